@@ -1,0 +1,220 @@
+// robotperf: the command-line front end.
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+
+#include "robotperf/build_info.hpp"
+#include "robotperf/harness/benchmark_spec.hpp"
+#include "robotperf/harness/dataset.hpp"
+#include "robotperf/harness/run.hpp"
+#include "robotperf/report/atomic_file.hpp"
+#include "robotperf/report/results.hpp"
+#include "robotperf/sysinfo/machine.hpp"
+
+namespace fs = std::filesystem;
+using namespace robotperf;
+
+namespace {
+
+// Exit codes, documented in the README.
+constexpr int kExitOk = 0;
+constexpr int kExitError = 1;
+constexpr int kExitUsage = 2;
+constexpr int kExitInvalidResult = 3;
+
+fs::path benchmarks_root(const std::string& flag) {
+  if (!flag.empty()) return flag;
+  if (const char* env = std::getenv("ROBOTPERF_BENCHMARKS"); env && *env) return env;
+  return build_info::kBenchmarksDir;
+}
+
+fs::path self_executable() {
+  std::error_code ec;
+  fs::path p = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) throw std::runtime_error("cannot locate the robotperf executable: " + ec.message());
+  return p;
+}
+
+int list_benchmarks(const fs::path& root) {
+  std::vector<std::string> broken;
+  const auto specs = harness::discover_benchmarks(root, &broken);
+  std::printf("%-5s %-30s %-12s %s\n", "id", "name", "category", "description");
+  for (const auto& s : specs) {
+    std::printf("%-5s %-30s %-12s %s\n", s.id.c_str(), s.name.c_str(), s.category.c_str(),
+                s.short_description.c_str());
+  }
+  for (const auto& b : broken)
+    std::fprintf(stderr, "robotperf: skipped broken package: %s\n", b.c_str());
+  return kExitOk;
+}
+
+int describe_benchmark(const fs::path& root, const std::string& id) {
+  const auto s = harness::find_benchmark(root, id);
+  std::cout << s.id << " — " << s.name << " (" << s.category << ")\n";
+  if (!s.short_description.empty()) std::cout << s.short_description << "\n";
+  std::cout << "\n" << s.description << "\n";
+  std::cout << "package:   " << s.dir.string() << "\n";
+  std::cout << "dataset:   " << s.dataset;
+  for (const auto& d : harness::builtin_datasets()) {
+    if (d.name == s.dataset) std::cout << " — " << d.description;
+  }
+  std::cout << "\nrate:      " << s.rate_hz << " Hz, "
+            << (s.count ? std::to_string(s.count) : "dataset-length") << " messages, warm-up "
+            << s.warmup << ", drain " << s.drain_s << " s\n";
+  std::cout << "validity:  at least " << s.min_samples << " samples, loss <= " << s.max_loss_percent
+            << " %\n";
+  std::cout << "inputs:\n";
+  for (const auto& in : s.inputs)
+    std::cout << "  " << in.topic << "  [" << in.type << "] <- stream " << in.stream << "\n";
+  std::cout << "nodes:\n";
+  for (const auto& n : s.nodes) {
+    std::cout << "  " << n.name << ": " << n.kernel << " (" << n.backend << ")\n";
+    for (const auto& [port, topic] : n.topics)
+      std::cout << "      " << port << " = " << topic << "\n";
+    for (const auto& [k, v] : n.parameters) std::cout << "      param " << k << " = " << v << "\n";
+  }
+  std::cout << "output:\n  " << s.output.topic << "  [" << s.output.type << "] -> monitor\n";
+  return kExitOk;
+}
+
+struct RunArgs {
+  std::string id;
+  std::optional<double> rate, duration, drain;
+  std::optional<std::size_t> count, warmup;
+  std::string rmw = "intra";
+  std::string processes = "single";
+  std::string output = "results";
+  bool csv = false;
+  bool quiet = false;
+  std::optional<int> domain;
+};
+
+int run(const fs::path& root, const RunArgs& a) {
+  const auto spec = harness::find_benchmark(root, a.id);
+  harness::RunOptions o;
+  o.rate_hz = a.rate;
+  o.count = a.count;
+  o.duration_s = a.duration;
+  o.warmup = a.warmup;
+  o.drain_s = a.drain;
+  o.rmw = a.rmw;
+  o.domain_id = a.domain ? *a.domain : rmw::domain_id_from_environment();
+  o.processes = a.processes == "per-node" ? harness::ProcessLayout::kPerNode
+                                          : harness::ProcessLayout::kSingle;
+  o.node_command = {self_executable().string(), "node"};
+  if (!a.quiet && isatty(STDERR_FILENO)) {
+    o.progress = [&](std::size_t sent, std::size_t total, std::size_t received) {
+      std::fprintf(stderr, "\r[%s] sent %zu/%zu  received %zu ", spec.id.c_str(), sent, total,
+                   received);
+      if (sent == total) std::fputc('\n', stderr);
+    };
+  }
+  // Fail on an unwritable output folder before spending time on the run.
+  fs::create_directories(a.output);
+
+  const auto result = harness::run_benchmark(spec, o);
+  const auto machine = sysinfo::collect_machine_info();
+  const auto json = report::result_to_json(result, machine);
+  const fs::path base = fs::path(a.output) / report::result_basename(result);
+  report::write_file_atomically(base.string() + ".json", json.dump(2) + "\n");
+  if (a.csv)
+    report::write_file_atomically(base.string() + ".latencies.csv", report::latencies_csv(result));
+
+  std::cout << report::summary_table(result);
+  std::cout << "machine: " << sysinfo::summary_line(machine) << "\n";
+  std::cout << "results: " << base.string() << ".json" << (a.csv ? " (+ .latencies.csv)" : "")
+            << "\n";
+  return result.valid ? kExitOk : kExitInvalidResult;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"robotperf — benchmarking suite for robotics computing (ROS 2 graphs, black-box)"};
+  app.set_version_flag("--version",
+                       std::string(build_info::kVersion) + " (" + build_info::kGitRevision + ")");
+  app.require_subcommand(1);
+  std::string benchmarks_flag;
+  app.add_option("--benchmarks", benchmarks_flag,
+                 "folder of benchmark packages (default: the source tree's)");
+
+  auto* list_cmd = app.add_subcommand("list", "list the benchmarks");
+
+  std::string describe_id;
+  auto* describe_cmd =
+      app.add_subcommand("describe", "show a benchmark's graph, dataset and settings");
+  describe_cmd->add_option("id", describe_id, "benchmark id or name, e.g. a1")->required();
+
+  RunArgs ra;
+  auto* run_cmd = app.add_subcommand("run", "run a benchmark and print its summary");
+  run_cmd->add_option("id", ra.id, "benchmark id or name, e.g. a1")->required();
+  run_cmd->add_option("--rate", ra.rate, "input rate in Hz (default: the benchmark's)");
+  auto* count_opt = run_cmd->add_option("--count", ra.count, "messages to send, warm-up included");
+  run_cmd->add_option("--duration", ra.duration, "seconds to send for (count = rate x duration)")
+      ->excludes(count_opt);
+  run_cmd->add_option("--warmup", ra.warmup,
+                      "first messages not counted (default: the benchmark's)");
+  run_cmd->add_option("--drain", ra.drain, "seconds to wait for outputs after the last send");
+  run_cmd->add_option("--rmw", ra.rmw, "transport: intra or fastdds")
+      ->check(CLI::IsMember({"intra", "fastdds"}));
+  run_cmd->add_option("--processes", ra.processes, "single (all nodes in one process) or per-node")
+      ->check(CLI::IsMember({"single", "per-node"}));
+  run_cmd->add_option("--domain", ra.domain, "DDS domain id (default: ROS_DOMAIN_ID or 0)")
+      ->check(CLI::Range(0, 232));
+  run_cmd->add_option("--output", ra.output, "folder for the results files (default: ./results)");
+  run_cmd->add_flag("--csv", ra.csv, "also write the per-message latencies as CSV");
+  run_cmd->add_flag("--quiet", ra.quiet, "no progress line");
+
+  auto* sysinfo_cmd = app.add_subcommand("sysinfo", "describe this machine as results record it");
+
+  std::string node_package, node_name, node_rmw = "fastdds";
+  int node_domain = 0;
+  auto* node_cmd =
+      app.add_subcommand("node", "run one node of a benchmark (used by --processes per-node)");
+  node_cmd->group("");  // internal: not listed in --help
+  node_cmd->add_option("package", node_package)->required();
+  node_cmd->add_option("--node", node_name)->required();
+  node_cmd->add_option("--rmw", node_rmw);
+  node_cmd->add_option("--domain", node_domain);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "robotperf: %s (see robotperf --help)\n", e.what());
+    return kExitUsage;
+  }
+
+  try {
+    const fs::path root = benchmarks_root(benchmarks_flag);
+    if (*list_cmd) return list_benchmarks(root);
+    if (*describe_cmd) return describe_benchmark(root, describe_id);
+    if (*run_cmd) return run(root, ra);
+    if (*sysinfo_cmd) {
+      std::cout << sysinfo::to_json(sysinfo::collect_machine_info()).dump(2) << "\n";
+      return kExitOk;
+    }
+    if (*node_cmd)
+      return harness::run_node_process(harness::load_benchmark(node_package), node_name, node_rmw,
+                                       node_domain);
+  } catch (const harness::BenchmarkError& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitUsage;
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitUsage;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitError;
+  }
+  return kExitUsage;
+}

@@ -1,0 +1,53 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "robotperf/graph/node.hpp"
+
+namespace robotperf::graph {
+
+// Runs the callbacks of its nodes. With one thread it is rclcpp's
+// single-threaded executor; with more, callbacks of different nodes run in
+// parallel while each node's own callbacks stay mutually exclusive.
+class Executor {
+ public:
+  explicit Executor(std::size_t threads = 1);
+  ~Executor();
+  Executor(const Executor&) = delete;
+  Executor& operator=(const Executor&) = delete;
+
+  void add_node(std::shared_ptr<Node> node);
+
+  // Runs callbacks on the calling thread (and threads-1 more) until cancel()
+  // or until a callback throws. Rethrows the first callback exception, prefixed
+  // with the node's name.
+  void spin();
+  // Runs spin() on background threads; stop() cancels and joins them.
+  void start();
+  void stop();
+  void cancel();
+  // The error that stopped a background spin, if any.
+  std::exception_ptr error() const;
+
+  std::size_t threads() const { return threads_; }
+
+ private:
+  void run_worker();
+  bool run_ready_work(int64_t& next_deadline);
+
+  std::size_t threads_;
+  std::shared_ptr<WakeSignal> signal_ = std::make_shared<WakeSignal>();
+  mutable std::mutex mutex_;
+  std::vector<std::shared_ptr<Node>> nodes_;
+  std::exception_ptr error_;
+  std::thread background_;
+};
+
+}  // namespace robotperf::graph

@@ -1,0 +1,207 @@
+// The node runtime: a small rclcpp-like layer over a Transport.
+//
+// A Context owns the transport of one process; Nodes create Publishers,
+// Subscriptions and Timers in it; an Executor runs their callbacks. Callbacks
+// of one node never run concurrently (rclcpp's default mutually exclusive
+// callback group), callbacks of different nodes may, on a multi-threaded executor.
+#pragma once
+
+#include <chrono>
+#include <climits>
+#include <concepts>
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "robotperf/msgs/type_support.hpp"
+#include "robotperf/rmw/transport.hpp"
+
+namespace robotperf::graph {
+
+using rmw::MessageInfo;
+using rmw::QoS;
+
+class Context {
+ public:
+  explicit Context(std::unique_ptr<rmw::Transport> transport) : transport_(std::move(transport)) {}
+  rmw::Transport& transport() { return *transport_; }
+
+ private:
+  std::unique_ptr<rmw::Transport> transport_;
+};
+
+// How an executor is told that an entity may have work. Shared between the
+// executor and the nodes it runs; transports call it from their own threads.
+class WakeSignal {
+ public:
+  void notify();
+  // Current generation; a waiter that saw generation g sleeps until it changes.
+  uint64_t generation();
+  // Waits until the generation differs from `seen`, `deadline_ns` (steady
+  // clock) passes, or stop() is called. Returns false once stopped.
+  bool wait(uint64_t seen, int64_t deadline_ns);
+  void stop();
+  bool stopped();
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  uint64_t generation_ = 0;
+  bool stopped_ = false;
+};
+
+class Node;
+
+// A publisher, subscription or timer: something an executor runs.
+class Entity {
+ public:
+  virtual ~Entity() = default;
+  // Runs at most one callback; returns whether it did.
+  virtual bool execute() = 0;
+  // Steady-clock time at which the entity wants to run next (timers only).
+  virtual int64_t next_deadline_ns() const { return INT64_MAX; }
+};
+
+struct EndpointStatus {
+  std::string topic;
+  std::string type;
+  bool is_publisher = false;
+  std::size_t matched = 0;
+};
+
+// Publishes messages of a type known only at run time.
+class GenericPublisher {
+ public:
+  GenericPublisher(std::unique_ptr<rmw::PublisherHandle> handle, std::string topic,
+                   std::string type)
+      : handle_(std::move(handle)), topic_(std::move(topic)), type_(std::move(type)) {}
+
+  void publish(rmw::MessagePtr msg) { handle_->publish(std::move(msg)); }
+  std::size_t matched_subscriptions() const { return handle_->matched_subscriptions(); }
+  const std::string& topic() const { return topic_; }
+  const std::string& type() const { return type_; }
+
+ private:
+  std::unique_ptr<rmw::PublisherHandle> handle_;
+  std::string topic_;
+  std::string type_;
+};
+
+template <class T>
+class Publisher : public GenericPublisher {
+ public:
+  using GenericPublisher::GenericPublisher;
+  void publish(std::shared_ptr<const T> msg) { GenericPublisher::publish(std::move(msg)); }
+  void publish(T&& msg) { publish(std::make_shared<const T>(std::move(msg))); }
+  void publish(const T& msg) { publish(std::make_shared<const T>(msg)); }
+};
+
+// Receives messages of a type known only at run time.
+class GenericSubscription final : public Entity {
+ public:
+  using Callback = std::function<void(rmw::MessagePtr, const MessageInfo&)>;
+  GenericSubscription(std::string topic, std::string type, Callback callback)
+      : topic_(std::move(topic)), type_(std::move(type)), callback_(std::move(callback)) {}
+
+  void attach(std::unique_ptr<rmw::SubscriptionHandle> handle) { handle_ = std::move(handle); }
+  bool execute() override;
+  std::size_t matched_publishers() const { return handle_->matched_publishers(); }
+  const std::string& topic() const { return topic_; }
+  const std::string& type() const { return type_; }
+
+ private:
+  std::unique_ptr<rmw::SubscriptionHandle> handle_;
+  std::string topic_;
+  std::string type_;
+  Callback callback_;
+};
+
+class Timer final : public Entity {
+ public:
+  Timer(std::chrono::nanoseconds period, std::function<void()> callback, int64_t first_deadline_ns)
+      : period_ns_(period.count()), next_ns_(first_deadline_ns), callback_(std::move(callback)) {}
+  bool execute() override;
+  int64_t next_deadline_ns() const override;
+  void cancel();
+
+ private:
+  int64_t period_ns_;
+  mutable std::mutex mutex_;
+  int64_t next_ns_;
+  bool cancelled_ = false;
+  std::function<void()> callback_;
+};
+
+class Node {
+ public:
+  Node(Context& context, std::string name);
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
+  virtual ~Node() = default;
+
+  const std::string& name() const { return name_; }
+  Context& context() { return context_; }
+
+  template <class T>
+  std::shared_ptr<Publisher<T>> create_publisher(const std::string& topic, const QoS& qos = QoS{}) {
+    const auto& ts = msgs::type_support<T>();
+    auto pub = std::make_shared<Publisher<T>>(context_.transport().create_publisher(topic, ts, qos),
+                                              topic, ts.ros_type);
+    add_publisher(pub);
+    return pub;
+  }
+
+  // `callback` takes (std::shared_ptr<const T>) or (std::shared_ptr<const T>, const MessageInfo&).
+  template <class T, class F>
+  std::shared_ptr<GenericSubscription> create_subscription(const std::string& topic, const QoS& qos,
+                                                           F&& callback) {
+    GenericSubscription::Callback cb;
+    if constexpr (std::invocable<F, std::shared_ptr<const T>, const MessageInfo&>) {
+      cb = [f = std::forward<F>(callback)](rmw::MessagePtr m, const MessageInfo& info) {
+        f(std::static_pointer_cast<const T>(std::move(m)), info);
+      };
+    } else {
+      cb = [f = std::forward<F>(callback)](rmw::MessagePtr m, const MessageInfo&) {
+        f(std::static_pointer_cast<const T>(std::move(m)));
+      };
+    }
+    return create_generic_subscription(topic, msgs::type_support<T>(), qos, std::move(cb));
+  }
+
+  std::shared_ptr<GenericPublisher> create_generic_publisher(const std::string& topic,
+                                                             const msgs::TypeSupport& type,
+                                                             const QoS& qos = QoS{});
+  std::shared_ptr<GenericSubscription> create_generic_subscription(
+      const std::string& topic, const msgs::TypeSupport& type, const QoS& qos,
+      GenericSubscription::Callback callback);
+
+  std::shared_ptr<Timer> create_timer(std::chrono::nanoseconds period,
+                                      std::function<void()> callback);
+
+  // Topics this node publishes and subscribes, with their matched counts.
+  std::vector<EndpointStatus> endpoints() const;
+
+  // --- for executors ---
+  void set_wake_signal(std::shared_ptr<WakeSignal> signal);
+  std::mutex& callback_mutex() { return callback_mutex_; }
+  std::vector<std::shared_ptr<Entity>> entities() const;
+  void notify();
+
+ private:
+  void add_publisher(std::shared_ptr<GenericPublisher> publisher);
+  void add_entity(std::shared_ptr<Entity> entity);
+
+  Context& context_;
+  std::string name_;
+  mutable std::mutex mutex_;  // guards the lists and the signal
+  std::vector<std::shared_ptr<GenericPublisher>> publishers_;
+  std::vector<std::shared_ptr<Entity>> entities_;
+  std::shared_ptr<WakeSignal> signal_;
+  std::mutex callback_mutex_;
+};
+
+}  // namespace robotperf::graph

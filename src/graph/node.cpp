@@ -1,0 +1,157 @@
+#include "robotperf/graph/node.hpp"
+
+#include <stdexcept>
+
+namespace robotperf::graph {
+
+void WakeSignal::notify() {
+  {
+    std::lock_guard lock(mutex_);
+    ++generation_;
+  }
+  cv_.notify_all();
+}
+
+uint64_t WakeSignal::generation() {
+  std::lock_guard lock(mutex_);
+  return generation_;
+}
+
+bool WakeSignal::wait(uint64_t seen, int64_t deadline_ns) {
+  std::unique_lock lock(mutex_);
+  auto changed = [&] { return stopped_ || generation_ != seen; };
+  if (deadline_ns == INT64_MAX) {
+    cv_.wait(lock, changed);
+  } else {
+    const auto deadline =
+        std::chrono::steady_clock::time_point(std::chrono::nanoseconds(deadline_ns));
+    cv_.wait_until(lock, deadline, changed);
+  }
+  return !stopped_;
+}
+
+void WakeSignal::stop() {
+  {
+    std::lock_guard lock(mutex_);
+    stopped_ = true;
+  }
+  cv_.notify_all();
+}
+
+bool WakeSignal::stopped() {
+  std::lock_guard lock(mutex_);
+  return stopped_;
+}
+
+bool Timer::execute() {
+  {
+    std::lock_guard lock(mutex_);
+    const int64_t now = rmw::steady_now_ns();
+    if (cancelled_ || now < next_ns_) return false;
+    // Absolute deadlines; a timer that fell behind skips the periods it missed
+    // instead of firing a burst to catch up.
+    next_ns_ += period_ns_;
+    if (next_ns_ <= now) next_ns_ += ((now - next_ns_) / period_ns_ + 1) * period_ns_;
+  }
+  callback_();
+  return true;
+}
+
+int64_t Timer::next_deadline_ns() const {
+  std::lock_guard lock(mutex_);
+  return cancelled_ ? INT64_MAX : next_ns_;
+}
+
+void Timer::cancel() {
+  std::lock_guard lock(mutex_);
+  cancelled_ = true;
+}
+
+bool GenericSubscription::execute() {
+  MessageInfo info;
+  rmw::MessagePtr msg = handle_->take(&info);
+  if (!msg) return false;
+  callback_(std::move(msg), info);
+  return true;
+}
+
+Node::Node(Context& context, std::string name) : context_(context), name_(std::move(name)) {
+  if (name_.empty()) throw std::invalid_argument("a node needs a name");
+}
+
+std::shared_ptr<Timer> Node::create_timer(std::chrono::nanoseconds period,
+                                          std::function<void()> callback) {
+  if (period.count() <= 0)
+    throw std::invalid_argument("timer period must be positive in node " + name_);
+  auto timer =
+      std::make_shared<Timer>(period, std::move(callback), rmw::steady_now_ns() + period.count());
+  add_entity(timer);
+  notify();  // an executor already spinning must learn the new deadline
+  return timer;
+}
+
+std::vector<EndpointStatus> Node::endpoints() const {
+  std::lock_guard lock(mutex_);
+  std::vector<EndpointStatus> out;
+  for (const auto& p : publishers_) {
+    out.push_back({p->topic(), p->type(), true, p->matched_subscriptions()});
+  }
+  for (const auto& e : entities_) {
+    if (auto* sub = dynamic_cast<const GenericSubscription*>(e.get())) {
+      out.push_back({sub->topic(), sub->type(), false, sub->matched_publishers()});
+    }
+  }
+  return out;
+}
+
+void Node::set_wake_signal(std::shared_ptr<WakeSignal> signal) {
+  {
+    std::lock_guard lock(mutex_);
+    signal_ = std::move(signal);
+  }
+  notify();  // data may have arrived before the node joined an executor
+}
+
+std::vector<std::shared_ptr<Entity>> Node::entities() const {
+  std::lock_guard lock(mutex_);
+  return entities_;
+}
+
+void Node::notify() {
+  std::shared_ptr<WakeSignal> signal;
+  {
+    std::lock_guard lock(mutex_);
+    signal = signal_;
+  }
+  if (signal) signal->notify();
+}
+
+std::shared_ptr<GenericPublisher> Node::create_generic_publisher(const std::string& topic,
+                                                                 const msgs::TypeSupport& type,
+                                                                 const QoS& qos) {
+  auto pub = std::make_shared<GenericPublisher>(
+      context_.transport().create_publisher(topic, type, qos), topic, type.ros_type);
+  add_publisher(pub);
+  return pub;
+}
+
+std::shared_ptr<GenericSubscription> Node::create_generic_subscription(
+    const std::string& topic, const msgs::TypeSupport& type, const QoS& qos,
+    GenericSubscription::Callback callback) {
+  auto sub = std::make_shared<GenericSubscription>(topic, type.ros_type, std::move(callback));
+  sub->attach(context_.transport().create_subscription(topic, type, qos, [this] { notify(); }));
+  add_entity(sub);
+  return sub;
+}
+
+void Node::add_publisher(std::shared_ptr<GenericPublisher> publisher) {
+  std::lock_guard lock(mutex_);
+  publishers_.push_back(std::move(publisher));
+}
+
+void Node::add_entity(std::shared_ptr<Entity> entity) {
+  std::lock_guard lock(mutex_);
+  entities_.push_back(std::move(entity));
+}
+
+}  // namespace robotperf::graph

@@ -1,0 +1,236 @@
+#include "robotperf/harness/benchmark_spec.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <set>
+
+namespace robotperf::harness {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Reads one YAML file and reports every problem as "<file>:<line>: <what>".
+class YamlFile {
+ public:
+  explicit YamlFile(fs::path path) : path_(std::move(path)) {
+    if (!fs::exists(path_)) throw BenchmarkError(path_.string() + ": file not found");
+    try {
+      root_ = YAML::LoadFile(path_.string());
+    } catch (const YAML::Exception& e) {
+      throw BenchmarkError(path_.string() + ":" + std::to_string(e.mark.line + 1) +
+                           ": malformed YAML: " + e.msg);
+    }
+    if (!root_.IsMap())
+      throw BenchmarkError(path_.string() + ": expected a mapping at the top level");
+  }
+
+  const YAML::Node& root() const { return root_; }
+
+  [[noreturn]] void fail(const YAML::Node& at, const std::string& what) const {
+    std::string where = path_.string();
+    if (at.IsDefined() && at.Mark().line >= 0) where += ":" + std::to_string(at.Mark().line + 1);
+    throw BenchmarkError(where + ": " + what);
+  }
+
+  void allow_keys(const YAML::Node& map, std::initializer_list<const char*> keys) const {
+    if (!map.IsMap()) fail(map, "expected a mapping");
+    std::set<std::string> allowed(keys.begin(), keys.end());
+    for (const auto& kv : map) {
+      const auto key = kv.first.as<std::string>();
+      if (!allowed.contains(key)) {
+        std::string list;
+        for (const auto& k : allowed) list += (list.empty() ? "" : ", ") + k;
+        fail(kv.first, "unknown key '" + key + "' (expected one of: " + list + ")");
+      }
+    }
+  }
+
+  template <class T>
+  T get(const YAML::Node& map, const char* key, const T& fallback) const {
+    const YAML::Node n = map[key];
+    if (!n.IsDefined() || n.IsNull()) return fallback;
+    try {
+      return n.as<T>();
+    } catch (const YAML::Exception&) {
+      fail(n, std::string("'") + key + "' has the wrong type");
+    }
+  }
+
+  std::string require_string(const YAML::Node& map, const char* key) const {
+    const YAML::Node n = map[key];
+    if (!n.IsDefined() || n.IsNull()) fail(map, std::string("missing '") + key + "'");
+    if (!n.IsScalar()) fail(n, std::string("'") + key + "' must be a string");
+    return n.as<std::string>();
+  }
+
+  rmw::QoS qos(const YAML::Node& map) const {
+    const auto name = get<std::string>(map, "qos", "default");
+    try {
+      return rmw::QoS::from_profile_name(name);
+    } catch (const std::invalid_argument& e) {
+      fail(map["qos"], e.what());
+    }
+  }
+
+  std::map<std::string, std::string> string_map(const YAML::Node& map, const char* key) const {
+    std::map<std::string, std::string> out;
+    const YAML::Node n = map[key];
+    if (!n.IsDefined() || n.IsNull()) return out;
+    if (!n.IsMap()) fail(n, std::string("'") + key + "' must be a mapping");
+    for (const auto& kv : n) {
+      if (!kv.second.IsScalar())
+        fail(kv.second, "value of '" + kv.first.as<std::string>() + "' must be a scalar");
+      out[kv.first.as<std::string>()] = kv.second.as<std::string>();
+    }
+    return out;
+  }
+
+ private:
+  fs::path path_;
+  YAML::Node root_;
+};
+
+BoundaryTopic boundary_topic(const YamlFile& file, const YAML::Node& n, bool is_input) {
+  if (is_input) {
+    file.allow_keys(n, {"topic", "type", "stream", "qos"});
+  } else {
+    file.allow_keys(n, {"topic", "type", "qos"});
+  }
+  BoundaryTopic t;
+  t.topic = file.require_string(n, "topic");
+  t.type = file.require_string(n, "type");
+  if (is_input) t.stream = file.require_string(n, "stream");
+  t.qos = file.qos(n);
+  try {
+    rmw::dds_topic_name(t.topic);
+  } catch (const std::invalid_argument& e) {
+    file.fail(n["topic"], e.what());
+  }
+  return t;
+}
+
+void load_graph(const fs::path& path, BenchmarkSpec& spec) {
+  const YamlFile file(path);
+  const YAML::Node& root = file.root();
+  file.allow_keys(root, {"dataset", "rate_hz", "count", "warmup", "drain_s", "executor_threads",
+                         "validity", "inputs", "output", "nodes"});
+  spec.dataset = file.require_string(root, "dataset");
+  spec.rate_hz = file.get<double>(root, "rate_hz", 30.0);
+  if (!(spec.rate_hz > 0)) file.fail(root["rate_hz"], "rate_hz must be positive");
+  spec.count = file.get<std::size_t>(root, "count", 0);
+  spec.warmup = file.get<std::size_t>(root, "warmup", 0);
+  spec.drain_s = file.get<double>(root, "drain_s", 2.0);
+  if (!(spec.drain_s >= 0)) file.fail(root["drain_s"], "drain_s must be >= 0");
+  spec.executor_threads = file.get<std::size_t>(root, "executor_threads", 1);
+  if (spec.executor_threads == 0)
+    file.fail(root["executor_threads"], "executor_threads must be >= 1");
+  if (const YAML::Node v = root["validity"]; v.IsDefined()) {
+    file.allow_keys(v, {"min_samples", "max_loss_percent"});
+    spec.min_samples = file.get<std::size_t>(v, "min_samples", spec.min_samples);
+    spec.max_loss_percent = file.get<double>(v, "max_loss_percent", spec.max_loss_percent);
+  }
+
+  const YAML::Node inputs = root["inputs"];
+  if (!inputs.IsSequence() || inputs.size() == 0)
+    file.fail(root, "'inputs' must be a non-empty list");
+  for (const auto& n : inputs) spec.inputs.push_back(boundary_topic(file, n, true));
+  if (!root["output"].IsDefined()) file.fail(root, "missing 'output'");
+  spec.output = boundary_topic(file, root["output"], false);
+
+  const YAML::Node nodes = root["nodes"];
+  if (!nodes.IsSequence()) file.fail(root, "'nodes' must be a list");
+  std::set<std::string> names;
+  for (const auto& n : nodes) {
+    file.allow_keys(n, {"name", "kernel", "backend", "parameters", "topics", "qos"});
+    NodeSpec node;
+    node.name = file.require_string(n, "name");
+    if (!names.insert(node.name).second) file.fail(n, "duplicate node name '" + node.name + "'");
+    node.kernel = file.require_string(n, "kernel");
+    const kernels::KernelInfo* info = kernels::find_kernel(node.kernel);
+    if (info == nullptr) file.fail(n["kernel"], "unknown kernel '" + node.kernel + "'");
+    node.backend = file.get<std::string>(n, "backend", "cpu");
+    node.parameters = file.string_map(n, "parameters");
+    node.topics = file.string_map(n, "topics");
+    node.qos = file.qos(n);
+    for (const auto& [port, topic] : node.topics) {
+      const bool known = std::ranges::count(info->input_ports, port) +
+                         std::ranges::count(info->output_ports, port);
+      if (!known) file.fail(n["topics"], "kernel " + node.kernel + " has no port '" + port + "'");
+    }
+    spec.nodes.push_back(std::move(node));
+  }
+}
+
+}  // namespace
+
+const NodeSpec* BenchmarkSpec::find_node(const std::string& node_name) const {
+  for (const auto& n : nodes) {
+    if (n.name == node_name) return &n;
+  }
+  return nullptr;
+}
+
+BenchmarkSpec load_benchmark(const fs::path& dir) {
+  BenchmarkSpec spec;
+  spec.dir = dir;
+  spec.category = dir.parent_path().filename().string();
+  const YamlFile meta(dir / "benchmark.yaml");
+  spec.id = meta.require_string(meta.root(), "id");
+  spec.name = meta.require_string(meta.root(), "name");
+  spec.short_description = meta.get<std::string>(meta.root(), "short", "");
+  spec.description = meta.get<std::string>(meta.root(), "description", "");
+  load_graph(dir / "graph.yaml", spec);
+  return spec;
+}
+
+std::vector<BenchmarkSpec> discover_benchmarks(const fs::path& root,
+                                               std::vector<std::string>* broken) {
+  std::vector<BenchmarkSpec> out;
+  std::error_code ec;
+  if (!fs::is_directory(root, ec)) {
+    throw BenchmarkError("benchmarks folder not found: " + root.string() +
+                         " (set --benchmarks or ROBOTPERF_BENCHMARKS)");
+  }
+  for (const auto& category : fs::directory_iterator(root)) {
+    if (!category.is_directory()) continue;
+    for (const auto& package : fs::directory_iterator(category.path())) {
+      if (!fs::exists(package.path() / "graph.yaml")) continue;
+      try {
+        out.push_back(load_benchmark(package.path()));
+      } catch (const BenchmarkError& e) {
+        if (broken) broken->push_back(e.what());
+      }
+    }
+  }
+  std::ranges::sort(out, [](const auto& a, const auto& b) { return a.id < b.id; });
+  return out;
+}
+
+BenchmarkSpec find_benchmark(const fs::path& root, const std::string& id_or_name) {
+  std::vector<std::string> broken;
+  auto all = discover_benchmarks(root, &broken);
+  for (auto& spec : all) {
+    if (spec.id == id_or_name || spec.name == id_or_name) return std::move(spec);
+  }
+  // A package that failed to load is reported with its own error.
+  for (const auto& b : broken) {
+    if (b.find("/" + id_or_name) != std::string::npos) throw BenchmarkError(b);
+  }
+  std::string ids;
+  for (const auto& s : all) ids += (ids.empty() ? "" : ", ") + s.id;
+  throw BenchmarkError("unknown benchmark '" + id_or_name + "' (available: " + ids +
+                       "; see 'robotperf list')");
+}
+
+kernels::KernelConfig kernel_config(const NodeSpec& node) {
+  kernels::KernelConfig config;
+  config.node_name = node.name;
+  config.backend = node.backend;
+  for (const auto& [k, v] : node.parameters) config.parameters.set(k, v);
+  config.topics = node.topics;
+  config.qos = node.qos;
+  return config;
+}
+
+}  // namespace robotperf::harness

@@ -1,0 +1,85 @@
+// Private to the harness: the Playback and Monitor nodes around the graph
+// under test (DESIGN.md §3).
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <vector>
+
+#include "robotperf/graph/node.hpp"
+#include "robotperf/harness/benchmark_spec.hpp"
+#include "robotperf/harness/dataset.hpp"
+#include "robotperf/harness/run.hpp"
+
+namespace robotperf::harness {
+
+// Message k of a run carries the header stamp base + k·period: unique within
+// the run even when the dataset loops, increasing like a real clock (so
+// time-based pairing in nodes still works), and exactly invertible.
+struct MessageIds {
+  int64_t base_ns = 0;
+  int64_t period_ns = 1;
+  std::size_t count = 0;
+
+  int64_t stamp_ns(uint64_t id) const { return base_ns + static_cast<int64_t>(id) * period_ns; }
+  std::optional<uint64_t> id_of(int64_t stamp_ns) const;
+};
+
+class Playback {
+ public:
+  Playback(graph::Context& context, const BenchmarkSpec& spec, const Dataset& dataset,
+           MessageIds ids);
+  std::shared_ptr<graph::Node> node() const { return node_; }
+
+  // Sends ids.count messages, message k at start + k·period (absolute
+  // deadlines: a late send does not delay the next ones). Fills `records`.
+  // Stops early when `should_stop` returns true; returns the number sent.
+  std::size_t run(std::vector<MessageRecord>& records, const std::function<bool()>& should_stop,
+                  const std::function<void(std::size_t sent)>& after_send);
+
+ private:
+  struct Input {
+    const DatasetStream* stream;
+    std::shared_ptr<graph::GenericPublisher> publisher;
+  };
+  std::shared_ptr<graph::Node> node_;
+  std::vector<Input> inputs_;
+  MessageIds ids_;
+};
+
+class Monitor {
+ public:
+  // Counts receptions of ids >= `warmup` towards received_measured().
+  Monitor(graph::Context& context, const BoundaryTopic& output, MessageIds ids, std::size_t warmup);
+  std::shared_ptr<graph::Node> node() const { return node_; }
+
+  // Waits until `expected` measured messages arrived or `deadline_ns` passes.
+  bool wait_for(std::size_t expected, int64_t deadline_ns);
+
+  struct Tally {
+    std::vector<int64_t> received_ns;  // per id, -1 when never received
+    std::size_t received_measured = 0;
+    std::size_t duplicates = 0;
+    std::size_t unknown = 0;
+  };
+  Tally tally() const;
+  std::size_t received() const;
+
+ private:
+  void on_message(const rmw::MessagePtr& msg, int64_t now_ns);
+
+  std::shared_ptr<graph::Node> node_;
+  const msgs::TypeSupport* type_;
+  MessageIds ids_;
+  std::size_t warmup_;
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  Tally tally_;
+  std::size_t received_ = 0;
+};
+
+}  // namespace robotperf::harness

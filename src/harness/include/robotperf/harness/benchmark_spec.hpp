@@ -1,0 +1,78 @@
+// A benchmark package: benchmark.yaml (RobotPerf fields) + graph.yaml (what to run).
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "robotperf/kernels/registry.hpp"
+#include "robotperf/rmw/transport.hpp"
+
+namespace robotperf::harness {
+
+// A benchmark package that cannot be used; the message names the file and what is wrong.
+class BenchmarkError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A topic at the boundary of the graph under test.
+struct BoundaryTopic {
+  std::string topic;
+  std::string type;    // ROS type, e.g. sensor_msgs/msg/Image
+  std::string stream;  // inputs: the dataset stream published on it
+  rmw::QoS qos;
+};
+
+struct NodeSpec {
+  std::string name;
+  std::string kernel;
+  std::string backend = "cpu";
+  std::map<std::string, std::string> parameters;
+  std::map<std::string, std::string> topics;  // port -> topic
+  rmw::QoS qos;
+};
+
+struct BenchmarkSpec {
+  std::filesystem::path dir;
+  // From benchmark.yaml.
+  std::string id;    // "a1"
+  std::string name;  // "a1_perception_2nodes"
+  std::string short_description;
+  std::string description;
+  std::string category;  // the folder above the package: perception, control, ...
+  // From graph.yaml.
+  std::string dataset;  // built-in dataset name
+  double rate_hz = 30.0;
+  std::size_t count = 0;  // messages to send; 0: as many as the dataset has frames
+  std::size_t warmup = 0;
+  double drain_s = 2.0;
+  std::size_t executor_threads = 1;
+  std::size_t min_samples = 30;
+  double max_loss_percent = 0.0;
+  std::vector<BoundaryTopic> inputs;
+  BoundaryTopic output;
+  std::vector<NodeSpec> nodes;
+
+  const NodeSpec* find_node(const std::string& name) const;
+};
+
+// Reads and checks <dir>/benchmark.yaml and <dir>/graph.yaml; throws BenchmarkError.
+BenchmarkSpec load_benchmark(const std::filesystem::path& dir);
+
+// Every package under <root>/<category>/<package>/ with a graph.yaml, sorted by id.
+// Packages that fail to load are returned in `broken` as one line each.
+std::vector<BenchmarkSpec> discover_benchmarks(const std::filesystem::path& root,
+                                               std::vector<std::string>* broken = nullptr);
+
+// By id ("a1") or full name ("a1_perception_2nodes"); throws BenchmarkError
+// listing the known ids when there is no such benchmark.
+BenchmarkSpec find_benchmark(const std::filesystem::path& root, const std::string& id_or_name);
+
+// The kernel configuration of a node of the spec.
+kernels::KernelConfig kernel_config(const NodeSpec& node);
+
+}  // namespace robotperf::harness

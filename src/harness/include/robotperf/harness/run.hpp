@@ -1,0 +1,107 @@
+// Running a benchmark black-box: Playback -> graph under test -> Monitor.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "robotperf/harness/benchmark_spec.hpp"
+#include "robotperf/metrics/latency_stats.hpp"
+
+namespace robotperf::harness {
+
+enum class ProcessLayout { kSingle, kPerNode };
+
+struct RunOptions {
+  std::optional<double> rate_hz;      // default: the benchmark's
+  std::optional<std::size_t> count;   // messages to send, warm-up included
+  std::optional<double> duration_s;   // alternative to count: rate * duration
+  std::optional<std::size_t> warmup;  // default: the benchmark's
+  std::optional<double> drain_s;      // default: the benchmark's
+  std::string rmw = "intra";
+  ProcessLayout processes = ProcessLayout::kSingle;
+  int domain_id = 0;
+  double connect_timeout_s = 15.0;  // discovery and node start-up, before timing
+  // For per-node runs: the robotperf executable and the arguments that make it
+  // run one node ("node" subcommand); the runner appends its own.
+  std::vector<std::string> node_command;
+  // Called from the playback thread after each send.
+  std::function<void(std::size_t sent, std::size_t total, std::size_t received)> progress;
+};
+
+// One message the Playback sent. Times are CLOCK_MONOTONIC nanoseconds.
+struct MessageRecord {
+  uint64_t id = 0;
+  int64_t scheduled_ns = 0;
+  int64_t sent_ns = 0;
+  int64_t received_ns = -1;  // first reception; -1 when lost
+  bool warmup = false;
+};
+
+struct NodeReport {
+  std::string name;
+  std::string kernel;
+  int pid = 0;              // 0 when it ran in the runner's process
+  std::string exit_status;  // "ok" or how it ended
+  double cpu_user_s = -1;   // -1 when unknown
+  double cpu_system_s = -1;
+};
+
+struct RunResult {
+  std::string benchmark_id;
+  std::string benchmark_name;
+  std::string category;
+  // Configuration as run.
+  double rate_hz = 0;
+  std::size_t count = 0;
+  std::size_t warmup = 0;
+  double drain_s = 0;
+  std::string rmw;
+  std::string processes;  // "single" or "per-node"
+  std::size_t executor_threads = 1;
+  std::string output_topic;
+  // Dataset.
+  std::string dataset;
+  std::string dataset_hash;
+  std::size_t dataset_frames = 0;
+  // Counts over the measured (post-warm-up) messages, except unknown and
+  // duplicates, which count every reception.
+  std::size_t sent = 0;
+  std::size_t measured = 0;
+  std::size_t matched = 0;
+  std::size_t lost = 0;
+  std::size_t duplicates = 0;
+  std::size_t unknown = 0;
+  double loss_percent = 0;
+  // Nanoseconds, over matched measured messages.
+  metrics::SampleStats latency_from_scheduled;
+  metrics::SampleStats latency_from_sent;
+  // Sending lateness: actual minus scheduled send time.
+  metrics::SampleStats send_lateness;
+  double throughput_hz = 0;    // output rate: (matched - 1) / (last - first reception)
+  double offered_rate_hz = 0;  // input rate actually achieved by the Playback
+  double window_s = 0;         // from the first measured send to the last reception
+  int64_t started_unix_ns = 0;
+  bool completed = false;  // false when the run was cut short
+  std::vector<std::string> errors;
+  bool valid = false;
+  std::vector<std::string> invalid_reasons;
+  std::vector<NodeReport> nodes;
+  std::vector<MessageRecord> records;
+};
+
+// Runs the benchmark. Problems that stop the run before timing (bad spec,
+// unknown transport, graph that never connects) throw; problems during the
+// run (a node that dies or throws) end it early and are reported in
+// `errors`, with what was measured until then.
+RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options);
+
+// The per-node child side: builds one node of `spec`, reports "ready" on
+// stdout once its endpoints are matched, runs until stdin closes, then prints
+// a final "stats" line. Returns the process exit code.
+int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
+                     const std::string& rmw, int domain_id);
+
+}  // namespace robotperf::harness

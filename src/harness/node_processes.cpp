@@ -1,0 +1,225 @@
+#include "node_processes.hpp"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "robotperf/rmw/transport.hpp"
+
+extern char** environ;
+
+namespace robotperf::harness {
+namespace {
+
+std::string describe_status(int status) {
+  if (WIFEXITED(status)) {
+    return WEXITSTATUS(status) == 0 ? "ok"
+                                    : "exited with status " + std::to_string(WEXITSTATUS(status));
+  }
+  if (WIFSIGNALED(status)) return std::string("killed by signal ") + strsignal(WTERMSIG(status));
+  return "ended (status " + std::to_string(status) + ")";
+}
+
+void make_pipe(int fds[2]) {
+  if (pipe2(fds, O_CLOEXEC) != 0) throw std::runtime_error(std::string("pipe: ") + strerror(errno));
+}
+
+}  // namespace
+
+NodeProcesses::NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::string>& command,
+                             const std::string& rmw, int domain_id) {
+  if (command.empty()) throw std::invalid_argument("per-node runs need the robotperf node command");
+  make_pipe(wake_pipe_);
+  // A child that dies must not kill the runner with SIGPIPE when we write to it.
+  signal(SIGPIPE, SIG_IGN);
+  for (const auto& node : spec.nodes) {
+    Child c;
+    c.name = node.name;
+    c.kernel = node.kernel;
+    c.report = {node.name, node.kernel, 0, "running", -1, -1};
+    int in[2], out[2];
+    make_pipe(in);
+    make_pipe(out);
+    std::vector<std::string> args = command;
+    args.push_back(spec.dir.string());
+    args.insert(args.end(),
+                {"--node", node.name, "--rmw", rmw, "--domain", std::to_string(domain_id)});
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, in[0], STDIN_FILENO);
+    posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
+    const int rc = posix_spawn(&c.pid, argv[0], &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    close(in[0]);
+    close(out[1]);
+    if (rc != 0) {
+      close(in[1]);
+      close(out[0]);
+      throw std::runtime_error("cannot start node '" + node.name + "' (" + args[0] +
+                               "): " + strerror(rc));
+    }
+    c.to_child = in[1];
+    c.from_child = out[0];
+    c.report.pid = c.pid;
+    children_.push_back(std::move(c));
+  }
+  supervisor_ = std::thread([this] { supervise(); });
+}
+
+NodeProcesses::~NodeProcesses() {
+  shutdown(2.0);
+  close(wake_pipe_[0]);
+  close(wake_pipe_[1]);
+}
+
+// Reads every child's stdout until all reach end of file: a line protocol
+// ("ready", "stats {json}") and, at EOF, the child's end.
+void NodeProcesses::supervise() {
+  while (true) {
+    std::vector<pollfd> fds{{wake_pipe_[0], POLLIN, 0}};
+    std::vector<Child*> owners{nullptr};
+    {
+      std::lock_guard lock(mutex_);
+      for (auto& c : children_) {
+        if (!c.eof) {
+          fds.push_back({c.from_child, POLLIN, 0});
+          owners.push_back(&c);
+        }
+      }
+    }
+    if (fds.size() == 1) return;
+    if (poll(fds.data(), fds.size(), -1) < 0 && errno != EINTR) return;
+    if (fds[0].revents & POLLIN) {
+      char b;
+      if (read(wake_pipe_[0], &b, 1) <= 0) return;
+    }
+    for (std::size_t i = 1; i < fds.size(); ++i) {
+      if (!(fds[i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+      Child& c = *owners[i];
+      char buf[4096];
+      const ssize_t n = read(c.from_child, buf, sizeof buf);
+      std::lock_guard lock(mutex_);
+      if (n > 0) {
+        c.buffer.append(buf, static_cast<std::size_t>(n));
+        for (auto nl = c.buffer.find('\n'); nl != std::string::npos; nl = c.buffer.find('\n')) {
+          on_line(c, c.buffer.substr(0, nl));
+          c.buffer.erase(0, nl + 1);
+        }
+      } else {
+        c.eof = true;
+        close(c.from_child);
+        reap(c, true);
+        if (!stopping_ && failure_.empty()) {
+          failure_ = "node '" + c.name + "' (pid " + std::to_string(c.report.pid) + ") " +
+                     c.report.exit_status + " during the run";
+        }
+      }
+      cv_.notify_all();
+    }
+  }
+}
+
+void NodeProcesses::on_line(Child& child, const std::string& line) {
+  if (line == "ready") {
+    child.ready = true;
+  } else if (line.rfind("stats ", 0) == 0) {
+    const auto j = nlohmann::json::parse(line.substr(6), nullptr, false);
+    if (!j.is_discarded()) {
+      child.report.cpu_user_s = j.value("cpu_user_s", -1.0);
+      child.report.cpu_system_s = j.value("cpu_system_s", -1.0);
+    }
+  }
+}
+
+void NodeProcesses::reap(Child& child, bool wait) {
+  if (child.pid <= 0) return;
+  int status = 0;
+  const pid_t r = waitpid(child.pid, &status, wait ? 0 : WNOHANG);
+  if (r == child.pid) {
+    child.report.exit_status = describe_status(status);
+    child.pid = -1;
+  }
+}
+
+void NodeProcesses::wait_ready(int64_t deadline_ns) {
+  std::unique_lock lock(mutex_);
+  const auto deadline =
+      std::chrono::steady_clock::time_point(std::chrono::nanoseconds(deadline_ns));
+  const bool ok = cv_.wait_until(lock, deadline, [&] {
+    if (!failure_.empty()) return true;
+    for (const auto& c : children_) {
+      if (!c.ready) return false;
+    }
+    return true;
+  });
+  if (!failure_.empty()) throw std::runtime_error(failure_ + " (before it was ready)");
+  if (!ok) {
+    std::string waiting;
+    for (const auto& c : children_) {
+      if (!c.ready) waiting += (waiting.empty() ? "" : ", ") + c.name;
+    }
+    throw std::runtime_error("nodes not connected in time: " + waiting +
+                             " (their topics found no peers; check the transport and graph.yaml)");
+  }
+}
+
+std::string NodeProcesses::failure() const {
+  std::lock_guard lock(mutex_);
+  return failure_;
+}
+
+std::vector<NodeReport> NodeProcesses::shutdown(double grace_s) {
+  {
+    std::lock_guard lock(mutex_);
+    if (!stopping_) {
+      stopping_ = true;
+      for (auto& c : children_) {
+        close(c.to_child);
+        c.to_child = -1;
+      }
+    }
+  }
+  {
+    std::unique_lock lock(mutex_);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(grace_s);
+    auto all_done = [&] {
+      for (const auto& c : children_) {
+        if (!c.eof) return false;
+      }
+      return true;
+    };
+    if (!cv_.wait_until(lock, deadline, all_done)) {
+      for (auto& c : children_) {
+        if (!c.eof && c.pid > 0) kill(c.pid, SIGKILL);
+      }
+    }
+  }
+  if (supervisor_.joinable()) {
+    const char b = 0;
+    if (write(wake_pipe_[1], &b, 1) < 0) {
+      // The supervisor also ends once every child pipe reached EOF.
+    }
+    supervisor_.join();
+  }
+  std::vector<NodeReport> out;
+  std::lock_guard lock(mutex_);
+  for (auto& c : children_) {
+    reap(c, true);
+    out.push_back(c.report);
+  }
+  return out;
+}
+
+}  // namespace robotperf::harness

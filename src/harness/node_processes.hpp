@@ -1,0 +1,61 @@
+// Private to the harness: the children of a per-node run, one process per
+// node of the graph, supervised by the runner.
+#pragma once
+
+#include <sys/types.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "robotperf/harness/run.hpp"
+
+namespace robotperf::harness {
+
+class NodeProcesses {
+ public:
+  // Starts `command` + [<package dir>, --node, NAME, --rmw, RMW, --domain, D] for every node.
+  NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::string>& command,
+                const std::string& rmw, int domain_id);
+  ~NodeProcesses();
+  NodeProcesses(const NodeProcesses&) = delete;
+  NodeProcesses& operator=(const NodeProcesses&) = delete;
+
+  // Waits until every child reported ready; throws std::runtime_error when one
+  // died or the deadline passed first.
+  void wait_ready(int64_t deadline_ns);
+  // A child that ended before shutdown() was asked: its description, else empty.
+  std::string failure() const;
+  // Asks every child to finish (closes its stdin), collects its report, and
+  // kills those that do not exit within `grace_s`.
+  std::vector<NodeReport> shutdown(double grace_s);
+
+ private:
+  struct Child {
+    std::string name;
+    std::string kernel;
+    pid_t pid = -1;
+    int to_child = -1;    // its stdin
+    int from_child = -1;  // its stdout
+    std::string buffer;
+    bool ready = false;
+    bool eof = false;
+    NodeReport report;
+  };
+  void supervise();
+  void on_line(Child& child, const std::string& line);
+  void reap(Child& child, bool wait);
+
+  std::vector<Child> children_;
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  bool stopping_ = false;
+  std::string failure_;
+  int wake_pipe_[2] = {-1, -1};
+  std::thread supervisor_;
+};
+
+}  // namespace robotperf::harness

@@ -1,0 +1,296 @@
+#include "robotperf/harness/run.hpp"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <set>
+#include <thread>
+
+#include "black_box.hpp"
+#include "node_processes.hpp"
+#include "robotperf/graph/executor.hpp"
+
+namespace robotperf::harness {
+namespace {
+
+struct Wiring {
+  std::set<std::string> published;   // topics someone in the whole graph publishes
+  std::set<std::string> subscribed;  // topics someone in the whole graph subscribes
+};
+
+Wiring wiring_of(const BenchmarkSpec& spec) {
+  Wiring w;
+  for (const auto& in : spec.inputs) w.published.insert(in.topic);
+  w.subscribed.insert(spec.output.topic);
+  for (const auto& node : spec.nodes) {
+    const kernels::KernelInfo* info = kernels::find_kernel(node.kernel);
+    for (const auto& [port, topic] : node.topics) {
+      const bool is_input = std::ranges::count(info->input_ports, port) > 0;
+      (is_input ? w.subscribed : w.published).insert(topic);
+    }
+  }
+  return w;
+}
+
+// The first endpoint of `nodes` still waiting for a peer it will have once the
+// whole graph is up, or an empty string when all are connected.
+std::string unconnected_endpoint(const std::vector<std::shared_ptr<graph::Node>>& nodes,
+                                 const Wiring& w) {
+  for (const auto& node : nodes) {
+    for (const auto& e : node->endpoints()) {
+      const bool expects_peer =
+          e.is_publisher ? w.subscribed.contains(e.topic) : w.published.contains(e.topic);
+      if (expects_peer && e.matched == 0) {
+        return node->name() + (e.is_publisher ? " publishing " : " subscribing ") + e.topic;
+      }
+    }
+  }
+  return {};
+}
+
+// Polls matched counts: discovery offers no single event for "graph complete".
+void wait_connected(const std::vector<std::shared_ptr<graph::Node>>& nodes, const Wiring& w,
+                    int64_t deadline_ns) {
+  while (true) {
+    const std::string missing = unconnected_endpoint(nodes, w);
+    if (missing.empty()) return;
+    if (rmw::steady_now_ns() > deadline_ns) {
+      throw std::runtime_error("graph did not connect in time: " + missing + " has no peer");
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+}
+
+std::string what_of(const std::exception_ptr& e) {
+  try {
+    std::rethrow_exception(e);
+  } catch (const std::exception& ex) {
+    return ex.what();
+  } catch (...) {
+    return "unknown error";
+  }
+}
+
+std::unique_ptr<rmw::Transport> transport_for(const RunOptions& options) {
+  rmw::TransportOptions t;
+  t.domain_id = options.domain_id;
+  return rmw::make_transport(options.rmw, t);
+}
+
+void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& tally) {
+  std::vector<double> from_scheduled, from_sent, lateness;
+  std::vector<int64_t> receptions;
+  int64_t first_measured_send = -1;
+  for (auto& rec : r.records) {
+    rec.received_ns = tally.received_ns[rec.id];
+    rec.warmup = rec.id < r.warmup;
+    lateness.push_back(static_cast<double>(rec.sent_ns - rec.scheduled_ns));
+    if (rec.warmup) continue;
+    ++r.measured;
+    if (first_measured_send < 0) first_measured_send = rec.sent_ns;
+    if (rec.received_ns < 0) continue;
+    ++r.matched;
+    from_scheduled.push_back(static_cast<double>(rec.received_ns - rec.scheduled_ns));
+    from_sent.push_back(static_cast<double>(rec.received_ns - rec.sent_ns));
+    receptions.push_back(rec.received_ns);
+  }
+  r.sent = r.records.size();
+  r.lost = r.measured - r.matched;
+  r.loss_percent =
+      r.measured ? 100.0 * static_cast<double>(r.lost) / static_cast<double>(r.measured) : 0.0;
+  r.duplicates = tally.duplicates;
+  r.unknown = tally.unknown;
+  r.latency_from_scheduled = metrics::compute_stats(from_scheduled);
+  r.latency_from_sent = metrics::compute_stats(from_sent);
+  r.send_lateness = metrics::compute_stats(lateness);
+
+  // N receptions span N-1 intervals: (N-1)/span gives f for N messages at f Hz.
+  if (receptions.size() >= 2) {
+    std::ranges::sort(receptions);
+    const double span = static_cast<double>(receptions.back() - receptions.front()) * 1e-9;
+    if (span > 0) r.throughput_hz = static_cast<double>(receptions.size() - 1) / span;
+    r.window_s = static_cast<double>(receptions.back() - first_measured_send) * 1e-9;
+  }
+  std::vector<int64_t> sends;
+  for (const auto& rec : r.records) {
+    if (!rec.warmup) sends.push_back(rec.sent_ns);
+  }
+  if (sends.size() >= 2) {
+    r.offered_rate_hz = static_cast<double>(sends.size() - 1) /
+                        (static_cast<double>(sends.back() - sends.front()) * 1e-9);
+  }
+
+  auto invalid = [&](std::string why) { r.invalid_reasons.push_back(std::move(why)); };
+  for (const auto& e : r.errors) invalid("run ended early: " + e);
+  if (r.matched < spec.min_samples) {
+    invalid(std::to_string(r.matched) + " matched samples, fewer than the " +
+            std::to_string(spec.min_samples) + " required");
+  }
+  if (r.loss_percent > spec.max_loss_percent) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%.2f %% lost, above the %.2f %% bound", r.loss_percent,
+                  spec.max_loss_percent);
+    invalid(buf);
+  }
+  if (r.duplicates > 0) invalid(std::to_string(r.duplicates) + " duplicate receptions");
+  if (r.unknown > 0) invalid(std::to_string(r.unknown) + " receptions with unknown message IDs");
+  r.valid = r.invalid_reasons.empty();
+}
+
+}  // namespace
+
+RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
+  RunResult r;
+  r.benchmark_id = spec.id;
+  r.benchmark_name = spec.name;
+  r.category = spec.category;
+  r.rmw = options.rmw;
+  r.processes = options.processes == ProcessLayout::kSingle ? "single" : "per-node";
+  r.executor_threads = spec.executor_threads;
+  r.output_topic = spec.output.topic;
+  if (options.processes == ProcessLayout::kPerNode && options.rmw == "intra") {
+    throw std::invalid_argument(
+        "--processes per-node needs an inter-process transport (--rmw fastdds)");
+  }
+
+  // Everything is loaded before timing starts (DESIGN.md §3.4).
+  const Dataset dataset = load_dataset(spec.dataset);
+  r.dataset = dataset.name;
+  r.dataset_hash = dataset.hash;
+  r.dataset_frames = dataset.frames;
+
+  r.rate_hz = options.rate_hz.value_or(spec.rate_hz);
+  if (!(r.rate_hz > 0) || !std::isfinite(r.rate_hz))
+    throw std::invalid_argument("--rate must be a positive number");
+  if (options.count) {
+    r.count = *options.count;
+  } else if (options.duration_s) {
+    if (!(*options.duration_s > 0)) throw std::invalid_argument("--duration must be positive");
+    r.count = static_cast<std::size_t>(std::llround(*options.duration_s * r.rate_hz));
+  } else {
+    r.count = spec.count ? spec.count : dataset.frames;
+  }
+  r.warmup = options.warmup.value_or(spec.warmup);
+  if (r.warmup >= r.count) {
+    throw std::invalid_argument("warm-up (" + std::to_string(r.warmup) +
+                                ") must be smaller than the message count (" +
+                                std::to_string(r.count) + ")");
+  }
+  r.drain_s = options.drain_s.value_or(spec.drain_s);
+
+  graph::Context context(transport_for(options));
+  const auto period_ns = static_cast<int64_t>(std::llround(1e9 / r.rate_hz));
+  const auto wall_now = std::chrono::duration_cast<std::chrono::milliseconds>(
+      std::chrono::system_clock::now().time_since_epoch());
+  r.started_unix_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(wall_now).count();
+  const MessageIds ids{r.started_unix_ns, period_ns, r.count};
+
+  Playback playback(context, spec, dataset, ids);
+  Monitor monitor(context, spec.output, ids, r.warmup);
+  graph::Executor monitor_executor(1);
+  monitor_executor.add_node(monitor.node());
+
+  graph::Executor graph_executor(spec.executor_threads);
+  std::vector<std::shared_ptr<graph::Node>> local_nodes{playback.node(), monitor.node()};
+  std::unique_ptr<NodeProcesses> children;
+  if (options.processes == ProcessLayout::kSingle) {
+    for (const auto& n : spec.nodes) {
+      auto node = kernels::make_kernel_node(n.kernel, context, kernel_config(n));
+      graph_executor.add_node(node);
+      local_nodes.push_back(node);
+      r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1});
+    }
+  } else {
+    children =
+        std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw, options.domain_id);
+  }
+
+  const int64_t connect_deadline =
+      rmw::steady_now_ns() + static_cast<int64_t>(options.connect_timeout_s * 1e9);
+  monitor_executor.start();
+  graph_executor.start();
+  if (children) children->wait_ready(connect_deadline);
+  wait_connected(local_nodes, wiring_of(spec), connect_deadline);
+
+  auto failure = [&]() -> std::string {
+    if (auto e = graph_executor.error()) return what_of(e);
+    if (auto e = monitor_executor.error()) return what_of(e);
+    if (children) return children->failure();
+    return {};
+  };
+  playback.run(
+      r.records, [&] { return !failure().empty(); },
+      [&](std::size_t sent) {
+        if (options.progress) options.progress(sent, r.count, monitor.received());
+      });
+
+  // Drain: wait for the outstanding outputs, at most drain_s after the last send.
+  const std::size_t expected = r.records.size() > r.warmup ? r.records.size() - r.warmup : 0;
+  const int64_t last_send = r.records.empty() ? rmw::steady_now_ns() : r.records.back().sent_ns;
+  monitor.wait_for(expected, last_send + static_cast<int64_t>(r.drain_s * 1e9));
+  const Monitor::Tally tally = monitor.tally();
+
+  if (std::string f = failure(); !f.empty()) r.errors.push_back(f);
+  graph_executor.stop();
+  monitor_executor.stop();
+  if (children) r.nodes = children->shutdown(5.0);
+  r.completed = r.records.size() == r.count && r.errors.empty();
+  summarise(r, spec, tally);
+  return r;
+}
+
+int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
+                     const std::string& rmw, int domain_id) {
+  const NodeSpec* node_spec = spec.find_node(node_name);
+  if (node_spec == nullptr) {
+    std::cerr << "robotperf node: benchmark " << spec.id << " has no node '" << node_name << "'\n";
+    return 2;
+  }
+  rmw::TransportOptions t;
+  t.domain_id = domain_id;
+  graph::Context context(rmw::make_transport(rmw, t));
+  auto node = kernels::make_kernel_node(node_spec->kernel, context, kernel_config(*node_spec));
+  graph::Executor executor(spec.executor_threads);
+  executor.add_node(node);
+
+  // The runner closes our stdin to stop us; a dead runner does the same.
+  std::atomic<bool> stdin_closed = false;
+  std::thread watcher([&] {
+    char buf[256];
+    while (std::cin.read(buf, sizeof buf) || std::cin.gcount() > 0) {
+    }
+    stdin_closed = true;
+    executor.cancel();
+  });
+
+  int code = 0;
+  try {
+    // Matching happens in the transport's threads; messages that arrive
+    // before spin() wait in the subscriptions' queues.
+    wait_connected({node}, wiring_of(spec), rmw::steady_now_ns() + 60'000'000'000);
+    std::cout << "ready" << std::endl;
+    executor.spin();  // until the watcher cancels it, or a callback throws
+  } catch (const std::exception& e) {
+    std::cerr << "robotperf node " << node_name << ": " << e.what() << "\n";
+    code = 3;
+  }
+  if (!stdin_closed) {
+    // Failed on our own: leave without waiting for the runner.
+    std::cout.flush();
+    std::_Exit(code);
+  }
+  watcher.join();
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  auto seconds = [](timeval tv) { return static_cast<double>(tv.tv_sec) + tv.tv_usec * 1e-6; };
+  std::cout << "stats {\"cpu_user_s\":" << seconds(usage.ru_utime)
+            << ",\"cpu_system_s\":" << seconds(usage.ru_stime) << "}" << std::endl;
+  return code;
+}
+
+}  // namespace robotperf::harness

@@ -1,0 +1,137 @@
+#include <charconv>
+#include <stdexcept>
+
+#include "builtin_kernels.hpp"
+
+namespace robotperf::kernels {
+namespace {
+
+struct Entry {
+  KernelInfo info;
+  KernelFactory factory;
+};
+
+const std::vector<Entry>& entries() {
+  static const std::vector<Entry> table{
+      {{"image_proc/rectify",
+        "undistort and rectify an image with its CameraInfo (cached map, cv::remap), as image_proc",
+        {"cpu"},
+        {"image", "camera_info"},
+        {"image_rect"}},
+       make_rectify_node},
+      {{"image_proc/resize",
+        "resize an image and scale its CameraInfo (K, P, ROI), as image_proc",
+        {"cpu"},
+        {"image", "camera_info"},
+        {"resize", "resize_info"}},
+       make_resize_node},
+      {{"util/relay",
+        "republish each message unchanged; delay_ms, drop_every and fail_after for harness checks",
+        {"cpu"},
+        {"input"},
+        {"output"}},
+       make_relay_node},
+  };
+  return table;
+}
+
+template <class T>
+T parse_number(const std::string& name, const std::string& text) {
+  T value{};
+  const char* end = text.data() + text.size();
+  auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  if (ec != std::errc() || ptr != end) {
+    throw std::invalid_argument("parameter '" + name + "': '" + text + "' is not a valid number");
+  }
+  return value;
+}
+
+}  // namespace
+
+const std::string* Parameters::find(const std::string& name) const {
+  auto it = values_.find(name);
+  if (it == values_.end()) return nullptr;
+  read_.insert(name);
+  return &it->second;
+}
+
+double Parameters::get_double(const std::string& name, double fallback) const {
+  const std::string* v = find(name);
+  return v ? parse_number<double>(name, *v) : fallback;
+}
+
+int64_t Parameters::get_int(const std::string& name, int64_t fallback) const {
+  const std::string* v = find(name);
+  return v ? parse_number<int64_t>(name, *v) : fallback;
+}
+
+bool Parameters::get_bool(const std::string& name, bool fallback) const {
+  const std::string* v = find(name);
+  if (!v) return fallback;
+  if (*v == "true" || *v == "True" || *v == "1") return true;
+  if (*v == "false" || *v == "False" || *v == "0") return false;
+  throw std::invalid_argument("parameter '" + name + "': '" + *v + "' is not true or false");
+}
+
+std::string Parameters::get_string(const std::string& name, const std::string& fallback) const {
+  const std::string* v = find(name);
+  return v ? *v : fallback;
+}
+
+std::vector<std::string> Parameters::unused() const {
+  std::vector<std::string> out;
+  for (const auto& [name, value] : values_) {
+    if (!read_.contains(name)) out.push_back(name);
+  }
+  return out;
+}
+
+std::string KernelConfig::topic(const std::string& port) const {
+  auto it = topics.find(port);
+  if (it == topics.end()) {
+    throw std::invalid_argument("node '" + node_name + "': no topic wired to port '" + port + "'");
+  }
+  return it->second;
+}
+
+const std::vector<KernelInfo>& kernel_infos() {
+  static const std::vector<KernelInfo> infos = [] {
+    std::vector<KernelInfo> out;
+    for (const auto& e : entries()) out.push_back(e.info);
+    return out;
+  }();
+  return infos;
+}
+
+const KernelInfo* find_kernel(const std::string& name) {
+  for (const auto& info : kernel_infos()) {
+    if (info.name == name) return &info;
+  }
+  return nullptr;
+}
+
+std::shared_ptr<graph::Node> make_kernel_node(const std::string& kernel, graph::Context& context,
+                                              const KernelConfig& config) {
+  for (const auto& e : entries()) {
+    if (e.info.name != kernel) continue;
+    bool backend_ok = false;
+    for (const auto& b : e.info.backends) backend_ok |= b == config.backend;
+    if (!backend_ok) {
+      throw std::invalid_argument("kernel '" + kernel + "' has no backend '" + config.backend +
+                                  "'");
+    }
+    auto node = e.factory(context, config);
+    if (auto unused = config.parameters.unused(); !unused.empty()) {
+      std::string names;
+      for (const auto& n : unused) names += (names.empty() ? "" : ", ") + n;
+      throw std::invalid_argument("node '" + config.node_name + "': unknown parameter(s) " + names +
+                                  " for kernel " + kernel);
+    }
+    return node;
+  }
+  std::string known;
+  for (const auto& e : entries()) known += (known.empty() ? "" : ", ") + e.info.name;
+  throw std::invalid_argument("unknown kernel '" + kernel + "' (known: " + known + ")");
+}
+
+}  // namespace robotperf::kernels

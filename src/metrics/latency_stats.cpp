@@ -1,0 +1,114 @@
+#include "robotperf/metrics/latency_stats.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace robotperf::metrics {
+namespace {
+
+// Neumaier's variant of Kahan summation: the rounding error of each addition is carried
+// separately, so the sum of 10^6 values keeps nearly full double precision.
+class CompensatedSum {
+ public:
+  void add(double value) {
+    const double next = sum_ + value;
+    if (std::fabs(sum_) >= std::fabs(value)) {
+      compensation_ += (sum_ - next) + value;
+    } else {
+      compensation_ += (value - next) + sum_;
+    }
+    sum_ = next;
+  }
+  double value() const { return sum_ + compensation_; }
+
+ private:
+  double sum_ = 0.0;
+  double compensation_ = 0.0;
+};
+
+nlohmann::json scaled_or_null(double value, double scale) {
+  const double scaled = value * scale;
+  if (std::isnan(scaled)) return nullptr;
+  return scaled;
+}
+
+}  // namespace
+
+double quantile_of_sorted(std::span<const double> sorted_samples, double q) {
+  if (!(q >= 0.0 && q <= 1.0)) {
+    throw std::invalid_argument("quantile must be in [0, 1], got " + std::to_string(q));
+  }
+  if (sorted_samples.empty()) return SampleStats::kNoValue;
+  const double rank = q * static_cast<double>(sorted_samples.size() - 1);
+  const auto lower = static_cast<std::size_t>(std::floor(rank));
+  if (lower + 1 >= sorted_samples.size()) return sorted_samples.back();
+  const double fraction = rank - static_cast<double>(lower);
+  const double below = sorted_samples[lower];
+  const double above = sorted_samples[lower + 1];
+  return below + fraction * (above - below);
+}
+
+SampleStats compute_stats(std::span<const double> samples) {
+  SampleStats stats;
+  stats.count = samples.size();
+  if (samples.empty()) return stats;
+  if (!std::all_of(samples.begin(), samples.end(), [](double x) { return std::isfinite(x); })) {
+    throw std::invalid_argument("compute_stats: samples must be finite (found NaN or infinity)");
+  }
+
+  std::vector<double> sorted(samples.begin(), samples.end());
+  std::sort(sorted.begin(), sorted.end());
+
+  const auto n = static_cast<double>(sorted.size());
+  CompensatedSum sum;
+  CompensatedSum sum_of_squares;
+  for (const double x : sorted) {
+    sum.add(x);
+    sum_of_squares.add(x * x);
+  }
+  stats.min = sorted.front();
+  stats.max = sorted.back();
+  // Rounding can put the mean of equal samples one ulp outside [min, max]; clamping keeps the
+  // ordering a reader relies on.
+  stats.mean = std::clamp(sum.value() / n, stats.min, stats.max);
+  stats.rms = std::sqrt(sum_of_squares.value() / n);
+
+  // Two-pass variance: subtracting the mean first avoids the cancellation of E[x^2] - E[x]^2 when
+  // the spread is small compared with the values (typical of latencies).
+  if (sorted.size() > 1) {
+    CompensatedSum squared_deviations;
+    for (const double x : sorted) {
+      const double deviation = x - stats.mean;
+      squared_deviations.add(deviation * deviation);
+    }
+    stats.stddev = std::sqrt(squared_deviations.value() / (n - 1.0));
+  }
+
+  stats.p50 = quantile_of_sorted(sorted, 0.50);
+  stats.p90 = quantile_of_sorted(sorted, 0.90);
+  stats.p99 = quantile_of_sorted(sorted, 0.99);
+  stats.p999 = quantile_of_sorted(sorted, 0.999);
+  return stats;
+}
+
+nlohmann::json to_json(const SampleStats& stats, double scale, std::string_view unit) {
+  nlohmann::json json = {
+      {"count", stats.count},
+      {"min", scaled_or_null(stats.min, scale)},
+      {"mean", scaled_or_null(stats.mean, scale)},
+      {"rms", scaled_or_null(stats.rms, scale)},
+      {"stddev", scaled_or_null(stats.stddev, scale)},
+      {"p50", scaled_or_null(stats.p50, scale)},
+      {"p90", scaled_or_null(stats.p90, scale)},
+      {"p99", scaled_or_null(stats.p99, scale)},
+      {"p999", scaled_or_null(stats.p999, scale)},
+      {"max", scaled_or_null(stats.max, scale)},
+  };
+  if (!unit.empty()) json["unit"] = std::string(unit);
+  return json;
+}
+
+}  // namespace robotperf::metrics

@@ -1,0 +1,95 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "robotperf/msgs/std_msgs.hpp"
+
+namespace robotperf::msgs {
+
+struct RegionOfInterest {
+  uint32_t x_offset = 0;
+  uint32_t y_offset = 0;
+  uint32_t height = 0;
+  uint32_t width = 0;
+  bool do_rectify = false;
+  friend bool operator==(const RegionOfInterest&, const RegionOfInterest&) = default;
+};
+template <class V, class M>
+requires std::is_same_v<std::remove_const_t<M>, RegionOfInterest>
+void visit_fields(V& v, M& m) {
+  v(m.x_offset);
+  v(m.y_offset);
+  v(m.height);
+  v(m.width);
+  v(m.do_rectify);
+}
+
+struct CameraInfo {
+  Header header;
+  uint32_t height = 0;
+  uint32_t width = 0;
+  std::string distortion_model;
+  std::vector<double> d;
+  std::array<double, 9> k{};
+  std::array<double, 9> r{};
+  std::array<double, 12> p{};
+  uint32_t binning_x = 0;
+  uint32_t binning_y = 0;
+  RegionOfInterest roi;
+  friend bool operator==(const CameraInfo&, const CameraInfo&) = default;
+};
+template <class V, class M>
+requires std::is_same_v<std::remove_const_t<M>, CameraInfo>
+void visit_fields(V& v, M& m) {
+  v(m.header);
+  v(m.height);
+  v(m.width);
+  v(m.distortion_model);
+  v(m.d);
+  v(m.k);
+  v(m.r);
+  v(m.p);
+  v(m.binning_x);
+  v(m.binning_y);
+  v(m.roi);
+}
+
+struct Image {
+  Header header;
+  uint32_t height = 0;
+  uint32_t width = 0;
+  std::string encoding;
+  uint8_t is_bigendian = 0;
+  uint32_t step = 0;
+  std::vector<uint8_t> data;
+  friend bool operator==(const Image&, const Image&) = default;
+};
+template <class V, class M>
+requires std::is_same_v<std::remove_const_t<M>, Image>
+void visit_fields(V& v, M& m) {
+  v(m.header);
+  v(m.height);
+  v(m.width);
+  v(m.encoding);
+  v(m.is_bigendian);
+  v(m.step);
+  v(m.data);
+}
+
+template <>
+struct MessageTraits<RegionOfInterest> {
+  static constexpr std::string_view ros_type = "sensor_msgs/msg/RegionOfInterest";
+};
+template <>
+struct MessageTraits<CameraInfo> {
+  static constexpr std::string_view ros_type = "sensor_msgs/msg/CameraInfo";
+};
+template <>
+struct MessageTraits<Image> {
+  static constexpr std::string_view ros_type = "sensor_msgs/msg/Image";
+};
+
+}  // namespace robotperf::msgs

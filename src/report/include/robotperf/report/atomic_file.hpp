@@ -1,0 +1,20 @@
+// Crash-safe file replacement for results: a reader sees either the old file or the complete new
+// one, never a truncated mix, even if the process or the machine dies mid-write.
+#pragma once
+
+#include <filesystem>
+#include <string_view>
+
+namespace robotperf::report {
+
+// Writes `content` to `path` atomically: creates missing parent directories, writes a uniquely
+// named temporary file in the same directory, fsyncs it, renames it over `path` and fsyncs the
+// directory so that the rename itself is durable.
+//
+// A new file gets mode 0666 minus the umask; a replaced file keeps its mode. If `path` is a
+// symbolic link, the link itself is replaced. On failure throws std::runtime_error with one line
+// naming the path, the failed step and the system's error text; up to the rename, an existing file
+// at `path` is untouched and the temporary file is removed.
+void write_file_atomically(const std::filesystem::path& path, std::string_view content);
+
+}  // namespace robotperf::report

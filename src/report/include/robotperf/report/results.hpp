@@ -1,0 +1,32 @@
+// The results of a run as files: the results JSON (schema robotperf.result/1),
+// the raw per-message latencies as CSV, and the summary table for a terminal.
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "robotperf/harness/run.hpp"
+#include "robotperf/sysinfo/machine.hpp"
+
+namespace robotperf::report {
+
+inline constexpr const char* kResultSchema = "robotperf.result/1";
+
+// robotperf's own version, revision, compiler, build and library versions.
+nlohmann::json software_json();
+
+nlohmann::json result_to_json(const harness::RunResult& result,
+                              const sysinfo::MachineInfo& machine);
+
+// id,warmup,scheduled_ns,sent_ns,received_ns,latency_scheduled_ns,latency_sent_ns (empty when
+// lost).
+std::string latencies_csv(const harness::RunResult& result);
+
+// A human-readable summary: configuration, counts, latency distribution, throughput, verdict.
+std::string summary_table(const harness::RunResult& result);
+
+// "<benchmark>-<rmw>-<UTC time>", unique per run start, safe as a file name.
+std::string result_basename(const harness::RunResult& result);
+
+}  // namespace robotperf::report

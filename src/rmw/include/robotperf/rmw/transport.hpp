@@ -1,0 +1,103 @@
+// The transport interface: what the node runtime needs from a middleware.
+//
+// Publishers hand over immutable, shared messages; a transport may pass the
+// pointer on unchanged (intra) or serialize it (DDS). Subscriptions follow the
+// rmw model: the transport calls `on_ready` from any thread when data arrives,
+// and the executor later `take`s it on its own thread.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "robotperf/msgs/type_support.hpp"
+
+namespace robotperf::rmw {
+
+using MessagePtr = std::shared_ptr<const void>;
+
+enum class Reliability { kReliable, kBestEffort };
+enum class Durability { kVolatile, kTransientLocal };
+enum class History { kKeepLast, kKeepAll };
+
+struct QoS {
+  History history = History::kKeepLast;
+  std::size_t depth = 10;
+  Reliability reliability = Reliability::kReliable;
+  Durability durability = Durability::kVolatile;
+
+  // ROS 2 `rmw_qos_profile_default`: KEEP_LAST 10, RELIABLE, VOLATILE.
+  static QoS ros_default() { return QoS{}; }
+  // ROS 2 `rmw_qos_profile_sensor_data`: KEEP_LAST 5, BEST_EFFORT, VOLATILE.
+  static QoS sensor_data() {
+    return QoS{History::kKeepLast, 5, Reliability::kBestEffort, Durability::kVolatile};
+  }
+  // Parses "default" or "sensor_data"; throws std::invalid_argument otherwise.
+  static QoS from_profile_name(const std::string& name);
+
+  friend bool operator==(const QoS&, const QoS&) = default;
+};
+
+struct MessageInfo {
+  int64_t source_timestamp_ns = 0;     // publication time on the sender (steady clock for intra)
+  int64_t reception_timestamp_ns = 0;  // arrival at the transport on the receiver
+  bool from_intra_process = false;
+};
+
+// Errors a transport reports to the user (bad topic, type clash, DDS failure).
+class TransportError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class PublisherHandle {
+ public:
+  virtual ~PublisherHandle() = default;
+  virtual void publish(MessagePtr msg) = 0;
+  // Subscriptions currently matched (discovered and compatible).
+  virtual std::size_t matched_subscriptions() const = 0;
+};
+
+class SubscriptionHandle {
+ public:
+  virtual ~SubscriptionHandle() = default;
+  // The oldest pending message, or nullptr when none is pending.
+  virtual MessagePtr take(MessageInfo* info) = 0;
+  virtual std::size_t matched_publishers() const = 0;
+};
+
+class Transport {
+ public:
+  virtual ~Transport() = default;
+  virtual std::string name() const = 0;
+  // `topic` is the ROS name, e.g. "/camera/image_raw".
+  virtual std::unique_ptr<PublisherHandle> create_publisher(const std::string& topic,
+                                                            const msgs::TypeSupport& type,
+                                                            const QoS& qos) = 0;
+  // `on_ready` may be called from any thread, possibly once for several messages.
+  virtual std::unique_ptr<SubscriptionHandle> create_subscription(
+      const std::string& topic, const msgs::TypeSupport& type, const QoS& qos,
+      std::function<void()> on_ready) = 0;
+};
+
+struct TransportOptions {
+  int domain_id = 0;  // DDS domain; ROS_DOMAIN_ID when set
+};
+
+// "intra" or "fastdds"; throws std::invalid_argument naming the valid choices.
+std::unique_ptr<Transport> make_transport(const std::string& name,
+                                          const TransportOptions& options = {});
+
+// Reads ROS_DOMAIN_ID (0 when unset); throws std::invalid_argument when malformed.
+int domain_id_from_environment();
+
+// Monotonic time (CLOCK_MONOTONIC) in nanoseconds: the one clock of DESIGN.md §3.2.
+int64_t steady_now_ns();
+
+// "/camera/image_raw" -> "rt/camera/image_raw"; validates the ROS name.
+std::string dds_topic_name(const std::string& ros_topic);
+
+}  // namespace robotperf::rmw

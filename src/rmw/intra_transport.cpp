@@ -1,0 +1,156 @@
+// In-process transport: publishers hand the same immutable message object to
+// every subscription on the topic. No serialization, no copies.
+#include "intra_transport.hpp"
+
+#include <deque>
+#include <map>
+#include <mutex>
+#include <vector>
+
+namespace robotperf::rmw {
+namespace {
+
+class IntraSubscription;
+
+struct Topic {
+  std::string type;
+  std::vector<IntraSubscription*> subscriptions;
+  std::size_t publishers = 0;
+};
+
+// Topics and their endpoints, shared by a transport's publishers and subscriptions.
+struct Registry {
+  std::mutex mutex;
+  std::map<std::string, Topic> topics;
+
+  Topic& topic(const std::string& name, const msgs::TypeSupport& type) {
+    auto [it, inserted] = topics.try_emplace(name);
+    if (inserted) {
+      it->second.type = type.ros_type;
+    } else if (it->second.type != type.ros_type) {
+      throw TransportError("topic '" + name + "' already carries " + it->second.type +
+                           ", cannot use it for " + type.ros_type);
+    }
+    return it->second;
+  }
+};
+
+class IntraSubscription final : public SubscriptionHandle {
+ public:
+  IntraSubscription(std::shared_ptr<Registry> registry, std::string topic, const QoS& qos,
+                    std::function<void()> on_ready)
+      : registry_(std::move(registry)),
+        topic_(std::move(topic)),
+        qos_(qos),
+        on_ready_(std::move(on_ready)) {}
+
+  ~IntraSubscription() override {
+    std::lock_guard lock(registry_->mutex);
+    auto& subs = registry_->topics[topic_].subscriptions;
+    std::erase(subs, this);
+  }
+
+  // Called with the registry lock held.
+  void deliver(const MessagePtr& msg, int64_t published_ns) {
+    {
+      std::lock_guard lock(mutex_);
+      // KEEP_LAST drops the oldest; KEEP_ALL grows without bound as DDS would
+      // with unlimited resource limits.
+      if (qos_.history == History::kKeepLast && queue_.size() >= qos_.depth) queue_.pop_front();
+      queue_.push_back({msg, published_ns});
+    }
+    if (on_ready_) on_ready_();
+  }
+
+  MessagePtr take(MessageInfo* info) override {
+    std::lock_guard lock(mutex_);
+    if (queue_.empty()) return nullptr;
+    Pending p = std::move(queue_.front());
+    queue_.pop_front();
+    if (info != nullptr) {
+      info->source_timestamp_ns = p.published_ns;
+      info->reception_timestamp_ns = p.published_ns;
+      info->from_intra_process = true;
+    }
+    return std::move(p.msg);
+  }
+
+  std::size_t matched_publishers() const override {
+    std::lock_guard lock(registry_->mutex);
+    return registry_->topics[topic_].publishers;
+  }
+
+ private:
+  struct Pending {
+    MessagePtr msg;
+    int64_t published_ns;
+  };
+  std::shared_ptr<Registry> registry_;
+  std::string topic_;
+  QoS qos_;
+  std::function<void()> on_ready_;
+  std::mutex mutex_;
+  std::deque<Pending> queue_;
+};
+
+class IntraPublisher final : public PublisherHandle {
+ public:
+  IntraPublisher(std::shared_ptr<Registry> registry, std::string topic)
+      : registry_(std::move(registry)), topic_(std::move(topic)) {}
+
+  ~IntraPublisher() override {
+    std::lock_guard lock(registry_->mutex);
+    --registry_->topics[topic_].publishers;
+  }
+
+  void publish(MessagePtr msg) override {
+    const int64_t now = steady_now_ns();
+    std::lock_guard lock(registry_->mutex);
+    for (IntraSubscription* sub : registry_->topics[topic_].subscriptions) sub->deliver(msg, now);
+  }
+
+  std::size_t matched_subscriptions() const override {
+    std::lock_guard lock(registry_->mutex);
+    return registry_->topics[topic_].subscriptions.size();
+  }
+
+ private:
+  std::shared_ptr<Registry> registry_;
+  std::string topic_;
+};
+
+class IntraTransport final : public Transport {
+ public:
+  std::string name() const override { return "intra"; }
+
+  std::unique_ptr<PublisherHandle> create_publisher(const std::string& topic,
+                                                    const msgs::TypeSupport& type,
+                                                    const QoS&) override {
+    dds_topic_name(topic);  // validates the name as the DDS transport would
+    std::lock_guard lock(registry_->mutex);
+    ++registry_->topic(topic, type).publishers;
+    return std::make_unique<IntraPublisher>(registry_, topic);
+  }
+
+  std::unique_ptr<SubscriptionHandle> create_subscription(const std::string& topic,
+                                                          const msgs::TypeSupport& type,
+                                                          const QoS& qos,
+                                                          std::function<void()> on_ready) override {
+    dds_topic_name(topic);
+    auto sub = std::make_unique<IntraSubscription>(registry_, topic, qos, std::move(on_ready));
+    std::lock_guard lock(registry_->mutex);
+    registry_->topic(topic, type).subscriptions.push_back(sub.get());
+    return sub;
+  }
+
+ private:
+  std::shared_ptr<Registry> registry_ = std::make_shared<Registry>();
+};
+
+}  // namespace
+
+std::unique_ptr<Transport> make_intra_transport() {
+  return std::make_unique<IntraTransport>();
+}
+
+}  // namespace robotperf::rmw

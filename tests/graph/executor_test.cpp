@@ -1,0 +1,156 @@
+#include "robotperf/graph/executor.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
+#include "robotperf/msgs/sensor_msgs.hpp"
+
+namespace robotperf::graph {
+namespace {
+
+using msgs::Image;
+
+// Counts events and lets a test wait for a number of them.
+class Counter {
+ public:
+  void add() {
+    {
+      std::lock_guard lock(m_);
+      ++n_;
+    }
+    cv_.notify_all();
+  }
+  bool wait_for(int n, std::chrono::seconds timeout = std::chrono::seconds(10)) {
+    std::unique_lock lock(m_);
+    return cv_.wait_for(lock, timeout, [&] { return n_ >= n; });
+  }
+  int value() {
+    std::lock_guard lock(m_);
+    return n_;
+  }
+
+ private:
+  std::mutex m_;
+  std::condition_variable cv_;
+  int n_ = 0;
+};
+
+TEST(Executor, RunsSubscriptionCallbacksOnItsThread) {
+  Context ctx(rmw::make_transport("intra"));
+  auto node = std::make_shared<Node>(ctx, "n");
+  Counter received;
+  std::thread::id callback_thread;
+  auto sub = node->create_subscription<Image>("/in", QoS{}, [&](std::shared_ptr<const Image>) {
+    callback_thread = std::this_thread::get_id();
+    received.add();
+  });
+  auto pub = node->create_publisher<Image>("/in");
+  Executor exec(1);
+  exec.add_node(node);
+  exec.start();
+  for (int i = 0; i < 5; ++i) pub->publish(Image{});
+  ASSERT_TRUE(received.wait_for(5));
+  exec.stop();
+  EXPECT_NE(callback_thread, std::this_thread::get_id());
+  EXPECT_EQ(received.value(), 5);
+}
+
+TEST(Executor, PipelineAcrossNodesPreservesOrder) {
+  Context ctx(rmw::make_transport("intra"));
+  auto a = std::make_shared<Node>(ctx, "a");
+  auto b = std::make_shared<Node>(ctx, "b");
+  auto a_out = a->create_publisher<Image>("/mid");
+  auto a_in = a->create_subscription<Image>(
+      "/in", QoS{}, [&](std::shared_ptr<const Image> m) { a_out->publish(m); });
+  std::vector<int32_t> order;
+  Counter done;
+  auto b_in = b->create_subscription<Image>("/mid", QoS{}, [&](std::shared_ptr<const Image> m) {
+    order.push_back(m->header.stamp.sec);
+    done.add();
+  });
+  auto source = a->create_publisher<Image>("/in");
+  Executor exec(2);
+  exec.add_node(a);
+  exec.add_node(b);
+  exec.start();
+  for (int i = 0; i < 8; ++i) {
+    Image m;
+    m.header.stamp.sec = i;
+    source->publish(std::move(m));
+  }
+  ASSERT_TRUE(done.wait_for(8));
+  exec.stop();
+  EXPECT_EQ(order, (std::vector<int32_t>{0, 1, 2, 3, 4, 5, 6, 7}));
+}
+
+TEST(Executor, CallbacksOfOneNodeNeverOverlapOnManyThreads) {
+  Context ctx(rmw::make_transport("intra"));
+  auto node = std::make_shared<Node>(ctx, "n");
+  std::atomic<int> inside{0};
+  std::atomic<int> max_inside{0};
+  Counter done;
+  auto body = [&](std::shared_ptr<const Image>) {
+    const int now = ++inside;
+    int prev = max_inside.load();
+    while (now > prev && !max_inside.compare_exchange_weak(prev, now)) {
+    }
+    std::this_thread::yield();
+    --inside;
+    done.add();
+  };
+  auto s1 = node->create_subscription<Image>("/a", QoS{}, body);
+  auto s2 = node->create_subscription<Image>("/b", QoS{}, body);
+  auto pa = node->create_publisher<Image>("/a");
+  auto pb = node->create_publisher<Image>("/b");
+  Executor exec(4);
+  exec.add_node(node);
+  exec.start();
+  for (int i = 0; i < 5; ++i) {
+    pa->publish(Image{});
+    pb->publish(Image{});
+  }
+  ASSERT_TRUE(done.wait_for(10));
+  exec.stop();
+  EXPECT_EQ(max_inside.load(), 1);
+}
+
+TEST(Executor, TimerFiresPeriodically) {
+  Context ctx(rmw::make_transport("intra"));
+  auto node = std::make_shared<Node>(ctx, "n");
+  Counter ticks;
+  const int64_t start = rmw::steady_now_ns();
+  auto timer = node->create_timer(std::chrono::milliseconds(10), [&] { ticks.add(); });
+  Executor exec(1);
+  exec.add_node(node);
+  exec.start();
+  ASSERT_TRUE(ticks.wait_for(5));
+  exec.stop();
+  // Five ticks of a 10 ms timer take at least 50 ms (absolute deadlines).
+  EXPECT_GE(rmw::steady_now_ns() - start, 50'000'000);
+  EXPECT_THROW(node->create_timer(std::chrono::milliseconds(0), [] {}), std::invalid_argument);
+}
+
+TEST(Executor, ACallbackExceptionStopsSpinAndNamesTheNode) {
+  Context ctx(rmw::make_transport("intra"));
+  auto node = std::make_shared<Node>(ctx, "faulty");
+  auto sub = node->create_subscription<Image>(
+      "/in", QoS{}, [](std::shared_ptr<const Image>) { throw std::runtime_error("bad frame"); });
+  auto pub = node->create_publisher<Image>("/in");
+  pub->publish(Image{});
+  Executor exec(1);
+  exec.add_node(node);
+  try {
+    exec.spin();
+    FAIL() << "spin() should rethrow";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("faulty"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("bad frame"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace robotperf::graph

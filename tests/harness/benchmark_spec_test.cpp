@@ -1,0 +1,102 @@
+#include "robotperf/harness/benchmark_spec.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "robotperf/harness/dataset.hpp"
+#include "test_package.hpp"
+
+namespace robotperf::harness {
+namespace {
+
+using testing::relay_graph;
+using testing::TestPackage;
+
+std::string error_of(const std::filesystem::path& dir) {
+  try {
+    load_benchmark(dir);
+  } catch (const BenchmarkError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(BenchmarkSpec, LoadsTheShippedPerceptionPackages) {
+  const auto specs =
+      discover_benchmarks(std::filesystem::path(ROBOTPERF_SOURCE_DIR) / "benchmarks");
+  std::vector<std::string> ids;
+  for (const auto& s : specs) ids.push_back(s.id);
+  for (const char* id : {"a1", "a2", "a5"}) EXPECT_NE(std::ranges::find(ids, id), ids.end()) << id;
+
+  const auto a1 = find_benchmark(std::filesystem::path(ROBOTPERF_SOURCE_DIR) / "benchmarks", "a1");
+  EXPECT_EQ(a1.name, "a1_perception_2nodes");
+  EXPECT_EQ(a1.category, "perception");
+  ASSERT_EQ(a1.nodes.size(), 2u);
+  EXPECT_EQ(a1.nodes[0].kernel, "image_proc/rectify");
+  EXPECT_EQ(a1.nodes[1].parameters.at("scale_width"), "2.0");
+  EXPECT_EQ(a1.output.topic, "/resize/image");
+  EXPECT_DOUBLE_EQ(a1.rate_hz, 30.0);
+}
+
+TEST(BenchmarkSpec, UnknownBenchmarkListsTheKnownOnes) {
+  try {
+    find_benchmark(std::filesystem::path(ROBOTPERF_SOURCE_DIR) / "benchmarks", "z9");
+    FAIL();
+  } catch (const BenchmarkError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown benchmark 'z9'"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("a1"), std::string::npos);
+  }
+}
+
+TEST(BenchmarkSpec, MalformedYamlNamesFileAndLine) {
+  TestPackage p("malformed", "dataset: perception/image\ninputs: [\n  {topic: /in\n");
+  const std::string err = error_of(p.dir());
+  EXPECT_NE(err.find("graph.yaml:"), std::string::npos) << err;
+  EXPECT_NE(err.find("malformed YAML"), std::string::npos) << err;
+}
+
+TEST(BenchmarkSpec, RejectsUnknownKeysKernelsPortsAndParameters) {
+  {
+    TestPackage p("typo", relay_graph("", "rate_hzz: 5\n"));
+    EXPECT_NE(error_of(p.dir()).find("unknown key 'rate_hzz'"), std::string::npos);
+  }
+  {
+    std::string g = relay_graph("");
+    g.replace(g.find("util/relay"), 10, "util/nothing");
+    TestPackage p("kernel", g);
+    EXPECT_NE(error_of(p.dir()).find("unknown kernel 'util/nothing'"), std::string::npos);
+  }
+  {
+    std::string g = relay_graph("");
+    g.replace(g.find("output: /out"), 12, "exit: /out");
+    TestPackage p("port", g);
+    EXPECT_NE(error_of(p.dir()).find("no port 'exit'"), std::string::npos);
+  }
+  {
+    std::string g = relay_graph("");
+    g.replace(g.find("stream: image}"), 14, "stream: image, qos: fastest}");
+    TestPackage q("qos", g);
+    EXPECT_NE(error_of(q.dir()).find("unknown QoS profile 'fastest'"), std::string::npos);
+  }
+}
+
+TEST(BenchmarkSpec, MissingFileIsReported) {
+  TestPackage p("missing", relay_graph(""));
+  std::filesystem::remove(p.dir() / "graph.yaml");
+  EXPECT_NE(error_of(p.dir()).find("graph.yaml: file not found"), std::string::npos);
+}
+
+TEST(Dataset, BuiltInCameraLoadsWholeAndHashesStably) {
+  const Dataset a = load_dataset("perception/image");
+  EXPECT_EQ(a.frames, 68u);
+  EXPECT_EQ(a.stream("image").messages.size(), 68u);
+  EXPECT_EQ(a.stream("camera_info").messages.size(), 68u);
+  EXPECT_EQ(a.hash, load_dataset("perception/image").hash);
+  EXPECT_EQ(a.hash.rfind("fnv1a64:", 0), 0u);
+  EXPECT_THROW(a.stream("lidar"), std::invalid_argument);
+  EXPECT_THROW(load_dataset("nope"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace robotperf::harness

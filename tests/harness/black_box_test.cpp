@@ -1,0 +1,141 @@
+// The harness against graphs whose behaviour is known exactly.
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "robotperf/harness/run.hpp"
+#include "test_package.hpp"
+
+namespace robotperf::harness {
+namespace {
+
+using testing::relay_graph;
+using testing::TestPackage;
+
+constexpr double kMs = 1e6;
+
+RunResult run_package(const std::string& name, const std::string& graph, RunOptions options) {
+  TestPackage p(name, graph);
+  return run_benchmark(load_benchmark(p.dir()), options);
+}
+
+RunOptions with_count(std::size_t n, double rate_hz) {
+  RunOptions o;
+  o.count = n;
+  o.rate_hz = rate_hz;
+  return o;
+}
+
+void expect_sane(const RunResult& r) {
+  EXPECT_LE(r.lost, r.measured);
+  EXPECT_GE(r.loss_percent, 0.0);
+  EXPECT_LE(r.loss_percent, 100.0);
+  EXPECT_EQ(r.lost + r.matched, r.measured);
+  for (const auto& rec : r.records) {
+    if (rec.received_ns < 0) continue;
+    EXPECT_GE(rec.received_ns, rec.sent_ns) << "negative latency for id " << rec.id;
+    EXPECT_GE(rec.sent_ns, rec.scheduled_ns) << "sent before its deadline, id " << rec.id;
+  }
+}
+
+TEST(BlackBox, NullGraphMatchesEverythingWithSmallOverhead) {
+  const RunResult r = run_package("null", relay_graph("none"), with_count(60, 200));
+  expect_sane(r);
+  EXPECT_EQ(r.sent, 60u);
+  EXPECT_EQ(r.matched, 60u);
+  EXPECT_EQ(r.lost, 0u);
+  EXPECT_EQ(r.duplicates, 0u);
+  EXPECT_EQ(r.unknown, 0u);
+  EXPECT_TRUE(r.valid) << (r.invalid_reasons.empty() ? "" : r.invalid_reasons[0]);
+  EXPECT_GE(r.latency_from_sent.min, 0.0);
+  // In-process delivery of a shared pointer: well under a few milliseconds even on a busy machine.
+  EXPECT_LT(r.latency_from_sent.p50, 5 * kMs);
+  EXPECT_LE(r.latency_from_sent.p50, r.latency_from_scheduled.p50);
+}
+
+TEST(BlackBox, KnownDelayIsMeasured) {
+  // 20 ms of work per message at 20 Hz: never queued, so latency ≈ 20 ms.
+  const RunResult r = run_package("delay", relay_graph("delay_ms: 20"), with_count(30, 20));
+  expect_sane(r);
+  ASSERT_EQ(r.matched, 30u);
+  EXPECT_GE(r.latency_from_sent.min, 20 * kMs);
+  EXPECT_LT(r.latency_from_sent.p50, 20 * kMs + 15 * kMs);
+  EXPECT_GE(r.latency_from_scheduled.min, r.latency_from_sent.min);
+}
+
+TEST(BlackBox, DroppingEveryFourthMessageIsCountedExactly) {
+  const RunResult r = run_package("drop", relay_graph("drop_every: 4"), with_count(40, 200));
+  expect_sane(r);
+  EXPECT_EQ(r.measured, 40u);
+  EXPECT_EQ(r.lost, 10u);
+  EXPECT_DOUBLE_EQ(r.loss_percent, 25.0);
+  for (const auto& rec : r.records) {
+    // The relay drops its 4th, 8th, ... message: ids 3, 7, 11, ...
+    EXPECT_EQ(rec.received_ns < 0, (rec.id + 1) % 4 == 0) << "id " << rec.id;
+  }
+  EXPECT_FALSE(r.valid);
+  ASSERT_FALSE(r.invalid_reasons.empty());
+  EXPECT_NE(r.invalid_reasons[0].find("25.00 % lost"), std::string::npos);
+}
+
+TEST(BlackBox, WarmupIsExcludedAndIdsStayUniqueWhenTheDatasetLoops) {
+  RunOptions o = with_count(150, 300);  // the dataset has 68 frames: it loops twice
+  o.warmup = 10;
+  const RunResult r = run_package("loop", relay_graph(""), o);
+  expect_sane(r);
+  EXPECT_EQ(r.sent, 150u);
+  EXPECT_EQ(r.measured, 140u);
+  EXPECT_EQ(r.matched, 140u);
+  EXPECT_EQ(r.duplicates, 0u);
+  EXPECT_EQ(r.unknown, 0u);
+  EXPECT_EQ(r.latency_from_sent.count, 140u);
+  std::set<uint64_t> ids;
+  for (const auto& rec : r.records) ids.insert(rec.id);
+  EXPECT_EQ(ids.size(), 150u);
+}
+
+TEST(BlackBox, ThroughputOfNMessagesAtFHzIsF) {
+  const RunResult r = run_package("rate", relay_graph(""), with_count(50, 50));
+  ASSERT_EQ(r.matched, 50u);
+  // Not N/(N-1)·f: within 10 % of 50 Hz on a noisy machine, where N/(N-1) alone is 2 %.
+  EXPECT_NEAR(r.throughput_hz, 50.0, 5.0);
+  EXPECT_NEAR(r.offered_rate_hz, 50.0, 5.0);
+}
+
+TEST(BlackBox, FailingNodeEndsTheRunEarlyAndKeepsWhatWasMeasured) {
+  const RunResult r = run_package("fail", relay_graph("fail_after: 10"), with_count(60, 100));
+  expect_sane(r);
+  EXPECT_FALSE(r.completed);
+  ASSERT_EQ(r.errors.size(), 1u);
+  EXPECT_NE(r.errors[0].find("node 'relay'"), std::string::npos) << r.errors[0];
+  EXPECT_NE(r.errors[0].find("fail_after"), std::string::npos) << r.errors[0];
+  EXPECT_EQ(r.matched, 10u);
+  EXPECT_LT(r.sent, 60u);
+  EXPECT_FALSE(r.valid);
+}
+
+TEST(BlackBox, FastDdsInOneProcessLosesNothing) {
+  RunOptions o = with_count(40, 100);
+  o.rmw = "fastdds";
+  o.domain_id = 100 + getpid() % 100;
+  const RunResult r = run_package("fastdds", relay_graph(""), o);
+  expect_sane(r);
+  EXPECT_EQ(r.matched, 40u);
+  EXPECT_EQ(r.lost, 0u);
+  EXPECT_TRUE(r.valid);
+}
+
+TEST(BlackBox, BadOptionsAreRejectedBeforeTiming) {
+  RunOptions o = with_count(10, 100);
+  o.warmup = 10;
+  EXPECT_THROW(run_package("warm", relay_graph(""), o), std::invalid_argument);
+  o = with_count(10, 100);
+  o.rmw = "carrier-pigeon";
+  EXPECT_THROW(run_package("rmw", relay_graph(""), o), std::invalid_argument);
+  o = with_count(10, 100);
+  o.processes = ProcessLayout::kPerNode;
+  EXPECT_THROW(run_package("layout", relay_graph(""), o), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace robotperf::harness

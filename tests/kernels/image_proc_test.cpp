@@ -1,0 +1,589 @@
+#include "robotperf/kernels/image_proc.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+#include "robotperf/datasets/synthetic_camera.hpp"
+#include "robotperf/kernels/camera_model.hpp"
+
+namespace robotperf::kernels {
+namespace {
+
+using datasets::CameraFrame;
+using datasets::kCheckerTilePx;
+using datasets::SyntheticCameraConfig;
+
+msgs::Image make_image(const std::string& encoding, uint32_t width, uint32_t height,
+                       uint32_t bytes_per_pixel) {
+  msgs::Image image;
+  image.header.frame_id = "cam";
+  image.header.stamp = msgs::Time{12, 345};
+  image.encoding = encoding;
+  image.width = width;
+  image.height = height;
+  image.step = width * bytes_per_pixel;
+  image.data.resize(size_t{image.step} * height);
+  for (size_t i = 0; i < image.data.size(); ++i) image.data[i] = static_cast<uint8_t>(i * 7);
+  return image;
+}
+
+cv::Mat to_gray(const msgs::Image& rgb) {
+  cv::Mat gray;
+  cv::cvtColor(image_view(rgb), gray, cv::COLOR_RGB2GRAY);
+  return gray;
+}
+
+// Sub-pixel corner position found by cv::cornerSubPix starting from `guess`.
+cv::Point2f refine_corner(const cv::Mat& gray, cv::Point2f guess) {
+  std::vector<cv::Point2f> corners{guess};
+  cv::cornerSubPix(gray, corners, cv::Size(6, 6), cv::Size(-1, -1),
+                   cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-3));
+  return corners[0];
+}
+
+// Checkerboard corners (ideal pixel coordinates) near the image border, where the lens moves
+// them most, and away from the box in frame 0.
+std::vector<cv::Point2f> border_corners() {
+  std::vector<cv::Point2f> corners;
+  for (const int i : {2, 4, 12, 14}) {
+    for (const int j : {2, 10}) {
+      corners.emplace_back(kCheckerTilePx * i - 0.5f, kCheckerTilePx * j - 0.5f);
+    }
+  }
+  return corners;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Encodings and views
+// ---------------------------------------------------------------------------------------------
+
+TEST(ImageEncodings, MapsRosEncodingsToOpenCvTypes) {
+  EXPECT_EQ(cv_type_from_encoding("rgb8"), CV_8UC3);
+  EXPECT_EQ(cv_type_from_encoding("bgr8"), CV_8UC3);
+  EXPECT_EQ(cv_type_from_encoding("rgba8"), CV_8UC4);
+  EXPECT_EQ(cv_type_from_encoding("bgra8"), CV_8UC4);
+  EXPECT_EQ(cv_type_from_encoding("mono8"), CV_8UC1);
+  EXPECT_EQ(cv_type_from_encoding("mono16"), CV_16UC1);
+  EXPECT_EQ(cv_type_from_encoding("16UC1"), CV_16UC1);
+  EXPECT_EQ(cv_type_from_encoding("32FC1"), CV_32FC1);
+  EXPECT_EQ(cv_type_from_encoding("8UC3"), CV_8UC3);
+  EXPECT_EQ(cv_type_from_encoding("64FC2"), CV_64FC2);
+  EXPECT_EQ(cv_type_from_encoding("bayer_rggb8"), CV_8UC1);
+  EXPECT_EQ(cv_type_from_encoding("bayer_grbg16"), CV_16UC1);
+  EXPECT_EQ(cv_type_from_encoding("yuv422"), CV_8UC2);
+  for (const char* bad : {"", "rgb", "jpeg", "32FC", "32FC0", "12UC1", "8UC1x", "bayer_rggb12"}) {
+    EXPECT_THROW(cv_type_from_encoding(bad), std::invalid_argument) << bad;
+  }
+}
+
+TEST(ImageView, IsZeroCopyAndHonoursStep) {
+  msgs::Image image = make_image("mono8", 5, 3, 1);
+  image.step = 8;  // padded rows
+  image.data.assign(24, 0);
+  image.data[8 + 2] = 42;
+  cv::Mat view = image_view(image);
+  EXPECT_EQ(view.data, image.data.data());
+  EXPECT_EQ(view.cols, 5);
+  EXPECT_EQ(view.rows, 3);
+  EXPECT_EQ(view.step[0], 8u);
+  EXPECT_EQ(view.at<uint8_t>(1, 2), 42);
+  view.at<uint8_t>(2, 4) = 9;
+  EXPECT_EQ(image.data[16 + 4], 9);
+}
+
+TEST(ImageView, RejectsInconsistentImages) {
+  const msgs::Image good = make_image("rgb8", 4, 2, 3);
+  EXPECT_NO_THROW(image_view(good));
+
+  msgs::Image short_data = good;
+  short_data.data.pop_back();
+  EXPECT_THROW(image_view(short_data), std::invalid_argument);
+
+  msgs::Image long_data = good;
+  long_data.data.push_back(0);
+  EXPECT_THROW(image_view(long_data), std::invalid_argument);
+
+  msgs::Image short_step = good;
+  short_step.step = 11;
+  short_step.data.resize(22);
+  EXPECT_THROW(image_view(short_step), std::invalid_argument);
+
+  msgs::Image unknown = good;
+  unknown.encoding = "rgb9";
+  EXPECT_THROW(image_view(unknown), std::invalid_argument);
+
+  msgs::Image misaligned = make_image("32FC1", 2, 2, 4);
+  misaligned.step = 10;
+  misaligned.data.resize(20);
+  EXPECT_THROW(image_view(misaligned), std::invalid_argument);
+
+  msgs::Image big_endian = make_image("mono16", 2, 2, 2);
+  big_endian.is_bigendian = 1;
+  EXPECT_THROW(image_view(big_endian), std::invalid_argument);
+
+  msgs::Image huge = good;
+  huge.height = 0x80000000u;  // step * height overflows 32 bits, data is tiny
+  EXPECT_THROW(image_view(huge), std::invalid_argument);
+}
+
+TEST(ImageView, PrepareImageReusesTheBuffer) {
+  msgs::Image image;
+  msgs::Header header;
+  header.frame_id = "f";
+  cv::Mat first = prepare_image(image, header, "32FC1", 16, 8);
+  EXPECT_EQ(image.step, 64u);
+  EXPECT_EQ(image.data.size(), 512u);
+  EXPECT_EQ(image.encoding, "32FC1");
+  EXPECT_EQ(image.header.frame_id, "f");
+  EXPECT_EQ(first.type(), CV_32FC1);
+  const uint8_t* buffer = image.data.data();
+  cv::Mat second = prepare_image(image, header, "mono8", 20, 10);
+  EXPECT_EQ(image.data.data(), buffer);
+  EXPECT_EQ(second.data, buffer);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rectify
+// ---------------------------------------------------------------------------------------------
+
+class RectifySynthetic : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    config_ = new SyntheticCameraConfig();
+    config_->frames = 10;
+    frames_ = new std::vector<CameraFrame>(datasets::generate_camera_sequence(*config_));
+  }
+  static void TearDownTestSuite() {
+    delete frames_;
+    delete config_;
+  }
+  static SyntheticCameraConfig* config_;
+  static std::vector<CameraFrame>* frames_;
+};
+SyntheticCameraConfig* RectifySynthetic::config_ = nullptr;
+std::vector<CameraFrame>* RectifySynthetic::frames_ = nullptr;
+
+TEST_F(RectifySynthetic, PutsCheckerboardCornersWhereThePinholeModelDoes) {
+  const CameraFrame& frame = frames_->front();
+  Rectifier rectifier;
+  const msgs::Image rectified = rectifier.rectify(frame.image, frame.info);
+  const cv::Mat rectified_gray = to_gray(rectified);
+  const cv::Mat raw_gray = to_gray(frame.image);
+
+  const cv::Matx33d k(frame.info.k.data());
+  const cv::Mat d(frame.info.d);
+  for (const cv::Point2f ideal : border_corners()) {
+    // Rectified: the corner is where the ideal pinhole camera sees it.
+    const cv::Point2f found = refine_corner(rectified_gray, ideal + cv::Point2f(1.5f, -1.5f));
+    EXPECT_LT(cv::norm(found - ideal), 0.5) << "ideal " << ideal << " found " << found;
+
+    // Raw: the corner is where the forward lens model puts it, far from the ideal position.
+    std::vector<cv::Point3d> ray{
+        {(ideal.x - k(0, 2)) / k(0, 0), (ideal.y - k(1, 2)) / k(1, 1), 1.0}};
+    std::vector<cv::Point2d> distorted;
+    cv::projectPoints(ray, cv::Vec3d::all(0), cv::Vec3d::all(0), k, d, distorted);
+    const cv::Point2f expected_raw(distorted[0]);
+    EXPECT_GT(cv::norm(expected_raw - ideal), 8.0) << "lens should move " << ideal;
+    const cv::Point2f found_raw = refine_corner(raw_gray, expected_raw + cv::Point2f(1.5f, -1.5f));
+    EXPECT_LT(cv::norm(found_raw - expected_raw), 0.5)
+        << "expected " << expected_raw << " found " << found_raw;
+  }
+}
+
+TEST_F(RectifySynthetic, MatchesTheIdealRenderInTheInterior) {
+  Rectifier rectifier;
+  for (const uint32_t index : {0u, 9u}) {
+    const CameraFrame& frame = (*frames_)[index];
+    const msgs::Image rectified = rectifier.rectify(frame.image, frame.info);
+    const msgs::Image ideal = datasets::render_ideal_camera_frame(*config_, index);
+    const cv::Rect interior(8, 8, 640 - 16, 480 - 16);
+    const double rectified_error =
+        cv::norm(image_view(rectified)(interior), image_view(ideal)(interior), cv::NORM_L1) /
+        (interior.area() * 3.0);
+    const double raw_error =
+        cv::norm(image_view(frame.image)(interior), image_view(ideal)(interior), cv::NORM_L1) /
+        (interior.area() * 3.0);
+    RecordProperty("rectified_vs_ideal_frame" + std::to_string(index),
+                   std::to_string(rectified_error));
+    RecordProperty("raw_vs_ideal_frame" + std::to_string(index), std::to_string(raw_error));
+    EXPECT_LT(rectified_error, 4.0) << "frame " << index;
+    EXPECT_GT(raw_error, 5.0 * rectified_error) << "frame " << index;
+  }
+}
+
+TEST_F(RectifySynthetic, KeepsHeaderEncodingAndSize) {
+  const CameraFrame& frame = (*frames_)[3];
+  Rectifier rectifier;
+  const msgs::Image rectified = rectifier.rectify(frame.image, frame.info);
+  EXPECT_EQ(rectified.header, frame.image.header);
+  EXPECT_EQ(rectified.encoding, "rgb8");
+  EXPECT_EQ(rectified.width, 640u);
+  EXPECT_EQ(rectified.height, 480u);
+  EXPECT_EQ(rectified.step, 640u * 3);
+  EXPECT_NE(rectified.data, frame.image.data);
+}
+
+TEST_F(RectifySynthetic, ComputesTheMapOncePerCameraModel) {
+  Rectifier rectifier;
+  msgs::Image rectified;
+  for (const CameraFrame& frame : *frames_) rectifier.rectify(frame.image, frame.info, rectified);
+  EXPECT_EQ(rectifier.map_computations(), 1u);
+
+  // A new header (stamp) alone does not invalidate the map.
+  msgs::CameraInfo info = frames_->front().info;
+  info.header.stamp = msgs::Time{99, 0};
+  rectifier.rectify(frames_->front().image, info, rectified);
+  EXPECT_EQ(rectifier.map_computations(), 1u);
+
+  info.k[0] += 1.0;
+  const msgs::Image changed = rectifier.rectify(frames_->front().image, info);
+  EXPECT_EQ(rectifier.map_computations(), 2u);
+  EXPECT_NE(changed.data, rectified.data);
+
+  info.d[0] = -0.2;
+  rectifier.rectify(frames_->front().image, info, rectified);
+  EXPECT_EQ(rectifier.map_computations(), 3u);
+  rectifier.rectify(frames_->front().image, info, rectified);
+  EXPECT_EQ(rectifier.map_computations(), 3u);
+}
+
+TEST_F(RectifySynthetic, ReusesTheOutputBuffer) {
+  Rectifier rectifier;
+  msgs::Image rectified;
+  rectifier.rectify((*frames_)[0].image, (*frames_)[0].info, rectified);
+  const uint8_t* buffer = rectified.data.data();
+  rectifier.rectify((*frames_)[1].image, (*frames_)[1].info, rectified);
+  EXPECT_EQ(rectified.data.data(), buffer);
+  EXPECT_EQ(rectified.header.stamp, (*frames_)[1].image.header.stamp);
+}
+
+TEST_F(RectifySynthetic, RoiRectifiesTheMatchingPartOfTheFullImage) {
+  const CameraFrame& frame = frames_->front();
+  Rectifier rectifier;
+  const msgs::Image full = rectifier.rectify(frame.image, frame.info);
+
+  // A raw image cropped to the ROI rectifies like the full image inside the ROI, except where
+  // the full image's source pixels lie outside the crop.
+  const cv::Rect roi(160, 120, 320, 240);
+  msgs::CameraInfo info = frame.info;
+  info.roi = msgs::RegionOfInterest{160, 120, 240, 320, false};
+  msgs::Image cropped;
+  image_view(frame.image)(roi).copyTo(prepare_image(cropped, frame.image.header, "rgb8", 320, 240));
+  const msgs::Image rectified_crop = rectifier.rectify(cropped, info);
+  EXPECT_EQ(rectifier.map_computations(), 1u);
+  ASSERT_EQ(rectified_crop.width, 320u);
+  const cv::Rect inner(20, 20, 280, 200);
+  EXPECT_EQ(cv::norm(image_view(rectified_crop)(inner), image_view(full)(roi)(inner), cv::NORM_INF),
+            0.0);
+
+  // The image must have the ROI's size.
+  EXPECT_THROW(rectifier.rectify(frame.image, info), std::invalid_argument);
+  // A ROI outside the image is rejected.
+  info.roi.x_offset = 400;
+  EXPECT_THROW(rectifier.rectify(cropped, info), std::invalid_argument);
+}
+
+TEST_F(RectifySynthetic, BinningRectifiesAtTheBinnedResolution) {
+  const CameraFrame& frame = frames_->front();
+  msgs::CameraInfo info = frame.info;
+  info.binning_x = 2;
+  info.binning_y = 2;
+  msgs::Image binned;
+  cv::resize(image_view(frame.image), prepare_image(binned, frame.image.header, "rgb8", 320, 240),
+             cv::Size(320, 240), 0, 0, cv::INTER_AREA);
+  Rectifier rectifier;
+  const msgs::Image rectified = rectifier.rectify(binned, info);
+  ASSERT_EQ(rectified.width, 320u);
+  ASSERT_EQ(rectified.height, 240u);
+  // Same geometry at half resolution: a corner lands at half its full-resolution position.
+  const cv::Point2f ideal(kCheckerTilePx * 14.0f, kCheckerTilePx * 10.0f);
+  const cv::Point2f expected = ideal * 0.5f - cv::Point2f(0.5f, 0.5f);
+  const cv::Point2f found = refine_corner(to_gray(rectified), expected + cv::Point2f(1, 1));
+  EXPECT_LT(cv::norm(found - expected), 0.5) << found;
+  EXPECT_THROW(rectifier.rectify(frame.image, info), std::invalid_argument);
+}
+
+TEST_F(RectifySynthetic, WorksOnMono8AndFloatImages) {
+  const CameraFrame& frame = frames_->front();
+  Rectifier rectifier;
+  const msgs::Image rgb_rectified = rectifier.rectify(frame.image, frame.info);
+
+  msgs::Image mono;
+  cv::cvtColor(image_view(frame.image), prepare_image(mono, frame.image.header, "mono8", 640, 480),
+               cv::COLOR_RGB2GRAY);
+  const msgs::Image mono_rectified = rectifier.rectify(mono, frame.info);
+  EXPECT_EQ(mono_rectified.encoding, "mono8");
+  EXPECT_LE(cv::norm(image_view(mono_rectified), to_gray(rgb_rectified), cv::NORM_INF), 2.0);
+
+  msgs::Image depth;
+  image_view(mono).convertTo(prepare_image(depth, frame.image.header, "32FC1", 640, 480), CV_32F,
+                             1.0 / 255.0);
+  const msgs::Image depth_rectified = rectifier.rectify(depth, frame.info);
+  EXPECT_EQ(depth_rectified.encoding, "32FC1");
+  const cv::Mat depth_view = image_view(depth_rectified);
+  const cv::Mat mono_view = image_view(mono_rectified);
+  EXPECT_NEAR(depth_view.at<float>(240, 320) * 255.0f, mono_view.at<uint8_t>(240, 320), 1.0);
+  EXPECT_EQ(rectifier.map_computations(), 1u);
+}
+
+TEST(Rectify, FloatImagesGetNanOutsideTheFieldOfView) {
+  // Strong pincushion distortion: the rectified corners see outside the raw image.
+  const msgs::CameraInfo info =
+      make_pinhole_camera_info(64, 48, 1.2, {0.6, 0.3, 0.0, 0.0, 0.0}, "cam");
+  msgs::Image depth;
+  prepare_image(depth, info.header, "32FC1", 64, 48).setTo(2.0f);
+  Rectifier rectifier;
+  const msgs::Image rectified = rectifier.rectify(depth, info);
+  const cv::Mat view = image_view(rectified);
+  EXPECT_TRUE(std::isnan(view.at<float>(0, 0)));
+  EXPECT_FLOAT_EQ(view.at<float>(24, 32), 2.0f);
+
+  msgs::Image mono;
+  prepare_image(mono, info.header, "mono8", 64, 48).setTo(200);
+  EXPECT_EQ(image_view(rectifier.rectify(mono, info)).at<uint8_t>(0, 0), 0);
+}
+
+TEST(Rectify, PassesThroughWhenDistortionIsZero) {
+  const msgs::Image image = make_image("rgb8", 64, 48, 3);
+  msgs::CameraInfo info = make_pinhole_camera_info(64, 48, 1.0, {0, 0, 0, 0, 0}, "cam");
+  // image_proc passes through on zero D alone, even with a rectifying R.
+  info.r = {0.9, 0.1, 0, -0.1, 0.9, 0, 0, 0, 1};
+  Rectifier rectifier;
+  EXPECT_EQ(rectifier.rectify(image, info), image);
+  info.d.clear();
+  EXPECT_EQ(rectifier.rectify(image, info), image);
+  EXPECT_EQ(rectifier.map_computations(), 0u);
+}
+
+TEST(Rectify, RejectsBadInput) {
+  const msgs::Image image = make_image("rgb8", 64, 48, 3);
+  const msgs::CameraInfo info = make_pinhole_camera_info(64, 48, 1.0, {-0.2, 0.05, 0, 0, 0}, "cam");
+  Rectifier rectifier;
+  EXPECT_NO_THROW(rectifier.rectify(image, info));
+
+  msgs::CameraInfo uncalibrated = info;
+  uncalibrated.k[0] = 0.0;
+  EXPECT_THROW(rectifier.rectify(image, uncalibrated), std::invalid_argument);
+
+  msgs::CameraInfo unknown_model = info;
+  unknown_model.distortion_model = "fancy";
+  EXPECT_THROW(rectifier.rectify(image, unknown_model), std::invalid_argument);
+
+  msgs::CameraInfo wrong_d_size = info;
+  wrong_d_size.distortion_model = std::string(kRationalPolynomial);
+  EXPECT_THROW(rectifier.rectify(image, wrong_d_size), std::invalid_argument);
+
+  msgs::Image short_data = image;
+  short_data.data.resize(100);
+  EXPECT_THROW(rectifier.rectify(short_data, info), std::invalid_argument);
+
+  msgs::Image unknown_encoding = image;
+  unknown_encoding.encoding = "hsv8";
+  EXPECT_THROW(rectifier.rectify(unknown_encoding, info), std::invalid_argument);
+
+  msgs::Image wrong_size = make_image("rgb8", 32, 48, 3);
+  EXPECT_THROW(rectifier.rectify(wrong_size, info), std::invalid_argument);
+
+  msgs::Image in_place = image;
+  EXPECT_THROW(rectifier.rectify(in_place, info, in_place), std::invalid_argument);
+
+  EXPECT_THROW(Rectifier(7), std::invalid_argument);
+}
+
+TEST(Rectify, RationalPolynomialUsesAllEightCoefficients) {
+  const msgs::Image image = make_image("mono8", 64, 48, 1);
+  msgs::CameraInfo info = make_pinhole_camera_info(64, 48, 1.0, {-0.2, 0.05, 0, 0, 0, 0, 0, 0},
+                                                   "cam", kRationalPolynomial);
+  Rectifier rectifier;
+  const msgs::Image without_k4 = rectifier.rectify(image, info);
+  info.d[5] = 0.3;  // k4, in the denominator
+  const msgs::Image with_k4 = rectifier.rectify(image, info);
+  EXPECT_EQ(rectifier.map_computations(), 2u);
+  EXPECT_NE(without_k4.data, with_k4.data);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Resize
+// ---------------------------------------------------------------------------------------------
+
+msgs::CameraInfo make_stereo_right_info() {
+  msgs::CameraInfo info =
+      make_pinhole_camera_info(640, 480, 1.047, {-0.25, 0.12, -0.00028, -5e-5, 0}, "cam");
+  info.k = {500.0, 0.0, 321.5, 0.0, 502.0, 239.25, 0.0, 0.0, 1.0};
+  info.p = {510.0, 0.0, 322.0, -51.0, 0.0, 511.0, 241.0, 7.0, 0.0, 0.0, 1.0, 0.0};
+  info.roi = msgs::RegionOfInterest{10, 20, 300, 400, true};
+  return info;
+}
+
+TEST(Resize, ScalesImageAndCameraInfoByTwo) {
+  const msgs::Image image = make_image("rgb8", 640, 480, 3);
+  const msgs::CameraInfo info = make_stereo_right_info();
+  ResizeParams params;
+  params.scale_width = 2.0;
+  params.scale_height = 2.0;
+  msgs::Image out;
+  msgs::CameraInfo out_info;
+  resize(image, info, params, out, out_info);
+
+  EXPECT_EQ(out.width, 1280u);
+  EXPECT_EQ(out.height, 960u);
+  EXPECT_EQ(out.step, 1280u * 3);
+  EXPECT_EQ(out.data.size(), 1280u * 960 * 3);
+  EXPECT_EQ(out.header, image.header);
+  EXPECT_EQ(out.encoding, "rgb8");
+  cv::Mat expected;
+  cv::resize(image_view(image), expected, cv::Size(1280, 960), 0, 0, cv::INTER_LINEAR);
+  EXPECT_EQ(cv::norm(image_view(out), expected, cv::NORM_INF), 0.0);
+
+  EXPECT_EQ(out_info.width, 1280u);
+  EXPECT_EQ(out_info.height, 960u);
+  const std::array<double, 9> k{1000.0, 0.0, 643.0, 0.0, 1004.0, 478.5, 0.0, 0.0, 1.0};
+  EXPECT_EQ(out_info.k, k);
+  // P[7] (Ty) is not scaled by image_proc.
+  const std::array<double, 12> p{1020.0, 0.0, 644.0, -102.0, 0.0, 1022.0,
+                                 482.0,  7.0, 0.0,   0.0,    1.0, 0.0};
+  EXPECT_EQ(out_info.p, p);
+  EXPECT_EQ(out_info.roi, (msgs::RegionOfInterest{20, 40, 600, 800, true}));
+  EXPECT_EQ(out_info.d, info.d);
+  EXPECT_EQ(out_info.r, info.r);
+  EXPECT_EQ(out_info.header, info.header);
+  EXPECT_EQ(out_info.distortion_model, info.distortion_model);
+}
+
+TEST(Resize, ExplicitSizeWithoutScale) {
+  const msgs::Image image = make_image("mono8", 640, 480, 1);
+  const msgs::CameraInfo info = make_stereo_right_info();
+  ResizeParams params;
+  params.use_scale = false;
+  params.width = 320;
+  params.height = 360;
+  params.interpolation = cv::INTER_NEAREST;
+  msgs::Image out;
+  msgs::CameraInfo out_info;
+  resize(image, info, params, out, out_info);
+  EXPECT_EQ(out.width, 320u);
+  EXPECT_EQ(out.height, 360u);
+  EXPECT_EQ(out.step, 320u);
+  cv::Mat expected;
+  cv::resize(image_view(image), expected, cv::Size(320, 360), 0, 0, cv::INTER_NEAREST);
+  EXPECT_EQ(cv::norm(image_view(out), expected, cv::NORM_INF), 0.0);
+  EXPECT_EQ(out_info.width, 320u);
+  EXPECT_EQ(out_info.height, 360u);
+  EXPECT_DOUBLE_EQ(out_info.k[0], 250.0);
+  EXPECT_DOUBLE_EQ(out_info.k[4], 502.0 * 0.75);
+  EXPECT_DOUBLE_EQ(out_info.p[3], -25.5);
+  EXPECT_EQ(out_info.roi, (msgs::RegionOfInterest{5, 15, 225, 200, true}));
+
+  // -1 keeps that dimension.
+  params.width = -1;
+  resize(image, info, params, out, out_info);
+  EXPECT_EQ(out.width, 640u);
+  EXPECT_EQ(out.height, 360u);
+  EXPECT_EQ(out_info.width, 640u);
+  EXPECT_DOUBLE_EQ(out_info.k[0], 500.0);
+}
+
+TEST(Resize, HandlesFloatAndFractionalScales) {
+  msgs::Image image;
+  cv::Mat view = prepare_image(image, msgs::Header{}, "32FC1", 101, 53);
+  cv::randu(view, 0.0, 10.0);
+  const msgs::CameraInfo info = make_pinhole_camera_info(101, 53, 1.0, {0, 0, 0, 0, 0}, "cam");
+  ResizeParams params;
+  params.scale_width = 0.55;
+  params.scale_height = 1.5;
+  msgs::Image out;
+  msgs::CameraInfo out_info;
+  resize(image, info, params, out, out_info);
+  // cv::resize rounds the image size (55.55 -> 56, 79.5 -> 80, half to even); image_proc
+  // truncates the CameraInfo size.
+  EXPECT_EQ(out.width, 56u);
+  EXPECT_EQ(out.height, 80u);
+  EXPECT_EQ(out.encoding, "32FC1");
+  EXPECT_EQ(out_info.width, 55u);
+  EXPECT_EQ(out_info.height, 79u);
+  EXPECT_DOUBLE_EQ(out_info.k[0], info.k[0] * 0.55);
+  cv::Mat expected;
+  cv::resize(image_view(image), expected, cv::Size(), 0.55, 1.5, cv::INTER_LINEAR);
+  EXPECT_EQ(cv::norm(image_view(out), expected, cv::NORM_INF), 0.0);
+}
+
+TEST(Resize, ReusesOutputBuffersAndAllowsInfoInPlace) {
+  const msgs::Image image = make_image("rgb8", 64, 48, 3);
+  msgs::CameraInfo info = make_pinhole_camera_info(64, 48, 1.0, {0, 0, 0, 0, 0}, "cam");
+  const double fx = info.k[0];
+  ResizeParams params;
+  params.scale_width = 2.0;
+  params.scale_height = 2.0;
+  msgs::Image out;
+  resize(image, info, params, out, info);
+  const uint8_t* buffer = out.data.data();
+  EXPECT_DOUBLE_EQ(info.k[0], 2.0 * fx);
+  EXPECT_EQ(info.width, 128u);
+  info.width = 64;
+  info.height = 48;
+  resize(image, info, params, out, info);
+  EXPECT_EQ(out.data.data(), buffer);
+}
+
+TEST(Resize, RejectsBadInput) {
+  const msgs::Image image = make_image("rgb8", 64, 48, 3);
+  const msgs::CameraInfo info = make_pinhole_camera_info(64, 48, 1.0, {0, 0, 0, 0, 0}, "cam");
+  msgs::Image out;
+  msgs::CameraInfo out_info;
+  ResizeParams params;
+  params.scale_width = 0.0;
+  EXPECT_THROW(resize(image, info, params, out, out_info), std::invalid_argument);
+  params = ResizeParams{};
+  params.use_scale = false;
+  params.width = 0;
+  EXPECT_THROW(resize(image, info, params, out, out_info), std::invalid_argument);
+  params = ResizeParams{};
+  params.interpolation = 9;
+  EXPECT_THROW(resize(image, info, params, out, out_info), std::invalid_argument);
+
+  msgs::Image short_data = image;
+  short_data.data.resize(10);
+  EXPECT_THROW(resize(short_data, info, ResizeParams{}, out, out_info), std::invalid_argument);
+  msgs::Image unknown = image;
+  unknown.encoding = "cmyk8";
+  EXPECT_THROW(resize(unknown, info, ResizeParams{}, out, out_info), std::invalid_argument);
+  msgs::Image same = image;
+  EXPECT_THROW(resize(same, info, ResizeParams{}, same, out_info), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Camera model
+// ---------------------------------------------------------------------------------------------
+
+TEST(CameraModel, PinholeFromHorizontalFieldOfView) {
+  const msgs::CameraInfo info = make_pinhole_camera_info(
+      640, 480, 1.047, {-0.25, 0.12, -0.00028, -5e-5, 0.0}, "camera_optical_frame");
+  EXPECT_NEAR(info.k[0], 554.38, 0.01);
+  EXPECT_DOUBLE_EQ(info.k[0], 320.0 / std::tan(0.5235));
+  EXPECT_DOUBLE_EQ(info.k[4], info.k[0]);
+  EXPECT_DOUBLE_EQ(info.k[2], 320.0);
+  EXPECT_DOUBLE_EQ(info.k[5], 240.0);
+  EXPECT_DOUBLE_EQ(info.k[8], 1.0);
+  EXPECT_EQ(info.r, (std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1}));
+  EXPECT_EQ(info.p,
+            (std::array<double, 12>{info.k[0], 0, 320, 0, 0, info.k[0], 240, 0, 0, 0, 1, 0}));
+  EXPECT_EQ(info.distortion_model, "plumb_bob");
+  EXPECT_EQ(info.d, (std::vector<double>{-0.25, 0.12, -0.00028, -5e-5, 0.0}));
+  EXPECT_EQ(info.header.frame_id, "camera_optical_frame");
+  EXPECT_EQ(info.width, 640u);
+  EXPECT_EQ(info.height, 480u);
+  EXPECT_EQ(info.binning_x, 0u);
+  EXPECT_EQ(info.roi, msgs::RegionOfInterest{});
+
+  EXPECT_THROW(make_pinhole_camera_info(0, 480, 1.0, {}, "c"), std::invalid_argument);
+  EXPECT_THROW(make_pinhole_camera_info(640, 480, 0.0, {}, "c"), std::invalid_argument);
+  EXPECT_THROW(make_pinhole_camera_info(640, 480, 3.2, {}, "c"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace robotperf::kernels

@@ -1,0 +1,170 @@
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include "robotperf/metrics/latency_stats.hpp"
+
+namespace robotperf::metrics {
+namespace {
+
+std::vector<double> one_to(int n) {
+  std::vector<double> values(n);
+  std::iota(values.begin(), values.end(), 1.0);
+  return values;
+}
+
+TEST(ComputeStats, OneToTenMatchesHandComputedValues) {
+  const SampleStats stats = compute_stats(one_to(10));
+  EXPECT_EQ(stats.count, 10u);
+  EXPECT_DOUBLE_EQ(stats.min, 1.0);
+  EXPECT_DOUBLE_EQ(stats.max, 10.0);
+  EXPECT_DOUBLE_EQ(stats.mean, 5.5);
+  // sum of squares 385 → rms sqrt(38.5); squared deviations 82.5 → sample stddev sqrt(82.5 / 9).
+  EXPECT_DOUBLE_EQ(stats.rms, std::sqrt(38.5));
+  EXPECT_DOUBLE_EQ(stats.stddev, std::sqrt(82.5 / 9.0));
+  // Type 7: h = 9 q.
+  EXPECT_DOUBLE_EQ(stats.p50, 5.5);
+  EXPECT_DOUBLE_EQ(stats.p90, 9.1);
+  EXPECT_DOUBLE_EQ(stats.p99, 9.91);
+  EXPECT_DOUBLE_EQ(stats.p999, 9.991);
+}
+
+TEST(ComputeStats, OrderOfInputDoesNotMatter) {
+  const std::vector<double> shuffled = {7, 3, 10, 1, 9, 2, 8, 5, 6, 4};
+  const SampleStats stats = compute_stats(shuffled);
+  EXPECT_DOUBLE_EQ(stats.p90, 9.1);
+  EXPECT_DOUBLE_EQ(stats.min, 1.0);
+  EXPECT_DOUBLE_EQ(stats.max, 10.0);
+}
+
+TEST(ComputeStats, InterpolatesBetweenUnequalNeighbours) {
+  // n = 4, h = 3 q: p50 → h 1.5 between 20 and 40 → 30; p90 → h 2.7 between 40 and 100 → 82.
+  const std::vector<double> samples = {100, 10, 40, 20};
+  const SampleStats stats = compute_stats(samples);
+  EXPECT_DOUBLE_EQ(stats.p50, 30.0);
+  EXPECT_DOUBLE_EQ(stats.p90, 82.0);
+  EXPECT_DOUBLE_EQ(stats.mean, 42.5);
+}
+
+TEST(ComputeStats, SingleSampleHasEveryStatisticButStddev) {
+  const std::vector<double> samples = {4.25};
+  const SampleStats stats = compute_stats(samples);
+  EXPECT_EQ(stats.count, 1u);
+  for (const double value :
+       {stats.min, stats.mean, stats.rms, stats.p50, stats.p90, stats.p99, stats.p999, stats.max}) {
+    EXPECT_DOUBLE_EQ(value, 4.25);
+  }
+  EXPECT_TRUE(std::isnan(stats.stddev));
+}
+
+TEST(ComputeStats, EmptyInputGivesCountZeroAndNaN) {
+  const SampleStats stats = compute_stats(std::vector<double>{});
+  EXPECT_EQ(stats.count, 0u);
+  for (const double value : {stats.min, stats.mean, stats.rms, stats.stddev, stats.p50, stats.p90,
+                             stats.p99, stats.p999, stats.max}) {
+    EXPECT_TRUE(std::isnan(value));
+  }
+}
+
+TEST(ComputeStats, RejectsNonFiniteSamples) {
+  const std::vector<double> with_nan = {1.0, std::numeric_limits<double>::quiet_NaN()};
+  const std::vector<double> with_inf = {1.0, std::numeric_limits<double>::infinity()};
+  EXPECT_THROW(compute_stats(with_nan), std::invalid_argument);
+  EXPECT_THROW(compute_stats(with_inf), std::invalid_argument);
+}
+
+TEST(ComputeStats, SmallSpreadOnLargeOffsetKeepsPrecision) {
+  // Latencies in ns since an epoch-like offset: a naive E[x^2] - E[x]^2 loses all digits here.
+  std::vector<double> samples;
+  for (int i = 0; i < 1000; ++i) samples.push_back(1e12 + (i % 2 == 0 ? -1.0 : 1.0));
+  const SampleStats stats = compute_stats(samples);
+  EXPECT_DOUBLE_EQ(stats.mean, 1e12);
+  EXPECT_NEAR(stats.stddev, std::sqrt(1000.0 / 999.0), 1e-9);
+}
+
+TEST(ComputeStats, MeanOfEqualSamplesStaysWithinMinAndMax) {
+  const std::vector<double> samples(12345, 0.1);
+  const SampleStats stats = compute_stats(samples);
+  EXPECT_GE(stats.mean, stats.min);
+  EXPECT_LE(stats.mean, stats.max);
+  EXPECT_NEAR(stats.stddev, 0.0, 1e-15);
+}
+
+TEST(ComputeStats, MillionUniformSamplesAreFastAndSane) {
+  std::mt19937_64 generator(42);
+  std::uniform_real_distribution<double> uniform(0.0, 1000.0);
+  std::vector<double> samples(1'000'000);
+  for (double& sample : samples) sample = uniform(generator);
+
+  const auto start = std::chrono::steady_clock::now();
+  const SampleStats stats = compute_stats(samples);
+  const auto elapsed = std::chrono::steady_clock::now() - start;
+
+  EXPECT_EQ(stats.count, 1'000'000u);
+  EXPECT_NEAR(stats.p50, 500.0, 3.0);
+  EXPECT_NEAR(stats.p99, 990.0, 1.0);
+  EXPECT_NEAR(stats.p999, 999.0, 0.3);
+  EXPECT_NEAR(stats.mean, 500.0, 2.0);
+  EXPECT_NEAR(stats.stddev, 1000.0 / std::sqrt(12.0), 1.0);
+  EXPECT_NEAR(stats.rms, 1000.0 / std::sqrt(3.0), 1.0);
+  EXPECT_LE(stats.p50, stats.p90);
+  EXPECT_LE(stats.p90, stats.p99);
+  EXPECT_LE(stats.p99, stats.p999);
+  EXPECT_LE(stats.p999, stats.max);
+  // Generous bound (sanitizer builds are slow); a quadratic algorithm would take minutes.
+  EXPECT_LT(std::chrono::duration<double>(elapsed).count(), 5.0);
+}
+
+TEST(QuantileOfSorted, EndpointsAndInvalidQuantile) {
+  const std::vector<double> sorted = {2.0, 4.0, 8.0};
+  EXPECT_DOUBLE_EQ(quantile_of_sorted(sorted, 0.0), 2.0);
+  EXPECT_DOUBLE_EQ(quantile_of_sorted(sorted, 1.0), 8.0);
+  EXPECT_DOUBLE_EQ(quantile_of_sorted(sorted, 0.75), 6.0);
+  EXPECT_TRUE(std::isnan(quantile_of_sorted(std::vector<double>{}, 0.5)));
+  EXPECT_THROW(quantile_of_sorted(sorted, 1.5), std::invalid_argument);
+  EXPECT_THROW(quantile_of_sorted(sorted, -0.1), std::invalid_argument);
+  EXPECT_THROW(quantile_of_sorted(sorted, std::numeric_limits<double>::quiet_NaN()),
+               std::invalid_argument);
+}
+
+TEST(StatsToJson, ScalesValuesAndAddsUnit) {
+  const std::vector<double> nanoseconds = {1'000'000.0, 3'000'000.0};
+  const nlohmann::json json = to_json(compute_stats(nanoseconds), 1e-6, "ms");
+  EXPECT_EQ(json.at("count").get<std::size_t>(), 2u);
+  EXPECT_DOUBLE_EQ(json.at("min").get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(json.at("mean").get<double>(), 2.0);
+  EXPECT_DOUBLE_EQ(json.at("max").get<double>(), 3.0);
+  EXPECT_DOUBLE_EQ(json.at("p50").get<double>(), 2.0);
+  EXPECT_EQ(json.at("unit").get<std::string>(), "ms");
+  for (const char* key : {"rms", "stddev", "p90", "p99", "p999"}) {
+    EXPECT_TRUE(json.at(key).is_number()) << key;
+  }
+}
+
+TEST(StatsToJson, NoUnitKeyWhenUnitIsEmpty) {
+  const nlohmann::json json = to_json(compute_stats(one_to(3)));
+  EXPECT_FALSE(json.contains("unit"));
+  EXPECT_DOUBLE_EQ(json.at("max").get<double>(), 3.0);
+}
+
+TEST(StatsToJson, NaNBecomesNull) {
+  const nlohmann::json empty = to_json(compute_stats(std::vector<double>{}), 1e-3, "us");
+  EXPECT_EQ(empty.at("count").get<std::size_t>(), 0u);
+  for (const char* key : {"min", "mean", "rms", "stddev", "p50", "p90", "p99", "p999", "max"}) {
+    EXPECT_TRUE(empty.at(key).is_null()) << key;
+  }
+  EXPECT_EQ(empty.dump().find("NaN"), std::string::npos);
+
+  const nlohmann::json single = to_json(compute_stats(std::vector<double>{5.0}));
+  EXPECT_TRUE(single.at("stddev").is_null());
+  EXPECT_TRUE(single.at("max").is_number());
+}
+
+}  // namespace
+}  // namespace robotperf::metrics
