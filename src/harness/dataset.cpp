@@ -22,7 +22,7 @@ std::string content_hash(const std::vector<DatasetStream>& streams) {
       hash.add_bytes(buffer);
     }
   }
-  return "fnv1a64:" + hash.hex_digest();
+  return hash.hex_digest();
 }
 
 Dataset perception_image() {
