@@ -210,8 +210,17 @@ class CdrReader {
     // Each element takes at least one byte: reject counts the payload cannot hold.
     if (n > remaining())
       throw CdrError("CDR sequence length " + std::to_string(n) + " exceeds payload");
-    seq.resize(n);
-    elements(seq.data(), n);
+    if constexpr (sizeof(T) == 1 && CdrPrimitive<T> && !std::is_same_v<T, bool>) {
+      // Byte sequences (image data) are constructed straight from the payload:
+      // resize() would first zero-fill megabytes that are overwritten at once.
+      need(n);
+      const auto* first = reinterpret_cast<const T*>(data_ + offset_);
+      seq.assign(first, first + n);
+      offset_ += n;
+    } else {
+      seq.resize(n);
+      elements(seq.data(), n);
+    }
   }
   template <class T, std::size_t N>
   void operator()(std::array<T, N>& arr) {
