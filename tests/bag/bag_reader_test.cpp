@@ -182,3 +182,78 @@ TEST(McapReader, TopicFilter) {
 
 }  // namespace
 }  // namespace robotperf::bag
+
+namespace robotperf::bag {
+namespace {
+
+using namespace testing;
+
+// Jazzy's metadata version 9 stores offered_qos_profiles as a YAML sequence
+// with enum names instead of a string with integers.
+TEST(Metadata, Version9QosSequenceWithNames) {
+  ScratchDir dir;
+  fs::create_directories(dir / "bag");
+  fs::copy_file(reference_bag("sqlite3_cdr_test") / "cdr_test_0.db3",
+                dir / "bag" / "cdr_test_0.db3");
+  const std::string yaml = R"(rosbag2_bagfile_information:
+  version: 9
+  storage_identifier: sqlite3
+  duration:
+    nanoseconds: 151137181
+  starting_time:
+    nanoseconds_since_epoch: 1586406456763032325
+  message_count: 7
+  topics_with_message_count:
+    - topic_metadata:
+        name: /test_topic
+        type: test_msgs/msg/BasicTypes
+        serialization_format: cdr
+        offered_qos_profiles:
+          - history: keep_last
+            depth: 3
+            reliability: best_effort
+            durability: volatile
+            deadline:
+              sec: 9223372036
+              nsec: 854775807
+            lifespan:
+              sec: 9223372036
+              nsec: 854775807
+            liveliness: automatic
+            liveliness_lease_duration:
+              sec: 9223372036
+              nsec: 854775807
+            avoid_ros_namespace_conventions: false
+        type_description_hash: RIHS01_abc
+      message_count: 3
+  compression_format: ""
+  compression_mode: ""
+  relative_file_paths:
+    - cdr_test_0.db3
+  files:
+    - path: cdr_test_0.db3
+      starting_time:
+        nanoseconds_since_epoch: 1586406456763032325
+      duration:
+        nanoseconds: 151137181
+      message_count: 7
+  custom_data: ~
+  ros_distro: jazzy
+)";
+  write_file(dir / "bag" / "metadata.yaml", {yaml.begin(), yaml.end()});
+  const BagInfo info = read_info(dir / "bag");
+  EXPECT_EQ(info.metadata_version, 9);
+  EXPECT_EQ(info.ros_distro, "jazzy");
+  const TopicInfo& t = topic_named(info.topics, "/test_topic");
+  EXPECT_EQ(t.type_description_hash, "RIHS01_abc");
+  const auto qos = parse_qos_profiles(t.offered_qos_profiles);
+  ASSERT_EQ(qos.size(), 1u);
+  EXPECT_EQ(qos[0].history, 1);
+  EXPECT_EQ(qos[0].depth, 3);
+  EXPECT_EQ(qos[0].reliability, 2);
+  EXPECT_EQ(qos[0].deadline.sec, 9223372036);
+  EXPECT_EQ(read_all(dir / "bag").size(), 7u);
+}
+
+}  // namespace
+}  // namespace robotperf::bag
