@@ -107,7 +107,8 @@ struct Value {
 // malformed and DefinitionError when a type is unknown.
 Value decode(const TypeRegistry& registry, const std::string& type,
              std::span<const uint8_t> payload);
-// Encodes back: the bytes decode() read, without trailing padding.
+// Encodes back: the bytes decode() read, with alignment padding written as
+// zeros and no trailing padding.
 std::vector<uint8_t> encode(const TypeRegistry& registry, const std::string& type,
                             const Value& value);
 
