@@ -80,7 +80,9 @@ TEST(DynamicCodec, TalkerStringsAndLogs) {
       const auto again = dyn::encode(registry, type, v);
       ASSERT_EQ(again.size(), m.data.size());
       for (std::size_t i = 0; i < again.size(); ++i) {
-        if (again[i] != m.data[i]) EXPECT_EQ(again[i], 0) << "byte " << i << " is not padding";
+        if (again[i] != m.data[i]) {
+          EXPECT_EQ(again[i], 0) << "byte " << i << " is not padding";
+        }
       }
       EXPECT_EQ(dyn::encode(registry, type, dyn::decode(registry, type, again)), again);
       continue;
