@@ -1,6 +1,7 @@
 #include "robotperf/msgs/dynamic.hpp"
 
 #include <cctype>
+#include <charconv>
 #include <fstream>
 #include <functional>
 #include <set>
@@ -312,10 +313,10 @@ std::string scalar(const Value& v) {
         } else if constexpr (std::is_same_v<T, int64_t> || std::is_same_v<T, uint64_t>) {
           return std::to_string(x);
         } else if constexpr (std::is_same_v<T, double>) {
-          std::ostringstream o;
-          o.precision(17);
-          o << x;
-          std::string s = o.str();
+          // The shortest text that reads back to the same double.
+          char buf[32];
+          const auto end = std::to_chars(buf, buf + sizeof(buf), x).ptr;
+          std::string s(buf, end);
           if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
           return s;
         } else if constexpr (std::is_same_v<T, std::string>) {
