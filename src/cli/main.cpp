@@ -7,10 +7,14 @@
 #include <filesystem>
 #include <iostream>
 
+#include "bag_commands.hpp"
+#include "robotperf/bag/bag.hpp"
 #include "robotperf/build_info.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/run.hpp"
+#include "robotperf/msgs/cdr.hpp"
+#include "robotperf/msgs/dynamic.hpp"
 #include "robotperf/report/atomic_file.hpp"
 #include "robotperf/report/results.hpp"
 #include "robotperf/sysinfo/machine.hpp"
@@ -169,6 +173,46 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("--csv", ra.csv, "also write the per-message latencies as CSV");
   run_cmd->add_flag("--quiet", ra.quiet, "no progress line");
 
+  auto* bag_cmd = app.add_subcommand("bag", "inspect, print and convert rosbag2 bags");
+  bag_cmd->require_subcommand(1);
+  std::string bag_path;
+  auto* bag_info_cmd = bag_cmd->add_subcommand("info", "storage, duration, topics, counts, QoS");
+  bag_info_cmd->add_option("bag", bag_path, "bag directory, .db3 or .mcap file")->required();
+  cli::EchoOptions echo;
+  auto* bag_echo_cmd = bag_cmd->add_subcommand("echo", "print messages as YAML");
+  bag_echo_cmd->add_option("bag", bag_path, "bag directory, .db3 or .mcap file")->required();
+  bag_echo_cmd->add_option("--topic", echo.topics, "only this topic (repeatable)");
+  bag_echo_cmd->add_option("--limit", echo.limit, "print at most N messages");
+  bag_echo_cmd->add_option("--msg-dir", echo.msg_dirs,
+                           "folder of .msg files for types the bag has no definition of");
+  bag_echo_cmd->add_option("--max-array", echo.max_array,
+                           "summarise arrays longer than this (default 64)");
+  cli::ConvertOptions convert;
+  std::string convert_out;
+  auto* bag_convert_cmd = bag_cmd->add_subcommand("convert", "write a bag in another storage");
+  bag_convert_cmd->add_option("in", bag_path, "bag directory, .db3 or .mcap file")->required();
+  bag_convert_cmd->add_option("out", convert_out, "new bag directory")->required();
+  bag_convert_cmd->add_option("--storage", convert.storage, "sqlite3 or mcap (default mcap)")
+      ->check(CLI::IsMember({"sqlite3", "mcap"}));
+  bag_convert_cmd
+      ->add_option("--compression", convert.compression, "MCAP chunks: zstd, lz4 or none")
+      ->check(CLI::IsMember({"zstd", "lz4", "none"}));
+  bag_convert_cmd->add_option("--chunk-size", convert.chunk_size, "MCAP chunk size in bytes");
+  bag_convert_cmd->add_option("--max-file-size", convert.max_file_mib,
+                              "split into files of about this many MiB (0 = one file)");
+
+  auto* dataset_cmd = app.add_subcommand("dataset", "the built-in datasets");
+  dataset_cmd->require_subcommand(1);
+  std::string dataset_name;
+  cli::GenerateOptions generate;
+  auto* generate_cmd = dataset_cmd->add_subcommand("generate", "write a built-in dataset as a bag");
+  generate_cmd->add_option("name", dataset_name, "dataset name, e.g. perception/image")->required();
+  generate_cmd->add_option("--out", generate.out, "bag directory (default: the name, / as _)");
+  generate_cmd->add_option("--storage", generate.storage, "sqlite3 or mcap (default mcap)")
+      ->check(CLI::IsMember({"sqlite3", "mcap"}));
+  generate_cmd->add_option("--compression", generate.compression, "MCAP chunks: zstd, lz4 or none")
+      ->check(CLI::IsMember({"zstd", "lz4", "none"}));
+
   auto* sysinfo_cmd = app.add_subcommand("sysinfo", "describe this machine as results record it");
 
   std::string node_package, node_name, node_rmw = "fastdds";
@@ -199,6 +243,10 @@ int main(int argc, char** argv) {
     if (*list_cmd) return list_benchmarks(root);
     if (*describe_cmd) return describe_benchmark(root, describe_id);
     if (*run_cmd) return run(root, ra);
+    if (*bag_info_cmd) return cli::bag_info(bag_path);
+    if (*bag_echo_cmd) return cli::bag_echo(bag_path, echo);
+    if (*bag_convert_cmd) return cli::bag_convert(bag_path, convert_out, convert);
+    if (*generate_cmd) return cli::dataset_generate(dataset_name, generate);
     if (*sysinfo_cmd) {
       std::cout << sysinfo::to_json(sysinfo::collect_machine_info()).dump(2) << "\n";
       return kExitOk;
@@ -206,6 +254,12 @@ int main(int argc, char** argv) {
     if (*node_cmd)
       return harness::run_node_process(harness::load_benchmark(node_package), node_name, node_rmw,
                                        node_domain);
+  } catch (const bag::BagError& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitUsage;
+  } catch (const msgs::dynamic::DefinitionError& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitUsage;
   } catch (const harness::BenchmarkError& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
     return kExitUsage;

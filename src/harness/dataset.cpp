@@ -33,8 +33,9 @@ Dataset perception_image() {
   d.description = builtin_datasets()[0].description;
   d.frames = frames.size();
   d.rate_hz = config.rate_hz;
-  DatasetStream images{"image", &msgs::type_support<msgs::Image>(), {}};
-  DatasetStream infos{"camera_info", &msgs::type_support<msgs::CameraInfo>(), {}};
+  DatasetStream images{"image", "/camera/image_raw", &msgs::type_support<msgs::Image>(), {}};
+  DatasetStream infos{
+      "camera_info", "/camera/camera_info", &msgs::type_support<msgs::CameraInfo>(), {}};
   for (auto& f : frames) {
     images.messages.push_back(std::make_shared<const msgs::Image>(std::move(f.image)));
     infos.messages.push_back(std::make_shared<const msgs::CameraInfo>(std::move(f.info)));

@@ -13,6 +13,7 @@ namespace robotperf::harness {
 // One kind of message of a dataset, one per frame (e.g. "image", "camera_info").
 struct DatasetStream {
   std::string name;
+  std::string topic;  // where it is recorded when written as a bag ("/camera/image_raw")
   const msgs::TypeSupport* type = nullptr;
   std::vector<rmw::MessagePtr> messages;
 };
