@@ -97,7 +97,11 @@ Monitor::Monitor(graph::Context& context, const BoundaryTopic& output, MessageId
       ids_(ids),
       warmup_(warmup) {
   tally_.received_ns.assign(ids_.count, -1);
-  node_->create_generic_subscription(output.topic, *type_, output.qos,
+  // The Monitor keeps everything the graph delivered: a briefly starved
+  // Monitor must not turn into loss charged to the graph under test.
+  rmw::QoS qos = output.qos;
+  qos.history = rmw::History::kKeepAll;
+  node_->create_generic_subscription(output.topic, *type_, qos,
                                      [this](rmw::MessagePtr m, const graph::MessageInfo&) {
                                        // Read the clock first: everything after is monitor
                                        // overhead.
