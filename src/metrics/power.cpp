@@ -142,6 +142,13 @@ PowerSampler::~PowerSampler() {
   if (thread_.joinable()) end();
 }
 
+void PowerSampler::on_window_edges(std::function<void(int64_t)> at_first,
+                                   std::function<void(int64_t)> at_last) {
+  std::lock_guard lock(mutex_);
+  at_first_ = std::move(at_first);
+  at_last_ = std::move(at_last);
+}
+
 void PowerSampler::begin() {
   std::lock_guard lock(mutex_);
   begun_ = true;
@@ -171,17 +178,19 @@ void PowerSampler::run() {
   cv_.wait(lock, [this] { return begun_ || ending_; });
   if (!begun_) return;
   const double cpu_start = thread_cpu_s();
-  auto take_round = [&] {
+  auto take_round = [&](const std::function<void(int64_t)>& edge) {
     lock.unlock();
-    meter_.sample_round(steady_ns(std::chrono::steady_clock::now()));
+    const int64_t now = steady_ns(std::chrono::steady_clock::now());
+    meter_.sample_round(now);
+    if (edge) edge(now);
     lock.lock();
   };
   auto next = std::chrono::steady_clock::now();
-  take_round();
+  take_round(at_first_);
   while (true) {
     next += period_;
     if (cv_.wait_until(lock, next, [this] { return ending_; })) break;
-    take_round();
+    take_round(nullptr);
     // Rounds that could not start on time are skipped, not bunched up.
     const auto now = std::chrono::steady_clock::now();
     while (next + period_ <= now) {
@@ -189,7 +198,7 @@ void PowerSampler::run() {
       ++overruns_;
     }
   }
-  take_round();  // the end of the window
+  take_round(at_last_);  // the end of the window
   cpu_s_ = thread_cpu_s() - cpu_start;
 }
 

@@ -11,6 +11,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -150,6 +151,11 @@ class PowerSampler {
   PowerSampler(const PowerSampler&) = delete;
   PowerSampler& operator=(const PowerSampler&) = delete;
 
+  // Called on the sampling thread right after the first and the last round, with their time
+  // (CLOCK_MONOTONIC ns), so that other window measurements share the power window exactly.
+  // Set before begin().
+  void on_window_edges(std::function<void(int64_t)> at_first, std::function<void(int64_t)> at_last);
+
   void begin();
   // Takes the last round, stops the thread and returns the report. Without begin(), the report
   // says the window was never started.
@@ -166,6 +172,7 @@ class PowerSampler {
   bool ending_ = false;
   std::size_t overruns_ = 0;
   double cpu_s_ = 0;
+  std::function<void(int64_t)> at_first_, at_last_;
   std::thread thread_;
 };
 
