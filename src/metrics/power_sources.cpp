@@ -97,18 +97,54 @@ std::vector<fs::path> entries(const fs::path& directory) {
 }
 
 // A sysfs attribute times a scale: RAPL and hwmon energy (µJ), hwmon power (µW).
+// A sysfs attribute kept open and re-read from offset 0 (sysfs regenerates the value on every
+// read from the start): one pread per reading instead of open, read and close.
+class SysfsNumber {
+ public:
+  explicit SysfsNumber(fs::path path) : path_(std::move(path)) {}
+  ~SysfsNumber() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  SysfsNumber(const SysfsNumber&) = delete;
+  SysfsNumber& operator=(const SysfsNumber&) = delete;
+
+  std::optional<double> read(std::string& error) {
+    if (fd_ < 0) {
+      fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
+      if (fd_ < 0) return read_number(path_, error);  // gives the reason
+    }
+    char buffer[64];
+    const ssize_t n = ::pread(fd_, buffer, sizeof buffer, 0);
+    if (n <= 0) {
+      error = path_.string() + ": " + (n < 0 ? std::strerror(errno) : "empty");
+      ::close(fd_);
+      fd_ = -1;  // opened again next time: the device may come back
+      return std::nullopt;
+    }
+    const std::string text = trim(std::string(buffer, static_cast<std::size_t>(n)));
+    const auto value = parse_number(text);
+    if (!value) error = path_.string() + ": not a number: '" + text + "'";
+    return value;
+  }
+
+ private:
+  fs::path path_;
+  int fd_ = -1;
+};
+
+// A sysfs attribute times a scale: RAPL and hwmon energy (µJ), hwmon power (µW).
 class SysfsSource : public PowerSource {
  public:
   SysfsSource(PowerSourceInfo info, fs::path file, double scale)
       : PowerSource(std::move(info)), file_(std::move(file)), scale_(scale) {}
   std::optional<double> read(std::string& error) override {
-    const auto value = read_number(file_, error);
+    const auto value = file_.read(error);
     if (!value) return std::nullopt;
     return *value * scale_;
   }
 
  private:
-  fs::path file_;
+  SysfsNumber file_;
   double scale_;
 };
 
@@ -118,15 +154,15 @@ class VoltageCurrentSource : public PowerSource {
   VoltageCurrentSource(PowerSourceInfo info, fs::path millivolts, fs::path milliamps)
       : PowerSource(std::move(info)), mv_(std::move(millivolts)), ma_(std::move(milliamps)) {}
   std::optional<double> read(std::string& error) override {
-    const auto mv = read_number(mv_, error);
+    const auto mv = mv_.read(error);
     if (!mv) return std::nullopt;
-    const auto ma = read_number(ma_, error);
+    const auto ma = ma_.read(error);
     if (!ma) return std::nullopt;
     return *mv * *ma * 1e-6;
   }
 
  private:
-  fs::path mv_, ma_;
+  SysfsNumber mv_, ma_;
 };
 
 // ---- RAPL (powercap) ----
