@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -29,6 +30,72 @@ constexpr int kExitOk = 0;
 constexpr int kExitError = 1;
 constexpr int kExitUsage = 2;
 constexpr int kExitInvalidResult = 3;
+constexpr int kExitRefused = 4;
+
+// Power and scheduling options shared by `run`, `sysinfo` and `node`.
+struct PowerArgs {
+  double period_s = 0.1;
+  std::string meter;
+  std::string sysfs_root = "/";
+  std::string nvml_library = "libnvidia-ml.so.1";
+  std::vector<std::string> types;
+
+  metrics::PowerOptions options() const {
+    metrics::PowerOptions o;
+    o.period = std::chrono::duration_cast<std::chrono::nanoseconds>(
+        std::chrono::duration<double>(period_s));
+    o.meter_command = meter;
+    o.sysfs_root = sysfs_root;
+    o.nvml_library = nvml_library;
+    o.types.insert(types.begin(), types.end());
+    return o;
+  }
+};
+
+void add_power_options(CLI::App* command, PowerArgs& a, bool with_period) {
+  if (with_period) {
+    command
+        ->add_option("--power-period", a.period_s,
+                     "seconds between power readings in the measured window (default 0.1)")
+        ->check(CLI::Range(0.0005, 60.0));
+  }
+  command->add_option("--power-meter", a.meter,
+                      "external power meter: a shell command that prints watts, run once per "
+                      "reading");
+  command
+      ->add_option("--power-sources", a.types,
+                   "use only these source types: rapl, hwmon, nvml, jetson, external "
+                   "(default: all found)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"rapl", "hwmon", "nvml", "jetson", "external"}));
+  command->add_option("--sysfs-root", a.sysfs_root,
+                      "root under which sys/ holds the power sensors (default /; for testing)");
+  command->add_option("--nvml-library", a.nvml_library,
+                      "NVML library to load (default libnvidia-ml.so.1)");
+}
+
+struct SchedulingArgs {
+  std::string cpus;
+  int rt_priority = 0;
+  bool lock_memory = false;
+
+  harness::SchedulingOptions options() const {
+    harness::SchedulingOptions o;
+    if (!cpus.empty()) o.cpus = harness::parse_cpu_list(cpus);
+    o.rt_priority = rt_priority;
+    o.lock_memory = lock_memory;
+    return o;
+  }
+};
+
+void add_scheduling_options(CLI::App* command, SchedulingArgs& a) {
+  command->add_option("--cpus", a.cpus, "pin the graph to these CPUs, e.g. 2-3 or 0,2");
+  command
+      ->add_option("--rt-priority", a.rt_priority,
+                   "run the graph with SCHED_FIFO at this priority (1-99)")
+      ->check(CLI::Range(1, 99));
+  command->add_flag("--mlock", a.lock_memory, "lock the graph's memory (mlockall)");
+}
 
 fs::path benchmarks_root(const std::string& flag) {
   if (!flag.empty()) return flag;
@@ -94,7 +161,10 @@ struct RunArgs {
   std::string output = "results";
   bool csv = false;
   bool quiet = false;
+  bool strict = false;
   std::optional<int> domain;
+  PowerArgs power;
+  SchedulingArgs scheduling;
 };
 
 int run(const fs::path& root, const RunArgs& a) {
@@ -110,6 +180,9 @@ int run(const fs::path& root, const RunArgs& a) {
   o.processes = a.processes == "per-node" ? harness::ProcessLayout::kPerNode
                                           : harness::ProcessLayout::kSingle;
   o.node_command = {self_executable().string(), "node"};
+  o.power = a.power.options();
+  o.scheduling = a.scheduling.options();
+  o.strict = a.strict;
   if (!a.quiet && isatty(STDERR_FILENO)) {
     o.progress = [&](std::size_t sent, std::size_t total, std::size_t received) {
       std::fprintf(stderr, "\r[%s] sent %zu/%zu  received %zu ", spec.id.c_str(), sent, total,
@@ -172,6 +245,10 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--output", ra.output, "folder for the results files (default: ./results)");
   run_cmd->add_flag("--csv", ra.csv, "also write the per-message latencies as CSV");
   run_cmd->add_flag("--quiet", ra.quiet, "no progress line");
+  run_cmd->add_flag("--strict", ra.strict,
+                    "refuse to run when a run rule is broken (see the warnings of a normal run)");
+  add_power_options(run_cmd, ra.power, true);
+  add_scheduling_options(run_cmd, ra.scheduling);
 
   auto* bag_cmd = app.add_subcommand("bag", "inspect, print and convert rosbag2 bags");
   bag_cmd->require_subcommand(1);
@@ -213,7 +290,12 @@ int main(int argc, char** argv) {
   generate_cmd->add_option("--compression", generate.compression, "MCAP chunks: zstd, lz4 or none")
       ->check(CLI::IsMember({"zstd", "lz4", "none"}));
 
-  auto* sysinfo_cmd = app.add_subcommand("sysinfo", "describe this machine as results record it");
+  PowerArgs sysinfo_power;
+  auto* sysinfo_cmd = app.add_subcommand(
+      "sysinfo",
+      "describe this machine, this robotperf and the power sources found, as results "
+      "record them");
+  add_power_options(sysinfo_cmd, sysinfo_power, false);
 
   std::string node_package, node_name, node_rmw = "fastdds";
   int node_domain = 0;
@@ -224,6 +306,8 @@ int main(int argc, char** argv) {
   node_cmd->add_option("--node", node_name)->required();
   node_cmd->add_option("--rmw", node_rmw);
   node_cmd->add_option("--domain", node_domain);
+  SchedulingArgs node_scheduling;
+  add_scheduling_options(node_cmd, node_scheduling);
 
   try {
     app.parse(argc, argv);
@@ -248,12 +332,20 @@ int main(int argc, char** argv) {
     if (*bag_convert_cmd) return cli::bag_convert(bag_path, convert_out, convert);
     if (*generate_cmd) return cli::dataset_generate(dataset_name, generate);
     if (*sysinfo_cmd) {
-      std::cout << sysinfo::to_json(sysinfo::collect_machine_info()).dump(2) << "\n";
+      const nlohmann::json description = {
+          {"machine", sysinfo::to_json(sysinfo::collect_machine_info())},
+          {"software", report::software_json()},
+          {"power",
+           metrics::sources_to_json(metrics::discover_power_sources(sysinfo_power.options()))}};
+      std::cout << description.dump(2) << "\n";
       return kExitOk;
     }
     if (*node_cmd)
       return harness::run_node_process(harness::load_benchmark(node_package), node_name, node_rmw,
-                                       node_domain);
+                                       node_domain, node_scheduling.options());
+  } catch (const harness::RunRefused& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitRefused;
   } catch (const bag::BagError& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
     return kExitUsage;

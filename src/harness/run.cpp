@@ -1,6 +1,7 @@
 #include "robotperf/harness/run.hpp"
 
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -12,6 +13,7 @@
 #include <thread>
 
 #include "black_box.hpp"
+#include "measurement.hpp"
 #include "node_processes.hpp"
 #include "robotperf/graph/executor.hpp"
 
@@ -182,6 +184,12 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
                                 std::to_string(r.count) + ")");
   }
   r.drain_s = options.drain_s.value_or(spec.drain_s);
+  r.domain_id = options.domain_id;
+  r.scheduling = options.scheduling;
+
+  // In one process the scheduling options cover every thread created from here on.
+  std::optional<ScopedScheduling> scheduling;
+  if (options.processes == ProcessLayout::kSingle) scheduling.emplace(options.scheduling);
 
   graph::Context context(transport_for(options));
   const auto period_ns = static_cast<int64_t>(std::llround(1e9 / r.rate_hz));
@@ -207,8 +215,16 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
     }
   } else {
     children =
-        std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw, options.domain_id);
+        std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw, options.domain_id,
+                                        options.scheduling.node_arguments());
   }
+  std::vector<metrics::ResourceMonitor::Process> graph_processes;
+  if (children) {
+    for (const auto& [pid, name] : children->processes()) graph_processes.push_back({pid, name});
+  } else {
+    graph_processes.push_back({getpid(), "robotperf (graph, Playback, Monitor)"});
+  }
+  WindowMeasurement measurement(options, graph_processes);
 
   const int64_t connect_deadline =
       rmw::steady_now_ns() + static_cast<int64_t>(options.connect_timeout_s * 1e9);
@@ -216,6 +232,13 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   graph_executor.start();
   if (children) children->wait_ready(connect_deadline);
   wait_connected(local_nodes, wiring_of(spec), connect_deadline);
+
+  r.warnings = check_run_rules_for(r, measurement.probe_other_load());
+  if (options.strict && !r.warnings.empty()) {
+    std::string broken;
+    for (const auto& w : r.warnings) broken += "\n  " + w.rule + ": " + w.message;
+    throw RunRefused("--strict: not running, run rules broken:" + broken);
+  }
 
   auto failure = [&]() -> std::string {
     if (auto e = graph_executor.error()) return what_of(e);
@@ -226,6 +249,7 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   playback.run(
       r.records, [&] { return !failure().empty(); },
       [&](std::size_t sent) {
+        if (sent == r.warmup + 1) measurement.begin();  // the first measured message is out
         if (options.progress) options.progress(sent, r.count, monitor.received());
       });
 
@@ -233,6 +257,7 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   const std::size_t expected = r.records.size() > r.warmup ? r.records.size() - r.warmup : 0;
   const int64_t last_send = r.records.empty() ? rmw::steady_now_ns() : r.records.back().sent_ns;
   monitor.wait_for(expected, last_send + static_cast<int64_t>(r.drain_s * 1e9));
+  measurement.end(r);
   const Monitor::Tally tally = monitor.tally();
 
   if (std::string f = failure(); !f.empty()) r.errors.push_back(f);
@@ -241,14 +266,35 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   if (children) r.nodes = children->shutdown(5.0);
   r.completed = r.records.size() == r.count && r.errors.empty();
   summarise(r, spec, tally);
+  if (r.resources.other_cpu_percent &&
+      *r.resources.other_cpu_percent > sysinfo::kBusyThresholdPercent) {
+    char message[200];
+    std::snprintf(message, sizeof message,
+                  "other processes used %.0f %% of a core during the measured "
+                  "window",
+                  *r.resources.other_cpu_percent);
+    r.warnings.push_back({"interference", message});
+    if (options.strict) {
+      r.invalid_reasons.push_back(std::string(message) + " (--strict)");
+      r.valid = false;
+    }
+  }
   return r;
 }
 
 int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
-                     const std::string& rmw, int domain_id) {
+                     const std::string& rmw, int domain_id, const SchedulingOptions& scheduling) {
   const NodeSpec* node_spec = spec.find_node(node_name);
   if (node_spec == nullptr) {
     std::cerr << "robotperf node: benchmark " << spec.id << " has no node '" << node_name << "'\n";
+    return 2;
+  }
+  // Before the transport and executor start their threads, so that they all inherit it.
+  std::optional<ScopedScheduling> scheduled;
+  try {
+    scheduled.emplace(scheduling);
+  } catch (const std::exception& e) {
+    std::cerr << "robotperf node " << node_name << ": " << e.what() << "\n";
     return 2;
   }
   rmw::TransportOptions t;

@@ -107,9 +107,10 @@ TEST_F(Cli, RunA1OnFastDds) {
 
 TEST_F(Cli, RunA1OneProcessPerNode) {
   // At 5 Hz even a loaded 2-core machine moves 1.2 MB frames between processes in time.
-  const Outcome o =
-      robotperf("run a1 --count 60 --rate 10 --rmw fastdds --processes per-node --domain " +
-                domain() + " --output " + out_.string());
+  const Outcome o = robotperf(
+      "run a1 --count 60 --rate 10 --rmw fastdds --processes per-node --cpus 0 "
+      "--domain " +
+      domain() + " --output " + out_.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   const auto j = result_json();
   expect_clean_a1_result(j, "fastdds");
@@ -119,6 +120,13 @@ TEST_F(Cli, RunA1OneProcessPerNode) {
     EXPECT_EQ(n["exit_status"], "ok") << n.dump();
     EXPECT_GT(n["pid"].get<int>(), 0);
   }
+  // Resources are those of the node processes, by node name.
+  ASSERT_EQ(j["resources"]["processes"].size(), 2u);
+  EXPECT_EQ(j["resources"]["processes"][0]["label"], "rectify");
+  EXPECT_EQ(j["resources"]["processes"][0]["pid"], j["nodes"][0]["pid"]);
+  EXPECT_EQ(j["resources"]["processes"][1]["measured"], true);
+  EXPECT_GT(j["resources"]["processes"][1]["cpu_percent"].get<double>(), 0.0);
+  EXPECT_EQ(j["configuration"]["scheduling"]["cpus"], "0");
 }
 
 TEST_F(Cli, UnknownBenchmarkIsOneClearLine) {
@@ -142,6 +150,115 @@ TEST_F(Cli, WarmupNotBelowCountIsRefused) {
   const Outcome o = robotperf("run a2 --count 5 --warmup 5 --output " + out_.string());
   EXPECT_EQ(o.exit_code, 2);
   EXPECT_NE(o.out.find("warm-up"), std::string::npos) << o.out;
+}
+
+TEST_F(Cli, ResultHasMachineSoftwarePowerResourcesAndWarnings) {
+  const Outcome o = robotperf("run a2 --count 40 --output " + out_.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  const auto j = result_json();
+  const auto& m = j["machine"];
+  EXPECT_FALSE(m["cpu"]["model"].is_null());
+  EXPECT_GE(m["cpu"]["logical_cpus"].get<int>(), 1);
+  EXPECT_FALSE(m["kernel"]["release"].is_null());
+  EXPECT_TRUE(m["kernel"].contains("preempt_rt"));
+  EXPECT_TRUE(m["container"].contains("detected"));
+  EXPECT_GT(m["memory_total_bytes"].get<double>(), 0);
+  const auto& sw = j["software"];
+  EXPECT_FALSE(sw["compiler"].get<std::string>().empty());
+  EXPECT_NE(sw["cxx_flags"].get<std::string>().find("-Wall"), std::string::npos);
+  EXPECT_FALSE(sw["libraries"]["fastdds"].get<std::string>().empty());
+  EXPECT_FALSE(sw["libraries"]["opencv"].get<std::string>().empty());
+  EXPECT_EQ(sw["transport"]["rmw"], "intra");
+
+  // 35 measured messages are too few for p99: that rule applies everywhere.
+  bool samples_rule = false;
+  for (const auto& w : j["warnings"]) samples_rule |= w["rule"] == "samples";
+  EXPECT_TRUE(samples_rule) << j["warnings"].dump();
+  EXPECT_NE(o.out.find("warnings (run rules):"), std::string::npos) << o.out;
+
+  const auto& power = j["power"];
+  if (!power["available"].get<bool>()) {
+    // This machine has no power sensors: unavailable, with the reason, never 0.
+    EXPECT_TRUE(power["total"].is_null());
+    EXPECT_NE(power["unavailable_reason"].get<std::string>().find("rapl:"), std::string::npos);
+    EXPECT_NE(o.out.find("power: unavailable — "), std::string::npos) << o.out;
+  }
+  EXPECT_GT(power["rounds"].get<int>(), 2);
+
+  const auto& resources = j["resources"];
+  ASSERT_EQ(resources["processes"].size(), 1u);
+  EXPECT_EQ(resources["processes"][0]["measured"], true);
+  EXPECT_GT(resources["processes"][0]["peak_rss_bytes"].get<double>(), 1 << 20);
+  EXPECT_FALSE(resources["system"]["busy_percent"].is_null());
+  EXPECT_NEAR(resources["window_s"].get<double>(), power["window_s"].get<double>(), 1e-9);
+}
+
+TEST_F(Cli, ExternalMeterGivesEnergyPerMessageAndThroughputPerWatt) {
+  const Outcome o = robotperf(
+      "run a2 --count 40 --power-meter 'echo 12.5' --power-sources external --power-period 0.05 "
+      "--output " +
+      out_.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  const auto j = result_json();
+  const auto& power = j["power"];
+  ASSERT_EQ(power["available"], true) << power.dump();
+  EXPECT_NEAR(power["total"]["average_w"].get<double>(), 12.5, 1e-9);
+  const double energy = power["total"]["energy_j"].get<double>();
+  EXPECT_NEAR(energy, 12.5 * power["window_s"].get<double>(), 1e-9);
+  const double matched = j["counts"]["matched"].get<double>();
+  EXPECT_NEAR(power["total"]["energy_per_message_mj"].get<double>(), energy * 1e3 / matched, 1e-9);
+  EXPECT_NEAR(power["total"]["throughput_per_watt"].get<double>(),
+              j["throughput"]["output_hz"].get<double>() / 12.5, 1e-9);
+  EXPECT_EQ(power["sources"][0]["name"], "external:meter");
+  EXPECT_NE(o.out.find("power: 12.50 W (external:meter 12.50 W)"), std::string::npos) << o.out;
+}
+
+TEST_F(Cli, BrokenPowerMeterIsOneClearLine) {
+  const Outcome o =
+      robotperf("run a2 --count 20 --power-meter 'echo nope' --output " + out_.string());
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << o.out;
+  EXPECT_NE(o.out.find("expected watts"), std::string::npos) << o.out;
+}
+
+TEST_F(Cli, StrictRefusesWhenARunRuleIsBroken) {
+  const Outcome o = robotperf("run a2 --count 20 --strict --output " + out_.string());
+  EXPECT_EQ(o.exit_code, 4) << o.out;
+  EXPECT_NE(o.out.find("--strict: not running"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("samples: 15 measured messages"), std::string::npos) << o.out;
+  EXPECT_FALSE(fs::exists(out_) && !fs::is_empty(out_));
+}
+
+TEST_F(Cli, PinnedRunIsRecorded) {
+  const Outcome o = robotperf("run a2 --count 40 --cpus 0 --output " + out_.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_EQ(result_json()["configuration"]["scheduling"]["cpus"], "0");
+  const Outcome bad = robotperf("run a2 --count 20 --cpus 1-x --output " + out_.string());
+  EXPECT_EQ(bad.exit_code, 2) << bad.out;
+  EXPECT_NE(bad.out.find("bad CPU list '1-x'"), std::string::npos) << bad.out;
+}
+
+TEST_F(Cli, SysinfoShowsMachineSoftwareAndPowerSources) {
+  const fs::path zone = out_ / "sys/class/powercap/intel-rapl:0";
+  fs::create_directories(zone);
+  std::ofstream(zone / "name") << "package-0\n";
+  std::ofstream(zone / "energy_uj") << "123456\n";
+  std::ofstream(zone / "max_energy_range_uj") << "262143328850\n";
+  const Outcome o = robotperf("sysinfo --sysfs-root " + out_.string() + " --power-sources rapl");
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  const auto j = nlohmann::json::parse(o.out);
+  EXPECT_FALSE(j["machine"]["cpu"]["logical_cpus"].is_null());
+  EXPECT_FALSE(j["software"]["git_revision"].get<std::string>().empty());
+  ASSERT_EQ(j["power"]["sources"].size(), 1u);
+  EXPECT_EQ(j["power"]["sources"][0]["name"], "rapl:package-0");
+  EXPECT_EQ(j["power"]["sources"][0]["kind"], "energy_counter");
+
+  const Outcome here = robotperf("sysinfo");
+  ASSERT_EQ(here.exit_code, 0) << here.out;
+  const auto h = nlohmann::json::parse(here.out);
+  if (h["power"]["sources"].empty()) {
+    EXPECT_FALSE(h["power"]["notes"].empty());
+  }
 }
 
 }  // namespace
