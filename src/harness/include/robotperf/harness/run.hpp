@@ -3,11 +3,13 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "robotperf/harness/benchmark_spec.hpp"
+#include "robotperf/harness/functional.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
 
 namespace robotperf::harness {
@@ -47,6 +49,8 @@ struct NodeReport {
   std::string exit_status;  // "ok" or how it ended
   double cpu_user_s = -1;   // -1 when unknown
   double cpu_system_s = -1;
+  // What the kernel counted (kernels::NodeCounters), e.g. inputs that never paired.
+  std::map<std::string, uint64_t> counters;
 };
 
 struct RunResult {
@@ -90,6 +94,9 @@ struct RunResult {
   std::vector<std::string> invalid_reasons;
   std::vector<NodeReport> nodes;
   std::vector<MessageRecord> records;
+  // Accuracy of the outputs against the dataset's ground truth; absent when the benchmark
+  // names no functional evaluator.
+  std::optional<FunctionalResult> functional;
 };
 
 // Runs the benchmark. Problems that stop the run before timing (bad spec,
