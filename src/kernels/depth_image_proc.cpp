@@ -137,7 +137,10 @@ void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
                   {"y", kXyzrgbOffsetY, kFloat32, 1},
                   {"z", kXyzrgbOffsetZ, kFloat32, 1},
                   {"rgb", kXyzrgbOffsetRgb, kFloat32, 1}};
-  cloud.data.assign(static_cast<std::size_t>(cloud.row_step) * depth.height, 0);
+  // Every point's x, y, z and b, g, r bytes are written below; padding and the fourth rgb byte
+  // are zero from the allocation, so a cloud of the same size is reused without clearing.
+  const std::size_t bytes = static_cast<std::size_t>(cloud.row_step) * depth.height;
+  if (cloud.data.size() != bytes) cloud.data.assign(bytes, 0);
   if (depth_view.empty()) return;
   if (is_float) {
     convert_depth<float>(depth_view, model, params.range_max, cloud);

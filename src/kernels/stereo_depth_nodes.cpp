@@ -34,6 +34,23 @@ int64_t stamp_of(const std::shared_ptr<const T>& m) {
   return m->header.stamp.to_ns();
 }
 
+// Output messages of megabytes: the last one published is reused once every subscriber has let
+// go of it (like a ROS 2 loaned message), so the kernel writes into memory already mapped instead
+// of page-faulting a fresh buffer on every frame.
+template <class T>
+class OutputPool {
+ public:
+  std::shared_ptr<T> acquire() {
+    // use_count 1: only we hold it, and nobody can take a new reference from us.
+    if (last_ && last_.use_count() == 1) return last_;
+    last_ = std::make_shared<T>();
+    return last_;
+  }
+
+ private:
+  std::shared_ptr<T> last_;
+};
+
 // Inputs rejected by the kernel (a bad image, mismatched frames) are skipped and counted, as the
 // ROS nodes log and skip them: the frame shows as lost at the Monitor.
 class SkippingNode : public graph::Node, public NodeCounters {
@@ -116,7 +133,7 @@ class DisparityNode final : public SkippingNode {
 
   void process(const MessageSync<4>::Set& set) {
     guarded([&] {
-      auto out = std::make_shared<msgs::DisparityImage>();
+      std::shared_ptr<msgs::DisparityImage> out = pool_.acquire();
       processor_.compute(*std::static_pointer_cast<const msgs::Image>(set[kLeftImage]),
                          *std::static_pointer_cast<const msgs::Image>(set[kRightImage]),
                          *std::static_pointer_cast<const msgs::CameraInfo>(set[kLeftInfo]),
@@ -126,6 +143,7 @@ class DisparityNode final : public SkippingNode {
   }
 
   DisparityProcessor processor_;
+  OutputPool<msgs::DisparityImage> pool_;
   MessageSync<4> sync_;
   std::shared_ptr<graph::Publisher<msgs::DisparityImage>> output_;
   std::vector<std::shared_ptr<graph::GenericSubscription>> subscriptions_;
@@ -170,7 +188,7 @@ class PointCloudXyzrgbNode final : public SkippingNode {
 
   void process(const MessageSync<3>::Set& set) {
     guarded([&] {
-      auto cloud = std::make_shared<msgs::PointCloud2>();
+      std::shared_ptr<msgs::PointCloud2> cloud = pool_.acquire();
       point_cloud_xyzrgb(*std::static_pointer_cast<const msgs::Image>(set[kDepth]),
                          *std::static_pointer_cast<const msgs::Image>(set[kImage]),
                          *std::static_pointer_cast<const msgs::CameraInfo>(set[kInfo]), params_,
@@ -180,6 +198,7 @@ class PointCloudXyzrgbNode final : public SkippingNode {
   }
 
   PointCloudXyzrgbParams params_;
+  OutputPool<msgs::PointCloud2> pool_;
   MessageSync<3> sync_;
   std::shared_ptr<graph::Publisher<msgs::PointCloud2>> output_;
   std::vector<std::shared_ptr<graph::GenericSubscription>> subscriptions_;

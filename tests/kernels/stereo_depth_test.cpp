@@ -333,6 +333,18 @@ TEST(PointCloudXyzrgb, LaysOutAnOrganisedXyzRgbCloud) {
   EXPECT_EQ(p.a, 0);
 }
 
+TEST(PointCloudXyzrgb, AReusedCloudEqualsAFreshOne) {
+  Tiny a("32FC1", "rgb8");
+  Tiny b("32FC1", "rgb8");
+  image_view(b.depth).at<float>(1, 2) = std::numeric_limits<float>::quiet_NaN();
+  image_view(b.colour).at<cv::Vec3b>(2, 0) = cv::Vec3b(1, 2, 3);
+  msgs::PointCloud2 reused, fresh;
+  point_cloud_xyzrgb(a.depth, a.colour, a.info, {}, reused);
+  point_cloud_xyzrgb(b.depth, b.colour, b.info, {}, reused);
+  point_cloud_xyzrgb(b.depth, b.colour, b.info, {}, fresh);
+  EXPECT_EQ(reused, fresh);
+}
+
 TEST(PointCloudXyzrgb, MillimetreDepthAndBgrColour) {
   Tiny t("16UC1", "bgr8");
   msgs::PointCloud2 c;

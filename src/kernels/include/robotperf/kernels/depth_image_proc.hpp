@@ -32,7 +32,9 @@ struct PointCloudXyzrgbParams {
 //   invalid depth gives NaN x, y, z (or range_max when set);
 // - colour: rgb8, rgba8, bgr8, bgra8 or mono8; resized (bilinear) to the depth size when it
 //   differs, the camera model then scaled by depth width / colour width;
-// - header = the depth image's; is_dense false; little-endian.
+// - header = the depth image's; is_dense false; little-endian;
+// - cloud.data is reused, without clearing, when it already has the cloud's size (its padding
+//   bytes are then left as they are: zero when this function made the cloud).
 // Throws std::invalid_argument for other encodings, differing frame_ids, a CameraInfo without a
 // focal length, or a bad image.
 void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
