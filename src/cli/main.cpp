@@ -149,6 +149,20 @@ int describe_benchmark(const fs::path& root, const std::string& id) {
     for (const auto& [k, v] : n.parameters) std::cout << "      param " << k << " = " << v << "\n";
   }
   std::cout << "output:\n  " << s.output.topic << "  [" << s.output.type << "] -> monitor\n";
+  if (s.functional) {
+    const auto& f = *s.functional;
+    std::cout << "functional: evaluator " << f.evaluator << ", "
+              << (f.sample ? std::to_string(f.sample) : std::string("every"))
+              << " sampled outputs\n";
+    for (const auto& [role, stream] : f.truth)
+      std::cout << "  truth " << role << " <- stream " << stream << "\n";
+    for (const auto& [metric, t] : f.thresholds) {
+      std::cout << "  threshold " << metric;
+      if (t.min) std::cout << " >= " << *t.min;
+      if (t.max) std::cout << " <= " << *t.max;
+      std::cout << "\n";
+    }
+  }
   return kExitOk;
 }
 
@@ -205,7 +219,8 @@ int run(const fs::path& root, const RunArgs& a) {
   std::cout << "machine: " << sysinfo::summary_line(machine) << "\n";
   std::cout << "results: " << base.string() << ".json" << (a.csv ? " (+ .latencies.csv)" : "")
             << "\n";
-  return result.valid ? kExitOk : kExitInvalidResult;
+  const bool functional_ok = !result.functional || result.functional->valid;
+  return result.valid && functional_ok ? kExitOk : kExitInvalidResult;
 }
 
 }  // namespace

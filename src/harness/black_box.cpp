@@ -122,9 +122,19 @@ void Monitor::on_message(const rmw::MessagePtr& msg, int64_t now_ns) {
     } else {
       tally_.received_ns[*id] = now_ns;
       if (*id >= warmup_) ++tally_.received_measured;
+      if (!keep_.empty() && keep_[*id]) tally_.kept.emplace_back(*id, msg);
     }
   }
   cv_.notify_all();
+}
+
+void Monitor::keep_outputs(const std::vector<uint64_t>& ids) {
+  std::lock_guard lock(mutex_);
+  keep_.assign(ids_.count, false);
+  for (uint64_t id : ids) {
+    if (id < ids_.count) keep_[id] = true;
+  }
+  tally_.kept.reserve(ids.size());
 }
 
 bool Monitor::wait_for(std::size_t expected, int64_t deadline_ns) {

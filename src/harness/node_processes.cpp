@@ -45,7 +45,7 @@ NodeProcesses::NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::s
     Child c;
     c.name = node.name;
     c.kernel = node.kernel;
-    c.report = {node.name, node.kernel, 0, "running", -1, -1};
+    c.report = {node.name, node.kernel, 0, "running", -1, -1, {}};
     int in[2], out[2];
     make_pipe(in);
     make_pipe(out);
@@ -141,6 +141,11 @@ void NodeProcesses::on_line(Child& child, const std::string& line) {
     if (!j.is_discarded()) {
       child.report.cpu_user_s = j.value("cpu_user_s", -1.0);
       child.report.cpu_system_s = j.value("cpu_system_s", -1.0);
+      if (const auto c = j.find("counters"); c != j.end() && c->is_object()) {
+        for (const auto& [name, value] : c->items()) {
+          if (value.is_number_unsigned()) child.report.counters[name] = value.get<uint64_t>();
+        }
+      }
     }
   }
 }

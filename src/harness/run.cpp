@@ -200,18 +200,26 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
 
   Playback playback(context, spec, dataset, ids);
   Monitor monitor(context, spec.output, ids, r.warmup);
+  std::vector<uint64_t> functional_ids;
+  if (spec.functional) {
+    make_evaluator(*spec.functional, dataset);  // a missing truth stream fails before timing
+    functional_ids = functional_sample_ids(r.count, r.warmup, spec.functional->sample);
+    monitor.keep_outputs(functional_ids);
+  }
   graph::Executor monitor_executor(1);
   monitor_executor.add_node(monitor.node());
 
   graph::Executor graph_executor(spec.executor_threads);
   std::vector<std::shared_ptr<graph::Node>> local_nodes{playback.node(), monitor.node()};
   std::unique_ptr<NodeProcesses> children;
+  std::vector<std::shared_ptr<graph::Node>> kernel_nodes;
   if (options.processes == ProcessLayout::kSingle) {
     for (const auto& n : spec.nodes) {
       auto node = kernels::make_kernel_node(n.kernel, context, kernel_config(n));
       graph_executor.add_node(node);
       local_nodes.push_back(node);
-      r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1});
+      kernel_nodes.push_back(node);
+      r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1, {}});
     }
   } else {
     children =
@@ -264,6 +272,11 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   graph_executor.stop();
   monitor_executor.stop();
   if (children) r.nodes = children->shutdown(5.0);
+  for (std::size_t i = 0; i < kernel_nodes.size(); ++i) {
+    if (const auto* c = dynamic_cast<const kernels::NodeCounters*>(kernel_nodes[i].get())) {
+      r.nodes[i].counters = c->counters();
+    }
+  }
   r.completed = r.records.size() == r.count && r.errors.empty();
   summarise(r, spec, tally);
   if (r.resources.other_cpu_percent &&
@@ -278,6 +291,11 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
       r.invalid_reasons.push_back(std::string(message) + " (--strict)");
       r.valid = false;
     }
+  }
+  // After timing: the evaluation costs nothing the run measured.
+  if (spec.functional) {
+    r.functional =
+        evaluate_functional(*spec.functional, dataset, tally.kept, functional_ids.size());
   }
   return r;
 }
@@ -334,8 +352,15 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   auto seconds = [](timeval tv) { return static_cast<double>(tv.tv_sec) + tv.tv_usec * 1e-6; };
+  std::string counters;
+  if (const auto* c = dynamic_cast<const kernels::NodeCounters*>(node.get())) {
+    for (const auto& [name, value] : c->counters()) {
+      counters += (counters.empty() ? "\"" : ",\"") + name + "\":" + std::to_string(value);
+    }
+  }
   std::cout << "stats {\"cpu_user_s\":" << seconds(usage.ru_utime)
-            << ",\"cpu_system_s\":" << seconds(usage.ru_stime) << "}" << std::endl;
+            << ",\"cpu_system_s\":" << seconds(usage.ru_stime) << ",\"counters\":{" << counters
+            << "}}" << std::endl;
   return code;
 }
 

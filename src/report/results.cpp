@@ -89,6 +89,39 @@ std::string resources_line(const harness::RunResult& r) {
   return out.str();
 }
 
+// Four significant digits: accuracy metrics span from micrometres to whole fractions.
+std::string general(double v) {
+  if (!std::isfinite(v)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return buf;
+}
+
+nlohmann::json optional_number(const std::optional<double>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
+
+nlohmann::json finite_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
+
+nlohmann::json functional_json(const std::optional<harness::FunctionalResult>& f) {
+  if (!f) return nullptr;
+  nlohmann::json metrics = nlohmann::json::object();
+  for (const auto& m : f->metrics) {
+    metrics[m.name] = {{"value", finite_or_null(m.value)},
+                       {"unit", m.unit},
+                       {"min", optional_number(m.threshold.min)},
+                       {"max", optional_number(m.threshold.max)},
+                       {"passed", m.passed}};
+  }
+  return {{"evaluator", f->evaluator},
+          {"samples", {{"requested", f->requested}, {"evaluated", f->evaluated}}},
+          {"metrics", metrics},
+          {"valid", f->valid},
+          {"reasons", f->reasons}};
+}
+
 }  // namespace
 
 nlohmann::json software_json() {
@@ -135,6 +168,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
     if (n.pid > 0) node["pid"] = n.pid;
     node["cpu_user_s"] = n.cpu_user_s >= 0 ? json(n.cpu_user_s) : json(nullptr);
     node["cpu_system_s"] = n.cpu_system_s >= 0 ? json(n.cpu_system_s) : json(nullptr);
+    if (!n.counters.empty()) node["counters"] = n.counters;
     nodes.push_back(std::move(node));
   }
   // The RobotPerf headline is the maximum latency, taken from the same block so the two agree
@@ -192,6 +226,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"completed", r.completed},
       {"errors", r.errors},
       {"validity", {{"valid", r.valid}, {"reasons", r.invalid_reasons}}},
+      {"functional", functional_json(r.functional)},
   };
 }
 
@@ -245,6 +280,33 @@ std::string summary_table(const harness::RunResult& r) {
   if (!r.warnings.empty()) {
     out << "warnings (run rules):\n";
     for (const auto& w : r.warnings) out << "  " << w.rule << ": " << w.message << "\n";
+  }
+  for (const auto& n : r.nodes) {
+    std::string unused;
+    for (const auto& [name, value] : n.counters) {
+      if (name.starts_with("unpaired_") || name.starts_with("rejected_")) {
+        if (value > 0) unused += (unused.empty() ? "" : ", ") + name + " " + std::to_string(value);
+      }
+    }
+    if (!unused.empty()) out << "node " << n.name << " dropped inputs: " << unused << "\n";
+  }
+  if (r.functional) {
+    const auto& f = *r.functional;
+    out << "\nfunctional (" << f.evaluator << ", " << f.evaluated << " of " << f.requested
+        << " sampled outputs):\n";
+    for (const auto& m : f.metrics) {
+      std::snprintf(line, sizeof line, "  %-20s %12s %-9s", m.name.c_str(),
+                    general(m.value).c_str(), m.unit.c_str());
+      out << line;
+      if (m.threshold.min) out << "  min " << general(*m.threshold.min);
+      if (m.threshold.max) out << "  max " << general(*m.threshold.max);
+      if (m.threshold.min || m.threshold.max) out << (m.passed ? "  ok" : "  FAILED");
+      out << "\n";
+    }
+    out << "functional result: " << (f.valid ? "VALID" : "INVALID");
+    for (std::size_t i = 0; i < f.reasons.size(); ++i)
+      out << (i == 0 ? " — " : "; ") << f.reasons[i];
+    out << "\n";
   }
   for (const auto& e : r.errors) out << "error: " << e << "\n";
   out << "result: " << (r.valid ? "VALID" : "INVALID");

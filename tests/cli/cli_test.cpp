@@ -78,7 +78,8 @@ void expect_clean_a1_result(const nlohmann::json& j, const std::string& rmw) {
 TEST_F(Cli, ListAndDescribe) {
   const Outcome list = robotperf("list");
   EXPECT_EQ(list.exit_code, 0);
-  for (const char* id : {"a1_perception_2nodes", "a2_rectify", "a5_resize"}) {
+  for (const char* id : {"a1_perception_2nodes", "a2_rectify", "a3_stereo_image_proc",
+                         "a4_depth_image_proc", "a5_resize"}) {
     EXPECT_NE(list.out.find(id), std::string::npos) << list.out;
   }
   const Outcome d = robotperf("describe a1");
@@ -127,6 +128,42 @@ TEST_F(Cli, RunA1OneProcessPerNode) {
   EXPECT_EQ(j["resources"]["processes"][1]["measured"], true);
   EXPECT_GT(j["resources"]["processes"][1]["cpu_percent"].get<double>(), 0.0);
   EXPECT_EQ(j["configuration"]["scheduling"]["cpus"], "0");
+}
+
+// a3 and a4 on both transports: valid, with a functional section that passed.
+void expect_functional_result(const nlohmann::json& j, const std::string& id,
+                              const std::string& rmw, const std::string& evaluator) {
+  EXPECT_EQ(j["benchmark"]["id"], id);
+  EXPECT_EQ(j["configuration"]["rmw"], rmw);
+  EXPECT_EQ(j["validity"]["valid"], true) << j["validity"].dump();
+  const auto& f = j["functional"];
+  ASSERT_TRUE(f.is_object()) << j.dump();
+  EXPECT_EQ(f["evaluator"], evaluator);
+  EXPECT_EQ(f["valid"], true) << f.dump();
+  EXPECT_GT(f["samples"]["evaluated"].get<int>(), 0);
+  for (const auto& [name, m] : f["metrics"].items()) {
+    EXPECT_TRUE(m["value"].is_number()) << name;
+    EXPECT_EQ(m["passed"], true) << name;
+  }
+}
+
+TEST_F(Cli, RunA3AndA4OnBothTransports) {
+  const std::pair<const char*, const char*> benchmarks[] = {{"a3", "stereo_disparity"},
+                                                            {"a4", "depth_point_cloud"}};
+  for (const auto& [id, evaluator] : benchmarks) {
+    for (const std::string rmw : {"intra", "fastdds"}) {
+      fs::remove_all(out_);
+      // 10 Hz leaves a loaded 2-core machine room for 10 MB point clouds through Fast DDS.
+      const Outcome o = robotperf(std::string("run ") + id + " --count 40 --rate 10 --rmw " + rmw +
+                                  " --domain " + domain() + " --output " + out_.string());
+      ASSERT_EQ(o.exit_code, 0) << id << " " << rmw << "\n" << o.out;
+      EXPECT_NE(o.out.find("functional result: VALID"), std::string::npos) << o.out;
+      expect_functional_result(result_json(), id, rmw, evaluator);
+    }
+  }
+  const Outcome d = robotperf("describe a3");
+  EXPECT_NE(d.out.find("evaluator stereo_disparity"), std::string::npos) << d.out;
+  EXPECT_NE(d.out.find("threshold bad1 <= 0.05"), std::string::npos) << d.out;
 }
 
 TEST_F(Cli, UnknownBenchmarkIsOneClearLine) {

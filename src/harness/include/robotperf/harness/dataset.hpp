@@ -37,7 +37,8 @@ struct DatasetInfo {
 
 const std::vector<DatasetInfo>& builtin_datasets();
 
-// Loads a built-in dataset; throws std::invalid_argument for an unknown name.
+// Loads a built-in dataset (generated once per process, then shared); throws
+// std::invalid_argument for an unknown name.
 Dataset load_dataset(const std::string& name);
 
 }  // namespace robotperf::harness

@@ -3,12 +3,14 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "robotperf/harness/benchmark_spec.hpp"
+#include "robotperf/harness/functional.hpp"
 #include "robotperf/harness/scheduling.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
 #include "robotperf/metrics/power.hpp"
@@ -59,6 +61,8 @@ struct NodeReport {
   std::string exit_status;  // "ok" or how it ended
   double cpu_user_s = -1;   // -1 when unknown
   double cpu_system_s = -1;
+  // What the kernel counted (kernels::NodeCounters), e.g. inputs that never paired.
+  std::map<std::string, uint64_t> counters;
 };
 
 struct RunResult {
@@ -109,6 +113,9 @@ struct RunResult {
   // Over the measured window: from the first measured send to the end of the drain.
   metrics::PowerReport power;
   metrics::ResourceUsage resources;
+  // Accuracy of the outputs against the dataset's ground truth; absent when the benchmark
+  // names no functional evaluator.
+  std::optional<FunctionalResult> functional;
 };
 
 // Thrown by run_benchmark with --strict when a run rule is broken; what() lists them.
