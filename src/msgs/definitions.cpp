@@ -30,6 +30,18 @@ const std::map<std::string_view, Definition>& definitions() {
         "uint32 binning_y\nRegionOfInterest roi\n",
         {"std_msgs/msg/Header", "builtin_interfaces/msg/Time",
          "sensor_msgs/msg/RegionOfInterest"}}},
+      {"sensor_msgs/msg/PointField",
+       {"string name\nuint32 offset\nuint8 datatype\nuint32 count\n", {}}},
+      {"sensor_msgs/msg/PointCloud2",
+       {"std_msgs/Header header\nuint32 height\nuint32 width\nPointField[] fields\n"
+        "bool is_bigendian\nuint32 point_step\nuint32 row_step\nuint8[] data\nbool is_dense\n",
+        {"std_msgs/msg/Header", "builtin_interfaces/msg/Time", "sensor_msgs/msg/PointField"}}},
+      {"stereo_msgs/msg/DisparityImage",
+       {"std_msgs/Header header\nsensor_msgs/Image image\nfloat32 f\nfloat32 t\n"
+        "sensor_msgs/RegionOfInterest valid_window\nfloat32 min_disparity\n"
+        "float32 max_disparity\nfloat32 delta_d\n",
+        {"std_msgs/msg/Header", "builtin_interfaces/msg/Time", "sensor_msgs/msg/Image",
+         "sensor_msgs/msg/RegionOfInterest"}}},
   };
   return table;
 }

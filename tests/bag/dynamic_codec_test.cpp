@@ -2,8 +2,10 @@
 // own schemas, from the test_msgs .msg files and from ../shared/data/msg.
 #include "bag_test_util.hpp"
 #include "robotperf/msgs/cdr.hpp"
+#include "robotperf/msgs/definitions.hpp"
 #include "robotperf/msgs/dynamic.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/msgs/stereo_msgs.hpp"
 
 namespace robotperf::bag {
 namespace {
@@ -159,6 +161,42 @@ TEST(DynamicCodec, ClearErrors) {
   registry.add_msg("p/U", "string s\n");
   EXPECT_THROW(dyn::decode(registry, "p/U", std::vector<uint8_t>{0, 1, 0, 0, 200, 0, 0, 0}),
                msgs::CdrError);
+}
+
+// Bags robotperf writes carry these schemas: each must decode and re-encode
+// its type exactly as the typed codec does.
+TEST(DynamicCodec, BuiltInSchemasMatchTheTypedCodec) {
+  msgs::DisparityImage disparity;
+  disparity.header.frame_id = "left";
+  disparity.image.width = 2;
+  disparity.image.height = 1;
+  disparity.image.encoding = "32FC1";
+  disparity.image.step = 8;
+  disparity.image.data.assign(8, 3);
+  disparity.f = 528.4f;
+  disparity.t = 0.1f;
+  disparity.max_disparity = 64;
+  disparity.delta_d = 0.0625f;
+  msgs::PointCloud2 cloud;
+  cloud.width = 1;
+  cloud.height = 1;
+  cloud.fields.push_back({"x", 0, 7, 1});
+  cloud.fields.push_back({"rgb", 16, 7, 1});
+  cloud.point_step = 32;
+  cloud.row_step = 32;
+  cloud.data.assign(32, 1);
+  cloud.is_dense = true;
+
+  auto check = [](const std::string& type, const std::vector<uint8_t>& cdr) {
+    const auto schema = msgs::ros2msg_schema(type);
+    ASSERT_TRUE(schema.has_value()) << type;
+    dyn::TypeRegistry registry;
+    registry.add_ros2msg(type, *schema);
+    EXPECT_EQ(dyn::encode(registry, type, dyn::decode(registry, type, cdr)), cdr) << type;
+  };
+  check("stereo_msgs/msg/DisparityImage", msgs::to_cdr(disparity));
+  check("sensor_msgs/msg/PointCloud2", msgs::to_cdr(cloud));
+  check("sensor_msgs/msg/CameraInfo", msgs::to_cdr(msgs::CameraInfo{}));
 }
 
 }  // namespace
