@@ -74,6 +74,7 @@ class Monitor {
 
   std::shared_ptr<graph::Node> node_;
   const msgs::TypeSupport* type_;
+  std::string topic_;
   MessageIds ids_;
   std::size_t warmup_;
   mutable std::mutex mutex_;

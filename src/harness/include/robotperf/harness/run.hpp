@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
@@ -9,10 +10,15 @@
 
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
+#include "robotperf/tracing/analysis.hpp"
 
 namespace robotperf::harness {
 
 enum class ProcessLayout { kSingle, kPerNode };
+
+// Black-box: Playback and Monitor measure around the graph. Grey-box: the run
+// is also recorded with LTTng and the results come from the trace (src/tracing).
+enum class RunMode { kBlack, kGrey };
 
 struct RunOptions {
   std::optional<double> rate_hz;      // default: the benchmark's
@@ -27,6 +33,11 @@ struct RunOptions {
   // For per-node runs: the robotperf executable and the arguments that make it
   // run one node ("node" subcommand); the runner appends its own.
   std::vector<std::string> node_command;
+  RunMode mode = RunMode::kBlack;
+  // Grey-box: the folder the CTF trace is written to (must not exist yet), and
+  // the per-CPU sub-buffer size (0: sized for the workload).
+  std::filesystem::path trace_dir;
+  std::size_t trace_subbuf_bytes = 0;
   // Called from the playback thread after each send.
   std::function<void(std::size_t sent, std::size_t total, std::size_t received)> progress;
 };
@@ -90,6 +101,11 @@ struct RunResult {
   std::vector<std::string> invalid_reasons;
   std::vector<NodeReport> nodes;
   std::vector<MessageRecord> records;
+  // Grey-box runs: the analysis of the recorded trace (counts, latencies and
+  // validity above then come from it) and where the trace is.
+  std::optional<tracing::TraceAnalysis> grey;
+  std::filesystem::path trace_dir;
+  std::size_t trace_subbuf_bytes = 0;
 };
 
 // Runs the benchmark. Problems that stop the run before timing (bad spec,
