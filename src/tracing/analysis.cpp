@@ -195,6 +195,13 @@ struct Collected {
 };
 
 void collect(ctf::Trace& trace, Collected& c, TraceAnalysis& a) {
+  // Room for every event the streams may hold (LTTng events take 40 bytes or
+  // more): growing the vectors would copy them and fault in pages twice.
+  const std::size_t estimate = c.id_events.size() + trace.total_bytes() / 40;
+  c.id_events.reserve(estimate);
+  c.inputs.reserve(c.inputs.size() + estimate / 8);
+  c.outputs.reserve(c.outputs.size() + estimate / 8);
+  c.callbacks.reserve(c.callbacks.size() + estimate / 4);
   std::unordered_map<const ctf::EventClass*, Dispatch> dispatch;
   for (const auto& ec : trace.metadata().events) dispatch[ec.get()] = dispatch_for(*ec, trace);
   const ctf::EventClass* last_class = nullptr;
@@ -322,9 +329,10 @@ std::vector<double> to_doubles(const std::vector<int64_t>& v) {
 }
 
 // The black-box statistics and validity rules (harness/run.cpp), from the trace.
-void summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run) {
+// Fills a.messages and `by_id` (message ID -> index in a.messages).
+void summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run,
+                   std::unordered_map<int64_t, std::size_t>& by_id) {
   auto in_run = [&](int32_t vpid) { return run.processes.contains(vpid); };
-  std::unordered_map<int64_t, std::size_t> by_id;
   for (const auto& in : c.inputs) {
     if (!in_run(in.vpid)) continue;
     MessageTimes m;
@@ -420,19 +428,37 @@ void summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run) {
 }
 
 // Per-hop breakdown from the events that carry message IDs.
-void breakdown(TraceAnalysis& a, Collected& c, const RunInfo& run) {
-  std::unordered_map<int64_t, const MessageTimes*> measured;
-  for (const auto& m : a.messages) {
-    if (!m.warmup) measured[m.id] = &m;
-  }
-  std::vector<IdEvent> ev;
-  ev.reserve(c.id_events.size());
+void breakdown(TraceAnalysis& a, Collected& c, const RunInfo& run,
+               const std::unordered_map<int64_t, std::size_t>& by_id) {
+  // Group the events of measured messages by message (a counting sort on the
+  // message's index: linear in the number of events), then by time within one.
+  std::vector<uint32_t> slot_of;
+  slot_of.reserve(c.id_events.size());
+  std::vector<std::size_t> starts(a.messages.size() + 1, 0);
   for (const auto& e : c.id_events) {
-    if (run.processes.contains(e.vpid) && measured.contains(e.id)) ev.push_back(e);
+    uint32_t slot = UINT32_MAX;
+    if (run.processes.contains(e.vpid)) {
+      auto it = by_id.find(e.id);
+      if (it != by_id.end() && !a.messages[it->second].warmup) {
+        slot = static_cast<uint32_t>(it->second);
+        ++starts[slot + 1];
+      }
+    }
+    slot_of.push_back(slot);
   }
-  std::sort(ev.begin(), ev.end(), [](const IdEvent& x, const IdEvent& y) {
-    return x.id != y.id ? x.id < y.id : x.ts < y.ts;
-  });
+  for (std::size_t i = 1; i < starts.size(); ++i) starts[i] += starts[i - 1];
+  std::vector<IdEvent> ev(starts.back());
+  {
+    std::vector<std::size_t> next(starts.begin(), starts.end() - 1);
+    for (std::size_t i = 0; i < c.id_events.size(); ++i) {
+      if (slot_of[i] != UINT32_MAX) ev[next[slot_of[i]]++] = c.id_events[i];
+    }
+  }
+  for (std::size_t m = 0; m + 1 < starts.size(); ++m) {
+    std::sort(ev.begin() + static_cast<std::ptrdiff_t>(starts[m]),
+              ev.begin() + static_cast<std::ptrdiff_t>(starts[m + 1]),
+              [](const IdEvent& x, const IdEvent& y) { return x.ts < y.ts; });
+  }
 
   struct Acc {
     std::vector<double> durations;
@@ -447,10 +473,9 @@ void breakdown(TraceAnalysis& a, Collected& c, const RunInfo& run) {
     x.offset_sum += static_cast<double>(start - sent);
   };
 
-  for (std::size_t lo = 0; lo < ev.size();) {
-    std::size_t hi = lo;
-    while (hi < ev.size() && ev[hi].id == ev[lo].id) ++hi;
-    const int64_t sent = measured[ev[lo].id]->sent_ns;
+  for (std::size_t m = 0; m + 1 < starts.size(); ++m) {
+    const std::size_t lo = starts[m], hi = starts[m + 1];
+    const int64_t sent = a.messages[m].sent_ns;
     for (std::size_t i = lo; i < hi; ++i) {
       const IdEvent& e = ev[i];
       if (e.kind == IdKind::kEntry) {
@@ -479,7 +504,6 @@ void breakdown(TraceAnalysis& a, Collected& c, const RunInfo& run) {
         }
       }
     }
-    lo = hi;
   }
   static const char* kinds[] = {"transport", "node", "kernel"};
   for (auto& [key, x] : acc) {
@@ -662,8 +686,9 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
         }
       }
       a.run = run;
-      summarise_run(a, c, run);
-      breakdown(a, c, run);
+      std::unordered_map<int64_t, std::size_t> by_id;
+      summarise_run(a, c, run, by_id);
+      breakdown(a, c, run, by_id);
     }
   }
   callback_durations(a, c, a.run);

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <bit>
 #include <cstring>
+#include <map>
 
 #include "robotperf/tracing/ctf.hpp"
 
@@ -29,6 +30,103 @@ constexpr uint32_t kPacketMagic = 0xC1FC1FC1;
 
 // Reads fields from a bit position in a mapped stream. Every read checks the
 // packet's bounds, so a corrupt trace gives an error and never a wild read.
+// A struct of byte-aligned scalars, strings and fixed arrays (every LTTng-UST
+// payload and context), compiled once into a list of reads.
+struct FlatOp {
+  enum Kind : uint8_t { kUnsigned, kSigned, kFloat, kString, kText, kSkip } kind;
+  uint8_t bytes;        // scalars
+  unsigned align_bits;  // >= 8
+  uint64_t count;       // kText, kSkip: bytes
+};
+struct FlatLayout {
+  std::vector<FlatOp> ops;
+};
+
+// Compiles `t` to a flat layout, or returns false when it needs the general
+// decoder (bit fields, big-endian data, sequences, variants, nested structs).
+bool compile_flat(const Type& t, bool trace_big_endian, FlatLayout& out) {
+  if (t.kind != Kind::kStruct || trace_big_endian || std::endian::native != std::endian::little)
+    return false;
+  auto little = [](const Type& x) { return x.byte_order != ByteOrder::kBig; };
+  for (const auto& f : t.fields) {
+    const Type& ft = *f.type;
+    const unsigned align = std::max(8u, ft.align_bits);
+    if (ft.align_bits % 8 != 0 && ft.align_bits != 1) return false;
+    switch (ft.kind) {
+      case Kind::kInteger:
+      case Kind::kEnum:
+        if (ft.size_bits % 8 != 0 || ft.align_bits < 8 || !little(ft) || ft.maps_clock)
+          return false;
+        out.ops.push_back({ft.is_signed ? FlatOp::kSigned : FlatOp::kUnsigned,
+                           static_cast<uint8_t>(ft.size_bits / 8), align, 0});
+        break;
+      case Kind::kFloat:
+        if (!little(ft) || ft.align_bits < 8) return false;
+        out.ops.push_back({FlatOp::kFloat, static_cast<uint8_t>(ft.size_bits / 8), align, 0});
+        break;
+      case Kind::kString:
+        out.ops.push_back({FlatOp::kString, 0, 8, 0});
+        break;
+      case Kind::kArray: {
+        const Type& e = *ft.element;
+        if (e.kind != Kind::kInteger || e.size_bits % 8 != 0 || e.align_bits > e.size_bits ||
+            e.align_bits < 8)
+          return false;
+        out.ops.push_back({e.is_text ? FlatOp::kText : FlatOp::kSkip, 0, std::max(8u, e.align_bits),
+                           ft.length * (e.size_bits / 8)});
+        break;
+      }
+      default:
+        return false;
+    }
+  }
+  return true;
+}
+
+enum class HeaderShape { kGeneral, kCompact, kLarge };
+
+// Whether a stream's event header is one of LTTng's two, laid out exactly as LTTng writes them.
+HeaderShape header_shape(const Type& h, bool trace_big_endian) {
+  if (trace_big_endian || std::endian::native != std::endian::little) return HeaderShape::kGeneral;
+  if (h.kind != Kind::kStruct || h.fields.size() != 2 || h.align_bits != 8)
+    return HeaderShape::kGeneral;
+  const Type& id = *h.fields[0].type;
+  const Type& v = *h.fields[1].type;
+  if (h.fields[0].name != "id" || id.kind != Kind::kEnum || v.kind != Kind::kVariant ||
+      v.tag_sibling != 0 || v.fields.size() != 2 || id.byte_order == ByteOrder::kBig)
+    return HeaderShape::kGeneral;
+  const unsigned id_bits = id.size_bits;
+  const unsigned ts_bits = id_bits == 5 ? 27 : 32;
+  if (!(id_bits == 5 || id_bits == 16)) return HeaderShape::kGeneral;
+  const uint64_t extended = id_bits == 5 ? 31 : 65535;
+  // The enum maps 0 .. extended-1 to "compact" and extended to "extended".
+  int compact_option = -1, extended_option = -1;
+  for (std::size_t m = 0; m < id.mappings.size(); ++m) {
+    const auto& mp = id.mappings[m];
+    if (mp.low == 0 && mp.high == static_cast<int64_t>(extended - 1))
+      compact_option = v.option_of_mapping[m];
+    if (mp.low == static_cast<int64_t>(extended) && mp.high == mp.low)
+      extended_option = v.option_of_mapping[m];
+  }
+  if (compact_option < 0 || extended_option < 0) return HeaderShape::kGeneral;
+  const Type& c = *v.fields[static_cast<std::size_t>(compact_option)].type;
+  const Type& e = *v.fields[static_cast<std::size_t>(extended_option)].type;
+  auto is_int = [](const Type& t, unsigned bits, bool clock) {
+    return (t.kind == Kind::kInteger) && t.size_bits == bits && t.maps_clock == clock &&
+           t.byte_order != ByteOrder::kBig && !t.is_signed;
+  };
+  if (c.kind != Kind::kStruct || c.fields.size() != 1 || !is_int(*c.fields[0].type, ts_bits, true))
+    return HeaderShape::kGeneral;
+  if (id_bits == 5 && c.fields[0].type->align_bits != 1) return HeaderShape::kGeneral;
+  if (id_bits == 16 && (c.fields[0].type->align_bits != 8 || id.align_bits != 8))
+    return HeaderShape::kGeneral;
+  if (e.kind != Kind::kStruct || e.fields.size() != 2 || e.fields[0].name != "id" ||
+      !is_int(*e.fields[0].type, 32, false) || e.fields[0].type->align_bits != 8 ||
+      !is_int(*e.fields[1].type, 64, true) || e.fields[1].type->align_bits != 8)
+    return HeaderShape::kGeneral;
+  return id_bits == 5 ? HeaderShape::kCompact : HeaderShape::kLarge;
+}
+
 class Decoder {
  public:
   Decoder(const uint8_t* data, uint64_t end_bits, bool trace_big_endian, const std::string& file)
@@ -227,6 +325,104 @@ class Decoder {
     }
   }
 
+  // Decodes a struct compiled to a flat layout (see FlatLayout) into out[0..n).
+  void decode_flat(const FlatLayout& layout, Value* out) {
+    for (std::size_t i = 0; i < layout.ops.size(); ++i) {
+      const FlatOp& op = layout.ops[i];
+      pos_ = (pos_ + op.align_bits - 1) & ~static_cast<uint64_t>(op.align_bits - 1);
+      const uint64_t start = pos_ / 8;
+      Value& v = out[i];
+      switch (op.kind) {
+        case FlatOp::kUnsigned:
+        case FlatOp::kSigned:
+        case FlatOp::kFloat: {
+          if (pos_ + op.bytes * 8 > end_bits_) fail("event runs past the end of its packet");
+          uint64_t bits = 0;
+          std::memcpy(&bits, data_ + start, op.bytes);  // little-endian host, little-endian trace
+          pos_ += op.bytes * 8;
+          if (op.kind == FlatOp::kFloat) {
+            v.tag = Value::Tag::kFloat;
+            v.f = op.bytes == 4
+                      ? static_cast<double>(std::bit_cast<float>(static_cast<uint32_t>(bits)))
+                      : std::bit_cast<double>(bits);
+          } else if (op.kind == FlatOp::kSigned) {
+            const unsigned n = op.bytes * 8;
+            if (n < 64 && ((bits >> (n - 1)) & 1)) bits |= ~uint64_t{0} << n;
+            v.tag = Value::Tag::kSigned;
+            v.u = bits;
+          } else {
+            v.tag = Value::Tag::kUnsigned;
+            v.u = bits;
+          }
+          break;
+        }
+        case FlatOp::kString:
+          v.tag = Value::Tag::kString;
+          v.s = read_string();
+          break;
+        case FlatOp::kText:
+          v.tag = Value::Tag::kString;
+          v.s = read_text(op.count);
+          break;
+        case FlatOp::kSkip:
+          if (pos_ + op.count * 8 > end_bits_) fail("array runs past the end of its packet");
+          pos_ += op.count * 8;
+          v = Value{};
+          break;
+      }
+    }
+  }
+
+  // LTTng's compact (5-bit id, 27-bit time) and large (16-bit id, 32-bit time)
+  // event headers, each with an extended form (32-bit id, 64-bit time).
+  uint64_t decode_lttng_header(HeaderShape shape) {
+    pos_ = (pos_ + 7) & ~uint64_t{7};
+    const uint8_t* p = data_ + pos_ / 8;
+    const uint64_t left = end_bits_ > pos_ ? (end_bits_ - pos_) / 8 : 0;
+    auto need = [&](uint64_t bytes) {
+      if (left < bytes) fail("event header runs past the end of its packet");
+    };
+    uint64_t id;
+    if (shape == HeaderShape::kCompact) {
+      need(1);
+      id = p[0] & 31u;
+      if (id != 31) {
+        need(4);
+        uint32_t word;
+        std::memcpy(&word, p, 4);
+        update_clock(word >> 5, 27);
+        pos_ += 32;
+        return id;
+      }
+      p += 1;
+      pos_ += 8;
+      need(13);
+    } else {
+      need(2);
+      uint16_t id16;
+      std::memcpy(&id16, p, 2);
+      id = id16;
+      if (id != 65535) {
+        need(6);
+        uint32_t ts;
+        std::memcpy(&ts, p + 2, 4);
+        update_clock(ts, 32);
+        pos_ += 48;
+        return id;
+      }
+      p += 2;
+      pos_ += 16;
+      need(14);
+    }
+    uint32_t id32;
+    uint64_t ts;
+    std::memcpy(&id32, p, 4);
+    std::memcpy(&ts, p + 4, 8);
+    clock_ = ts;
+    pos_ += 96;
+    return id32;
+  }
+
   // The option of variant t selected by the value of its tag, an enum of type tag_type.
   Value decode_variant(const Type& t, const uint64_t* siblings, const Type& tag_type,
                        uint64_t* id_out) {
@@ -334,6 +530,12 @@ Trace::~Trace() = default;
 Trace::Trace(Trace&&) noexcept = default;
 Trace& Trace::operator=(Trace&&) noexcept = default;
 
+std::size_t Trace::total_bytes() const {
+  std::size_t n = 0;
+  for (const auto& m : mapped_) n += m->size;
+  return n;
+}
+
 int Trace::stream_context_index(uint64_t stream_id, std::string_view name) const {
   const StreamClass* sc = metadata_.stream(stream_id);
   return sc ? index_of(sc->event_context, name) : -1;
@@ -348,6 +550,27 @@ StreamStats Trace::read_stream(std::size_t index,
   const Metadata& md = metadata_;
   Decoder d(m.data, m.size * 8, md.big_endian, stats.file);
   std::vector<Value> header_values, context_values, payload, event_context;
+  // Layouts compiled on first use, per stream class and event class.
+  struct Compiled {
+    bool tried = false;
+    bool flat = false;
+    FlatLayout layout;
+  };
+  std::map<const void*, Compiled> compiled;
+  auto layout_of = [&](const TypePtr& t) -> const FlatLayout* {
+    Compiled& c = compiled[t.get()];
+    if (!c.tried) {
+      c.tried = true;
+      c.flat = compile_flat(*t, md.big_endian, c.layout);
+    }
+    return c.flat ? &c.layout : nullptr;
+  };
+  // Payload layouts of the current stream class, by event id (compiled once).
+  const StreamClass* layouts_for = nullptr;
+  std::vector<const FlatLayout*> payload_layouts;
+  std::vector<uint8_t> payload_flat;
+  HeaderShape shape = HeaderShape::kGeneral;
+  const FlatLayout* context_layout = nullptr;
   uint64_t last_discarded = 0;
   bool have_seq = false;
   uint64_t last_seq = 0;
@@ -400,21 +623,48 @@ StreamStats Trace::read_stream(std::size_t index,
     const uint64_t content_end = packet_start + content_bits;
     d.set_end(content_end);
     d.set_clock_updates(true);
+    if (layouts_for != sc) {
+      layouts_for = sc;
+      shape =
+          sc->event_header ? header_shape(*sc->event_header, md.big_endian) : HeaderShape::kGeneral;
+      context_layout = sc->event_context ? layout_of(sc->event_context) : nullptr;
+      payload_layouts.assign(sc->events_by_id.size(), nullptr);
+      payload_flat.assign(sc->events_by_id.size(), 0);
+      for (std::size_t i = 0; i < sc->events_by_id.size(); ++i) {
+        const EventClass* ec = sc->events_by_id[i];
+        if (ec == nullptr || ec->context) continue;
+        payload_layouts[i] = ec->fields ? layout_of(ec->fields) : nullptr;
+        payload_flat[i] = !ec->fields || payload_layouts[i] != nullptr;
+      }
+      if (sc->event_context) event_context.resize(sc->event_context->fields.size());
+    }
 
     while (true) {
       // Events end where the next header would not fit (trailing padding).
       if (d.pos() >= content_end) break;
       uint64_t id = 0;
-      if (sc->event_header) {
+      if (shape != HeaderShape::kGeneral) {
+        id = d.decode_lttng_header(shape);
+      } else if (sc->event_header) {
         d.decode_struct(*sc->event_header, nullptr, &id);
       }
       const EventClass* ec = id < sc->events_by_id.size() ? sc->events_by_id[id] : nullptr;
       if (ec == nullptr) d.fail("unknown event id " + std::to_string(id));
-      event_context.clear();
-      if (sc->event_context) d.decode_struct(*sc->event_context, &event_context, nullptr);
-      if (ec->context) d.decode_struct(*ec->context, nullptr, nullptr);
-      payload.clear();
-      if (ec->fields) d.decode_struct(*ec->fields, &payload, nullptr);
+      if (context_layout != nullptr) {
+        d.decode_flat(*context_layout, event_context.data());
+      } else if (sc->event_context) {
+        event_context.clear();
+        d.decode_struct(*sc->event_context, &event_context, nullptr);
+      }
+      if (payload_flat[id]) {
+        const FlatLayout* layout = payload_layouts[id];
+        payload.resize(layout ? layout->ops.size() : 0);
+        if (layout) d.decode_flat(*layout, payload.data());
+      } else {
+        if (ec->context) d.decode_struct(*ec->context, nullptr, nullptr);
+        payload.clear();
+        if (ec->fields) d.decode_struct(*ec->fields, &payload, nullptr);
+      }
       Event ev;
       ev.cls = ec;
       ev.timestamp = d.clock();

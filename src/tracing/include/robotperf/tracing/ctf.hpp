@@ -152,6 +152,8 @@ class Trace {
   const Metadata& metadata() const { return metadata_; }
   const std::filesystem::path& dir() const { return dir_; }
   std::size_t stream_count() const { return stream_files_.size(); }
+  // The size of all stream files together.
+  std::size_t total_bytes() const;
 
   // Decodes every event of stream `index`, in stream order (time order within
   // the stream), calling `on_event` for each. The Event and its views are valid
