@@ -1,11 +1,14 @@
 // Grey-box runs recorded with a real LTTng session daemon (started here when
 // none runs) and analysed from the CTF trace.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <set>
 
 #include "robotperf/harness/run.hpp"
@@ -177,6 +180,71 @@ TEST_F(GreyRun, PerNodeProcessesAreTracedAsPartOfTheRun) {
   for (const auto& t : r.grey->topics)
     cross_process_topic |= t.topic == "/rectify/image_rect" && t.latency.count > 0;
   EXPECT_TRUE(cross_process_topic);
+}
+
+struct Outcome {
+  int exit_code = -1;
+  std::string out;
+};
+
+Outcome robotperf(const std::string& args, const std::string& env = "") {
+  const std::string cmd = env + " " + std::string(ROBOTPERF_EXECUTABLE) + " " + args + " 2>&1";
+  Outcome o;
+  FILE* p = popen(cmd.c_str(), "r");
+  if (p == nullptr) return o;
+  char buf[4096];
+  while (std::size_t n = fread(buf, 1, sizeof buf, p)) o.out.append(buf, n);
+  const int status = pclose(p);
+  o.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return o;
+}
+
+TEST_F(GreyRun, CommandLineRunsGreyAndAnalysesTheTrace) {
+  const fs::path out = dir_ / "results";
+  const Outcome run = robotperf("run a2 --mode grey --count 40 --quiet --output " + out.string());
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  EXPECT_NE(run.out.find("per-hop breakdown"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("kernel  rectify: image_proc/rectify"), std::string::npos) << run.out;
+  fs::path json, trace;
+  for (const auto& e : fs::directory_iterator(out)) {
+    if (e.path().extension() == ".json") json = e.path();
+    if (e.path().extension() == ".trace") trace = e.path();
+  }
+  ASSERT_FALSE(json.empty());
+  ASSERT_EQ(trace.stem(), json.stem()) << "the trace sits beside its results file";
+  std::ifstream in(json);
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["type"], "grey");
+  EXPECT_EQ(j["counts"]["matched"], 35);
+  EXPECT_EQ(j["grey"]["trace"]["discarded_events"], 0);
+  EXPECT_EQ(j["grey"]["trace"]["path"], trace.string());
+  EXPECT_FALSE(j["grey"]["hops"].empty());
+
+  const fs::path analysis = dir_ / "analysis.json";
+  const Outcome again =
+      robotperf("trace analyze " + trace.string() + " --json " + analysis.string());
+  ASSERT_EQ(again.exit_code, 0) << again.out;
+  std::ifstream ain(analysis);
+  const auto a = nlohmann::json::parse(ain);
+  EXPECT_EQ(a["run"]["matched"], 35);
+  EXPECT_EQ(a["run"]["latency_ms"]["from_scheduled"]["p50"],
+            j["latency_ms"]["from_scheduled"]["p50"]);
+
+  const Outcome missing = robotperf("trace analyze " + (dir_ / "no-such-trace").string());
+  EXPECT_EQ(missing.exit_code, 2) << missing.out;
+  EXPECT_EQ(std::count(missing.out.begin(), missing.out.end(), '\n'), 1) << missing.out;
+}
+
+TEST_F(GreyRun, MissingLttngIsOneLineSayingHowToInstallIt) {
+  const fs::path out = dir_ / "results";
+  const Outcome o =
+      robotperf("run a2 --mode grey --count 10 --output " + out.string(), "PATH=/nonexistent");
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << o.out;
+  EXPECT_NE(o.out.find("apt-get install lttng-tools"), std::string::npos) << o.out;
+  const Outcome black = robotperf("run a2 --count 10 --warmup 0 --quiet --output " + out.string(),
+                                  "PATH=/nonexistent");
+  EXPECT_NE(black.exit_code, 2) << "black-box runs do not need LTTng: " << black.out;
 }
 
 TEST_F(GreyRun, BlackBoxRunsNeedNoTracing) {
