@@ -11,6 +11,7 @@ packages=(
   libsqlite3-dev ros2-test-interface-files
   libzstd-dev liblz4-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  liblttng-ust-dev lttng-tools babeltrace2
 )
 
 missing=()

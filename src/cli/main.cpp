@@ -19,6 +19,9 @@
 #include "robotperf/report/atomic_file.hpp"
 #include "robotperf/report/results.hpp"
 #include "robotperf/sysinfo/machine.hpp"
+#include "robotperf/tracing/analysis.hpp"
+#include "robotperf/tracing/ctf.hpp"
+#include "robotperf/tracing/session.hpp"
 
 namespace fs = std::filesystem;
 using namespace robotperf;
@@ -179,6 +182,8 @@ struct RunArgs {
   std::optional<int> domain;
   PowerArgs power;
   SchedulingArgs scheduling;
+  std::string mode = "black";
+  std::size_t trace_subbuf = 0;
 };
 
 int run(const fs::path& root, const RunArgs& a) {
@@ -206,11 +211,22 @@ int run(const fs::path& root, const RunArgs& a) {
   }
   // Fail on an unwritable output folder before spending time on the run.
   fs::create_directories(a.output);
+  if (a.mode == "grey") {
+    o.mode = harness::RunMode::kGrey;
+    // Recorded under a temporary name, renamed after the results file once the run is named.
+    o.trace_dir = fs::path(a.output) / (".trace-" + std::to_string(getpid()));
+    o.trace_subbuf_bytes = a.trace_subbuf;
+  }
 
-  const auto result = harness::run_benchmark(spec, o);
+  auto result = harness::run_benchmark(spec, o);
+  const fs::path base = fs::path(a.output) / report::result_basename(result);
+  if (result.grey) {
+    const fs::path trace = base.string() + ".trace";
+    fs::rename(result.trace_dir, trace);
+    result.trace_dir = trace;
+  }
   const auto machine = sysinfo::collect_machine_info();
   const auto json = report::result_to_json(result, machine);
-  const fs::path base = fs::path(a.output) / report::result_basename(result);
   report::write_file_atomically(base.string() + ".json", json.dump(2) + "\n");
   if (a.csv)
     report::write_file_atomically(base.string() + ".latencies.csv", report::latencies_csv(result));
@@ -218,15 +234,52 @@ int run(const fs::path& root, const RunArgs& a) {
   std::cout << report::summary_table(result);
   std::cout << "machine: " << sysinfo::summary_line(machine) << "\n";
   std::cout << "results: " << base.string() << ".json" << (a.csv ? " (+ .latencies.csv)" : "")
-            << "\n";
+            << (result.grey ? " (+ .trace)" : "") << "\n";
   const bool functional_ok = !result.functional || result.functional->valid;
   return result.valid && functional_ok ? kExitOk : kExitInvalidResult;
+}
+
+struct TraceArgs {
+  std::string dir;
+  std::string json;
+  int pid = 0;
+};
+
+// `trace analyze`: the grey-box analysis of any CTF trace folder.
+int analyze(const TraceArgs& a) {
+  const auto analysis = tracing::analyze_trace(a.dir, {.run_pid = a.pid, .extra_processes = {}});
+  std::cout << tracing::analysis_summary(analysis);
+  if (!a.json.empty()) {
+    nlohmann::json j = tracing::to_json(analysis);
+    j["valid"] = analysis.valid;
+    j["reasons"] = analysis.invalid_reasons;
+    if (analysis.run) {
+      j["run"] = {
+          {"benchmark", analysis.run->benchmark},
+          {"rmw", analysis.run->rmw},
+          {"pid", analysis.run->pid},
+          {"sent", analysis.sent},
+          {"measured", analysis.measured},
+          {"matched", analysis.matched},
+          {"lost", analysis.lost},
+          {"duplicates", analysis.duplicates},
+          {"unknown", analysis.unknown},
+          {"latency_ms",
+           {{"from_scheduled", metrics::to_json(analysis.latency_from_scheduled, 1e-6, "ms")},
+            {"from_sent", metrics::to_json(analysis.latency_from_sent, 1e-6, "ms")}}},
+          {"throughput_hz", analysis.throughput_hz}};
+    }
+    report::write_file_atomically(a.json, j.dump(2) + "\n");
+  }
+  return analysis.valid ? kExitOk : kExitInvalidResult;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"robotperf — benchmarking suite for robotics computing (ROS 2 graphs, black-box)"};
+  CLI::App app{
+      "robotperf — benchmarking suite for robotics computing (ROS 2 graphs, black-box and "
+      "grey-box)"};
   app.set_version_flag("--version",
                        std::string(build_info::kVersion) + " (" + build_info::kGitRevision + ")");
   app.require_subcommand(1);
@@ -264,6 +317,24 @@ int main(int argc, char** argv) {
                     "refuse to run when a run rule is broken (see the warnings of a normal run)");
   add_power_options(run_cmd, ra.power, true);
   add_scheduling_options(run_cmd, ra.scheduling);
+  run_cmd
+      ->add_option("--mode", ra.mode,
+                   "black (Playback/Monitor) or grey (also record an LTTng trace and take the "
+                   "results from it)")
+      ->check(CLI::IsMember({"black", "grey"}));
+  run_cmd->add_option("--trace-subbuf-size", ra.trace_subbuf,
+                      "grey: per-CPU LTTng sub-buffer bytes (default: sized for the workload)");
+
+  TraceArgs ta;
+  auto* trace_cmd = app.add_subcommand("trace", "work with LTTng traces");
+  trace_cmd->require_subcommand(1);
+  auto* analyze_cmd = trace_cmd->add_subcommand(
+      "analyze", "grey-box analysis of a CTF trace (robotperf or ros2_tracing)");
+  analyze_cmd->add_option("dir", ta.dir, "the trace folder (searched for CTF metadata)")
+      ->required();
+  analyze_cmd->add_option("--json", ta.json, "also write the analysis as JSON to this file");
+  analyze_cmd->add_option("--pid", ta.pid,
+                          "analyse the robotperf run of this process (default: the first)");
 
   auto* bag_cmd = app.add_subcommand("bag", "inspect, print and convert rosbag2 bags");
   bag_cmd->require_subcommand(1);
@@ -346,6 +417,7 @@ int main(int argc, char** argv) {
     if (*bag_echo_cmd) return cli::bag_echo(bag_path, echo);
     if (*bag_convert_cmd) return cli::bag_convert(bag_path, convert_out, convert);
     if (*generate_cmd) return cli::dataset_generate(dataset_name, generate);
+    if (*analyze_cmd) return analyze(ta);
     if (*sysinfo_cmd) {
       const nlohmann::json description = {
           {"machine", sysinfo::to_json(sysinfo::collect_machine_info())},
@@ -366,6 +438,12 @@ int main(int argc, char** argv) {
     return kExitUsage;
   } catch (const msgs::dynamic::DefinitionError& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitUsage;
+  } catch (const tracing::TracingUnavailable& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitUsage;
+  } catch (const tracing::ctf::CtfError& e) {
+    std::fprintf(stderr, "robotperf: unreadable trace: %s\n", e.what());
     return kExitUsage;
   } catch (const harness::BenchmarkError& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());

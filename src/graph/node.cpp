@@ -2,7 +2,22 @@
 
 #include <stdexcept>
 
+#include "robotperf/tracing/tracepoints.hpp"
+
 namespace robotperf::graph {
+namespace {
+
+// The message ID (header stamp) of a message, or kNoMessageId for types without a header.
+int64_t message_id(const msgs::TypeSupport& type, const void* msg) {
+  return type.stamped() ? type.stamp_ns(msg) : tracing::kNoMessageId;
+}
+
+}  // namespace
+
+Context::Context(std::unique_ptr<rmw::Transport> transport) : transport_(std::move(transport)) {
+  // ros2_tracing records its tracetools version here; ours names the runtime.
+  lttng_ust_tracepoint(ros2, rcl_init, this, "robotperf");
+}
 
 void WakeSignal::notify() {
   {
@@ -53,7 +68,9 @@ bool Timer::execute() {
     next_ns_ += period_ns_;
     if (next_ns_ <= now) next_ns_ += ((now - next_ns_) / period_ns_ + 1) * period_ns_;
   }
+  lttng_ust_tracepoint(ros2, callback_start, &callback_, 0);
   callback_();
+  lttng_ust_tracepoint(ros2, callback_end, &callback_);
   return true;
 }
 
@@ -67,16 +84,40 @@ void Timer::cancel() {
   cancelled_ = true;
 }
 
+void GenericPublisher::publish(rmw::MessagePtr msg) {
+  lttng_ust_tracepoint(ros2, rclcpp_publish, this, msg.get());
+  if (lttng_ust_tracepoint_enabled(robotperf, publish)) {
+    // Sizing walks the message without writing it, and only while traced.
+    lttng_ust_do_tracepoint(robotperf, publish, node_name_.c_str(), topic_.c_str(),
+                            message_id(*type_support_, msg.get()),
+                            type_support_->serialized_size(msg.get()));
+  }
+  lttng_ust_tracepoint(ros2, rcl_publish, this, msg.get());
+  handle_->publish(std::move(msg));
+}
+
 bool GenericSubscription::execute() {
   MessageInfo info;
   rmw::MessagePtr msg = handle_->take(&info);
   if (!msg) return false;
+  lttng_ust_tracepoint(ros2, rcl_take, msg.get());
+  lttng_ust_tracepoint(ros2, rclcpp_take, msg.get());
+  lttng_ust_tracepoint(ros2, callback_start, &callback_, info.from_intra_process ? 1 : 0);
+  const bool traced = lttng_ust_tracepoint_enabled(robotperf, callback_entry);
+  const int64_t id = traced ? message_id(*type_support_, msg.get()) : tracing::kNoMessageId;
+  if (traced) {
+    lttng_ust_do_tracepoint(robotperf, callback_entry, node_name_.c_str(), topic_.c_str(), id,
+                            type_support_->serialized_size(msg.get()));
+  }
   callback_(std::move(msg), info);
+  lttng_ust_tracepoint(robotperf, callback_exit, node_name_.c_str(), topic_.c_str(), id);
+  lttng_ust_tracepoint(ros2, callback_end, &callback_);
   return true;
 }
 
 Node::Node(Context& context, std::string name) : context_(context), name_(std::move(name)) {
   if (name_.empty()) throw std::invalid_argument("a node needs a name");
+  lttng_ust_tracepoint(ros2, rcl_node_init, this, &context_.transport(), name_.c_str(), "/");
 }
 
 std::shared_ptr<Timer> Node::create_timer(std::chrono::nanoseconds period,
@@ -85,6 +126,9 @@ std::shared_ptr<Timer> Node::create_timer(std::chrono::nanoseconds period,
     throw std::invalid_argument("timer period must be positive in node " + name_);
   auto timer =
       std::make_shared<Timer>(period, std::move(callback), rmw::steady_now_ns() + period.count());
+  lttng_ust_tracepoint(ros2, rcl_timer_init, timer.get(), static_cast<int64_t>(period.count()));
+  lttng_ust_tracepoint(ros2, rclcpp_timer_callback_added, timer.get(), timer->callback_handle());
+  lttng_ust_tracepoint(ros2, rclcpp_timer_link_node, timer.get(), this);
   add_entity(timer);
   notify();  // an executor already spinning must learn the new deadline
   return timer;
@@ -130,21 +174,28 @@ std::shared_ptr<GenericPublisher> Node::create_generic_publisher(const std::stri
                                                                  const msgs::TypeSupport& type,
                                                                  const QoS& qos) {
   auto pub = std::make_shared<GenericPublisher>(
-      context_.transport().create_publisher(topic, type, qos), topic, type.ros_type);
-  add_publisher(pub);
+      context_.transport().create_publisher(topic, type, qos), topic, type, name_);
+  add_publisher(pub, qos);
   return pub;
 }
 
 std::shared_ptr<GenericSubscription> Node::create_generic_subscription(
     const std::string& topic, const msgs::TypeSupport& type, const QoS& qos,
     GenericSubscription::Callback callback) {
-  auto sub = std::make_shared<GenericSubscription>(topic, type.ros_type, std::move(callback));
+  auto sub = std::make_shared<GenericSubscription>(topic, type, name_, std::move(callback));
   sub->attach(context_.transport().create_subscription(topic, type, qos, [this] { notify(); }));
+  // One object stands for both of ROS 2's layers: rcl handle = rclcpp subscription.
+  lttng_ust_tracepoint(ros2, rcl_subscription_init, sub.get(), this, sub->rmw_handle(),
+                       topic.c_str(), qos.depth);
+  lttng_ust_tracepoint(ros2, rclcpp_subscription_init, sub.get(), sub.get());
+  lttng_ust_tracepoint(ros2, rclcpp_subscription_callback_added, sub.get(), sub->callback_handle());
   add_entity(sub);
   return sub;
 }
 
-void Node::add_publisher(std::shared_ptr<GenericPublisher> publisher) {
+void Node::add_publisher(std::shared_ptr<GenericPublisher> publisher, const QoS& qos) {
+  lttng_ust_tracepoint(ros2, rcl_publisher_init, publisher.get(), this, publisher->rmw_handle(),
+                       publisher->topic().c_str(), qos.depth);
   std::lock_guard lock(mutex_);
   publishers_.push_back(std::move(publisher));
 }

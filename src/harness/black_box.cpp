@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "robotperf/msgs/known_types.hpp"
+#include "robotperf/tracing/tracepoints.hpp"
 
 namespace robotperf::harness {
 namespace {
@@ -81,6 +82,8 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
     r.scheduled_ns = start_ns + static_cast<int64_t>(k) * ids_.period_ns;
     sleep_until_ns(r.scheduled_ns);
     r.sent_ns = rmw::steady_now_ns();
+    lttng_ust_tracepoint(robotperf, input, node_->name().c_str(), ids_.stamp_ns(k), k,
+                         r.scheduled_ns);
     for (std::size_t i = 0; i < inputs_.size(); ++i)
       inputs_[i].publisher->publish(std::move(next[i]));
     ++sent;
@@ -94,6 +97,7 @@ Monitor::Monitor(graph::Context& context, const BoundaryTopic& output, MessageId
                  std::size_t warmup)
     : node_(std::make_shared<graph::Node>(context, "robotperf_monitor")),
       type_(&type_support_by_name(output.type, output.topic)),
+      topic_(output.topic),
       ids_(ids),
       warmup_(warmup) {
   tally_.received_ns.assign(ids_.count, -1);
@@ -111,7 +115,10 @@ Monitor::Monitor(graph::Context& context, const BoundaryTopic& output, MessageId
 }
 
 void Monitor::on_message(const rmw::MessagePtr& msg, int64_t now_ns) {
-  const auto id = ids_.id_of(type_->stamp_ns(msg.get()));
+  const int64_t stamp = type_->stamp_ns(msg.get());
+  lttng_ust_tracepoint(robotperf, output, node_->name().c_str(), topic_.c_str(), stamp,
+                       type_->serialized_size(msg.get()));
+  const auto id = ids_.id_of(stamp);
   {
     std::lock_guard lock(mutex_);
     ++received_;

@@ -80,6 +80,7 @@ class Monitor {
 
   std::shared_ptr<graph::Node> node_;
   const msgs::TypeSupport* type_;
+  std::string topic_;
   MessageIds ids_;
   std::size_t warmup_;
   std::vector<bool> keep_;  // per id

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "black_box.hpp"
+#include "grey_box.hpp"
 #include "measurement.hpp"
 #include "node_processes.hpp"
 #include "robotperf/graph/executor.hpp"
@@ -191,6 +192,9 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   std::optional<ScopedScheduling> scheduling;
   if (options.processes == ProcessLayout::kSingle) scheduling.emplace(options.scheduling);
 
+  std::optional<GreyBoxRecording> grey;
+  if (options.mode == RunMode::kGrey) grey.emplace(spec, options, r);
+
   graph::Context context(transport_for(options));
   const auto period_ns = static_cast<int64_t>(std::llround(1e9 / r.rate_hz));
   const auto wall_now = std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -254,12 +258,14 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
     if (children) return children->failure();
     return {};
   };
+  trace_run_begin(spec, r, period_ns);
   playback.run(
       r.records, [&] { return !failure().empty(); },
       [&](std::size_t sent) {
         if (sent == r.warmup + 1) measurement.begin();  // the first measured message is out
         if (options.progress) options.progress(sent, r.count, monitor.received());
       });
+  trace_run_end(r.records.size());
 
   // Drain: wait for the outstanding outputs, at most drain_s after the last send.
   const std::size_t expected = r.records.size() > r.warmup ? r.records.size() - r.warmup : 0;
@@ -279,6 +285,8 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   }
   r.completed = r.records.size() == r.count && r.errors.empty();
   summarise(r, spec, tally);
+  // Grey-box: counts, latencies and validity come from the trace.
+  if (grey) grey->finish(r);
   if (r.resources.other_cpu_percent &&
       *r.resources.other_cpu_percent > sysinfo::kBusyThresholdPercent) {
     char message[200];
@@ -318,6 +326,7 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   rmw::TransportOptions t;
   t.domain_id = domain_id;
   graph::Context context(rmw::make_transport(rmw, t));
+  trace_run_join();
   auto node = kernels::make_kernel_node(node_spec->kernel, context, kernel_config(*node_spec));
   graph::Executor executor(spec.executor_threads);
   executor.add_node(node);

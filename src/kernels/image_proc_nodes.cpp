@@ -4,6 +4,7 @@
 #include "builtin_kernels.hpp"
 #include "camera_sync.hpp"
 #include "robotperf/kernels/image_proc.hpp"
+#include "robotperf/tracing/tracepoints.hpp"
 
 namespace robotperf::kernels {
 namespace {
@@ -33,6 +34,22 @@ class CameraNode : public graph::Node {
   }
   virtual void process(const CameraSync::ImagePtr& image, const CameraSync::InfoPtr& info) = 0;
 
+  // robotperf:kernel_init/fini around a kernel's computation on `image`; the
+  // sizes are CDR sizes from a sizing pass, computed only while traced.
+  void trace_kernel_init(const char* kernel, const msgs::Image& image) const {
+    if (lttng_ust_tracepoint_enabled(robotperf, kernel_init)) {
+      lttng_ust_do_tracepoint(robotperf, kernel_init, name().c_str(), kernel, stamp_of(image),
+                              msgs::type_support<msgs::Image>().serialized_size(&image));
+    }
+  }
+  void trace_kernel_fini(const char* kernel, const msgs::Image& output) const {
+    lttng_ust_tracepoint(robotperf, kernel_fini, name().c_str(), kernel, stamp_of(output),
+                         msgs::type_support<msgs::Image>().serialized_size(&output));
+  }
+  static int64_t stamp_of(const msgs::Image& m) {
+    return int64_t{m.header.stamp.sec} * 1'000'000'000 + m.header.stamp.nanosec;
+  }
+
  private:
   CameraSync sync_;
   std::shared_ptr<graph::GenericSubscription> image_sub_, info_sub_;
@@ -48,10 +65,13 @@ class RectifyNode final : public CameraNode {
  private:
   void process(const CameraSync::ImagePtr& image, const CameraSync::InfoPtr& info) override {
     auto out = std::make_shared<msgs::Image>();
+    trace_kernel_init(kKernel, *image);
     rectifier_.rectify(*image, *info, *out);
+    trace_kernel_fini(kKernel, *out);
     output_->publish(std::shared_ptr<const msgs::Image>(std::move(out)));
   }
 
+  static constexpr const char* kKernel = "image_proc/rectify";
   Rectifier rectifier_;
   std::shared_ptr<graph::Publisher<msgs::Image>> output_;
 };
@@ -74,12 +94,15 @@ class ResizeNode final : public CameraNode {
   void process(const CameraSync::ImagePtr& image, const CameraSync::InfoPtr& info) override {
     auto out = std::make_shared<msgs::Image>();
     auto out_info = std::make_shared<msgs::CameraInfo>();
+    trace_kernel_init(kKernel, *image);
     resize(*image, *info, params_, *out, *out_info);
+    trace_kernel_fini(kKernel, *out);
     // CameraInfo first: a subscriber pairing on the image then finds its partner waiting.
     info_out_->publish(std::shared_ptr<const msgs::CameraInfo>(std::move(out_info)));
     image_out_->publish(std::shared_ptr<const msgs::Image>(std::move(out)));
   }
 
+  static constexpr const char* kKernel = "image_proc/resize";
   ResizeParams params_;
   std::shared_ptr<graph::Publisher<msgs::Image>> image_out_;
   std::shared_ptr<graph::Publisher<msgs::CameraInfo>> info_out_;

@@ -183,10 +183,10 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"cpus", sched.cpus.empty() ? json(nullptr) : json(harness::format_cpu_list(sched.cpus))},
       {"rt_priority", sched.rt_priority ? json(sched.rt_priority) : json(nullptr)},
       {"lock_memory", sched.lock_memory}};
-  return {
+  json out = {
       {"schema", kResultSchema},
       {"benchmark", {{"id", r.benchmark_id}, {"name", r.benchmark_name}, {"category", r.category}}},
-      {"type", "black"},
+      {"type", r.grey ? "grey" : "black"},
       {"started_utc", utc_time(r.started_unix_ns, "%Y-%m-%dT%H:%M:%SZ")},
       {"configuration",
        {{"rate_hz", r.rate_hz},
@@ -228,6 +228,13 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"validity", {{"valid", r.valid}, {"reasons", r.invalid_reasons}}},
       {"functional", functional_json(r.functional)},
   };
+  if (r.grey) {
+    // Grey-box: where the trace is and what it says beyond end-to-end latency.
+    out["grey"] = tracing::to_json(*r.grey);
+    out["grey"]["trace"]["path"] = r.trace_dir.string();
+    out["grey"]["trace"]["subbuf_bytes"] = r.trace_subbuf_bytes;
+  }
+  return out;
 }
 
 std::string latencies_csv(const harness::RunResult& r) {
@@ -249,9 +256,9 @@ std::string latencies_csv(const harness::RunResult& r) {
 
 std::string summary_table(const harness::RunResult& r) {
   std::ostringstream out;
-  out << r.benchmark_id << " (" << r.benchmark_name << ") · " << r.rmw << " · " << r.processes
-      << " process" << (r.processes == "single" ? "" : "es") << " · " << fixed(r.rate_hz, 1)
-      << " Hz · dataset " << r.dataset << "\n";
+  out << r.benchmark_id << " (" << r.benchmark_name << ") · " << (r.grey ? "grey-box · " : "")
+      << r.rmw << " · " << r.processes << " process" << (r.processes == "single" ? "" : "es")
+      << " · " << fixed(r.rate_hz, 1) << " Hz · dataset " << r.dataset << "\n";
   out << "messages: sent " << r.sent << " (warm-up " << r.warmup << "), measured " << r.measured
       << ", matched " << r.matched << ", lost " << r.lost << " (" << fixed(r.loss_percent, 2)
       << " %)";
@@ -274,6 +281,7 @@ std::string summary_table(const harness::RunResult& r) {
   row("send lateness", r.send_lateness);
   out << "\nthroughput: " << fixed(r.throughput_hz, 3) << " Hz out, " << fixed(r.offered_rate_hz, 3)
       << " Hz offered\n";
+  if (r.grey) out << "\n" << tracing::breakdown_table(*r.grey) << "\n";
   out << "headline (RobotPerf): latency " << fixed(r.latency_from_scheduled.max / kNsPerMs, 3)
       << " ms (max), throughput " << fixed(r.throughput_hz, 3) << " Hz\n";
   out << power_line(r) << resources_line(r);

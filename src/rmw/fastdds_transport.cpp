@@ -10,7 +10,10 @@
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 
+#include <array>
+#include <chrono>
 #include <cstdint>
+#include <cstring>
 #include <exception>
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
 #include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
@@ -40,6 +43,7 @@
 
 #include "fastdds_participant_qos.hpp"
 #include "robotperf/msgs/cdr.hpp"
+#include "robotperf/tracing/tracepoints.hpp"
 
 namespace robotperf::rmw {
 namespace {
@@ -240,6 +244,15 @@ class Participant {
   std::map<std::string, dds::Topic*> topics_;
 };
 
+// rmw's gid of an endpoint: its 16-byte GUID, zero-padded to RMW_GID_STORAGE_SIZE.
+std::array<uint8_t, ROBOTPERF_ROS2_GID_STORAGE_SIZE> gid_of(
+    const eprosima::fastrtps::rtps::GUID_t& guid) {
+  std::array<uint8_t, ROBOTPERF_ROS2_GID_STORAGE_SIZE> gid{};
+  std::memcpy(gid.data(), guid.guidPrefix.value, guid.guidPrefix.size);
+  std::memcpy(gid.data() + guid.guidPrefix.size, guid.entityId.value, guid.entityId.size);
+  return gid;
+}
+
 class FastddsPublisher final : public PublisherHandle {
  public:
   FastddsPublisher(std::shared_ptr<Participant> participant, const std::string& topic,
@@ -249,13 +262,30 @@ class FastddsPublisher final : public PublisherHandle {
     writer_ =
         publisher.create_datawriter(&participant_->topic(topic, type), writer_qos(publisher, qos));
     if (writer_ == nullptr) throw TransportError("fastdds: cannot create a writer on " + topic);
+    if (lttng_ust_tracepoint_enabled(ros2, rmw_publisher_init)) {
+      const auto gid = gid_of(writer_->guid());
+      lttng_ust_do_tracepoint(ros2, rmw_publisher_init, this, gid.data());
+    }
   }
   ~FastddsPublisher() override { participant_->publisher().delete_datawriter(writer_); }
 
   void publish(MessagePtr msg) override {
     if (!msg) throw TransportError("fastdds: cannot publish a null message on " + topic_);
     // Fast DDS takes a non-const sample pointer but only reads it to serialize.
-    if (!writer_->write(const_cast<void*>(msg.get()))) {
+    void* sample = const_cast<void*>(msg.get());
+    if (lttng_ust_tracepoint_enabled(ros2, rmw_publish)) {
+      // Traced, the source timestamp is set here so that rmw_publish and the
+      // subscriber's rmw_take carry the same one (Fast DDS would read the
+      // same system clock itself inside write()).
+      const auto now = std::chrono::system_clock::now().time_since_epoch();
+      const int64_t ns = std::chrono::duration_cast<std::chrono::nanoseconds>(now).count();
+      lttng_ust_do_tracepoint(ros2, rmw_publish, this, msg.get(), ns);
+      const eprosima::fastrtps::Time_t stamp(static_cast<int32_t>(ns / 1'000'000'000),
+                                             static_cast<uint32_t>(ns % 1'000'000'000));
+      if (writer_->write_w_timestamp(sample, dds::HANDLE_NIL, stamp) != ReturnCode::RETCODE_OK) {
+        throw TransportError("fastdds: write on " + topic_ + " failed");
+      }
+    } else if (!writer_->write(sample)) {
       throw TransportError("fastdds: write on " + topic_ + " failed");
     }
   }
@@ -294,6 +324,10 @@ class FastddsSubscription final : public SubscriptionHandle {
         subscriber.create_datareader(&participant_->topic(topic, type), reader_qos(subscriber, qos),
                                      &listener_, dds::StatusMask::data_available());
     if (reader_ == nullptr) throw TransportError("fastdds: cannot create a reader on " + topic);
+    if (lttng_ust_tracepoint_enabled(ros2, rmw_subscription_init)) {
+      const auto gid = gid_of(reader_->guid());
+      lttng_ust_do_tracepoint(ros2, rmw_subscription_init, this, gid.data());
+    }
   }
   ~FastddsSubscription() override {
     reader_->set_listener(nullptr);
@@ -312,6 +346,8 @@ class FastddsSubscription final : public SubscriptionHandle {
       }
       // Samples without data only announce writer/instance state changes.
       if (!sample_info.valid_data) continue;
+      lttng_ust_tracepoint(ros2, rmw_take, this, msg.get(), sample_info.source_timestamp.to_ns(),
+                           1);
       if (info != nullptr) {
         info->source_timestamp_ns = sample_info.source_timestamp.to_ns();
         info->reception_timestamp_ns = sample_info.reception_timestamp.to_ns();

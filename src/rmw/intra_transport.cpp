@@ -2,10 +2,13 @@
 // every subscription on the topic. No serialization, no copies.
 #include "intra_transport.hpp"
 
+#include <cstring>
 #include <deque>
 #include <map>
 #include <mutex>
 #include <vector>
+
+#include "robotperf/tracing/tracepoints.hpp"
 
 namespace robotperf::rmw {
 namespace {
@@ -67,6 +70,7 @@ class IntraSubscription final : public SubscriptionHandle {
     if (queue_.empty()) return nullptr;
     Pending p = std::move(queue_.front());
     queue_.pop_front();
+    lttng_ust_tracepoint(ros2, rmw_take, this, p.msg.get(), p.published_ns, 1);
     if (info != nullptr) {
       info->source_timestamp_ns = p.published_ns;
       info->reception_timestamp_ns = p.published_ns;
@@ -105,6 +109,8 @@ class IntraPublisher final : public PublisherHandle {
 
   void publish(MessagePtr msg) override {
     const int64_t now = steady_now_ns();
+    // The timestamp is the source timestamp subscriptions see in rmw_take.
+    lttng_ust_tracepoint(ros2, rmw_publish, this, msg.get(), now);
     std::lock_guard lock(registry_->mutex);
     for (IntraSubscription* sub : registry_->topics[topic_].subscriptions) sub->deliver(msg, now);
   }
@@ -119,6 +125,18 @@ class IntraPublisher final : public PublisherHandle {
   std::string topic_;
 };
 
+// In-process endpoints have no DDS GUID: the endpoint's address stands for it.
+void trace_endpoint_init(const void* endpoint, bool publisher) {
+  uint8_t gid[ROBOTPERF_ROS2_GID_STORAGE_SIZE] = {};
+  const auto address = reinterpret_cast<uintptr_t>(endpoint);
+  std::memcpy(gid, &address, sizeof address);
+  if (publisher) {
+    lttng_ust_tracepoint(ros2, rmw_publisher_init, endpoint, gid);
+  } else {
+    lttng_ust_tracepoint(ros2, rmw_subscription_init, endpoint, gid);
+  }
+}
+
 class IntraTransport final : public Transport {
  public:
   std::string name() const override { return "intra"; }
@@ -129,7 +147,9 @@ class IntraTransport final : public Transport {
     dds_topic_name(topic);  // validates the name as the DDS transport would
     std::lock_guard lock(registry_->mutex);
     ++registry_->topic(topic, type).publishers;
-    return std::make_unique<IntraPublisher>(registry_, topic);
+    auto pub = std::make_unique<IntraPublisher>(registry_, topic);
+    trace_endpoint_init(pub.get(), true);
+    return pub;
   }
 
   std::unique_ptr<SubscriptionHandle> create_subscription(const std::string& topic,
@@ -140,6 +160,7 @@ class IntraTransport final : public Transport {
     auto sub = std::make_unique<IntraSubscription>(registry_, topic, qos, std::move(on_ready));
     std::lock_guard lock(registry_->mutex);
     registry_->topic(topic, type).subscriptions.push_back(sub.get());
+    trace_endpoint_init(sub.get(), false);
     return sub;
   }
 

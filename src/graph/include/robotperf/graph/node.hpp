@@ -27,7 +27,8 @@ using rmw::QoS;
 
 class Context {
  public:
-  explicit Context(std::unique_ptr<rmw::Transport> transport) : transport_(std::move(transport)) {}
+  // Emits ros2:rcl_init.
+  explicit Context(std::unique_ptr<rmw::Transport> transport);
   rmw::Transport& transport() { return *transport_; }
 
  private:
@@ -77,18 +78,26 @@ struct EndpointStatus {
 class GenericPublisher {
  public:
   GenericPublisher(std::unique_ptr<rmw::PublisherHandle> handle, std::string topic,
-                   std::string type)
-      : handle_(std::move(handle)), topic_(std::move(topic)), type_(std::move(type)) {}
+                   const msgs::TypeSupport& type, std::string node_name)
+      : handle_(std::move(handle)),
+        topic_(std::move(topic)),
+        type_(type.ros_type),
+        type_support_(&type),
+        node_name_(std::move(node_name)) {}
 
-  void publish(rmw::MessagePtr msg) { handle_->publish(std::move(msg)); }
+  // Emits the robotperf:publish and ros2 rclcpp/rcl_publish events (when enabled).
+  void publish(rmw::MessagePtr msg);
   std::size_t matched_subscriptions() const { return handle_->matched_subscriptions(); }
   const std::string& topic() const { return topic_; }
   const std::string& type() const { return type_; }
+  const void* rmw_handle() const { return handle_.get(); }
 
  private:
   std::unique_ptr<rmw::PublisherHandle> handle_;
   std::string topic_;
   std::string type_;
+  const msgs::TypeSupport* type_support_;
+  std::string node_name_;
 };
 
 template <class T>
@@ -104,19 +113,29 @@ class Publisher : public GenericPublisher {
 class GenericSubscription final : public Entity {
  public:
   using Callback = std::function<void(rmw::MessagePtr, const MessageInfo&)>;
-  GenericSubscription(std::string topic, std::string type, Callback callback)
-      : topic_(std::move(topic)), type_(std::move(type)), callback_(std::move(callback)) {}
+  GenericSubscription(std::string topic, const msgs::TypeSupport& type, std::string node_name,
+                      Callback callback)
+      : topic_(std::move(topic)),
+        type_(type.ros_type),
+        type_support_(&type),
+        node_name_(std::move(node_name)),
+        callback_(std::move(callback)) {}
 
   void attach(std::unique_ptr<rmw::SubscriptionHandle> handle) { handle_ = std::move(handle); }
+  // Runs the callback on one taken message, between the callback start/end tracepoints.
   bool execute() override;
   std::size_t matched_publishers() const { return handle_->matched_publishers(); }
   const std::string& topic() const { return topic_; }
   const std::string& type() const { return type_; }
+  const void* rmw_handle() const { return handle_.get(); }
+  const void* callback_handle() const { return &callback_; }
 
  private:
   std::unique_ptr<rmw::SubscriptionHandle> handle_;
   std::string topic_;
   std::string type_;
+  const msgs::TypeSupport* type_support_;
+  std::string node_name_;
   Callback callback_;
 };
 
@@ -127,6 +146,7 @@ class Timer final : public Entity {
   bool execute() override;
   int64_t next_deadline_ns() const override;
   void cancel();
+  const void* callback_handle() const { return &callback_; }
 
  private:
   int64_t period_ns_;
@@ -150,8 +170,8 @@ class Node {
   std::shared_ptr<Publisher<T>> create_publisher(const std::string& topic, const QoS& qos = QoS{}) {
     const auto& ts = msgs::type_support<T>();
     auto pub = std::make_shared<Publisher<T>>(context_.transport().create_publisher(topic, ts, qos),
-                                              topic, ts.ros_type);
-    add_publisher(pub);
+                                              topic, ts, name_);
+    add_publisher(pub, qos);
     return pub;
   }
 
@@ -192,7 +212,8 @@ class Node {
   void notify();
 
  private:
-  void add_publisher(std::shared_ptr<GenericPublisher> publisher);
+  // Records the publisher and emits ros2:rcl_publisher_init.
+  void add_publisher(std::shared_ptr<GenericPublisher> publisher, const QoS& qos);
   void add_entity(std::shared_ptr<Entity> entity);
 
   Context& context_;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <optional>
@@ -16,10 +17,15 @@
 #include "robotperf/metrics/power.hpp"
 #include "robotperf/metrics/resources.hpp"
 #include "robotperf/sysinfo/run_rules.hpp"
+#include "robotperf/tracing/analysis.hpp"
 
 namespace robotperf::harness {
 
 enum class ProcessLayout { kSingle, kPerNode };
+
+// Black-box: Playback and Monitor measure around the graph. Grey-box: the run
+// is also recorded with LTTng and the results come from the trace (src/tracing).
+enum class RunMode { kBlack, kGrey };
 
 struct RunOptions {
   std::optional<double> rate_hz;      // default: the benchmark's
@@ -41,6 +47,11 @@ struct RunOptions {
   SchedulingOptions scheduling;
   // Refuse to run (RunRefused) when a run rule is broken, instead of recording a warning.
   bool strict = false;
+  RunMode mode = RunMode::kBlack;
+  // Grey-box: the folder the CTF trace is written to (must not exist yet), and
+  // the per-CPU sub-buffer size (0: sized for the workload).
+  std::filesystem::path trace_dir;
+  std::size_t trace_subbuf_bytes = 0;
   // Called from the playback thread after each send.
   std::function<void(std::size_t sent, std::size_t total, std::size_t received)> progress;
 };
@@ -116,6 +127,11 @@ struct RunResult {
   // Accuracy of the outputs against the dataset's ground truth; absent when the benchmark
   // names no functional evaluator.
   std::optional<FunctionalResult> functional;
+  // Grey-box runs: the analysis of the recorded trace (counts, latencies and
+  // validity above then come from it) and where the trace is.
+  std::optional<tracing::TraceAnalysis> grey;
+  std::filesystem::path trace_dir;
+  std::size_t trace_subbuf_bytes = 0;
 };
 
 // Thrown by run_benchmark with --strict when a run rule is broken; what() lists them.

@@ -1,0 +1,831 @@
+#include "robotperf/tracing/analysis.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <string_view>
+#include <unordered_map>
+
+#include "robotperf/tracing/ctf.hpp"
+
+namespace robotperf::tracing {
+namespace {
+
+namespace fs = std::filesystem;
+using ctf::Event;
+using ctf::Value;
+
+constexpr double kNsPerMs = 1e6;
+
+// What the analysis does with an event class, and where its fields are.
+enum class Handler : uint8_t {
+  kIgnore,
+  kRunBegin,
+  kRunJoin,
+  kRunEnd,
+  kInput,
+  kOutput,
+  kPublish,
+  kCallbackEntry,
+  kKernelInit,
+  kKernelFini,
+  kNodeInit,
+  kPublisherInit,
+  kSubscriptionInit,
+  kRclcppSubscriptionInit,
+  kSubscriptionCallbackAdded,
+  kTimerInit,
+  kTimerCallbackAdded,
+  kTimerLinkNode,
+  kCallbackStart,
+  kCallbackEnd,
+  kRmwPublish,
+  kRmwTake,
+};
+
+struct Dispatch {
+  Handler handler = Handler::kIgnore;
+  int f[7] = {-1, -1, -1, -1, -1, -1, -1};  // payload field indices, per handler
+  int vpid = -1, vtid = -1;                 // stream context indices
+};
+
+Dispatch dispatch_for(const ctf::EventClass& ec, const ctf::Trace& trace) {
+  struct Spec {
+    const char* name;
+    Handler handler;
+    std::vector<const char*> fields;
+  };
+  static const std::vector<Spec> specs = {
+      {"robotperf:run_begin",
+       Handler::kRunBegin,
+       {"benchmark", "rmw", "count", "warmup", "period_ns", "min_samples", "max_loss_percent"}},
+      {"robotperf:run_join", Handler::kRunJoin, {"run_pid"}},
+      {"robotperf:run_end", Handler::kRunEnd, {"sent"}},
+      {"robotperf:input", Handler::kInput, {"message_id", "index", "scheduled_ns"}},
+      {"robotperf:output", Handler::kOutput, {"message_id"}},
+      {"robotperf:publish", Handler::kPublish, {"node", "topic", "message_id"}},
+      {"robotperf:callback_entry", Handler::kCallbackEntry, {"node", "topic", "message_id"}},
+      {"robotperf:kernel_init", Handler::kKernelInit, {"node", "kernel", "message_id"}},
+      {"robotperf:kernel_fini", Handler::kKernelFini, {"node", "kernel", "message_id"}},
+      {"ros2:rcl_node_init", Handler::kNodeInit, {"node_handle", "node_name", "namespace"}},
+      {"ros2:rcl_publisher_init",
+       Handler::kPublisherInit,
+       {"publisher_handle", "node_handle", "rmw_publisher_handle", "topic_name"}},
+      {"ros2:rcl_subscription_init",
+       Handler::kSubscriptionInit,
+       {"subscription_handle", "node_handle", "rmw_subscription_handle", "topic_name"}},
+      {"ros2:rclcpp_subscription_init",
+       Handler::kRclcppSubscriptionInit,
+       {"subscription_handle", "subscription"}},
+      {"ros2:rclcpp_subscription_callback_added",
+       Handler::kSubscriptionCallbackAdded,
+       {"subscription", "callback"}},
+      {"ros2:rcl_timer_init", Handler::kTimerInit, {"timer_handle", "period"}},
+      {"ros2:rclcpp_timer_callback_added",
+       Handler::kTimerCallbackAdded,
+       {"timer_handle", "callback"}},
+      {"ros2:rclcpp_timer_link_node", Handler::kTimerLinkNode, {"timer_handle", "node_handle"}},
+      {"ros2:callback_start", Handler::kCallbackStart, {"callback"}},
+      {"ros2:callback_end", Handler::kCallbackEnd, {"callback"}},
+      {"ros2:rmw_publish", Handler::kRmwPublish, {"rmw_publisher_handle", "timestamp"}},
+      {"ros2:rmw_take",
+       Handler::kRmwTake,
+       {"rmw_subscription_handle", "source_timestamp", "taken"}},
+  };
+  Dispatch d;
+  for (const auto& s : specs) {
+    if (ec.name != s.name) continue;
+    for (std::size_t i = 0; i < s.fields.size(); ++i) {
+      d.f[i] = ec.field_index(s.fields[i]);
+      // Older ros2_tracing versions lack some fields (rmw_publish's timestamp):
+      // such events cannot be used, the rest of the analysis still can.
+      const bool optional = std::string_view(s.fields[i]) == "namespace" ||
+                            (s.handler == Handler::kRmwTake && i == 2);
+      if (d.f[i] < 0 && !optional) return d;
+    }
+    d.handler = s.handler;
+    d.vpid = trace.stream_context_index(ec.stream_id, "vpid");
+    d.vtid = trace.stream_context_index(ec.stream_id, "vtid");
+    break;
+  }
+  return d;
+}
+
+struct Key {
+  int32_t vpid;
+  uint64_t handle;
+  bool operator==(const Key&) const = default;
+};
+struct KeyHash {
+  std::size_t operator()(const Key& k) const {
+    return std::hash<uint64_t>()(k.handle * 0x9E3779B97F4A7C15ull ^ static_cast<uint64_t>(k.vpid));
+  }
+};
+template <class V>
+using HandleMap = std::unordered_map<Key, V, KeyHash>;
+
+enum class IdKind : uint8_t { kPublish, kEntry, kKernelInit, kKernelFini };
+
+struct IdEvent {
+  int64_t ts;
+  int64_t id;
+  int32_t vpid;
+  int32_t vtid;
+  uint32_t node;
+  uint32_t what;  // topic, or kernel name
+  IdKind kind;
+};
+
+struct Input {
+  int64_t ts, id, scheduled;
+  uint64_t index;
+  int32_t vpid;
+};
+struct Output {
+  int64_t ts, id;
+  int32_t vpid;
+};
+struct CallbackEvent {
+  int64_t ts;
+  int32_t vpid, vtid;
+  uint64_t callback;
+  bool start;
+};
+struct RmwEvent {
+  int64_t ts;
+  int32_t vpid;
+  uint64_t handle;
+  int64_t stamp;
+};
+struct Endpoint {
+  uint32_t topic;
+  uint64_t node_handle;
+};
+
+// Everything the analysis keeps from the events, before the run is known.
+struct Collected {
+  // Names (node, topic, kernel) interned; views into the mapped traces.
+  std::unordered_map<std::string_view, uint32_t> name_ids;
+  std::vector<std::string_view> names;
+  uint32_t intern(std::string_view s) {
+    auto [it, inserted] = name_ids.try_emplace(s, static_cast<uint32_t>(names.size()));
+    if (inserted) names.push_back(s);
+    return it->second;
+  }
+
+  std::vector<std::pair<int64_t, RunInfo>> runs;   // (time, info)
+  std::vector<std::pair<int32_t, int32_t>> joins;  // (vpid, run pid)
+  std::vector<std::pair<int32_t, uint64_t>> ends;  // (vpid, sent)
+  std::vector<Input> inputs;
+  std::vector<Output> outputs;
+  std::vector<IdEvent> id_events;
+  std::vector<CallbackEvent> callbacks;
+  std::vector<RmwEvent> rmw_publishes, rmw_takes;
+
+  HandleMap<std::string> node_names;
+  HandleMap<Endpoint> publishers_by_rmw, subscriptions_by_handle, subscriptions_by_rmw;
+  HandleMap<uint64_t> rclcpp_subscriptions;  // rclcpp subscription -> rcl handle
+  HandleMap<uint64_t> callback_subscription, callback_timer;
+  HandleMap<int64_t> timer_period;
+  HandleMap<uint64_t> timer_node;
+};
+
+void collect(ctf::Trace& trace, Collected& c, TraceAnalysis& a) {
+  // Room for every event the streams may hold (LTTng events take 40 bytes or
+  // more): growing the vectors would copy them and fault in pages twice.
+  const std::size_t estimate = c.id_events.size() + trace.total_bytes() / 40;
+  c.id_events.reserve(estimate);
+  c.inputs.reserve(c.inputs.size() + estimate / 8);
+  c.outputs.reserve(c.outputs.size() + estimate / 8);
+  c.callbacks.reserve(c.callbacks.size() + estimate / 4);
+  std::unordered_map<const ctf::EventClass*, Dispatch> dispatch;
+  for (const auto& ec : trace.metadata().events) dispatch[ec.get()] = dispatch_for(*ec, trace);
+  const ctf::EventClass* last_class = nullptr;
+  const Dispatch* d = nullptr;
+
+  for (std::size_t s = 0; s < trace.stream_count(); ++s) {
+    const ctf::StreamStats st = trace.read_stream(s, [&](const Event& e) {
+      const auto ts = static_cast<int64_t>(e.timestamp);
+      if (a.events == 0 || ts < a.first_ns) a.first_ns = ts;
+      if (ts > a.last_ns) a.last_ns = ts;
+      ++a.events;
+      if (e.cls != last_class) {
+        last_class = e.cls;
+        d = &dispatch[e.cls];
+      }
+      if (d->handler == Handler::kIgnore) return;
+      const auto& f = e.fields;
+      auto field = [&](int i) -> const Value& { return f[static_cast<std::size_t>(d->f[i])]; };
+      const int32_t vpid =
+          d->vpid >= 0
+              ? static_cast<int32_t>(e.stream_context[static_cast<std::size_t>(d->vpid)].as_int())
+              : 0;
+      auto vtid = [&] {
+        return d->vtid >= 0 ? static_cast<int32_t>(
+                                  e.stream_context[static_cast<std::size_t>(d->vtid)].as_int())
+                            : 0;
+      };
+      switch (d->handler) {
+        case Handler::kIgnore:
+          break;
+        case Handler::kRunBegin: {
+          RunInfo r;
+          r.benchmark = std::string(field(0).s);
+          r.rmw = std::string(field(1).s);
+          r.count = field(2).as_uint();
+          r.warmup = field(3).as_uint();
+          r.period_ns = field(4).as_int();
+          r.min_samples = field(5).as_uint();
+          r.max_loss_percent = field(6).tag == Value::Tag::kFloat
+                                   ? field(6).f
+                                   : static_cast<double>(field(6).as_int());
+          r.pid = vpid;
+          c.runs.emplace_back(ts, std::move(r));
+          break;
+        }
+        case Handler::kRunJoin:
+          c.joins.emplace_back(vpid, static_cast<int32_t>(field(0).as_int()));
+          break;
+        case Handler::kRunEnd:
+          c.ends.emplace_back(vpid, field(0).as_uint());
+          break;
+        case Handler::kInput:
+          c.inputs.push_back({ts, field(0).as_int(), field(2).as_int(), field(1).as_uint(), vpid});
+          break;
+        case Handler::kOutput:
+          c.outputs.push_back({ts, field(0).as_int(), vpid});
+          break;
+        case Handler::kPublish:
+        case Handler::kCallbackEntry:
+        case Handler::kKernelInit:
+        case Handler::kKernelFini: {
+          const IdKind kind = d->handler == Handler::kPublish         ? IdKind::kPublish
+                              : d->handler == Handler::kCallbackEntry ? IdKind::kEntry
+                              : d->handler == Handler::kKernelInit    ? IdKind::kKernelInit
+                                                                      : IdKind::kKernelFini;
+          c.id_events.push_back({ts, field(2).as_int(), vpid, vtid(), c.intern(field(0).s),
+                                 c.intern(field(1).s), kind});
+          break;
+        }
+        case Handler::kNodeInit: {
+          std::string ns = d->f[2] >= 0 ? std::string(field(2).s) : std::string();
+          std::string name(field(1).s);
+          // A node in a namespace other than "/" is shown with it.
+          if (!ns.empty() && ns != "/") name = ns + (ns.ends_with('/') ? "" : "/") + name;
+          c.node_names[{vpid, field(0).u}] = std::move(name);
+          break;
+        }
+        case Handler::kPublisherInit:
+          c.publishers_by_rmw[{vpid, field(2).u}] = {c.intern(field(3).s), field(1).u};
+          break;
+        case Handler::kSubscriptionInit: {
+          const Endpoint ep{c.intern(field(3).s), field(1).u};
+          c.subscriptions_by_handle[{vpid, field(0).u}] = ep;
+          c.subscriptions_by_rmw[{vpid, field(2).u}] = ep;
+          break;
+        }
+        case Handler::kRclcppSubscriptionInit:
+          c.rclcpp_subscriptions[{vpid, field(1).u}] = field(0).u;
+          break;
+        case Handler::kSubscriptionCallbackAdded:
+          c.callback_subscription[{vpid, field(1).u}] = field(0).u;
+          break;
+        case Handler::kTimerInit:
+          c.timer_period[{vpid, field(0).u}] = field(1).as_int();
+          break;
+        case Handler::kTimerCallbackAdded:
+          c.callback_timer[{vpid, field(1).u}] = field(0).u;
+          break;
+        case Handler::kTimerLinkNode:
+          c.timer_node[{vpid, field(0).u}] = field(1).u;
+          break;
+        case Handler::kCallbackStart:
+        case Handler::kCallbackEnd:
+          c.callbacks.push_back(
+              {ts, vpid, vtid(), field(0).u, d->handler == Handler::kCallbackStart});
+          break;
+        case Handler::kRmwPublish:
+          c.rmw_publishes.push_back({ts, vpid, field(0).u, field(1).as_int()});
+          break;
+        case Handler::kRmwTake:
+          if (d->f[2] < 0 || field(2).as_int() != 0)
+            c.rmw_takes.push_back({ts, vpid, field(0).u, field(1).as_int()});
+          break;
+      }
+    });
+    ++a.streams;
+    a.packets += st.packets;
+    a.discarded_events += st.discarded_events;
+    a.lost_packets += st.lost_packets;
+  }
+}
+
+std::vector<double> to_doubles(const std::vector<int64_t>& v) {
+  return std::vector<double>(v.begin(), v.end());
+}
+
+// The black-box statistics and validity rules (harness/run.cpp), from the trace.
+// Fills a.messages and `by_id` (message ID -> index in a.messages).
+void summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run,
+                   std::unordered_map<int64_t, std::size_t>& by_id) {
+  auto in_run = [&](int32_t vpid) { return run.processes.contains(vpid); };
+  for (const auto& in : c.inputs) {
+    if (!in_run(in.vpid)) continue;
+    MessageTimes m;
+    m.id = in.id;
+    m.index = in.index;
+    m.scheduled_ns = in.scheduled;
+    m.sent_ns = in.ts;
+    m.warmup = in.index < run.warmup;
+    a.messages.push_back(m);
+  }
+  std::sort(a.messages.begin(), a.messages.end(),
+            [](const MessageTimes& x, const MessageTimes& y) { return x.index < y.index; });
+  by_id.reserve(a.messages.size() * 2);
+  for (std::size_t i = 0; i < a.messages.size(); ++i) {
+    if (!by_id.try_emplace(a.messages[i].id, i).second) {
+      a.invalid_reasons.push_back("two inputs carry the message ID " +
+                                  std::to_string(a.messages[i].id));
+    }
+  }
+  std::vector<Output> outputs;
+  for (const auto& o : c.outputs) {
+    if (in_run(o.vpid)) outputs.push_back(o);
+  }
+  // Receptions in time order, so the first one of an ID is the one counted.
+  std::sort(outputs.begin(), outputs.end(),
+            [](const Output& x, const Output& y) { return x.ts < y.ts; });
+  for (const auto& o : outputs) {
+    auto it = by_id.find(o.id);
+    if (it == by_id.end()) {
+      ++a.unknown;
+    } else if (a.messages[it->second].received_ns >= 0) {
+      ++a.duplicates;
+    } else {
+      a.messages[it->second].received_ns = o.ts;
+    }
+  }
+
+  std::vector<int64_t> from_scheduled, from_sent, lateness, receptions, sends;
+  int64_t first_measured_send = -1;
+  for (const auto& m : a.messages) {
+    lateness.push_back(m.sent_ns - m.scheduled_ns);
+    if (m.warmup) continue;
+    ++a.measured;
+    sends.push_back(m.sent_ns);
+    if (first_measured_send < 0) first_measured_send = m.sent_ns;
+    if (m.received_ns < 0) continue;
+    ++a.matched;
+    from_scheduled.push_back(m.received_ns - m.scheduled_ns);
+    from_sent.push_back(m.received_ns - m.sent_ns);
+    receptions.push_back(m.received_ns);
+  }
+  a.sent = a.messages.size();
+  a.lost = a.measured - a.matched;
+  a.loss_percent =
+      a.measured ? 100.0 * static_cast<double>(a.lost) / static_cast<double>(a.measured) : 0.0;
+  a.latency_from_scheduled = metrics::compute_stats(to_doubles(from_scheduled));
+  a.latency_from_sent = metrics::compute_stats(to_doubles(from_sent));
+  a.send_lateness = metrics::compute_stats(to_doubles(lateness));
+  if (receptions.size() >= 2) {
+    std::sort(receptions.begin(), receptions.end());
+    const double span = static_cast<double>(receptions.back() - receptions.front()) * 1e-9;
+    if (span > 0) a.throughput_hz = static_cast<double>(receptions.size() - 1) / span;
+    a.window_s = static_cast<double>(receptions.back() - first_measured_send) * 1e-9;
+  }
+  if (sends.size() >= 2) {
+    a.offered_rate_hz = static_cast<double>(sends.size() - 1) /
+                        (static_cast<double>(sends.back() - sends.front()) * 1e-9);
+  }
+
+  auto invalid = [&](std::string why) { a.invalid_reasons.push_back(std::move(why)); };
+  if (!run.ended) {
+    invalid("the trace ends before the run did (no robotperf:run_end event)");
+  } else if (run.sent_reported != run.count) {
+    invalid("run ended early: sent " + std::to_string(run.sent_reported) + " of " +
+            std::to_string(run.count) + " messages");
+  }
+  if (a.sent != run.sent_reported && run.ended) {
+    invalid("the trace holds " + std::to_string(a.sent) + " input events for " +
+            std::to_string(run.sent_reported) + " messages sent");
+  }
+  if (a.matched < run.min_samples) {
+    invalid(std::to_string(a.matched) + " matched samples, fewer than the " +
+            std::to_string(run.min_samples) + " required");
+  }
+  if (a.loss_percent > run.max_loss_percent) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%.2f %% lost, above the %.2f %% bound", a.loss_percent,
+                  run.max_loss_percent);
+    invalid(buf);
+  }
+  if (a.duplicates > 0) invalid(std::to_string(a.duplicates) + " duplicate receptions");
+  if (a.unknown > 0) invalid(std::to_string(a.unknown) + " receptions with unknown message IDs");
+}
+
+// Per-hop breakdown from the events that carry message IDs.
+void breakdown(TraceAnalysis& a, Collected& c, const RunInfo& run,
+               const std::unordered_map<int64_t, std::size_t>& by_id) {
+  // Group the events of measured messages by message (a counting sort on the
+  // message's index: linear in the number of events), then by time within one.
+  std::vector<uint32_t> slot_of;
+  slot_of.reserve(c.id_events.size());
+  std::vector<std::size_t> starts(a.messages.size() + 1, 0);
+  for (const auto& e : c.id_events) {
+    uint32_t slot = UINT32_MAX;
+    if (run.processes.contains(e.vpid)) {
+      auto it = by_id.find(e.id);
+      if (it != by_id.end() && !a.messages[it->second].warmup) {
+        slot = static_cast<uint32_t>(it->second);
+        ++starts[slot + 1];
+      }
+    }
+    slot_of.push_back(slot);
+  }
+  for (std::size_t i = 1; i < starts.size(); ++i) starts[i] += starts[i - 1];
+  std::vector<IdEvent> ev(starts.back());
+  {
+    std::vector<std::size_t> next(starts.begin(), starts.end() - 1);
+    for (std::size_t i = 0; i < c.id_events.size(); ++i) {
+      if (slot_of[i] != UINT32_MAX) ev[next[slot_of[i]]++] = c.id_events[i];
+    }
+  }
+  for (std::size_t m = 0; m + 1 < starts.size(); ++m) {
+    std::sort(ev.begin() + static_cast<std::ptrdiff_t>(starts[m]),
+              ev.begin() + static_cast<std::ptrdiff_t>(starts[m + 1]),
+              [](const IdEvent& x, const IdEvent& y) { return x.ts < y.ts; });
+  }
+
+  struct Acc {
+    std::vector<double> durations;
+    double offset_sum = 0;
+  };
+  // (kind, node, from, to) -> samples
+  std::map<std::tuple<int, uint32_t, uint32_t, uint32_t>, Acc> acc;
+  auto add = [&](int kind, uint32_t node, uint32_t from, uint32_t to, int64_t start, int64_t end,
+                 int64_t sent) {
+    Acc& x = acc[{kind, node, from, to}];
+    x.durations.push_back(static_cast<double>(end - start));
+    x.offset_sum += static_cast<double>(start - sent);
+  };
+
+  for (std::size_t m = 0; m + 1 < starts.size(); ++m) {
+    const std::size_t lo = starts[m], hi = starts[m + 1];
+    const int64_t sent = a.messages[m].sent_ns;
+    for (std::size_t i = lo; i < hi; ++i) {
+      const IdEvent& e = ev[i];
+      if (e.kind == IdKind::kEntry) {
+        // Transport: the latest publish of this message on this topic before the take.
+        for (std::size_t j = i; j-- > lo;) {
+          if (ev[j].kind == IdKind::kPublish && ev[j].what == e.what) {
+            add(0, e.node, ev[j].node, e.what, ev[j].ts, e.ts, sent);
+            break;
+          }
+        }
+      } else if (e.kind == IdKind::kPublish) {
+        // Node: from the node's latest callback start on this message to its publish.
+        for (std::size_t j = i; j-- > lo;) {
+          if (ev[j].kind == IdKind::kEntry && ev[j].node == e.node && ev[j].vpid == e.vpid) {
+            add(1, e.node, ev[j].what, e.what, ev[j].ts, e.ts, sent);
+            break;
+          }
+        }
+      } else if (e.kind == IdKind::kKernelFini) {
+        for (std::size_t j = i; j-- > lo;) {
+          if (ev[j].kind == IdKind::kKernelInit && ev[j].node == e.node && ev[j].what == e.what &&
+              ev[j].vtid == e.vtid) {
+            add(2, e.node, e.what, e.what, ev[j].ts, e.ts, sent);
+            break;
+          }
+        }
+      }
+    }
+  }
+  static const char* kinds[] = {"transport", "node", "kernel"};
+  for (auto& [key, x] : acc) {
+    const auto& [kind, node, from, to] = key;
+    Hop h;
+    h.kind = kinds[kind];
+    h.node = std::string(c.names[node]);
+    h.from = kind == 2 ? std::string() : std::string(c.names[from]);
+    h.to = std::string(c.names[to]);
+    h.mean_start_offset_ns = x.offset_sum / static_cast<double>(x.durations.size());
+    h.duration = metrics::compute_stats(x.durations);
+    a.hops.push_back(std::move(h));
+  }
+  std::stable_sort(a.hops.begin(), a.hops.end(), [](const Hop& x, const Hop& y) {
+    return x.mean_start_offset_ns < y.mean_start_offset_ns;
+  });
+}
+
+std::string hex(uint64_t v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "0x%llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+std::string node_name(const Collected& c, int32_t vpid, uint64_t node_handle) {
+  auto it = c.node_names.find({vpid, node_handle});
+  return it != c.node_names.end() ? it->second : "?";
+}
+
+// Callback durations from ros2:callback_start/end, per node and source.
+void callback_durations(TraceAnalysis& a, Collected& c, const std::optional<RunInfo>& run) {
+  std::vector<CallbackEvent> ev;
+  for (const auto& e : c.callbacks) {
+    if (!run || run->processes.contains(e.vpid)) ev.push_back(e);
+  }
+  std::sort(ev.begin(), ev.end(), [](const CallbackEvent& x, const CallbackEvent& y) {
+    if (x.vpid != y.vpid) return x.vpid < y.vpid;
+    if (x.vtid != y.vtid) return x.vtid < y.vtid;
+    return x.ts < y.ts;
+  });
+  std::map<std::pair<std::string, std::string>, std::vector<double>> acc;
+  HandleMap<std::pair<std::string, std::string>> names;
+  auto name_of = [&](int32_t vpid, uint64_t cb) -> const std::pair<std::string, std::string>& {
+    auto [it, inserted] = names.try_emplace({vpid, cb});
+    if (!inserted) return it->second;
+    if (auto s = c.callback_subscription.find({vpid, cb}); s != c.callback_subscription.end()) {
+      uint64_t handle = s->second;
+      if (auto r = c.rclcpp_subscriptions.find({vpid, handle}); r != c.rclcpp_subscriptions.end())
+        handle = r->second;
+      if (auto ep = c.subscriptions_by_handle.find({vpid, handle});
+          ep != c.subscriptions_by_handle.end()) {
+        it->second = {node_name(c, vpid, ep->second.node_handle),
+                      std::string(c.names[ep->second.topic])};
+        return it->second;
+      }
+    }
+    if (auto t = c.callback_timer.find({vpid, cb}); t != c.callback_timer.end()) {
+      std::string node = "?";
+      if (auto n = c.timer_node.find({vpid, t->second}); n != c.timer_node.end())
+        node = node_name(c, vpid, n->second);
+      std::string source = "timer";
+      if (auto p = c.timer_period.find({vpid, t->second}); p != c.timer_period.end()) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "timer %g ms", static_cast<double>(p->second) / kNsPerMs);
+        source = buf;
+      }
+      it->second = {node, source};
+      return it->second;
+    }
+    it->second = {"?", "callback " + hex(cb)};
+    return it->second;
+  };
+  std::vector<std::pair<uint64_t, int64_t>> stack;
+  for (std::size_t i = 0; i < ev.size(); ++i) {
+    if (i == 0 || ev[i].vpid != ev[i - 1].vpid || ev[i].vtid != ev[i - 1].vtid) stack.clear();
+    if (ev[i].start) {
+      stack.emplace_back(ev[i].callback, ev[i].ts);
+    } else if (!stack.empty() && stack.back().first == ev[i].callback) {
+      acc[name_of(ev[i].vpid, ev[i].callback)].push_back(
+          static_cast<double>(ev[i].ts - stack.back().second));
+      stack.pop_back();
+    }
+  }
+  for (auto& [key, d] : acc)
+    a.callbacks.push_back({key.first, key.second, metrics::compute_stats(d)});
+}
+
+// rmw_publish -> rmw_take latencies, matched by topic and source timestamp.
+void topic_latencies(TraceAnalysis& a, Collected& c, const std::optional<RunInfo>& run) {
+  struct PubKey {
+    uint32_t topic;
+    int64_t stamp;
+    bool operator==(const PubKey&) const = default;
+  };
+  struct PubHash {
+    std::size_t operator()(const PubKey& k) const {
+      return std::hash<int64_t>()(k.stamp) ^ (static_cast<std::size_t>(k.topic) << 40);
+    }
+  };
+  std::unordered_map<PubKey, std::pair<int64_t, std::string>, PubHash> pubs;
+  pubs.reserve(c.rmw_publishes.size());
+  for (const auto& p : c.rmw_publishes) {
+    if (run && !run->processes.contains(p.vpid)) continue;
+    auto ep = c.publishers_by_rmw.find({p.vpid, p.handle});
+    if (ep == c.publishers_by_rmw.end()) continue;
+    pubs.try_emplace({ep->second.topic, p.stamp}, p.ts,
+                     node_name(c, p.vpid, ep->second.node_handle));
+  }
+  std::map<std::tuple<std::string, std::string, std::string>, std::vector<double>> acc;
+  for (const auto& t : c.rmw_takes) {
+    if (run && !run->processes.contains(t.vpid)) continue;
+    auto ep = c.subscriptions_by_rmw.find({t.vpid, t.handle});
+    if (ep == c.subscriptions_by_rmw.end()) continue;
+    auto p = pubs.find({ep->second.topic, t.stamp});
+    if (p == pubs.end()) continue;
+    acc[{std::string(c.names[ep->second.topic]), p->second.second,
+         node_name(c, t.vpid, ep->second.node_handle)}]
+        .push_back(static_cast<double>(t.ts - p->second.first));
+  }
+  for (auto& [key, d] : acc) {
+    a.topics.push_back(
+        {std::get<0>(key), std::get<1>(key), std::get<2>(key), metrics::compute_stats(d)});
+  }
+}
+
+std::string fixed(double v, int decimals) {
+  if (!std::isfinite(v)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+std::string ms(double ns) {
+  return fixed(ns / kNsPerMs, 3);
+}
+
+}  // namespace
+
+std::string Hop::label() const {
+  if (kind == "transport") return to + ": " + from + " -> " + node;
+  if (kind == "node") return node + ": " + from + " -> " + to;
+  return node + ": " + to;
+}
+
+TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  TraceAnalysis a;
+  const auto dirs = ctf::find_traces(dir);
+  if (dirs.empty())
+    throw std::invalid_argument(dir.string() + " holds no CTF trace (no 'metadata' file)");
+  std::vector<ctf::Trace> traces;
+  Collected c;
+  for (const auto& d : dirs) {
+    traces.emplace_back(d);
+    a.traces.push_back(d.string());
+    collect(traces.back(), c, a);
+  }
+
+  if (!c.runs.empty()) {
+    std::sort(c.runs.begin(), c.runs.end(),
+              [](const auto& x, const auto& y) { return x.first < y.first; });
+    const RunInfo* chosen = &c.runs.front().second;
+    if (options.run_pid != 0) {
+      chosen = nullptr;
+      for (const auto& [ts, r] : c.runs) {
+        if (r.pid == options.run_pid) chosen = &r;
+      }
+    }
+    if (chosen != nullptr) {
+      RunInfo run = *chosen;
+      run.processes.insert(run.pid);
+      run.processes.insert(options.extra_processes.begin(), options.extra_processes.end());
+      for (const auto& [vpid, run_pid] : c.joins) {
+        if (run_pid == run.pid) run.processes.insert(vpid);
+      }
+      for (const auto& [vpid, sent] : c.ends) {
+        if (vpid == run.pid) {
+          run.ended = true;
+          run.sent_reported = sent;
+        }
+      }
+      a.run = run;
+      std::unordered_map<int64_t, std::size_t> by_id;
+      summarise_run(a, c, run, by_id);
+      breakdown(a, c, run, by_id);
+    }
+  }
+  callback_durations(a, c, a.run);
+  topic_latencies(a, c, a.run);
+
+  if (a.discarded_events > 0) {
+    a.invalid_reasons.insert(
+        a.invalid_reasons.begin(),
+        "the tracer discarded " + std::to_string(a.discarded_events) +
+            " events (sub-buffers too small for the event rate): the trace is incomplete");
+  }
+  if (a.lost_packets > 0) {
+    a.invalid_reasons.insert(a.invalid_reasons.begin(),
+                             "the tracer lost " + std::to_string(a.lost_packets) + " packets");
+  }
+  if (!a.run && options.run_pid != 0) {
+    a.invalid_reasons.push_back("no robotperf run of process " + std::to_string(options.run_pid) +
+                                " in the trace");
+  }
+  a.valid = a.invalid_reasons.empty();
+  a.read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return a;
+}
+
+nlohmann::json to_json(const TraceAnalysis& a) {
+  using nlohmann::json;
+  json hops = json::array();
+  for (const auto& h : a.hops) {
+    hops.push_back({{"kind", h.kind},
+                    {"node", h.node},
+                    {"from", h.from},
+                    {"to", h.to},
+                    {"label", h.label()},
+                    {"mean_start_offset_ms", h.mean_start_offset_ns / kNsPerMs},
+                    {"duration_ms", metrics::to_json(h.duration, 1.0 / kNsPerMs, "ms")}});
+  }
+  json callbacks = json::array();
+  for (const auto& cb : a.callbacks) {
+    callbacks.push_back({{"node", cb.node},
+                         {"source", cb.source},
+                         {"duration_ms", metrics::to_json(cb.duration, 1.0 / kNsPerMs, "ms")}});
+  }
+  json topics = json::array();
+  for (const auto& t : a.topics) {
+    topics.push_back({{"topic", t.topic},
+                      {"publisher", t.publisher},
+                      {"subscriber", t.subscriber},
+                      {"latency_ms", metrics::to_json(t.latency, 1.0 / kNsPerMs, "ms")}});
+  }
+  return {{"trace",
+           {{"folders", a.traces},
+            {"streams", a.streams},
+            {"packets", a.packets},
+            {"events", a.events},
+            {"discarded_events", a.discarded_events},
+            {"lost_packets", a.lost_packets},
+            {"duration_s", static_cast<double>(a.last_ns - a.first_ns) * 1e-9},
+            {"analysis_s", a.read_seconds}}},
+          {"hops", hops},
+          {"callbacks", callbacks},
+          {"topics", topics}};
+}
+
+std::string breakdown_table(const TraceAnalysis& a) {
+  std::ostringstream out;
+  char line[512];
+  auto header = [&](const char* title) {
+    std::snprintf(line, sizeof line, "%-58s %8s %9s %9s %9s %9s\n", title, "count", "mean", "p50",
+                  "p99", "max");
+    out << line;
+  };
+  auto row = [&](const std::string& name, const metrics::SampleStats& s) {
+    std::snprintf(line, sizeof line, "%-58s %8zu %9s %9s %9s %9s\n", name.c_str(), s.count,
+                  ms(s.mean).c_str(), ms(s.p50).c_str(), ms(s.p99).c_str(), ms(s.max).c_str());
+    out << line;
+  };
+  if (!a.hops.empty()) {
+    header("per-hop breakdown (ms), along the path");
+    for (const auto& h : a.hops) row(h.kind + "  " + h.label(), h.duration);
+    out << "\n";
+  }
+  if (!a.callbacks.empty()) {
+    header("callback durations (ms)");
+    for (const auto& cb : a.callbacks) row(cb.node + "  " + cb.source, cb.duration);
+    out << "\n";
+  }
+  if (!a.topics.empty()) {
+    header("publish -> take (ms), rmw_publish to rmw_take");
+    for (const auto& t : a.topics)
+      row(t.topic + ": " + t.publisher + " -> " + t.subscriber, t.latency);
+    out << "\n";
+  }
+  out << "trace: " << a.events << " events in " << a.streams << " streams, " << a.packets
+      << " packets; discarded events " << a.discarded_events << ", lost packets " << a.lost_packets
+      << "; analysed in " << fixed(a.read_seconds, 3) << " s\n";
+  return out.str();
+}
+
+std::string analysis_summary(const TraceAnalysis& a) {
+  std::ostringstream out;
+  if (a.run) {
+    const RunInfo& r = *a.run;
+    out << r.benchmark << " · " << r.rmw << " · grey-box (trace) · process " << r.pid;
+    if (r.processes.size() > 1) out << " + " << r.processes.size() - 1 << " node processes";
+    out << "\n";
+    out << "messages: sent " << a.sent << " (warm-up " << r.warmup << "), measured " << a.measured
+        << ", matched " << a.matched << ", lost " << a.lost << " (" << fixed(a.loss_percent, 2)
+        << " %)";
+    if (a.duplicates) out << ", duplicates " << a.duplicates;
+    if (a.unknown) out << ", unknown " << a.unknown;
+    out << "\n\n";
+    char line[256];
+    std::snprintf(line, sizeof line, "%-24s %9s %9s %9s %9s %9s %9s %9s %9s\n", "latency (ms)",
+                  "min", "mean", "rms", "p50", "p90", "p99", "p99.9", "max");
+    out << line;
+    auto row = [&](const char* name, const metrics::SampleStats& s) {
+      std::snprintf(line, sizeof line, "%-24s %9s %9s %9s %9s %9s %9s %9s %9s\n", name,
+                    ms(s.min).c_str(), ms(s.mean).c_str(), ms(s.rms).c_str(), ms(s.p50).c_str(),
+                    ms(s.p90).c_str(), ms(s.p99).c_str(), ms(s.p999).c_str(), ms(s.max).c_str());
+      out << line;
+    };
+    row("from scheduled send", a.latency_from_scheduled);
+    row("from actual send", a.latency_from_sent);
+    row("send lateness", a.send_lateness);
+    out << "\nthroughput: " << fixed(a.throughput_hz, 3) << " Hz out, "
+        << fixed(a.offered_rate_hz, 3) << " Hz offered\n\n";
+  } else {
+    out << "no robotperf run in this trace: callback durations and publish -> take latencies "
+           "only\n\n";
+  }
+  out << breakdown_table(a);
+  out << "result: " << (a.valid ? "VALID" : "INVALID");
+  for (std::size_t i = 0; i < a.invalid_reasons.size(); ++i) {
+    out << (i == 0 ? " — " : "; ") << a.invalid_reasons[i];
+  }
+  out << "\n";
+  return out.str();
+}
+
+}  // namespace robotperf::tracing

@@ -1,0 +1,696 @@
+// CTF 1.8 binary streams: packets (header, context, events), event headers
+// with clock-value wrap-around, stream and event contexts, payloads.
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+#include <map>
+
+#include "robotperf/tracing/ctf.hpp"
+
+namespace robotperf::tracing::ctf {
+
+namespace fs = std::filesystem;
+
+struct Trace::Mapped {
+  const uint8_t* data = nullptr;
+  std::size_t size = 0;
+  ~Mapped() {
+    if (data != nullptr && size > 0) munmap(const_cast<uint8_t*>(data), size);
+  }
+};
+
+namespace {
+
+constexpr uint32_t kPacketMagic = 0xC1FC1FC1;
+
+// Reads fields from a bit position in a mapped stream. Every read checks the
+// packet's bounds, so a corrupt trace gives an error and never a wild read.
+// A struct of byte-aligned scalars, strings and fixed arrays (every LTTng-UST
+// payload and context), compiled once into a list of reads.
+struct FlatOp {
+  enum Kind : uint8_t { kUnsigned, kSigned, kFloat, kString, kText, kSkip } kind;
+  uint8_t bytes;        // scalars
+  unsigned align_bits;  // >= 8
+  uint64_t count;       // kText, kSkip: bytes
+};
+struct FlatLayout {
+  std::vector<FlatOp> ops;
+};
+
+// Compiles `t` to a flat layout, or returns false when it needs the general
+// decoder (bit fields, big-endian data, sequences, variants, nested structs).
+bool compile_flat(const Type& t, bool trace_big_endian, FlatLayout& out) {
+  if (t.kind != Kind::kStruct || trace_big_endian || std::endian::native != std::endian::little)
+    return false;
+  auto little = [](const Type& x) { return x.byte_order != ByteOrder::kBig; };
+  for (const auto& f : t.fields) {
+    const Type& ft = *f.type;
+    const unsigned align = std::max(8u, ft.align_bits);
+    if (ft.align_bits % 8 != 0 && ft.align_bits != 1) return false;
+    switch (ft.kind) {
+      case Kind::kInteger:
+      case Kind::kEnum:
+        if (ft.size_bits % 8 != 0 || ft.align_bits < 8 || !little(ft) || ft.maps_clock)
+          return false;
+        out.ops.push_back({ft.is_signed ? FlatOp::kSigned : FlatOp::kUnsigned,
+                           static_cast<uint8_t>(ft.size_bits / 8), align, 0});
+        break;
+      case Kind::kFloat:
+        if (!little(ft) || ft.align_bits < 8) return false;
+        out.ops.push_back({FlatOp::kFloat, static_cast<uint8_t>(ft.size_bits / 8), align, 0});
+        break;
+      case Kind::kString:
+        out.ops.push_back({FlatOp::kString, 0, 8, 0});
+        break;
+      case Kind::kArray: {
+        const Type& e = *ft.element;
+        if (e.kind != Kind::kInteger || e.size_bits % 8 != 0 || e.align_bits > e.size_bits ||
+            e.align_bits < 8)
+          return false;
+        out.ops.push_back({e.is_text ? FlatOp::kText : FlatOp::kSkip, 0, std::max(8u, e.align_bits),
+                           ft.length * (e.size_bits / 8)});
+        break;
+      }
+      default:
+        return false;
+    }
+  }
+  return true;
+}
+
+enum class HeaderShape { kGeneral, kCompact, kLarge };
+
+// Whether a stream's event header is one of LTTng's two, laid out exactly as LTTng writes them.
+HeaderShape header_shape(const Type& h, bool trace_big_endian) {
+  if (trace_big_endian || std::endian::native != std::endian::little) return HeaderShape::kGeneral;
+  if (h.kind != Kind::kStruct || h.fields.size() != 2 || h.align_bits != 8)
+    return HeaderShape::kGeneral;
+  const Type& id = *h.fields[0].type;
+  const Type& v = *h.fields[1].type;
+  if (h.fields[0].name != "id" || id.kind != Kind::kEnum || v.kind != Kind::kVariant ||
+      v.tag_sibling != 0 || v.fields.size() != 2 || id.byte_order == ByteOrder::kBig)
+    return HeaderShape::kGeneral;
+  const unsigned id_bits = id.size_bits;
+  const unsigned ts_bits = id_bits == 5 ? 27 : 32;
+  if (!(id_bits == 5 || id_bits == 16)) return HeaderShape::kGeneral;
+  const uint64_t extended = id_bits == 5 ? 31 : 65535;
+  // The enum maps 0 .. extended-1 to "compact" and extended to "extended".
+  int compact_option = -1, extended_option = -1;
+  for (std::size_t m = 0; m < id.mappings.size(); ++m) {
+    const auto& mp = id.mappings[m];
+    if (mp.low == 0 && mp.high == static_cast<int64_t>(extended - 1))
+      compact_option = v.option_of_mapping[m];
+    if (mp.low == static_cast<int64_t>(extended) && mp.high == mp.low)
+      extended_option = v.option_of_mapping[m];
+  }
+  if (compact_option < 0 || extended_option < 0) return HeaderShape::kGeneral;
+  const Type& c = *v.fields[static_cast<std::size_t>(compact_option)].type;
+  const Type& e = *v.fields[static_cast<std::size_t>(extended_option)].type;
+  auto is_int = [](const Type& t, unsigned bits, bool clock) {
+    return (t.kind == Kind::kInteger) && t.size_bits == bits && t.maps_clock == clock &&
+           t.byte_order != ByteOrder::kBig && !t.is_signed;
+  };
+  if (c.kind != Kind::kStruct || c.fields.size() != 1 || !is_int(*c.fields[0].type, ts_bits, true))
+    return HeaderShape::kGeneral;
+  if (id_bits == 5 && c.fields[0].type->align_bits != 1) return HeaderShape::kGeneral;
+  if (id_bits == 16 && (c.fields[0].type->align_bits != 8 || id.align_bits != 8))
+    return HeaderShape::kGeneral;
+  if (e.kind != Kind::kStruct || e.fields.size() != 2 || e.fields[0].name != "id" ||
+      !is_int(*e.fields[0].type, 32, false) || e.fields[0].type->align_bits != 8 ||
+      !is_int(*e.fields[1].type, 64, true) || e.fields[1].type->align_bits != 8)
+    return HeaderShape::kGeneral;
+  return id_bits == 5 ? HeaderShape::kCompact : HeaderShape::kLarge;
+}
+
+class Decoder {
+ public:
+  Decoder(const uint8_t* data, uint64_t end_bits, bool trace_big_endian, const std::string& file)
+      : data_(data), end_bits_(end_bits), trace_be_(trace_big_endian), file_(file) {}
+
+  uint64_t pos() const { return pos_; }
+  void seek(uint64_t bits) { pos_ = bits; }
+  void set_end(uint64_t bits) { end_bits_ = bits; }
+  uint64_t clock() const { return clock_; }
+  void set_clock(uint64_t value) { clock_ = value; }
+  void set_clock_updates(bool on) { clock_updates_ = on; }
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw CtfError(file_ + ": " + what + " at byte " + std::to_string(pos_ / 8));
+  }
+
+  void align(unsigned bits) {
+    if (bits > 1) pos_ = (pos_ + bits - 1) & ~static_cast<uint64_t>(bits - 1);
+  }
+
+  uint64_t read_bits(const Type& t) {
+    align(t.align_bits);
+    const unsigned n = t.size_bits;
+    if (pos_ + n > end_bits_) fail("event runs past the end of its packet");
+    const bool be =
+        t.byte_order == ByteOrder::kNative ? trace_be_ : t.byte_order == ByteOrder::kBig;
+    uint64_t v;
+    if ((pos_ & 7) == 0 && (n & 7) == 0) {
+      const uint8_t* p = data_ + pos_ / 8;
+      switch (n) {
+        case 8:
+          v = *p;
+          break;
+        case 16: {
+          uint16_t x;
+          std::memcpy(&x, p, 2);
+          v = be ? __builtin_bswap16(x) : x;
+          break;
+        }
+        case 32: {
+          uint32_t x;
+          std::memcpy(&x, p, 4);
+          v = be ? __builtin_bswap32(x) : x;
+          break;
+        }
+        case 64: {
+          uint64_t x;
+          std::memcpy(&x, p, 8);
+          v = be ? __builtin_bswap64(x) : x;
+          break;
+        }
+        default:
+          v = read_unaligned(n, be);
+      }
+    } else {
+      v = read_unaligned(n, be);
+    }
+    pos_ += n;
+    if (t.maps_clock && clock_updates_) update_clock(v, n);
+    return v;
+  }
+
+  // CTF clock update: an n-bit value holds the low bits of the clock; a value
+  // below the current low bits means the low bits wrapped once.
+  void update_clock(uint64_t v, unsigned n) {
+    if (n >= 64) {
+      clock_ = v;
+      return;
+    }
+    const uint64_t mask = (uint64_t{1} << n) - 1;
+    uint64_t next = (clock_ & ~mask) | v;
+    if (v < (clock_ & mask)) next += uint64_t{1} << n;
+    clock_ = next;
+  }
+
+  static Value value_of(const Type& t, uint64_t bits) {
+    Value out;
+    if (t.is_signed) {
+      if (t.size_bits < 64 && (bits >> (t.size_bits - 1)) & 1) bits |= ~uint64_t{0} << t.size_bits;
+      out.tag = Value::Tag::kSigned;
+    } else {
+      out.tag = Value::Tag::kUnsigned;
+    }
+    out.u = bits;
+    return out;
+  }
+
+  std::string_view read_string() {
+    align(8);
+    const uint64_t start = pos_ / 8, end = end_bits_ / 8;
+    const void* nul = std::memchr(data_ + start, 0, end > start ? end - start : 0);
+    if (nul == nullptr) fail("unterminated string");
+    const auto len = static_cast<std::size_t>(static_cast<const uint8_t*>(nul) - (data_ + start));
+    pos_ = (start + len + 1) * 8;
+    return {reinterpret_cast<const char*>(data_ + start), len};
+  }
+
+  // Text stored as a fixed array or a sequence of 8-bit characters: up to the first NUL.
+  std::string_view read_text(uint64_t count) {
+    align(8);
+    if (pos_ + count * 8 > end_bits_) fail("text runs past the end of its packet");
+    const auto* p = reinterpret_cast<const char*>(data_ + pos_ / 8);
+    pos_ += count * 8;
+    const void* nul = std::memchr(p, 0, count);
+    return {p, nul ? static_cast<std::size_t>(static_cast<const char*>(nul) - p) : count};
+  }
+
+  // Decodes one value of type t. `siblings` holds the integer values of the
+  // enclosing struct's earlier fields (for variant tags and sequence lengths).
+  // Header decoding records fields named "id" in *id_out.
+  Value decode(const Type& t, uint64_t* id_out, bool is_id_field) {
+    switch (t.kind) {
+      case Kind::kInteger:
+      case Kind::kEnum: {
+        const uint64_t bits = read_bits(t);
+        if (is_id_field && id_out != nullptr) *id_out = bits;
+        return value_of(t, bits);
+      }
+      case Kind::kFloat: {
+        const uint64_t bits = read_bits(t);
+        Value out;
+        out.tag = Value::Tag::kFloat;
+        out.f = t.size_bits == 32
+                    ? static_cast<double>(std::bit_cast<float>(static_cast<uint32_t>(bits)))
+                    : std::bit_cast<double>(bits);
+        return out;
+      }
+      case Kind::kString: {
+        Value out;
+        out.tag = Value::Tag::kString;
+        out.s = read_string();
+        return out;
+      }
+      case Kind::kStruct:
+        decode_struct(t, nullptr, id_out);
+        return {};
+      case Kind::kArray:
+        return decode_array(t, t.length, id_out);
+      case Kind::kSequence:
+      case Kind::kVariant:
+        fail("a sequence or variant outside a struct");
+    }
+    return {};
+  }
+
+  Value decode_array(const Type& t, uint64_t count, uint64_t* id_out) {
+    const Type& e = *t.element;
+    if (e.kind == Kind::kInteger && e.is_text) {
+      Value out;
+      out.tag = Value::Tag::kString;
+      out.s = read_text(count);
+      return out;
+    }
+    if (e.kind == Kind::kInteger && (e.size_bits % 8) == 0 && e.align_bits <= e.size_bits) {
+      // Plain integer arrays (gids, uuids): skip in one step.
+      align(t.align_bits);
+      const uint64_t bits = count * e.size_bits;
+      if (pos_ + bits > end_bits_) fail("array runs past the end of its packet");
+      pos_ += bits;
+      return {};
+    }
+    align(t.align_bits);
+    for (uint64_t i = 0; i < count; ++i) decode(e, id_out, false);
+    return {};
+  }
+
+  // Decodes a struct; when `out` is given, stores its top-level values there.
+  void decode_struct(const Type& t, std::vector<Value>* out, uint64_t* id_out) {
+    align(t.align_bits);
+    const std::size_t n = t.fields.size();
+    // Sibling values for tags and lengths; structs are small.
+    uint64_t local[32];
+    std::vector<uint64_t> big;
+    uint64_t* sib = local;
+    if (n > 32) {
+      big.resize(n);
+      sib = big.data();
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const Field& f = t.fields[i];
+      const Type& ft = *f.type;
+      Value v;
+      if (ft.kind == Kind::kVariant) {
+        if (ft.tag_sibling < 0) fail("variant tag '" + ft.variant_tag + "' is not resolved");
+        v = decode_variant(ft, sib, *t.fields[static_cast<std::size_t>(ft.tag_sibling)].type,
+                           id_out);
+      } else if (ft.kind == Kind::kSequence) {
+        if (ft.length_sibling < 0 || static_cast<std::size_t>(ft.length_sibling) >= i)
+          fail("sequence length '" + ft.length_field + "' is not an earlier field");
+        v = decode_array(ft, sib[ft.length_sibling], id_out);
+      } else {
+        v = decode(ft, id_out, id_out != nullptr && f.name == "id");
+      }
+      sib[i] = v.u;
+      if (out != nullptr) out->push_back(v);
+    }
+  }
+
+  // Decodes a struct compiled to a flat layout (see FlatLayout) into out[0..n).
+  void decode_flat(const FlatLayout& layout, Value* out) {
+    for (std::size_t i = 0; i < layout.ops.size(); ++i) {
+      const FlatOp& op = layout.ops[i];
+      pos_ = (pos_ + op.align_bits - 1) & ~static_cast<uint64_t>(op.align_bits - 1);
+      const uint64_t start = pos_ / 8;
+      Value& v = out[i];
+      switch (op.kind) {
+        case FlatOp::kUnsigned:
+        case FlatOp::kSigned:
+        case FlatOp::kFloat: {
+          if (pos_ + op.bytes * 8 > end_bits_) fail("event runs past the end of its packet");
+          uint64_t bits = 0;
+          std::memcpy(&bits, data_ + start, op.bytes);  // little-endian host, little-endian trace
+          pos_ += op.bytes * 8;
+          if (op.kind == FlatOp::kFloat) {
+            v.tag = Value::Tag::kFloat;
+            v.f = op.bytes == 4
+                      ? static_cast<double>(std::bit_cast<float>(static_cast<uint32_t>(bits)))
+                      : std::bit_cast<double>(bits);
+          } else if (op.kind == FlatOp::kSigned) {
+            const unsigned n = op.bytes * 8;
+            if (n < 64 && ((bits >> (n - 1)) & 1)) bits |= ~uint64_t{0} << n;
+            v.tag = Value::Tag::kSigned;
+            v.u = bits;
+          } else {
+            v.tag = Value::Tag::kUnsigned;
+            v.u = bits;
+          }
+          break;
+        }
+        case FlatOp::kString:
+          v.tag = Value::Tag::kString;
+          v.s = read_string();
+          break;
+        case FlatOp::kText:
+          v.tag = Value::Tag::kString;
+          v.s = read_text(op.count);
+          break;
+        case FlatOp::kSkip:
+          if (pos_ + op.count * 8 > end_bits_) fail("array runs past the end of its packet");
+          pos_ += op.count * 8;
+          v = Value{};
+          break;
+      }
+    }
+  }
+
+  // LTTng's compact (5-bit id, 27-bit time) and large (16-bit id, 32-bit time)
+  // event headers, each with an extended form (32-bit id, 64-bit time).
+  uint64_t decode_lttng_header(HeaderShape shape) {
+    pos_ = (pos_ + 7) & ~uint64_t{7};
+    const uint8_t* p = data_ + pos_ / 8;
+    const uint64_t left = end_bits_ > pos_ ? (end_bits_ - pos_) / 8 : 0;
+    auto need = [&](uint64_t bytes) {
+      if (left < bytes) fail("event header runs past the end of its packet");
+    };
+    uint64_t id;
+    if (shape == HeaderShape::kCompact) {
+      need(1);
+      id = p[0] & 31u;
+      if (id != 31) {
+        need(4);
+        uint32_t word;
+        std::memcpy(&word, p, 4);
+        update_clock(word >> 5, 27);
+        pos_ += 32;
+        return id;
+      }
+      p += 1;
+      pos_ += 8;
+      need(13);
+    } else {
+      need(2);
+      uint16_t id16;
+      std::memcpy(&id16, p, 2);
+      id = id16;
+      if (id != 65535) {
+        need(6);
+        uint32_t ts;
+        std::memcpy(&ts, p + 2, 4);
+        update_clock(ts, 32);
+        pos_ += 48;
+        return id;
+      }
+      p += 2;
+      pos_ += 16;
+      need(14);
+    }
+    uint32_t id32;
+    uint64_t ts;
+    std::memcpy(&id32, p, 4);
+    std::memcpy(&ts, p + 4, 8);
+    clock_ = ts;
+    pos_ += 96;
+    return id32;
+  }
+
+  // The option of variant t selected by the value of its tag, an enum of type tag_type.
+  Value decode_variant(const Type& t, const uint64_t* siblings, const Type& tag_type,
+                       uint64_t* id_out) {
+    const auto tag = static_cast<int64_t>(siblings[t.tag_sibling]);
+    int option = -1;
+    for (std::size_t m = 0; m < tag_type.mappings.size(); ++m) {
+      const auto& mp = tag_type.mappings[m];
+      if (tag >= mp.low && tag <= mp.high) {
+        option = t.option_of_mapping[m];
+        break;
+      }
+    }
+    if (option < 0) fail("variant tag value " + std::to_string(tag) + " selects no option");
+    const Type& ot = *t.fields[static_cast<std::size_t>(option)].type;
+    if (ot.kind == Kind::kStruct) {
+      decode_struct(ot, nullptr, id_out);
+      return {};
+    }
+    return decode(ot, id_out,
+                  id_out != nullptr && t.fields[static_cast<std::size_t>(option)].name == "id");
+  }
+
+ private:
+  uint64_t read_unaligned(unsigned n, bool be) {
+    uint64_t v = 0;
+    if (!be) {
+      // Little-endian bit order: bit k of the field is bit (pos+k) counted from
+      // each byte's least significant bit.
+      for (unsigned k = 0; k < n;) {
+        const uint64_t bit = pos_ + k;
+        const unsigned in_byte = bit & 7;
+        const unsigned take = std::min(8 - in_byte, n - k);
+        const uint64_t byte = data_[bit / 8];
+        v |= ((byte >> in_byte) & ((1u << take) - 1)) << k;
+        k += take;
+      }
+    } else {
+      for (unsigned k = 0; k < n;) {
+        const uint64_t bit = pos_ + k;
+        const unsigned in_byte = bit & 7;
+        const unsigned take = std::min(8 - in_byte, n - k);
+        const uint64_t byte = data_[bit / 8];
+        v = (v << take) | ((byte >> (8 - in_byte - take)) & ((1u << take) - 1));
+        k += take;
+      }
+    }
+    return v;
+  }
+
+  const uint8_t* data_;
+  uint64_t pos_ = 0;
+  uint64_t end_bits_;
+  bool trace_be_;
+  const std::string& file_;
+  uint64_t clock_ = 0;
+  bool clock_updates_ = true;
+};
+
+int index_of(const TypePtr& t, std::string_view name) {
+  if (!t) return -1;
+  for (std::size_t i = 0; i < t->fields.size(); ++i) {
+    if (t->fields[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+}  // namespace
+
+Trace::Trace(const fs::path& dir) : dir_(dir) {
+  metadata_ = read_metadata(dir / "metadata");
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    if (!entry.is_regular_file()) continue;
+    const std::string name = entry.path().filename().string();
+    if (name == "metadata" || name.starts_with(".")) continue;
+    stream_files_.push_back(entry.path());
+  }
+  if (ec) throw CtfError("cannot list " + dir.string() + ": " + ec.message());
+  std::sort(stream_files_.begin(), stream_files_.end());
+  for (const auto& file : stream_files_) {
+    auto m = std::make_unique<Mapped>();
+    const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw CtfError("cannot open " + file.string());
+    struct stat st {};
+    if (fstat(fd, &st) != 0) {
+      ::close(fd);
+      throw CtfError("cannot stat " + file.string());
+    }
+    m->size = static_cast<std::size_t>(st.st_size);
+    if (m->size > 0) {
+      void* p = mmap(nullptr, m->size, PROT_READ, MAP_PRIVATE, fd, 0);
+      if (p == MAP_FAILED) {
+        ::close(fd);
+        throw CtfError("cannot map " + file.string());
+      }
+      madvise(p, m->size, MADV_SEQUENTIAL);
+      m->data = static_cast<const uint8_t*>(p);
+    }
+    ::close(fd);
+    mapped_.push_back(std::move(m));
+  }
+}
+
+Trace::~Trace() = default;
+Trace::Trace(Trace&&) noexcept = default;
+Trace& Trace::operator=(Trace&&) noexcept = default;
+
+std::size_t Trace::total_bytes() const {
+  std::size_t n = 0;
+  for (const auto& m : mapped_) n += m->size;
+  return n;
+}
+
+int Trace::stream_context_index(uint64_t stream_id, std::string_view name) const {
+  const StreamClass* sc = metadata_.stream(stream_id);
+  return sc ? index_of(sc->event_context, name) : -1;
+}
+
+StreamStats Trace::read_stream(std::size_t index,
+                               const std::function<void(const Event&)>& on_event) {
+  const Mapped& m = *mapped_.at(index);
+  StreamStats stats;
+  stats.file = stream_files_[index].string();
+  if (m.size == 0) return stats;
+  const Metadata& md = metadata_;
+  Decoder d(m.data, m.size * 8, md.big_endian, stats.file);
+  std::vector<Value> header_values, context_values, payload, event_context;
+  // Layouts compiled on first use, per stream class and event class.
+  struct Compiled {
+    bool tried = false;
+    bool flat = false;
+    FlatLayout layout;
+  };
+  std::map<const void*, Compiled> compiled;
+  auto layout_of = [&](const TypePtr& t) -> const FlatLayout* {
+    Compiled& c = compiled[t.get()];
+    if (!c.tried) {
+      c.tried = true;
+      c.flat = compile_flat(*t, md.big_endian, c.layout);
+    }
+    return c.flat ? &c.layout : nullptr;
+  };
+  // Payload layouts of the current stream class, by event id (compiled once).
+  const StreamClass* layouts_for = nullptr;
+  std::vector<const FlatLayout*> payload_layouts;
+  std::vector<uint8_t> payload_flat;
+  HeaderShape shape = HeaderShape::kGeneral;
+  const FlatLayout* context_layout = nullptr;
+  uint64_t last_discarded = 0;
+  bool have_seq = false;
+  uint64_t last_seq = 0;
+  const uint64_t file_bits = m.size * 8;
+  uint64_t packet_start = 0;
+
+  while (packet_start < file_bits) {
+    d.set_end(file_bits);
+    d.seek(packet_start);
+    d.set_clock_updates(false);
+    uint64_t stream_id = 0;
+    if (md.packet_header) {
+      header_values.clear();
+      d.decode_struct(*md.packet_header, &header_values, nullptr);
+      const int magic = index_of(md.packet_header, "magic");
+      if (magic >= 0 && header_values[static_cast<std::size_t>(magic)].u != kPacketMagic)
+        d.fail("bad packet magic (not a CTF stream, or corrupt)");
+      const int sid = index_of(md.packet_header, "stream_id");
+      if (sid >= 0) stream_id = header_values[static_cast<std::size_t>(sid)].u;
+    }
+    const StreamClass* sc = md.stream(stream_id);
+    if (sc == nullptr) d.fail("unknown stream id " + std::to_string(stream_id));
+    uint64_t content_bits = file_bits - packet_start, packet_bits = content_bits;
+    uint32_t cpu_id = 0;
+    if (sc->packet_context) {
+      context_values.clear();
+      d.decode_struct(*sc->packet_context, &context_values, nullptr);
+      auto get = [&](std::string_view name) -> const Value* {
+        const int i = index_of(sc->packet_context, name);
+        return i >= 0 ? &context_values[static_cast<std::size_t>(i)] : nullptr;
+      };
+      if (const Value* v = get("content_size")) content_bits = v->u;
+      if (const Value* v = get("packet_size")) packet_bits = v->u;
+      if (const Value* v = get("timestamp_begin")) d.set_clock(v->u);
+      if (const Value* v = get("cpu_id")) cpu_id = static_cast<uint32_t>(v->u);
+      if (const Value* v = get("events_discarded")) {
+        // A running count per stream: what it gained since the previous packet.
+        if (v->u >= last_discarded) stats.discarded_events += v->u - last_discarded;
+        last_discarded = v->u;
+      }
+      if (const Value* v = get("packet_seq_num")) {
+        if (have_seq && v->u > last_seq + 1) stats.lost_packets += v->u - last_seq - 1;
+        have_seq = true;
+        last_seq = v->u;
+      }
+    }
+    if (packet_bits == 0 || content_bits > packet_bits || packet_start + packet_bits > file_bits)
+      d.fail("packet size " + std::to_string(packet_bits / 8) + " bytes does not fit the file");
+    ++stats.packets;
+    const uint64_t content_end = packet_start + content_bits;
+    d.set_end(content_end);
+    d.set_clock_updates(true);
+    if (layouts_for != sc) {
+      layouts_for = sc;
+      shape =
+          sc->event_header ? header_shape(*sc->event_header, md.big_endian) : HeaderShape::kGeneral;
+      context_layout = sc->event_context ? layout_of(sc->event_context) : nullptr;
+      payload_layouts.assign(sc->events_by_id.size(), nullptr);
+      payload_flat.assign(sc->events_by_id.size(), 0);
+      for (std::size_t i = 0; i < sc->events_by_id.size(); ++i) {
+        const EventClass* ec = sc->events_by_id[i];
+        if (ec == nullptr || ec->context) continue;
+        payload_layouts[i] = ec->fields ? layout_of(ec->fields) : nullptr;
+        payload_flat[i] = !ec->fields || payload_layouts[i] != nullptr;
+      }
+      if (sc->event_context) event_context.resize(sc->event_context->fields.size());
+    }
+
+    while (true) {
+      // Events end where the next header would not fit (trailing padding).
+      if (d.pos() >= content_end) break;
+      uint64_t id = 0;
+      if (shape != HeaderShape::kGeneral) {
+        id = d.decode_lttng_header(shape);
+      } else if (sc->event_header) {
+        d.decode_struct(*sc->event_header, nullptr, &id);
+      }
+      const EventClass* ec = id < sc->events_by_id.size() ? sc->events_by_id[id] : nullptr;
+      if (ec == nullptr) d.fail("unknown event id " + std::to_string(id));
+      if (context_layout != nullptr) {
+        d.decode_flat(*context_layout, event_context.data());
+      } else if (sc->event_context) {
+        event_context.clear();
+        d.decode_struct(*sc->event_context, &event_context, nullptr);
+      }
+      if (payload_flat[id]) {
+        const FlatLayout* layout = payload_layouts[id];
+        payload.resize(layout ? layout->ops.size() : 0);
+        if (layout) d.decode_flat(*layout, payload.data());
+      } else {
+        if (ec->context) d.decode_struct(*ec->context, nullptr, nullptr);
+        payload.clear();
+        if (ec->fields) d.decode_struct(*ec->fields, &payload, nullptr);
+      }
+      Event ev;
+      ev.cls = ec;
+      ev.timestamp = d.clock();
+      ev.cpu_id = cpu_id;
+      ev.fields = payload;
+      ev.stream_context = event_context;
+      ++stats.events;
+      on_event(ev);
+    }
+    packet_start += packet_bits;
+  }
+  return stats;
+}
+
+std::vector<fs::path> find_traces(const fs::path& root) {
+  std::vector<fs::path> out;
+  std::error_code ec;
+  if (!fs::is_directory(root, ec)) throw CtfError(root.string() + " is not a folder");
+  if (fs::is_regular_file(root / "metadata")) out.push_back(root);
+  for (auto it = fs::recursive_directory_iterator(root, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    if (it->is_directory() && fs::is_regular_file(it->path() / "metadata"))
+      out.push_back(it->path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace robotperf::tracing::ctf

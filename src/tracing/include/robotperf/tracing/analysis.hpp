@@ -1,0 +1,121 @@
+// Grey-box analysis of a CTF trace: end-to-end latency of a robotperf run from
+// its input and output events matched by message ID (with the black-box
+// statistics and validity rules), a per-hop breakdown, callback durations per
+// node, and publish→take latencies per topic from the ros2:* events — the
+// last two also for traces of real ROS 2 systems recorded with ros2_tracing.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "robotperf/metrics/latency_stats.hpp"
+
+namespace robotperf::tracing {
+
+// The configuration a run records in its robotperf:run_begin event.
+struct RunInfo {
+  std::string benchmark;
+  std::string rmw;
+  uint64_t count = 0;
+  uint64_t warmup = 0;
+  int64_t period_ns = 0;
+  uint64_t min_samples = 0;
+  double max_loss_percent = 0;
+  int pid = 0;              // the process that ran it (Playback and Monitor)
+  std::set<int> processes;  // it and its per-node children
+  bool ended = false;       // robotperf:run_end seen
+  uint64_t sent_reported = 0;
+};
+
+// One frame the input component sent. Times are trace clock nanoseconds
+// (CLOCK_MONOTONIC for LTTng traces).
+struct MessageTimes {
+  int64_t id = 0;  // the header stamp
+  uint64_t index = 0;
+  int64_t scheduled_ns = 0;
+  int64_t sent_ns = 0;
+  int64_t received_ns = -1;  // first output; -1 when lost
+  bool warmup = false;
+};
+
+// One hop of the message path: a transport hop (published by one node, taken
+// by another), a node hop (a node's callback start on its input to its
+// publish of the output), or a kernel (its computation). Nanoseconds.
+struct Hop {
+  std::string kind;  // "transport", "node" or "kernel"
+  std::string node;  // the receiving node (transport) or the node
+  std::string from;  // transport: publishing node; node: input topic
+  std::string to;    // transport and node: topic; kernel: kernel name
+  metrics::SampleStats duration;
+  double mean_start_offset_ns = 0;  // mean hop start after the frame's send: orders the path
+  std::string label() const;
+};
+
+struct CallbackStats {
+  std::string node;
+  std::string source;             // the topic, or "timer <period>"
+  metrics::SampleStats duration;  // ns
+};
+
+struct TopicLatency {
+  std::string topic;
+  std::string publisher;  // node names ("?" when the trace lacks the init events)
+  std::string subscriber;
+  metrics::SampleStats latency;  // rmw_publish -> rmw_take, ns
+};
+
+struct TraceAnalysis {
+  // The trace.
+  std::vector<std::string> traces;  // the CTF folders read
+  uint64_t streams = 0;
+  uint64_t packets = 0;
+  uint64_t events = 0;
+  uint64_t discarded_events = 0;
+  uint64_t lost_packets = 0;
+  int64_t first_ns = 0, last_ns = 0;
+  double read_seconds = 0;  // wall time of the analysis
+
+  // The robotperf run, when the trace holds one.
+  std::optional<RunInfo> run;
+  std::vector<MessageTimes> messages;  // by index
+  std::size_t sent = 0, measured = 0, matched = 0, lost = 0, duplicates = 0, unknown = 0;
+  double loss_percent = 0;
+  metrics::SampleStats latency_from_scheduled, latency_from_sent, send_lateness;  // ns
+  double throughput_hz = 0, offered_rate_hz = 0, window_s = 0;
+  std::vector<Hop> hops;  // ordered along the path
+
+  // Any trace with ros2:* events.
+  std::vector<CallbackStats> callbacks;
+  std::vector<TopicLatency> topics;
+
+  bool valid = false;
+  std::vector<std::string> invalid_reasons;
+};
+
+struct AnalyzeOptions {
+  // Analyse the run of this process (0: the first run in the trace).
+  int run_pid = 0;
+  // Processes that belong to the run besides the ones the trace says (per-node children).
+  std::set<int> extra_processes;
+};
+
+// Reads every CTF trace under `dir` (one per buffer domain) and analyses it.
+// Throws ctf::CtfError for an unreadable trace, std::invalid_argument when
+// `dir` holds no trace.
+TraceAnalysis analyze_trace(const std::filesystem::path& dir, const AnalyzeOptions& options = {});
+
+// The `grey` block of the results JSON: trace, hops, callbacks, topics. Milliseconds.
+nlohmann::json to_json(const TraceAnalysis& analysis);
+
+// Breakdown tables for a terminal: hops, callbacks, topics, and the tracer's losses.
+std::string breakdown_table(const TraceAnalysis& analysis);
+
+// The full report of `robotperf trace analyze`: run summary (when there is a run) + breakdown.
+std::string analysis_summary(const TraceAnalysis& analysis);
+
+}  // namespace robotperf::tracing

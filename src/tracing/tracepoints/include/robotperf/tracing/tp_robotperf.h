@@ -1,0 +1,127 @@
+/* The `robotperf` LTTng-UST provider: what grey-box analysis needs from the
+ * benchmark's input and output components, the node runtime and the kernels.
+ * Every event names its node and carries the message ID (the header stamp in
+ * nanoseconds, -1 for types without a header); sizes are CDR sizes computed
+ * by a sizing pass, never by serialising. Field names are part of the trace
+ * format read by src/tracing/analysis.cpp. */
+#undef LTTNG_UST_TRACEPOINT_PROVIDER
+#define LTTNG_UST_TRACEPOINT_PROVIDER robotperf
+
+#undef LTTNG_UST_TRACEPOINT_INCLUDE
+#define LTTNG_UST_TRACEPOINT_INCLUDE "robotperf/tracing/tp_robotperf.h"
+
+#if !defined(ROBOTPERF_TRACING_TP_ROBOTPERF_H) || defined(LTTNG_UST_TRACEPOINT_HEADER_MULTI_READ)
+#define ROBOTPERF_TRACING_TP_ROBOTPERF_H
+
+#include <lttng/tracepoint.h>
+#include <stdint.h>
+
+/* Once per run, before the first input: the run's configuration, so that a
+ * trace can be analysed on its own with the run's validity rules. */
+LTTNG_UST_TRACEPOINT_EVENT(
+    robotperf, run_begin,
+    LTTNG_UST_TP_ARGS(const char *, benchmark_arg, const char *, rmw_arg, uint64_t, count_arg,
+                      uint64_t, warmup_arg, int64_t, period_ns_arg, uint64_t, min_samples_arg,
+                      double, max_loss_percent_arg),
+    LTTNG_UST_TP_FIELDS(
+        lttng_ust_field_string(benchmark, benchmark_arg)
+        lttng_ust_field_string(rmw, rmw_arg)
+        lttng_ust_field_integer(uint64_t, count, count_arg)
+        lttng_ust_field_integer(uint64_t, warmup, warmup_arg)
+        lttng_ust_field_integer(int64_t, period_ns, period_ns_arg)
+        lttng_ust_field_integer(uint64_t, min_samples, min_samples_arg)
+        lttng_ust_field_float(double, max_loss_percent, max_loss_percent_arg)))
+
+/* A per-node child process of the run of process run_pid starts: the
+ * analysis counts its events as part of that run. */
+LTTNG_UST_TRACEPOINT_EVENT(
+    robotperf, run_join,
+    LTTNG_UST_TP_ARGS(int, run_pid_arg),
+    LTTNG_UST_TP_FIELDS(lttng_ust_field_integer(int, run_pid, run_pid_arg)))
+
+/* After the last input: how many frames the input component sent. */
+LTTNG_UST_TRACEPOINT_EVENT(
+    robotperf, run_end,
+    LTTNG_UST_TP_ARGS(uint64_t, sent_arg),
+    LTTNG_UST_TP_FIELDS(lttng_ust_field_integer(uint64_t, sent, sent_arg)))
+
+/* The input component sends frame `index` (all its topics carry message_id);
+ * the event time is the actual send time, scheduled_ns the open-loop deadline
+ * on the same clock (CLOCK_MONOTONIC). */
+LTTNG_UST_TRACEPOINT_EVENT(
+    robotperf, input,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, int64_t, message_id_arg, uint64_t, index_arg,
+                      int64_t, scheduled_ns_arg),
+    LTTNG_UST_TP_FIELDS(
+        lttng_ust_field_string(node, node_arg)
+        lttng_ust_field_integer(int64_t, message_id, message_id_arg)
+        lttng_ust_field_integer(uint64_t, index, index_arg)
+        lttng_ust_field_integer(int64_t, scheduled_ns, scheduled_ns_arg)))
+
+/* The output component received message_id. */
+LTTNG_UST_TRACEPOINT_EVENT(
+    robotperf, output,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, const char *, topic_arg, int64_t, message_id_arg,
+                      uint64_t, size_arg),
+    LTTNG_UST_TP_FIELDS(
+        lttng_ust_field_string(node, node_arg)
+        lttng_ust_field_string(topic, topic_arg)
+        lttng_ust_field_integer(int64_t, message_id, message_id_arg)
+        lttng_ust_field_integer(uint64_t, size, size_arg)))
+
+/* A node hands a message to the transport. */
+LTTNG_UST_TRACEPOINT_EVENT(
+    robotperf, publish,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, const char *, topic_arg, int64_t, message_id_arg,
+                      uint64_t, size_arg),
+    LTTNG_UST_TP_FIELDS(
+        lttng_ust_field_string(node, node_arg)
+        lttng_ust_field_string(topic, topic_arg)
+        lttng_ust_field_integer(int64_t, message_id, message_id_arg)
+        lttng_ust_field_integer(uint64_t, size, size_arg)))
+
+/* A subscription callback of a node starts on a taken message ... */
+LTTNG_UST_TRACEPOINT_EVENT(
+    robotperf, callback_entry,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, const char *, topic_arg, int64_t, message_id_arg,
+                      uint64_t, size_arg),
+    LTTNG_UST_TP_FIELDS(
+        lttng_ust_field_string(node, node_arg)
+        lttng_ust_field_string(topic, topic_arg)
+        lttng_ust_field_integer(int64_t, message_id, message_id_arg)
+        lttng_ust_field_integer(uint64_t, size, size_arg)))
+
+/* ... and returns. */
+LTTNG_UST_TRACEPOINT_EVENT(
+    robotperf, callback_exit,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, const char *, topic_arg, int64_t, message_id_arg),
+    LTTNG_UST_TP_FIELDS(
+        lttng_ust_field_string(node, node_arg)
+        lttng_ust_field_string(topic, topic_arg)
+        lttng_ust_field_integer(int64_t, message_id, message_id_arg)))
+
+/* A kernel starts its computation on a message (input size) ... */
+LTTNG_UST_TRACEPOINT_EVENT(
+    robotperf, kernel_init,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, const char *, kernel_arg, int64_t, message_id_arg,
+                      uint64_t, size_arg),
+    LTTNG_UST_TP_FIELDS(
+        lttng_ust_field_string(node, node_arg)
+        lttng_ust_field_string(kernel, kernel_arg)
+        lttng_ust_field_integer(int64_t, message_id, message_id_arg)
+        lttng_ust_field_integer(uint64_t, size, size_arg)))
+
+/* ... and finishes it (output size), before publishing. */
+LTTNG_UST_TRACEPOINT_EVENT(
+    robotperf, kernel_fini,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, const char *, kernel_arg, int64_t, message_id_arg,
+                      uint64_t, size_arg),
+    LTTNG_UST_TP_FIELDS(
+        lttng_ust_field_string(node, node_arg)
+        lttng_ust_field_string(kernel, kernel_arg)
+        lttng_ust_field_integer(int64_t, message_id, message_id_arg)
+        lttng_ust_field_integer(uint64_t, size, size_arg)))
+
+#endif /* ROBOTPERF_TRACING_TP_ROBOTPERF_H */
+
+#include <lttng/tracepoint-event.h>

@@ -1,0 +1,308 @@
+// The CTF reader and the analyzer on hand-built traces whose timestamps are
+// known, so every latency, hop and count has an exact expected value.
+#include "robotperf/tracing/analysis.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "ctf_writer.hpp"
+#include "robotperf/tracing/ctf.hpp"
+
+namespace robotperf::tracing {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::CtfWriter;
+using V = testing::FieldValue;
+
+class TempDir {
+ public:
+  explicit TempDir(const std::string& name)
+      : path_(fs::temp_directory_path() /
+              ("robotperf-tracing-" + std::to_string(getpid()) + "-" + name)) {
+    fs::remove_all(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+constexpr int32_t kRunPid = 42;
+constexpr int64_t kBase = 1'700'000'000'000'000'000;  // message ID of frame 0
+constexpr int64_t kPeriod = 10'000'000;               // 10 ms
+constexpr uint64_t kStart = 5'000'000'000;            // first deadline, trace clock
+constexpr int64_t kLateness = 100;
+// End-to-end latency from the actual send, per frame; -1 = lost.
+constexpr int64_t kLatency[] = {4'000'000, 7'000'000, -1, 3'000'000};
+
+int64_t id_of(uint64_t k) {
+  return kBase + static_cast<int64_t>(k) * kPeriod;
+}
+uint64_t sent_of(uint64_t k) {
+  return kStart + k * kPeriod + kLateness;
+}
+
+// A relay run of 4 frames (warm-up 1), traced on two CPUs (streams): the
+// Playback publishes /in, node "relay" runs kernel "k" and publishes /out,
+// the Monitor takes /out. Frame 2 is lost after the kernel.
+void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0) {
+  testing::define_robotperf_events(w);
+  const std::string play = "robotperf_playback", relay = "relay", mon = "robotperf_monitor";
+  const uint64_t t0 = kStart - 1'000'000;
+  // Initialisation: node, subscription + callback, timer, publisher of /in.
+  w.event(0, "ros2:rcl_node_init", t0, kRunPid, 1,
+          {V(uint64_t{0x10}), V(uint64_t{0}), V(relay), V(std::string("/"))});
+  w.event(0, "ros2:rcl_node_init", t0 + 1, kRunPid, 1,
+          {V(uint64_t{0x11}), V(uint64_t{0}), V(play), V(std::string("/"))});
+  w.event(0, "ros2:rcl_subscription_init", t0 + 2, kRunPid, 1,
+          {V(uint64_t{0x20}), V(uint64_t{0x10}), V(uint64_t{0x30}), V(std::string("/in")),
+           V(uint64_t{10})});
+  w.event(0, "ros2:rclcpp_subscription_init", t0 + 3, kRunPid, 1,
+          {V(uint64_t{0x20}), V(uint64_t{0x21})});
+  w.event(0, "ros2:rclcpp_subscription_callback_added", t0 + 4, kRunPid, 1,
+          {V(uint64_t{0x21}), V(uint64_t{0x40})});
+  w.event(0, "ros2:rcl_timer_init", t0 + 5, kRunPid, 1,
+          {V(uint64_t{0x50}), V(int64_t{100'000'000})});
+  w.event(0, "ros2:rclcpp_timer_callback_added", t0 + 6, kRunPid, 1,
+          {V(uint64_t{0x50}), V(uint64_t{0x60})});
+  w.event(0, "ros2:rclcpp_timer_link_node", t0 + 7, kRunPid, 1,
+          {V(uint64_t{0x50}), V(uint64_t{0x10})});
+  w.event(0, "ros2:rcl_publisher_init", t0 + 8, kRunPid, 1,
+          {V(uint64_t{0x70}), V(uint64_t{0x11}), V(uint64_t{0x80}), V(std::string("/in")),
+           V(uint64_t{10})});
+  w.event(0, "robotperf:run_begin", t0 + 9, kRunPid, 1,
+          {V(std::string("t1")), V(std::string("intra")), V(uint64_t{4}), V(uint64_t{1}),
+           V(kPeriod), V(uint64_t{1}), V(50.0)});
+
+  for (uint64_t k = 0; k < 4; ++k) {
+    const int64_t id = id_of(k);
+    const uint64_t sent = sent_of(k);
+    // Stream 0: the Playback thread; stream 1: the executor thread (another CPU).
+    w.event(0, "robotperf:input", sent, kRunPid, 1,
+            {V(play), V(id), V(k), V(static_cast<int64_t>(kStart + k * kPeriod))});
+    w.event(0, "robotperf:publish", sent + 10, kRunPid, 1,
+            {V(play), V(std::string("/in")), V(id), V(uint64_t{100})});
+    w.event(0, "ros2:rmw_publish", sent + 20, kRunPid, 1,
+            {V(uint64_t{0x80}), V(uint64_t{0x999}), V(static_cast<int64_t>(sent))});
+    w.event(1, "ros2:rmw_take", sent + 520, kRunPid, 2,
+            {V(uint64_t{0x30}), V(uint64_t{0x999}), V(static_cast<int64_t>(sent)), V(int64_t{1})});
+    w.event(1, "ros2:callback_start", sent + 990, kRunPid, 2, {V(uint64_t{0x40}), V(int64_t{1})});
+    w.event(1, "robotperf:callback_entry", sent + 1000, kRunPid, 2,
+            {V(relay), V(std::string("/in")), V(id), V(uint64_t{100})});
+    w.event(1, "robotperf:kernel_init", sent + 2000, kRunPid, 2,
+            {V(relay), V(std::string("k")), V(id), V(uint64_t{100})});
+    w.event(1, "robotperf:kernel_fini", sent + 3000 + 100 * k, kRunPid, 2,
+            {V(relay), V(std::string("k")), V(id), V(uint64_t{100})});
+    if (kLatency[k] >= 0) {
+      w.event(1, "robotperf:publish", sent + 5000, kRunPid, 2,
+              {V(relay), V(std::string("/out")), V(id), V(uint64_t{100})});
+    }
+    // The callback ends on the other CPU (the thread migrated): 6000 + k ns after its start.
+    w.event(0, "ros2:callback_end", sent + 990 + 6000 + k, kRunPid, 2, {V(uint64_t{0x40})});
+    if (kLatency[k] >= 0) {
+      const uint64_t out = sent + static_cast<uint64_t>(kLatency[k]);
+      w.event(1, "robotperf:callback_entry", out - 5, kRunPid, 3,
+              {V(mon), V(std::string("/out")), V(id), V(uint64_t{100})});
+      w.event(1, "robotperf:output", out, kRunPid, 3,
+              {V(mon), V(std::string("/out")), V(id), V(uint64_t{100})});
+    }
+    // A timer callback of 250 ns.
+    w.event(0, "ros2:callback_start", sent + 8'000'000, kRunPid, 4,
+            {V(uint64_t{0x60}), V(int64_t{0})});
+    w.event(0, "ros2:callback_end", sent + 8'000'250, kRunPid, 4, {V(uint64_t{0x60})});
+    if (k == 1) {
+      w.end_packet(0, 0);
+      w.end_packet(1, discarded_in_second_packet);
+    }
+  }
+  // Another run's process receiving one of our IDs: not ours, not counted.
+  w.event(1, "robotperf:output", sent_of(3) + 9'000'000, 99, 99,
+          {V(mon), V(std::string("/out")), V(id_of(3)), V(uint64_t{100})});
+  w.event(0, "robotperf:run_end", sent_of(3) + 9'500'000, kRunPid, 1, {V(uint64_t{4})});
+  w.finish();
+}
+
+TEST(CtfReader, DecodesCompactAndExtendedHeadersWithClockWrap) {
+  TempDir dir("headers");
+  CtfWriter w(dir.path(), CtfWriter::Header::kCompact, true);
+  w.define("a:b", {{"v", testing::FieldKind::kU64}, {"s", testing::FieldKind::kString}});
+  // Low 27 bits wrap between the 2nd and 3rd event; a gap of more than 2^27 ns
+  // forces an extended header; the last one has the largest possible compact delta.
+  const uint64_t ts[] = {(1ull << 27) - 10, (1ull << 27) - 1, (1ull << 27) + 5, (1ull << 40),
+                         (1ull << 40) + (1ull << 27) - 1};
+  for (uint64_t i = 0; i < 5; ++i)
+    w.event(0, "a:b", ts[i], 7, 8, {V(i * 3), V(std::string("x") + std::to_string(i))});
+  w.finish();
+
+  ctf::Trace trace(dir.path());
+  EXPECT_EQ(trace.metadata().env_value("tracer_name"), "lttng-ust");
+  ASSERT_EQ(trace.stream_count(), 1u);
+  const int vpid = trace.stream_context_index(0, "vpid");
+  const int procname = trace.stream_context_index(0, "procname");
+  ASSERT_GE(vpid, 0);
+  std::vector<uint64_t> seen;
+  const auto stats = trace.read_stream(0, [&](const ctf::Event& e) {
+    EXPECT_EQ(e.cls->name, "a:b");
+    EXPECT_EQ(e.fields[0].u, seen.size() * 3);
+    EXPECT_EQ(e.fields[1].s, "x" + std::to_string(seen.size()));
+    EXPECT_EQ(e.stream_context[static_cast<std::size_t>(vpid)].as_int(), 7);
+    EXPECT_EQ(e.stream_context[static_cast<std::size_t>(procname)].s, "robotperf");
+    seen.push_back(e.timestamp);
+  });
+  EXPECT_EQ(stats.events, 5u);
+  EXPECT_EQ(stats.packets, 1u);
+  EXPECT_EQ(seen, std::vector<uint64_t>(std::begin(ts), std::end(ts)));
+}
+
+TEST(Analyzer, HandBuiltTraceGivesExactLatencies) {
+  for (auto header : {CtfWriter::Header::kCompact, CtfWriter::Header::kLarge}) {
+    TempDir dir(header == CtfWriter::Header::kCompact ? "exact-compact" : "exact-large");
+    CtfWriter w(dir.path() / "ust" / "uid" / "0" / "64-bit", header,
+                header == CtfWriter::Header::kLarge, 2);
+    write_run(w);
+    const TraceAnalysis a = analyze_trace(dir.path());
+
+    ASSERT_TRUE(a.run.has_value());
+    EXPECT_EQ(a.run->benchmark, "t1");
+    EXPECT_EQ(a.run->pid, kRunPid);
+    EXPECT_DOUBLE_EQ(a.run->max_loss_percent, 50.0);
+    EXPECT_EQ(a.discarded_events, 0u);
+    EXPECT_EQ(a.sent, 4u);
+    EXPECT_EQ(a.measured, 3u);
+    EXPECT_EQ(a.matched, 2u);
+    EXPECT_EQ(a.lost, 1u);
+    EXPECT_EQ(a.duplicates, 0u) << "the other process's reception must not count";
+    EXPECT_EQ(a.unknown, 0u);
+    // Measured and matched: frames 1 (7 ms) and 3 (3 ms).
+    EXPECT_EQ(a.latency_from_sent.count, 2u);
+    EXPECT_DOUBLE_EQ(a.latency_from_sent.min, 3'000'000.0);
+    EXPECT_DOUBLE_EQ(a.latency_from_sent.max, 7'000'000.0);
+    EXPECT_DOUBLE_EQ(a.latency_from_scheduled.min, 3'000'000.0 + kLateness);
+    EXPECT_DOUBLE_EQ(a.latency_from_scheduled.max, 7'000'000.0 + kLateness);
+    EXPECT_DOUBLE_EQ(a.send_lateness.mean, static_cast<double>(kLateness));
+    // Receptions at sent(1)+7 ms and sent(3)+3 ms: 16 ms apart, 2 of them.
+    EXPECT_NEAR(a.throughput_hz, 1.0 / 0.016, 1e-9);
+    EXPECT_TRUE(a.valid) << (a.invalid_reasons.empty() ? "" : a.invalid_reasons[0]);
+
+    auto hop = [&](const std::string& label) -> const Hop* {
+      for (const auto& h : a.hops) {
+        if (h.label() == label) return &h;
+      }
+      ADD_FAILURE() << "no hop " << label;
+      return nullptr;
+    };
+    if (const Hop* h = hop("/in: robotperf_playback -> relay")) {
+      EXPECT_EQ(h->duration.count, 3u);
+      EXPECT_DOUBLE_EQ(h->duration.min, 990.0);
+      EXPECT_DOUBLE_EQ(h->duration.max, 990.0);
+    }
+    if (const Hop* h = hop("relay: k")) {
+      EXPECT_EQ(h->duration.count, 3u);
+      EXPECT_DOUBLE_EQ(h->duration.mean, 1200.0);  // 1100, 1200, 1300
+    }
+    if (const Hop* h = hop("relay: /in -> /out")) {
+      EXPECT_EQ(h->duration.count, 2u);  // frame 2 was never published
+      EXPECT_DOUBLE_EQ(h->duration.mean, 4000.0);
+    }
+    if (const Hop* h = hop("/out: relay -> robotperf_monitor")) {
+      EXPECT_DOUBLE_EQ(h->duration.min, 3'000'000.0 - 5000 - 5);
+      EXPECT_DOUBLE_EQ(h->duration.max, 7'000'000.0 - 5000 - 5);
+    }
+    ASSERT_EQ(a.hops.size(), 4u);
+    EXPECT_EQ(a.hops.front().kind, "transport") << "hops are ordered along the path";
+
+    ASSERT_EQ(a.callbacks.size(), 2u);
+    for (const auto& cb : a.callbacks) {
+      EXPECT_EQ(cb.node, "relay");
+      EXPECT_EQ(cb.duration.count, 4u);
+      if (cb.source == "/in") {
+        EXPECT_DOUBLE_EQ(cb.duration.min, 6000.0);
+        EXPECT_DOUBLE_EQ(cb.duration.max, 6003.0);
+      } else {
+        EXPECT_EQ(cb.source, "timer 100 ms");
+        EXPECT_DOUBLE_EQ(cb.duration.mean, 250.0);
+      }
+    }
+    ASSERT_EQ(a.topics.size(), 1u);
+    EXPECT_EQ(a.topics[0].topic, "/in");
+    EXPECT_EQ(a.topics[0].publisher, "robotperf_playback");
+    EXPECT_EQ(a.topics[0].subscriber, "relay");
+    EXPECT_DOUBLE_EQ(a.topics[0].latency.mean, 500.0);
+  }
+}
+
+TEST(Analyzer, DiscardedEventsAreReportedAndInvalidate) {
+  TempDir dir("discarded");
+  CtfWriter w(dir.path(), CtfWriter::Header::kLarge, false, 2);
+  write_run(w, 7);
+  const TraceAnalysis a = analyze_trace(dir.path());
+  EXPECT_EQ(a.discarded_events, 7u);
+  EXPECT_FALSE(a.valid);
+  ASSERT_FALSE(a.invalid_reasons.empty());
+  EXPECT_NE(a.invalid_reasons[0].find("discarded 7 events"), std::string::npos)
+      << a.invalid_reasons[0];
+  EXPECT_EQ(to_json(a)["trace"]["discarded_events"], 7);
+}
+
+TEST(Analyzer, TraceWithoutRobotperfRunStillGivesCallbacksAndTopics) {
+  TempDir dir("ros2-only");
+  CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false);
+  testing::define_robotperf_events(w);
+  w.event(0, "ros2:rcl_node_init", 100, 7, 7,
+          {V(uint64_t{1}), V(uint64_t{0}), V(std::string("talker")), V(std::string("/demo"))});
+  w.event(0, "ros2:rcl_timer_init", 110, 7, 7, {V(uint64_t{2}), V(int64_t{500'000'000})});
+  w.event(0, "ros2:rclcpp_timer_callback_added", 120, 7, 7, {V(uint64_t{2}), V(uint64_t{3})});
+  w.event(0, "ros2:rclcpp_timer_link_node", 130, 7, 7, {V(uint64_t{2}), V(uint64_t{1})});
+  w.event(0, "ros2:callback_start", 1000, 7, 7, {V(uint64_t{3}), V(int64_t{0})});
+  w.event(0, "ros2:callback_end", 1700, 7, 7, {V(uint64_t{3})});
+  w.finish();
+  const TraceAnalysis a = analyze_trace(dir.path());
+  EXPECT_FALSE(a.run.has_value());
+  EXPECT_TRUE(a.valid);
+  ASSERT_EQ(a.callbacks.size(), 1u);
+  EXPECT_EQ(a.callbacks[0].node, "/demo/talker");
+  EXPECT_EQ(a.callbacks[0].source, "timer 500 ms");
+  EXPECT_DOUBLE_EQ(a.callbacks[0].duration.mean, 700.0);
+  EXPECT_NE(analysis_summary(a).find("no robotperf run"), std::string::npos);
+}
+
+TEST(CtfReader, CorruptTracesGiveClearErrors) {
+  TempDir dir("corrupt");
+  CtfWriter w(dir.path(), CtfWriter::Header::kLarge, false);
+  testing::define_robotperf_events(w);
+  w.event(0, "robotperf:run_end", 1000, 1, 1, {V(uint64_t{4})});
+  w.finish();
+  const fs::path stream = dir.path() / "channel0_0";
+  // Cut the stream inside its packet: the packet no longer fits the file.
+  fs::resize_file(stream, 100);
+  EXPECT_THROW(analyze_trace(dir.path()), ctf::CtfError);
+  // Not a CTF stream at all.
+  std::ofstream(stream, std::ios::binary) << std::string(200, 'x');
+  try {
+    analyze_trace(dir.path());
+    FAIL() << "garbage stream accepted";
+  } catch (const ctf::CtfError& e) {
+    EXPECT_NE(std::string(e.what()).find("magic"), std::string::npos) << e.what();
+  }
+  // Broken metadata names the line.
+  std::ofstream(dir.path() / "metadata")
+      << "/* CTF 1.8 */\ntrace {\n major = 1;\n packet.header := struct { nonsense_t x; };\n};\n";
+  try {
+    analyze_trace(dir.path());
+    FAIL() << "broken metadata accepted";
+  } catch (const ctf::CtfError& e) {
+    EXPECT_NE(std::string(e.what()).find("line 4"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(analyze_trace(dir.path() / "nothing-here"), ctf::CtfError);
+  const TempDir empty("empty");
+  fs::create_directories(empty.path());
+  EXPECT_THROW(analyze_trace(empty.path()), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace robotperf::tracing

@@ -1,0 +1,263 @@
+// Grey-box runs recorded with a real LTTng session daemon (started here when
+// none runs) and analysed from the CTF trace.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "robotperf/harness/run.hpp"
+#include "robotperf/tracing/session.hpp"
+
+namespace robotperf::harness {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kMs = 1e6;
+
+class GreyRun : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    std::string why;
+    ASSERT_TRUE(tracing::lttng_available(&why)) << why;
+    tracing::ensure_session_daemon();
+  }
+
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("robotperf-grey-" + std::to_string(getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  BenchmarkSpec benchmark(const std::string& id) {
+    return find_benchmark(fs::path(ROBOTPERF_SOURCE_DIR) / "benchmarks", id);
+  }
+
+  // A relay between the camera stream and the monitor (the dataset has 68 frames).
+  BenchmarkSpec relay_package() {
+    const fs::path pkg = dir_ / "pkg" / "test" / "t1_relay";
+    fs::create_directories(pkg);
+    std::ofstream(pkg / "benchmark.yaml")
+        << "id: t1\nname: t1_relay\nshort: test\ndescription: test\nresults: []\n";
+    std::ofstream(pkg / "graph.yaml")
+        << "dataset: perception/image\nrate_hz: 100\nwarmup: 0\ndrain_s: 2.0\n"
+           "validity: {min_samples: 5, max_loss_percent: 0.0}\n"
+           "inputs:\n  - {topic: /in, type: sensor_msgs/msg/Image, stream: image}\n"
+           "output: {topic: /out, type: sensor_msgs/msg/Image}\n"
+           "nodes:\n  - name: relay\n    kernel: util/relay\n    parameters: {}\n"
+           "    topics: {input: /in, output: /out}\n";
+    return load_benchmark(pkg);
+  }
+
+  RunOptions grey(RunOptions o, const std::string& name) {
+    o.mode = RunMode::kGrey;
+    o.trace_dir = dir_ / name;
+    return o;
+  }
+
+  fs::path dir_;
+};
+
+std::string reasons(const RunResult& r) {
+  std::string out;
+  for (const auto& s : r.invalid_reasons) out += s + "; ";
+  return out;
+}
+
+// babeltrace2's event count for the trace: the reference CTF reader.
+std::size_t babeltrace_events(const fs::path& trace) {
+  const std::string cmd = "babeltrace2 '" + trace.string() + "' 2>/dev/null | wc -l";
+  FILE* p = popen(cmd.c_str(), "r");
+  if (p == nullptr) return 0;
+  std::size_t n = 0;
+  if (std::fscanf(p, "%zu", &n) != 1) n = 0;
+  pclose(p);
+  return n;
+}
+
+TEST_F(GreyRun, A1AgreesWithBlackBoxAndExplainsWhereTheTimeGoes) {
+  const BenchmarkSpec spec = benchmark("a1");
+  RunOptions o;
+  // Below the rate at which a sanitized Debug build on a busy 2-core machine
+  // starts queueing frames (queueing makes two runs differ, traced or not).
+  o.rate_hz = 15;
+  const RunResult black = run_benchmark(spec, o);
+  const RunResult g = run_benchmark(spec, grey(o, "a1.trace"));
+  ASSERT_TRUE(black.valid) << reasons(black);
+  ASSERT_TRUE(g.grey.has_value());
+  ASSERT_TRUE(g.valid) << reasons(g);
+  EXPECT_EQ(g.grey->discarded_events, 0u);
+  EXPECT_EQ(g.sent, black.sent);
+  EXPECT_EQ(g.matched, g.measured);
+  EXPECT_EQ(g.duplicates + g.unknown, 0u);
+  // Same configuration, same statistics: medians within 30 % or 2 ms.
+  const double tolerance = std::max(0.3 * black.latency_from_scheduled.p50, 2 * kMs);
+  EXPECT_NEAR(g.latency_from_scheduled.p50, black.latency_from_scheduled.p50, tolerance);
+  EXPECT_GE(g.latency_from_sent.min, 0.0);
+
+  // The breakdown names both kernels, the transport hops between the nodes,
+  // and the callbacks of both nodes; every hop is shorter than end to end.
+  // A node hop is split by the input whose callback completed the image pair.
+  std::set<std::string> labels;
+  for (const auto& h : g.grey->hops) {
+    labels.insert(h.label());
+    if (h.kind != "node") {
+      EXPECT_EQ(h.duration.count, g.measured) << h.label();
+    }
+    EXPECT_LE(h.duration.p50, g.latency_from_sent.max) << h.label();
+  }
+  EXPECT_TRUE(labels.contains("rectify: image_proc/rectify"));
+  EXPECT_TRUE(labels.contains("resize: image_proc/resize"));
+  EXPECT_TRUE(labels.contains("/rectify/image_rect: rectify -> resize"));
+  EXPECT_TRUE(labels.contains("/resize/image: resize -> robotperf_monitor"));
+  std::set<std::string> callback_nodes;
+  for (const auto& c : g.grey->callbacks) callback_nodes.insert(c.node);
+  EXPECT_TRUE(callback_nodes.contains("rectify"));
+  EXPECT_TRUE(callback_nodes.contains("resize"));
+  EXPECT_FALSE(g.grey->topics.empty());
+
+  // Our reader sees every event babeltrace2 sees.
+  EXPECT_EQ(g.grey->events, babeltrace_events(g.trace_dir));
+}
+
+TEST_F(GreyRun, TinySubbuffersUnderLoadAreReportedAndInvalid) {
+  RunOptions o;
+  o.count = 3000;
+  o.rate_hz = 5000;
+  o.trace_subbuf_bytes = 4096;
+  const RunResult r = run_benchmark(relay_package(), grey(o, "tiny.trace"));
+  ASSERT_TRUE(r.grey.has_value());
+  EXPECT_GT(r.grey->discarded_events, 0u);
+  EXPECT_FALSE(r.valid);
+  ASSERT_FALSE(r.invalid_reasons.empty());
+  EXPECT_NE(reasons(r).find("discarded " + std::to_string(r.grey->discarded_events) + " events"),
+            std::string::npos)
+      << reasons(r);
+  EXPECT_EQ(r.trace_subbuf_bytes, 4096u);
+}
+
+TEST_F(GreyRun, LoopedDatasetHasNoKeyCollisions) {
+  RunOptions o;
+  o.count = 250;  // the 68-frame dataset loops three times
+  o.rate_hz = 100;
+  const RunResult r = run_benchmark(relay_package(), grey(o, "loop.trace"));
+  ASSERT_TRUE(r.grey.has_value());
+  EXPECT_EQ(r.grey->discarded_events, 0u);
+  EXPECT_EQ(r.sent, 250u);
+  EXPECT_EQ(r.matched, r.measured);
+  EXPECT_EQ(r.duplicates, 0u);
+  EXPECT_EQ(r.unknown, 0u);
+  std::set<int64_t> ids;
+  for (const auto& m : r.grey->messages) ids.insert(m.id);
+  EXPECT_EQ(ids.size(), 250u) << "every frame of the looped dataset has its own key";
+  EXPECT_TRUE(r.valid) << reasons(r);
+}
+
+TEST_F(GreyRun, PerNodeProcessesAreTracedAsPartOfTheRun) {
+  RunOptions o;
+  o.count = 45;
+  o.rate_hz = 15;
+  o.rmw = "fastdds";
+  o.processes = ProcessLayout::kPerNode;
+  o.domain_id = 150 + getpid() % 50;
+  o.node_command = {ROBOTPERF_EXECUTABLE, "node"};
+  const RunResult r = run_benchmark(benchmark("a1"), grey(o, "per-node.trace"));
+  ASSERT_TRUE(r.grey.has_value());
+  EXPECT_TRUE(r.valid) << reasons(r);
+  ASSERT_TRUE(r.grey->run.has_value());
+  EXPECT_EQ(r.grey->run->processes.size(), 3u) << "runner + rectify + resize";
+  std::set<std::string> labels;
+  for (const auto& h : r.grey->hops) labels.insert(h.label());
+  EXPECT_TRUE(labels.contains("rectify: image_proc/rectify"));
+  EXPECT_TRUE(labels.contains("/rectify/image_rect: rectify -> resize"));
+  // Across processes, rmw_publish and rmw_take meet on Fast DDS's source timestamp.
+  bool cross_process_topic = false;
+  for (const auto& t : r.grey->topics)
+    cross_process_topic |= t.topic == "/rectify/image_rect" && t.latency.count > 0;
+  EXPECT_TRUE(cross_process_topic);
+}
+
+struct Outcome {
+  int exit_code = -1;
+  std::string out;
+};
+
+Outcome robotperf(const std::string& args, const std::string& env = "") {
+  const std::string cmd = env + " " + std::string(ROBOTPERF_EXECUTABLE) + " " + args + " 2>&1";
+  Outcome o;
+  FILE* p = popen(cmd.c_str(), "r");
+  if (p == nullptr) return o;
+  char buf[4096];
+  while (std::size_t n = fread(buf, 1, sizeof buf, p)) o.out.append(buf, n);
+  const int status = pclose(p);
+  o.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return o;
+}
+
+TEST_F(GreyRun, CommandLineRunsGreyAndAnalysesTheTrace) {
+  const fs::path out = dir_ / "results";
+  const Outcome run = robotperf("run a2 --mode grey --count 40 --quiet --output " + out.string());
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  EXPECT_NE(run.out.find("per-hop breakdown"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("kernel  rectify: image_proc/rectify"), std::string::npos) << run.out;
+  fs::path json, trace;
+  for (const auto& e : fs::directory_iterator(out)) {
+    if (e.path().extension() == ".json") json = e.path();
+    if (e.path().extension() == ".trace") trace = e.path();
+  }
+  ASSERT_FALSE(json.empty());
+  ASSERT_EQ(trace.stem(), json.stem()) << "the trace sits beside its results file";
+  std::ifstream in(json);
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["type"], "grey");
+  EXPECT_EQ(j["counts"]["matched"], 35);
+  EXPECT_EQ(j["grey"]["trace"]["discarded_events"], 0);
+  EXPECT_EQ(j["grey"]["trace"]["path"], trace.string());
+  EXPECT_FALSE(j["grey"]["hops"].empty());
+
+  const fs::path analysis = dir_ / "analysis.json";
+  const Outcome again =
+      robotperf("trace analyze " + trace.string() + " --json " + analysis.string());
+  ASSERT_EQ(again.exit_code, 0) << again.out;
+  std::ifstream ain(analysis);
+  const auto a = nlohmann::json::parse(ain);
+  EXPECT_EQ(a["run"]["matched"], 35);
+  EXPECT_EQ(a["run"]["latency_ms"]["from_scheduled"]["p50"],
+            j["latency_ms"]["from_scheduled"]["p50"]);
+
+  const Outcome missing = robotperf("trace analyze " + (dir_ / "no-such-trace").string());
+  EXPECT_EQ(missing.exit_code, 2) << missing.out;
+  EXPECT_EQ(std::count(missing.out.begin(), missing.out.end(), '\n'), 1) << missing.out;
+}
+
+TEST_F(GreyRun, MissingLttngIsOneLineSayingHowToInstallIt) {
+  const fs::path out = dir_ / "results";
+  const Outcome o =
+      robotperf("run a2 --mode grey --count 10 --output " + out.string(), "PATH=/nonexistent");
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << o.out;
+  EXPECT_NE(o.out.find("apt-get install lttng-tools"), std::string::npos) << o.out;
+  const Outcome black = robotperf("run a2 --count 10 --warmup 0 --quiet --output " + out.string(),
+                                  "PATH=/nonexistent");
+  EXPECT_NE(black.exit_code, 2) << "black-box runs do not need LTTng: " << black.out;
+}
+
+TEST_F(GreyRun, BlackBoxRunsNeedNoTracing) {
+  RunOptions o;
+  o.count = 20;
+  const RunResult r = run_benchmark(relay_package(), o);
+  EXPECT_FALSE(r.grey.has_value());
+  EXPECT_TRUE(r.trace_dir.empty());
+  EXPECT_TRUE(r.valid) << reasons(r);
+}
+
+}  // namespace
+}  // namespace robotperf::harness
