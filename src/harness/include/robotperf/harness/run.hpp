@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "robotperf/harness/benchmark_spec.hpp"
+#include "robotperf/harness/dataset.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
 
 namespace robotperf::harness {
@@ -27,6 +28,12 @@ struct RunOptions {
   // For per-node runs: the robotperf executable and the arguments that make it
   // run one node ("node" subcommand); the runner appends its own.
   std::vector<std::string> node_command;
+  // Replay this bag's topics instead of the benchmark's built-in dataset.
+  std::optional<BagSelection> bag;
+  // Bags: send frames on the bag's recorded timeline, `rate_scale` times as
+  // fast, instead of at a fixed rate.
+  bool bag_timeline = false;
+  double rate_scale = 1.0;
   // Called from the playback thread after each send.
   std::function<void(std::size_t sent, std::size_t total, std::size_t received)> progress;
 };
