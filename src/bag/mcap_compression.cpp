@@ -1,5 +1,5 @@
+#include <libdeflate.h>
 #include <lz4frame.h>
-#include <zlib.h>
 #include <zstd.h>
 
 #include "mcap_format.hpp"
@@ -7,18 +7,10 @@
 namespace robotperf::bag::mcap {
 
 uint32_t crc32(std::span<const uint8_t> bytes, uint32_t crc) {
-  // zlib's crc32 is the CRC-32 (ISO-HDLC) that MCAP specifies; feed it in
-  // pieces below its 32-bit length limit.
-  const uint8_t* p = bytes.data();
-  std::size_t n = bytes.size();
-  uLong c = crc;
-  while (n > 0) {
-    const auto piece = static_cast<uInt>(std::min<std::size_t>(n, 1u << 30));
-    c = ::crc32(c, p, piece);
-    p += piece;
-    n -= piece;
-  }
-  return static_cast<uint32_t>(c);
+  // The CRC-32 (ISO-HDLC) that MCAP specifies. libdeflate's uses carry-less
+  // multiplication where the CPU has it: several times zlib's speed, which
+  // matters as every chunk read is checked.
+  return libdeflate_crc32(crc, bytes.data(), bytes.size());
 }
 
 void decompress(const std::string& compression, std::span<const uint8_t> in,
