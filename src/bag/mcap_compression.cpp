@@ -2,6 +2,8 @@
 #include <lz4frame.h>
 #include <zstd.h>
 
+#include <memory>
+
 #include "mcap_format.hpp"
 
 namespace robotperf::bag::mcap {
@@ -32,7 +34,12 @@ void decompress(const std::string& compression, std::span<const uint8_t> in,
   }
   out.resize(static_cast<std::size_t>(uncompressed_size));
   if (compression == "zstd") {
-    const std::size_t n = ZSTD_decompress(out.data(), out.size(), in.data(), in.size());
+    // One context per thread, reused: a fresh one per chunk costs an allocation and its setup.
+    thread_local const std::unique_ptr<ZSTD_DCtx, decltype(&ZSTD_freeDCtx)> context(
+        ZSTD_createDCtx(), &ZSTD_freeDCtx);
+    if (!context) throw FormatError("cannot create a zstd decompression context");
+    const std::size_t n =
+        ZSTD_decompressDCtx(context.get(), out.data(), out.size(), in.data(), in.size());
     if (ZSTD_isError(n))
       throw FormatError(std::string("zstd chunk does not decompress: ") + ZSTD_getErrorName(n));
     if (n != uncompressed_size) {
