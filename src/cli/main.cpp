@@ -137,6 +137,8 @@ int run(const fs::path& root, const RunArgs& a) {
   const auto spec = harness::find_benchmark(root, a.id);
   harness::RunOptions o;
   if (a.dataset) o.bag = bag_selection(a);
+  if (a.rate_scale != 1.0 && a.rate != "bag")
+    throw std::invalid_argument("--rate-scale only applies with --rate bag");
   if (a.rate == "bag") {
     o.bag_timeline = true;
     o.rate_scale = a.rate_scale;

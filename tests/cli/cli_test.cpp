@@ -234,13 +234,13 @@ TEST_F(Cli, RunReplaysABagOnItsOwnTimeline) {
 TEST_F(Cli, BadDatasetOptionsAreOneClearLine) {
   const std::string bag = (out_ / "camera").string();
   ASSERT_EQ(robotperf("dataset generate perception/image --out " + bag).exit_code, 0);
-  for (const std::string& args : std::vector<std::string>{
-           "run a1 --dataset " + bag + " --remap /nope:=/camera/image_raw",
-           "run a1 --dataset " + bag + " --remap nonsense",
-           "run a1 --dataset " + bag + " --window 5:x",
-           "run a1 --dataset " + bag + " --window 100:200",
-           "run a1 --rate bag",
-           "run a1 --dataset " + (out_ / "missing").string()}) {
+  for (const std::string& args :
+       std::vector<std::string>{"run a1 --dataset " + bag + " --remap /nope:=/camera/image_raw",
+                                "run a1 --dataset " + bag + " --remap nonsense",
+                                "run a1 --dataset " + bag + " --window 5:x",
+                                "run a1 --dataset " + bag + " --window 100:200",
+                                "run a1 --rate bag", "run a1 --dataset " + bag + " --rate-scale 2",
+                                "run a1 --dataset " + (out_ / "missing").string()}) {
     const Outcome o = robotperf(args);
     EXPECT_EQ(o.exit_code, 2) << args << ": " << o.out;
     EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << args << ": " << o.out;
