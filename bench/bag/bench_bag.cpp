@@ -31,7 +31,7 @@ using namespace robotperf;
 namespace {
 
 constexpr double kTarget = 0.5;
-constexpr int kRepetitions = 3;
+constexpr int kRepetitions = 5;
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

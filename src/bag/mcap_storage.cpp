@@ -396,20 +396,24 @@ class McapReader final : public StorageReader {
     const std::string compression = r.string();
     const auto compressed = r.bytes64();
     std::span<const uint8_t> records = compressed;
+    const bool check = options_.verify_crc && uncompressed_crc != 0;
+    uint32_t actual_crc = 0;
     try {
       if (compression.empty()) {
         if (compressed.size() != uncompressed_size) {
           throw FormatError("uncompressed chunk holds " + std::to_string(compressed.size()) +
                             " bytes but declares " + std::to_string(uncompressed_size));
         }
+        if (check) actual_crc = mcap::crc32(records);
       } else {
-        mcap::decompress(compression, compressed, uncompressed_size, plain);
+        mcap::decompress(compression, compressed, uncompressed_size, plain,
+                         check ? &actual_crc : nullptr);
         records = plain;
       }
     } catch (const FormatError& e) {
       fail("chunk at offset " + std::to_string(offset) + ": " + e.what());
     }
-    if (options_.verify_crc && uncompressed_crc != 0 && mcap::crc32(records) != uncompressed_crc)
+    if (check && actual_crc != uncompressed_crc)
       fail("chunk at offset " + std::to_string(offset) + ": CRC mismatch (file corrupt)");
     return records;
   }
