@@ -147,9 +147,10 @@ class Builder {
 uint32_t crc32(std::span<const uint8_t> bytes, uint32_t crc = 0);
 
 // Decompresses a chunk's records; throws FormatError for an unknown
-// compression or corrupt data.
+// compression or corrupt data. With `crc`, also returns the CRC-32 of the
+// output there, computed piece by piece while each piece is still in cache.
 void decompress(const std::string& compression, std::span<const uint8_t> in,
-                uint64_t uncompressed_size, std::vector<uint8_t>& out);
+                uint64_t uncompressed_size, std::vector<uint8_t>& out, uint32_t* crc = nullptr);
 // Compresses `in` with "zstd" or "lz4" (frame format).
 void compress(const std::string& compression, std::span<const uint8_t> in,
               std::vector<uint8_t>& out);

@@ -2,6 +2,8 @@
 // topic (message_encoding "cdr", QoS in the channel metadata), one "ros2msg"
 // schema per type, messages in optionally compressed chunks.
 #include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -9,6 +11,8 @@
 #include <cstdio>
 #include <cstring>
 #include <map>
+#include <memory>
+#include <span>
 #include <tuple>
 
 #include "mcap_format.hpp"
@@ -22,44 +26,58 @@ namespace fs = std::filesystem;
 using mcap::Cursor;
 using mcap::FormatError;
 
+// The file, mapped read-only: chunks are parsed (and uncompressed messages
+// copied out) straight from the page cache, with no read() copy in between.
 class File {
  public:
   explicit File(const fs::path& path) : path_(path) {
-    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) throw BagError(path.string() + ": cannot open: " + std::strerror(errno));
-    const off_t end = ::lseek(fd_, 0, SEEK_END);
-    if (end < 0) throw BagError(path.string() + ": cannot seek: " + std::strerror(errno));
-    size_ = static_cast<uint64_t>(end);
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw BagError(path.string() + ": cannot open: " + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(fd, &st) != 0) {
+      const int e = errno;
+      ::close(fd);
+      throw BagError(path.string() + ": cannot stat: " + std::strerror(e));
+    }
+    size_ = static_cast<uint64_t>(st.st_size);
+    if (size_ > 0) {
+      void* map = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd, 0);
+      if (map == MAP_FAILED) {
+        const int e = errno;
+        ::close(fd);
+        throw BagError(path.string() + ": cannot map: " + std::strerror(e));
+      }
+      ::madvise(map, size_, MADV_SEQUENTIAL);
+      data_ = static_cast<const uint8_t*>(map);
+    }
+    ::close(fd);
   }
-  ~File() { ::close(fd_); }
+  ~File() {
+    if (data_ != nullptr) ::munmap(const_cast<uint8_t*>(data_), size_);
+  }
   File(const File&) = delete;
   File& operator=(const File&) = delete;
 
   uint64_t size() const { return size_; }
 
-  void read(uint64_t offset, uint64_t n, std::vector<uint8_t>& out) const {
+  // `n` bytes at `offset`, valid as long as the File.
+  std::span<const uint8_t> view(uint64_t offset, uint64_t n) const {
     if (offset > size_ || n > size_ - offset) {
       throw BagError(path_.string() + ": truncated: " + std::to_string(n) + " bytes at offset " +
                      std::to_string(offset) + " lie past the end of the " + std::to_string(size_) +
                      "-byte file");
     }
-    out.resize(static_cast<std::size_t>(n));
-    std::size_t done = 0;
-    while (done < n) {
-      const ssize_t r =
-          ::pread(fd_, out.data() + done, out.size() - done, static_cast<off_t>(offset + done));
-      if (r < 0 && errno == EINTR) continue;
-      if (r <= 0) {
-        throw BagError(path_.string() + ": read error at offset " + std::to_string(offset + done) +
-                       ": " + (r < 0 ? std::strerror(errno) : "unexpected end of file"));
-      }
-      done += static_cast<std::size_t>(r);
-    }
+    return {data_ + offset, static_cast<std::size_t>(n)};
+  }
+
+  void read(uint64_t offset, uint64_t n, std::vector<uint8_t>& out) const {
+    const auto bytes = view(offset, n);
+    out.assign(bytes.begin(), bytes.end());
   }
 
  private:
   fs::path path_;
-  int fd_ = -1;
+  const uint8_t* data_ = nullptr;
   uint64_t size_ = 0;
 };
 
@@ -84,11 +102,15 @@ struct Unit {
   bool chunk = true;
 };
 
+// A message waiting in the merge heap. Its bytes stay in the buffer of the
+// chunk (or record) they came from until next() copies them out.
 struct Pending {
   uint64_t log_time;
   std::size_t unit;
   std::size_t position;
-  Message message;
+  std::size_t topic;
+  std::shared_ptr<std::vector<uint8_t>> buffer;
+  std::span<const uint8_t> data;
 };
 
 // Min-heap order: earliest log_time first; ties in file order.
@@ -122,7 +144,14 @@ class McapReader final : public StorageReader {
     }
     if (heap_.empty()) return false;
     std::pop_heap(heap_.begin(), heap_.end(), later);
-    out = std::move(heap_.back().message);
+    Pending& p = heap_.back();
+    out.topic = p.topic;
+    out.timestamp_ns = static_cast<int64_t>(p.log_time);
+    // Into the caller's buffer, whose capacity is reused from message to message.
+    out.data.assign(p.data.begin(), p.data.end());
+    // The last message of a buffer hands it back for the next unit: large
+    // buffers allocated afresh would cost a page fault per 4 KiB.
+    if (p.buffer.use_count() == 1 && spare_.size() < 2) spare_.push_back(std::move(p.buffer));
     heap_.pop_back();
     return true;
   }
@@ -357,23 +386,42 @@ class McapReader final : public StorageReader {
     }
   }
 
-  // Calls fn(opcode, cursor) for each record inside the chunk record `r`.
-  template <class Fn>
-  void for_each_chunk_record(uint64_t offset, Cursor& r, Fn&& fn) {
+  // The records of the chunk record `r`: in place when uncompressed, else
+  // decompressed into `plain`. Checks the CRC of the uncompressed records.
+  std::span<const uint8_t> chunk_records(uint64_t offset, Cursor& r, std::vector<uint8_t>& plain) {
     r.u64();  // message_start_time
     r.u64();  // message_end_time
     const uint64_t uncompressed_size = r.u64();
     const uint32_t uncompressed_crc = r.u32();
     const std::string compression = r.string();
     const auto compressed = r.bytes64();
+    std::span<const uint8_t> records = compressed;
+    const bool check = options_.verify_crc && uncompressed_crc != 0;
+    uint32_t actual_crc = 0;
     try {
-      mcap::decompress(compression, compressed, uncompressed_size, chunk_);
+      if (compression.empty()) {
+        if (compressed.size() != uncompressed_size) {
+          throw FormatError("uncompressed chunk holds " + std::to_string(compressed.size()) +
+                            " bytes but declares " + std::to_string(uncompressed_size));
+        }
+        if (check) actual_crc = mcap::crc32(records);
+      } else {
+        mcap::decompress(compression, compressed, uncompressed_size, plain,
+                         check ? &actual_crc : nullptr);
+        records = plain;
+      }
     } catch (const FormatError& e) {
       fail("chunk at offset " + std::to_string(offset) + ": " + e.what());
     }
-    if (options_.verify_crc && uncompressed_crc != 0 && mcap::crc32(chunk_) != uncompressed_crc)
+    if (check && actual_crc != uncompressed_crc)
       fail("chunk at offset " + std::to_string(offset) + ": CRC mismatch (file corrupt)");
-    Cursor records(chunk_);
+    return records;
+  }
+
+  // Calls fn(opcode, cursor) for each record inside the chunk record `r`.
+  template <class Fn>
+  void for_each_chunk_record(uint64_t offset, Cursor& r, Fn&& fn) {
+    Cursor records(chunk_records(offset, r, chunk_));
     while (!records.done()) {
       const uint8_t op = records.u8();
       Cursor c(records.bytes64());
@@ -381,13 +429,22 @@ class McapReader final : public StorageReader {
     }
   }
 
+  std::shared_ptr<std::vector<uint8_t>> take_buffer() {
+    if (spare_.empty()) return std::make_shared<std::vector<uint8_t>>();
+    auto b = std::move(spare_.back());
+    spare_.pop_back();
+    return b;
+  }
+
   void load_unit(std::size_t index) {
     const Unit& u = units_[index];
-    file_.read(u.offset, u.length, buffer_);
-    Cursor record(buffer_);
+    Cursor record(file_.view(u.offset, u.length));
     const uint8_t op = record.u8();
     Cursor r(record.bytes64());
     std::size_t position = 0;
+    // Messages point into the mapped file, or into `holder` when their chunk
+    // had to be decompressed.
+    std::shared_ptr<std::vector<uint8_t>> holder;
     auto take_message = [&](Cursor& c) {
       const uint16_t channel = c.u16();
       c.u32();  // sequence
@@ -400,19 +457,24 @@ class McapReader final : public StorageReader {
              std::to_string(channel) + ", which the file never defines");
       }
       if (!channel_selected_by_name(channel) || outside_window(log_time, log_time)) return;
-      Pending p{log_time, index, position++, {}};
-      p.message.topic = topic->second;
-      p.message.timestamp_ns = static_cast<int64_t>(log_time);
-      p.message.data.assign(data.begin(), data.end());
-      heap_.push_back(std::move(p));
+      heap_.push_back({log_time, index, position++, topic->second, holder, data});
       std::push_heap(heap_.begin(), heap_.end(), later);
     };
     if (op == mcap::kMessage) {
       take_message(r);
     } else if (op == mcap::kChunk) {
-      for_each_chunk_record(u.offset, r, [&](uint8_t inner, Cursor& c) {
+      std::shared_ptr<std::vector<uint8_t>> plain = take_buffer();
+      const auto records_span = chunk_records(u.offset, r, *plain);
+      if (!plain->empty() && records_span.data() == plain->data()) holder = plain;
+      Cursor records(records_span);
+      while (!records.done()) {
+        const uint8_t inner = records.u8();
+        Cursor c(records.bytes64());
         if (inner == mcap::kMessage) take_message(c);
-      });
+      }
+      // Unused, or no message pointed into it: back for the next chunk.
+      holder.reset();
+      if (plain.use_count() == 1 && spare_.size() < 2) spare_.push_back(std::move(plain));
     } else {
       fail("chunk index points to a record of opcode " + std::to_string(op) + " at offset " +
            std::to_string(u.offset) + ", not a chunk");
@@ -433,8 +495,9 @@ class McapReader final : public StorageReader {
   std::vector<Unit> units_;
   std::size_t next_unit_ = 0;
   std::vector<Pending> heap_;
-  std::vector<uint8_t> buffer_;  // the record being read
-  std::vector<uint8_t> chunk_;   // the decompressed records of a chunk
+  std::vector<uint8_t> buffer_;  // magic, footer and summary being read
+  std::vector<uint8_t> chunk_;   // the decompressed records of a chunk (scanning)
+  std::vector<std::shared_ptr<std::vector<uint8_t>>> spare_;  // buffers to reuse
 };
 
 class McapWriter final : public StorageWriter {

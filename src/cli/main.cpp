@@ -171,7 +171,11 @@ int describe_benchmark(const fs::path& root, const std::string& id) {
 
 struct RunArgs {
   std::string id;
-  std::optional<double> rate, duration, drain;
+  std::optional<std::string> rate;  // Hz, or "bag"
+  std::optional<double> duration, drain;
+  std::optional<std::string> dataset, window;
+  std::vector<std::string> remaps;
+  double rate_scale = 1.0;
   std::optional<std::size_t> count, warmup;
   std::string rmw = "intra";
   std::string processes = "single";
@@ -186,10 +190,56 @@ struct RunArgs {
   std::size_t trace_subbuf = 0;
 };
 
+// "--remap from:=to" and "--window START:END" (seconds, either may be empty).
+harness::BagSelection bag_selection(const RunArgs& a) {
+  harness::BagSelection bag;
+  bag.path = *a.dataset;
+  for (const auto& r : a.remaps) {
+    const auto sep = r.find(":=");
+    if (sep == std::string::npos || sep == 0 || sep + 2 == r.size())
+      throw std::invalid_argument("--remap " + r + ": expected <bag topic>:=<benchmark topic>");
+    bag.remaps[r.substr(0, sep)] = r.substr(sep + 2);
+  }
+  if (a.window) {
+    const auto sep = a.window->find(':');
+    auto seconds = [&](const std::string& text) -> std::optional<double> {
+      if (text.empty()) return std::nullopt;
+      std::size_t used = 0;
+      double v = 0;
+      try {
+        v = std::stod(text, &used);
+      } catch (const std::exception&) {
+      }
+      if (used != text.size() || !(v >= 0))
+        throw std::invalid_argument("--window " + *a.window + ": expected START:END in seconds");
+      return v;
+    };
+    if (sep == std::string::npos)
+      throw std::invalid_argument("--window " + *a.window + ": expected START:END in seconds");
+    bag.start_s = seconds(a.window->substr(0, sep));
+    bag.end_s = seconds(a.window->substr(sep + 1));
+  }
+  return bag;
+}
+
 int run(const fs::path& root, const RunArgs& a) {
   const auto spec = harness::find_benchmark(root, a.id);
   harness::RunOptions o;
-  o.rate_hz = a.rate;
+  if (a.dataset) o.bag = bag_selection(a);
+  if (a.rate_scale != 1.0 && a.rate != "bag")
+    throw std::invalid_argument("--rate-scale only applies with --rate bag");
+  if (a.rate == "bag") {
+    o.bag_timeline = true;
+    o.rate_scale = a.rate_scale;
+  } else if (a.rate) {
+    std::size_t used = 0;
+    try {
+      o.rate_hz = std::stod(*a.rate, &used);
+    } catch (const std::exception&) {
+    }
+    if (used == 0 || used != a.rate->size())
+      throw std::invalid_argument("--rate " + *a.rate + ": expected a rate in Hz or 'bag'");
+  }
   o.count = a.count;
   o.duration_s = a.duration;
   o.warmup = a.warmup;
@@ -297,7 +347,18 @@ int main(int argc, char** argv) {
   RunArgs ra;
   auto* run_cmd = app.add_subcommand("run", "run a benchmark and print its summary");
   run_cmd->add_option("id", ra.id, "benchmark id or name, e.g. a1")->required();
-  run_cmd->add_option("--rate", ra.rate, "input rate in Hz (default: the benchmark's)");
+  run_cmd->add_option("--rate", ra.rate,
+                      "input rate in Hz (default: the benchmark's), or 'bag': the bag's own "
+                      "timeline");
+  run_cmd->add_option("--rate-scale", ra.rate_scale, "with --rate bag: play this many times faster")
+      ->check(CLI::PositiveNumber);
+  auto* dataset_opt = run_cmd->add_option(
+      "--dataset", ra.dataset, "replay this rosbag2 bag (directory, .db3 or .mcap) as the input");
+  run_cmd
+      ->add_option("--remap", ra.remaps, "bag topic onto a benchmark input: from:=to (repeatable)")
+      ->needs(dataset_opt);
+  run_cmd->add_option("--window", ra.window, "only the bag's messages in START:END seconds")
+      ->needs(dataset_opt);
   auto* count_opt = run_cmd->add_option("--count", ra.count, "messages to send, warm-up included");
   run_cmd->add_option("--duration", ra.duration, "seconds to send for (count = rate x duration)")
       ->excludes(count_opt);

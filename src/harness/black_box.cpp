@@ -4,9 +4,11 @@
 #include <time.h>
 
 #include <cerrno>
+#include <cmath>
 #include <stdexcept>
 
 #include "robotperf/msgs/known_types.hpp"
+#include "robotperf/msgs/serialized_message.hpp"
 #include "robotperf/tracing/tracepoints.hpp"
 
 namespace robotperf::harness {
@@ -42,21 +44,76 @@ std::optional<uint64_t> MessageIds::id_of(int64_t stamp) const {
   return id;
 }
 
+std::vector<int64_t> timeline_schedule(const std::vector<int64_t>& frame_times_ns, double scale,
+                                       std::size_t count) {
+  const std::size_t n = frame_times_ns.size();
+  if (n < 2) throw BenchmarkError("following the recorded timeline needs at least 2 frames");
+  if (!(scale > 0) || !std::isfinite(scale))
+    throw std::invalid_argument("--rate-scale must be a positive number");
+  // Offsets from the first frame in integers: absolute times near 1.7e18 ns
+  // lose nanoseconds as doubles.
+  const int64_t first = frame_times_ns.front();
+  const double span = static_cast<double>(frame_times_ns.back() - first);
+  const double loop = span + span / static_cast<double>(n - 1);
+  std::vector<int64_t> schedule(count);
+  for (std::size_t k = 0; k < count; ++k) {
+    const double recorded =
+        static_cast<double>(k / n) * loop + static_cast<double>(frame_times_ns[k % n] - first);
+    schedule[k] = std::llround(recorded / scale);
+  }
+  return schedule;
+}
+
 Playback::Playback(graph::Context& context, const BenchmarkSpec& spec, const Dataset& dataset,
-                   MessageIds ids)
-    : node_(std::make_shared<graph::Node>(context, "robotperf_playback")), ids_(ids) {
+                   MessageIds ids, bool publish_serialized, std::vector<int64_t> schedule_ns)
+    : node_(std::make_shared<graph::Node>(context, "robotperf_playback")),
+      ids_(ids),
+      schedule_ns_(std::move(schedule_ns)) {
   for (const auto& input : spec.inputs) {
     const DatasetStream& stream = dataset.stream(input.stream);
-    const auto& ts = type_support_by_name(input.type, input.topic);
-    if (stream.type != &ts) {
+    if (stream.type->ros_type != input.type) {
       throw BenchmarkError("input " + input.topic + " is declared " + input.type +
                            " but dataset stream '" + input.stream + "' holds " +
                            stream.type->ros_type);
     }
     if (stream.messages.empty())
       throw BenchmarkError("dataset stream '" + input.stream + "' is empty");
-    inputs_.push_back({&stream, node_->create_generic_publisher(input.topic, ts, input.qos)});
+    Input in{stream.type, stream.messages, msgs::is_serialized_type_support(*stream.type), {}};
+    if (in.serialized && !publish_serialized) {
+      // The transport hands objects to typed subscriptions: decode once, now.
+      if (!msgs::with_message_type(input.type, []<class T>() {})) {
+        throw BenchmarkError("input " + input.topic + ": type " + input.type +
+                             " is not compiled into robotperf, so the intra transport cannot "
+                             "deliver it; replay the bag with --rmw fastdds");
+      }
+      in.type = &type_support_by_name(input.type, input.topic);
+      in.serialized = false;
+      for (auto& m : in.messages) {
+        std::shared_ptr<void> typed = in.type->create();
+        try {
+          in.type->deserialize(static_cast<const msgs::SerializedMessage*>(m.get())->cdr,
+                               typed.get());
+        } catch (const msgs::CdrError& e) {
+          throw BenchmarkError("dataset " + dataset.name + ": a message on " + stream.topic +
+                               " does not decode as " + input.type + ": " + e.what());
+        }
+        m = std::move(typed);
+      }
+    } else if (!in.serialized) {
+      type_support_by_name(input.type, input.topic);  // refuses unstamped types
+    }
+    in.publisher = node_->create_generic_publisher(input.topic, *in.type, input.qos);
+    inputs_.push_back(std::move(in));
   }
+}
+
+rmw::MessagePtr Playback::Input::copy_with_stamp(std::size_t frame, int64_t stamp_ns) const {
+  const void* original = messages[frame].get();
+  if (!serialized) return type->copy_with_stamp_ns(original, stamp_ns);
+  auto copy = std::make_shared<msgs::SerializedMessage>(
+      *static_cast<const msgs::SerializedMessage*>(original));
+  msgs::write_header_stamp_ns(copy->cdr, stamp_ns);
+  return copy;
 }
 
 std::size_t Playback::run(std::vector<MessageRecord>& records,
@@ -73,13 +130,13 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
     if (should_stop()) break;
     // Prepare before the deadline, so copying the payload is not measured.
     for (std::size_t i = 0; i < inputs_.size(); ++i) {
-      const DatasetStream& s = *inputs_[i].stream;
-      const void* original = s.messages[k % s.messages.size()].get();
-      next[i] = s.type->copy_with_stamp_ns(original, ids_.stamp_ns(k));
+      const Input& in = inputs_[i];
+      next[i] = in.copy_with_stamp(k % in.messages.size(), ids_.stamp_ns(k));
     }
     MessageRecord& r = records[k];
     r.id = k;
-    r.scheduled_ns = start_ns + static_cast<int64_t>(k) * ids_.period_ns;
+    r.scheduled_ns = start_ns + (schedule_ns_.empty() ? static_cast<int64_t>(k) * ids_.period_ns
+                                                      : schedule_ns_[k]);
     sleep_until_ns(r.scheduled_ns);
     r.sent_ns = rmw::steady_now_ns();
     lttng_ust_tracepoint(robotperf, input, node_->name().c_str(), ids_.stamp_ns(k), k,

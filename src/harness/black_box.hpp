@@ -30,10 +30,20 @@ struct MessageIds {
   std::optional<uint64_t> id_of(int64_t stamp_ns) const;
 };
 
+// For replaying a bag on its own timeline: the send time of message k relative
+// to the first, for `count` messages, the recorded intervals divided by
+// `scale`; the dataset loops with one mean interval between its last and first frame.
+std::vector<int64_t> timeline_schedule(const std::vector<int64_t>& frame_times_ns, double scale,
+                                       std::size_t count);
+
 class Playback {
  public:
+  // Streams of serialized payloads (bags) are published as they are, with the
+  // ID written into their header bytes, when `publish_serialized`; otherwise
+  // they are decoded here, before timing, into the compiled-in type. An empty
+  // `schedule_ns` paces message k at k·ids.period_ns.
   Playback(graph::Context& context, const BenchmarkSpec& spec, const Dataset& dataset,
-           MessageIds ids);
+           MessageIds ids, bool publish_serialized = false, std::vector<int64_t> schedule_ns = {});
   std::shared_ptr<graph::Node> node() const { return node_; }
 
   // Sends ids.count messages, message k at start + k·period (absolute
@@ -44,12 +54,17 @@ class Playback {
 
  private:
   struct Input {
-    const DatasetStream* stream;
+    const msgs::TypeSupport* type;
+    std::vector<rmw::MessagePtr> messages;  // one per frame
+    bool serialized;                        // msgs::SerializedMessage payloads
     std::shared_ptr<graph::GenericPublisher> publisher;
+
+    rmw::MessagePtr copy_with_stamp(std::size_t frame, int64_t stamp_ns) const;
   };
   std::shared_ptr<graph::Node> node_;
   std::vector<Input> inputs_;
   MessageIds ids_;
+  std::vector<int64_t> schedule_ns_;
 };
 
 class Monitor {

@@ -162,12 +162,24 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   }
 
   // Everything is loaded before timing starts (DESIGN.md §3.4).
-  const Dataset dataset = load_dataset(spec.dataset);
+  const Dataset dataset =
+      options.bag ? load_bag_dataset(*options.bag, spec.inputs) : load_dataset(spec.dataset);
   r.dataset = dataset.name;
   r.dataset_hash = dataset.hash;
   r.dataset_frames = dataset.frames;
 
-  r.rate_hz = options.rate_hz.value_or(spec.rate_hz);
+  if (options.bag_timeline) {
+    if (dataset.frame_times_ns.empty())
+      throw std::invalid_argument("--rate bag needs a recorded dataset (--dataset <bag>)");
+    if (!(options.rate_scale > 0) || !std::isfinite(options.rate_scale))
+      throw std::invalid_argument("--rate-scale must be a positive number");
+    // The mean recorded rate: what count, duration and the message IDs go by.
+    r.rate_hz = dataset.rate_hz * options.rate_scale;
+    if (!(r.rate_hz > 0))
+      throw std::invalid_argument("--rate bag: the bag's frames all have the same time");
+  } else {
+    r.rate_hz = options.rate_hz.value_or(spec.rate_hz);
+  }
   if (!(r.rate_hz > 0) || !std::isfinite(r.rate_hz))
     throw std::invalid_argument("--rate must be a positive number");
   if (options.count) {
@@ -202,7 +214,17 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   r.started_unix_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(wall_now).count();
   const MessageIds ids{r.started_unix_ns, period_ns, r.count};
 
-  Playback playback(context, spec, dataset, ids);
+  // Bag payloads go on the wire as recorded. They need a participant of their
+  // own: a DDS participant knows one TopicDataType per type name, and the
+  // graph's typed endpoints need theirs.
+  const bool publish_serialized = options.bag.has_value() && options.rmw != "intra";
+  std::unique_ptr<graph::Context> playback_context;
+  if (publish_serialized)
+    playback_context = std::make_unique<graph::Context>(transport_for(options));
+  Playback playback(
+      publish_serialized ? *playback_context : context, spec, dataset, ids, publish_serialized,
+      options.bag_timeline ? timeline_schedule(dataset.frame_times_ns, options.rate_scale, r.count)
+                           : std::vector<int64_t>{});
   Monitor monitor(context, spec.output, ids, r.warmup);
   std::vector<uint64_t> functional_ids;
   if (spec.functional) {

@@ -370,3 +370,33 @@ TEST_F(Cli, BadBagIsOneClearLine) {
 }
 
 }  // namespace
+
+TEST_F(Cli, RunReplaysABagOnItsOwnTimeline) {
+  const std::string bag = (out_ / "camera").string();
+  Outcome o = robotperf("dataset generate perception/image --out " + bag);
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  o = robotperf("run a1 --dataset " + bag + " --rate bag --rate-scale 2 --count 60 --output " +
+                out_.string() + " --quiet");
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  const auto j = result_json();
+  expect_clean_a1_result(j, "intra");
+  EXPECT_EQ(j["dataset"]["name"], bag);
+  // 30 Hz recorded, played twice as fast.
+  EXPECT_NEAR(j["configuration"]["rate_hz"].get<double>(), 60.0, 0.1);
+}
+
+TEST_F(Cli, BadDatasetOptionsAreOneClearLine) {
+  const std::string bag = (out_ / "camera").string();
+  ASSERT_EQ(robotperf("dataset generate perception/image --out " + bag).exit_code, 0);
+  for (const std::string& args :
+       std::vector<std::string>{"run a1 --dataset " + bag + " --remap /nope:=/camera/image_raw",
+                                "run a1 --dataset " + bag + " --remap nonsense",
+                                "run a1 --dataset " + bag + " --window 5:x",
+                                "run a1 --dataset " + bag + " --window 100:200",
+                                "run a1 --rate bag", "run a1 --dataset " + bag + " --rate-scale 2",
+                                "run a1 --dataset " + (out_ / "missing").string()}) {
+    const Outcome o = robotperf(args);
+    EXPECT_EQ(o.exit_code, 2) << args << ": " << o.out;
+    EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << args << ": " << o.out;
+  }
+}

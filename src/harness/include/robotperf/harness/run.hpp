@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "robotperf/harness/benchmark_spec.hpp"
+#include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/functional.hpp"
 #include "robotperf/harness/scheduling.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
@@ -52,6 +53,12 @@ struct RunOptions {
   // the per-CPU sub-buffer size (0: sized for the workload).
   std::filesystem::path trace_dir;
   std::size_t trace_subbuf_bytes = 0;
+  // Replay this bag's topics instead of the benchmark's built-in dataset.
+  std::optional<BagSelection> bag;
+  // Bags: send frames on the bag's recorded timeline, `rate_scale` times as
+  // fast, instead of at a fixed rate.
+  bool bag_timeline = false;
+  double rate_scale = 1.0;
   // Called from the playback thread after each send.
   std::function<void(std::size_t sent, std::size_t total, std::size_t received)> progress;
 };

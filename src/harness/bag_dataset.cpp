@@ -1,0 +1,186 @@
+// DataLoader for rosbag2 bags: the benchmark's input topics, undecoded, in memory.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "robotperf/bag/bag.hpp"
+#include "robotperf/datasets/hash.hpp"
+#include "robotperf/harness/benchmark_spec.hpp"
+#include "robotperf/harness/dataset.hpp"
+#include "robotperf/msgs/definitions.hpp"
+#include "robotperf/msgs/dynamic.hpp"
+#include "robotperf/msgs/known_types.hpp"
+#include "robotperf/msgs/serialized_message.hpp"
+
+namespace robotperf::harness {
+namespace {
+
+constexpr const char* kHeaderType = "std_msgs/msg/Header";
+
+// Whether `topic`'s type starts with a std_msgs/Header: from the bag's own
+// definition when it has one, else from the types compiled into robotperf.
+bool starts_with_header(const bag::TopicInfo& topic) {
+  std::string schema = topic.definition_encoding == "ros2msg" ? topic.definition : "";
+  if (schema.empty()) schema = msgs::ros2msg_schema(topic.type).value_or("");
+  if (!schema.empty()) {
+    msgs::dynamic::TypeRegistry registry;
+    registry.add_ros2msg(topic.type, schema);
+    const auto& fields = registry.get(topic.type).fields;
+    return !fields.empty() && fields[0].type.primitive == msgs::dynamic::Primitive::kMessage &&
+           fields[0].type.message_type == kHeaderType &&
+           fields[0].type.array == msgs::dynamic::ArrayKind::kNone;
+  }
+  bool stamped = false;
+  if (!msgs::with_message_type(topic.type,
+                               [&]<class T>() { stamped = msgs::type_support<T>().stamped(); })) {
+    throw BenchmarkError("topic " + topic.name + ": the bag has no definition of " + topic.type +
+                         ", so whether it starts with a std_msgs/Header is unknown");
+  }
+  return stamped;
+}
+
+struct Recorded {
+  int64_t time_ns;   // bag timestamp (reception time)
+  int64_t stamp_ns;  // header.stamp
+  std::shared_ptr<msgs::SerializedMessage> payload;
+};
+
+}  // namespace
+
+Dataset load_bag_dataset(const BagSelection& selection, const std::vector<BoundaryTopic>& inputs) {
+  const std::string path = selection.path.string();
+  if (inputs.empty()) throw BenchmarkError("a benchmark without inputs cannot replay bag " + path);
+  const bag::BagInfo info = bag::read_info(selection.path);
+  auto benchmark_topic = [&](const std::string& bag_topic) {
+    auto it = selection.remaps.find(bag_topic);
+    return it == selection.remaps.end() ? bag_topic : it->second;
+  };
+  for (const auto& [from, to] : selection.remaps) {
+    if (std::none_of(info.topics.begin(), info.topics.end(),
+                     [&](const bag::TopicInfo& t) { return t.name == from; })) {
+      throw BenchmarkError("--remap " + from + ":=" + to + ": bag " + path + " has no topic " +
+                           from);
+    }
+  }
+
+  // Which bag topic feeds each input.
+  std::vector<const bag::TopicInfo*> sources;
+  bag::ReadOptions read;
+  for (const auto& input : inputs) {
+    const bag::TopicInfo* source = nullptr;
+    for (const auto& t : info.topics) {
+      if (benchmark_topic(t.name) != input.topic) continue;
+      if (source != nullptr) {
+        throw BenchmarkError("bag " + path + ": topics " + source->name + " and " + t.name +
+                             " both map onto input " + input.topic);
+      }
+      source = &t;
+    }
+    if (source == nullptr) {
+      std::string names;
+      for (const auto& t : info.topics) names += (names.empty() ? "" : ", ") + t.name;
+      throw BenchmarkError("bag " + path + " has nothing for input " + input.topic + " (" +
+                           input.type + "); its topics: " + names +
+                           "; map one onto it with --remap <bag topic>:=" + input.topic);
+    }
+    if (!starts_with_header(*source)) {
+      throw BenchmarkError("bag topic " + source->name + ": type " + source->type +
+                           " does not start with a std_msgs/Header, so its messages cannot "
+                           "carry message IDs; only stamped types can be replayed");
+    }
+    if (source->type != input.type) {
+      throw BenchmarkError("bag topic " + source->name + " holds " + source->type + ", but input " +
+                           input.topic + " expects " + input.type);
+    }
+    sources.push_back(source);
+    read.topics.insert(source->name);
+  }
+  if (selection.start_s) {
+    read.start_time_ns = info.starting_time_ns + std::llround(*selection.start_s * 1e9);
+  }
+  if (selection.end_s) {
+    read.end_time_ns = info.starting_time_ns + std::llround(*selection.end_s * 1e9);
+  }
+
+  // Load, keeping the bytes as recorded.
+  std::map<std::string, std::size_t> input_of_topic;
+  for (std::size_t i = 0; i < sources.size(); ++i) input_of_topic[sources[i]->name] = i;
+  std::vector<std::vector<Recorded>> recorded(inputs.size());
+  bag::Reader reader(selection.path, read);
+  bag::Message m;
+  while (reader.next(m)) {
+    const bag::TopicInfo& topic = reader.topics()[m.topic];
+    const std::size_t i = input_of_topic.at(topic.name);
+    int64_t stamp = 0;
+    try {
+      stamp = msgs::read_header_stamp_ns(m.data);
+    } catch (const msgs::CdrError& e) {
+      throw bag::BagError(path + ": message on " + topic.name +
+                          " has no readable header: " + e.what());
+    }
+    auto payload = std::make_shared<msgs::SerializedMessage>();
+    payload->cdr = std::move(m.data);
+    recorded[i].push_back({m.timestamp_ns, stamp, std::move(payload)});
+  }
+
+  // Frames: the first input's messages in order, joined by equal header
+  // stamps with one unused message of every other input.
+  struct Frame {
+    int64_t time_ns;
+    std::vector<const Recorded*> parts;
+  };
+  std::vector<std::multimap<int64_t, const Recorded*>> by_stamp(inputs.size());
+  for (std::size_t i = 1; i < inputs.size(); ++i) {
+    for (const auto& r : recorded[i]) by_stamp[i].emplace(r.stamp_ns, &r);
+  }
+  std::vector<Frame> frames;
+  for (const auto& first : recorded[0]) {
+    Frame f{first.time_ns, {&first}};
+    for (std::size_t i = 1; i < inputs.size() && f.parts.size() == i; ++i) {
+      auto it = by_stamp[i].find(first.stamp_ns);
+      if (it == by_stamp[i].end()) break;
+      f.time_ns = std::min(f.time_ns, it->second->time_ns);
+      f.parts.push_back(it->second);
+      by_stamp[i].erase(it);
+    }
+    if (f.parts.size() == inputs.size()) frames.push_back(std::move(f));
+  }
+  std::stable_sort(frames.begin(), frames.end(),
+                   [](const Frame& a, const Frame& b) { return a.time_ns < b.time_ns; });
+  if (frames.empty()) {
+    std::string topics;
+    for (const auto* s : sources) topics += (topics.empty() ? "" : ", ") + s->name;
+    throw BenchmarkError("bag " + path + " has no complete frame" +
+                         (inputs.size() > 1
+                              ? " (messages of " + topics + " with equal header stamps)"
+                              : " on " + topics) +
+                         (selection.start_s || selection.end_s ? " in the selected window" : ""));
+  }
+
+  Dataset d;
+  d.name = path;
+  d.description = "rosbag2 " + bag::to_string(info.storage) + " bag " + path;
+  d.frames = frames.size();
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    DatasetStream s{
+        inputs[i].stream, sources[i]->name, &msgs::serialized_type_support(sources[i]->type), {}};
+    s.messages.reserve(frames.size());
+    for (const auto& f : frames) s.messages.push_back(f.parts[i]->payload);
+    d.streams.push_back(std::move(s));
+  }
+  for (const auto& f : frames) d.frame_times_ns.push_back(f.time_ns);
+  const int64_t span = d.frame_times_ns.back() - d.frame_times_ns.front();
+  d.rate_hz =
+      span > 0 ? static_cast<double>(frames.size() - 1) * 1e9 / static_cast<double>(span) : 0.0;
+  datasets::Fnv1a64 hash;
+  for (const auto& s : d.streams) {
+    hash.add_string(s.name).add_string(s.type->ros_type);
+    for (const auto& msg : s.messages)
+      hash.add_bytes(static_cast<const msgs::SerializedMessage*>(msg.get())->cdr);
+  }
+  d.hash = hash.hex_digest();
+  return d;
+}
+
+}  // namespace robotperf::harness
