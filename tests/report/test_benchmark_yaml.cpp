@@ -72,7 +72,9 @@ TEST_F(BenchmarkYaml, ImportsEveryPublishedA1ResultAndFlagsTheDefectiveRows) {
       ++negative;
       EXPECT_TRUE(has_flag(r, "negative min latency")) << r.note;
     }
-    if (r.note.find("-2298.236986") != std::string::npos) EXPECT_EQ(r.note_min, -2298.236986);
+    if (r.note.find("-2298.236986") != std::string::npos) {
+      EXPECT_EQ(r.note_min, -2298.236986);
+    }
     if (r.metric == "power" && r.value > 0 && r.value < 1e-40) {
       ++tiny_power;
       EXPECT_TRUE(has_flag(r, "below 1 mW")) << "line " << r.line;
@@ -110,7 +112,9 @@ TEST_F(BenchmarkYaml, ImportsEveryPublishedA1ResultAndFlagsTheDefectiveRows) {
   std::istringstream lines(text);
   std::string line;
   for (int n = 1; std::getline(lines, line); ++n) {
-    if (n == first.line) EXPECT_EQ(line, "- result:");
+    if (n == first.line) {
+      EXPECT_EQ(line, "- result:");
+    }
   }
 
   const std::string report = flagged_rows_report(b);
