@@ -10,6 +10,7 @@ packages=(
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   libsqlite3-dev ros2-test-interface-files
   libgtest-dev libgmock-dev libbenchmark-dev
+  chromium  # headless, for the report rendering test
 )
 
 missing=()

@@ -236,11 +236,13 @@ int import_published(const std::vector<std::string>& paths, const std::string& i
   }
   std::sort(files.begin(), files.end());
   if (files.empty()) throw report::ReportError("no benchmark.yaml found in the given paths");
+  // Read everything before printing anything: a bad file gives one line and nothing else.
+  std::vector<report::PublishedBenchmark> benchmarks;
+  for (const auto& f : files) benchmarks.push_back(report::import_benchmark_yaml(f));
   std::printf("%-8s %-44s %6s %8s %8s %6s %8s\n", "id", "name", "rows", "latency", "through.",
               "power", "flagged");
   std::string flagged;
-  for (const auto& f : files) {
-    const auto b = report::import_benchmark_yaml(f);
+  for (const auto& b : benchmarks) {
     std::size_t lat = 0, thr = 0, pow = 0;
     for (const auto& r : b.results) {
       lat += r.metric == "latency";
