@@ -280,11 +280,11 @@ std::vector<PublishedResult> export_entries(const StoredRun& run, const ExportOp
   base.datasource = run.dataset;
   const std::string lost = "lost " + format_fixed(run.loss_percent, 2) + " % (" +
                            std::to_string(run.lost) + " of " + std::to_string(run.measured) + ")";
+  const nlohmann::json software = run.json.value("software", nlohmann::json::object());
   std::string context = format_fixed(run.rate_hz, 1) + " Hz input, rmw " + run.rmw + ", " +
                         run.processes + (run.processes == "single" ? " process" : " processes") +
-                        ", robotperf " +
-                        run.json["software"].value("robotperf_version", std::string("?")) + " (" +
-                        run.json["software"].value("git_revision", std::string("?")) + ")";
+                        ", robotperf " + software.value("robotperf_version", std::string("?")) +
+                        " (" + software.value("git_revision", std::string("?")) + ")";
   if (!run.valid) {
     std::string why;
     for (const auto& r : run.invalid_reasons) why += (why.empty() ? "" : "; ") + r;

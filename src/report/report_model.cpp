@@ -425,7 +425,9 @@ Table machines_table(const std::vector<StoredRun>& runs) {
   for (const auto& r : runs) {
     nlohmann::json m = r.json.value("machine", nlohmann::json::object());
     // The current frequency changes from run to run; the machine does not.
-    if (m.contains("cpu") && m["cpu"].contains("frequency")) {
+    if (!m.is_object()) m = nlohmann::json::object();
+    if (m.contains("cpu") && m["cpu"].is_object() && m["cpu"].contains("frequency") &&
+        m["cpu"]["frequency"].is_object()) {
       m["cpu"]["frequency"].erase("per_cpu");
       m["cpu"]["frequency"].erase("current_min_khz");
       m["cpu"]["frequency"].erase("current_max_khz");
@@ -436,9 +438,13 @@ Table machines_table(const std::vector<StoredRun>& runs) {
   }
   for (const auto& key : keys) {
     const auto& runs_of = by_machine[key];
-    const nlohmann::json& m = runs_of.front()->json["machine"];
-    const auto& cpu = m.value("cpu", nlohmann::json::object());
-    const auto& freq = cpu.value("frequency", nlohmann::json::object());
+    const nlohmann::json m = nlohmann::json::parse(key);
+    auto object = [](const nlohmann::json& parent, const char* name) {
+      const auto it = parent.find(name);
+      return it != parent.end() && it->is_object() ? *it : nlohmann::json::object();
+    };
+    const nlohmann::json cpu = object(m, "cpu");
+    const nlohmann::json freq = object(cpu, "frequency");
     auto mhz = [](const nlohmann::json& khz) {
       return khz.is_number() ? std::to_string(khz.get<std::uint64_t>() / 1000) : std::string("?");
     };
@@ -456,7 +462,7 @@ Table machines_table(const std::vector<StoredRun>& runs) {
                text_or_dash(g.value("device_id", nlohmann::json()));
       gpus += (gpus.empty() ? "" : ", ") + name;
     }
-    const auto& container = m.value("container", nlohmann::json::object());
+    const nlohmann::json container = object(m, "container");
     std::string isolation =
         container.value("detected", false)
             ? "container (" + text_or_dash(container.value("runtime", nlohmann::json())) + ")"
@@ -468,7 +474,7 @@ Table machines_table(const std::vector<StoredRun>& runs) {
     const auto mem = m.value("memory_total_bytes", nlohmann::json());
     std::string runs_list;
     for (const auto* r : runs_of) runs_list += (runs_list.empty() ? "" : ", ") + r->stem();
-    const auto& kernel = m.value("kernel", nlohmann::json::object());
+    const nlohmann::json kernel = object(m, "kernel");
     t.rows.push_back(
         {runs_of.front()->hardware, text_or_dash(m.value("hostname", nlohmann::json())),
          text_or_dash(cpu.value("model", nlohmann::json())),

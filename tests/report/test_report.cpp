@@ -178,6 +178,19 @@ TEST_F(Report, OldResultsWithoutHistogramUseTheStoredPercentiles) {
   EXPECT_NE(html.find("from the stored percentiles"), std::string::npos);
 }
 
+TEST_F(Report, ResultsWithoutMachineOrSoftwareStillReport) {
+  const auto path = testing::write_sample(dir_, {});
+  auto j = nlohmann::json::parse(read_text(path));
+  j.erase("machine");
+  j.erase("software");
+  std::ofstream(path) << j.dump();
+  const auto input = load_report_inputs({dir_});
+  ASSERT_EQ(input.runs.size(), 1u);
+  EXPECT_EQ(input.runs[0].hardware, "unknown machine");
+  EXPECT_NE(render_html(input, {}).find("<table class=\"machines\""), std::string::npos);
+  EXPECT_EQ(export_entries(input.runs[0], {}).size(), 2u);
+}
+
 TEST_F(Report, BadInputsGiveOneClearLine) {
   write_two_machines(10, 11);
   std::ofstream(dir_ / "garbage.json") << "{not json";
