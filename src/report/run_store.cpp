@@ -36,6 +36,12 @@ std::vector<std::string> strings(const json& j) {
   if (!j.is_array()) return out;
   for (const auto& e : j) {
     if (e.is_string()) out.push_back(e.get<std::string>());
+    // Run-rule warnings: {"rule": ..., "message": ...}.
+    if (e.is_object() && e.contains("message") && e["message"].is_string())
+      out.push_back((e.contains("rule") && e["rule"].is_string()
+                         ? e["rule"].get<std::string>() + ": "
+                         : std::string()) +
+                    e["message"].get<std::string>());
   }
   return out;
 }
@@ -87,11 +93,12 @@ void read_power(const json& power, StoredRun& run) {
     if (run.power_note.empty()) run.power_note = string_or_empty(power, key);
   }
   if (run.power_note.empty() && run.power_w) {
-    std::vector<std::string> names;
+    // The sources summed into the total, else every source that was read.
+    std::vector<std::string> names = strings(member(total, "sources"));
     const json& sources = member(power, "sources");
-    if (sources.is_array()) {
+    if (names.empty() && sources.is_array()) {
       for (const auto& s : sources) {
-        if (s.is_object()) {
+        if (s.is_object() && s.value("available", true)) {
           const auto name = string_or_empty(s, "name");
           if (!name.empty()) names.push_back(name);
         }

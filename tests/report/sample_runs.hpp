@@ -103,10 +103,16 @@ inline std::filesystem::path write_sample(const std::filesystem::path& dir, cons
   const auto run = make_run(s);
   auto j = result_to_json(run, make_machine(s));
   if (power_w > 0) {
-    j["power"] = {{"available", true},
-                  {"average_w", power_w},
-                  {"energy_j", power_w * run.window_s},
-                  {"sources", {{{"name", "rapl:package-0"}, {"average_w", power_w}}}}};
+    // As the metrics piece writes it (metrics::to_json(PowerReport)).
+    j["power"] = {
+        {"available", true},
+        {"unavailable_reason", nullptr},
+        {"total",
+         {{"average_w", power_w},
+          {"energy_j", power_w * run.window_s},
+          {"sources", {"rapl:package-0"}}}},
+        {"sources", {{{"name", "rapl:package-0"}, {"available", true}, {"average_w", power_w}}}}};
+    j["warnings"] = {{{"rule", "governor"}, {"message", "CPU governor is powersave"}}};
   }
   const auto base = dir / result_basename(run);
   write_file_atomically(base.string() + ".json", j.dump(2) + "\n");

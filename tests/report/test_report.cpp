@@ -97,6 +97,26 @@ TEST_F(Report, ResultsJsonCarriesTheHistogram) {
   EXPECT_EQ(run.histogram->total(), run.latency.count);
   EXPECT_EQ(run.hardware, "AMD Ryzen 7 5800X");
   EXPECT_EQ(run.hardware_category, "workstation");
+  EXPECT_FALSE(run.power_w);
+  EXPECT_EQ(run.power_note, "not recorded");
+
+  testing::SampleRun later;
+  later.start_unix_ns += 1'000'000'000;
+  const auto with_power = load_run(testing::write_sample(dir_, later, false, 12.5));
+  EXPECT_EQ(with_power.power_w, 12.5);
+  EXPECT_TRUE(with_power.energy_j);
+  EXPECT_EQ(with_power.power_note, "rapl:package-0");
+  EXPECT_EQ(with_power.warnings, std::vector<std::string>{"governor: CPU governor is powersave"});
+
+  auto j = with_power.json;
+  j["power"] = {{"available", false},
+                {"unavailable_reason", "no RAPL, hwmon or NVML source"},
+                {"total", nullptr},
+                {"sources", nlohmann::json::array()}};
+  std::ofstream(dir_ / "unavailable.json") << j.dump();
+  const auto without = load_run(dir_ / "unavailable.json");
+  EXPECT_FALSE(without.power_w);
+  EXPECT_EQ(without.power_note, "no RAPL, hwmon or NVML source");
 }
 
 TEST_F(Report, HtmlHasRadarsTablesDistributionsAndComparison) {
@@ -127,6 +147,8 @@ TEST_F(Report, HtmlHasRadarsTablesDistributionsAndComparison) {
   // The comparison: B twice as slow with little spread is significant.
   const std::regex row("<td>a1</td><td>latency max \\(ms\\)</td>.*?significant: B worse");
   EXPECT_TRUE(std::regex_search(html, row));
+  // Run-rule warnings recorded in the results are repeated.
+  EXPECT_NE(html.find("governor: CPU governor is powersave"), std::string::npos);
   // Published hardware is plotted beside local runs.
   EXPECT_NE(html.find("Intel i7-12700H (RobotPerf)"), std::string::npos);
 
