@@ -9,6 +9,7 @@ packages=(
   libopencv-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   libsqlite3-dev ros2-test-interface-files
+  libzstd-dev liblz4-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium  # headless, for the report rendering test
 )

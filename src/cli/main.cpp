@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -9,10 +10,14 @@
 #include <iostream>
 #include <sstream>
 
+#include "bag_commands.hpp"
+#include "robotperf/bag/bag.hpp"
 #include "robotperf/build_info.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/run.hpp"
+#include "robotperf/msgs/cdr.hpp"
+#include "robotperf/msgs/dynamic.hpp"
 #include "robotperf/report/atomic_file.hpp"
 #include "robotperf/report/benchmark_yaml.hpp"
 #include "robotperf/report/readme.hpp"
@@ -31,6 +36,72 @@ constexpr int kExitOk = 0;
 constexpr int kExitError = 1;
 constexpr int kExitUsage = 2;
 constexpr int kExitInvalidResult = 3;
+constexpr int kExitRefused = 4;
+
+// Power and scheduling options shared by `run`, `sysinfo` and `node`.
+struct PowerArgs {
+  double period_s = 0.1;
+  std::string meter;
+  std::string sysfs_root = "/";
+  std::string nvml_library = "libnvidia-ml.so.1";
+  std::vector<std::string> types;
+
+  metrics::PowerOptions options() const {
+    metrics::PowerOptions o;
+    o.period = std::chrono::duration_cast<std::chrono::nanoseconds>(
+        std::chrono::duration<double>(period_s));
+    o.meter_command = meter;
+    o.sysfs_root = sysfs_root;
+    o.nvml_library = nvml_library;
+    o.types.insert(types.begin(), types.end());
+    return o;
+  }
+};
+
+void add_power_options(CLI::App* command, PowerArgs& a, bool with_period) {
+  if (with_period) {
+    command
+        ->add_option("--power-period", a.period_s,
+                     "seconds between power readings in the measured window (default 0.1)")
+        ->check(CLI::Range(0.0005, 60.0));
+  }
+  command->add_option("--power-meter", a.meter,
+                      "external power meter: a shell command that prints watts, run once per "
+                      "reading");
+  command
+      ->add_option("--power-sources", a.types,
+                   "use only these source types: rapl, hwmon, nvml, jetson, external "
+                   "(default: all found)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"rapl", "hwmon", "nvml", "jetson", "external"}));
+  command->add_option("--sysfs-root", a.sysfs_root,
+                      "root under which sys/ holds the power sensors (default /; for testing)");
+  command->add_option("--nvml-library", a.nvml_library,
+                      "NVML library to load (default libnvidia-ml.so.1)");
+}
+
+struct SchedulingArgs {
+  std::string cpus;
+  int rt_priority = 0;
+  bool lock_memory = false;
+
+  harness::SchedulingOptions options() const {
+    harness::SchedulingOptions o;
+    if (!cpus.empty()) o.cpus = harness::parse_cpu_list(cpus);
+    o.rt_priority = rt_priority;
+    o.lock_memory = lock_memory;
+    return o;
+  }
+};
+
+void add_scheduling_options(CLI::App* command, SchedulingArgs& a) {
+  command->add_option("--cpus", a.cpus, "pin the graph to these CPUs, e.g. 2-3 or 0,2");
+  command
+      ->add_option("--rt-priority", a.rt_priority,
+                   "run the graph with SCHED_FIFO at this priority (1-99)")
+      ->check(CLI::Range(1, 99));
+  command->add_flag("--mlock", a.lock_memory, "lock the graph's memory (mlockall)");
+}
 
 fs::path benchmarks_root(const std::string& flag) {
   if (!flag.empty()) return flag;
@@ -84,6 +155,20 @@ int describe_benchmark(const fs::path& root, const std::string& id) {
     for (const auto& [k, v] : n.parameters) std::cout << "      param " << k << " = " << v << "\n";
   }
   std::cout << "output:\n  " << s.output.topic << "  [" << s.output.type << "] -> monitor\n";
+  if (s.functional) {
+    const auto& f = *s.functional;
+    std::cout << "functional: evaluator " << f.evaluator << ", "
+              << (f.sample ? std::to_string(f.sample) : std::string("every"))
+              << " sampled outputs\n";
+    for (const auto& [role, stream] : f.truth)
+      std::cout << "  truth " << role << " <- stream " << stream << "\n";
+    for (const auto& [metric, t] : f.thresholds) {
+      std::cout << "  threshold " << metric;
+      if (t.min) std::cout << " >= " << *t.min;
+      if (t.max) std::cout << " <= " << *t.max;
+      std::cout << "\n";
+    }
+  }
   return kExitOk;
 }
 
@@ -97,7 +182,10 @@ struct RunArgs {
   bool csv = false;
   bool quiet = false;
   bool report = false;
+  bool strict = false;
   std::optional<int> domain;
+  PowerArgs power;
+  SchedulingArgs scheduling;
 };
 
 int run(const fs::path& root, const RunArgs& a) {
@@ -113,6 +201,9 @@ int run(const fs::path& root, const RunArgs& a) {
   o.processes = a.processes == "per-node" ? harness::ProcessLayout::kPerNode
                                           : harness::ProcessLayout::kSingle;
   o.node_command = {self_executable().string(), "node"};
+  o.power = a.power.options();
+  o.scheduling = a.scheduling.options();
+  o.strict = a.strict;
   if (!a.quiet && isatty(STDERR_FILENO)) {
     o.progress = [&](std::size_t sent, std::size_t total, std::size_t received) {
       std::fprintf(stderr, "\r[%s] sent %zu/%zu  received %zu ", spec.id.c_str(), sent, total,
@@ -147,7 +238,8 @@ int run(const fs::path& root, const RunArgs& a) {
                                   report::render_html(input, options));
     std::cout << "report: " << base.string() << ".report.html\n";
   }
-  return result.valid ? kExitOk : kExitInvalidResult;
+  const bool functional_ok = !result.functional || result.functional->valid;
+  return result.valid && functional_ok ? kExitOk : kExitInvalidResult;
 }
 
 // Results files named on the command line: files, or folders whose results files are taken.
@@ -410,8 +502,57 @@ int main(int argc, char** argv) {
   report_cmd->add_option("--compare", rpa.compare,
                          "compare two sides (give it twice): a results file or name prefix, "
                          "or a hardware name");
+  run_cmd->add_flag("--strict", ra.strict,
+                    "refuse to run when a run rule is broken (see the warnings of a normal run)");
+  add_power_options(run_cmd, ra.power, true);
+  add_scheduling_options(run_cmd, ra.scheduling);
 
-  auto* sysinfo_cmd = app.add_subcommand("sysinfo", "describe this machine as results record it");
+  auto* bag_cmd = app.add_subcommand("bag", "inspect, print and convert rosbag2 bags");
+  bag_cmd->require_subcommand(1);
+  std::string bag_path;
+  auto* bag_info_cmd = bag_cmd->add_subcommand("info", "storage, duration, topics, counts, QoS");
+  bag_info_cmd->add_option("bag", bag_path, "bag directory, .db3 or .mcap file")->required();
+  cli::EchoOptions echo;
+  auto* bag_echo_cmd = bag_cmd->add_subcommand("echo", "print messages as YAML");
+  bag_echo_cmd->add_option("bag", bag_path, "bag directory, .db3 or .mcap file")->required();
+  bag_echo_cmd->add_option("--topic", echo.topics, "only this topic (repeatable)");
+  bag_echo_cmd->add_option("--limit", echo.limit, "print at most N messages");
+  bag_echo_cmd->add_option("--msg-dir", echo.msg_dirs,
+                           "folder of .msg files for types the bag has no definition of");
+  bag_echo_cmd->add_option("--max-array", echo.max_array,
+                           "summarise arrays longer than this (default 64)");
+  cli::ConvertOptions convert;
+  std::string convert_out;
+  auto* bag_convert_cmd = bag_cmd->add_subcommand("convert", "write a bag in another storage");
+  bag_convert_cmd->add_option("in", bag_path, "bag directory, .db3 or .mcap file")->required();
+  bag_convert_cmd->add_option("out", convert_out, "new bag directory")->required();
+  bag_convert_cmd->add_option("--storage", convert.storage, "sqlite3 or mcap (default mcap)")
+      ->check(CLI::IsMember({"sqlite3", "mcap"}));
+  bag_convert_cmd
+      ->add_option("--compression", convert.compression, "MCAP chunks: zstd, lz4 or none")
+      ->check(CLI::IsMember({"zstd", "lz4", "none"}));
+  bag_convert_cmd->add_option("--chunk-size", convert.chunk_size, "MCAP chunk size in bytes");
+  bag_convert_cmd->add_option("--max-file-size", convert.max_file_mib,
+                              "split into files of about this many MiB (0 = one file)");
+
+  auto* dataset_cmd = app.add_subcommand("dataset", "the built-in datasets");
+  dataset_cmd->require_subcommand(1);
+  std::string dataset_name;
+  cli::GenerateOptions generate;
+  auto* generate_cmd = dataset_cmd->add_subcommand("generate", "write a built-in dataset as a bag");
+  generate_cmd->add_option("name", dataset_name, "dataset name, e.g. perception/image")->required();
+  generate_cmd->add_option("--out", generate.out, "bag directory (default: the name, / as _)");
+  generate_cmd->add_option("--storage", generate.storage, "sqlite3 or mcap (default mcap)")
+      ->check(CLI::IsMember({"sqlite3", "mcap"}));
+  generate_cmd->add_option("--compression", generate.compression, "MCAP chunks: zstd, lz4 or none")
+      ->check(CLI::IsMember({"zstd", "lz4", "none"}));
+
+  PowerArgs sysinfo_power;
+  auto* sysinfo_cmd = app.add_subcommand(
+      "sysinfo",
+      "describe this machine, this robotperf and the power sources found, as results "
+      "record them");
+  add_power_options(sysinfo_cmd, sysinfo_power, false);
 
   std::string node_package, node_name, node_rmw = "fastdds";
   int node_domain = 0;
@@ -422,6 +563,8 @@ int main(int argc, char** argv) {
   node_cmd->add_option("--node", node_name)->required();
   node_cmd->add_option("--rmw", node_rmw);
   node_cmd->add_option("--domain", node_domain);
+  SchedulingArgs node_scheduling;
+  add_scheduling_options(node_cmd, node_scheduling);
 
   try {
     app.parse(argc, argv);
@@ -452,13 +595,31 @@ int main(int argc, char** argv) {
     if (*import_cmd) return import_published(import_paths, import_into);
     if (*readme_cmd) return readme(root, readme_ids, readme_check);
     if (*report_cmd) return make_report(rpa);
+    if (*bag_info_cmd) return cli::bag_info(bag_path);
+    if (*bag_echo_cmd) return cli::bag_echo(bag_path, echo);
+    if (*bag_convert_cmd) return cli::bag_convert(bag_path, convert_out, convert);
+    if (*generate_cmd) return cli::dataset_generate(dataset_name, generate);
     if (*sysinfo_cmd) {
-      std::cout << sysinfo::to_json(sysinfo::collect_machine_info()).dump(2) << "\n";
+      const nlohmann::json description = {
+          {"machine", sysinfo::to_json(sysinfo::collect_machine_info())},
+          {"software", report::software_json()},
+          {"power",
+           metrics::sources_to_json(metrics::discover_power_sources(sysinfo_power.options()))}};
+      std::cout << description.dump(2) << "\n";
       return kExitOk;
     }
     if (*node_cmd)
       return harness::run_node_process(harness::load_benchmark(node_package), node_name, node_rmw,
-                                       node_domain);
+                                       node_domain, node_scheduling.options());
+  } catch (const harness::RunRefused& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitRefused;
+  } catch (const bag::BagError& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitUsage;
+  } catch (const msgs::dynamic::DefinitionError& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitUsage;
   } catch (const harness::BenchmarkError& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
     return kExitUsage;

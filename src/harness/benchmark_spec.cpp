@@ -114,7 +114,7 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   const YamlFile file(path);
   const YAML::Node& root = file.root();
   file.allow_keys(root, {"dataset", "rate_hz", "count", "warmup", "drain_s", "executor_threads",
-                         "validity", "inputs", "output", "nodes"});
+                         "validity", "inputs", "output", "nodes", "functional"});
   spec.dataset = file.require_string(root, "dataset");
   spec.rate_hz = file.get<double>(root, "rate_hz", 30.0);
   if (!(spec.rate_hz > 0)) file.fail(root["rate_hz"], "rate_hz must be positive");
@@ -160,6 +160,67 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
     }
     spec.nodes.push_back(std::move(node));
   }
+
+  if (const YAML::Node f = root["functional"]; f.IsDefined()) {
+    file.allow_keys(f, {"evaluator", "truth", "sample"});
+    FunctionalSpec functional;
+    functional.evaluator = file.require_string(f, "evaluator");
+    const EvaluatorInfo* info = find_evaluator(functional.evaluator);
+    if (info == nullptr) {
+      std::string known;
+      for (const auto& e : evaluator_infos()) known += (known.empty() ? "" : ", ") + e.name;
+      file.fail(f["evaluator"], "unknown functional evaluator '" + functional.evaluator +
+                                    "' (known: " + known + ")");
+    }
+    if (info->output_type != spec.output.type) {
+      file.fail(f["evaluator"], "evaluator " + info->name + " reads " + info->output_type +
+                                    ", but the output is " + spec.output.type);
+    }
+    functional.truth = file.string_map(f, "truth");
+    for (const auto& role : info->truth_roles) {
+      if (!functional.truth.contains(role)) {
+        file.fail(f, "evaluator " + info->name + " needs truth stream '" + role + "'");
+      }
+    }
+    for (const auto& [role, stream] : functional.truth) {
+      if (std::ranges::count(info->truth_roles, role) == 0) {
+        file.fail(f["truth"], "evaluator " + info->name + " has no truth role '" + role + "'");
+      }
+    }
+    functional.sample = file.get<std::size_t>(f, "sample", functional.sample);
+    spec.functional = std::move(functional);
+  }
+}
+
+// benchmark.yaml `functional: {thresholds: {<metric>: {min: x, max: y}}}`.
+void load_thresholds(const YamlFile& meta, BenchmarkSpec& spec) {
+  const YAML::Node f = meta.root()["functional"];
+  if (!f.IsDefined() || f.IsNull()) return;
+  meta.allow_keys(f, {"thresholds"});
+  if (!spec.functional) {
+    meta.fail(f, "functional thresholds are given but graph.yaml names no functional evaluator");
+  }
+  const EvaluatorInfo& info = *find_evaluator(spec.functional->evaluator);
+  const YAML::Node thresholds = f["thresholds"];
+  if (!thresholds.IsDefined() || thresholds.IsNull()) return;
+  if (!thresholds.IsMap()) meta.fail(thresholds, "'thresholds' must be a mapping");
+  for (const auto& kv : thresholds) {
+    const auto metric = kv.first.as<std::string>();
+    const bool known =
+        std::ranges::any_of(info.metrics, [&](const auto& m) { return m.name == metric; });
+    if (!known) {
+      std::string names;
+      for (const auto& m : info.metrics) names += (names.empty() ? "" : ", ") + m.name;
+      meta.fail(kv.first, "evaluator " + info.name + " has no metric '" + metric +
+                              "' (it has: " + names + ")");
+    }
+    meta.allow_keys(kv.second, {"min", "max"});
+    FunctionalThreshold t;
+    if (kv.second["min"].IsDefined()) t.min = meta.get<double>(kv.second, "min", 0.0);
+    if (kv.second["max"].IsDefined()) t.max = meta.get<double>(kv.second, "max", 0.0);
+    if (!t.min && !t.max) meta.fail(kv.second, "threshold of '" + metric + "' needs min or max");
+    spec.functional->thresholds[metric] = t;
+  }
 }
 
 }  // namespace
@@ -181,6 +242,7 @@ BenchmarkSpec load_benchmark(const fs::path& dir) {
   spec.short_description = meta.get<std::string>(meta.root(), "short", "");
   spec.description = meta.get<std::string>(meta.root(), "description", "");
   load_graph(dir / "graph.yaml", spec);
+  load_thresholds(meta, spec);
   return spec;
 }
 

@@ -97,7 +97,11 @@ Monitor::Monitor(graph::Context& context, const BoundaryTopic& output, MessageId
       ids_(ids),
       warmup_(warmup) {
   tally_.received_ns.assign(ids_.count, -1);
-  node_->create_generic_subscription(output.topic, *type_, output.qos,
+  // The Monitor keeps everything the graph delivered: a briefly starved
+  // Monitor must not turn into loss charged to the graph under test.
+  rmw::QoS qos = output.qos;
+  qos.history = rmw::History::kKeepAll;
+  node_->create_generic_subscription(output.topic, *type_, qos,
                                      [this](rmw::MessagePtr m, const graph::MessageInfo&) {
                                        // Read the clock first: everything after is monitor
                                        // overhead.
@@ -118,9 +122,19 @@ void Monitor::on_message(const rmw::MessagePtr& msg, int64_t now_ns) {
     } else {
       tally_.received_ns[*id] = now_ns;
       if (*id >= warmup_) ++tally_.received_measured;
+      if (!keep_.empty() && keep_[*id]) tally_.kept.emplace_back(*id, msg);
     }
   }
   cv_.notify_all();
+}
+
+void Monitor::keep_outputs(const std::vector<uint64_t>& ids) {
+  std::lock_guard lock(mutex_);
+  keep_.assign(ids_.count, false);
+  for (uint64_t id : ids) {
+    if (id < ids_.count) keep_[id] = true;
+  }
+  tally_.kept.reserve(ids.size());
 }
 
 bool Monitor::wait_for(std::size_t expected, int64_t deadline_ns) {

@@ -8,6 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "robotperf/graph/node.hpp"
@@ -57,6 +58,10 @@ class Monitor {
   Monitor(graph::Context& context, const BoundaryTopic& output, MessageIds ids, std::size_t warmup);
   std::shared_ptr<graph::Node> node() const { return node_; }
 
+  // Keeps the first reception of each of `ids` for the functional evaluation (holding a
+  // reference only: no copy). Call before the run starts.
+  void keep_outputs(const std::vector<uint64_t>& ids);
+
   // Waits until `expected` measured messages arrived or `deadline_ns` passes.
   bool wait_for(std::size_t expected, int64_t deadline_ns);
 
@@ -65,6 +70,7 @@ class Monitor {
     std::size_t received_measured = 0;
     std::size_t duplicates = 0;
     std::size_t unknown = 0;
+    std::vector<std::pair<uint64_t, rmw::MessagePtr>> kept;  // by keep_outputs, in arrival order
   };
   Tally tally() const;
   std::size_t received() const;
@@ -76,6 +82,7 @@ class Monitor {
   const msgs::TypeSupport* type_;
   MessageIds ids_;
   std::size_t warmup_;
+  std::vector<bool> keep_;  // per id
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   Tally tally_;

@@ -1,10 +1,15 @@
 #include "robotperf/harness/dataset.hpp"
 
+#include <map>
+#include <mutex>
 #include <stdexcept>
 
 #include "robotperf/datasets/hash.hpp"
 #include "robotperf/datasets/synthetic_camera.hpp"
+#include "robotperf/datasets/synthetic_depth.hpp"
+#include "robotperf/datasets/synthetic_stereo.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/msgs/stereo_msgs.hpp"
 
 namespace robotperf::harness {
 namespace {
@@ -33,14 +38,83 @@ Dataset perception_image() {
   d.description = builtin_datasets()[0].description;
   d.frames = frames.size();
   d.rate_hz = config.rate_hz;
-  DatasetStream images{"image", &msgs::type_support<msgs::Image>(), {}};
-  DatasetStream infos{"camera_info", &msgs::type_support<msgs::CameraInfo>(), {}};
+  DatasetStream images{"image", "/camera/image_raw", &msgs::type_support<msgs::Image>(), {}};
+  DatasetStream infos{
+      "camera_info", "/camera/camera_info", &msgs::type_support<msgs::CameraInfo>(), {}};
   for (auto& f : frames) {
     images.messages.push_back(std::make_shared<const msgs::Image>(std::move(f.image)));
     infos.messages.push_back(std::make_shared<const msgs::CameraInfo>(std::move(f.info)));
   }
   d.streams.push_back(std::move(images));
   d.streams.push_back(std::move(infos));
+  d.hash = content_hash(d.streams);
+  return d;
+}
+
+template <class T>
+DatasetStream make_stream(std::string name, std::string topic) {
+  return DatasetStream{std::move(name), std::move(topic), &msgs::type_support<T>(), {}};
+}
+
+template <class T>
+void append(DatasetStream& stream, T&& message) {
+  stream.messages.push_back(std::make_shared<const std::decay_t<T>>(std::forward<T>(message)));
+}
+
+const std::string& description_of(const std::string& name) {
+  for (const auto& d : builtin_datasets()) {
+    if (d.name == name) return d.description;
+  }
+  throw std::logic_error("dataset " + name + " is not listed");
+}
+
+Dataset perception_stereo() {
+  const datasets::SyntheticStereoConfig config;
+  auto frames = datasets::generate_stereo_sequence(config);
+  Dataset d;
+  d.name = "perception/stereo";
+  d.description = description_of(d.name);
+  d.frames = frames.size();
+  d.rate_hz = config.rate_hz;
+  auto left = make_stream<msgs::Image>("left_image", "/left/image_raw");
+  auto left_info = make_stream<msgs::CameraInfo>("left_camera_info", "/left/camera_info");
+  auto right = make_stream<msgs::Image>("right_image", "/right/image_raw");
+  auto right_info = make_stream<msgs::CameraInfo>("right_camera_info", "/right/camera_info");
+  auto truth = make_stream<msgs::DisparityImage>("disparity_truth", "/ground_truth/disparity");
+  for (auto& f : frames) {
+    append(left, std::move(f.left));
+    append(left_info, std::move(f.left_info));
+    append(right, std::move(f.right));
+    append(right_info, std::move(f.right_info));
+    append(truth, std::move(f.truth));
+  }
+  for (auto* s : {&left, &left_info, &right, &right_info, &truth})
+    d.streams.push_back(std::move(*s));
+  d.hash = content_hash(d.streams);
+  return d;
+}
+
+Dataset perception_depth() {
+  const datasets::SyntheticDepthConfig config;
+  auto frames = datasets::generate_depth_sequence(config);
+  Dataset d;
+  d.name = "perception/depth";
+  d.description = description_of(d.name);
+  d.frames = frames.size();
+  d.rate_hz = config.rate_hz;
+  auto depth = make_stream<msgs::Image>("depth", "/camera/depth/image_raw");
+  auto depth_mm = make_stream<msgs::Image>("depth_mm", "/camera/depth/image_raw_mm");
+  auto image = make_stream<msgs::Image>("image", "/camera/rgb/image_raw");
+  auto info = make_stream<msgs::CameraInfo>("camera_info", "/camera/depth/camera_info");
+  auto truth = make_stream<msgs::Image>("depth_truth", "/ground_truth/depth");
+  for (auto& f : frames) {
+    append(depth, std::move(f.depth));
+    append(depth_mm, std::move(f.depth_mm));
+    append(image, std::move(f.colour));
+    append(info, std::move(f.info));
+    append(truth, std::move(f.truth_depth));
+  }
+  for (auto* s : {&depth, &depth_mm, &image, &info, &truth}) d.streams.push_back(std::move(*s));
   d.hash = content_hash(d.streams);
   return d;
 }
@@ -62,15 +136,40 @@ const std::vector<DatasetInfo>& builtin_datasets() {
       {"perception/image",
        "synthetic 640x480 rgb8 camera, 30 Hz, 68 frames, plumb_bob k1=-0.25 k2=0.12 "
        "p1=-0.00028 p2=-5e-5, hfov 1.047 rad; checkerboard with a moving box"},
+      {"perception/stereo",
+       "synthetic rectified 640x480 rgb8 stereo pair, 10 Hz, 10 frames, baseline 0.10 m, hfov "
+       "1.089 rad; ray-cast textured room with moving boxes (depth 1.6-6 m); streams left_image, "
+       "left_camera_info, right_image, right_camera_info and the per-pixel ground truth "
+       "disparity_truth (DisparityImage, NaN where occluded)"},
+      {"perception/depth",
+       "synthetic registered 640x480 depth + rgb8 colour, 30 Hz, 20 frames, hfov 1.089 rad, range "
+       "0.05-8 m; ray-cast room with moving boxes and a doorway beyond range; streams depth "
+       "(32FC1 m, NaN = none), depth_mm (16UC1 mm, 0 = none), image, camera_info and the ground "
+       "truth depth_truth (64FC1 true depth)"},
   };
   return infos;
 }
 
 Dataset load_dataset(const std::string& name) {
-  if (name == "perception/image") return perception_image();
-  std::string names;
-  for (const auto& d : builtin_datasets()) names += (names.empty() ? "" : ", ") + d.name;
-  throw std::invalid_argument("unknown dataset '" + name + "' (built-in: " + names + ")");
+  // Generated datasets are immutable and take seconds to render: a process that runs a benchmark
+  // again (tests, sweeps) reuses them; copies share the messages.
+  static std::mutex mutex;
+  static std::map<std::string, Dataset> cache;
+  std::lock_guard lock(mutex);
+  if (auto it = cache.find(name); it != cache.end()) return it->second;
+  Dataset d;
+  if (name == "perception/image") {
+    d = perception_image();
+  } else if (name == "perception/stereo") {
+    d = perception_stereo();
+  } else if (name == "perception/depth") {
+    d = perception_depth();
+  } else {
+    std::string names;
+    for (const auto& d : builtin_datasets()) names += (names.empty() ? "" : ", ") + d.name;
+    throw std::invalid_argument("unknown dataset '" + name + "' (built-in: " + names + ")");
+  }
+  return cache.emplace(name, std::move(d)).first->second;
 }
 
 }  // namespace robotperf::harness

@@ -35,7 +35,8 @@ void make_pipe(int fds[2]) {
 }  // namespace
 
 NodeProcesses::NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::string>& command,
-                             const std::string& rmw, int domain_id) {
+                             const std::string& rmw, int domain_id,
+                             const std::vector<std::string>& extra) {
   if (command.empty()) throw std::invalid_argument("per-node runs need the robotperf node command");
   make_pipe(wake_pipe_);
   // A child that dies must not kill the runner with SIGPIPE when we write to it.
@@ -44,7 +45,7 @@ NodeProcesses::NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::s
     Child c;
     c.name = node.name;
     c.kernel = node.kernel;
-    c.report = {node.name, node.kernel, 0, "running", -1, -1};
+    c.report = {node.name, node.kernel, 0, "running", -1, -1, {}};
     int in[2], out[2];
     make_pipe(in);
     make_pipe(out);
@@ -52,6 +53,7 @@ NodeProcesses::NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::s
     args.push_back(spec.dir.string());
     args.insert(args.end(),
                 {"--node", node.name, "--rmw", rmw, "--domain", std::to_string(domain_id)});
+    args.insert(args.end(), extra.begin(), extra.end());
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -139,6 +141,11 @@ void NodeProcesses::on_line(Child& child, const std::string& line) {
     if (!j.is_discarded()) {
       child.report.cpu_user_s = j.value("cpu_user_s", -1.0);
       child.report.cpu_system_s = j.value("cpu_system_s", -1.0);
+      if (const auto c = j.find("counters"); c != j.end() && c->is_object()) {
+        for (const auto& [name, value] : c->items()) {
+          if (value.is_number_unsigned()) child.report.counters[name] = value.get<uint64_t>();
+        }
+      }
     }
   }
 }
@@ -178,6 +185,13 @@ void NodeProcesses::wait_ready(int64_t deadline_ns) {
 std::string NodeProcesses::failure() const {
   std::lock_guard lock(mutex_);
   return failure_;
+}
+
+std::vector<std::pair<int, std::string>> NodeProcesses::processes() const {
+  std::lock_guard lock(mutex_);
+  std::vector<std::pair<int, std::string>> out;
+  for (const auto& c : children_) out.emplace_back(c.report.pid, c.name);
+  return out;
 }
 
 std::vector<NodeReport> NodeProcesses::shutdown(double grace_s) {

@@ -17,9 +17,10 @@ namespace robotperf::harness {
 
 class NodeProcesses {
  public:
-  // Starts `command` + [<package dir>, --node, NAME, --rmw, RMW, --domain, D] for every node.
+  // Starts `command` + [<package dir>, --node, NAME, --rmw, RMW, --domain, D] + `extra` for
+  // every node.
   NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::string>& command,
-                const std::string& rmw, int domain_id);
+                const std::string& rmw, int domain_id, const std::vector<std::string>& extra = {});
   ~NodeProcesses();
   NodeProcesses(const NodeProcesses&) = delete;
   NodeProcesses& operator=(const NodeProcesses&) = delete;
@@ -29,6 +30,8 @@ class NodeProcesses {
   void wait_ready(int64_t deadline_ns);
   // A child that ended before shutdown() was asked: its description, else empty.
   std::string failure() const;
+  // Pid and node name of every child.
+  std::vector<std::pair<int, std::string>> processes() const;
   // Asks every child to finish (closes its stdin), collects its report, and
   // kills those that do not exit within `grace_s`.
   std::vector<NodeReport> shutdown(double grace_s);

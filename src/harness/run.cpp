@@ -1,6 +1,7 @@
 #include "robotperf/harness/run.hpp"
 
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -12,6 +13,7 @@
 #include <thread>
 
 #include "black_box.hpp"
+#include "measurement.hpp"
 #include "node_processes.hpp"
 #include "robotperf/graph/executor.hpp"
 
@@ -182,6 +184,12 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
                                 std::to_string(r.count) + ")");
   }
   r.drain_s = options.drain_s.value_or(spec.drain_s);
+  r.domain_id = options.domain_id;
+  r.scheduling = options.scheduling;
+
+  // In one process the scheduling options cover every thread created from here on.
+  std::optional<ScopedScheduling> scheduling;
+  if (options.processes == ProcessLayout::kSingle) scheduling.emplace(options.scheduling);
 
   graph::Context context(transport_for(options));
   const auto period_ns = static_cast<int64_t>(std::llround(1e9 / r.rate_hz));
@@ -192,23 +200,39 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
 
   Playback playback(context, spec, dataset, ids);
   Monitor monitor(context, spec.output, ids, r.warmup);
+  std::vector<uint64_t> functional_ids;
+  if (spec.functional) {
+    make_evaluator(*spec.functional, dataset);  // a missing truth stream fails before timing
+    functional_ids = functional_sample_ids(r.count, r.warmup, spec.functional->sample);
+    monitor.keep_outputs(functional_ids);
+  }
   graph::Executor monitor_executor(1);
   monitor_executor.add_node(monitor.node());
 
   graph::Executor graph_executor(spec.executor_threads);
   std::vector<std::shared_ptr<graph::Node>> local_nodes{playback.node(), monitor.node()};
   std::unique_ptr<NodeProcesses> children;
+  std::vector<std::shared_ptr<graph::Node>> kernel_nodes;
   if (options.processes == ProcessLayout::kSingle) {
     for (const auto& n : spec.nodes) {
       auto node = kernels::make_kernel_node(n.kernel, context, kernel_config(n));
       graph_executor.add_node(node);
       local_nodes.push_back(node);
-      r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1});
+      kernel_nodes.push_back(node);
+      r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1, {}});
     }
   } else {
     children =
-        std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw, options.domain_id);
+        std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw, options.domain_id,
+                                        options.scheduling.node_arguments());
   }
+  std::vector<metrics::ResourceMonitor::Process> graph_processes;
+  if (children) {
+    for (const auto& [pid, name] : children->processes()) graph_processes.push_back({pid, name});
+  } else {
+    graph_processes.push_back({getpid(), "robotperf (graph, Playback, Monitor)"});
+  }
+  WindowMeasurement measurement(options, graph_processes);
 
   const int64_t connect_deadline =
       rmw::steady_now_ns() + static_cast<int64_t>(options.connect_timeout_s * 1e9);
@@ -216,6 +240,13 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   graph_executor.start();
   if (children) children->wait_ready(connect_deadline);
   wait_connected(local_nodes, wiring_of(spec), connect_deadline);
+
+  r.warnings = check_run_rules_for(r, measurement.probe_other_load());
+  if (options.strict && !r.warnings.empty()) {
+    std::string broken;
+    for (const auto& w : r.warnings) broken += "\n  " + w.rule + ": " + w.message;
+    throw RunRefused("--strict: not running, run rules broken:" + broken);
+  }
 
   auto failure = [&]() -> std::string {
     if (auto e = graph_executor.error()) return what_of(e);
@@ -226,6 +257,7 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   playback.run(
       r.records, [&] { return !failure().empty(); },
       [&](std::size_t sent) {
+        if (sent == r.warmup + 1) measurement.begin();  // the first measured message is out
         if (options.progress) options.progress(sent, r.count, monitor.received());
       });
 
@@ -233,22 +265,54 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   const std::size_t expected = r.records.size() > r.warmup ? r.records.size() - r.warmup : 0;
   const int64_t last_send = r.records.empty() ? rmw::steady_now_ns() : r.records.back().sent_ns;
   monitor.wait_for(expected, last_send + static_cast<int64_t>(r.drain_s * 1e9));
+  measurement.end(r);
   const Monitor::Tally tally = monitor.tally();
 
   if (std::string f = failure(); !f.empty()) r.errors.push_back(f);
   graph_executor.stop();
   monitor_executor.stop();
   if (children) r.nodes = children->shutdown(5.0);
+  for (std::size_t i = 0; i < kernel_nodes.size(); ++i) {
+    if (const auto* c = dynamic_cast<const kernels::NodeCounters*>(kernel_nodes[i].get())) {
+      r.nodes[i].counters = c->counters();
+    }
+  }
   r.completed = r.records.size() == r.count && r.errors.empty();
   summarise(r, spec, tally);
+  if (r.resources.other_cpu_percent &&
+      *r.resources.other_cpu_percent > sysinfo::kBusyThresholdPercent) {
+    char message[200];
+    std::snprintf(message, sizeof message,
+                  "other processes used %.0f %% of a core during the measured "
+                  "window",
+                  *r.resources.other_cpu_percent);
+    r.warnings.push_back({"interference", message});
+    if (options.strict) {
+      r.invalid_reasons.push_back(std::string(message) + " (--strict)");
+      r.valid = false;
+    }
+  }
+  // After timing: the evaluation costs nothing the run measured.
+  if (spec.functional) {
+    r.functional =
+        evaluate_functional(*spec.functional, dataset, tally.kept, functional_ids.size());
+  }
   return r;
 }
 
 int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
-                     const std::string& rmw, int domain_id) {
+                     const std::string& rmw, int domain_id, const SchedulingOptions& scheduling) {
   const NodeSpec* node_spec = spec.find_node(node_name);
   if (node_spec == nullptr) {
     std::cerr << "robotperf node: benchmark " << spec.id << " has no node '" << node_name << "'\n";
+    return 2;
+  }
+  // Before the transport and executor start their threads, so that they all inherit it.
+  std::optional<ScopedScheduling> scheduled;
+  try {
+    scheduled.emplace(scheduling);
+  } catch (const std::exception& e) {
+    std::cerr << "robotperf node " << node_name << ": " << e.what() << "\n";
     return 2;
   }
   rmw::TransportOptions t;
@@ -288,8 +352,15 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   auto seconds = [](timeval tv) { return static_cast<double>(tv.tv_sec) + tv.tv_usec * 1e-6; };
+  std::string counters;
+  if (const auto* c = dynamic_cast<const kernels::NodeCounters*>(node.get())) {
+    for (const auto& [name, value] : c->counters()) {
+      counters += (counters.empty() ? "\"" : ",\"") + name + "\":" + std::to_string(value);
+    }
+  }
   std::cout << "stats {\"cpu_user_s\":" << seconds(usage.ru_utime)
-            << ",\"cpu_system_s\":" << seconds(usage.ru_stime) << "}" << std::endl;
+            << ",\"cpu_system_s\":" << seconds(usage.ru_stime) << ",\"counters\":{" << counters
+            << "}}" << std::endl;
   return code;
 }
 

@@ -8,5 +8,9 @@ namespace robotperf::kernels {
 std::shared_ptr<graph::Node> make_relay_node(graph::Context& context, const KernelConfig& config);
 std::shared_ptr<graph::Node> make_rectify_node(graph::Context& context, const KernelConfig& config);
 std::shared_ptr<graph::Node> make_resize_node(graph::Context& context, const KernelConfig& config);
+std::shared_ptr<graph::Node> make_disparity_node(graph::Context& context,
+                                                 const KernelConfig& config);
+std::shared_ptr<graph::Node> make_point_cloud_xyzrgb_node(graph::Context& context,
+                                                          const KernelConfig& config);
 
 }  // namespace robotperf::kernels

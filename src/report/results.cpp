@@ -1,7 +1,10 @@
 #include "robotperf/report/results.hpp"
 
+#include <gnu/libc-version.h>
+
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <sstream>
 
@@ -29,6 +32,97 @@ std::string fixed(double v, int decimals) {
   return buf;
 }
 
+std::string power_line(const harness::RunResult& r) {
+  const auto& p = r.power;
+  if (!p.available) return "power: unavailable — " + p.unavailable_reason + "\n";
+  std::ostringstream out;
+  out << "power: " << fixed(p.total_average_w, 2) << " W";
+  std::string parts;
+  for (const auto& s : p.sources) {
+    if (!s.available || !s.info.in_total) continue;
+    parts += (parts.empty() ? "" : ", ") + s.info.name + " " + fixed(s.average_w, 2) + " W";
+  }
+  out << " (" << parts << "), " << fixed(p.total_energy_j, 3) << " J";
+  if (r.matched > 0) {
+    out << ", " << fixed(p.total_energy_j * 1e3 / static_cast<double>(r.matched), 3) << " mJ/msg";
+  }
+  if (r.throughput_hz > 0 && p.total_average_w > 0) {
+    out << ", " << fixed(r.throughput_hz / p.total_average_w, 3) << " msg/s per W";
+  }
+  for (const auto& s : p.sources) {
+    if (!s.available) out << "; " << s.info.name << " unavailable: " << s.unavailable_reason;
+  }
+  out << "\n";
+  return out.str();
+}
+
+std::string resources_line(const harness::RunResult& r) {
+  const auto& u = r.resources;
+  if (!u.measured) return "resources: not measured (the measured window never started)\n";
+  std::ostringstream out;
+  out << "resources over " << fixed(u.window_s, 2) << " s:\n";
+  for (const auto& p : u.processes) {
+    out << "  " << p.label << " (pid " << p.pid << "): ";
+    if (!p.measured) {
+      out << p.error << "\n";
+      continue;
+    }
+    out << fixed(p.cpu_percent, 1) << " % CPU";
+    if (p.peak_rss_bytes) {
+      out << ", peak RSS " << fixed(static_cast<double>(*p.peak_rss_bytes) / (1 << 20), 1)
+          << " MiB";
+    }
+    out << ", context switches " << p.voluntary_switches << " voluntary / "
+        << p.involuntary_switches << " involuntary, page faults " << p.minor_faults << " minor / "
+        << p.major_faults << " major\n";
+  }
+  if (u.system_busy_percent) {
+    out << "  system: " << fixed(*u.system_busy_percent, 1) << " % busy";
+    if (u.other_cpu_percent) {
+      out << ", other processes " << fixed(*u.other_cpu_percent, 1) << " % of a core";
+    }
+    out << "; per CPU";
+    for (std::size_t i = 0; i < u.per_cpu_busy_percent.size(); ++i) {
+      out << " " << u.cpu_ids[i] << ":" << fixed(u.per_cpu_busy_percent[i], 0) << "%";
+    }
+    out << "\n";
+  }
+  return out.str();
+}
+
+// Four significant digits: accuracy metrics span from micrometres to whole fractions.
+std::string general(double v) {
+  if (!std::isfinite(v)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return buf;
+}
+
+nlohmann::json optional_number(const std::optional<double>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
+
+nlohmann::json finite_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
+
+nlohmann::json functional_json(const std::optional<harness::FunctionalResult>& f) {
+  if (!f) return nullptr;
+  nlohmann::json metrics = nlohmann::json::object();
+  for (const auto& m : f->metrics) {
+    metrics[m.name] = {{"value", finite_or_null(m.value)},
+                       {"unit", m.unit},
+                       {"min", optional_number(m.threshold.min)},
+                       {"max", optional_number(m.threshold.max)},
+                       {"passed", m.passed}};
+  }
+  return {{"evaluator", f->evaluator},
+          {"samples", {{"requested", f->requested}, {"evaluated", f->evaluated}}},
+          {"metrics", metrics},
+          {"valid", f->valid},
+          {"reasons", f->reasons}};
+}
+
 }  // namespace
 
 nlohmann::json software_json() {
@@ -39,7 +133,32 @@ nlohmann::json software_json() {
           {"cxx_flags", build_info::kCxxFlags},
           {"sanitized", build_info::kSanitized},
           {"libraries",
-           {{"fastdds", build_info::kFastDdsVersion}, {"opencv", build_info::kOpenCvVersion}}}};
+           {{"fastdds", build_info::kFastDdsVersion},
+            {"fastcdr", build_info::kFastCdrVersion},
+            {"opencv", build_info::kOpenCvVersion},
+            {"yaml-cpp", build_info::kYamlCppVersion},
+            {"nlohmann_json", build_info::kNlohmannJsonVersion},
+            {"sqlite3", build_info::kSqliteVersion},
+            {"glibc", gnu_get_libc_version()}}}};
+}
+
+nlohmann::json transport_json(const std::string& rmw, int domain_id, const std::string& processes) {
+  nlohmann::json t = {{"rmw", rmw}, {"processes", processes}};
+  if (rmw == "intra") {
+    t["settings"] = "in-process shared pointers: no serialization, no copies";
+    return t;
+  }
+  t["domain_id"] = domain_id;
+  // Fast DDS reads an XML profile from these variables; it changes the transports and QoS used.
+  nlohmann::json profiles = nullptr;
+  for (const char* variable : {"FASTDDS_DEFAULT_PROFILES_FILE", "FASTRTPS_DEFAULT_PROFILES_FILE"}) {
+    if (const char* file = std::getenv(variable); file && *file) profiles = file;
+  }
+  t["profiles_file"] = profiles;
+  t["settings"] = profiles.is_null() ? "Fast DDS defaults: UDPv4 + shared memory, XCDR1, QoS per "
+                                       "topic as in graph.yaml"
+                                     : "Fast DDS with the XML profile in profiles_file";
+  return t;
 }
 
 nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::MachineInfo& machine) {
@@ -50,6 +169,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
     if (n.pid > 0) node["pid"] = n.pid;
     node["cpu_user_s"] = n.cpu_user_s >= 0 ? json(n.cpu_user_s) : json(nullptr);
     node["cpu_system_s"] = n.cpu_system_s >= 0 ? json(n.cpu_system_s) : json(nullptr);
+    if (!n.counters.empty()) node["counters"] = n.counters;
     nodes.push_back(std::move(node));
   }
   // The RobotPerf headline is the maximum latency, taken from the same block so the two agree
@@ -62,6 +182,15 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
     if (!rec.warmup && rec.received_ns >= 0)
       latencies_ms.push_back(static_cast<double>(rec.received_ns - rec.scheduled_ns) / kNsPerMs);
   }
+  json warnings = json::array();
+  for (const auto& w : r.warnings) warnings.push_back({{"rule", w.rule}, {"message", w.message}});
+  json software = software_json();
+  software["transport"] = transport_json(r.rmw, r.domain_id, r.processes);
+  const auto& sched = r.scheduling;
+  const json scheduling = {
+      {"cpus", sched.cpus.empty() ? json(nullptr) : json(harness::format_cpu_list(sched.cpus))},
+      {"rt_priority", sched.rt_priority ? json(sched.rt_priority) : json(nullptr)},
+      {"lock_memory", sched.lock_memory}};
   return {
       {"schema", kResultSchema},
       {"benchmark", {{"id", r.benchmark_id}, {"name", r.benchmark_name}, {"category", r.category}}},
@@ -75,10 +204,13 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"rmw", r.rmw},
         {"processes", r.processes},
         {"executor_threads", r.executor_threads},
-        {"output_topic", r.output_topic}}},
+        {"output_topic", r.output_topic},
+        {"domain_id", r.domain_id},
+        {"scheduling", scheduling}}},
       {"dataset", {{"name", r.dataset}, {"hash", r.dataset_hash}, {"frames", r.dataset_frames}}},
       {"machine", sysinfo::to_json(machine)},
-      {"software", software_json()},
+      {"software", software},
+      {"warnings", warnings},
       {"counts",
        {{"sent", r.sent},
         {"measured", r.measured},
@@ -97,10 +229,13 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
        {{"output_hz", r.throughput_hz},
         {"offered_hz", r.offered_rate_hz},
         {"window_s", r.window_s}}},
+      {"power", metrics::to_json(r.power, r.matched, r.throughput_hz)},
+      {"resources", metrics::to_json(r.resources)},
       {"nodes", nodes},
       {"completed", r.completed},
       {"errors", r.errors},
       {"validity", {{"valid", r.valid}, {"reasons", r.invalid_reasons}}},
+      {"functional", functional_json(r.functional)},
   };
 }
 
@@ -150,6 +285,38 @@ std::string summary_table(const harness::RunResult& r) {
       << " Hz offered\n";
   out << "headline (RobotPerf): latency " << fixed(r.latency_from_scheduled.max / kNsPerMs, 3)
       << " ms (max), throughput " << fixed(r.throughput_hz, 3) << " Hz\n";
+  out << power_line(r) << resources_line(r);
+  if (!r.warnings.empty()) {
+    out << "warnings (run rules):\n";
+    for (const auto& w : r.warnings) out << "  " << w.rule << ": " << w.message << "\n";
+  }
+  for (const auto& n : r.nodes) {
+    std::string unused;
+    for (const auto& [name, value] : n.counters) {
+      if (name.starts_with("unpaired_") || name.starts_with("rejected_")) {
+        if (value > 0) unused += (unused.empty() ? "" : ", ") + name + " " + std::to_string(value);
+      }
+    }
+    if (!unused.empty()) out << "node " << n.name << " dropped inputs: " << unused << "\n";
+  }
+  if (r.functional) {
+    const auto& f = *r.functional;
+    out << "\nfunctional (" << f.evaluator << ", " << f.evaluated << " of " << f.requested
+        << " sampled outputs):\n";
+    for (const auto& m : f.metrics) {
+      std::snprintf(line, sizeof line, "  %-20s %12s %-9s", m.name.c_str(),
+                    general(m.value).c_str(), m.unit.c_str());
+      out << line;
+      if (m.threshold.min) out << "  min " << general(*m.threshold.min);
+      if (m.threshold.max) out << "  max " << general(*m.threshold.max);
+      if (m.threshold.min || m.threshold.max) out << (m.passed ? "  ok" : "  FAILED");
+      out << "\n";
+    }
+    out << "functional result: " << (f.valid ? "VALID" : "INVALID");
+    for (std::size_t i = 0; i < f.reasons.size(); ++i)
+      out << (i == 0 ? " — " : "; ") << f.reasons[i];
+    out << "\n";
+  }
   for (const auto& e : r.errors) out << "error: " << e << "\n";
   out << "result: " << (r.valid ? "VALID" : "INVALID");
   for (std::size_t i = 0; i < r.invalid_reasons.size(); ++i) {

@@ -39,7 +39,7 @@ void expect_sane(const RunResult& r) {
 }
 
 TEST(BlackBox, NullGraphMatchesEverythingWithSmallOverhead) {
-  const RunResult r = run_package("null", relay_graph("none"), with_count(60, 200));
+  const RunResult r = run_package("null", relay_graph("none"), with_count(60, 100));
   expect_sane(r);
   EXPECT_EQ(r.sent, 60u);
   EXPECT_EQ(r.matched, 60u);
@@ -48,8 +48,9 @@ TEST(BlackBox, NullGraphMatchesEverythingWithSmallOverhead) {
   EXPECT_EQ(r.unknown, 0u);
   EXPECT_TRUE(r.valid) << (r.invalid_reasons.empty() ? "" : r.invalid_reasons[0]);
   EXPECT_GE(r.latency_from_sent.min, 0.0);
-  // In-process delivery of a shared pointer: well under a few milliseconds even on a busy machine.
-  EXPECT_LT(r.latency_from_sent.p50, 5 * kMs);
+  // In-process delivery of a shared pointer: microseconds; 20 ms allows for a
+  // heavily loaded CI machine and still catches a broken wake-up path.
+  EXPECT_LT(r.latency_from_sent.p50, 20 * kMs);
   EXPECT_LE(r.latency_from_sent.p50, r.latency_from_scheduled.p50);
 }
 

@@ -19,6 +19,7 @@
 #include "robotperf/msgs/cdr.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/msgs/std_msgs.hpp"
+#include "robotperf/msgs/stereo_msgs.hpp"
 #include "robotperf/msgs/type_support.hpp"
 
 namespace robotperf::msgs {
@@ -228,6 +229,94 @@ TEST(CdrGolden, CameraInfoEmptyDistortionStillAlignsK) {
 #undef F64_500
 #undef F64_320
 #undef F64_240
+
+TEST(CdrGolden, PointCloud2) {
+  PointCloud2 cloud;
+  cloud.header = Header{{1, 2}, "cam"};
+  cloud.height = 1;
+  cloud.width = 2;
+  cloud.fields = {PointField{"x", 0, PointField::kFloat32, 1}};
+  cloud.point_step = 4;
+  cloud.row_step = 8;
+  cloud.data = {0x00, 0x00, 0xC0, 0x3F, 0x00, 0x00, 0x80, 0xBF};  // 1.5f, -1.0f
+  cloud.is_dense = true;
+  const Bytes expected = {
+      0x00, 0x01, 0x00, 0x00,                          // header
+      0x01, 0x00, 0x00, 0x00,                          // @0 header.stamp.sec = 1
+      0x02, 0x00, 0x00, 0x00,                          // @4 header.stamp.nanosec = 2
+      0x04, 0x00, 0x00, 0x00,                          // @8 frame_id length 4
+      'c',  'a',  'm',  0x00,                          // @12 "cam" NUL
+      0x01, 0x00, 0x00, 0x00,                          // @16 height = 1
+      0x02, 0x00, 0x00, 0x00,                          // @20 width = 2
+      0x01, 0x00, 0x00, 0x00,                          // @24 fields count = 1
+      0x02, 0x00, 0x00, 0x00,                          // @28 fields[0].name length = 1 + NUL
+      'x',  0x00,                                      // @32 "x" NUL
+      0x00, 0x00,                                      // @34 pad: uint32 offset aligned to 4
+      0x00, 0x00, 0x00, 0x00,                          // @36 offset = 0
+      0x07,                                            // @40 datatype = FLOAT32
+      0x00, 0x00, 0x00,                                // @41 pad
+      0x01, 0x00, 0x00, 0x00,                          // @44 count = 1
+      0x00,                                            // @48 is_bigendian
+      0x00, 0x00, 0x00,                                // @49 pad
+      0x04, 0x00, 0x00, 0x00,                          // @52 point_step = 4
+      0x08, 0x00, 0x00, 0x00,                          // @56 row_step = 8
+      0x08, 0x00, 0x00, 0x00,                          // @60 data count = 8
+      0x00, 0x00, 0xC0, 0x3F, 0x00, 0x00, 0x80, 0xBF,  // @64 data
+      0x01,                                            // @72 is_dense
+  };
+  ExpectGolden(cloud, expected);
+}
+
+TEST(CdrGolden, DisparityImage) {
+  DisparityImage d;
+  d.header = Header{{1, 2}, "cam"};
+  d.image.header = d.header;
+  d.image.height = 1;
+  d.image.width = 2;
+  d.image.encoding = "32FC1";
+  d.image.step = 8;
+  d.image.data = {0x00, 0x00, 0xC0, 0x3F, 0x00, 0x00, 0x80, 0xBF};  // 1.5f, -1.0f
+  d.f = 500.0f;
+  d.t = 0.1f;
+  d.valid_window = RegionOfInterest{70, 7, 466, 563, false};
+  d.min_disparity = 0.0f;
+  d.max_disparity = 63.0f;
+  d.delta_d = 0.0625f;
+  const Bytes expected = {
+      0x00, 0x01, 0x00, 0x00,                          // header
+      0x01, 0x00, 0x00, 0x00,                          // @0 header.stamp.sec = 1
+      0x02, 0x00, 0x00, 0x00,                          // @4 header.stamp.nanosec = 2
+      0x04, 0x00, 0x00, 0x00,                          // @8 frame_id length 4
+      'c',  'a',  'm',  0x00,                          // @12 "cam" NUL
+      0x01, 0x00, 0x00, 0x00,                          // @16 image.header.stamp.sec
+      0x02, 0x00, 0x00, 0x00,                          // @20 image.header.stamp.nanosec
+      0x04, 0x00, 0x00, 0x00,                          // @24 image.header.frame_id length 4
+      'c',  'a',  'm',  0x00,                          // @28 "cam" NUL
+      0x01, 0x00, 0x00, 0x00,                          // @32 image.height = 1
+      0x02, 0x00, 0x00, 0x00,                          // @36 image.width = 2
+      0x06, 0x00, 0x00, 0x00,                          // @40 encoding length = 5 + NUL
+      '3',  '2',  'F',  'C',  '1',  0x00,              // @44 "32FC1" NUL
+      0x00,                                            // @50 image.is_bigendian
+      0x00,                                            // @51 pad
+      0x08, 0x00, 0x00, 0x00,                          // @52 image.step = 8
+      0x08, 0x00, 0x00, 0x00,                          // @56 image.data count = 8
+      0x00, 0x00, 0xC0, 0x3F, 0x00, 0x00, 0x80, 0xBF,  // @60 image.data
+      0x00, 0x00, 0xFA, 0x43,                          // @68 f = 500.0f
+      0xCD, 0xCC, 0xCC, 0x3D,                          // @72 t = 0.1f
+      0x46, 0x00, 0x00, 0x00,                          // @76 valid_window.x_offset = 70
+      0x07, 0x00, 0x00, 0x00,                          // @80 y_offset = 7
+      0xD2, 0x01, 0x00, 0x00,                          // @84 height = 466
+      0x33, 0x02, 0x00, 0x00,                          // @88 width = 563
+      0x00,                                            // @92 do_rectify
+      0x00, 0x00, 0x00,                                // @93 pad: float32 aligned to 4
+      0x00, 0x00, 0x00, 0x00,                          // @96 min_disparity = 0
+      0x00, 0x00, 0x7C, 0x42,                          // @100 max_disparity = 63
+      0x00, 0x00, 0x80, 0x3D,                          // @104 delta_d = 1/16
+  };
+  ExpectGolden(d, expected);
+  EXPECT_EQ(type_support<DisparityImage>().dds_type, "stereo_msgs::msg::dds_::DisparityImage_");
+  EXPECT_EQ(type_support<PointCloud2>().dds_type, "sensor_msgs::msg::dds_::PointCloud2_");
+}
 
 TEST(CdrRoundTrip, LargerImage) {
   Image img;

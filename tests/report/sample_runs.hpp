@@ -74,7 +74,11 @@ inline harness::RunResult make_run(const SampleRun& s) {
   r.completed = true;
   r.valid = r.lost == 0;
   if (!r.valid) r.invalid_reasons.push_back("lost messages");
-  r.nodes.push_back({"rectify", "image_proc/rectify", 0, "ok", -1, -1});
+  harness::NodeReport node;
+  node.name = "rectify";
+  node.kernel = "image_proc/rectify";
+  node.exit_status = "ok";
+  r.nodes.push_back(node);
   return r;
 }
 

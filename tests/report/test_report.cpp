@@ -98,7 +98,7 @@ TEST_F(Report, ResultsJsonCarriesTheHistogram) {
   EXPECT_EQ(run.hardware, "AMD Ryzen 7 5800X");
   EXPECT_EQ(run.hardware_category, "workstation");
   EXPECT_FALSE(run.power_w);
-  EXPECT_EQ(run.power_note, "not recorded");
+  EXPECT_FALSE(run.power_note.empty());  // why there is no power figure
 
   testing::SampleRun later;
   later.start_unix_ns += 1'000'000'000;
@@ -233,7 +233,8 @@ TEST_F(Report, BadInputsGiveOneClearLine) {
 
 TEST_F(Report, ReadmeIsStableAndMatchesTheCommittedOnes) {
   const fs::path root = fs::path(ROBOTPERF_SOURCE_DIR) / "benchmarks/perception";
-  for (const char* package : {"a1_perception_2nodes", "a2_rectify", "a5_resize"}) {
+  for (const char* package : {"a1_perception_2nodes", "a2_rectify", "a3_stereo_image_proc",
+                              "a4_depth_image_proc", "a5_resize"}) {
     const std::string first = render_package_readme(root / package);
     EXPECT_EQ(first, render_package_readme(root / package));
     EXPECT_EQ(first, read_text(root / package / "README.md"))

@@ -4,10 +4,12 @@
 #include <cstddef>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "robotperf/harness/functional.hpp"
 #include "robotperf/kernels/registry.hpp"
 #include "robotperf/rmw/transport.hpp"
 
@@ -56,6 +58,9 @@ struct BenchmarkSpec {
   std::vector<BoundaryTopic> inputs;
   BoundaryTopic output;
   std::vector<NodeSpec> nodes;
+  // graph.yaml `functional:` with benchmark.yaml's thresholds; absent when the benchmark does not
+  // check accuracy.
+  std::optional<FunctionalSpec> functional;
 
   const NodeSpec* find_node(const std::string& name) const;
 };

@@ -13,6 +13,7 @@ namespace robotperf::harness {
 // One kind of message of a dataset, one per frame (e.g. "image", "camera_info").
 struct DatasetStream {
   std::string name;
+  std::string topic;  // where it is recorded when written as a bag ("/camera/image_raw")
   const msgs::TypeSupport* type = nullptr;
   std::vector<rmw::MessagePtr> messages;
 };
@@ -36,7 +37,8 @@ struct DatasetInfo {
 
 const std::vector<DatasetInfo>& builtin_datasets();
 
-// Loads a built-in dataset; throws std::invalid_argument for an unknown name.
+// Loads a built-in dataset (generated once per process, then shared); throws
+// std::invalid_argument for an unknown name.
 Dataset load_dataset(const std::string& name);
 
 }  // namespace robotperf::harness

@@ -3,12 +3,19 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "robotperf/harness/benchmark_spec.hpp"
+#include "robotperf/harness/functional.hpp"
+#include "robotperf/harness/scheduling.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
+#include "robotperf/metrics/power.hpp"
+#include "robotperf/metrics/resources.hpp"
+#include "robotperf/sysinfo/run_rules.hpp"
 
 namespace robotperf::harness {
 
@@ -27,6 +34,13 @@ struct RunOptions {
   // For per-node runs: the robotperf executable and the arguments that make it
   // run one node ("node" subcommand); the runner appends its own.
   std::vector<std::string> node_command;
+  // Power sources and their sampling period; sampled during the measured window only.
+  metrics::PowerOptions power;
+  // Where the graph runs: pinned CPUs, real-time priority, locked memory. In a single-process
+  // run they apply to the whole process (Playback and Monitor too); per node, to the children.
+  SchedulingOptions scheduling;
+  // Refuse to run (RunRefused) when a run rule is broken, instead of recording a warning.
+  bool strict = false;
   // Called from the playback thread after each send.
   std::function<void(std::size_t sent, std::size_t total, std::size_t received)> progress;
 };
@@ -47,6 +61,8 @@ struct NodeReport {
   std::string exit_status;  // "ok" or how it ended
   double cpu_user_s = -1;   // -1 when unknown
   double cpu_system_s = -1;
+  // What the kernel counted (kernels::NodeCounters), e.g. inputs that never paired.
+  std::map<std::string, uint64_t> counters;
 };
 
 struct RunResult {
@@ -90,6 +106,22 @@ struct RunResult {
   std::vector<std::string> invalid_reasons;
   std::vector<NodeReport> nodes;
   std::vector<MessageRecord> records;
+  int domain_id = 0;
+  SchedulingOptions scheduling;
+  // Run rules broken before or during the run (DESIGN.md §3).
+  std::vector<sysinfo::RunWarning> warnings;
+  // Over the measured window: from the first measured send to the end of the drain.
+  metrics::PowerReport power;
+  metrics::ResourceUsage resources;
+  // Accuracy of the outputs against the dataset's ground truth; absent when the benchmark
+  // names no functional evaluator.
+  std::optional<FunctionalResult> functional;
+};
+
+// Thrown by run_benchmark with --strict when a run rule is broken; what() lists them.
+class RunRefused : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 // Runs the benchmark. Problems that stop the run before timing (bad spec,
@@ -102,6 +134,7 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options);
 // stdout once its endpoints are matched, runs until stdin closes, then prints
 // a final "stats" line. Returns the process exit code.
 int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
-                     const std::string& rmw, int domain_id);
+                     const std::string& rmw, int domain_id,
+                     const SchedulingOptions& scheduling = {});
 
 }  // namespace robotperf::harness

@@ -56,6 +56,15 @@ struct KernelInfo {
   std::vector<std::string> output_ports;
 };
 
+// Implemented by kernel nodes that count inputs they received but could not use (frames whose
+// inputs never paired, inputs rejected as malformed). The harness reports the counts with the
+// node; read them only while the node's callbacks are not running.
+class NodeCounters {
+ public:
+  virtual ~NodeCounters() = default;
+  virtual std::map<std::string, uint64_t> counters() const = 0;
+};
+
 using KernelFactory =
     std::function<std::shared_ptr<graph::Node>(graph::Context&, const KernelConfig&)>;
 

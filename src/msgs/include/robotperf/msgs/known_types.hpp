@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/msgs/stereo_msgs.hpp"
 
 namespace robotperf::msgs {
 
@@ -16,6 +17,10 @@ bool with_message_type(std::string_view ros_type, F&& f) {
     f.template operator()<Image>();
   } else if (ros_type == MessageTraits<CameraInfo>::ros_type) {
     f.template operator()<CameraInfo>();
+  } else if (ros_type == MessageTraits<PointCloud2>::ros_type) {
+    f.template operator()<PointCloud2>();
+  } else if (ros_type == MessageTraits<DisparityImage>::ros_type) {
+    f.template operator()<DisparityImage>();
   } else {
     return false;
   }

@@ -79,6 +79,58 @@ void visit_fields(V& v, M& m) {
   v(m.data);
 }
 
+struct PointField {
+  // datatype values.
+  static constexpr uint8_t kInt8 = 1;
+  static constexpr uint8_t kUint8 = 2;
+  static constexpr uint8_t kInt16 = 3;
+  static constexpr uint8_t kUint16 = 4;
+  static constexpr uint8_t kInt32 = 5;
+  static constexpr uint8_t kUint32 = 6;
+  static constexpr uint8_t kFloat32 = 7;
+  static constexpr uint8_t kFloat64 = 8;
+
+  std::string name;
+  uint32_t offset = 0;
+  uint8_t datatype = 0;
+  uint32_t count = 0;
+  friend bool operator==(const PointField&, const PointField&) = default;
+};
+template <class V, class M>
+requires std::is_same_v<std::remove_const_t<M>, PointField>
+void visit_fields(V& v, M& m) {
+  v(m.name);
+  v(m.offset);
+  v(m.datatype);
+  v(m.count);
+}
+
+struct PointCloud2 {
+  Header header;
+  uint32_t height = 0;
+  uint32_t width = 0;
+  std::vector<PointField> fields;
+  bool is_bigendian = false;
+  uint32_t point_step = 0;
+  uint32_t row_step = 0;
+  std::vector<uint8_t> data;
+  bool is_dense = false;
+  friend bool operator==(const PointCloud2&, const PointCloud2&) = default;
+};
+template <class V, class M>
+requires std::is_same_v<std::remove_const_t<M>, PointCloud2>
+void visit_fields(V& v, M& m) {
+  v(m.header);
+  v(m.height);
+  v(m.width);
+  v(m.fields);
+  v(m.is_bigendian);
+  v(m.point_step);
+  v(m.row_step);
+  v(m.data);
+  v(m.is_dense);
+}
+
 template <>
 struct MessageTraits<RegionOfInterest> {
   static constexpr std::string_view ros_type = "sensor_msgs/msg/RegionOfInterest";
@@ -90,6 +142,14 @@ struct MessageTraits<CameraInfo> {
 template <>
 struct MessageTraits<Image> {
   static constexpr std::string_view ros_type = "sensor_msgs/msg/Image";
+};
+template <>
+struct MessageTraits<PointField> {
+  static constexpr std::string_view ros_type = "sensor_msgs/msg/PointField";
+};
+template <>
+struct MessageTraits<PointCloud2> {
+  static constexpr std::string_view ros_type = "sensor_msgs/msg/PointCloud2";
 };
 
 }  // namespace robotperf::msgs

@@ -16,6 +16,9 @@ inline constexpr const char* kResultSchema = "robotperf.result/1";
 // robotperf's own version, revision, compiler, build and library versions.
 nlohmann::json software_json();
 
+// The transport and its settings, as recorded under software.transport.
+nlohmann::json transport_json(const std::string& rmw, int domain_id, const std::string& processes);
+
 nlohmann::json result_to_json(const harness::RunResult& result,
                               const sysinfo::MachineInfo& machine);
 

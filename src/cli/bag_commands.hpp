@@ -1,0 +1,37 @@
+// The `bag` and `dataset generate` verbs of the robotperf command.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace robotperf::cli {
+
+// Like `ros2 bag info`: storage, files, duration, per-topic counts, types, QoS.
+int bag_info(const std::string& path);
+
+struct EchoOptions {
+  std::vector<std::string> topics;    // empty: all
+  std::optional<std::size_t> limit;   // messages to print
+  std::vector<std::string> msg_dirs;  // .msg folders for types the bag has no definition of
+  std::size_t max_array = 64;         // longer arrays are summarised
+};
+int bag_echo(const std::string& path, const EchoOptions& options);
+
+struct ConvertOptions {
+  std::string storage = "mcap";
+  std::string compression = "zstd";
+  std::size_t chunk_size = 4 * 1024 * 1024;
+  double max_file_mib = 0;
+};
+int bag_convert(const std::string& in, const std::string& out, const ConvertOptions& options);
+
+struct GenerateOptions {
+  std::string out;  // default: the dataset name with '/' replaced by '_'
+  std::string storage = "mcap";
+  std::string compression = "zstd";
+};
+int dataset_generate(const std::string& name, const GenerateOptions& options);
+
+}  // namespace robotperf::cli

@@ -1,0 +1,23 @@
+// Private to the harness: the built-in functional evaluators.
+#pragma once
+
+#include <memory>
+
+#include "robotperf/harness/functional.hpp"
+
+namespace robotperf::harness {
+
+// A truth stream of the dataset by role; the spec maps roles to stream names.
+struct TruthStreams {
+  const FunctionalSpec* spec;
+  const Dataset* dataset;
+  const DatasetStream& operator[](const std::string& role) const;
+};
+
+EvaluatorInfo stereo_disparity_info();
+std::unique_ptr<FunctionalEvaluator> make_stereo_disparity_evaluator(const TruthStreams& truth);
+
+EvaluatorInfo depth_point_cloud_info();
+std::unique_ptr<FunctionalEvaluator> make_depth_point_cloud_evaluator(const TruthStreams& truth);
+
+}  // namespace robotperf::harness

@@ -1,0 +1,37 @@
+// Run rules: conditions under which a benchmark's numbers do not mean what they seem (a Debug
+// build, a CPU clock that follows the load, other load on the machine, tracing during a
+// black-box run, too few samples for the percentiles reported). They are checked before a run;
+// each one found becomes a warning recorded in the result (or, with --strict, a refusal).
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "robotperf/sysinfo/machine.hpp"
+
+namespace robotperf::sysinfo {
+
+struct RunWarning {
+  std::string rule;     // short id: "build", "governor", "system_busy", ...
+  std::string message;  // one line: what, why it matters, what to do
+};
+
+struct RunRuleInputs {
+  MachineInfo machine;
+  std::string build_type;  // CMAKE_BUILD_TYPE of this robotperf
+  bool sanitized = false;
+  std::size_t measured_messages = 0;
+  // CPU used by processes other than the graph's just before the run, in % of one core.
+  std::optional<double> other_load_percent;
+  std::filesystem::path root = "/";  // where proc/ and sys/ are (fixture trees in tests)
+};
+
+// Load by other processes above this (in % of one core) makes the machine "busy".
+inline constexpr double kBusyThresholdPercent = 25.0;
+
+std::vector<RunWarning> check_run_rules(const RunRuleInputs& inputs);
+
+}  // namespace robotperf::sysinfo

@@ -1,0 +1,158 @@
+// Bad input gives one clear line naming the file and the problem.
+#include <sqlite3.h>
+
+#include <cstring>
+
+#include "bag_test_util.hpp"
+
+namespace robotperf::bag {
+namespace {
+
+using namespace testing;
+
+// Reads the whole bag; returns the error text ("" when it read fine).
+std::string error_of(const fs::path& path) {
+  try {
+    read_all(path);
+  } catch (const BagError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.find('\n'), std::string::npos) << "not one line: " << what;
+    return what;
+  }
+  return "";
+}
+
+void expect_error(const fs::path& path, const std::string& names, const std::string& says) {
+  const std::string what = error_of(path);
+  EXPECT_NE(what.find(names), std::string::npos) << "'" << what << "' does not name " << names;
+  EXPECT_NE(what.find(says), std::string::npos) << "'" << what << "' does not say " << says;
+}
+
+std::vector<uint8_t> talker() {
+  return read_file(reference_bag("mcap_talker") / "talker.mcap");
+}
+
+// The only chunk of talker.mcap starts at offset 45: prefix (9), start and
+// end times (16), uncompressed size (8), then the crc (4) and the compression.
+constexpr std::size_t kChunk = 45;
+constexpr std::size_t kChunkCrc = kChunk + 9 + 24;
+constexpr std::size_t kChunkCompression = kChunkCrc + 4 + 4;
+
+TEST(BagErrors, TruncatedMcap) {
+  ScratchDir dir;
+  auto bytes = talker();
+  bytes.resize(bytes.size() / 2);
+  write_file(dir / "t.mcap", bytes);
+  expect_error(dir / "t.mcap", "t.mcap", "truncated");
+}
+
+TEST(BagErrors, TruncatedMcapRecordInLinearScan) {
+  ScratchDir dir;
+  auto bytes = talker();
+  // Keep the footer (no summary) but cut the data section short.
+  std::vector<uint8_t> cut(bytes.begin(), bytes.begin() + 2000);
+  cut.insert(cut.end(), bytes.end() - 37, bytes.end());
+  std::memset(cut.data() + cut.size() - 37 + 9, 0, 20);
+  write_file(dir / "t.mcap", cut);
+  expect_error(dir / "t.mcap", "t.mcap", "truncated");
+}
+
+TEST(BagErrors, ChunkCrcMismatch) {
+  ScratchDir dir;
+  auto bytes = talker();
+  ASSERT_EQ(std::memcmp(bytes.data() + kChunkCompression, "zstd", 4), 0);
+  bytes[kChunkCrc] ^= 0xFF;
+  write_file(dir / "crc.mcap", bytes);
+  expect_error(dir / "crc.mcap", "crc.mcap", "CRC mismatch");
+  // Without verification the messages still come out.
+  ReadOptions no_crc;
+  no_crc.verify_crc = false;
+  EXPECT_EQ(read_all(dir / "crc.mcap", no_crc).size(), 20u);
+}
+
+TEST(BagErrors, CorruptPayloadInAnUncompressedChunk) {
+  ScratchDir dir;
+  convert(reference_bag("mcap_talker"), dir / "plain", {Storage::kMcap, Compression::kNone});
+  auto bytes = read_file(dir / "plain" / "plain_0.mcap");
+  // Flip a character of a "Hello, world!" inside the chunk.
+  const char needle[] = "Hello, world! 3";
+  auto it = std::search(bytes.begin(), bytes.end(), needle, needle + sizeof(needle) - 1);
+  ASSERT_NE(it, bytes.end());
+  *it ^= 0x20;
+  write_file(dir / "plain" / "plain_0.mcap", bytes);
+  expect_error(dir / "plain", "plain_0.mcap", "CRC mismatch");
+}
+
+TEST(BagErrors, WrongMagic) {
+  ScratchDir dir;
+  auto bytes = talker();
+  bytes[1] = 'X';
+  write_file(dir / "m.mcap", bytes);
+  expect_error(dir / "m.mcap", "m.mcap", "magic");
+  write_file(dir / "text.db3", {'h', 'e', 'l', 'l', 'o', '\n'});
+  expect_error(dir / "text.db3", "text.db3", "wrong magic");
+}
+
+TEST(BagErrors, UnknownChunkCompression) {
+  ScratchDir dir;
+  auto bytes = talker();
+  std::memcpy(bytes.data() + kChunkCompression, "zxxd", 4);
+  write_file(dir / "c.mcap", bytes);
+  expect_error(dir / "c.mcap", "c.mcap", "unknown compression 'zxxd'");
+}
+
+TEST(BagErrors, MissingMetadataYaml) {
+  ScratchDir dir;
+  fs::create_directories(dir / "bag");
+  expect_error(dir / "bag", "bag", "no metadata.yaml");
+  expect_error(dir / "nothing", "nothing", "no such file");
+}
+
+TEST(BagErrors, MalformedMetadataYaml) {
+  ScratchDir dir;
+  fs::create_directories(dir / "bag");
+  write_file(dir / "bag" / "metadata.yaml",
+             {'r', 'o', 's', 'b', 'a', 'g', ':', ' ', '[', 'x', '\n'});
+  expect_error(dir / "bag", "metadata.yaml", "malformed YAML");
+}
+
+TEST(BagErrors, MetadataListsAMissingFile) {
+  ScratchDir dir;
+  fs::create_directories(dir / "bag");
+  fs::copy_file(reference_bag("sqlite3_cdr_test") / "metadata.yaml", dir / "bag" / "metadata.yaml");
+  expect_error(dir / "bag", "cdr_test_0.db3", "missing");
+}
+
+TEST(BagErrors, UnknownBagCompressionInMetadata) {
+  ScratchDir dir;
+  convert(reference_bag("sqlite3_cdr_test"), dir / "bag", {Storage::kSqlite3, Compression::kNone});
+  auto yaml = read_file(dir / "bag" / "metadata.yaml");
+  std::string text(yaml.begin(), yaml.end());
+  const std::string empty = "compression_format: \"\"";
+  text.replace(text.find(empty), empty.size(), "compression_format: brotli");
+  write_file(dir / "bag" / "metadata.yaml", {text.begin(), text.end()});
+  expect_error(dir / "bag", "metadata.yaml", "'brotli' is unknown");
+}
+
+TEST(BagErrors, SqliteFileThatIsNotABag) {
+  ScratchDir dir;
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((dir / "other.db3").c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "CREATE TABLE people(name TEXT)", nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  expect_error(dir / "other.db3", "other.db3", "not a rosbag2 bag");
+}
+
+TEST(BagErrors, TruncatedSqliteFile) {
+  ScratchDir dir;
+  auto bytes = read_file(reference_bag("sqlite3_cdr_test") / "cdr_test_0.db3");
+  bytes.resize(5000);
+  write_file(dir / "cut.db3", bytes);
+  const std::string what = error_of(dir / "cut.db3");
+  EXPECT_NE(what.find("cut.db3"), std::string::npos) << what;
+  EXPECT_FALSE(what.empty());
+}
+
+}  // namespace
+}  // namespace robotperf::bag

@@ -1,0 +1,416 @@
+// stereo_image_proc/disparity, depth_image_proc/point_cloud_xyzrgb and the input pairing.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <opencv2/core.hpp>
+
+#include "robotperf/datasets/synthetic_depth.hpp"
+#include "robotperf/datasets/synthetic_stereo.hpp"
+#include "robotperf/kernels/camera_model.hpp"
+#include "robotperf/kernels/depth_image_proc.hpp"
+#include "robotperf/kernels/image_proc.hpp"
+#include "robotperf/kernels/message_sync.hpp"
+#include "robotperf/kernels/stereo_image_proc.hpp"
+
+namespace robotperf::kernels {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// MessageSync
+// ---------------------------------------------------------------------------------------------
+
+// Messages are their own stamps, so a test can see exactly what was paired.
+std::shared_ptr<const void> msg(int64_t stamp) {
+  return std::make_shared<const int64_t>(stamp);
+}
+int64_t stamp_of(const std::shared_ptr<const void>& m) {
+  return *static_cast<const int64_t*>(m.get());
+}
+
+struct Recorder {
+  std::vector<std::array<int64_t, 3>> sets;
+  auto callback() {
+    return [this](const MessageSync<3>::Set& s) {
+      sets.push_back({stamp_of(s[0]), stamp_of(s[1]), stamp_of(s[2])});
+    };
+  }
+};
+
+TEST(MessageSync, ExactPairsOnlyIdenticalStampsAndDropsTheUnpaired) {
+  Recorder r;
+  MessageSync<3> sync({SyncPolicy::kExact, 10}, r.callback());
+  for (int64_t k = 0; k < 10; ++k) {
+    if (k != 4) sync.add(0, msg(k), k);  // input 0 loses frame 4
+    sync.add(1, msg(k), k);
+    if (k != 7) sync.add(2, msg(k), k);  // input 2 loses frame 7
+  }
+  ASSERT_EQ(r.sets.size(), 8u);
+  for (const auto& s : r.sets) {
+    EXPECT_EQ(s[0], s[1]);
+    EXPECT_EQ(s[1], s[2]);
+    EXPECT_NE(s[0], 4);
+    EXPECT_NE(s[0], 7);
+  }
+  EXPECT_EQ(sync.emitted(), 8u);
+  // Frame 4: inputs 1 and 2 dropped; frame 7: inputs 0 and 1.
+  EXPECT_EQ(sync.dropped()[0], 1u);
+  EXPECT_EQ(sync.dropped()[1], 2u);
+  EXPECT_EQ(sync.dropped()[2], 1u);
+}
+
+TEST(MessageSync, ExactDropsTheOldestStampBeyondTheQueue) {
+  Recorder r;
+  MessageSync<3> sync({SyncPolicy::kExact, 2}, r.callback());
+  for (int64_t k = 0; k < 5; ++k) sync.add(0, msg(k), k);  // inputs 1, 2 silent
+  EXPECT_EQ(sync.dropped()[0], 3u);
+  sync.add(1, msg(4), 4);
+  sync.add(2, msg(4), 4);
+  ASSERT_EQ(r.sets.size(), 1u);
+  EXPECT_EQ(r.sets[0], (std::array<int64_t, 3>{4, 4, 4}));
+  EXPECT_EQ(sync.dropped()[0], 4u);  // 3 was passed over
+}
+
+TEST(MessageSync, ApproximatePairsNearestStampsAcrossAnOffset) {
+  Recorder r;
+  MessageSync<3> sync({SyncPolicy::kApproximate, 5}, r.callback());
+  // Colour and CameraInfo 5 ms after depth, frames 33 ms apart.
+  for (int64_t k = 0; k < 6; ++k) {
+    sync.add(0, msg(k * 33), k * 33);
+    sync.add(1, msg(k * 33 + 5), k * 33 + 5);
+    sync.add(2, msg(k * 33 + 5), k * 33 + 5);
+  }
+  // Each set waits for the next depth to be sure: 5 of 6 frames out, none mixed.
+  ASSERT_EQ(r.sets.size(), 5u);
+  for (std::size_t i = 0; i < r.sets.size(); ++i) {
+    EXPECT_EQ(r.sets[i][0], static_cast<int64_t>(i) * 33);
+    EXPECT_EQ(r.sets[i][1], r.sets[i][0] + 5);
+    EXPECT_EQ(r.sets[i][2], r.sets[i][0] + 5);
+  }
+  EXPECT_EQ(sync.dropped_total(), 0u);
+}
+
+TEST(MessageSync, ApproximateWithIdenticalStampsEmitsAtOnceAndDropsALostFramesPartners) {
+  Recorder r;
+  MessageSync<3> sync({SyncPolicy::kApproximate, 5, 10}, r.callback());
+  for (int64_t k = 0; k < 8; ++k) {
+    const int64_t t = k * 100;
+    sync.add(1, msg(t), t);
+    sync.add(2, msg(t), t);
+    if (k != 3) sync.add(0, msg(t), t);  // depth of frame 3 lost
+    EXPECT_EQ(r.sets.size(), static_cast<std::size_t>(k < 3 ? k + 1 : k)) << "frame " << k;
+  }
+  for (const auto& s : r.sets) {
+    EXPECT_EQ(s[0], s[1]);
+    EXPECT_EQ(s[0], s[2]);
+  }
+  EXPECT_EQ(sync.dropped()[0], 0u);
+  EXPECT_EQ(sync.dropped()[1], 1u);
+  EXPECT_EQ(sync.dropped()[2], 1u);
+}
+
+TEST(MessageSync, ApproximateRespectsMaxInterval) {
+  Recorder r;
+  MessageSync<3> sync({SyncPolicy::kApproximate, 5, 10}, r.callback());
+  sync.add(0, msg(0), 0);
+  sync.add(1, msg(50), 50);
+  sync.add(2, msg(50), 50);
+  sync.add(0, msg(100), 100);
+  sync.add(1, msg(100), 100);
+  sync.add(2, msg(100), 100);
+  ASSERT_EQ(r.sets.size(), 1u);  // 0 and 50 are too far apart; 50 and 100 too
+  EXPECT_EQ(r.sets[0], (std::array<int64_t, 3>{100, 100, 100}));
+  EXPECT_EQ(sync.dropped_total(), 3u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Disparity
+// ---------------------------------------------------------------------------------------------
+
+class Disparity : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    datasets::SyntheticStereoConfig c;
+    c.frames = 2;
+    frames_ = new std::vector<datasets::StereoFrame>(datasets::generate_stereo_sequence(c));
+  }
+  static void TearDownTestSuite() { delete frames_; }
+
+  // bad-1 share and valid share against the truth inside the valid window.
+  static std::pair<double, double> accuracy(const msgs::DisparityImage& out,
+                                            const msgs::DisparityImage& truth) {
+    const cv::Mat d = image_view(out.image), gt = image_view(truth.image);
+    int evaluated = 0, valid = 0, bad = 0;
+    const auto& w = out.valid_window;
+    for (uint32_t v = w.y_offset; v < w.y_offset + w.height; ++v) {
+      for (uint32_t u = w.x_offset; u < w.x_offset + w.width; ++u) {
+        const float g = gt.at<float>(v, u);
+        if (std::isnan(g)) continue;
+        ++evaluated;
+        const float x = d.at<float>(v, u);
+        if (x < out.min_disparity) continue;
+        ++valid;
+        bad += std::abs(x - g) > 1.0f;
+      }
+    }
+    return {static_cast<double>(bad) / valid, static_cast<double>(valid) / evaluated};
+  }
+
+  static std::vector<datasets::StereoFrame>* frames_;
+};
+std::vector<datasets::StereoFrame>* Disparity::frames_ = nullptr;
+
+TEST_F(Disparity, FillsTheDisparityImageAsStereoImageProc) {
+  const auto& f = (*frames_)[0];
+  DisparityProcessor bm;
+  msgs::DisparityImage out;
+  bm.compute(f.left, f.right, f.left_info, f.right_info, out);
+  EXPECT_EQ(out.header, f.left_info.header);
+  EXPECT_EQ(out.image.header, f.left_info.header);
+  EXPECT_EQ(out.image.encoding, "32FC1");
+  EXPECT_EQ(out.image.width, 640u);
+  EXPECT_EQ(out.image.height, 480u);
+  EXPECT_EQ(out.image.step, 640u * 4);
+  EXPECT_FLOAT_EQ(out.f, static_cast<float>(f.right_info.p[0]));
+  EXPECT_NEAR(out.t, 0.10f, 1e-6);
+  // Window 15 (border 7), range 64, min 0: x from 64 + 0 + 7 - 1 = 70 to 640 - 1 - 7 = 632.
+  EXPECT_EQ(out.valid_window.x_offset, 70u);
+  EXPECT_EQ(out.valid_window.y_offset, 7u);
+  EXPECT_EQ(out.valid_window.width, 632u - 70u);
+  EXPECT_EQ(out.valid_window.height, 472u - 7u);
+  EXPECT_FLOAT_EQ(out.min_disparity, 0.0f);
+  EXPECT_FLOAT_EQ(out.max_disparity, 63.0f);
+  EXPECT_FLOAT_EQ(out.delta_d, 1.0f / 16);
+  // Fixed-point values / 16: every disparity is a multiple of 1/16; invalid ones are -1.
+  const cv::Mat d = image_view(out.image);
+  int invalid = 0;
+  for (int v = 0; v < d.rows; ++v) {
+    for (int u = 0; u < d.cols; ++u) {
+      const float x = d.at<float>(v, u);
+      EXPECT_EQ(x * 16, std::round(x * 16));
+      invalid += x == -1.0f;
+    }
+  }
+  EXPECT_GT(invalid, 480 * 64);  // at least the band left of the search range
+  const auto [bad1, valid] = accuracy(out, f.truth);
+  EXPECT_LT(bad1, 0.05);
+  EXPECT_GT(valid, 0.85);
+}
+
+TEST_F(Disparity, SubtractsThePrincipalPointOffset) {
+  const auto& f = (*frames_)[0];
+  DisparityProcessor bm;
+  msgs::DisparityImage plain, shifted;
+  bm.compute(f.left, f.right, f.left_info, f.right_info, plain);
+  msgs::CameraInfo right = f.right_info;
+  right.p[2] -= 2.0;  // cx_left - cx_right = 2
+  bm.compute(f.left, f.right, f.left_info, right, shifted);
+  const cv::Mat a = image_view(plain.image), b = image_view(shifted.image);
+  EXPECT_FLOAT_EQ(b.at<float>(240, 320), a.at<float>(240, 320) - 2.0f);
+}
+
+TEST_F(Disparity, SemiGlobalMatchingIsSelectableAndAccurate) {
+  const auto& f = (*frames_)[1];
+  StereoParams p;
+  p.algorithm = StereoAlgorithm::kSemiGlobal;
+  DisparityProcessor sgbm(p);
+  msgs::DisparityImage out;
+  sgbm.compute(f.left, f.right, f.left_info, f.right_info, out);
+  const auto [bad1, valid] = accuracy(out, f.truth);
+  EXPECT_LT(bad1, 0.05);
+  EXPECT_GT(valid, 0.85);
+}
+
+TEST_F(Disparity, SwappedImagesGiveGarbage) {
+  const auto& f = (*frames_)[0];
+  DisparityProcessor bm;
+  msgs::DisparityImage out;
+  bm.compute(f.right, f.left, f.left_info, f.right_info, out);
+  const auto [bad1, valid] = accuracy(out, f.truth);
+  EXPECT_LT(valid, 0.5);
+}
+
+TEST_F(Disparity, RejectsBadParametersAndInputs) {
+  StereoParams p;
+  p.disparity_range = 60;
+  EXPECT_THROW(DisparityProcessor{p}, std::invalid_argument);
+  p = {};
+  p.correlation_window_size = 14;
+  EXPECT_THROW(DisparityProcessor{p}, std::invalid_argument);
+  p = {};
+  p.algorithm = StereoAlgorithm::kSemiGlobal;
+  p.p2 = p.p1;
+  EXPECT_THROW(DisparityProcessor{p}, std::invalid_argument);
+
+  const auto& f = (*frames_)[0];
+  DisparityProcessor bm;
+  msgs::DisparityImage out;
+  msgs::Image small;
+  prepare_image(small, f.right.header, "rgb8", 320, 240);
+  EXPECT_THROW(bm.compute(f.left, small, f.left_info, f.right_info, out), std::invalid_argument);
+  msgs::Image depth;
+  prepare_image(depth, f.right.header, "32FC1", 640, 480);
+  EXPECT_THROW(bm.compute(f.left, depth, f.left_info, f.right_info, out), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Point cloud xyzrgb
+// ---------------------------------------------------------------------------------------------
+
+struct Point {
+  float x, y, z;
+  uint8_t b, g, r, a;
+};
+Point point_at(const msgs::PointCloud2& c, uint32_t u, uint32_t v) {
+  Point p;
+  const uint8_t* base = c.data.data() + v * c.row_step + u * c.point_step;
+  std::memcpy(&p.x, base + 0, 4);
+  std::memcpy(&p.y, base + 4, 4);
+  std::memcpy(&p.z, base + 8, 4);
+  p.b = base[16];
+  p.g = base[17];
+  p.r = base[18];
+  p.a = base[19];
+  return p;
+}
+
+// A 4x3 camera, fx = fy = 2, cx = 1.5, cy = 1.
+struct Tiny {
+  msgs::CameraInfo info;
+  msgs::Image depth, colour;
+  Tiny(const char* depth_encoding, const char* colour_encoding) {
+    info.width = 4;
+    info.height = 3;
+    info.k = {2, 0, 1.5, 0, 2, 1, 0, 0, 1};
+    info.p = {2, 0, 1.5, 0, 0, 2, 1, 0, 0, 0, 1, 0};
+    msgs::Header h;
+    h.stamp = {5, 6};
+    h.frame_id = "cam";
+    cv::Mat d = prepare_image(depth, h, depth_encoding, 4, 3);
+    cv::Mat c = prepare_image(colour, h, colour_encoding, 4, 3);
+    for (int v = 0; v < 3; ++v) {
+      for (int u = 0; u < 4; ++u) {
+        if (d.depth() == CV_32F) {
+          d.at<float>(v, u) = 1.0f + u + 10 * v;
+        } else {
+          d.at<uint16_t>(v, u) = static_cast<uint16_t>(1000 * (1 + u + 10 * v));
+        }
+        for (int ch = 0; ch < c.channels(); ++ch)
+          c.ptr<uint8_t>(v)[u * c.channels() + ch] = static_cast<uint8_t>(10 * u + v + 100 * ch);
+      }
+    }
+  }
+};
+
+TEST(PointCloudXyzrgb, LaysOutAnOrganisedXyzRgbCloud) {
+  Tiny t("32FC1", "rgb8");
+  msgs::PointCloud2 c;
+  point_cloud_xyzrgb(t.depth, t.colour, t.info, {}, c);
+  EXPECT_EQ(c.header, t.depth.header);
+  EXPECT_EQ(c.width, 4u);
+  EXPECT_EQ(c.height, 3u);
+  EXPECT_EQ(c.point_step, 32u);
+  EXPECT_EQ(c.row_step, 128u);
+  EXPECT_EQ(c.data.size(), 384u);
+  EXPECT_FALSE(c.is_dense);
+  EXPECT_FALSE(c.is_bigendian);
+  ASSERT_EQ(c.fields.size(), 4u);
+  const char* names[] = {"x", "y", "z", "rgb"};
+  const uint32_t offsets[] = {0, 4, 8, 16};
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_EQ(c.fields[i].name, names[i]);
+    EXPECT_EQ(c.fields[i].offset, offsets[i]);
+    EXPECT_EQ(c.fields[i].datatype, msgs::PointField::kFloat32);
+    EXPECT_EQ(c.fields[i].count, 1u);
+  }
+  const Point p = point_at(c, 3, 2);  // z = 1 + 3 + 20 = 24
+  EXPECT_FLOAT_EQ(p.z, 24.0f);
+  EXPECT_FLOAT_EQ(p.x, (3 - 1.5f) * 24 / 2);
+  EXPECT_FLOAT_EQ(p.y, (2 - 1.0f) * 24 / 2);
+  EXPECT_EQ(p.r, 32);  // rgb8 pixel (u 3, v 2): r = 32, g = 132, b = 232
+  EXPECT_EQ(p.g, 132);
+  EXPECT_EQ(p.b, 232);
+  EXPECT_EQ(p.a, 0);
+}
+
+TEST(PointCloudXyzrgb, AReusedCloudEqualsAFreshOne) {
+  Tiny a("32FC1", "rgb8");
+  Tiny b("32FC1", "rgb8");
+  image_view(b.depth).at<float>(1, 2) = std::numeric_limits<float>::quiet_NaN();
+  image_view(b.colour).at<cv::Vec3b>(2, 0) = cv::Vec3b(1, 2, 3);
+  msgs::PointCloud2 reused, fresh;
+  point_cloud_xyzrgb(a.depth, a.colour, a.info, {}, reused);
+  point_cloud_xyzrgb(b.depth, b.colour, b.info, {}, reused);
+  point_cloud_xyzrgb(b.depth, b.colour, b.info, {}, fresh);
+  EXPECT_EQ(reused, fresh);
+}
+
+TEST(PointCloudXyzrgb, MillimetreDepthAndBgrColour) {
+  Tiny t("16UC1", "bgr8");
+  msgs::PointCloud2 c;
+  point_cloud_xyzrgb(t.depth, t.colour, t.info, {}, c);
+  const Point p = point_at(c, 1, 1);  // 12000 mm
+  EXPECT_FLOAT_EQ(p.z, 12.0f);
+  EXPECT_FLOAT_EQ(p.x, (1 - 1.5f) * 12 / 2);
+  EXPECT_EQ(p.b, 11);  // bgr8 pixel: b = 11, g = 111, r = 211
+  EXPECT_EQ(p.r, 211);
+}
+
+TEST(PointCloudXyzrgb, InvalidDepthGivesNanOrRangeMax) {
+  Tiny t("16UC1", "mono8");
+  image_view(t.depth).at<uint16_t>(0, 0) = 0;
+  Tiny f("32FC1", "rgb8");
+  image_view(f.depth).at<float>(0, 1) = std::numeric_limits<float>::quiet_NaN();
+  msgs::PointCloud2 c;
+  point_cloud_xyzrgb(t.depth, t.colour, t.info, {}, c);
+  EXPECT_TRUE(std::isnan(point_at(c, 0, 0).x) && std::isnan(point_at(c, 0, 0).z));
+  EXPECT_EQ(point_at(c, 0, 0).g, point_at(c, 0, 0).r);  // mono8: grey
+  point_cloud_xyzrgb(f.depth, f.colour, f.info, {}, c);
+  EXPECT_TRUE(std::isnan(point_at(c, 1, 0).y));
+  point_cloud_xyzrgb(f.depth, f.colour, f.info, {5.0}, c);
+  EXPECT_FLOAT_EQ(point_at(c, 1, 0).z, 5.0f);
+}
+
+TEST(PointCloudXyzrgb, RejectsWhatDepthImageProcRejects) {
+  Tiny t("32FC1", "rgb8");
+  msgs::PointCloud2 c;
+  msgs::Image other = t.colour;
+  other.header.frame_id = "elsewhere";
+  EXPECT_THROW(point_cloud_xyzrgb(t.depth, other, t.info, {}, c), std::invalid_argument);
+  msgs::Image wrong;
+  prepare_image(wrong, t.depth.header, "8UC1", 4, 3);
+  EXPECT_THROW(point_cloud_xyzrgb(wrong, t.colour, t.info, {}, c), std::invalid_argument);
+  prepare_image(wrong, t.depth.header, "rgb16", 4, 3);
+  EXPECT_THROW(point_cloud_xyzrgb(t.depth, wrong, t.info, {}, c), std::invalid_argument);
+  msgs::CameraInfo uncalibrated = t.info;
+  uncalibrated.p = {};
+  EXPECT_THROW(point_cloud_xyzrgb(t.depth, t.colour, uncalibrated, {}, c), std::invalid_argument);
+}
+
+TEST(PointCloudXyzrgb, ScenePointsMatchTheTruth) {
+  datasets::SyntheticDepthConfig config;
+  config.frames = 1;
+  const auto frames = datasets::generate_depth_sequence(config);
+  const auto& f = frames[0];
+  for (const msgs::Image* depth : {&f.depth, &f.depth_mm}) {
+    msgs::PointCloud2 c;
+    point_cloud_xyzrgb(*depth, f.colour, f.info, {}, c);
+    const cv::Mat truth = image_view(f.truth_depth);
+    double worst = 0;
+    for (uint32_t v = 0; v < c.height; v += 7) {
+      for (uint32_t u = 0; u < c.width; u += 7) {
+        const Point p = point_at(c, u, v);
+        const double z = truth.at<double>(v, u);
+        ASSERT_EQ(std::isnan(z), std::isnan(p.z)) << u << "," << v;
+        if (std::isnan(z)) continue;
+        const double x = (u - f.info.p[2]) * z / f.info.p[0];
+        const double y = (v - f.info.p[6]) * z / f.info.p[5];
+        worst = std::max(worst, std::hypot(p.x - x, p.y - y, p.z - z));
+      }
+    }
+    EXPECT_LT(worst, depth->encoding == "16UC1" ? 1e-3 : 1e-5) << depth->encoding;
+  }
+}
+
+}  // namespace
+}  // namespace robotperf::kernels

@@ -1,0 +1,123 @@
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+#include "robotperf/sysinfo/run_rules.hpp"
+
+namespace robotperf::sysinfo {
+namespace {
+
+namespace fs = std::filesystem;
+
+class FixtureRoot {
+ public:
+  FixtureRoot() {
+    const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
+    root_ = fs::temp_directory_path() /
+            ("robotperf_rules_" + std::string(test->name()) + "_" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+  }
+  ~FixtureRoot() { fs::remove_all(root_); }
+  const fs::path& path() const { return root_; }
+  void write(const std::string& relative, const std::string& content) const {
+    const fs::path file = root_ / relative;
+    fs::create_directories(file.parent_path());
+    std::ofstream(file) << content;
+  }
+
+ private:
+  fs::path root_;
+};
+
+std::vector<std::string> rules_of(const std::vector<RunWarning>& warnings) {
+  std::vector<std::string> rules;
+  for (const auto& w : warnings) rules.push_back(w.rule);
+  return rules;
+}
+
+const RunWarning* find(const std::vector<RunWarning>& warnings, const std::string& rule) {
+  for (const auto& w : warnings) {
+    if (w.rule == rule) return &w;
+  }
+  return nullptr;
+}
+
+// A tuned bare-metal Release setup: nothing to warn about.
+RunRuleInputs clean(const fs::path& root) {
+  RunRuleInputs in;
+  in.root = root;
+  in.build_type = "Release";
+  in.measured_messages = 5000;
+  in.other_load_percent = 3.0;
+  in.machine.governors = {"performance"};
+  in.machine.smt_enabled = false;
+  in.machine.virtual_machine = false;
+  return in;
+}
+
+TEST(RunRules, TunedMachineHasNoWarnings) {
+  FixtureRoot root;
+  root.write("sys/devices/system/cpu/intel_pstate/no_turbo", "1\n");
+  root.write("sys/kernel/tracing/tracing_on", "1\n");  // on, but nothing is traced
+  root.write("sys/kernel/tracing/current_tracer", "nop\n");
+  root.write("sys/kernel/tracing/set_event", "");
+  const auto warnings = check_run_rules(clean(root.path()));
+  EXPECT_TRUE(warnings.empty()) << warnings.front().message;
+}
+
+TEST(RunRules, EveryRuleFires) {
+  FixtureRoot root;
+  root.write("sys/devices/system/cpu/intel_pstate/no_turbo", "0\n");
+  root.write("proc/4711/comm", "lttng-sessiond\n");
+  RunRuleInputs in = clean(root.path());
+  in.build_type = "Debug";
+  in.sanitized = true;
+  in.machine.governors = {"performance", "powersave"};
+  in.machine.smt_enabled = true;
+  in.machine.virtual_machine = true;
+  in.machine.in_container = true;
+  in.machine.container_runtime = "docker";
+  in.other_load_percent = 80.0;
+  in.measured_messages = 63;
+  const auto warnings = check_run_rules(in);
+  EXPECT_EQ(rules_of(warnings), (std::vector<std::string>{"build", "build", "governor", "turbo",
+                                                          "smt", "virtual_machine", "container",
+                                                          "system_busy", "tracing", "samples"}));
+  EXPECT_NE(find(warnings, "governor")->message.find("powersave"), std::string::npos);
+  EXPECT_EQ(find(warnings, "governor")->message.find("performance,"), std::string::npos);
+  EXPECT_NE(find(warnings, "system_busy")->message.find("80 %"), std::string::npos);
+  EXPECT_NE(find(warnings, "tracing")->message.find("4711"), std::string::npos);
+  EXPECT_NE(find(warnings, "samples")->message.find("63 measured"), std::string::npos);
+  EXPECT_NE(find(warnings, "samples")->message.find("p99 and p99.9"), std::string::npos);
+  EXPECT_NE(find(warnings, "container")->message.find("docker"), std::string::npos);
+}
+
+TEST(RunRules, FtraceWithATracerAndUnknownFrequency) {
+  FixtureRoot root;
+  root.write("sys/kernel/tracing/tracing_on", "1\n");
+  root.write("sys/kernel/tracing/current_tracer", "function_graph\n");
+  RunRuleInputs in = clean(root.path());
+  in.machine.governors.clear();
+  in.measured_messages = 500;
+  const auto warnings = check_run_rules(in);
+  EXPECT_EQ(rules_of(warnings), (std::vector<std::string>{"frequency", "tracing", "samples"}));
+  EXPECT_NE(find(warnings, "tracing")->message.find("function_graph"), std::string::npos);
+  EXPECT_NE(find(warnings, "samples")->message.find("p99.9 needs at least 1000"),
+            std::string::npos);
+}
+
+TEST(RunRules, BusyThresholdIsStrict) {
+  FixtureRoot root;
+  RunRuleInputs in = clean(root.path());
+  in.other_load_percent = kBusyThresholdPercent;
+  EXPECT_TRUE(check_run_rules(in).empty());
+  in.other_load_percent = kBusyThresholdPercent + 1;
+  EXPECT_EQ(rules_of(check_run_rules(in)), std::vector<std::string>{"system_busy"});
+}
+
+}  // namespace
+}  // namespace robotperf::sysinfo
