@@ -12,6 +12,7 @@ packages=(
   libzstd-dev liblz4-dev libdeflate-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   liblttng-ust-dev lttng-tools babeltrace2
+  chromium  # headless, for the report rendering test
 )
 
 missing=()

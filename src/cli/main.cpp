@@ -6,7 +6,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 
 #include "bag_commands.hpp"
 #include "robotperf/bag/bag.hpp"
@@ -17,7 +19,11 @@
 #include "robotperf/msgs/cdr.hpp"
 #include "robotperf/msgs/dynamic.hpp"
 #include "robotperf/report/atomic_file.hpp"
+#include "robotperf/report/benchmark_yaml.hpp"
+#include "robotperf/report/readme.hpp"
+#include "robotperf/report/report.hpp"
 #include "robotperf/report/results.hpp"
+#include "robotperf/report/run_store.hpp"
 #include "robotperf/sysinfo/machine.hpp"
 #include "robotperf/tracing/analysis.hpp"
 #include "robotperf/tracing/ctf.hpp"
@@ -182,6 +188,7 @@ struct RunArgs {
   std::string output = "results";
   bool csv = false;
   bool quiet = false;
+  bool report = false;
   bool strict = false;
   std::optional<int> domain;
   PowerArgs power;
@@ -285,6 +292,18 @@ int run(const fs::path& root, const RunArgs& a) {
   std::cout << "machine: " << sysinfo::summary_line(machine) << "\n";
   std::cout << "results: " << base.string() << ".json" << (a.csv ? " (+ .latencies.csv)" : "")
             << (result.grey ? " (+ .trace)" : "") << "\n";
+  if (a.report) {
+    report::ReportInput input;
+    input.runs.push_back(report::load_run(base.string() + ".json"));
+    // The package's accepted results, for context, when it has any.
+    const auto accepted = report::import_benchmark_yaml(spec.dir / "benchmark.yaml");
+    if (!accepted.results.empty()) input.published.push_back(accepted);
+    report::ReportOptions options;
+    options.title = "robotperf " + spec.id + " — " + report::result_basename(result);
+    report::write_file_atomically(base.string() + ".report.html",
+                                  report::render_html(input, options));
+    std::cout << "report: " << base.string() << ".report.html\n";
+  }
   const bool functional_ok = !result.functional || result.functional->valid;
   return result.valid && functional_ok ? kExitOk : kExitInvalidResult;
 }
@@ -322,6 +341,175 @@ int analyze(const TraceArgs& a) {
     report::write_file_atomically(a.json, j.dump(2) + "\n");
   }
   return analysis.valid ? kExitOk : kExitInvalidResult;
+}
+
+// Results files named on the command line: files, or folders whose results files are taken.
+std::vector<report::StoredRun> collect_runs(const std::vector<std::string>& paths) {
+  std::vector<report::StoredRun> runs;
+  for (const auto& p : paths.empty() ? std::vector<std::string>{"results"} : paths) {
+    if (fs::is_directory(p)) {
+      auto scan = report::scan_results(p);
+      for (const auto& s : scan.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
+      for (auto& r : scan.runs) runs.push_back(std::move(r));
+    } else {
+      runs.push_back(report::load_run(p));
+    }
+  }
+  return runs;
+}
+
+struct ExportArgs {
+  std::vector<std::string> results;
+  std::string format = "benchmark-yaml";
+  std::string merge;
+  bool merge_package = false;
+  bool include_invalid = false;
+  std::string hardware, category;
+};
+
+int export_results(const fs::path& root, const ExportArgs& a) {
+  const auto runs = collect_runs(a.results);
+  report::ExportOptions options{a.hardware, a.category};
+  // Entries per target file ("" = standard output), in run order.
+  std::vector<std::pair<fs::path, std::vector<report::PublishedResult>>> targets;
+  auto target = [&](const fs::path& file) -> std::vector<report::PublishedResult>& {
+    for (auto& [f, entries] : targets) {
+      if (f == file) return entries;
+    }
+    return targets.emplace_back(file, std::vector<report::PublishedResult>{}).second;
+  };
+  std::size_t skipped_invalid = 0;
+  for (const auto& run : runs) {
+    if (!run.valid && !a.include_invalid) {
+      ++skipped_invalid;
+      continue;
+    }
+    fs::path file = a.merge;
+    if (a.merge_package)
+      file = harness::find_benchmark(root, run.benchmark_id).dir / "benchmark.yaml";
+    auto& entries = target(file);
+    for (auto& e : report::export_entries(run, options)) entries.push_back(std::move(e));
+  }
+  if (skipped_invalid)
+    std::fprintf(stderr,
+                 "robotperf: left out %zu invalid run(s) (--include-invalid exports them)\n",
+                 skipped_invalid);
+  if (targets.empty()) {
+    std::fprintf(stderr, "robotperf: no valid runs to export\n");
+    return kExitUsage;
+  }
+  for (const auto& [file, entries] : targets) {
+    if (file.empty()) {
+      std::cout << report::entries_yaml(entries);
+      continue;
+    }
+    std::ifstream in(file, std::ios::binary);
+    if (!in)
+      throw report::ReportError(file.string() + ": cannot read the benchmark.yaml to merge into");
+    const std::string original{std::istreambuf_iterator<char>(in), {}};
+    const auto merged = report::merge_entries(original, file.string(), entries);
+    if (merged.added) report::write_file_atomically(file, merged.text);
+    std::cout << file.string() << ": added " << merged.added << " result(s)";
+    if (merged.already_present) std::cout << ", " << merged.already_present << " already there";
+    std::cout << "\n";
+  }
+  return kExitOk;
+}
+
+int import_published(const std::vector<std::string>& paths, const std::string& into) {
+  std::vector<fs::path> files;
+  for (const auto& p : paths) {
+    if (fs::is_directory(p) && !fs::exists(fs::path(p) / "benchmark.yaml")) {
+      for (const auto& e : fs::recursive_directory_iterator(p)) {
+        if (e.path().filename() == "benchmark.yaml") files.push_back(e.path());
+      }
+    } else {
+      files.emplace_back(p);
+    }
+  }
+  std::sort(files.begin(), files.end());
+  if (files.empty()) throw report::ReportError("no benchmark.yaml found in the given paths");
+  // Read everything before printing anything: a bad file gives one line and nothing else.
+  std::vector<report::PublishedBenchmark> benchmarks;
+  for (const auto& f : files) benchmarks.push_back(report::import_benchmark_yaml(f));
+  std::printf("%-8s %-44s %6s %8s %8s %6s %8s\n", "id", "name", "rows", "latency", "through.",
+              "power", "flagged");
+  std::string flagged;
+  for (const auto& b : benchmarks) {
+    std::size_t lat = 0, thr = 0, pow = 0;
+    for (const auto& r : b.results) {
+      lat += r.metric == "latency";
+      thr += r.metric == "throughput";
+      pow += r.metric == "power";
+    }
+    std::printf("%-8s %-44s %6zu %8zu %8zu %6zu %8zu\n", b.id.c_str(), b.name.c_str(),
+                b.results.size(), lat, thr, pow, b.flagged());
+    flagged += report::flagged_rows_report(b);
+    if (!into.empty()) {
+      const fs::path out = fs::path(into) / ("published-" + b.category + "-" + b.name + ".json");
+      report::write_file_atomically(out, report::to_json(b).dump(1) + "\n");
+    }
+  }
+  if (!flagged.empty()) std::cout << "\nrows that break the measurement rules:\n" << flagged;
+  if (!into.empty())
+    std::cout << "\nimported into " << into << " (robotperf report " << into << " plots them)\n";
+  return kExitOk;
+}
+
+int readme(const fs::path& root, const std::vector<std::string>& ids, bool check) {
+  int status = kExitOk;
+  for (const auto& id : ids) {
+    const auto spec = harness::find_benchmark(root, id);
+    const fs::path file = spec.dir / "README.md";
+    const std::string text = report::render_package_readme(spec.dir);
+    if (check) {
+      std::ifstream in(file, std::ios::binary);
+      const std::string current{std::istreambuf_iterator<char>(in), {}};
+      if (current != text) {
+        std::fprintf(stderr, "robotperf: %s is out of date; run: robotperf readme %s\n",
+                     file.c_str(), spec.id.c_str());
+        status = kExitError;
+      }
+      continue;
+    }
+    report::write_file_atomically(file, text);
+    std::cout << file.string() << "\n";
+  }
+  return status;
+}
+
+struct ReportArgs {
+  std::vector<std::string> inputs;
+  std::string html, md, title = "robotperf report";
+  std::vector<std::string> compare;
+};
+
+int make_report(const ReportArgs& a) {
+  if (a.html.empty() && a.md.empty())
+    throw std::invalid_argument("report: say where to write it: --html FILE and/or --md FILE");
+  if (!a.compare.empty() && a.compare.size() != 2)
+    throw std::invalid_argument(
+        "report: --compare takes exactly two selectors (--compare A --compare B)");
+  std::vector<fs::path> paths;
+  for (const auto& p : a.inputs.empty() ? std::vector<std::string>{"results"} : a.inputs)
+    paths.emplace_back(p);
+  const auto input = report::load_report_inputs(paths);
+  for (const auto& s : input.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
+  if (input.runs.empty() && input.published.empty())
+    throw report::ReportError(
+        "nothing to report: no results files or benchmark.yaml in the given paths");
+  report::ReportOptions options;
+  options.title = a.title;
+  if (a.compare.size() == 2) options.compare = std::pair{a.compare[0], a.compare[1]};
+  if (!a.html.empty()) {
+    report::write_file_atomically(a.html, report::render_html(input, options));
+    std::cout << "report: " << a.html << "\n";
+  }
+  if (!a.md.empty()) {
+    report::write_file_atomically(a.md, report::render_markdown(input, options));
+    std::cout << "report: " << a.md << "\n";
+  }
+  return kExitOk;
 }
 
 }  // namespace
@@ -374,6 +562,60 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--output", ra.output, "folder for the results files (default: ./results)");
   run_cmd->add_flag("--csv", ra.csv, "also write the per-message latencies as CSV");
   run_cmd->add_flag("--quiet", ra.quiet, "no progress line");
+  run_cmd->add_flag("--report", ra.report,
+                    "also write the HTML report of the run next to its results");
+
+  auto* results_cmd = app.add_subcommand("results", "the results folder: list, export, import");
+  results_cmd->require_subcommand(1);
+  std::string list_dir = "results";
+  auto* results_list_cmd = results_cmd->add_subcommand("list", "show the runs of a results folder");
+  results_list_cmd->add_option("dir", list_dir, "results folder (default: ./results)");
+  ExportArgs ea;
+  auto* export_cmd = results_cmd->add_subcommand(
+      "export", "turn runs into RobotPerf benchmark.yaml result entries");
+  export_cmd->add_option("results", ea.results, "results files or folders (default: ./results)");
+  export_cmd->add_option("--format", ea.format, "output format")
+      ->check(CLI::IsMember({"benchmark-yaml"}));
+  auto* merge_opt = export_cmd->add_option(
+      "--merge", ea.merge,
+      "append the entries to this benchmark.yaml (existing entries untouched)");
+  export_cmd
+      ->add_flag("--merge-package", ea.merge_package,
+                 "append each run's entries to its benchmark package's benchmark.yaml")
+      ->excludes(merge_opt);
+  export_cmd->add_option("--hardware", ea.hardware,
+                         "hardware name to record (default: from the machine description)");
+  export_cmd->add_option("--category", ea.category, "RobotPerf category (default: guessed)")
+      ->check(CLI::IsMember({"edge", "workstation", "datacenter", "cloud"}));
+  export_cmd->add_flag("--include-invalid", ea.include_invalid, "also export invalid runs");
+  std::vector<std::string> import_paths;
+  std::string import_into;
+  auto* import_cmd = results_cmd->add_subcommand(
+      "import", "read published RobotPerf benchmark.yaml files and flag rows that break the rules");
+  import_cmd->add_option("files", import_paths, "benchmark.yaml files or folders holding them")
+      ->required();
+  import_cmd->add_option("--into", import_into,
+                         "also store them in this results folder, for robotperf report");
+
+  std::vector<std::string> readme_ids;
+  bool readme_check = false;
+  auto* readme_cmd = app.add_subcommand(
+      "readme", "regenerate benchmark packages' README.md from their benchmark.yaml");
+  readme_cmd->add_option("ids", readme_ids, "benchmark ids, e.g. a1 a2 a5")->required();
+  readme_cmd->add_flag("--check", readme_check, "only check that README.md is up to date");
+
+  ReportArgs rpa;
+  auto* report_cmd = app.add_subcommand(
+      "report", "HTML and Markdown report: radar plots across hardware, runs, distributions");
+  report_cmd->add_option("results", rpa.inputs,
+                         "results files, imported files, benchmark.yaml files or folders "
+                         "(default: ./results)");
+  report_cmd->add_option("--html", rpa.html, "write the HTML report here");
+  report_cmd->add_option("--md", rpa.md, "write the Markdown report here");
+  report_cmd->add_option("--title", rpa.title, "report title");
+  report_cmd->add_option("--compare", rpa.compare,
+                         "compare two sides (give it twice): a results file or name prefix, "
+                         "or a hardware name");
   run_cmd->add_flag("--strict", ra.strict,
                     "refuse to run when a run rule is broken (see the warnings of a normal run)");
   add_power_options(run_cmd, ra.power, true);
@@ -474,6 +716,17 @@ int main(int argc, char** argv) {
     if (*list_cmd) return list_benchmarks(root);
     if (*describe_cmd) return describe_benchmark(root, describe_id);
     if (*run_cmd) return run(root, ra);
+    if (*results_list_cmd) {
+      const auto scan = report::scan_results(list_dir);
+      for (const auto& sk : scan.skipped)
+        std::fprintf(stderr, "robotperf: skipped %s\n", sk.c_str());
+      std::cout << report::runs_table(scan.runs);
+      return kExitOk;
+    }
+    if (*export_cmd) return export_results(root, ea);
+    if (*import_cmd) return import_published(import_paths, import_into);
+    if (*readme_cmd) return readme(root, readme_ids, readme_check);
+    if (*report_cmd) return make_report(rpa);
     if (*bag_info_cmd) return cli::bag_info(bag_path);
     if (*bag_echo_cmd) return cli::bag_echo(bag_path, echo);
     if (*bag_convert_cmd) return cli::bag_convert(bag_path, convert_out, convert);
@@ -507,6 +760,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "robotperf: unreadable trace: %s\n", e.what());
     return kExitUsage;
   } catch (const harness::BenchmarkError& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitUsage;
+  } catch (const report::ReportError& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
     return kExitUsage;
   } catch (const std::invalid_argument& e) {

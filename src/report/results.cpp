@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "robotperf/build_info.hpp"
+#include "robotperf/report/histogram.hpp"
 
 namespace robotperf::report {
 namespace {
@@ -174,6 +175,13 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
   // The RobotPerf headline is the maximum latency, taken from the same block so the two agree
   // exactly.
   const json from_scheduled = metrics::to_json(r.latency_from_scheduled, 1.0 / kNsPerMs, "ms");
+  // The distribution itself, compactly, so that a report can draw it without the CSV.
+  std::vector<double> latencies_ms;
+  latencies_ms.reserve(r.records.size());
+  for (const auto& rec : r.records) {
+    if (!rec.warmup && rec.received_ns >= 0)
+      latencies_ms.push_back(static_cast<double>(rec.received_ns - rec.scheduled_ns) / kNsPerMs);
+  }
   json warnings = json::array();
   for (const auto& w : r.warnings) warnings.push_back({{"rule", w.rule}, {"message", w.message}});
   json software = software_json();
@@ -214,7 +222,8 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"latency_ms",
        {{"from_scheduled", from_scheduled},
         {"from_sent", metrics::to_json(r.latency_from_sent, 1.0 / kNsPerMs, "ms")},
-        {"send_lateness", metrics::to_json(r.send_lateness, 1.0 / kNsPerMs, "ms")}}},
+        {"send_lateness", metrics::to_json(r.send_lateness, 1.0 / kNsPerMs, "ms")},
+        {"from_scheduled_histogram", to_json(make_log_histogram(latencies_ms))}}},
       {"headline", {{"latency_ms", from_scheduled["max"]}, {"throughput_hz", r.throughput_hz}}},
       {"throughput",
        {{"output_hz", r.throughput_hz},

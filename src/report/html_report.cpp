@@ -1,0 +1,193 @@
+#include <sstream>
+
+#include "report_model.hpp"
+#include "robotperf/report/readme.hpp"
+
+namespace robotperf::report {
+namespace {
+
+using detail::html_escape;
+using detail::Table;
+
+constexpr const char* kStyle = R"(
+body { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; margin: 24px; color: #222;
+       max-width: 1600px; }
+h1 { margin-bottom: 4px; } h2 { border-bottom: 2px solid #1f77b4; padding-bottom: 4px;
+       margin-top: 36px; } h3 { margin-top: 28px; }
+p.summary { color: #555; margin-top: 0; }
+table { border-collapse: collapse; margin: 8px 0 16px; font-size: 13px; }
+th, td { border: 1px solid #ccc; padding: 3px 7px; vertical-align: top; }
+th { background: #eef3f8; text-align: left; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; }
+tr.warn td { background: #fff1e6; }
+div.warnings { background: #fff6e0; border-left: 5px solid #e69500; padding: 8px 16px; }
+div.warnings li { margin: 3px 0; }
+div.radars { display: flex; flex-wrap: wrap; gap: 12px; }
+figure { margin: 0; } figcaption { font-size: 12px; color: #555; max-width: 480px; }
+svg text { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; }
+svg .plot-title { font-size: 13px; font-weight: bold; } svg .axis-label { font-size: 12px; }
+svg .axis-scale, svg .tick, svg .legend, svg .marker-label { font-size: 11px; fill: #444; }
+p.note { font-size: 12px; color: #555; }
+)";
+
+std::string table_html(const Table& t) {
+  std::ostringstream s;
+  s << "<table class=\"" << t.css_class << "\">\n<thead><tr>";
+  for (const auto& h : t.header) s << "<th>" << html_escape(h) << "</th>";
+  s << "</tr></thead>\n<tbody>\n";
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    s << "<tr" << (r < t.row_warning.size() && t.row_warning[r] ? " class=\"warn\"" : "") << ">";
+    for (std::size_t c = 0; c < t.rows[r].size(); ++c) {
+      s << "<td" << (c < t.numeric.size() && t.numeric[c] ? " class=\"num\"" : "") << ">"
+        << html_escape(t.rows[r][c]) << "</td>";
+    }
+    s << "</tr>\n";
+  }
+  s << "</tbody></table>\n";
+  return s.str();
+}
+
+}  // namespace
+
+std::string render_html(const ReportInput& input, const ReportOptions& options) {
+  const detail::Model m = detail::build_model(input, options);
+  std::ostringstream s;
+  s << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+    << "<meta name=\"generator\" content=\"robotperf\">\n<title>" << html_escape(m.title)
+    << "</title>\n<style>" << kStyle << "</style>\n</head>\n<body>\n";
+  s << "<h1>" << html_escape(m.title) << "</h1>\n<p class=\"summary\">" << html_escape(m.summary)
+    << "</p>\n";
+  if (!m.warnings.empty()) {
+    s << "<div class=\"warnings\" id=\"warnings\"><strong>Validity warnings</strong><ul>\n";
+    for (const auto& w : m.warnings) s << "<li>" << html_escape(w) << "</li>\n";
+    s << "</ul></div>\n";
+  }
+  for (const auto& category : m.categories) {
+    s << "<h2 id=\"category-" << html_escape(category) << "\">" << html_escape(category)
+      << "</h2>\n<div class=\"radars\">\n";
+    for (const auto& radar : m.radars.at(category)) {
+      s << "<figure>\n";
+      if (radar.axes.empty()) {
+        s << "<p class=\"note\">No " << radar.metric << " figures in " << html_escape(category)
+          << (radar.metric == "power" ? " (power is reported only where a real sensor was read)"
+                                      : "")
+          << ".</p>\n";
+      } else {
+        s << detail::radar_svg(radar);
+        s << "<figcaption>Each axis is one benchmark with its own scale (written at its end; "
+             "logarithmic when the values span more than 20x); one polygon per platform (solid: "
+             "local runs, median of valid runs; dashed: published "
+             "RobotPerf rows, median of the rows that pass the measurement rules).</figcaption>\n";
+      }
+      s << "</figure>\n";
+    }
+    s << "</div>\n";
+    for (const auto& radar : m.radars.at(category)) {
+      if (radar.axes.empty()) continue;
+      s << "<details><summary>" << html_escape(radar.metric)
+        << " values behind the radar plot</summary>\n"
+        << table_html(radar.data) << "</details>\n";
+    }
+    for (const auto& b : m.benchmarks.at(category)) {
+      s << "<h3 id=\"benchmark-" << html_escape(b.id) << "\">" << html_escape(b.id) << " — "
+        << html_escape(b.name) << "</h3>\n";
+      if (!b.runs.rows.empty()) {
+        s << table_html(b.runs);
+        if (!b.distribution.empty()) s << detail::distribution_svg(b.distribution, b.id);
+      } else {
+        s << "<p class=\"note\">No local runs of " << html_escape(b.id) << ".</p>\n";
+      }
+      if (!b.published.rows.empty()) {
+        s << "<p class=\"note\">Published RobotPerf results: " << b.published_rows
+          << " rows; medians over the rows that pass the measurement rules.</p>\n"
+          << table_html(b.published);
+      }
+      if (!b.flagged.rows.empty()) {
+        s << "<details><summary>" << b.flagged.rows.size()
+          << " published rows break the measurement rules</summary>\n"
+          << table_html(b.flagged) << "</details>\n";
+      }
+    }
+  }
+  if (m.comparison) {
+    s << "<h2 id=\"comparison\">Comparison</h2>\n<p>A = <strong>" << html_escape(m.comparison->a)
+      << "</strong>, B = <strong>" << html_escape(m.comparison->b) << "</strong>.</p>\n"
+      << table_html(m.comparison->table) << "<p class=\"note\">";
+    for (const auto& n : m.comparison->notes) s << html_escape(n) << "<br>";
+    s << "Significance: Welch's t-test at the 5 % level over the per-run values; with one run "
+         "per side only the mean latency can be judged, from the spread within the runs.</p>\n";
+  }
+  if (!m.machines.rows.empty()) {
+    s << "<h2 id=\"machines\">Machines</h2>\n" << table_html(m.machines);
+  }
+  s << "<p class=\"note\">Latency is measured from the scheduled send time (immune to "
+       "coordinated omission); the RobotPerf headline latency is its maximum. Throughput is the "
+       "output rate; power is the average over the measured window, reported only when a real "
+       "sensor was read.</p>\n</body>\n</html>\n";
+  return s.str();
+}
+
+std::string render_markdown(const ReportInput& input, const ReportOptions& options) {
+  const detail::Model m = detail::build_model(input, options);
+  std::ostringstream s;
+  auto table = [&](const Table& t) {
+    s << "|";
+    for (const auto& h : t.header) s << " " << markdown_cell(h) << " |";
+    s << "\n|";
+    for (std::size_t c = 0; c < t.header.size(); ++c)
+      s << (c < t.numeric.size() && t.numeric[c] ? "---:|" : "---|");
+    s << "\n";
+    for (std::size_t r = 0; r < t.rows.size(); ++r) {
+      s << "|";
+      for (std::size_t c = 0; c < t.rows[r].size(); ++c) {
+        const bool warn = c == 0 && r < t.row_warning.size() && t.row_warning[r];
+        s << " " << (warn ? "⚠ " : "") << markdown_cell(t.rows[r][c]) << " |";
+      }
+      s << "\n";
+    }
+    s << "\n";
+  };
+  s << "# " << m.title << "\n\n" << m.summary << "\n\n";
+  if (!m.warnings.empty()) {
+    s << "## Validity warnings\n\n";
+    for (const auto& w : m.warnings) s << "- " << markdown_cell(w) << "\n";
+    s << "\n";
+  }
+  for (const auto& category : m.categories) {
+    s << "## " << category << "\n\n";
+    for (const auto& radar : m.radars.at(category)) {
+      if (radar.axes.empty()) continue;
+      s << "**" << radar.metric << " (" << radar.unit << "), "
+        << (radar.smaller_is_better ? "smaller" : "larger")
+        << " is better** — the values of the radar plot\n\n";
+      table(radar.data);
+    }
+    for (const auto& b : m.benchmarks.at(category)) {
+      s << "### " << b.id << " — " << b.name << "\n\n";
+      if (!b.runs.rows.empty()) table(b.runs);
+      if (!b.published.rows.empty()) {
+        s << "Published RobotPerf results (" << b.published_rows
+          << " rows; medians over the rows that pass the measurement rules):\n\n";
+        table(b.published);
+      }
+      if (!b.flagged.rows.empty()) {
+        s << "Published rows that break the measurement rules:\n\n";
+        table(b.flagged);
+      }
+    }
+  }
+  if (m.comparison) {
+    s << "## Comparison\n\nA = **" << markdown_cell(m.comparison->a) << "**, B = **"
+      << markdown_cell(m.comparison->b) << "**\n\n";
+    table(m.comparison->table);
+    for (const auto& n : m.comparison->notes) s << "- " << markdown_cell(n) << "\n";
+    s << "\n";
+  }
+  if (!m.machines.rows.empty()) {
+    s << "## Machines\n\n";
+    table(m.machines);
+  }
+  return s.str();
+}
+
+}  // namespace robotperf::report

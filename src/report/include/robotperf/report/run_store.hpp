@@ -1,0 +1,98 @@
+// The results folder: reading results JSON files (robotperf.result/1) back into a form the
+// results table, the RobotPerf export and the report share.
+#pragma once
+
+#include <filesystem>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "robotperf/report/histogram.hpp"
+
+namespace robotperf::report {
+
+// A results or benchmark file that cannot be used; the message names the file and what is wrong.
+class ReportError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+inline constexpr double kNoValue = std::numeric_limits<double>::quiet_NaN();
+
+// One latency block of a results file, in milliseconds; NaN where the file has null.
+struct LatencySummary {
+  std::size_t count = 0;
+  double min = kNoValue, mean = kNoValue, rms = kNoValue, stddev = kNoValue, p50 = kNoValue,
+         p90 = kNoValue, p99 = kNoValue, p999 = kNoValue, max = kNoValue;
+};
+
+// A run as its results file records it.
+struct StoredRun {
+  std::filesystem::path path;
+  nlohmann::json json;  // the whole file
+  std::string benchmark_id, benchmark_name, category;
+  std::string type;         // "black" or "grey"
+  std::string started_utc;  // "2026-11-22T07:42:22Z"
+  std::string rmw, processes;
+  double rate_hz = kNoValue;
+  std::string dataset;
+  std::string hardware;           // short platform name: CPU model, plus GPU models
+  std::string hardware_category;  // RobotPerf category guessed from the machine
+  std::size_t measured = 0, matched = 0, lost = 0;
+  double loss_percent = kNoValue;
+  LatencySummary latency;  // from the scheduled send time: the RobotPerf-compatible latency
+  double throughput_hz = kNoValue;
+  double offered_hz = kNoValue;
+  std::optional<double> power_w;  // average over the measured window, when a real source was read
+  std::optional<double> energy_j;
+  std::string power_note;  // the source, or why power is unavailable
+  bool valid = false;
+  std::vector<std::string> invalid_reasons;
+  std::vector<std::string> warnings;  // run-rule warnings recorded by the run, if any
+  std::optional<LogHistogram> histogram;
+  std::optional<std::filesystem::path> csv_path;  // <stem>.latencies.csv beside the JSON
+
+  // File name without ".json": "<id>-<rmw>-<UTC start>".
+  std::string stem() const;
+  // "2026-11-22 07:42:22": the start, as RobotPerf writes `timestampt`.
+  std::string timestamp() const;
+};
+
+// Reads one results file; throws ReportError naming the file when it is not a readable
+// robotperf.result/1 file.
+StoredRun load_run(const std::filesystem::path& path);
+
+// True when `path` holds a JSON object with "schema": "robotperf.result/1" (cheap check).
+bool looks_like_result(const std::filesystem::path& path);
+
+struct RunScan {
+  std::vector<StoredRun> runs;       // sorted by start time, then file name
+  std::vector<std::string> skipped;  // one line per unreadable results file
+};
+
+// Every results file directly in `dir` (not recursive). Throws ReportError when `dir` does not
+// exist.
+RunScan scan_results(const std::filesystem::path& dir);
+
+// A short platform name from a machine description (robotperf sysinfo JSON):
+// "AMD Ryzen 7 5800X", "Intel Core i7-12700H + NVIDIA GeForce RTX 3060", "NVIDIA Jetson AGX Orin".
+std::string hardware_label(const nlohmann::json& machine);
+
+// The RobotPerf category of a machine: "edge" (ARM boards, Jetson), "cloud" (virtual machines),
+// "datacenter" (server CPUs: EPYC, Xeon, ...), else "workstation".
+std::string hardware_category(const nlohmann::json& machine);
+
+// The latencies (ms, from the scheduled send) of the measured, matched messages of a
+// <stem>.latencies.csv file. Throws ReportError naming the file and line when it is malformed.
+std::vector<double> read_latency_csv(const std::filesystem::path& csv);
+
+// The `results list` table: one line per run.
+std::string runs_table(const std::vector<StoredRun>& runs);
+
+// "12.345" with `decimals` digits, or "-" for NaN.
+std::string format_fixed(double value, int decimals);
+
+}  // namespace robotperf::report

@@ -1,0 +1,706 @@
+#include "report_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+
+#include "robotperf/build_info.hpp"
+#include "robotperf/metrics/latency_stats.hpp"
+#include "robotperf/report/significance.hpp"
+
+namespace robotperf::report {
+namespace {
+
+namespace fs = std::filesystem;
+using detail::Table;
+
+std::string lower(std::string s) {
+  std::ranges::transform(s, s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+double median(std::vector<double> v) {
+  std::erase_if(v, [](double x) { return !std::isfinite(x); });
+  if (v.empty()) return kNoValue;
+  std::ranges::sort(v);
+  return metrics::quantile_of_sorted(v, 0.5);
+}
+
+// A value of one metric measured once: by a local run or in a published row.
+struct Observation {
+  std::string benchmark_id, category, series, metric;
+  bool local = false;
+  double value = kNoValue;
+  const StoredRun* run = nullptr;
+};
+
+struct MetricInfo {
+  const char* metric;
+  const char* unit;
+  bool smaller_is_better;
+};
+constexpr MetricInfo kRadarMetrics[] = {
+    {"latency", "ms", true}, {"throughput", "fps", false}, {"power", "W", true}};
+
+std::vector<Observation> observations(const ReportInput& in) {
+  std::vector<Observation> out;
+  for (const auto& r : in.runs) {
+    if (!r.valid) continue;  // invalid runs are shown in the tables, never plotted
+    const std::string series = detail::local_series(r);
+    out.push_back({r.benchmark_id, r.category, series, "latency", true, r.latency.max, &r});
+    out.push_back({r.benchmark_id, r.category, series, "throughput", true, r.throughput_hz, &r});
+    if (r.power_w)
+      out.push_back({r.benchmark_id, r.category, series, "power", true, *r.power_w, &r});
+  }
+  for (const auto& b : in.published) {
+    for (const auto& row : b.results) {
+      if (!row.flags.empty() || !std::isfinite(row.value)) continue;
+      out.push_back({b.id, b.category, detail::published_series(row.hardware), row.metric, false,
+                     row.value, nullptr});
+    }
+  }
+  return out;
+}
+
+std::vector<detail::Radar> radars_for(const std::string& category,
+                                      const std::vector<Observation>& obs,
+                                      const ReportOptions& options) {
+  std::vector<detail::Radar> out;
+  for (const auto& m : kRadarMetrics) {
+    detail::Radar radar;
+    radar.category = category;
+    radar.metric = m.metric;
+    radar.unit = m.unit;
+    radar.smaller_is_better = m.smaller_is_better;
+    std::set<std::string> axes;
+    std::map<std::string, std::map<std::string, std::vector<double>>> by_series;
+    std::map<std::string, bool> is_local;
+    for (const auto& o : obs) {
+      if (o.category != category || o.metric != m.metric) continue;
+      axes.insert(o.benchmark_id);
+      by_series[o.series][o.benchmark_id].push_back(o.value);
+      is_local[o.series] = o.local;
+    }
+    if (axes.empty()) {
+      out.push_back(std::move(radar));
+      continue;
+    }
+    radar.axes.assign(axes.begin(), axes.end());
+    // Local series first, then the published ones that cover the most benchmarks.
+    std::vector<std::string> names;
+    for (const auto& [name, values] : by_series) names.push_back(name);
+    std::ranges::stable_sort(names, [&](const std::string& a, const std::string& b) {
+      if (is_local[a] != is_local[b]) return is_local[a];
+      return by_series[a].size() > by_series[b].size();
+    });
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      if (i >= options.max_radar_series) {
+        radar.omitted.push_back(names[i]);
+        continue;
+      }
+      radar.series.push_back(names[i]);
+      radar.series_local.push_back(is_local[names[i]]);
+      std::vector<double> row;
+      for (const auto& axis : radar.axes) {
+        const auto it = by_series[names[i]].find(axis);
+        row.push_back(it == by_series[names[i]].end() ? kNoValue : median(it->second));
+      }
+      radar.values.push_back(std::move(row));
+    }
+    radar.data.css_class = "radar-data";
+    radar.data.header = {"hardware"};
+    radar.data.numeric = {false};
+    for (const auto& a : radar.axes) {
+      radar.data.header.push_back(a + " (" + m.unit + ")");
+      radar.data.numeric.push_back(true);
+    }
+    for (std::size_t s = 0; s < radar.series.size(); ++s) {
+      std::vector<std::string> row = {radar.series[s]};
+      for (double v : radar.values[s]) row.push_back(detail::format_value(v));
+      radar.data.rows.push_back(std::move(row));
+      radar.data.row_warning.push_back(false);
+    }
+    out.push_back(std::move(radar));
+  }
+  return out;
+}
+
+std::vector<detail::Distribution> distributions(const std::vector<const StoredRun*>& runs,
+                                                std::vector<std::string>& warnings) {
+  std::vector<detail::Distribution> out;
+  for (const StoredRun* r : runs) {
+    detail::Distribution d;
+    d.label = r->stem();
+    d.p50 = r->latency.p50;
+    d.p99 = r->latency.p99;
+    if (!std::isfinite(d.p50)) continue;
+    bool done = false;
+    if (r->csv_path) {
+      try {
+        std::vector<double> v = read_latency_csv(*r->csv_path);
+        std::ranges::sort(v);
+        if (!v.empty()) {
+          const std::size_t n = std::min<std::size_t>(v.size(), 400);
+          for (std::size_t i = 0; i < n; ++i) {
+            const double q = n == 1 ? 1.0 : static_cast<double>(i) / static_cast<double>(n - 1);
+            d.points.emplace_back(metrics::quantile_of_sorted(v, q), q);
+          }
+          d.source = "per-message CSV";
+          done = true;
+        }
+      } catch (const ReportError& e) {
+        warnings.push_back(std::string(e.what()) + " (the stored distribution is shown instead)");
+      }
+    }
+    if (!done && r->histogram && r->histogram->total() > 0) {
+      const auto& h = *r->histogram;
+      const double total = static_cast<double>(h.total());
+      double cumulative = static_cast<double>(h.nonpositive);
+      d.points.emplace_back(h.counts.empty() ? 0.0 : h.lower_edge(0), cumulative / total);
+      for (std::size_t i = 0; i < h.counts.size(); ++i) {
+        cumulative += static_cast<double>(h.counts[i]);
+        // The last bin ends at the observed maximum, not at its upper edge.
+        const double x = i + 1 == h.counts.size() && std::isfinite(r->latency.max)
+                             ? std::min(h.upper_edge(i), r->latency.max)
+                             : h.upper_edge(i);
+        d.points.emplace_back(x, cumulative / total);
+      }
+      d.source = "stored histogram";
+      done = true;
+    }
+    if (!done) {
+      const auto& l = r->latency;
+      for (auto [x, y] : {std::pair{l.min, 0.0},
+                          {l.p50, 0.5},
+                          {l.p90, 0.9},
+                          {l.p99, 0.99},
+                          {l.p999, 0.999},
+                          {l.max, 1.0}}) {
+        if (std::isfinite(x)) d.points.emplace_back(x, y);
+      }
+      d.source = "stored percentiles";
+    }
+    out.push_back(std::move(d));
+  }
+  return out;
+}
+
+Table runs_table_for(const std::vector<const StoredRun*>& runs) {
+  Table t;
+  t.css_class = "runs";
+  t.header = {"run",    "hardware",       "transport", "rate Hz", "matched",
+              "loss %", "min ms",         "mean ms",   "p50 ms",  "p99 ms",
+              "max ms", "throughput fps", "power W",   "validity"};
+  t.numeric = {false, false, false, true, true, true, true,
+               true,  true,  true,  true, true, true, false};
+  for (const StoredRun* r : runs) {
+    std::string validity = r->valid ? "valid" : "INVALID";
+    for (std::size_t i = 0; i < r->invalid_reasons.size(); ++i)
+      validity += (i ? "; " : ": ") + r->invalid_reasons[i];
+    t.rows.push_back({r->stem(), r->hardware,
+                      r->rmw + (r->processes == "per-node" ? " (per-node)" : ""),
+                      format_fixed(r->rate_hz, 1),
+                      std::to_string(r->matched) + "/" + std::to_string(r->measured),
+                      format_fixed(r->loss_percent, 2), format_fixed(r->latency.min, 3),
+                      format_fixed(r->latency.mean, 3), format_fixed(r->latency.p50, 3),
+                      format_fixed(r->latency.p99, 3), format_fixed(r->latency.max, 3),
+                      format_fixed(r->throughput_hz, 2),
+                      r->power_w ? format_fixed(*r->power_w, 2) : "-", validity});
+    t.row_warning.push_back(!r->valid);
+  }
+  return t;
+}
+
+void published_tables(const PublishedBenchmark& b, Table& summary, Table& flagged) {
+  summary.css_class = "published";
+  summary.header = {
+      "hardware",         "category",    "rows", "latency ms (median)", "throughput fps (median)",
+      "power W (median)", "flagged rows"};
+  summary.numeric = {false, false, true, true, true, true, true};
+  std::vector<std::string> order;
+  std::map<std::string, std::map<std::string, std::vector<double>>> values;
+  std::map<std::string, std::size_t> rows, flags;
+  std::map<std::string, std::set<std::string>> categories;
+  for (const auto& r : b.results) {
+    if (!rows.contains(r.hardware)) order.push_back(r.hardware);
+    ++rows[r.hardware];
+    categories[r.hardware].insert(r.category);
+    if (!r.flags.empty()) {
+      ++flags[r.hardware];
+    } else {
+      values[r.hardware][r.metric].push_back(r.value);
+    }
+  }
+  for (const auto& h : order) {
+    std::string cats;
+    for (const auto& c : categories[h]) cats += (cats.empty() ? "" : ", ") + c;
+    summary.rows.push_back(
+        {h, cats, std::to_string(rows[h]), detail::format_value(median(values[h]["latency"])),
+         detail::format_value(median(values[h]["throughput"])),
+         detail::format_value(median(values[h]["power"])), std::to_string(flags[h])});
+    summary.row_warning.push_back(false);
+  }
+  flagged.css_class = "flagged";
+  flagged.header = {"line", "hardware", "metric", "value", "why it breaks the measurement rules"};
+  flagged.numeric = {true, false, false, true, false};
+  for (const auto& r : b.results) {
+    if (r.flags.empty()) continue;
+    std::string why;
+    for (const auto& f : r.flags) why += (why.empty() ? "" : "; ") + f;
+    flagged.rows.push_back(
+        {b.source.filename().string() + ":" + std::to_string(r.line), r.hardware, r.metric,
+         (r.value_text.empty() ? "?" : r.value_text) + " " + r.metric_unit, why});
+    flagged.row_warning.push_back(true);
+  }
+}
+
+// --- comparison ----------------------------------------------------------------------------
+
+struct Side {
+  std::string label;
+  std::vector<const StoredRun*> runs;
+  std::vector<std::pair<const PublishedBenchmark*, const PublishedResult*>> rows;
+};
+
+Side select(const std::string& selector, const ReportInput& in) {
+  Side side;
+  side.label = selector;
+  const std::string want = lower(selector);
+  for (const auto& r : in.runs) {
+    const bool by_file = r.path.string() == selector || r.path.filename().string() == selector ||
+                         r.stem().starts_with(selector);
+    const bool by_name = lower(r.hardware) == want || lower(detail::local_series(r)) == want;
+    if (by_file || by_name) side.runs.push_back(&r);
+  }
+  for (const auto& b : in.published) {
+    for (const auto& row : b.results) {
+      if (!row.flags.empty()) continue;
+      if (lower(row.hardware) == want || lower(detail::published_series(row.hardware)) == want)
+        side.rows.emplace_back(&b, &row);
+    }
+  }
+  if (side.runs.empty() && side.rows.empty()) {
+    std::set<std::string> known;
+    for (const auto& r : in.runs) known.insert(detail::local_series(r));
+    for (const auto& b : in.published)
+      for (const auto& row : b.results) known.insert(row.hardware);
+    std::string list;
+    std::size_t shown = 0;
+    for (const auto& k : known) {
+      if (shown++ == 8) {
+        list += ", ...";
+        break;
+      }
+      list += (list.empty() ? "" : ", ") + k;
+    }
+    throw ReportError("--compare '" + selector +
+                      "' matches no results file and no hardware (known: " + list + ")");
+  }
+  return side;
+}
+
+struct CompareMetric {
+  const char* name;
+  const char* unit;
+  bool smaller_is_better;
+};
+constexpr CompareMetric kCompareMetrics[] = {{"latency max", "ms", true},
+                                             {"latency mean", "ms", true},
+                                             {"latency p50", "ms", true},
+                                             {"throughput", "fps", false},
+                                             {"power", "W", true}};
+
+std::vector<double> side_values(const Side& s, const std::string& id, const std::string& metric,
+                                std::vector<const StoredRun*>* runs_used) {
+  std::vector<double> v;
+  for (const StoredRun* r : s.runs) {
+    if (r->benchmark_id != id || !r->valid) continue;
+    double x = kNoValue;
+    if (metric == "latency max") x = r->latency.max;
+    if (metric == "latency mean") x = r->latency.mean;
+    if (metric == "latency p50") x = r->latency.p50;
+    if (metric == "throughput") x = r->throughput_hz;
+    if (metric == "power" && r->power_w) x = *r->power_w;
+    if (std::isfinite(x)) {
+      v.push_back(x);
+      if (runs_used) runs_used->push_back(r);
+    }
+  }
+  for (const auto& [b, row] : s.rows) {
+    if (b->id != id) continue;
+    double x = kNoValue;
+    if (metric == "latency max" && row->metric == "latency") x = row->value;
+    if (metric == "latency mean" && row->metric == "latency" && row->note_mean) x = *row->note_mean;
+    if (metric == "throughput" && row->metric == "throughput") x = row->value;
+    if (metric == "power" && row->metric == "power") x = row->value;
+    if (std::isfinite(x)) v.push_back(x);
+  }
+  return v;
+}
+
+detail::Comparison compare(const std::string& a_sel, const std::string& b_sel,
+                           const ReportInput& in) {
+  const Side a = select(a_sel, in);
+  const Side b = select(b_sel, in);
+  detail::Comparison c;
+  c.a = a_sel;
+  c.b = b_sel;
+  c.table.css_class = "comparison";
+  c.table.header = {"benchmark",  "metric", "A (median)", "n A",
+                    "B (median)", "n B",    "B / A",      "judgement"};
+  c.table.numeric = {false, false, true, true, true, true, true, false};
+  std::set<std::string> ids;
+  for (const auto* r : a.runs) ids.insert(r->benchmark_id);
+  for (const auto& [bench, row] : a.rows) ids.insert(bench->id);
+  for (const auto& id : ids) {
+    for (const auto& m : kCompareMetrics) {
+      std::vector<const StoredRun*> runs_a, runs_b;
+      const auto va = side_values(a, id, m.name, &runs_a);
+      const auto vb = side_values(b, id, m.name, &runs_b);
+      if (va.empty() || vb.empty()) continue;
+      const double ma = median(va), mb = median(vb);
+      const double ratio = mb / ma;
+      std::string judgement;
+      std::optional<double> p;
+      std::string basis;
+      if (va.size() >= 2 && vb.size() >= 2) {
+        p = welch_test(va, vb).p_value;
+        basis = "run-to-run spread";
+      } else if (std::string(m.name) == "latency mean" && runs_a.size() == 1 &&
+                 runs_b.size() == 1 && va.size() == 1 && vb.size() == 1 &&
+                 runs_a[0]->latency.count >= 2 && runs_b[0]->latency.count >= 2) {
+        const auto& la = runs_a[0]->latency;
+        const auto& lb = runs_b[0]->latency;
+        p = welch_test(la.mean, la.stddev, la.count, lb.mean, lb.stddev, lb.count).p_value;
+        basis = "within-run spread only; repeat the runs to judge run-to-run";
+      }
+      if (p) {
+        const bool better = m.smaller_is_better ? mb < ma : mb > ma;
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "p = %.2g", *p);
+        judgement = (*p < 0.05 ? std::string("significant: B ") + (better ? "better" : "worse")
+                               : std::string("not significant")) +
+                    " (" + buf + ", " + basis + ")";
+      } else {
+        judgement = "not judged: needs 2 or more runs per side";
+      }
+      c.table.rows.push_back({id, std::string(m.name) + " (" + m.unit + ")",
+                              detail::format_value(ma), std::to_string(va.size()),
+                              detail::format_value(mb), std::to_string(vb.size()),
+                              format_fixed(ratio, 3), judgement});
+      c.table.row_warning.push_back(false);
+    }
+  }
+  c.notes.push_back("A = " + a_sel + ": " + std::to_string(a.runs.size()) + " local runs, " +
+                    std::to_string(a.rows.size()) + " published rows");
+  c.notes.push_back("B = " + b_sel + ": " + std::to_string(b.runs.size()) + " local runs, " +
+                    std::to_string(b.rows.size()) + " published rows");
+  if (c.table.rows.empty())
+    c.notes.push_back("The two sides have no benchmark and metric in common.");
+  return c;
+}
+
+// --- machines ------------------------------------------------------------------------------
+
+std::string yes_no(const nlohmann::json& j) {
+  return j.is_boolean() ? (j.get<bool>() ? "yes" : "no") : "-";
+}
+
+std::string text_or_dash(const nlohmann::json& j) {
+  if (j.is_string()) return j.get<std::string>();
+  if (j.is_number()) return j.dump();
+  return "-";
+}
+
+Table machines_table(const std::vector<StoredRun>& runs) {
+  Table t;
+  t.css_class = "machines";
+  t.header = {"hardware", "host",           "CPU",    "cores / threads", "frequency MHz",
+              "governor", "memory GiB",     "kernel", "PREEMPT_RT",      "OS",
+              "GPUs",     "container / VM", "runs"};
+  t.numeric = std::vector<bool>(t.header.size(), false);
+  std::vector<std::string> keys;
+  std::map<std::string, std::vector<const StoredRun*>> by_machine;
+  for (const auto& r : runs) {
+    nlohmann::json m = r.json.value("machine", nlohmann::json::object());
+    // The current frequency changes from run to run; the machine does not.
+    if (!m.is_object()) m = nlohmann::json::object();
+    if (m.contains("cpu") && m["cpu"].is_object() && m["cpu"].contains("frequency") &&
+        m["cpu"]["frequency"].is_object()) {
+      m["cpu"]["frequency"].erase("per_cpu");
+      m["cpu"]["frequency"].erase("current_min_khz");
+      m["cpu"]["frequency"].erase("current_max_khz");
+    }
+    const std::string key = m.dump();
+    if (!by_machine.contains(key)) keys.push_back(key);
+    by_machine[key].push_back(&r);
+  }
+  for (const auto& key : keys) {
+    const auto& runs_of = by_machine[key];
+    const nlohmann::json m = nlohmann::json::parse(key);
+    auto object = [](const nlohmann::json& parent, const char* name) {
+      const auto it = parent.find(name);
+      return it != parent.end() && it->is_object() ? *it : nlohmann::json::object();
+    };
+    const nlohmann::json cpu = object(m, "cpu");
+    const nlohmann::json freq = object(cpu, "frequency");
+    auto mhz = [](const nlohmann::json& khz) {
+      return khz.is_number() ? std::to_string(khz.get<std::uint64_t>() / 1000) : std::string("?");
+    };
+    std::string frequency = freq.contains("min_khz") && freq["min_khz"].is_number()
+                                ? mhz(freq["min_khz"]) + "–" + mhz(freq["max_khz"])
+                                : "-";
+    std::string governors;
+    for (const auto& g : freq.value("governors", nlohmann::json::array()))
+      governors += (governors.empty() ? "" : ", ") + g.get<std::string>();
+    std::string gpus;
+    for (const auto& g : m.value("gpus", nlohmann::json::array())) {
+      std::string name = text_or_dash(g.value("model", nlohmann::json()));
+      if (name == "-")
+        name = text_or_dash(g.value("vendor_name", nlohmann::json())) + " " +
+               text_or_dash(g.value("device_id", nlohmann::json()));
+      gpus += (gpus.empty() ? "" : ", ") + name;
+    }
+    const nlohmann::json container = object(m, "container");
+    std::string isolation =
+        container.value("detected", false)
+            ? "container (" + text_or_dash(container.value("runtime", nlohmann::json())) + ")"
+            : "no container";
+    isolation += m.value("virtual_machine", nlohmann::json()).is_boolean() &&
+                         m["virtual_machine"].get<bool>()
+                     ? ", virtual machine"
+                     : "";
+    const auto mem = m.value("memory_total_bytes", nlohmann::json());
+    std::string runs_list;
+    for (const auto* r : runs_of) runs_list += (runs_list.empty() ? "" : ", ") + r->stem();
+    const nlohmann::json kernel = object(m, "kernel");
+    t.rows.push_back(
+        {runs_of.front()->hardware, text_or_dash(m.value("hostname", nlohmann::json())),
+         text_or_dash(cpu.value("model", nlohmann::json())),
+         text_or_dash(cpu.value("physical_cores", nlohmann::json())) + " / " +
+             text_or_dash(cpu.value("logical_cpus", nlohmann::json())),
+         frequency, governors.empty() ? "-" : governors,
+         mem.is_number() ? format_fixed(mem.get<double>() / (1024.0 * 1024 * 1024), 1) : "-",
+         text_or_dash(kernel.value("release", nlohmann::json())),
+         yes_no(kernel.value("preempt_rt", nlohmann::json())),
+         text_or_dash(m.value("os", nlohmann::json())), gpus.empty() ? "none" : gpus, isolation,
+         runs_list});
+    t.row_warning.push_back(false);
+  }
+  return t;
+}
+
+}  // namespace
+
+namespace detail {
+
+const char* const kPalette[12] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b",
+                                  "#e377c2", "#17becf", "#7f7f7f", "#bcbd22", "#393b79", "#637939"};
+
+std::string local_series(const StoredRun& run) {
+  return run.hardware + " · " + run.rmw;
+}
+
+std::string published_series(const std::string& hardware) {
+  return hardware + " (RobotPerf)";
+}
+
+std::string format_value(double value) {
+  if (!std::isfinite(value)) return "-";
+  char buf[64];
+  const double a = std::fabs(value);
+  std::snprintf(buf, sizeof buf,
+                a >= 1000  ? "%.0f"
+                : a >= 100 ? "%.1f"
+                : a >= 1   ? "%.2f"
+                           : "%.3g",
+                value);
+  return buf;
+}
+
+std::string html_escape(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+Model build_model(const ReportInput& in, const ReportOptions& options) {
+  Model model;
+  model.title = options.title;
+  for (const auto& s : in.skipped) model.warnings.push_back("skipped " + s);
+
+  std::set<std::string> categories;
+  std::map<std::string, std::set<std::string>> ids_by_category;
+  std::map<std::string, std::string> names;
+  for (const auto& r : in.runs) {
+    categories.insert(r.category);
+    ids_by_category[r.category].insert(r.benchmark_id);
+    names[r.benchmark_id] = r.benchmark_name;
+    if (!r.valid) {
+      std::string why;
+      for (const auto& reason : r.invalid_reasons) why += (why.empty() ? "" : "; ") + reason;
+      model.warnings.push_back("run " + r.stem() + " is INVALID: " + why +
+                               " (shown in its table, left out of the plots)");
+    }
+    for (const auto& w : r.warnings) model.warnings.push_back("run " + r.stem() + ": " + w);
+  }
+  std::size_t published_rows = 0, flagged_rows = 0;
+  for (const auto& b : in.published) {
+    categories.insert(b.category);
+    ids_by_category[b.category].insert(b.id);
+    if (!names.contains(b.id)) names[b.id] = b.name;
+    published_rows += b.results.size();
+    flagged_rows += b.flagged();
+    if (b.flagged() > 0) {
+      model.warnings.push_back(b.source.string() + ": " + std::to_string(b.flagged()) + " of " +
+                               std::to_string(b.results.size()) +
+                               " published rows break the measurement rules (listed under " + b.id +
+                               "; left out of the plots and comparisons)");
+    }
+  }
+  model.categories.assign(categories.begin(), categories.end());
+
+  const auto obs = observations(in);
+  for (const auto& category : model.categories) {
+    model.radars[category] = radars_for(category, obs, options);
+    for (const auto& id : ids_by_category[category]) {
+      BenchmarkSection section;
+      section.id = id;
+      section.name = names[id];
+      section.category = category;
+      std::vector<const StoredRun*> runs;
+      for (const auto& r : in.runs) {
+        if (r.benchmark_id == id) runs.push_back(&r);
+      }
+      section.runs = runs_table_for(runs);
+      std::vector<const StoredRun*> recent(
+          runs.end() -
+              static_cast<std::ptrdiff_t>(std::min(runs.size(), options.max_distribution_runs)),
+          runs.end());
+      section.distribution = distributions(recent, model.warnings);
+      for (const auto& b : in.published) {
+        if (b.id != id) continue;
+        Table summary, flagged;
+        published_tables(b, summary, flagged);
+        // Several files of one benchmark: append.
+        if (section.published.header.empty()) {
+          section.published = std::move(summary);
+          section.flagged = std::move(flagged);
+        } else {
+          for (std::size_t i = 0; i < summary.rows.size(); ++i) {
+            section.published.rows.push_back(summary.rows[i]);
+            section.published.row_warning.push_back(false);
+          }
+          for (std::size_t i = 0; i < flagged.rows.size(); ++i) {
+            section.flagged.rows.push_back(flagged.rows[i]);
+            section.flagged.row_warning.push_back(true);
+          }
+        }
+        section.published_rows += b.results.size();
+      }
+      model.benchmarks[category].push_back(std::move(section));
+    }
+  }
+
+  if (options.compare) {
+    model.comparison = compare(options.compare->first, options.compare->second, in);
+  } else {
+    std::vector<std::string> series;
+    for (const auto& r : in.runs) {
+      const auto s = local_series(r);
+      if (std::ranges::find(series, s) == series.end()) series.push_back(s);
+    }
+    if (series.size() >= 2) model.comparison = compare(series[0], series[1], in);
+  }
+  model.machines = machines_table(in.runs);
+
+  std::set<std::string> machines;
+  for (const auto& r : in.runs) machines.insert(r.hardware);
+  const auto valid = std::ranges::count_if(in.runs, [](const auto& r) { return r.valid; });
+  model.summary = std::to_string(in.runs.size()) + " local runs (" + std::to_string(valid) +
+                  " valid) on " + std::to_string(machines.size()) + " machine" +
+                  (machines.size() == 1 ? "" : "s") + "; " + std::to_string(in.published.size()) +
+                  " published benchmark files with " + std::to_string(published_rows) + " rows (" +
+                  std::to_string(flagged_rows) + " flagged). robotperf " + build_info::kVersion +
+                  ".";
+  return model;
+}
+
+}  // namespace detail
+
+ReportInput load_report_inputs(const std::vector<fs::path>& paths) {
+  ReportInput in;
+  std::set<fs::path> seen;
+  auto load_file = [&](const fs::path& p, bool named) {
+    const fs::path canonical = fs::weakly_canonical(p);
+    if (!seen.insert(canonical).second) return;
+    try {
+      const auto ext = p.extension().string();
+      if (ext == ".yaml" || ext == ".yml") {
+        in.published.push_back(import_benchmark_yaml(p));
+        return;
+      }
+      if (ext != ".json") {
+        if (named)
+          throw ReportError(p.string() +
+                            ": expected a results .json, an imported "
+                            ".json or a benchmark.yaml");
+        return;
+      }
+      std::ifstream f(p);
+      const auto j = nlohmann::json::parse(f, nullptr, false);
+      if (j.is_object() && j.value("schema", "") == kPublishedSchema) {
+        in.published.push_back(published_from_json(j, p));
+      } else {
+        in.runs.push_back(load_run(p));
+      }
+    } catch (const ReportError& e) {
+      if (named) throw;
+      in.skipped.push_back(e.what());
+    }
+  };
+  for (const auto& p : paths) {
+    if (fs::is_directory(p)) {
+      std::vector<fs::path> files;
+      for (const auto& e : fs::recursive_directory_iterator(p)) {
+        if (!e.is_regular_file()) continue;
+        const auto name = e.path().filename().string();
+        if (e.path().extension() == ".json" || name == "benchmark.yaml") files.push_back(e.path());
+      }
+      std::ranges::sort(files);
+      for (const auto& f : files) load_file(f, false);
+    } else if (fs::exists(p)) {
+      load_file(p, true);
+    } else {
+      throw ReportError(p.string() + ": no such file or folder");
+    }
+  }
+  std::ranges::stable_sort(in.runs, [](const StoredRun& a, const StoredRun& b) {
+    return std::tie(a.started_utc, a.path) < std::tie(b.started_utc, b.path);
+  });
+  return in;
+}
+
+}  // namespace robotperf::report

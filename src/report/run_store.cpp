@@ -1,0 +1,322 @@
+#include "robotperf/report/run_store.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sstream>
+
+namespace robotperf::report {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+double number_or_nan(const json& j, const char* key) {
+  const auto it = j.find(key);
+  return it != j.end() && it->is_number() ? it->get<double>() : kNoValue;
+}
+
+std::string string_or_empty(const json& j, const char* key) {
+  const auto it = j.find(key);
+  return it != j.end() && it->is_string() ? it->get<std::string>() : std::string();
+}
+
+const json& member(const json& j, const char* key) {
+  static const json null_json;
+  if (!j.is_object()) return null_json;
+  const auto it = j.find(key);
+  return it == j.end() ? null_json : *it;
+}
+
+std::vector<std::string> strings(const json& j) {
+  std::vector<std::string> out;
+  if (!j.is_array()) return out;
+  for (const auto& e : j) {
+    if (e.is_string()) out.push_back(e.get<std::string>());
+    // Run-rule warnings: {"rule": ..., "message": ...}.
+    if (e.is_object() && e.contains("message") && e["message"].is_string())
+      out.push_back((e.contains("rule") && e["rule"].is_string()
+                         ? e["rule"].get<std::string>() + ": "
+                         : std::string()) +
+                    e["message"].get<std::string>());
+  }
+  return out;
+}
+
+LatencySummary latency_summary(const json& block) {
+  LatencySummary s;
+  if (!block.is_object()) return s;
+  s.count = block.value("count", std::size_t{0});
+  s.min = number_or_nan(block, "min");
+  s.mean = number_or_nan(block, "mean");
+  s.rms = number_or_nan(block, "rms");
+  s.stddev = number_or_nan(block, "stddev");
+  s.p50 = number_or_nan(block, "p50");
+  s.p90 = number_or_nan(block, "p90");
+  s.p99 = number_or_nan(block, "p99");
+  s.p999 = number_or_nan(block, "p999");
+  s.max = number_or_nan(block, "max");
+  return s;
+}
+
+// The power section is written by the metrics piece; read the average and energy from the names
+// it may use, and treat anything else as "no power figure".
+void read_power(const json& power, StoredRun& run) {
+  if (power.is_null()) {
+    run.power_note = "not recorded";
+    return;
+  }
+  if (power.is_string()) {
+    run.power_note = power.get<std::string>();
+    return;
+  }
+  if (!power.is_object()) return;
+  const json& total = member(power, "total");
+  for (const json* scope : {&power, &total}) {
+    for (const char* key : {"average_w", "average_watts", "avg_w", "watts"}) {
+      const double w = number_or_nan(*scope, key);
+      if (std::isfinite(w) && !run.power_w) run.power_w = w;
+    }
+    for (const char* key : {"energy_j", "energy_joules"}) {
+      const double e = number_or_nan(*scope, key);
+      if (std::isfinite(e) && !run.energy_j) run.energy_j = e;
+    }
+  }
+  if (member(power, "available").is_boolean() && !power["available"].get<bool>()) {
+    run.power_w.reset();
+    run.energy_j.reset();
+  }
+  for (const char* key : {"reason", "unavailable_reason", "why", "status"}) {
+    if (run.power_note.empty()) run.power_note = string_or_empty(power, key);
+  }
+  if (run.power_note.empty() && run.power_w) {
+    // The sources summed into the total, else every source that was read.
+    std::vector<std::string> names = strings(member(total, "sources"));
+    const json& sources = member(power, "sources");
+    if (names.empty() && sources.is_array()) {
+      for (const auto& s : sources) {
+        if (s.is_object() && s.value("available", true)) {
+          const auto name = string_or_empty(s, "name");
+          if (!name.empty()) names.push_back(name);
+        }
+      }
+    }
+    for (std::size_t i = 0; i < names.size(); ++i) run.power_note += (i ? ", " : "") + names[i];
+  }
+  if (run.power_note.empty() && !run.power_w) run.power_note = "unavailable";
+}
+
+std::string collapse_spaces(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == ' ' && (out.empty() || out.back() == ' ')) continue;
+    out += c;
+  }
+  while (!out.empty() && out.back() == ' ') out.pop_back();
+  return out;
+}
+
+}  // namespace
+
+std::string StoredRun::stem() const {
+  return path.stem().string();
+}
+
+std::string StoredRun::timestamp() const {
+  std::string t = started_utc;
+  if (t.size() >= 19 && t[10] == 'T') {
+    t[10] = ' ';
+    t.resize(19);
+  }
+  return t;
+}
+
+bool looks_like_result(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) return false;
+  const json j = json::parse(in, nullptr, /*allow_exceptions=*/false);
+  return j.is_object() && j.value("schema", "") == "robotperf.result/1";
+}
+
+StoredRun load_run(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw ReportError(path.string() + ": cannot open the results file");
+  StoredRun run;
+  run.path = path;
+  try {
+    run.json = json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw ReportError(path.string() + ": not valid JSON (" + e.what() +
+                      "); is it a robotperf results file?");
+  }
+  const json& j = run.json;
+  if (!j.is_object() || j.value("schema", "") != "robotperf.result/1") {
+    throw ReportError(path.string() +
+                      ": not a robotperf results file (expected \"schema\": "
+                      "\"robotperf.result/1\")");
+  }
+  const json& benchmark = member(j, "benchmark");
+  run.benchmark_id = string_or_empty(benchmark, "id");
+  if (run.benchmark_id.empty())
+    throw ReportError(path.string() + ": results file without benchmark.id");
+  run.benchmark_name = string_or_empty(benchmark, "name");
+  run.category = string_or_empty(benchmark, "category");
+  run.type = string_or_empty(j, "type");
+  run.started_utc = string_or_empty(j, "started_utc");
+  const json& config = member(j, "configuration");
+  run.rmw = string_or_empty(config, "rmw");
+  run.processes = string_or_empty(config, "processes");
+  run.rate_hz = number_or_nan(config, "rate_hz");
+  run.dataset = string_or_empty(member(j, "dataset"), "name");
+  const json& machine = member(j, "machine");
+  run.hardware = hardware_label(machine);
+  run.hardware_category = hardware_category(machine);
+  const json& counts = member(j, "counts");
+  run.measured = counts.value("measured", std::size_t{0});
+  run.matched = counts.value("matched", std::size_t{0});
+  run.lost = counts.value("lost", std::size_t{0});
+  run.loss_percent = number_or_nan(counts, "loss_percent");
+  const json& latency = member(j, "latency_ms");
+  run.latency = latency_summary(member(latency, "from_scheduled"));
+  run.histogram = log_histogram_from_json(member(latency, "from_scheduled_histogram"));
+  const json& throughput = member(j, "throughput");
+  run.throughput_hz = number_or_nan(throughput, "output_hz");
+  run.offered_hz = number_or_nan(throughput, "offered_hz");
+  read_power(member(j, "power"), run);
+  const json& validity = member(j, "validity");
+  run.valid = member(validity, "valid").is_boolean() && validity["valid"].get<bool>();
+  run.invalid_reasons = strings(member(validity, "reasons"));
+  run.warnings = strings(member(j, "warnings"));
+  if (run.warnings.empty()) run.warnings = strings(member(member(j, "run_rules"), "warnings"));
+  fs::path csv = path;
+  csv.replace_extension(".latencies.csv");
+  if (fs::exists(csv)) run.csv_path = csv;
+  return run;
+}
+
+RunScan scan_results(const fs::path& dir) {
+  if (!fs::is_directory(dir))
+    throw ReportError(dir.string() +
+                      ": no such results folder (runs write to ./results, or to "
+                      "the folder given by run --output)");
+  RunScan scan;
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (e.is_regular_file() && e.path().extension() == ".json") files.push_back(e.path());
+  }
+  std::ranges::sort(files);
+  for (const auto& f : files) {
+    try {
+      scan.runs.push_back(load_run(f));
+    } catch (const ReportError& e) {
+      scan.skipped.push_back(e.what());
+    }
+  }
+  std::ranges::stable_sort(scan.runs, [](const StoredRun& a, const StoredRun& b) {
+    return std::tie(a.started_utc, a.path) < std::tie(b.started_utc, b.path);
+  });
+  return scan;
+}
+
+std::string hardware_label(const json& machine) {
+  std::string name;
+  const std::string board = string_or_empty(machine, "board_model");
+  if (!board.empty()) {
+    name = std::regex_replace(board, std::regex(" Developer Kit$| Dev(\\.|elopment)? Kit$"), "");
+  } else {
+    name = string_or_empty(member(machine, "cpu"), "model");
+    // "Intel(R) Core(TM) i7-12700H CPU @ 2.30GHz" -> "Intel Core i7-12700H".
+    name = std::regex_replace(name, std::regex("\\((R|TM|r|tm)\\)"), "");
+    name = std::regex_replace(name, std::regex(" CPU @ .*$| @ [0-9.]+ ?GHz$"), "");
+    name = std::regex_replace(name, std::regex(" [0-9]+-Core Processor$| Processor$"), "");
+    name = collapse_spaces(name);
+  }
+  if (name.empty()) name = "unknown machine";
+  std::set<std::string> seen;
+  const json& gpus = member(machine, "gpus");
+  if (gpus.is_array()) {
+    for (const auto& g : gpus) {
+      std::string model = string_or_empty(g, "model");
+      if (model.empty() && string_or_empty(g, "driver") == "amdgpu")
+        model = "AMD GPU " + string_or_empty(g, "device_id");
+      if (!model.empty() && seen.insert(model).second) name += " + " + model;
+    }
+  }
+  return name;
+}
+
+std::string hardware_category(const json& machine) {
+  const std::string arch = string_or_empty(machine, "architecture");
+  const std::string board = string_or_empty(machine, "board_model");
+  const std::string cpu = string_or_empty(member(machine, "cpu"), "model");
+  if (!board.empty() || arch == "aarch64" || arch.starts_with("arm")) return "edge";
+  if (member(machine, "virtual_machine").is_boolean() && machine["virtual_machine"].get<bool>())
+    return "cloud";
+  static const std::regex server("EPYC|Xeon|Opteron|Ampere|Neoverse|Graviton");
+  if (std::regex_search(cpu, server)) return "datacenter";
+  return "workstation";
+}
+
+std::vector<double> read_latency_csv(const fs::path& csv) {
+  std::ifstream in(csv);
+  if (!in) throw ReportError(csv.string() + ": cannot open the latency CSV");
+  std::string line;
+  std::getline(in, line);
+  if (!line.starts_with("id,warmup,scheduled_ns,sent_ns,received_ns,latency_scheduled_ns"))
+    throw ReportError(csv.string() + ":1: not a robotperf latency CSV (unexpected header)");
+  std::vector<double> out;
+  std::size_t number = 1;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty()) continue;
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    if (line.back() == ',') cells.emplace_back();
+    if (cells.size() != 7)
+      throw ReportError(csv.string() + ":" + std::to_string(number) + ": expected 7 columns");
+    if (cells[1] == "1" || cells[5].empty()) continue;  // warm-up or lost
+    try {
+      out.push_back(static_cast<double>(std::stoll(cells[5])) / 1e6);
+    } catch (const std::exception&) {
+      throw ReportError(csv.string() + ":" + std::to_string(number) + ": latency '" + cells[5] +
+                        "' is not an integer");
+    }
+  }
+  return out;
+}
+
+std::string format_fixed(double value, int decimals) {
+  if (!std::isfinite(value)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, value);
+  return buf;
+}
+
+std::string runs_table(const std::vector<StoredRun>& runs) {
+  std::ostringstream out;
+  char line[512];
+  std::snprintf(line, sizeof line, "%-36s %-5s %-5s %-32s %-14s %-19s %9s %9s %9s %8s %s\n", "file",
+                "bench", "type", "hardware", "transport", "date (UTC)", "lat max", "lat p50",
+                "thr Hz", "power W", "validity");
+  out << line;
+  for (const auto& r : runs) {
+    std::string hardware = r.hardware.size() > 32 ? r.hardware.substr(0, 31) + "~" : r.hardware;
+    std::string validity = r.valid ? "valid" : "INVALID";
+    if (!r.valid && !r.invalid_reasons.empty()) validity += ": " + r.invalid_reasons.front();
+    std::snprintf(line, sizeof line, "%-36s %-5s %-5s %-32s %-14s %-19s %9s %9s %9s %8s %s\n",
+                  r.stem().c_str(), r.benchmark_id.c_str(), r.type.c_str(), hardware.c_str(),
+                  (r.rmw + (r.processes == "per-node" ? "/per-node" : "")).c_str(),
+                  r.timestamp().c_str(), format_fixed(r.latency.max, 3).c_str(),
+                  format_fixed(r.latency.p50, 3).c_str(), format_fixed(r.throughput_hz, 2).c_str(),
+                  r.power_w ? format_fixed(*r.power_w, 2).c_str() : "-", validity.c_str());
+    out << line;
+  }
+  return out.str();
+}
+
+}  // namespace robotperf::report

@@ -1,0 +1,222 @@
+// Inline SVG plots for the HTML report: radar charts and latency CDFs.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "report_model.hpp"
+
+namespace robotperf::report::detail {
+namespace {
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f", v);
+  return buf;
+}
+
+// A "nice" tick step (1, 2 or 5 times a power of ten) for about `count` ticks over `range`.
+double nice_step(double range, int count) {
+  if (!(range > 0)) return 1;
+  const double raw = range / count;
+  const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0, 10.0}) {
+    if (raw <= m * magnitude) return m * magnitude;
+  }
+  return 10 * magnitude;
+}
+
+}  // namespace
+
+std::string radar_svg(const Radar& r) {
+  constexpr double kSize = 480, kCx = 240, kCy = 200, kRadius = 120;
+  const std::size_t n = r.axes.size();
+  const double legend_height =
+      18.0 * static_cast<double>(r.series.size() + (r.omitted.empty() ? 0 : 1)) + 10;
+  std::ostringstream s;
+  s << "<svg class=\"radar\" data-category=\"" << html_escape(r.category) << "\" data-metric=\""
+    << r.metric << "\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kSize << "\" height=\""
+    << num(400 + legend_height) << "\" viewBox=\"0 0 " << kSize << " " << num(400 + legend_height)
+    << "\" role=\"img\">\n";
+  s << "<title>" << html_escape(r.category + ": " + r.metric + " (" + r.unit + ")") << "</title>\n";
+  s << "<text x=\"" << kCx << "\" y=\"22\" text-anchor=\"middle\" class=\"plot-title\">"
+    << html_escape(r.metric + " (" + r.unit + ") — " +
+                   (r.smaller_is_better ? "smaller is better" : "larger is better"))
+    << "</text>\n";
+  // Each axis has its own scale so that benchmarks of different magnitude share the plot: linear
+  // from 0 to the axis maximum, or, when the values of an axis span more than a factor of 20
+  // (published data has outliers), logarithmic from the axis minimum (at 10 % of the radius) to
+  // the maximum. Either way a smaller value sits nearer the centre. The scale is written at the
+  // end of each axis.
+  std::vector<double> axis_min(n, 0.0), axis_max(n, 0.0);
+  for (std::size_t a = 0; a < n; ++a) {
+    bool any = false;
+    for (const auto& row : r.values) {
+      if (!std::isfinite(row[a]) || row[a] <= 0) continue;
+      axis_min[a] = any ? std::min(axis_min[a], row[a]) : row[a];
+      axis_max[a] = any ? std::max(axis_max[a], row[a]) : row[a];
+      any = true;
+    }
+  }
+  bool logarithmic = false;
+  for (std::size_t a = 0; a < n; ++a) logarithmic = logarithmic || axis_max[a] > 20 * axis_min[a];
+  auto fraction = [&](std::size_t a, double v) {
+    if (!logarithmic) return v / axis_max[a];
+    if (axis_max[a] <= axis_min[a]) return 1.0;
+    return 0.1 + 0.9 * std::log(v / axis_min[a]) / std::log(axis_max[a] / axis_min[a]);
+  };
+  auto angle = [&](std::size_t a) {
+    return -std::numbers::pi / 2 +
+           2 * std::numbers::pi * static_cast<double>(a) / static_cast<double>(n);
+  };
+  auto point = [&](std::size_t a, double f) {
+    return std::pair{kCx + kRadius * f * std::cos(angle(a)),
+                     kCy + kRadius * f * std::sin(angle(a))};
+  };
+  // Grid rings.
+  for (double ring : {0.25, 0.5, 0.75, 1.0}) {
+    if (n >= 3) {
+      s << "<polygon class=\"grid\" points=\"";
+      for (std::size_t a = 0; a < n; ++a) {
+        const auto [x, y] = point(a, ring);
+        s << num(x) << "," << num(y) << " ";
+      }
+      s << "\" fill=\"none\" stroke=\"#ccc\"/>\n";
+    } else {
+      s << "<circle cx=\"" << kCx << "\" cy=\"" << kCy << "\" r=\"" << num(kRadius * ring)
+        << "\" fill=\"none\" stroke=\"#ccc\"/>\n";
+    }
+  }
+  // Axes with their labels.
+  for (std::size_t a = 0; a < n; ++a) {
+    const auto [x, y] = point(a, 1.0);
+    s << "<line x1=\"" << kCx << "\" y1=\"" << kCy << "\" x2=\"" << num(x) << "\" y2=\"" << num(y)
+      << "\" stroke=\"#999\"/>\n";
+    const auto [lx, ly] = point(a, 1.16);
+    const double c = std::cos(angle(a));
+    const char* anchor = c > 0.3 ? "start" : c < -0.3 ? "end" : "middle";
+    s << "<text class=\"axis-label\" x=\"" << num(lx) << "\" y=\"" << num(ly) << "\" text-anchor=\""
+      << anchor << "\">" << html_escape(r.axes[a]) << " (" << r.unit << ")</text>\n";
+    s << "<text class=\"axis-scale\" x=\"" << num(lx) << "\" y=\"" << num(ly + 13)
+      << "\" text-anchor=\"" << anchor << "\">"
+      << (logarithmic ? format_value(axis_min[a]) + "–" : std::string("max "))
+      << format_value(axis_max[a]) << (logarithmic ? " (log)" : "") << "</text>\n";
+  }
+  // One polygon per series.
+  for (std::size_t si = 0; si < r.series.size(); ++si) {
+    const char* colour = kPalette[si % 12];
+    std::vector<std::pair<double, double>> pts;
+    for (std::size_t a = 0; a < n; ++a) {
+      const double v = r.values[si][a];
+      if (!std::isfinite(v) || v <= 0 || axis_max[a] <= 0) continue;
+      pts.push_back(point(a, fraction(a, v)));
+    }
+    const std::string dash = r.series_local[si] ? "" : " stroke-dasharray=\"5,3\"";
+    if (pts.size() >= 2) {
+      s << "<polygon class=\"series\" points=\"";
+      for (const auto& [x, y] : pts) s << num(x) << "," << num(y) << " ";
+      s << "\" fill=\"" << colour << "\" fill-opacity=\"0.12\" stroke=\"" << colour
+        << "\" stroke-width=\"" << (r.series_local[si] ? 3 : 1.5) << "\"" << dash << "/>\n";
+    }
+    for (const auto& [x, y] : pts) {
+      s << "<circle cx=\"" << num(x) << "\" cy=\"" << num(y) << "\" r=\""
+        << (r.series_local[si] ? 5 : 3.5) << "\" fill=\"" << colour << "\"/>\n";
+    }
+  }
+  // Legend.
+  double ly = 400;
+  for (std::size_t si = 0; si < r.series.size(); ++si) {
+    const char* colour = kPalette[si % 12];
+    s << "<rect x=\"20\" y=\"" << num(ly - 10) << "\" width=\"14\" height=\"10\" fill=\"" << colour
+      << "\"/><text class=\"legend\" x=\"40\" y=\"" << num(ly) << "\">"
+      << html_escape(r.series[si].size() > 68 ? r.series[si].substr(0, 66) + "…" : r.series[si])
+      << "<title>" << html_escape(r.series[si]) << "</title></text>\n";
+    ly += 18;
+  }
+  if (!r.omitted.empty()) {
+    s << "<text class=\"legend\" x=\"20\" y=\"" << num(ly) << "\">+ " << r.omitted.size()
+      << " more platforms (in the table below)</text>\n";
+  }
+  s << "</svg>\n";
+  return s.str();
+}
+
+std::string distribution_svg(const std::vector<Distribution>& curves, const std::string& id) {
+  constexpr double kWidth = 760, kLeft = 60, kRight = 20, kTop = 30, kPlotHeight = 240;
+  const double legend_height = 18.0 * static_cast<double>(curves.size()) + 10;
+  const double height = kTop + kPlotHeight + 45 + legend_height;
+  double x_max = 0;
+  for (const auto& c : curves) {
+    for (const auto& [x, y] : c.points) x_max = std::max(x_max, x);
+  }
+  const double step = nice_step(x_max, 8);
+  x_max = std::max(step, std::ceil(x_max * 1.02 / step) * step);
+  const double plot_width = kWidth - kLeft - kRight;
+  auto px = [&](double x) { return kLeft + plot_width * x / x_max; };
+  auto py = [&](double y) { return kTop + kPlotHeight * (1 - y); };
+  std::ostringstream s;
+  s << "<svg class=\"cdf\" data-benchmark=\"" << html_escape(id)
+    << "\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kWidth << "\" height=\"" << num(height)
+    << "\" viewBox=\"0 0 " << kWidth << " " << num(height) << "\" role=\"img\">\n";
+  s << "<title>" << html_escape(id) << " latency distribution</title>\n";
+  s << "<text class=\"plot-title\" x=\"" << kLeft << "\" y=\"18\">" << html_escape(id)
+    << ": latency from the scheduled send, cumulative distribution (p50 and p99 marked)</text>\n";
+  // Axes and grid.
+  for (double y : {0.0, 0.25, 0.5, 0.75, 0.9, 1.0}) {
+    s << "<line x1=\"" << kLeft << "\" x2=\"" << num(kLeft + plot_width) << "\" y1=\"" << num(py(y))
+      << "\" y2=\"" << num(py(y)) << "\" stroke=\"#eee\"/>\n";
+    s << "<text class=\"tick\" x=\"" << num(kLeft - 6) << "\" y=\"" << num(py(y) + 4)
+      << "\" text-anchor=\"end\">" << y << "</text>\n";
+  }
+  for (double x = 0; x <= x_max + step / 2; x += step) {
+    s << "<line x1=\"" << num(px(x)) << "\" x2=\"" << num(px(x)) << "\" y1=\"" << num(py(0))
+      << "\" y2=\"" << num(py(0) + 5) << "\" stroke=\"#666\"/>\n";
+    s << "<text class=\"tick\" x=\"" << num(px(x)) << "\" y=\"" << num(py(0) + 18)
+      << "\" text-anchor=\"middle\">" << format_value(x) << "</text>\n";
+  }
+  s << "<text class=\"tick\" x=\"" << num(kLeft + plot_width / 2) << "\" y=\"" << num(py(0) + 36)
+    << "\" text-anchor=\"middle\">latency (ms)</text>\n";
+  s << "<rect x=\"" << kLeft << "\" y=\"" << kTop << "\" width=\"" << num(plot_width)
+    << "\" height=\"" << kPlotHeight << "\" fill=\"none\" stroke=\"#666\"/>\n";
+  for (std::size_t i = 0; i < curves.size(); ++i) {
+    const auto& c = curves[i];
+    const char* colour = kPalette[i % 12];
+    s << "<polyline class=\"curve\" fill=\"none\" stroke=\"" << colour
+      << "\" stroke-width=\"2\" points=\"";
+    // A CDF is a step function: draw each rise at its x.
+    double last_y = 0;
+    bool first = true;
+    for (const auto& [x, y] : c.points) {
+      if (first) {
+        s << num(px(x)) << "," << num(py(0)) << " ";
+        first = false;
+      }
+      s << num(px(x)) << "," << num(py(last_y)) << " " << num(px(x)) << "," << num(py(y)) << " ";
+      last_y = y;
+    }
+    s << "\"/>\n";
+    for (const auto& [q, v] : {std::pair{0.5, c.p50}, {0.99, c.p99}}) {
+      if (!std::isfinite(v)) continue;
+      s << "<line class=\"marker\" x1=\"" << num(px(v)) << "\" x2=\"" << num(px(v)) << "\" y1=\""
+        << num(py(0)) << "\" y2=\"" << num(py(q)) << "\" stroke=\"" << colour
+        << "\" stroke-dasharray=\"4,3\"/>\n";
+      s << "<circle cx=\"" << num(px(v)) << "\" cy=\"" << num(py(q)) << "\" r=\"4\" fill=\""
+        << colour << "\"/>\n";
+      s << "<text class=\"marker-label\" x=\"" << num(px(v) + 5) << "\" y=\""
+        << num(py(q) + (q > 0.9 ? 14 : -6) + 12.0 * static_cast<double>(i)) << "\" fill=\""
+        << colour << "\">" << (q == 0.5 ? "p50 " : "p99 ") << format_value(v) << "</text>\n";
+    }
+  }
+  double ly = kTop + kPlotHeight + 60;
+  for (std::size_t i = 0; i < curves.size(); ++i) {
+    s << "<rect x=\"" << kLeft << "\" y=\"" << num(ly - 10)
+      << "\" width=\"14\" height=\"10\" fill=\"" << kPalette[i % 12]
+      << "\"/><text class=\"legend\" x=\"" << num(kLeft + 20) << "\" y=\"" << num(ly) << "\">"
+      << html_escape(curves[i].label + " — from the " + curves[i].source) << "</text>\n";
+    ly += 18;
+  }
+  s << "</svg>\n";
+  return s.str();
+}
+
+}  // namespace robotperf::report::detail

@@ -1,0 +1,210 @@
+// The results workflow as a user runs it: run -> results list -> export/merge -> import -> report,
+// and the report rendered by headless Chromium.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kPublished = fs::path(ROBOTPERF_SHARED_DATA_DIR) / "robotperf/perception";
+
+struct Outcome {
+  int exit_code = -1;
+  std::string out;  // stdout and stderr together
+};
+
+Outcome shell(const std::string& cmd) {
+  Outcome o;
+  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
+  if (p == nullptr) return o;
+  std::array<char, 4096> buf;
+  while (std::size_t n = fread(buf.data(), 1, buf.size(), p)) o.out.append(buf.data(), n);
+  const int status = pclose(p);
+  o.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return o;
+}
+
+Outcome robotperf(const std::string& args) {
+  return shell(std::string(ROBOTPERF_EXECUTABLE) + " " + args);
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+std::size_t count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = 0; (at = text.find(what, at)) != std::string::npos; at += what.size()) ++n;
+  return n;
+}
+
+class ResultsCli : public ::testing::Test {
+ protected:
+  // Three short real runs, shared by the tests of this suite.
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / ("robotperf-results-cli-" + std::to_string(getpid()));
+    fs::remove_all(dir_);
+    for (const char* args : {"run a5 --count 40 --csv", "run a5 --count 40", "run a2 --count 40"}) {
+      const auto o =
+          robotperf(std::string(args) + " --quiet --output " + (dir_ / "results").string());
+      ASSERT_EQ(o.exit_code, 0) << o.out;
+    }
+  }
+  static void TearDownTestSuite() { fs::remove_all(dir_); }
+  static fs::path dir_;
+};
+fs::path ResultsCli::dir_;
+
+TEST_F(ResultsCli, ListShowsEveryRun) {
+  const auto o = robotperf("results list " + (dir_ / "results").string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_EQ(count(o.out, "a5-intra-"), 2u) << o.out;
+  EXPECT_EQ(count(o.out, "a2-intra-"), 1u) << o.out;
+  EXPECT_EQ(count(o.out, " valid\n"), 3u) << o.out;
+  const auto missing = robotperf("results list " + (dir_ / "nothing").string());
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.out.find("no such results folder"), std::string::npos);
+}
+
+TEST_F(ResultsCli, ExportMergeImportRoundTrip) {
+  const auto yaml =
+      robotperf("results export --format benchmark-yaml " + (dir_ / "results").string());
+  ASSERT_EQ(yaml.exit_code, 0) << yaml.out;
+  EXPECT_EQ(yaml.out.rfind("results:\n", 0), 0u) << yaml.out;
+  EXPECT_EQ(count(yaml.out, "metric: latency"), 3u);
+  EXPECT_EQ(count(yaml.out, "metric: throughput"), 3u);
+
+  // Merge into a copy of the published a5 file: existing bytes kept, new rows imported.
+  const fs::path copy = dir_ / "a5" / "benchmark.yaml";
+  fs::create_directories(copy.parent_path());
+  fs::copy_file(kPublished / "a5_resize/benchmark.yaml", copy,
+                fs::copy_options::overwrite_existing);
+  const std::string before = read_text(copy);
+  const auto merge = robotperf("results export --merge " + copy.string() + " " +
+                               (dir_ / "results").string() + "/a5-intra-*.json");
+  ASSERT_EQ(merge.exit_code, 0) << merge.out;
+  EXPECT_NE(merge.out.find("added 4 result(s)"), std::string::npos) << merge.out;
+  const std::string after = read_text(copy);
+  EXPECT_GT(after.size(), before.size());
+  const auto again = robotperf("results export --merge " + copy.string() + " " +
+                               (dir_ / "results").string() + "/a5-intra-*.json");
+  EXPECT_NE(again.out.find("added 0 result(s), 4 already there"), std::string::npos) << again.out;
+  EXPECT_EQ(read_text(copy), after);
+
+  const auto imported =
+      robotperf("results import " + copy.string() + " --into " + (dir_ / "imported").string());
+  ASSERT_EQ(imported.exit_code, 0) << imported.out;
+  EXPECT_NE(imported.out.find("a5_resize"), std::string::npos);
+  EXPECT_NE(imported.out.find("rows that break the measurement rules"), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir_ / "imported" / "published-perception-a5_resize.json"));
+}
+
+TEST_F(ResultsCli, ImportFlagsThePublishedA1Rows) {
+  const auto o = robotperf("results import " + (kPublished / "a1_perception_2nodes").string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("negative min latency"), std::string::npos);
+  EXPECT_NE(o.out.find("is above 100 %"), std::string::npos);
+  EXPECT_NE(o.out.find("W <= 0"), std::string::npos);
+  const auto bad = robotperf("results import " + (dir_ / "nope.yaml").string());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_EQ(count(bad.out, "\n"), 1u) << bad.out;  // one line
+}
+
+TEST_F(ResultsCli, ReportNeedsAnOutputAndExistingInputs) {
+  EXPECT_EQ(robotperf("report " + (dir_ / "results").string()).exit_code, 2);
+  const auto o = robotperf("report " + (dir_ / "missing").string() + " --html x.html");
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.out.find("no such file or folder"), std::string::npos) << o.out;
+}
+
+TEST_F(ResultsCli, ReportRendersInHeadlessChromium) {
+  const auto which = shell("command -v chromium");
+  ASSERT_EQ(which.exit_code, 0) << "chromium is not installed: run scripts/install-deps.sh";
+  const fs::path html = dir_ / "report.html";
+  const auto o = robotperf("report " + (dir_ / "results").string() + " " + kPublished.string() +
+                           " --html " + html.string() + " --md " + (dir_ / "report.md").string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+
+  const std::string chromium =
+      "chromium --headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
+      "--disable-background-networking --disable-component-update --disable-sync "
+      "--hide-scrollbars --user-data-dir=" +
+      (dir_ / "chromium-profile").string();
+  // The DOM as the browser parsed it: the plots and tables are there.
+  const auto dom = shell(chromium + " --dump-dom file://" + html.string() + " 2>/dev/null");
+  ASSERT_EQ(dom.exit_code, 0) << dom.out;
+  EXPECT_EQ(count(dom.out, "<svg class=\"radar\""), 3u);
+  EXPECT_EQ(count(dom.out, "<svg class=\"cdf\""), 2u);  // a2 and a5
+  EXPECT_GE(count(dom.out, "<table class=\"runs\""), 2u);
+  EXPECT_GE(count(dom.out, "<table class=\"published\""), 4u);
+  EXPECT_NE(dom.out.find("<table class=\"machines\""), std::string::npos);
+
+  // The screenshot: the radar plots and tables are drawn.
+  const fs::path png = dir_ / "report.png";
+  const auto shot = shell(chromium + " --window-size=1600,1400 --screenshot=" + png.string() +
+                          " file://" + html.string());
+  ASSERT_EQ(shot.exit_code, 0) << shot.out;
+  EXPECT_EQ(shot.out.find("Uncaught"), std::string::npos) << shot.out;
+  const cv::Mat image = cv::imread(png.string(), cv::IMREAD_COLOR);
+  ASSERT_FALSE(image.empty()) << "no screenshot at " << png;
+  EXPECT_EQ(image.cols, 1600);
+  EXPECT_EQ(image.rows, 1400);
+  // The first series' colour (#1f77b4, the local runs) is drawn in the radar area, the table
+  // header colour (#eef3f8) further down, and the page is not blank.
+  std::size_t series = 0, header = 0, ink = 0;
+  for (int y = 0; y < image.rows; ++y) {
+    for (int x = 0; x < image.cols; ++x) {
+      const cv::Vec3b p = image.at<cv::Vec3b>(y, x);  // BGR
+      auto near = [&](int r, int g, int b) {
+        return std::abs(p[2] - r) < 12 && std::abs(p[1] - g) < 12 && std::abs(p[0] - b) < 12;
+      };
+      series += near(0x1f, 0x77, 0xb4);
+      header += near(0xee, 0xf3, 0xf8);
+      ink += p[0] < 128 && p[1] < 128 && p[2] < 128;
+    }
+  }
+  EXPECT_GT(series, 300u);
+  EXPECT_GT(header, 1000u);
+  EXPECT_GT(ink, 5000u);
+}
+
+TEST_F(ResultsCli, RunWritesItsReport) {
+  const fs::path out = dir_ / "with-report";
+  const auto o = robotperf("run a5 --count 40 --quiet --report --output " + out.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  std::size_t reports = 0;
+  for (const auto& e : fs::directory_iterator(out)) {
+    if (e.path().string().ends_with(".report.html")) {
+      ++reports;
+      const std::string html = read_text(e.path());
+      EXPECT_EQ(count(html, "<svg class=\"radar\""), 2u);  // latency, throughput; no power here
+      EXPECT_NE(html.find("<table class=\"runs\""), std::string::npos);
+    }
+  }
+  EXPECT_EQ(reports, 1u);
+}
+
+TEST_F(ResultsCli, ReadmeCheckSaysWhenOutOfDate) {
+  const fs::path root = dir_ / "benchmarks";
+  fs::create_directories(root / "perception");
+  fs::copy(fs::path(ROBOTPERF_SOURCE_DIR) / "benchmarks/perception/a5_resize",
+           root / "perception/a5_resize", fs::copy_options::recursive);
+  EXPECT_EQ(robotperf("--benchmarks " + root.string() + " readme a5 --check").exit_code, 0);
+  std::ofstream(root / "perception/a5_resize/README.md", std::ios::app) << "edited\n";
+  const auto stale = robotperf("--benchmarks " + root.string() + " readme a5 --check");
+  EXPECT_EQ(stale.exit_code, 1);
+  EXPECT_NE(stale.out.find("out of date"), std::string::npos);
+  EXPECT_EQ(robotperf("--benchmarks " + root.string() + " readme a5").exit_code, 0);
+  EXPECT_EQ(robotperf("--benchmarks " + root.string() + " readme a5 --check").exit_code, 0);
+}
+
+}  // namespace

@@ -1,0 +1,333 @@
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "robotperf/report/benchmark_yaml.hpp"
+#include "sample_runs.hpp"
+
+namespace robotperf::report {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kPublished = fs::path(ROBOTPERF_SHARED_DATA_DIR) / "robotperf";
+const fs::path kPublishedA1 = kPublished / "perception/a1_perception_2nodes/benchmark.yaml";
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+bool has_flag(const PublishedResult& r, const std::string& part) {
+  for (const auto& f : r.flags) {
+    if (f.find(part) != std::string::npos) return true;
+  }
+  return false;
+}
+
+class BenchmarkYaml : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("robotperf-byaml-" + std::to_string(getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // Exported entries of a synthetic run with power.
+  std::vector<PublishedResult> sample_entries() {
+    testing::SampleRun s;
+    s.gpu = "NVIDIA GeForce RTX 3060";
+    const auto run = load_run(testing::write_sample(dir_, s, false, 42.5));
+    return export_entries(run, {});
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(BenchmarkYaml, ImportsEveryPublishedA1ResultAndFlagsTheDefectiveRows) {
+  const auto b = import_benchmark_yaml(kPublishedA1);
+  const std::string text = read_text(kPublishedA1);
+  std::size_t entries_in_text = 0;
+  for (std::size_t at = 0; (at = text.find("\n- result:", at)) != std::string::npos; ++at)
+    ++entries_in_text;
+  EXPECT_EQ(b.id, "a1");
+  EXPECT_EQ(b.category, "perception");
+  ASSERT_EQ(b.results.size(), entries_in_text);
+  EXPECT_GT(b.results.size(), 300u);
+
+  std::size_t negative = 0, over_100 = 0, zero_power = 0, tiny_power = 0;
+  for (const auto& r : b.results) {
+    EXPECT_FALSE(r.hardware.empty()) << "line " << r.line;
+    EXPECT_TRUE(std::isfinite(r.value)) << "line " << r.line;
+    EXPECT_GT(r.line, 0);
+    // The entry's line holds "- result:".
+    if (r.note.find("min_latency -") != std::string::npos ||
+        r.note.find("min_benchmark -") != std::string::npos) {
+      ++negative;
+      EXPECT_TRUE(has_flag(r, "negative min latency")) << r.note;
+    }
+    if (r.note.find("-2298.236986") != std::string::npos) {
+      EXPECT_EQ(r.note_min, -2298.236986);
+    }
+    if (r.metric == "power" && r.value > 0 && r.value < 1e-40) {
+      ++tiny_power;
+      EXPECT_TRUE(has_flag(r, "below 1 mW")) << "line " << r.line;
+    }
+    if (r.note_loss_percent && *r.note_loss_percent > 100) {
+      ++over_100;
+      EXPECT_TRUE(has_flag(r, "above 100 %")) << "line " << r.line;
+    }
+    if (r.metric == "power" && r.value == 0.0) {
+      ++zero_power;
+      EXPECT_TRUE(has_flag(r, "W <= 0")) << "line " << r.line;
+    }
+    // A row whose note says nothing wrong and whose value is sane has no flag.
+    if (r.metric == "latency" && r.value > 0 && r.note_min.value_or(1) > 0 &&
+        r.note_loss_percent.value_or(0) <= 100) {
+      EXPECT_TRUE(r.flags.empty()) << "line " << r.line << ": " << r.flags.front();
+    }
+  }
+  EXPECT_EQ(negative, 2u);
+  EXPECT_GE(over_100, 20u);
+  EXPECT_EQ(zero_power, 13u);
+  EXPECT_EQ(tiny_power, 1u);  // 8.97e-44 W
+  EXPECT_EQ(b.flagged(), negative + over_100 + zero_power + tiny_power);
+
+  // The first published row: Intel i7-12700H, 20.4 ms, with its note figures.
+  const auto& first = b.results.front();
+  EXPECT_EQ(first.hardware, "Intel i7-12700H");
+  EXPECT_EQ(first.metric, "latency");
+  EXPECT_EQ(first.value, 20.4);
+  EXPECT_EQ(first.note_mean, 14.73);
+  EXPECT_EQ(first.note_rms, 14.84);
+  EXPECT_EQ(first.category, "workstation");
+  EXPECT_EQ(first.timestampt, "07-07-2023");
+  // The reported line is the entry's "- result:" line.
+  std::istringstream lines(text);
+  std::string line;
+  for (int n = 1; std::getline(lines, line); ++n) {
+    if (n == first.line) {
+      EXPECT_EQ(line, "- result:");
+    }
+  }
+
+  const std::string report = flagged_rows_report(b);
+  EXPECT_NE(report.find("benchmark.yaml:"), std::string::npos);
+  EXPECT_NE(report.find("NVIDIA Jetson Nano · latency 1120.322889 ms: negative min latency"),
+            std::string::npos)
+      << report;
+}
+
+TEST_F(BenchmarkYaml, ImportsEveryPublishedFile) {
+  std::size_t files = 0;
+  for (const auto& e : fs::recursive_directory_iterator(kPublished)) {
+    if (e.path().filename() != "benchmark.yaml") continue;
+    ++files;
+    EXPECT_NO_THROW(import_benchmark_yaml(e.path())) << e.path();
+  }
+  EXPECT_GT(files, 30u);
+}
+
+TEST_F(BenchmarkYaml, PowerBelowOneMilliwattIsFlagged) {
+  PublishedResult r;
+  r.metric = "power";
+  r.metric_unit = "W";
+  r.value = 8.97e-44;
+  r.value_text = "8.97e-44";
+  check_published(r);
+  ASSERT_EQ(r.flags.size(), 1u);
+  EXPECT_NE(r.flags[0].find("below 1 mW"), std::string::npos);
+  r.value = 5.8;
+  check_published(r);
+  EXPECT_TRUE(r.flags.empty());
+  r.metric = "latency";
+  r.value = -3;
+  check_published(r);
+  EXPECT_TRUE(has_flag(r, "negative latency"));
+}
+
+TEST_F(BenchmarkYaml, ExportGivesRobotPerfEntries) {
+  const auto entries = sample_entries();
+  ASSERT_EQ(entries.size(), 3u);
+  EXPECT_EQ(entries[0].metric, "latency");
+  EXPECT_EQ(entries[0].metric_unit, "ms");
+  EXPECT_EQ(entries[0].type, "black");
+  EXPECT_EQ(entries[0].hardware, "AMD Ryzen 7 5800X + NVIDIA GeForce RTX 3060");
+  EXPECT_EQ(entries[0].category, "workstation");
+  EXPECT_EQ(entries[0].datasource, "perception/image");
+  EXPECT_EQ(entries[0].timestampt, "2026-09-21 14:13:20");
+  EXPECT_NE(entries[0].note.find("mean "), std::string::npos);
+  EXPECT_NE(entries[0].note.find("lost 0.00 %"), std::string::npos);
+  EXPECT_EQ(entries[1].metric, "throughput");
+  EXPECT_EQ(entries[1].metric_unit, "fps");
+  EXPECT_EQ(entries[1].value, 30.0);
+  EXPECT_EQ(entries[2].metric, "power");
+  EXPECT_EQ(entries[2].value, 42.5);
+  for (auto e : entries) {
+    check_published(e);
+    EXPECT_TRUE(e.flags.empty()) << e.flags.front();
+  }
+}
+
+// export -> merge -> import preserves every field, and merging leaves every existing byte.
+void expect_round_trip(const std::string& original, const std::vector<PublishedResult>& entries,
+                       const fs::path& file, std::size_t dash_col) {
+  const auto merged = merge_entries(original, file.string(), entries);
+  EXPECT_EQ(merged.added, entries.size());
+  // The original is the merged text minus one inserted block.
+  std::size_t prefix = 0;
+  while (prefix < original.size() && original[prefix] == merged.text[prefix]) ++prefix;
+  const std::size_t suffix = original.size() - prefix;
+  ASSERT_GT(merged.text.size(), original.size());
+  EXPECT_EQ(merged.text.substr(merged.text.size() - suffix), original.substr(prefix))
+      << "existing content changed";
+  const std::string inserted = merged.text.substr(prefix, merged.text.size() - original.size());
+  EXPECT_EQ(inserted.find_first_not_of(' '), dash_col) << inserted;
+
+  report::write_file_atomically(file, merged.text);
+  const auto back = import_benchmark_yaml(file);
+  ASSERT_GE(back.results.size(), entries.size());
+  const std::size_t first_new = back.results.size() - entries.size();
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    const auto& got = back.results[first_new + i];
+    EXPECT_TRUE(got.same_entry(entries[i])) << i;
+    EXPECT_EQ(got.type, entries[i].type);
+    EXPECT_EQ(got.metric, entries[i].metric);
+    EXPECT_EQ(got.metric_unit, entries[i].metric_unit);
+    EXPECT_EQ(got.hardware, entries[i].hardware);
+    EXPECT_EQ(got.category, entries[i].category);
+    EXPECT_EQ(got.timestampt, entries[i].timestampt);
+    EXPECT_EQ(got.value, entries[i].value);  // exactly
+    EXPECT_EQ(got.note, entries[i].note);
+    EXPECT_EQ(got.datasource, entries[i].datasource);
+    EXPECT_TRUE(got.flags.empty());
+  }
+  // Merging again adds nothing.
+  const auto again = merge_entries(merged.text, file.string(), entries);
+  EXPECT_EQ(again.added, 0u);
+  EXPECT_EQ(again.already_present, entries.size());
+  EXPECT_EQ(again.text, merged.text);
+}
+
+TEST_F(BenchmarkYaml, RoundTripIntoThePublishedA1File) {
+  const std::string original = read_text(kPublishedA1);
+  const auto before = import_benchmark_yaml(kPublishedA1);
+  const auto entries = sample_entries();
+  const fs::path file = dir_ / "a1" / "benchmark.yaml";
+  expect_round_trip(original, entries, file, 0);
+  const auto after = import_benchmark_yaml(file);
+  ASSERT_EQ(after.results.size(), before.results.size() + entries.size());
+  for (std::size_t i = 0; i < before.results.size(); ++i) {
+    EXPECT_TRUE(after.results[i].same_entry(before.results[i])) << i;
+    EXPECT_EQ(after.results[i].line, before.results[i].line);
+  }
+  EXPECT_EQ(after.short_description, before.short_description);  // the key after results
+}
+
+TEST_F(BenchmarkYaml, RoundTripIntoAnEmptyPackageFile) {
+  const std::string original = read_text(fs::path(ROBOTPERF_SOURCE_DIR) /
+                                         "benchmarks/perception/a1_perception_2nodes/"
+                                         "benchmark.yaml");
+  ASSERT_NE(original.find("results: []"), std::string::npos);
+  const auto entries = sample_entries();
+  const auto merged = merge_entries(original, "benchmark.yaml", entries);
+  EXPECT_EQ(merged.added, 3u);
+  EXPECT_EQ(merged.text.substr(0, original.find("results: []")),
+            original.substr(0, original.find("results: []")));
+  const fs::path file = dir_ / "benchmark.yaml";
+  report::write_file_atomically(file, merged.text);
+  const auto back = import_benchmark_yaml(file);
+  ASSERT_EQ(back.results.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_TRUE(back.results[i].same_entry(entries[i]));
+  // And from there, a second run appends after the first.
+  auto second = entries[0];
+  second.timestampt = "2026-09-22 10:00:00";
+  expect_round_trip(merged.text, {second}, file, 0);
+}
+
+TEST_F(BenchmarkYaml, RoundTripKeepsTheTemplatesIndentation) {
+  const std::string original = read_text(kPublished / "TEMPLATE.yaml");
+  auto entries = sample_entries();
+  entries[0].hardware = "Hardware with \"quotes\": and a colon";
+  entries[0].note = "line one\nline two, 100 % \\ backslash, ROBOTCORE\xC2\xAE";
+  expect_round_trip(original, entries, dir_ / "benchmark.yaml", 2);
+}
+
+TEST_F(BenchmarkYaml, RefusesWhatItCannotMergeSafely) {
+  const auto entries = sample_entries();
+  EXPECT_THROW(merge_entries("id: a1\nresults: [{result: {metric: latency}}]\n", "f.yaml", entries),
+               ReportError);
+  try {
+    merge_entries("id: a1\nresults: [\n", "f.yaml", entries);
+    FAIL() << "malformed YAML merged";
+  } catch (const ReportError& e) {
+    EXPECT_NE(std::string(e.what()).find("f.yaml:"), std::string::npos) << e.what();
+  }
+  const auto fresh = merge_entries("id: x1\nname: x1_new\n", "f.yaml", entries);
+  EXPECT_EQ(fresh.added, 3u);
+  EXPECT_EQ(fresh.text.substr(0, 20), "id: x1\nname: x1_new\n");
+}
+
+TEST_F(BenchmarkYaml, ScalarsReadBackExactly) {
+  for (const std::string s : {"plain text",
+                              "",
+                              "true",
+                              "No",
+                              "2023-07-06 08:05:58",
+                              "07-07-2023",
+                              "a: b",
+                              "#x",
+                              "- x",
+                              "tab\there",
+                              "quote \" and \\",
+                              "\x01 control",
+                              "ROBOTCORE\xC2\xAE Perception",
+                              "null",
+                              "trailing ",
+                              "12",
+                              "[x]",
+                              "{y}",
+                              "x # y",
+                              "%"}) {
+    const YAML::Node n = YAML::Load("k: " + yaml_scalar(s));
+    EXPECT_EQ(n["k"].as<std::string>(), s) << yaml_scalar(s);
+  }
+  for (double v : {0.0, 20.4, 46.155170000000005, 8.97e-44, 1e300, 30.0, -2298.236986}) {
+    EXPECT_EQ(YAML::Load("k: " + shortest_number(v))["k"].as<double>(), v);
+  }
+}
+
+TEST_F(BenchmarkYaml, ImportedFilesRoundTripAsJson) {
+  const auto b = import_benchmark_yaml(kPublishedA1);
+  const auto back = published_from_json(to_json(b), "x.json");
+  ASSERT_EQ(back.results.size(), b.results.size());
+  for (std::size_t i = 0; i < b.results.size(); ++i) {
+    EXPECT_TRUE(back.results[i].same_entry(b.results[i]));
+    EXPECT_EQ(back.results[i].flags, b.results[i].flags);
+    EXPECT_EQ(back.results[i].line, b.results[i].line);
+  }
+  EXPECT_THROW(published_from_json({{"schema", "other"}}, "x.json"), ReportError);
+}
+
+TEST_F(BenchmarkYaml, BadFilesGiveOneLine) {
+  std::ofstream(dir_ / "bad.yaml") << "id: a1\nresults:\n  - result: {metric: [\n";
+  try {
+    import_benchmark_yaml(dir_ / "bad.yaml");
+    FAIL();
+  } catch (const ReportError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.yaml:"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("malformed YAML"), std::string::npos);
+  }
+  std::ofstream(dir_ / "list.yaml") << "- 1\n- 2\n";
+  EXPECT_THROW(import_benchmark_yaml(dir_ / "list.yaml"), ReportError);
+  EXPECT_THROW(import_benchmark_yaml(dir_ / "missing.yaml"), ReportError);
+}
+
+}  // namespace
+}  // namespace robotperf::report

@@ -1,0 +1,257 @@
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <regex>
+
+#include "robotperf/report/histogram.hpp"
+#include "robotperf/report/readme.hpp"
+#include "robotperf/report/report.hpp"
+#include "robotperf/report/significance.hpp"
+#include "sample_runs.hpp"
+
+namespace robotperf::report {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kPublishedA1 = fs::path(ROBOTPERF_SHARED_DATA_DIR) /
+                              "robotperf/perception/a1_perception_2nodes/benchmark.yaml";
+
+std::size_t count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = 0; (at = text.find(what, at)) != std::string::npos; at += what.size()) ++n;
+  return n;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+class Report : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("robotperf-report-" + std::to_string(getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // Two runs on each of two machines, one with a CSV, all with power.
+  void write_two_machines(double base_b_1, double base_b_2) {
+    int64_t t = 1'790'000'000'000'000'000;
+    auto sample = [&](const std::string& cpu, double base) {
+      testing::SampleRun s;
+      s.cpu = cpu;
+      s.base_latency_ms = base;
+      s.start_unix_ns = (t += 60'000'000'000);
+      return s;
+    };
+    testing::write_sample(dir_, sample("AMD Ryzen 7 5800X 8-Core Processor", 5.0), true, 40);
+    testing::write_sample(dir_, sample("AMD Ryzen 7 5800X 8-Core Processor", 5.1), false, 41);
+    testing::write_sample(dir_, sample("Intel(R) Core(TM) i7-12700H CPU @ 2.30GHz", base_b_1),
+                          false, 30);
+    testing::write_sample(dir_, sample("Intel(R) Core(TM) i7-12700H CPU @ 2.30GHz", base_b_2),
+                          false, 31);
+  }
+
+  fs::path dir_;
+};
+
+TEST(Significance, WelchMatchesKnownValues) {
+  const std::vector<double> a = {1, 2, 3, 4, 5}, b = {2, 4, 6, 8, 10};
+  const auto w = welch_test(a, b);
+  EXPECT_NEAR(w.t, -1.8974, 1e-4);
+  EXPECT_NEAR(w.degrees_of_freedom, 5.8824, 1e-4);
+  EXPECT_NEAR(w.p_value, 0.1077, 1e-3);  // R: t.test(1:5, c(2,4,6,8,10))
+  EXPECT_NEAR(regularized_incomplete_beta(0.5, 2, 3), 0.6875, 1e-12);
+  EXPECT_NEAR(student_t_two_sided_p(2.0, 10), 0.07339, 1e-4);
+  EXPECT_NEAR(student_t_two_sided_p(0.0, 3), 1.0, 1e-12);
+  EXPECT_EQ(welch_test(4, 0, 3, 4, 0, 3).p_value, 1.0);
+  EXPECT_EQ(welch_test(4, 0, 3, 5, 0, 3).p_value, 0.0);
+  EXPECT_THROW(welch_test(std::vector<double>{1}, b), std::invalid_argument);
+}
+
+TEST(Histogram, CountsEverySampleAndReadsBack) {
+  const std::vector<double> samples = {1.0, 1.05, 10.0, 0.0, -1.0, 3.3};
+  const auto h = make_log_histogram(samples, 10);
+  EXPECT_EQ(h.total(), samples.size());
+  EXPECT_EQ(h.nonpositive, 2u);
+  EXPECT_LE(h.lower_edge(0), 1.0);
+  EXPECT_GT(h.upper_edge(h.counts.size() - 1), 10.0);
+  EXPECT_EQ(h.counts.front(), 2u);  // 1.0 and 1.05 share the bin [1, 1.26)
+  const auto back = log_histogram_from_json(to_json(h));
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->counts, h.counts);
+  EXPECT_EQ(back->first_index, h.first_index);
+  EXPECT_FALSE(log_histogram_from_json(nlohmann::json::object()));
+  EXPECT_THROW(make_log_histogram(samples, 0), std::invalid_argument);
+}
+
+TEST_F(Report, ResultsJsonCarriesTheHistogram) {
+  const auto run = load_run(testing::write_sample(dir_, {}));
+  ASSERT_TRUE(run.histogram);
+  EXPECT_EQ(run.histogram->total(), run.latency.count);
+  EXPECT_EQ(run.hardware, "AMD Ryzen 7 5800X");
+  EXPECT_EQ(run.hardware_category, "workstation");
+  EXPECT_FALSE(run.power_w);
+  EXPECT_FALSE(run.power_note.empty());  // why there is no power figure
+
+  testing::SampleRun later;
+  later.start_unix_ns += 1'000'000'000;
+  const auto with_power = load_run(testing::write_sample(dir_, later, false, 12.5));
+  EXPECT_EQ(with_power.power_w, 12.5);
+  EXPECT_TRUE(with_power.energy_j);
+  EXPECT_EQ(with_power.power_note, "rapl:package-0");
+  EXPECT_EQ(with_power.warnings, std::vector<std::string>{"governor: CPU governor is powersave"});
+
+  auto j = with_power.json;
+  j["power"] = {{"available", false},
+                {"unavailable_reason", "no RAPL, hwmon or NVML source"},
+                {"total", nullptr},
+                {"sources", nlohmann::json::array()}};
+  std::ofstream(dir_ / "unavailable.json") << j.dump();
+  const auto without = load_run(dir_ / "unavailable.json");
+  EXPECT_FALSE(without.power_w);
+  EXPECT_EQ(without.power_note, "no RAPL, hwmon or NVML source");
+}
+
+TEST_F(Report, HtmlHasRadarsTablesDistributionsAndComparison) {
+  write_two_machines(10.0, 10.2);
+  ReportInput input = load_report_inputs({dir_, kPublishedA1});
+  ASSERT_EQ(input.runs.size(), 4u);
+  ASSERT_EQ(input.published.size(), 1u);
+  ReportOptions options;
+  options.compare = std::pair{"AMD Ryzen 7 5800X", "Intel Core i7-12700H"};
+  const std::string html = render_html(input, options);
+  EXPECT_EQ(count(html, "<svg class=\"radar\""), 3u);  // latency, throughput, power
+  for (const char* metric : {"latency", "throughput", "power"})
+    EXPECT_NE(html.find("data-metric=\"" + std::string(metric) + "\""), std::string::npos);
+  EXPECT_NE(html.find("a1 (ms)"), std::string::npos);  // axes labelled with id and unit
+  EXPECT_EQ(count(html, "<svg class=\"cdf\""), 1u);
+  EXPECT_NE(html.find("from the per-message CSV"), std::string::npos);
+  EXPECT_NE(html.find("from the stored histogram"), std::string::npos);
+  EXPECT_NE(html.find("p50 "), std::string::npos);
+  EXPECT_NE(html.find("p99 "), std::string::npos);
+  for (const char* table : {"runs", "published", "flagged", "comparison", "machines"})
+    EXPECT_NE(html.find("<table class=\"" + std::string(table) + "\""), std::string::npos) << table;
+  // 40 rows of the published a1 file break the rules: said, and listed.
+  EXPECT_NE(html.find("40 of 308 published rows break the measurement rules"), std::string::npos);
+  // Self-contained: no script, no external resource.
+  EXPECT_EQ(html.find("<script"), std::string::npos);
+  EXPECT_EQ(html.find("src="), std::string::npos);
+  EXPECT_EQ(std::regex_search(html, std::regex("https?://(?!www\\.w3\\.org/2000/svg)")), false);
+  // The comparison: B twice as slow with little spread is significant.
+  const std::regex row("<td>a1</td><td>latency max \\(ms\\)</td>.*?significant: B worse");
+  EXPECT_TRUE(std::regex_search(html, row));
+  // Run-rule warnings recorded in the results are repeated.
+  EXPECT_NE(html.find("governor: CPU governor is powersave"), std::string::npos);
+  // Published hardware is plotted beside local runs.
+  EXPECT_NE(html.find("Intel i7-12700H (RobotPerf)"), std::string::npos);
+
+  const std::string md = render_markdown(input, options);
+  for (const auto& r : input.runs) {
+    EXPECT_NE(html.find(r.stem()), std::string::npos);
+    EXPECT_NE(md.find(r.stem()), std::string::npos);
+  }
+  EXPECT_NE(md.find("## Comparison"), std::string::npos);
+  EXPECT_NE(md.find("significant: B worse"), std::string::npos);
+  EXPECT_NE(md.find("| hardware | a1 (ms) |"), std::string::npos);
+  EXPECT_NE(md.find("## Machines"), std::string::npos);
+}
+
+TEST_F(Report, OverlappingRunsAreNotSignificant) {
+  write_two_machines(5.2, 4.9);
+  ReportOptions options;
+  options.compare = std::pair{"AMD Ryzen 7 5800X", "Intel Core i7-12700H"};
+  const std::string md = render_markdown(load_report_inputs({dir_}), options);
+  for (const char* metric : {"latency max", "latency mean", "latency p50"}) {
+    const std::regex row("\\| a1 \\| " + std::string(metric) +
+                         " \\(ms\\) \\|[^\\n]*\\| not significant");
+    EXPECT_TRUE(std::regex_search(md, row)) << metric << "\n" << md;
+  }
+}
+
+TEST_F(Report, InvalidRunsAreWarnedAboutAndNotPlotted) {
+  testing::SampleRun bad;
+  bad.lost = 10;
+  bad.cpu = "Lossy CPU";
+  bad.start_unix_ns += 1'000'000'000;
+  testing::write_sample(dir_, bad);
+  testing::write_sample(dir_, {});
+  const auto input = load_report_inputs({dir_});
+  const std::string html = render_html(input, {});
+  EXPECT_NE(html.find("is INVALID: lost messages"), std::string::npos);
+  EXPECT_NE(html.find("<tr class=\"warn\"><td>a1-intra"), std::string::npos);
+  // Only the valid run's series is in the radar's legend.
+  EXPECT_NE(html.find("AMD Ryzen 7 5800X · intra<title>"), std::string::npos);
+  EXPECT_EQ(html.find("Lossy CPU · intra<title>"), std::string::npos);
+}
+
+TEST_F(Report, OldResultsWithoutHistogramUseTheStoredPercentiles) {
+  const auto path = testing::write_sample(dir_, {});
+  auto j = nlohmann::json::parse(read_text(path));
+  j["latency_ms"].erase("from_scheduled_histogram");
+  std::ofstream(path) << j.dump();
+  const std::string html = render_html(load_report_inputs({dir_}), {});
+  EXPECT_NE(html.find("from the stored percentiles"), std::string::npos);
+}
+
+TEST_F(Report, ResultsWithoutMachineOrSoftwareStillReport) {
+  const auto path = testing::write_sample(dir_, {});
+  auto j = nlohmann::json::parse(read_text(path));
+  j.erase("machine");
+  j.erase("software");
+  std::ofstream(path) << j.dump();
+  const auto input = load_report_inputs({dir_});
+  ASSERT_EQ(input.runs.size(), 1u);
+  EXPECT_EQ(input.runs[0].hardware, "unknown machine");
+  EXPECT_NE(render_html(input, {}).find("<table class=\"machines\""), std::string::npos);
+  EXPECT_EQ(export_entries(input.runs[0], {}).size(), 2u);
+}
+
+TEST_F(Report, BadInputsGiveOneClearLine) {
+  write_two_machines(10, 11);
+  std::ofstream(dir_ / "garbage.json") << "{not json";
+  const auto input = load_report_inputs({dir_});  // skipped inside a folder
+  ASSERT_EQ(input.skipped.size(), 1u);
+  EXPECT_NE(input.skipped[0].find("garbage.json"), std::string::npos);
+  EXPECT_THROW(load_report_inputs({dir_ / "garbage.json"}), ReportError);  // named: an error
+  EXPECT_THROW(load_report_inputs({dir_ / "missing"}), ReportError);
+  ReportOptions options;
+  options.compare = std::pair{"AMD Ryzen 7 5800X", "no such machine"};
+  try {
+    render_html(input, options);
+    FAIL();
+  } catch (const ReportError& e) {
+    EXPECT_NE(std::string(e.what()).find("'no such machine' matches no"), std::string::npos);
+  }
+}
+
+TEST_F(Report, ReadmeIsStableAndMatchesTheCommittedOnes) {
+  const fs::path root = fs::path(ROBOTPERF_SOURCE_DIR) / "benchmarks/perception";
+  for (const char* package : {"a1_perception_2nodes", "a2_rectify", "a3_stereo_image_proc",
+                              "a4_depth_image_proc", "a5_resize"}) {
+    const std::string first = render_package_readme(root / package);
+    EXPECT_EQ(first, render_package_readme(root / package));
+    EXPECT_EQ(first, read_text(root / package / "README.md"))
+        << package << ": regenerate with robotperf readme";
+  }
+  // With results: tables per metric, flagged rows marked.
+  fs::create_directories(dir_ / "pkg");
+  fs::copy_file(kPublishedA1, dir_ / "pkg" / "benchmark.yaml");
+  const std::string readme = render_package_readme(dir_ / "pkg");
+  EXPECT_EQ(readme, render_package_readme(dir_ / "pkg"));
+  EXPECT_NE(readme.find("### Latency"), std::string::npos);
+  EXPECT_NE(readme.find("### Throughput"), std::string::npos);
+  EXPECT_NE(readme.find("### Power"), std::string::npos);
+  EXPECT_NE(readme.find("⚠ negative min latency"), std::string::npos);
+  EXPECT_NE(readme.find("| Intel i7-12700H | workstation | black | 20.4 | ms | 07-07-2023 |"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace robotperf::report
