@@ -42,7 +42,12 @@ class GreyRun : public ::testing::Test {
   }
 
   // A relay between the camera stream and the monitor (the dataset has 68 frames).
-  BenchmarkSpec relay_package() {
+  // A relay of camera images, or of the small CameraInfo messages of the same
+  // dataset when the test needs a high event rate rather than real payloads.
+  BenchmarkSpec relay_package(bool small_messages = false) {
+    const std::string type =
+        small_messages ? "sensor_msgs/msg/CameraInfo" : "sensor_msgs/msg/Image";
+    const std::string stream = small_messages ? "camera_info" : "image";
     const fs::path pkg = dir_ / "pkg" / "test" / "t1_relay";
     fs::create_directories(pkg);
     std::ofstream(pkg / "benchmark.yaml")
@@ -50,9 +55,11 @@ class GreyRun : public ::testing::Test {
     std::ofstream(pkg / "graph.yaml")
         << "dataset: perception/image\nrate_hz: 100\nwarmup: 0\ndrain_s: 2.0\n"
            "validity: {min_samples: 5, max_loss_percent: 0.0}\n"
-           "inputs:\n  - {topic: /in, type: sensor_msgs/msg/Image, stream: image}\n"
-           "output: {topic: /out, type: sensor_msgs/msg/Image}\n"
-           "nodes:\n  - name: relay\n    kernel: util/relay\n    parameters: {}\n"
+           "inputs:\n  - {topic: /in, type: "
+        << type << ", stream: " << stream << "}\n"
+        << "output: {topic: /out, type: " << type << "}\n"
+        << "nodes:\n  - name: relay\n    kernel: util/relay\n    parameters: {type: " << type
+        << "}\n"
            "    topics: {input: /in, output: /out}\n";
     return load_benchmark(pkg);
   }
@@ -130,10 +137,17 @@ TEST_F(GreyRun, A1AgreesWithBlackBoxAndExplainsWhereTheTimeGoes) {
 
 TEST_F(GreyRun, TinySubbuffersUnderLoadAreReportedAndInvalid) {
   RunOptions o;
-  o.count = 3000;
-  o.rate_hz = 5000;
+#ifdef __SANITIZE_ADDRESS__
+  // An ASan Debug build produces events too slowly to overrun the consumer
+  // daemon, so the premise of this test does not hold there.
+  GTEST_SKIP() << "needs an optimised, unsanitized build to overload the tracer";
+#endif
+  // Small messages as fast as the Playback can send them: far more events than
+  // the consumer daemon can drain through 4 KiB sub-buffers.
+  o.count = 20000;
+  o.rate_hz = 20000;
   o.trace_subbuf_bytes = 4096;
-  const RunResult r = run_benchmark(relay_package(), grey(o, "tiny.trace"));
+  const RunResult r = run_benchmark(relay_package(true), grey(o, "tiny.trace"));
   ASSERT_TRUE(r.grey.has_value());
   EXPECT_GT(r.grey->discarded_events, 0u);
   EXPECT_FALSE(r.valid);
