@@ -18,16 +18,6 @@ using raycast::Scene;
 using raycast::Texture;
 using raycast::Vec3;
 
-Texture texture(double cell_m, uint32_t seed, double r, double g, double b) {
-  Texture t;
-  t.cell_m = cell_m;
-  t.seed = seed;
-  t.tint[0] = r;
-  t.tint[1] = g;
-  t.tint[2] = b;
-  return t;
-}
-
 // A 5.5 m x 3.2 m room, camera 1.2 m above the floor; the back wall at 7.5 m has a doorway onto
 // a corridor that ends at 10.5 m, beyond the sensor's range.
 Scene depth_scene(double p) {
@@ -35,21 +25,21 @@ Scene depth_scene(double p) {
   s.rectangles.push_back({{-2.5, 1.2, 0.2},
                           {5.5, 0.0, 0.0},
                           {0.0, 0.0, 7.3},
-                          texture(0.04, 101, 0.9, 0.8, 0.6)});  // floor
+                          Texture{0.04, 101, {0.9, 0.8, 0.6}}});  // floor
   s.rectangles.push_back({{-2.5, -2.0, 0.2},
                           {5.5, 0.0, 0.0},
                           {0.0, 0.0, 7.3},
-                          texture(0.08, 103, 0.95, 0.95, 0.95)});  // ceiling
+                          Texture{0.08, 103, {0.95, 0.95, 0.95}}});  // ceiling
   s.rectangles.push_back({{-2.5, -2.0, 0.2},
                           {0.0, 0.0, 7.3},
                           {0.0, 3.2, 0.0},
-                          texture(0.05, 107, 0.7, 0.9, 0.7)});  // left wall
+                          Texture{0.05, 107, {0.7, 0.9, 0.7}}});  // left wall
   s.rectangles.push_back({{3.0, -2.0, 0.2},
                           {0.0, 0.0, 7.3},
                           {0.0, 3.2, 0.0},
-                          texture(0.05, 109, 0.9, 0.7, 0.7)});  // right wall
+                          Texture{0.05, 109, {0.9, 0.7, 0.7}}});  // right wall
   Rectangle back{
-      {-2.5, -2.0, 7.5}, {5.5, 0.0, 0.0}, {0.0, 3.2, 0.0}, texture(0.06, 113, 0.7, 0.8, 0.95)};
+      {-2.5, -2.0, 7.5}, {5.5, 0.0, 0.0}, {0.0, 3.2, 0.0}, Texture{0.06, 113, {0.7, 0.8, 0.95}}};
   back.has_hole = true;  // doorway x in [0.6, 1.6], from y = -0.8 down to the floor
   back.hole_a0 = 3.1 / 5.5;
   back.hole_a1 = 4.1 / 5.5;
@@ -59,16 +49,16 @@ Scene depth_scene(double p) {
   s.rectangles.push_back({{0.6, 1.2, 7.5},
                           {1.0, 0.0, 0.0},
                           {0.0, 0.0, 3.0},
-                          texture(0.04, 127, 0.9, 0.8, 0.6)});  // corridor floor
+                          Texture{0.04, 127, {0.9, 0.8, 0.6}}});  // corridor floor
   s.rectangles.push_back({{-1.0, -2.0, 10.5},
                           {4.0, 0.0, 0.0},
                           {0.0, 3.2, 0.0},
-                          texture(0.06, 131, 0.8, 0.8, 0.8)});  // corridor end
+                          Texture{0.06, 131, {0.8, 0.8, 0.8}}});  // corridor end
   const double x1 = -0.8 + 1.1 * p;
-  s.boxes.push_back({{x1, 0.2, 0.6}, {x1 + 0.3, 0.6, 0.9}, texture(0.01, 137, 1.0, 0.6, 0.5)});
+  s.boxes.push_back({{x1, 0.2, 0.6}, {x1 + 0.3, 0.6, 0.9}, Texture{0.01, 137, {1.0, 0.6, 0.5}}});
   const double z2 = 2.5 + 1.0 * p;
-  s.boxes.push_back({{0.8, 0.4, z2}, {1.5, 1.2, z2 + 0.7}, texture(0.03, 139, 0.6, 0.7, 1.0)});
-  s.boxes.push_back({{-1.8, -0.5, 4.5}, {-1.2, 1.2, 5.0}, texture(0.03, 149, 0.9, 0.9, 0.5)});
+  s.boxes.push_back({{0.8, 0.4, z2}, {1.5, 1.2, z2 + 0.7}, Texture{0.03, 139, {0.6, 0.7, 1.0}}});
+  s.boxes.push_back({{-1.8, -0.5, 4.5}, {-1.2, 1.2, 5.0}, Texture{0.03, 149, {0.9, 0.9, 0.5}}});
   return s;
 }
 

@@ -19,16 +19,6 @@ using raycast::Scene;
 using raycast::Texture;
 using raycast::Vec3;
 
-Texture texture(double cell_m, uint32_t seed, double r, double g, double b) {
-  Texture t;
-  t.cell_m = cell_m;
-  t.seed = seed;
-  t.tint[0] = r;
-  t.tint[1] = g;
-  t.tint[2] = b;
-  return t;
-}
-
 // The scene at phase p in [0, 1): a room 1 m above the floor, objects between 1.6 m and 6 m
 // (disparities about 9 to 33 px at 0.10 m baseline and hfov 1.089).
 Scene stereo_scene(double p) {
@@ -36,20 +26,20 @@ Scene stereo_scene(double p) {
   s.rectangles.push_back({{-6.0, 1.0, 0.3},
                           {12.0, 0.0, 0.0},
                           {0.0, 0.0, 5.7},
-                          texture(0.03, 11, 0.95, 0.85, 0.7)});  // floor
+                          Texture{0.03, 11, {0.95, 0.85, 0.7}}});  // floor
   s.rectangles.push_back({{-6.0, -4.0, 6.0},
                           {12.0, 0.0, 0.0},
                           {0.0, 5.0, 0.0},
-                          texture(0.05, 23, 0.8, 0.9, 1.0)});  // back wall
+                          Texture{0.05, 23, {0.8, 0.9, 1.0}}});  // back wall
   s.rectangles.push_back({{0.6, -0.7, 2.6},
                           {0.9, 0.0, 0.7},
                           {0.0, 1.1, 0.0},
-                          texture(0.02, 37, 1.0, 0.8, 0.8)});  // slanted panel
+                          Texture{0.02, 37, {1.0, 0.8, 0.8}}});  // slanted panel
   const double ax = -1.3 + 1.5 * p;
-  s.boxes.push_back({{ax, 0.3, 1.6}, {ax + 0.5, 1.0, 2.1}, texture(0.015, 41, 0.9, 1.0, 0.8)});
+  s.boxes.push_back({{ax, 0.3, 1.6}, {ax + 0.5, 1.0, 2.1}, Texture{0.015, 41, {0.9, 1.0, 0.8}}});
   const double bz = 3.0 + 0.8 * p;
-  s.boxes.push_back({{-0.3, -0.5, bz}, {0.3, 0.2, bz + 0.4}, texture(0.03, 53, 1.0, 0.9, 0.6)});
-  s.boxes.push_back({{-1.6, -1.2, 4.0}, {-1.0, -0.4, 4.4}, texture(0.03, 67, 0.7, 0.8, 1.0)});
+  s.boxes.push_back({{-0.3, -0.5, bz}, {0.3, 0.2, bz + 0.4}, Texture{0.03, 53, {1.0, 0.9, 0.6}}});
+  s.boxes.push_back({{-1.6, -1.2, 4.0}, {-1.0, -0.4, 4.4}, Texture{0.03, 67, {0.7, 0.8, 1.0}}});
   return s;
 }
 
