@@ -9,6 +9,7 @@
 #include <string>
 #include <thread>
 
+#include "../fixture_root.hpp"
 #include "robotperf/metrics/power.hpp"
 
 namespace robotperf::metrics {
@@ -18,26 +19,7 @@ namespace fs = std::filesystem;
 
 constexpr int64_t kSecond = 1'000'000'000;
 
-class FixtureRoot {
- public:
-  FixtureRoot() {
-    const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
-    root_ = fs::temp_directory_path() /
-            ("robotperf_power_" + std::string(test->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(root_);
-    fs::create_directories(root_);
-  }
-  ~FixtureRoot() { fs::remove_all(root_); }
-  const fs::path& path() const { return root_; }
-  void write(const std::string& relative, const std::string& content) const {
-    const fs::path file = root_ / relative;
-    fs::create_directories(file.parent_path());
-    std::ofstream(file, std::ios::binary) << content;
-  }
-
- private:
-  fs::path root_;
-};
+using robotperf::testing::FixtureRoot;
 
 PowerOptions options_for(const FixtureRoot& root, std::set<std::string> types) {
   PowerOptions o;

@@ -7,6 +7,7 @@
 #include <string>
 #include <thread>
 
+#include "../fixture_root.hpp"
 #include "robotperf/sysinfo/machine.hpp"
 
 namespace robotperf::sysinfo {
@@ -14,29 +15,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A fresh directory tree that stands in for "/".
-class FixtureRoot {
- public:
-  FixtureRoot() {
-    const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
-    root_ = fs::temp_directory_path() /
-            ("robotperf_sysinfo_" + std::string(test->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(root_);
-    fs::create_directories(root_);
-  }
-  ~FixtureRoot() { fs::remove_all(root_); }
-
-  const fs::path& path() const { return root_; }
-
-  void write(const std::string& relative, const std::string& content) const {
-    const fs::path file = root_ / relative;
-    fs::create_directories(file.parent_path());
-    std::ofstream(file, std::ios::binary) << content;
-  }
-
- private:
-  fs::path root_;
-};
+using robotperf::testing::FixtureRoot;
 
 std::string x86_cpuinfo(int sockets, int cores_per_socket, int threads_per_core) {
   std::string text;

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "../fixture_root.hpp"
 #include "robotperf/sysinfo/run_rules.hpp"
 
 namespace robotperf::sysinfo {
@@ -12,26 +13,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class FixtureRoot {
- public:
-  FixtureRoot() {
-    const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
-    root_ = fs::temp_directory_path() /
-            ("robotperf_rules_" + std::string(test->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(root_);
-    fs::create_directories(root_);
-  }
-  ~FixtureRoot() { fs::remove_all(root_); }
-  const fs::path& path() const { return root_; }
-  void write(const std::string& relative, const std::string& content) const {
-    const fs::path file = root_ / relative;
-    fs::create_directories(file.parent_path());
-    std::ofstream(file) << content;
-  }
-
- private:
-  fs::path root_;
-};
+using robotperf::testing::FixtureRoot;
 
 std::vector<std::string> rules_of(const std::vector<RunWarning>& warnings) {
   std::vector<std::string> rules;
