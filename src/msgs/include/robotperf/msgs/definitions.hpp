@@ -6,10 +6,14 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace robotperf::msgs {
 
 // Empty when robotperf has no definition of `ros_type`.
 std::optional<std::string> ros2msg_schema(std::string_view ros_type);
+
+// Every type ros2msg_schema() knows, sorted.
+std::vector<std::string_view> builtin_message_types();
 
 }  // namespace robotperf::msgs

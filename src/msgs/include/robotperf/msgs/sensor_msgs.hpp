@@ -152,4 +152,28 @@ struct MessageTraits<PointCloud2> {
   static constexpr std::string_view ros_type = "sensor_msgs/msg/PointCloud2";
 };
 
+// sensor_msgs/JointState: per named joint, any of position, velocity and
+// effort (each empty or as long as name).
+struct JointState {
+  Header header;
+  std::vector<std::string> name;
+  std::vector<double> position;
+  std::vector<double> velocity;
+  std::vector<double> effort;
+  friend bool operator==(const JointState&, const JointState&) = default;
+};
+template <class V, class M>
+requires std::is_same_v<std::remove_const_t<M>, JointState>
+void visit_fields(V& v, M& m) {
+  v(m.header);
+  v(m.name);
+  v(m.position);
+  v(m.velocity);
+  v(m.effort);
+}
+template <>
+struct MessageTraits<JointState> {
+  static constexpr std::string_view ros_type = "sensor_msgs/msg/JointState";
+};
+
 }  // namespace robotperf::msgs

@@ -1,6 +1,8 @@
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "robotperf/msgs/builtin_interfaces.hpp"
 
@@ -27,6 +29,58 @@ struct MessageTraits<Header> {
 template <class T>
 concept Stamped = requires(T& m) {
   { m.header } -> std::convertible_to<Header&>;
+};
+
+struct MultiArrayDimension {
+  std::string label;
+  uint32_t size = 0;
+  uint32_t stride = 0;
+  friend bool operator==(const MultiArrayDimension&, const MultiArrayDimension&) = default;
+};
+template <class V, class M>
+requires std::is_same_v<std::remove_const_t<M>, MultiArrayDimension>
+void visit_fields(V& v, M& m) {
+  v(m.label);
+  v(m.size);
+  v(m.stride);
+}
+template <>
+struct MessageTraits<MultiArrayDimension> {
+  static constexpr std::string_view ros_type = "std_msgs/msg/MultiArrayDimension";
+};
+
+struct MultiArrayLayout {
+  std::vector<MultiArrayDimension> dim;
+  uint32_t data_offset = 0;
+  friend bool operator==(const MultiArrayLayout&, const MultiArrayLayout&) = default;
+};
+template <class V, class M>
+requires std::is_same_v<std::remove_const_t<M>, MultiArrayLayout>
+void visit_fields(V& v, M& m) {
+  v(m.dim);
+  v(m.data_offset);
+}
+template <>
+struct MessageTraits<MultiArrayLayout> {
+  static constexpr std::string_view ros_type = "std_msgs/msg/MultiArrayLayout";
+};
+
+// std_msgs/Float64MultiArray: the command message of forward command
+// controllers (one value per joint, layout usually empty).
+struct Float64MultiArray {
+  MultiArrayLayout layout;
+  std::vector<double> data;
+  friend bool operator==(const Float64MultiArray&, const Float64MultiArray&) = default;
+};
+template <class V, class M>
+requires std::is_same_v<std::remove_const_t<M>, Float64MultiArray>
+void visit_fields(V& v, M& m) {
+  v(m.layout);
+  v(m.data);
+}
+template <>
+struct MessageTraits<Float64MultiArray> {
+  static constexpr std::string_view ros_type = "std_msgs/msg/Float64MultiArray";
 };
 
 }  // namespace robotperf::msgs
