@@ -3,6 +3,7 @@
 // the reference (the speed of getting the bytes off the page cache or disk).
 //
 //   ./build/bench/bag/bench_bag [--size-mb N (default 1024)] [--dir DIR] [--keep]
+//                               [--format "sqlite3"|"mcap none"|"mcap zstd"|"mcap lz4"]
 //
 // Target (issue #4): reading >= 50 % of the reference speed, compared as
 // payload MB/s (the message bytes the reader delivers per second) over cat's
@@ -128,6 +129,7 @@ int main(int argc, char** argv) {
   uint64_t size_mb = 1024;
   fs::path root;
   bool keep = false;
+  std::string only_format;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--size-mb" && i + 1 < argc) {
@@ -136,8 +138,10 @@ int main(int argc, char** argv) {
       root = argv[++i];
     } else if (a == "--keep") {
       keep = true;
+    } else if (a == "--format" && i + 1 < argc) {
+      only_format = argv[++i];
     } else {
-      std::fprintf(stderr, "usage: bench_bag [--size-mb N] [--dir DIR] [--keep]\n");
+      std::fprintf(stderr, "usage: bench_bag [--size-mb N] [--dir DIR] [--keep] [--format NAME]\n");
       return 2;
     }
   }
@@ -149,12 +153,22 @@ int main(int argc, char** argv) {
     root = fs::temp_directory_path() / ("robotperf-bench-bag-" + std::to_string(getpid()));
   fs::create_directories(root);
 
-  const std::vector<Format> formats{
+  std::vector<Format> formats{
       {"sqlite3", bag::Storage::kSqlite3, bag::Compression::kNone},
       {"mcap none", bag::Storage::kMcap, bag::Compression::kNone},
       {"mcap zstd", bag::Storage::kMcap, bag::Compression::kZstd},
       {"mcap lz4", bag::Storage::kMcap, bag::Compression::kLz4},
   };
+  if (!only_format.empty()) {
+    std::erase_if(formats, [&](const Format& f) { return f.name != only_format; });
+    if (formats.empty()) {
+      std::fprintf(stderr,
+                   "bench_bag: unknown --format '%s' (sqlite3, \"mcap none\", \"mcap zstd\", "
+                   "\"mcap lz4\")\n",
+                   only_format.c_str());
+      return 2;
+    }
+  }
   std::printf(
       "bag read throughput: perception/image frames, %llu MB of payload per bag, best of %d\n",
       static_cast<unsigned long long>(size_mb), kRepetitions);

@@ -1,4 +1,3 @@
-#include <libdeflate.h>
 #include <lz4frame.h>
 #include <zstd.h>
 
@@ -8,19 +7,16 @@
 #include "mcap_format.hpp"
 
 namespace robotperf::bag::mcap {
-
-uint32_t crc32(std::span<const uint8_t> bytes, uint32_t crc) {
-  // The CRC-32 (ISO-HDLC) that MCAP specifies. libdeflate's uses carry-less
-  // multiplication where the CPU has it: several times zlib's speed, which
-  // matters as every chunk read is checked.
-  return libdeflate_crc32(crc, bytes.data(), bytes.size());
-}
-
 namespace {
 
 // Output produced in pieces of this size: small enough to stay in the L2
 // cache between being written and being checksummed.
 constexpr std::size_t kPiece = 256 * 1024;
+
+LZ4F_dctx* new_lz4_context() {
+  LZ4F_dctx* ctx = nullptr;
+  return LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION)) ? nullptr : ctx;
+}
 
 }  // namespace
 
@@ -68,27 +64,31 @@ void decompress(const std::string& compression, std::span<const uint8_t> in,
     return;
   }
   if (compression == "lz4") {
-    LZ4F_dctx* ctx = nullptr;
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION)))
-      throw FormatError("cannot create an lz4 decompression context");
+    // One context per thread, reused like zstd's: a fresh one allocates its block buffers anew
+    // for every chunk.
+    thread_local const std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> context(
+        new_lz4_context(), &LZ4F_freeDecompressionContext);
+    if (!context) throw FormatError("cannot create an lz4 decompression context");
+    LZ4F_dctx* ctx = context.get();
+    LZ4F_resetDecompressionContext(ctx);  // a chunk that failed may have left it mid-frame
+    // The output stays where it is between calls: lz4 then decodes linked blocks against it
+    // instead of first saving the last 64 KB of every piece in its own buffer.
+    LZ4F_decompressOptions_t options{};
+    options.stableDst = 1;
     std::size_t in_pos = 0;
     std::size_t out_pos = 0;
     std::size_t hint = 1;
     while (hint != 0 && in_pos < in.size()) {
       std::size_t src = in.size() - in_pos;
       std::size_t dst = std::min(out.size() - out_pos, kPiece);
-      hint = LZ4F_decompress(ctx, out.data() + out_pos, &dst, in.data() + in_pos, &src, nullptr);
-      if (LZ4F_isError(hint)) {
-        const std::string why = LZ4F_getErrorName(hint);
-        LZ4F_freeDecompressionContext(ctx);
-        throw FormatError("lz4 chunk does not decompress: " + why);
-      }
+      hint = LZ4F_decompress(ctx, out.data() + out_pos, &dst, in.data() + in_pos, &src, &options);
+      if (LZ4F_isError(hint))
+        throw FormatError(std::string("lz4 chunk does not decompress: ") + LZ4F_getErrorName(hint));
       produced(out_pos, out_pos + dst);
       in_pos += src;
       out_pos += dst;
       if (src == 0 && dst == 0) break;  // no progress: output full or input exhausted
     }
-    LZ4F_freeDecompressionContext(ctx);
     if (hint != 0 || out_pos != uncompressed_size) {
       throw FormatError("lz4 chunk decompresses to " + std::to_string(out_pos) + " bytes, not " +
                         std::to_string(uncompressed_size) + (hint ? " (frame incomplete)" : ""));

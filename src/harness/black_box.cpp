@@ -3,6 +3,7 @@
 #include <sys/prctl.h>
 #include <time.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <stdexcept>
@@ -26,6 +27,9 @@ const msgs::TypeSupport& type_support_by_name(const std::string& ros_type,
   }
   return *ts;
 }
+
+// The Playback starts preparing a message at least this long before its deadline.
+constexpr int64_t kMinPrepareLeadNs = 2'000'000;
 
 void sleep_until_ns(int64_t deadline_ns) {
   timespec ts{static_cast<time_t>(deadline_ns / 1'000'000'000),
@@ -125,18 +129,26 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
   std::vector<rmw::MessagePtr> next(inputs_.size());
   // The first deadline leaves time to prepare the first message.
   const int64_t start_ns = rmw::steady_now_ns() + 10'000'000;
+  int64_t longest_prepare_ns = 0;
   std::size_t sent = 0;
   for (uint64_t k = 0; k < ids_.count; ++k) {
     if (should_stop()) break;
-    // Prepare before the deadline, so copying the payload is not measured.
-    for (std::size_t i = 0; i < inputs_.size(); ++i) {
-      const Input& in = inputs_[i];
-      next[i] = in.copy_with_stamp(k % in.messages.size(), ids_.stamp_ns(k));
-    }
     MessageRecord& r = records[k];
     r.id = k;
     r.scheduled_ns = start_ns + (schedule_ns_.empty() ? static_cast<int64_t>(k) * ids_.period_ns
                                                       : schedule_ns_[k]);
+    // Prepare before the deadline, so copying the payload is not measured, but only just before
+    // it: copying megabytes right after the previous send would compete with the graph while it
+    // handles that message (for a core, for memory bandwidth, and for the wake-up of the node
+    // that has to take it). The lead is a multiple of the longest preparation seen, so that a
+    // slow copy on a busy machine still ends before the deadline.
+    sleep_until_ns(r.scheduled_ns - std::max(kMinPrepareLeadNs, 4 * longest_prepare_ns));
+    const int64_t prepare_start = rmw::steady_now_ns();
+    for (std::size_t i = 0; i < inputs_.size(); ++i) {
+      const Input& in = inputs_[i];
+      next[i] = in.copy_with_stamp(k % in.messages.size(), ids_.stamp_ns(k));
+    }
+    longest_prepare_ns = std::max(longest_prepare_ns, rmw::steady_now_ns() - prepare_start);
     sleep_until_ns(r.scheduled_ns);
     r.sent_ns = rmw::steady_now_ns();
     lttng_ust_tracepoint(robotperf, input, node_->name().c_str(), ids_.stamp_ns(k), k,
@@ -163,19 +175,26 @@ Monitor::Monitor(graph::Context& context, const BoundaryTopic& output, MessageId
   rmw::QoS qos = output.qos;
   qos.history = rmw::History::kKeepAll;
   node_->create_generic_subscription(output.topic, *type_, qos,
-                                     [this](rmw::MessagePtr m, const graph::MessageInfo&) {
+                                     [this](rmw::MessagePtr m, const graph::MessageInfo& info) {
                                        // Read the clock first: everything after is monitor
                                        // overhead.
                                        const int64_t now = rmw::steady_now_ns();
-                                       on_message(m, now);
+                                       on_message(m, info.from_intra_process, now);
                                      });
 }
 
-void Monitor::on_message(const rmw::MessagePtr& msg, int64_t now_ns) {
+void Monitor::on_message(const rmw::MessagePtr& msg, bool shared_with_graph, int64_t now_ns) {
   const int64_t stamp = type_->stamp_ns(msg.get());
   lttng_ust_tracepoint(robotperf, output, node_->name().c_str(), topic_.c_str(), stamp,
                        type_->serialized_size(msg.get()));
   const auto id = ids_.id_of(stamp);
+  // A kept output the graph shares with us (intra) is copied rather than held: holding it would
+  // make a node that reuses its output buffer once released (stereo_depth_nodes.cpp) allocate and
+  // page-fault a fresh one for the next frame, a cost the measurement would add to the graph.
+  // keep_ is written only before the run starts.
+  rmw::MessagePtr kept;
+  if (id && !keep_.empty() && keep_[*id])
+    kept = shared_with_graph ? type_->copy_with_stamp_ns(msg.get(), stamp) : msg;
   {
     std::lock_guard lock(mutex_);
     ++received_;
@@ -186,7 +205,7 @@ void Monitor::on_message(const rmw::MessagePtr& msg, int64_t now_ns) {
     } else {
       tally_.received_ns[*id] = now_ns;
       if (*id >= warmup_) ++tally_.received_measured;
-      if (!keep_.empty() && keep_[*id]) tally_.kept.emplace_back(*id, msg);
+      if (kept) tally_.kept.emplace_back(*id, std::move(kept));
     }
   }
   cv_.notify_all();

@@ -73,8 +73,8 @@ class Monitor {
   Monitor(graph::Context& context, const BoundaryTopic& output, MessageIds ids, std::size_t warmup);
   std::shared_ptr<graph::Node> node() const { return node_; }
 
-  // Keeps the first reception of each of `ids` for the functional evaluation (holding a
-  // reference only: no copy). Call before the run starts.
+  // Keeps the first reception of each of `ids` for the functional evaluation: a copy of a
+  // message shared with the graph (intra), else the message itself. Call before the run starts.
   void keep_outputs(const std::vector<uint64_t>& ids);
 
   // Waits until `expected` measured messages arrived or `deadline_ns` passes.
@@ -91,7 +91,7 @@ class Monitor {
   std::size_t received() const;
 
  private:
-  void on_message(const rmw::MessagePtr& msg, int64_t now_ns);
+  void on_message(const rmw::MessagePtr& msg, bool shared_with_graph, int64_t now_ns);
 
   std::shared_ptr<graph::Node> node_;
   const msgs::TypeSupport* type_;

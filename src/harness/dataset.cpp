@@ -76,9 +76,11 @@ Dataset perception_stereo() {
   d.description = description_of(d.name);
   d.frames = frames.size();
   d.rate_hz = config.rate_hz;
-  auto left = make_stream<msgs::Image>("left_image", "/left/image_raw");
+  // The pair is rectified: its topics are those a3 takes, so that the bag `dataset generate`
+  // writes plays into a3 without remapping.
+  auto left = make_stream<msgs::Image>("left_image", "/left/image_rect");
   auto left_info = make_stream<msgs::CameraInfo>("left_camera_info", "/left/camera_info");
-  auto right = make_stream<msgs::Image>("right_image", "/right/image_raw");
+  auto right = make_stream<msgs::Image>("right_image", "/right/image_rect");
   auto right_info = make_stream<msgs::CameraInfo>("right_camera_info", "/right/camera_info");
   auto truth = make_stream<msgs::DisparityImage>("disparity_truth", "/ground_truth/disparity");
   for (auto& f : frames) {
@@ -102,10 +104,11 @@ Dataset perception_depth() {
   d.description = description_of(d.name);
   d.frames = frames.size();
   d.rate_hz = config.rate_hz;
-  auto depth = make_stream<msgs::Image>("depth", "/camera/depth/image_raw");
-  auto depth_mm = make_stream<msgs::Image>("depth_mm", "/camera/depth/image_raw_mm");
-  auto image = make_stream<msgs::Image>("image", "/camera/rgb/image_raw");
-  auto info = make_stream<msgs::CameraInfo>("camera_info", "/camera/depth/camera_info");
+  // Depth registered to the colour camera, on the topics a4 takes (depth_image_proc's names).
+  auto depth = make_stream<msgs::Image>("depth", "/camera/depth_registered/image_rect");
+  auto depth_mm = make_stream<msgs::Image>("depth_mm", "/camera/depth_registered/image_rect_mm");
+  auto image = make_stream<msgs::Image>("image", "/camera/rgb/image_rect_color");
+  auto info = make_stream<msgs::CameraInfo>("camera_info", "/camera/rgb/camera_info");
   auto truth = make_stream<msgs::Image>("depth_truth", "/ground_truth/depth");
   for (auto& f : frames) {
     append(depth, std::move(f.depth));

@@ -175,6 +175,8 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
       throw std::invalid_argument("--rate-scale must be a positive number");
     // The mean recorded rate: what count, duration and the message IDs go by.
     r.rate_hz = dataset.rate_hz * options.rate_scale;
+    r.timeline = "bag";
+    r.rate_scale = options.rate_scale;
     if (!(r.rate_hz > 0))
       throw std::invalid_argument("--rate bag: the bag's frames all have the same time");
   } else {
@@ -227,7 +229,9 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
                            : std::vector<int64_t>{});
   Monitor monitor(context, spec.output, ids, r.warmup);
   std::vector<uint64_t> functional_ids;
-  if (spec.functional) {
+  // A bag brings no ground truth to check the outputs against.
+  const bool evaluate_outputs = spec.functional && !options.bag;
+  if (evaluate_outputs) {
     make_evaluator(*spec.functional, dataset);  // a missing truth stream fails before timing
     functional_ids = functional_sample_ids(r.count, r.warmup, spec.functional->sample);
     monitor.keep_outputs(functional_ids);
@@ -272,6 +276,11 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
     std::string broken;
     for (const auto& w : r.warnings) broken += "\n  " + w.rule + ": " + w.message;
     throw RunRefused("--strict: not running, run rules broken:" + broken);
+  }
+  if (spec.functional && !evaluate_outputs) {
+    r.warnings.push_back({"functional", "outputs not checked for accuracy (" +
+                                            spec.functional->evaluator +
+                                            "): a bag has no ground truth to check them against"});
   }
 
   auto failure = [&]() -> std::string {
@@ -323,7 +332,7 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
     }
   }
   // After timing: the evaluation costs nothing the run measured.
-  if (spec.functional) {
+  if (evaluate_outputs) {
     r.functional =
         evaluate_functional(*spec.functional, dataset, tally.kept, functional_ids.size());
   }

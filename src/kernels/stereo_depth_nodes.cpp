@@ -7,6 +7,7 @@
 #include "robotperf/kernels/depth_image_proc.hpp"
 #include "robotperf/kernels/message_sync.hpp"
 #include "robotperf/kernels/stereo_image_proc.hpp"
+#include "robotperf/tracing/tracepoints.hpp"
 
 namespace robotperf::kernels {
 namespace {
@@ -65,6 +66,25 @@ class SkippingNode : public graph::Node, public NodeCounters {
         std::cerr << "robotperf node " << name() << ": skipping input: " << e.what() << "\n";
     }
   }
+  // robotperf:kernel_init/fini around the kernel's computation of one frame, so that grey-box
+  // runs show the kernel's own time beside the node's; the sizes (CDR sizes of the frame's image
+  // inputs and of the output) are computed only while traced.
+  template <class... Inputs>
+  void trace_kernel_init(const char* kernel, int64_t stamp, const Inputs&... inputs) const {
+    if (lttng_ust_tracepoint_enabled(robotperf, kernel_init)) {
+      const uint64_t size = (msgs::type_support<Inputs>().serialized_size(&inputs) + ...);
+      lttng_ust_do_tracepoint(robotperf, kernel_init, name().c_str(), kernel, stamp, size);
+    }
+  }
+  template <class T>
+  void trace_kernel_fini(const char* kernel, const T& output) const {
+    if (lttng_ust_tracepoint_enabled(robotperf, kernel_fini)) {
+      lttng_ust_do_tracepoint(robotperf, kernel_fini, name().c_str(), kernel,
+                              output.header.stamp.to_ns(),
+                              msgs::type_support<T>().serialized_size(&output));
+    }
+  }
+
   uint64_t rejected_ = 0;
 };
 
@@ -134,14 +154,18 @@ class DisparityNode final : public SkippingNode {
   void process(const MessageSync<4>::Set& set) {
     guarded([&] {
       std::shared_ptr<msgs::DisparityImage> out = pool_.acquire();
-      processor_.compute(*std::static_pointer_cast<const msgs::Image>(set[kLeftImage]),
-                         *std::static_pointer_cast<const msgs::Image>(set[kRightImage]),
+      const auto& left = *std::static_pointer_cast<const msgs::Image>(set[kLeftImage]);
+      const auto& right = *std::static_pointer_cast<const msgs::Image>(set[kRightImage]);
+      trace_kernel_init(kKernel, left.header.stamp.to_ns(), left, right);
+      processor_.compute(left, right,
                          *std::static_pointer_cast<const msgs::CameraInfo>(set[kLeftInfo]),
                          *std::static_pointer_cast<const msgs::CameraInfo>(set[kRightInfo]), *out);
+      trace_kernel_fini(kKernel, *out);
       output_->publish(std::shared_ptr<const msgs::DisparityImage>(std::move(out)));
     });
   }
 
+  static constexpr const char* kKernel = "stereo_image_proc/disparity";
   DisparityProcessor processor_;
   OutputPool<msgs::DisparityImage> pool_;
   MessageSync<4> sync_;
@@ -189,14 +213,18 @@ class PointCloudXyzrgbNode final : public SkippingNode {
   void process(const MessageSync<3>::Set& set) {
     guarded([&] {
       std::shared_ptr<msgs::PointCloud2> cloud = pool_.acquire();
-      point_cloud_xyzrgb(*std::static_pointer_cast<const msgs::Image>(set[kDepth]),
-                         *std::static_pointer_cast<const msgs::Image>(set[kImage]),
+      const auto& depth = *std::static_pointer_cast<const msgs::Image>(set[kDepth]);
+      const auto& image = *std::static_pointer_cast<const msgs::Image>(set[kImage]);
+      trace_kernel_init(kKernel, depth.header.stamp.to_ns(), depth, image);
+      point_cloud_xyzrgb(depth, image,
                          *std::static_pointer_cast<const msgs::CameraInfo>(set[kInfo]), params_,
                          *cloud);
+      trace_kernel_fini(kKernel, *cloud);
       output_->publish(std::shared_ptr<const msgs::PointCloud2>(std::move(cloud)));
     });
   }
 
+  static constexpr const char* kKernel = "depth_image_proc/point_cloud_xyzrgb";
   PointCloudXyzrgbParams params_;
   OutputPool<msgs::PointCloud2> pool_;
   MessageSync<3> sync_;

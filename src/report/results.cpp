@@ -198,6 +198,8 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"started_utc", utc_time(r.started_unix_ns, "%Y-%m-%dT%H:%M:%SZ")},
       {"configuration",
        {{"rate_hz", r.rate_hz},
+        {"timeline", r.timeline},
+        {"rate_scale", r.timeline == "bag" ? json(r.rate_scale) : json(nullptr)},
         {"count", r.count},
         {"warmup", r.warmup},
         {"drain_s", r.drain_s},
@@ -267,7 +269,13 @@ std::string summary_table(const harness::RunResult& r) {
   std::ostringstream out;
   out << r.benchmark_id << " (" << r.benchmark_name << ") · " << (r.grey ? "grey-box · " : "")
       << r.rmw << " · " << r.processes << " process" << (r.processes == "single" ? "" : "es")
-      << " · " << fixed(r.rate_hz, 1) << " Hz · dataset " << r.dataset << "\n";
+      << " · " << fixed(r.rate_hz, 1) << " Hz";
+  if (r.timeline == "bag") {
+    out << " (the bag's timeline";
+    if (r.rate_scale != 1.0) out << " x" << r.rate_scale;
+    out << ")";
+  }
+  out << " · dataset " << r.dataset << "\n";
   out << "messages: sent " << r.sent << " (warm-up " << r.warmup << "), measured " << r.measured
       << ", matched " << r.matched << ", lost " << r.lost << " (" << fixed(r.loss_percent, 2)
       << " %)";

@@ -42,14 +42,18 @@ class Cli : public ::testing::Test {
   void TearDown() override { fs::remove_all(out_); }
 
   // The single results JSON the run wrote.
-  nlohmann::json result_json() {
+  std::string result_json_path() {
     std::vector<fs::path> files;
     for (const auto& e : fs::directory_iterator(out_)) {
       if (e.path().extension() == ".json") files.push_back(e.path());
     }
     EXPECT_EQ(files.size(), 1u);
-    if (files.empty()) return {};
-    std::ifstream in(files[0]);
+    return files.empty() ? std::string() : files[0].string();
+  }
+  nlohmann::json result_json() {
+    const std::string path = result_json_path();
+    if (path.empty()) return {};
+    std::ifstream in(path);
     return nlohmann::json::parse(in);
   }
   std::string domain() const { return std::to_string(150 + getpid() % 80); }
@@ -92,7 +96,11 @@ TEST_F(Cli, RunA1OnIntra) {
   const Outcome o = robotperf("run a1 --count 60 --rmw intra --csv --output " + out_.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("result: VALID"), std::string::npos) << o.out;
-  expect_clean_a1_result(result_json(), "intra");
+  EXPECT_NE(o.out.find("· 30.0 Hz · dataset perception/image"), std::string::npos) << o.out;
+  const auto j = result_json();
+  expect_clean_a1_result(j, "intra");
+  EXPECT_EQ(j["configuration"]["timeline"], "fixed");
+  EXPECT_TRUE(j["configuration"]["rate_scale"].is_null());
   bool csv = false;
   for (const auto& e : fs::directory_iterator(out_))
     csv |= e.path().string().ends_with(".latencies.csv");
@@ -381,8 +389,53 @@ TEST_F(Cli, RunReplaysABagOnItsOwnTimeline) {
   const auto j = result_json();
   expect_clean_a1_result(j, "intra");
   EXPECT_EQ(j["dataset"]["name"], bag);
-  // 30 Hz recorded, played twice as fast.
+  // 30 Hz recorded, played twice as fast; the result says so.
   EXPECT_NEAR(j["configuration"]["rate_hz"].get<double>(), 60.0, 0.1);
+  EXPECT_EQ(j["configuration"]["timeline"], "bag");
+  EXPECT_EQ(j["configuration"]["rate_scale"], 2.0);
+  EXPECT_NE(o.out.find("· 60.0 Hz (the bag's timeline x2) · dataset " + bag), std::string::npos)
+      << o.out;
+}
+
+// A bag replayed into nodes that each run in their own process: the Playback publishes the
+// recorded CDR payloads as they are, with the IDs written into their header bytes.
+TEST_F(Cli, RunReplaysABagIntoOneProcessPerNode) {
+  const std::string bag = (out_ / "camera").string();
+  Outcome o = robotperf("dataset generate perception/image --out " + bag);
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  o = robotperf("run a1 --dataset " + bag +
+                " --count 40 --rate 10 --rmw fastdds --processes per-node --domain " + domain() +
+                " --quiet --output " + out_.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  auto j = result_json();
+  EXPECT_EQ(j["dataset"]["name"], bag);
+  EXPECT_EQ(j["configuration"]["processes"], "per-node");
+  EXPECT_EQ(j["counts"]["measured"], 35);
+  EXPECT_EQ(j["counts"]["matched"], 35);
+  EXPECT_EQ(j["validity"]["valid"], true) << j["validity"].dump();
+  ASSERT_EQ(j["nodes"].size(), 2u);
+  for (const auto& n : j["nodes"]) {
+    EXPECT_EQ(n["exit_status"], "ok") << n.dump();
+    EXPECT_GT(n["pid"].get<int>(), 0);
+  }
+
+  // a4's generated dataset plays into a4 as it is, three inputs a frame; a bag has no ground
+  // truth, so the outputs are not checked, and the result says so.
+  const std::string depth_bag = (out_ / "depth").string();
+  o = robotperf("dataset generate perception/depth --out " + depth_bag);
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  fs::remove(result_json_path());
+  o = robotperf("run a4 --dataset " + depth_bag +
+                " --count 35 --rate 10 --rmw fastdds --processes per-node --domain " + domain() +
+                " --quiet --output " + out_.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("functional: outputs not checked"), std::string::npos) << o.out;
+  j = result_json();
+  EXPECT_EQ(j["counts"]["matched"], 30);
+  EXPECT_EQ(j["validity"]["valid"], true) << j["validity"].dump();
+  EXPECT_TRUE(j["functional"].is_null()) << j["functional"].dump();
+  ASSERT_EQ(j["nodes"].size(), 1u);
+  EXPECT_EQ(j["nodes"][0]["counters"]["sets_processed"], 35);
 }
 
 TEST_F(Cli, BadDatasetOptionsAreOneClearLine) {

@@ -149,6 +149,9 @@ TEST(BagPlayback, A1OnFastddsPublishesRecordedBytesWithRemapping) {
   write_camera_bag(tmp.path() / "bag", bag::Storage::kMcap,
                    {{"/camera/image_raw", "/front/image"}, {"/camera/camera_info", "/front/info"}});
   RunOptions o = bag_run(tmp.path() / "bag", "fastdds", 80);
+  // A sanitized Debug build on a busy 2-core machine does not rectify and upscale 30 frames a
+  // second through Fast DDS: frames would queue and drop, which is not what this test is about.
+  o.rate_hz = 15;
   o.domain_id = 40 + getpid() % 100;
   // Without remapping, the bag has nothing for a1's inputs.
   try {

@@ -88,7 +88,11 @@ struct RunResult {
   std::string benchmark_name;
   std::string category;
   // Configuration as run.
-  double rate_hz = 0;
+  double rate_hz = 0;  // with the bag's timeline: its mean recorded rate times rate_scale
+  // When frames are sent: "fixed" (every 1/rate_hz) or "bag" (the bag's recorded intervals
+  // divided by rate_scale).
+  std::string timeline = "fixed";
+  double rate_scale = 1.0;
   std::size_t count = 0;
   std::size_t warmup = 0;
   double drain_s = 0;
