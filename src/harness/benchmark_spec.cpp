@@ -95,13 +95,14 @@ BoundaryTopic boundary_topic(const YamlFile& file, const YAML::Node& n, bool is_
   if (is_input) {
     file.allow_keys(n, {"topic", "type", "stream", "qos"});
   } else {
-    file.allow_keys(n, {"topic", "type", "qos"});
+    file.allow_keys(n, {"topic", "type", "qos", "state"});
   }
   BoundaryTopic t;
   t.topic = file.require_string(n, "topic");
   t.type = file.require_string(n, "type");
   if (is_input) t.stream = file.require_string(n, "stream");
   t.qos = file.qos(n);
+  if (!is_input) t.state = file.get<bool>(n, "state", false);
   try {
     rmw::dds_topic_name(t.topic);
   } catch (const std::invalid_argument& e) {
@@ -162,7 +163,7 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   }
 
   if (const YAML::Node f = root["functional"]; f.IsDefined()) {
-    file.allow_keys(f, {"evaluator", "truth", "sample"});
+    file.allow_keys(f, {"evaluator", "truth", "sample", "observed_truth"});
     FunctionalSpec functional;
     functional.evaluator = file.require_string(f, "evaluator");
     const EvaluatorInfo* info = find_evaluator(functional.evaluator);
@@ -188,6 +189,13 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
       }
     }
     functional.sample = file.get<std::size_t>(f, "sample", functional.sample);
+    functional.observed_truth_topic = file.get<std::string>(f, "observed_truth", "");
+    if (info->observed_truth_type.empty() != functional.observed_truth_topic.empty()) {
+      file.fail(f, info->observed_truth_type.empty()
+                       ? "evaluator " + info->name + " takes no observed_truth topic"
+                       : "evaluator " + info->name + " needs an observed_truth topic (" +
+                             info->observed_truth_type + ")");
+    }
     spec.functional = std::move(functional);
   }
 }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -17,6 +18,7 @@
 #include "measurement.hpp"
 #include "node_processes.hpp"
 #include "robotperf/graph/executor.hpp"
+#include "robotperf/msgs/known_types.hpp"
 
 namespace robotperf::harness {
 namespace {
@@ -145,6 +147,40 @@ void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& ta
   r.valid = r.invalid_reasons.empty();
 }
 
+ControlLoopResult control_loop_result(const control::LoopReport& loop, const MessageIds& ids,
+                                      const std::vector<MessageRecord>& records,
+                                      std::size_t warmup) {
+  ControlLoopResult c;
+  c.node = loop.name;
+  c.update_rate_hz = loop.update_rate_hz;
+  c.cpu = loop.cpu;
+  c.rt_priority = loop.rt_priority;
+  c.cycles = loop.cycles;
+  c.recorded_cycles = loop.records.size();
+  c.deadline_misses = loop.deadline_misses;
+  const double period_ns = 1e9 / loop.update_rate_hz;
+  std::vector<double> update, cycle, jitter, wake, to_write;
+  for (std::size_t k = 0; k < loop.records.size(); ++k) {
+    const auto& rec = loop.records[k];
+    update.push_back(static_cast<double>(rec.update_end_ns - rec.read_end_ns));
+    cycle.push_back(static_cast<double>(rec.write_end_ns - rec.wake_ns));
+    wake.push_back(static_cast<double>(rec.wake_ns - rec.deadline_ns));
+    if (k > 0)
+      jitter.push_back(static_cast<double>(rec.wake_ns - loop.records[k - 1].wake_ns) - period_ns);
+  }
+  for (const auto& w : loop.writes) {
+    const auto id = ids.id_of(w.command_id);
+    if (!id || *id < warmup || *id >= records.size()) continue;
+    to_write.push_back(static_cast<double>(w.write_end_ns - records[*id].scheduled_ns));
+  }
+  c.update_duration = metrics::compute_stats(update);
+  c.cycle_duration = metrics::compute_stats(cycle);
+  c.period_jitter = metrics::compute_stats(jitter);
+  c.wake_latency = metrics::compute_stats(wake);
+  c.command_to_write = metrics::compute_stats(to_write);
+  return c;
+}
+
 }  // namespace
 
 RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
@@ -231,6 +267,14 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
     make_evaluator(*spec.functional, dataset);  // a missing truth stream fails before timing
     functional_ids = functional_sample_ids(r.count, r.warmup, spec.functional->sample);
     monitor.keep_outputs(functional_ids);
+    if (const auto& topic = spec.functional->observed_truth_topic; !topic.empty()) {
+      const std::string& type = find_evaluator(spec.functional->evaluator)->observed_truth_type;
+      const msgs::TypeSupport* ts = nullptr;
+      msgs::with_message_type(type, [&]<class T>() { ts = &msgs::type_support<T>(); });
+      if (ts == nullptr || !ts->stamped())
+        throw BenchmarkError("observed truth type " + type + " cannot carry message IDs");
+      monitor.keep_observed_truth(topic, *ts);
+    }
   }
   graph::Executor monitor_executor(1);
   monitor_executor.add_node(monitor.node());
@@ -290,7 +334,10 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   trace_run_end(r.records.size());
 
   // Drain: wait for the outstanding outputs, at most drain_s after the last send.
-  const std::size_t expected = r.records.size() > r.warmup ? r.records.size() - r.warmup : 0;
+  // A state output keeps reporting after the first reception of each ID: wait the whole drain.
+  const std::size_t expected = spec.output.state ? SIZE_MAX
+                               : r.records.size() > r.warmup ? r.records.size() - r.warmup
+                                                             : 0;
   const int64_t last_send = r.records.empty() ? rmw::steady_now_ns() : r.records.back().sent_ns;
   monitor.wait_for(expected, last_send + static_cast<int64_t>(r.drain_s * 1e9));
   measurement.end(r);
@@ -301,12 +348,17 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   monitor_executor.stop();
   if (children) r.nodes = children->shutdown(5.0);
   for (std::size_t i = 0; i < kernel_nodes.size(); ++i) {
+    if (auto* loop = dynamic_cast<kernels::ControlLoopSource*>(kernel_nodes[i].get())) {
+      r.control_loops.push_back(control_loop_result(loop->stop_and_report(), ids, r.records,
+                                                    r.warmup));
+    }
     if (const auto* c = dynamic_cast<const kernels::NodeCounters*>(kernel_nodes[i].get())) {
       r.nodes[i].counters = c->counters();
     }
   }
   r.completed = r.records.size() == r.count && r.errors.empty();
   summarise(r, spec, tally);
+  r.repeats = tally.repeats;
   // Grey-box: counts, latencies and validity come from the trace.
   if (grey) grey->finish(r);
   if (r.resources.other_cpu_percent &&
@@ -325,7 +377,8 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   // After timing: the evaluation costs nothing the run measured.
   if (spec.functional) {
     r.functional =
-        evaluate_functional(*spec.functional, dataset, tally.kept, functional_ids.size());
+        evaluate_functional(*spec.functional, dataset, tally.kept, functional_ids.size(),
+                            tally.observed_truth);
   }
   return r;
 }

@@ -27,6 +27,11 @@ struct BoundaryTopic {
   std::string type;    // ROS type, e.g. sensor_msgs/msg/Image
   std::string stream;  // inputs: the dataset stream published on it
   rmw::QoS qos;
+  // Outputs only: a state stream (control benchmarks). Each message carries the ID of the newest
+  // command it reflects and several messages may carry one ID: the first reception is the
+  // latency, later ones are counted as repeats (not duplicates), the functional check keeps the
+  // last, and the Monitor waits the whole drain time.
+  bool state = false;
 };
 
 struct NodeSpec {
