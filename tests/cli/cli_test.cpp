@@ -400,3 +400,59 @@ TEST_F(Cli, BadDatasetOptionsAreOneClearLine) {
     EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << args << ": " << o.out;
   }
 }
+
+// c1-c5 end to end, kept short: state outputs matched by ID, loop metrics in the results and the
+// functional checks of c1 and c2 passing. Short runs have fewer samples than the packages
+// require, so the only reason for invalidity allowed is that.
+TEST_F(Cli, RunControlBenchmarksC1ToC5) {
+  const std::pair<const char*, const char*> runs[] = {{"c1", "--count 2 --warmup 0"},
+                                                      {"c2", "--count 25 --warmup 2"},
+                                                      {"c3", "--count 120 --warmup 10"},
+                                                      {"c4", "--count 120 --warmup 10"},
+                                                      {"c5", "--count 120 --warmup 10"}};
+  for (const auto& [id, args] : runs) {
+    fs::remove_all(out_);
+    const Outcome o =
+        robotperf(std::string("run ") + id + " " + args + " --quiet --output " + out_.string());
+    EXPECT_NE(o.out.find("control loop controller_manager"), std::string::npos) << o.out;
+    const nlohmann::json j = result_json();
+    ASSERT_TRUE(j.is_object()) << o.out;
+    EXPECT_EQ(j["counts"]["lost"], 0) << id << "\n" << o.out;
+    EXPECT_EQ(j["counts"]["duplicates"], 0) << id;
+    EXPECT_EQ(j["counts"]["unknown"], 0) << id;
+    EXPECT_GT(j["counts"]["repeats"].get<int>(), 0) << id;
+    for (const auto& reason : j["validity"]["reasons"])
+      EXPECT_NE(reason.get<std::string>().find("fewer than"), std::string::npos) << reason;
+    ASSERT_EQ(j["control_loops"].size(), 1u) << id;
+    const auto& loop = j["control_loops"][0];
+    EXPECT_GT(loop["cycles"].get<int>(), 0);
+    EXPECT_TRUE(loop["deadline_misses"].is_number());
+    EXPECT_GT(loop["update_duration_us"]["count"].get<int>(), 0);
+    EXPECT_TRUE(loop["period_jitter_us"]["p99"].is_number());
+    // Written to the hardware before the state reflecting it was received.
+    EXPECT_LT(loop["command_to_write_ms"]["max"].get<double>(),
+              j["latency_ms"]["from_scheduled"]["min"].get<double>())
+        << id;
+    if (std::string(id) == "c1" || std::string(id) == "c2") {
+      ASSERT_TRUE(j["functional"].is_object()) << id;
+      EXPECT_EQ(j["functional"]["valid"], true) << j["functional"].dump();
+    }
+  }
+}
+
+TEST_F(Cli, ControlLoopCpuThatCannotBeHadIsOneClearLine) {
+  // No machine here has CPU 1000: pinning the loop thread there fails before the run.
+  fs::create_directories(out_ / "control" / "c9_bad");
+  const fs::path src = fs::path(ROBOTPERF_SOURCE_DIR) / "benchmarks" / "control" /
+                       "c3_rrbot_forward_command_controller_position";
+  fs::copy_file(src / "benchmark.yaml", out_ / "control" / "c9_bad" / "benchmark.yaml");
+  std::ifstream in(src / "graph.yaml");
+  std::string graph((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  graph.replace(graph.find("cpu: -1"), 7, "cpu: 1000");
+  std::ofstream(out_ / "control" / "c9_bad" / "graph.yaml") << graph;
+  const Outcome o =
+      robotperf("--benchmarks " + out_.string() +
+                " run c3 --count 20 --warmup 2 --quiet --output " + (out_ / "r").string());
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_NE(o.out.find("cannot pin the control loop to CPU 1000"), std::string::npos) << o.out;
+}
