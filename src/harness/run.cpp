@@ -6,14 +6,16 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <thread>
 
 #include "black_box.hpp"
+#include "control_loop.hpp"
 #include "grey_box.hpp"
 #include "measurement.hpp"
 #include "node_processes.hpp"
@@ -145,40 +147,6 @@ void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& ta
   if (r.duplicates > 0) invalid(std::to_string(r.duplicates) + " duplicate receptions");
   if (r.unknown > 0) invalid(std::to_string(r.unknown) + " receptions with unknown message IDs");
   r.valid = r.invalid_reasons.empty();
-}
-
-ControlLoopResult control_loop_result(const control::LoopReport& loop, const MessageIds& ids,
-                                      const std::vector<MessageRecord>& records,
-                                      std::size_t warmup) {
-  ControlLoopResult c;
-  c.node = loop.name;
-  c.update_rate_hz = loop.update_rate_hz;
-  c.cpu = loop.cpu;
-  c.rt_priority = loop.rt_priority;
-  c.cycles = loop.cycles;
-  c.recorded_cycles = loop.records.size();
-  c.deadline_misses = loop.deadline_misses;
-  const double period_ns = 1e9 / loop.update_rate_hz;
-  std::vector<double> update, cycle, jitter, wake, to_write;
-  for (std::size_t k = 0; k < loop.records.size(); ++k) {
-    const auto& rec = loop.records[k];
-    update.push_back(static_cast<double>(rec.update_end_ns - rec.read_end_ns));
-    cycle.push_back(static_cast<double>(rec.write_end_ns - rec.wake_ns));
-    wake.push_back(static_cast<double>(rec.wake_ns - rec.deadline_ns));
-    if (k > 0)
-      jitter.push_back(static_cast<double>(rec.wake_ns - loop.records[k - 1].wake_ns) - period_ns);
-  }
-  for (const auto& w : loop.writes) {
-    const auto id = ids.id_of(w.command_id);
-    if (!id || *id < warmup || *id >= records.size()) continue;
-    to_write.push_back(static_cast<double>(w.write_end_ns - records[*id].scheduled_ns));
-  }
-  c.update_duration = metrics::compute_stats(update);
-  c.cycle_duration = metrics::compute_stats(cycle);
-  c.period_jitter = metrics::compute_stats(jitter);
-  c.wake_latency = metrics::compute_stats(wake);
-  c.command_to_write = metrics::compute_stats(to_write);
-  return c;
 }
 
 }  // namespace
@@ -335,7 +303,7 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
 
   // Drain: wait for the outstanding outputs, at most drain_s after the last send.
   // A state output keeps reporting after the first reception of each ID: wait the whole drain.
-  const std::size_t expected = spec.output.state ? SIZE_MAX
+  const std::size_t expected = spec.output.state             ? SIZE_MAX
                                : r.records.size() > r.warmup ? r.records.size() - r.warmup
                                                              : 0;
   const int64_t last_send = r.records.empty() ? rmw::steady_now_ns() : r.records.back().sent_ns;
@@ -346,11 +314,23 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   if (std::string f = failure(); !f.empty()) r.errors.push_back(f);
   graph_executor.stop();
   monitor_executor.stop();
-  if (children) r.nodes = children->shutdown(5.0);
+  if (children) {
+    r.nodes = children->shutdown(5.0);
+    for (const auto& wire : children->control_loops()) {
+      try {
+        r.control_loops.push_back(control_loop_from_wire(wire, ids, r.records, r.warmup));
+      } catch (const nlohmann::json::exception& e) {
+        r.errors.push_back("malformed control loop report from a node process: " +
+                           std::string(e.what()));
+      }
+    }
+  }
   for (std::size_t i = 0; i < kernel_nodes.size(); ++i) {
     if (auto* loop = dynamic_cast<kernels::ControlLoopSource*>(kernel_nodes[i].get())) {
-      r.control_loops.push_back(control_loop_result(loop->stop_and_report(), ids, r.records,
-                                                    r.warmup));
+      const control::LoopReport report = loop->stop_and_report();
+      ControlLoopResult c = control_loop_timing(report);
+      c.command_to_write = command_to_write(report.writes, ids, r.records, r.warmup);
+      r.control_loops.push_back(std::move(c));
     }
     if (const auto* c = dynamic_cast<const kernels::NodeCounters*>(kernel_nodes[i].get())) {
       r.nodes[i].counters = c->counters();
@@ -376,9 +356,8 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   }
   // After timing: the evaluation costs nothing the run measured.
   if (spec.functional) {
-    r.functional =
-        evaluate_functional(*spec.functional, dataset, tally.kept, functional_ids.size(),
-                            tally.observed_truth);
+    r.functional = evaluate_functional(*spec.functional, dataset, tally.kept, functional_ids.size(),
+                                       tally.observed_truth);
   }
   return r;
 }
@@ -436,15 +415,16 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   auto seconds = [](timeval tv) { return static_cast<double>(tv.tv_sec) + tv.tv_usec * 1e-6; };
-  std::string counters;
+  nlohmann::json stats = {{"cpu_user_s", seconds(usage.ru_utime)},
+                          {"cpu_system_s", seconds(usage.ru_stime)},
+                          {"counters", nlohmann::json::object()}};
   if (const auto* c = dynamic_cast<const kernels::NodeCounters*>(node.get())) {
-    for (const auto& [name, value] : c->counters()) {
-      counters += (counters.empty() ? "\"" : ",\"") + name + "\":" + std::to_string(value);
-    }
+    for (const auto& [name, value] : c->counters()) stats["counters"][name] = value;
   }
-  std::cout << "stats {\"cpu_user_s\":" << seconds(usage.ru_utime)
-            << ",\"cpu_system_s\":" << seconds(usage.ru_stime) << ",\"counters\":{" << counters
-            << "}}" << std::endl;
+  // The loop's metrics are read here, where the loop ran, and go to the runner with the stats.
+  if (auto* loop = dynamic_cast<kernels::ControlLoopSource*>(node.get()))
+    stats["control_loop"] = control_loop_to_wire(loop->stop_and_report());
+  std::cout << "stats " << stats.dump() << std::endl;
   return code;
 }
 
