@@ -418,12 +418,13 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   nlohmann::json stats = {{"cpu_user_s", seconds(usage.ru_utime)},
                           {"cpu_system_s", seconds(usage.ru_stime)},
                           {"counters", nlohmann::json::object()}};
+  // The loop's metrics are read here, where the loop ran, and go to the runner with the stats;
+  // stopping the loop first, so that the counters below are not read while it runs.
+  if (auto* loop = dynamic_cast<kernels::ControlLoopSource*>(node.get()))
+    stats["control_loop"] = control_loop_to_wire(loop->stop_and_report());
   if (const auto* c = dynamic_cast<const kernels::NodeCounters*>(node.get())) {
     for (const auto& [name, value] : c->counters()) stats["counters"][name] = value;
   }
-  // The loop's metrics are read here, where the loop ran, and go to the runner with the stats.
-  if (auto* loop = dynamic_cast<kernels::ControlLoopSource*>(node.get()))
-    stats["control_loop"] = control_loop_to_wire(loop->stop_and_report());
   std::cout << "stats " << stats.dump() << std::endl;
   return code;
 }
