@@ -3,7 +3,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cmath>
 #include <set>
+#include <sstream>
 
 namespace robotperf::harness {
 namespace {
@@ -301,6 +303,26 @@ kernels::KernelConfig kernel_config(const NodeSpec& node) {
   config.topics = node.topics;
   config.qos = node.qos;
   return config;
+}
+
+void override_update_rate(BenchmarkSpec& spec, double hz) {
+  // Beyond 100 kHz the period (10 us) is shorter than one cycle's wake-up on a general-purpose OS.
+  if (!std::isfinite(hz) || !(hz > 0) || hz > 100'000)
+    throw std::invalid_argument("--update-rate must be a rate in Hz, above 0 and at most 100000");
+  bool found = false;
+  for (auto& n : spec.nodes) {
+    if (!n.kernel.starts_with("control/")) continue;
+    std::ostringstream text;
+    text.precision(17);
+    text << hz;
+    n.parameters["update_rate"] = text.str();
+    found = true;
+  }
+  if (!found)
+    throw std::invalid_argument(
+        "--update-rate applies to control benchmarks (a controller "
+        "manager's loop); " +
+        spec.id + " has none");
 }
 
 }  // namespace robotperf::harness

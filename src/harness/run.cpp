@@ -12,6 +12,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include "black_box.hpp"
@@ -151,8 +152,15 @@ void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& ta
 
 }  // namespace
 
-RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
+RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& options) {
+  std::optional<BenchmarkSpec> overridden;
+  if (options.update_rate_hz) {
+    overridden = package_spec;
+    override_update_rate(*overridden, *options.update_rate_hz);
+  }
+  const BenchmarkSpec& spec = overridden ? *overridden : package_spec;
   RunResult r;
+  r.update_rate_hz = options.update_rate_hz;
   r.benchmark_id = spec.id;
   r.benchmark_name = spec.name;
   r.category = spec.category;
@@ -260,9 +268,16 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
       r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1, {}});
     }
   } else {
-    children =
-        std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw, options.domain_id,
-                                        options.scheduling.node_arguments());
+    std::vector<std::string> node_arguments = options.scheduling.node_arguments();
+    if (options.update_rate_hz) {
+      // The children load the package themselves: they get the override to apply.
+      std::ostringstream hz;
+      hz.precision(17);
+      hz << *options.update_rate_hz;
+      node_arguments.insert(node_arguments.end(), {"--update-rate", hz.str()});
+    }
+    children = std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw,
+                                               options.domain_id, node_arguments);
   }
   std::vector<metrics::ResourceMonitor::Process> graph_processes;
   if (children) {

@@ -206,6 +206,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"executor_threads", r.executor_threads},
         {"output_topic", r.output_topic},
         {"domain_id", r.domain_id},
+        {"update_rate_hz", r.update_rate_hz ? json(*r.update_rate_hz) : json(nullptr)},
         {"scheduling", scheduling}}},
       {"dataset", {{"name", r.dataset}, {"hash", r.dataset_hash}, {"frames", r.dataset_frames}}},
       {"machine", sysinfo::to_json(machine)},
@@ -242,19 +243,19 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
     json loops = json::array();
     const double us = 1e-3;
     for (const auto& c : r.control_loops) {
-      loops.push_back({{"node", c.node},
-                       {"update_rate_hz", c.update_rate_hz},
-                       {"cpu", c.cpu >= 0 ? json(c.cpu) : json(nullptr)},
-                       {"rt_priority", c.rt_priority ? json(c.rt_priority) : json(nullptr)},
-                       {"cycles", c.cycles},
-                       {"recorded_cycles", c.recorded_cycles},
-                       {"deadline_misses", c.deadline_misses},
-                       {"update_duration_us", metrics::to_json(c.update_duration, us, "us")},
-                       {"cycle_duration_us", metrics::to_json(c.cycle_duration, us, "us")},
-                       {"period_jitter_us", metrics::to_json(c.period_jitter, us, "us")},
-                       {"wake_latency_us", metrics::to_json(c.wake_latency, us, "us")},
-                       {"command_to_write_ms",
-                        metrics::to_json(c.command_to_write, 1.0 / kNsPerMs, "ms")}});
+      loops.push_back(
+          {{"node", c.node},
+           {"update_rate_hz", c.update_rate_hz},
+           {"cpu", c.cpu >= 0 ? json(c.cpu) : json(nullptr)},
+           {"rt_priority", c.rt_priority ? json(c.rt_priority) : json(nullptr)},
+           {"cycles", c.cycles},
+           {"recorded_cycles", c.recorded_cycles},
+           {"deadline_misses", c.deadline_misses},
+           {"update_duration_us", metrics::to_json(c.update_duration, us, "us")},
+           {"cycle_duration_us", metrics::to_json(c.cycle_duration, us, "us")},
+           {"period_jitter_us", metrics::to_json(c.period_jitter, us, "us")},
+           {"wake_latency_us", metrics::to_json(c.wake_latency, us, "us")},
+           {"command_to_write_ms", metrics::to_json(c.command_to_write, 1.0 / kNsPerMs, "ms")}});
     }
     out["control_loops"] = loops;
   }
@@ -321,8 +322,8 @@ std::string summary_table(const harness::RunResult& r) {
   for (const auto& c : r.control_loops) {
     out << "\ncontrol loop " << c.node << " at " << fixed(c.update_rate_hz, 1) << " Hz"
         << (c.cpu >= 0 ? ", CPU " + std::to_string(c.cpu) : std::string())
-        << (c.rt_priority ? ", SCHED_FIFO " + std::to_string(c.rt_priority) : std::string())
-        << ": " << c.cycles << " cycles, deadline misses " << c.deadline_misses << "\n";
+        << (c.rt_priority ? ", SCHED_FIFO " + std::to_string(c.rt_priority) : std::string()) << ": "
+        << c.cycles << " cycles, deadline misses " << c.deadline_misses << "\n";
     std::snprintf(line, sizeof line, "%-24s %9s %9s %9s %9s %9s\n", "  loop (us)", "mean", "p50",
                   "p99", "max", "min");
     out << line;

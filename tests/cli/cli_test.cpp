@@ -486,6 +486,31 @@ TEST_F(Cli, RunC3OneProcessPerNodeReportsItsLoop) {
   EXPECT_LT(to_write["max"].get<double>(), j["latency_ms"]["from_scheduled"]["max"].get<double>());
 }
 
+// --update-rate runs the controller manager's loop faster than the graph says, and is recorded.
+TEST_F(Cli, UpdateRateOverridesTheControlLoopRate) {
+  const Outcome o = robotperf(
+      "run c3 --rate 100 --update-rate 1000 --count 100 --warmup 10 "
+      "--quiet --output " +
+      out_.string());
+  const auto j = result_json();
+  ASSERT_TRUE(j.is_object()) << o.out;
+  EXPECT_EQ(j["configuration"]["update_rate_hz"].get<double>(), 1000.0);
+  ASSERT_EQ(j["control_loops"].size(), 1u);
+  const auto& loop = j["control_loops"][0];
+  EXPECT_EQ(loop["update_rate_hz"].get<double>(), 1000.0);
+  // About a second of commands: far more cycles than the 100 Hz loop of the graph would run.
+  EXPECT_GT(loop["cycles"].get<int>(), 500) << loop.dump();
+
+  for (const std::string& args :
+       {"run c3 --update-rate 0", "run c3 --update-rate -100", "run c3 --update-rate inf",
+        "run c3 --update-rate fast", "run a1 --update-rate 1000"}) {
+    const Outcome bad = robotperf(args + " --count 20 --quiet --output " + (out_ / "bad").string());
+    EXPECT_EQ(bad.exit_code, 2) << args << ": " << bad.out;
+    EXPECT_EQ(std::count(bad.out.begin(), bad.out.end(), '\n'), 1) << args << ": " << bad.out;
+    EXPECT_NE(bad.out.find("--update-rate"), std::string::npos) << args << ": " << bad.out;
+  }
+}
+
 TEST_F(Cli, ControlLoopCpuThatCannotBeHadIsOneClearLine) {
   // No machine here has CPU 1000: pinning the loop thread there fails before the run.
   fs::create_directories(out_ / "control" / "c9_bad");

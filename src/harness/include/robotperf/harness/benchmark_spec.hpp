@@ -85,4 +85,9 @@ BenchmarkSpec find_benchmark(const std::filesystem::path& root, const std::strin
 // The kernel configuration of a node of the spec.
 kernels::KernelConfig kernel_config(const NodeSpec& node);
 
+// Sets the loop rate (update_rate) of every controller manager (control/* kernel) of `spec`.
+// Throws std::invalid_argument with one line when the benchmark has none or `hz` is not a rate a
+// loop can run at (0 < hz <= 100000).
+void override_update_rate(BenchmarkSpec& spec, double hz);
+
 }  // namespace robotperf::harness

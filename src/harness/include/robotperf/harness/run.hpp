@@ -29,7 +29,9 @@ enum class ProcessLayout { kSingle, kPerNode };
 enum class RunMode { kBlack, kGrey };
 
 struct RunOptions {
-  std::optional<double> rate_hz;      // default: the benchmark's
+  std::optional<double> rate_hz;  // default: the benchmark's
+  // Control benchmarks: the controller managers' loop rate in Hz (default: the graph's).
+  std::optional<double> update_rate_hz;
   std::optional<std::size_t> count;   // messages to send, warm-up included
   std::optional<double> duration_s;   // alternative to count: rate * duration
   std::optional<std::size_t> warmup;  // default: the benchmark's
@@ -154,6 +156,7 @@ struct RunResult {
   std::optional<FunctionalResult> functional;
   // Control kernels: their loops' timing (empty for other benchmarks).
   std::vector<ControlLoopResult> control_loops;
+  std::optional<double> update_rate_hz;  // the loop rate given with --update-rate
   // Grey-box runs: the analysis of the recorded trace (counts, latencies and
   // validity above then come from it) and where the trace is.
   std::optional<tracing::TraceAnalysis> grey;
