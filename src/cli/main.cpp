@@ -122,10 +122,18 @@ fs::path self_executable() {
 int list_benchmarks(const fs::path& root) {
   std::vector<std::string> broken;
   const auto specs = harness::discover_benchmarks(root, &broken);
-  std::printf("%-5s %-30s %-12s %s\n", "id", "name", "category", "description");
+  // Columns as wide as their longest entry.
+  int id_width = 2, name_width = 4, category_width = 8;
   for (const auto& s : specs) {
-    std::printf("%-5s %-30s %-12s %s\n", s.id.c_str(), s.name.c_str(), s.category.c_str(),
-                s.short_description.c_str());
+    id_width = std::max(id_width, static_cast<int>(s.id.size()));
+    name_width = std::max(name_width, static_cast<int>(s.name.size()));
+    category_width = std::max(category_width, static_cast<int>(s.category.size()));
+  }
+  std::printf("%-*s  %-*s  %-*s  %s\n", id_width, "id", name_width, "name", category_width,
+              "category", "description");
+  for (const auto& s : specs) {
+    std::printf("%-*s  %-*s  %-*s  %s\n", id_width, s.id.c_str(), name_width, s.name.c_str(),
+                category_width, s.category.c_str(), s.short_description.c_str());
   }
   for (const auto& b : broken)
     std::fprintf(stderr, "robotperf: skipped broken package: %s\n", b.c_str());

@@ -501,7 +501,7 @@ TEST_F(Cli, UpdateRateOverridesTheControlLoopRate) {
   // About a second of commands: far more cycles than the 100 Hz loop of the graph would run.
   EXPECT_GT(loop["cycles"].get<int>(), 500) << loop.dump();
 
-  for (const std::string& args :
+  for (const std::string args :
        {"run c3 --update-rate 0", "run c3 --update-rate -100", "run c3 --update-rate inf",
         "run c3 --update-rate fast", "run a1 --update-rate 1000"}) {
     const Outcome bad = robotperf(args + " --count 20 --quiet --output " + (out_ / "bad").string());
