@@ -110,11 +110,21 @@ void ControllerManager::stop() {
 }
 
 void ControllerManager::loop(int64_t start_ns) {
-  for (uint64_t k = 0; !stop_.load(std::memory_order_relaxed); ++k) {
-    // Absolute deadlines: a late cycle does not shift the ones after it.
-    const int64_t deadline = start_ns + static_cast<int64_t>(k) * period_ns_;
+  // Absolute deadlines start + k * period: a late cycle does not shift the ones after it.
+  int64_t deadline = start_ns;
+  while (!stop_.load(std::memory_order_relaxed)) {
     sleep_until(deadline);
-    run_cycle(deadline, monotonic_ns());
+    const int64_t now = monotonic_ns();
+    run_cycle(deadline, now);
+    deadline += period_ns_;
+    // Woken after the next deadline had passed: the periods already over are skipped and counted
+    // as missed, rather than run back to back with a near-zero period (as ros2_control's loop
+    // does on an overrun); the grid, and so the phase, is kept.
+    if (now >= deadline) {
+      const int64_t skipped = (now - deadline) / period_ns_ + 1;
+      deadline += skipped * period_ns_;
+      misses_ += static_cast<uint64_t>(skipped);
+    }
   }
 }
 

@@ -47,8 +47,10 @@ struct LoopReport {
   double update_rate_hz = 0;
   int cpu = -1;
   int rt_priority = 0;
-  uint64_t cycles = 0;           // run, recorded or not
-  uint64_t deadline_misses = 0;  // cycles whose write ended after the next period began
+  uint64_t cycles = 0;  // run, recorded or not
+  // Cycles whose write ended after the next period began, plus periods skipped because the loop
+  // woke after their deadline had passed.
+  uint64_t deadline_misses = 0;
   std::vector<CycleRecord> records;
   std::vector<CommandWrite> writes;
   uint64_t writes_dropped = 0;  // beyond the buffer's capacity

@@ -2,6 +2,9 @@
 // (the roles of realtime_tools' RealtimeBuffer and RealtimePublisher in ROS 2).
 #pragma once
 
+#include <pthread.h>
+#include <sched.h>
+
 #include <condition_variable>
 #include <functional>
 #include <memory>
@@ -74,6 +77,15 @@ class RealtimePublisher {
 
  private:
   void run() {
+    // On the normal scheduler, SCHED_BATCH: this thread, woken by the loop every publication,
+    // must not preempt the loop on wake-up (CFS wake-up preemption) and delay the rest of its
+    // cycle. Real-time configurations are left as they are.
+    int policy = 0;
+    sched_param param{};
+    if (pthread_getschedparam(pthread_self(), &policy, &param) == 0 && policy == SCHED_OTHER) {
+      param.sched_priority = 0;
+      pthread_setschedparam(pthread_self(), SCHED_BATCH, &param);
+    }
     std::unique_lock lock(mutex_);
     while (true) {
       cv_.wait(lock, [this] { return ready_ || stop_; });
