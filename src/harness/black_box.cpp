@@ -215,12 +215,13 @@ void Monitor::keep_outputs(const std::vector<uint64_t>& ids) {
 void Monitor::keep_observed_truth(const std::string& topic, const msgs::TypeSupport& type) {
   rmw::QoS qos;
   qos.history = rmw::History::kKeepAll;
-  node_->create_generic_subscription(
-      topic, type, qos, [this, &type](rmw::MessagePtr m, const graph::MessageInfo&) {
-        const auto id = ids_.id_of(type.stamp_ns(m.get()));
-        std::lock_guard lock(mutex_);
-        if (id && !keep_.empty() && keep_[*id]) tally_.observed_truth[*id] = std::move(m);
-      });
+  node_->create_generic_subscription(topic, type, qos,
+                                     [this, &type](rmw::MessagePtr m, const graph::MessageInfo&) {
+                                       const auto id = ids_.id_of(type.stamp_ns(m.get()));
+                                       std::lock_guard lock(mutex_);
+                                       if (id && !keep_.empty() && keep_[*id])
+                                         tally_.observed_truth[*id] = std::move(m);
+                                     });
 }
 
 bool Monitor::wait_for(std::size_t expected, int64_t deadline_ns) {

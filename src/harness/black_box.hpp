@@ -106,7 +106,7 @@ class Monitor {
   MessageIds ids_;
   std::size_t warmup_;
   bool state_;
-  std::vector<bool> keep_;  // per id
+  std::vector<bool> keep_;               // per id
   std::vector<std::size_t> kept_index_;  // per id: where in tally_.kept, or SIZE_MAX
   mutable std::mutex mutex_;
   std::condition_variable cv_;

@@ -126,8 +126,8 @@ Dataset control_rrbot_goals() {
   d.name = "control/rrbot_goals";
   d.description = description_of(d.name);
   d.rate_hz = 1.0 / 6.0;
-  auto goals = make_stream<msgs::JointTrajectory>("goals",
-                                                  "/joint_trajectory_controller/joint_trajectory");
+  auto goals =
+      make_stream<msgs::JointTrajectory>("goals", "/joint_trajectory_controller/joint_trajectory");
   for (auto& g : datasets::rrbot_goals()) append(goals, std::move(g));
   d.frames = goals.messages.size();
   d.streams.push_back(std::move(goals));

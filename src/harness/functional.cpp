@@ -89,10 +89,10 @@ std::vector<uint64_t> functional_sample_ids(std::size_t count, std::size_t warmu
   return ids;
 }
 
-FunctionalResult evaluate_functional(
-    const FunctionalSpec& spec, const Dataset& dataset,
-    const std::vector<std::pair<uint64_t, rmw::MessagePtr>>& kept, std::size_t requested,
-    const std::map<uint64_t, rmw::MessagePtr>& observed_truth) {
+FunctionalResult evaluate_functional(const FunctionalSpec& spec, const Dataset& dataset,
+                                     const std::vector<std::pair<uint64_t, rmw::MessagePtr>>& kept,
+                                     std::size_t requested,
+                                     const std::map<uint64_t, rmw::MessagePtr>& observed_truth) {
   FunctionalResult r;
   r.evaluator = spec.evaluator;
   r.requested = requested;
@@ -105,7 +105,8 @@ FunctionalResult evaluate_functional(
       evaluator->add(msg.get(), static_cast<std::size_t>(id % frames));
     } else {
       auto truth = observed_truth.find(id);
-      evaluator->add_observed(msg.get(), truth == observed_truth.end() ? nullptr : truth->second.get(),
+      evaluator->add_observed(msg.get(),
+                              truth == observed_truth.end() ? nullptr : truth->second.get(),
                               static_cast<std::size_t>(id % frames));
     }
     ++r.evaluated;

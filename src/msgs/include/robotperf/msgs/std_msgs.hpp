@@ -90,8 +90,8 @@ struct MessageTraits<Float64MultiArray> {
   static int64_t id_ns(const Float64MultiArray& m) {
     if (m.layout.dim.empty()) return -1;
     const std::string& label = m.layout.dim.front().label;
-    if (label.size() <= kMessageIdLabel.size() || label.compare(0, kMessageIdLabel.size(),
-                                                                kMessageIdLabel) != 0)
+    if (label.size() <= kMessageIdLabel.size() ||
+        label.compare(0, kMessageIdLabel.size(), kMessageIdLabel) != 0)
       return -1;
     int64_t value = 0;
     for (std::size_t i = kMessageIdLabel.size(); i < label.size(); ++i) {

@@ -2,8 +2,8 @@
 // name, create, serialize and deserialize messages without knowing their C++ type.
 #pragma once
 
-#include <cstddef>
 #include <concepts>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <span>
