@@ -122,10 +122,18 @@ fs::path self_executable() {
 int list_benchmarks(const fs::path& root) {
   std::vector<std::string> broken;
   const auto specs = harness::discover_benchmarks(root, &broken);
-  std::printf("%-5s %-30s %-12s %s\n", "id", "name", "category", "description");
+  // Columns as wide as their longest entry.
+  int id_width = 2, name_width = 4, category_width = 8;
   for (const auto& s : specs) {
-    std::printf("%-5s %-30s %-12s %s\n", s.id.c_str(), s.name.c_str(), s.category.c_str(),
-                s.short_description.c_str());
+    id_width = std::max(id_width, static_cast<int>(s.id.size()));
+    name_width = std::max(name_width, static_cast<int>(s.name.size()));
+    category_width = std::max(category_width, static_cast<int>(s.category.size()));
+  }
+  std::printf("%-*s  %-*s  %-*s  %s\n", id_width, "id", name_width, "name", category_width,
+              "category", "description");
+  for (const auto& s : specs) {
+    std::printf("%-*s  %-*s  %-*s  %s\n", id_width, s.id.c_str(), name_width, s.name.c_str(),
+                category_width, s.category.c_str(), s.short_description.c_str());
   }
   for (const auto& b : broken)
     std::fprintf(stderr, "robotperf: skipped broken package: %s\n", b.c_str());
@@ -177,7 +185,8 @@ int describe_benchmark(const fs::path& root, const std::string& id) {
 
 struct RunArgs {
   std::string id;
-  std::optional<std::string> rate;  // Hz, or "bag"
+  std::optional<std::string> rate;    // Hz, or "bag"
+  std::optional<double> update_rate;  // Hz: the controller managers' loop rate
   std::optional<double> duration, drain;
   std::optional<std::string> dataset, window;
   std::vector<std::string> remaps;
@@ -247,6 +256,7 @@ int run(const fs::path& root, const RunArgs& a) {
     if (used == 0 || used != a.rate->size())
       throw std::invalid_argument("--rate " + *a.rate + ": expected a rate in Hz or 'bag'");
   }
+  o.update_rate_hz = a.update_rate;
   o.count = a.count;
   o.duration_s = a.duration;
   o.warmup = a.warmup;
@@ -538,6 +548,9 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--rate", ra.rate,
                       "input rate in Hz (default: the benchmark's), or 'bag': the bag's own "
                       "timeline");
+  run_cmd->add_option("--update-rate", ra.update_rate,
+                      "control benchmarks: the controller manager's loop rate in Hz (default: "
+                      "the graph's update_rate), e.g. 1000 to stress the loop");
   run_cmd->add_option("--rate-scale", ra.rate_scale, "with --rate bag: play this many times faster")
       ->check(CLI::PositiveNumber);
   auto* dataset_opt = run_cmd->add_option(
@@ -695,6 +708,8 @@ int main(int argc, char** argv) {
   node_cmd->add_option("--node", node_name)->required();
   node_cmd->add_option("--rmw", node_rmw);
   node_cmd->add_option("--domain", node_domain);
+  std::optional<double> node_update_rate;
+  node_cmd->add_option("--update-rate", node_update_rate);
   SchedulingArgs node_scheduling;
   add_scheduling_options(node_cmd, node_scheduling);
 
@@ -741,9 +756,12 @@ int main(int argc, char** argv) {
       std::cout << description.dump(2) << "\n";
       return kExitOk;
     }
-    if (*node_cmd)
-      return harness::run_node_process(harness::load_benchmark(node_package), node_name, node_rmw,
-                                       node_domain, node_scheduling.options());
+    if (*node_cmd) {
+      harness::BenchmarkSpec spec = harness::load_benchmark(node_package);
+      if (node_update_rate) harness::override_update_rate(spec, *node_update_rate);
+      return harness::run_node_process(spec, node_name, node_rmw, node_domain,
+                                       node_scheduling.options());
+    }
   } catch (const harness::RunRefused& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
     return kExitRefused;

@@ -3,7 +3,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cmath>
 #include <set>
+#include <sstream>
 
 namespace robotperf::harness {
 namespace {
@@ -95,13 +97,14 @@ BoundaryTopic boundary_topic(const YamlFile& file, const YAML::Node& n, bool is_
   if (is_input) {
     file.allow_keys(n, {"topic", "type", "stream", "qos"});
   } else {
-    file.allow_keys(n, {"topic", "type", "qos"});
+    file.allow_keys(n, {"topic", "type", "qos", "state"});
   }
   BoundaryTopic t;
   t.topic = file.require_string(n, "topic");
   t.type = file.require_string(n, "type");
   if (is_input) t.stream = file.require_string(n, "stream");
   t.qos = file.qos(n);
+  if (!is_input) t.state = file.get<bool>(n, "state", false);
   try {
     rmw::dds_topic_name(t.topic);
   } catch (const std::invalid_argument& e) {
@@ -162,7 +165,7 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   }
 
   if (const YAML::Node f = root["functional"]; f.IsDefined()) {
-    file.allow_keys(f, {"evaluator", "truth", "sample"});
+    file.allow_keys(f, {"evaluator", "truth", "sample", "observed_truth"});
     FunctionalSpec functional;
     functional.evaluator = file.require_string(f, "evaluator");
     const EvaluatorInfo* info = find_evaluator(functional.evaluator);
@@ -188,6 +191,13 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
       }
     }
     functional.sample = file.get<std::size_t>(f, "sample", functional.sample);
+    functional.observed_truth_topic = file.get<std::string>(f, "observed_truth", "");
+    if (info->observed_truth_type.empty() != functional.observed_truth_topic.empty()) {
+      file.fail(f, info->observed_truth_type.empty()
+                       ? "evaluator " + info->name + " takes no observed_truth topic"
+                       : "evaluator " + info->name + " needs an observed_truth topic (" +
+                             info->observed_truth_type + ")");
+    }
     spec.functional = std::move(functional);
   }
 }
@@ -293,6 +303,26 @@ kernels::KernelConfig kernel_config(const NodeSpec& node) {
   config.topics = node.topics;
   config.qos = node.qos;
   return config;
+}
+
+void override_update_rate(BenchmarkSpec& spec, double hz) {
+  // Beyond 100 kHz the period (10 us) is shorter than one cycle's wake-up on a general-purpose OS.
+  if (!std::isfinite(hz) || !(hz > 0) || hz > 100'000)
+    throw std::invalid_argument("--update-rate must be a rate in Hz, above 0 and at most 100000");
+  bool found = false;
+  for (auto& n : spec.nodes) {
+    if (!n.kernel.starts_with("control/")) continue;
+    std::ostringstream text;
+    text.precision(17);
+    text << hz;
+    n.parameters["update_rate"] = text.str();
+    found = true;
+  }
+  if (!found)
+    throw std::invalid_argument(
+        "--update-rate applies to control benchmarks (a controller "
+        "manager's loop); " +
+        spec.id + " has none");
 }
 
 }  // namespace robotperf::harness

@@ -168,7 +168,8 @@ Monitor::Monitor(graph::Context& context, const BoundaryTopic& output, MessageId
       type_(&type_support_by_name(output.type, output.topic)),
       topic_(output.topic),
       ids_(ids),
-      warmup_(warmup) {
+      warmup_(warmup),
+      state_(output.state) {
   tally_.received_ns.assign(ids_.count, -1);
   // The Monitor keeps everything the graph delivered: a briefly starved
   // Monitor must not turn into loss charged to the graph under test.
@@ -201,11 +202,20 @@ void Monitor::on_message(const rmw::MessagePtr& msg, bool shared_with_graph, int
     if (!id) {
       ++tally_.unknown;
     } else if (tally_.received_ns[*id] >= 0) {
-      ++tally_.duplicates;
+      if (!state_) {
+        ++tally_.duplicates;
+      } else {
+        ++tally_.repeats;
+        // A state stream: the latest state reflecting this command is what is judged.
+        if (kept) tally_.kept[kept_index_[*id]].second = std::move(kept);
+      }
     } else {
       tally_.received_ns[*id] = now_ns;
       if (*id >= warmup_) ++tally_.received_measured;
-      if (kept) tally_.kept.emplace_back(*id, std::move(kept));
+      if (kept) {
+        kept_index_[*id] = tally_.kept.size();
+        tally_.kept.emplace_back(*id, std::move(kept));
+      }
     }
   }
   cv_.notify_all();
@@ -214,10 +224,23 @@ void Monitor::on_message(const rmw::MessagePtr& msg, bool shared_with_graph, int
 void Monitor::keep_outputs(const std::vector<uint64_t>& ids) {
   std::lock_guard lock(mutex_);
   keep_.assign(ids_.count, false);
+  kept_index_.assign(ids_.count, SIZE_MAX);
   for (uint64_t id : ids) {
     if (id < ids_.count) keep_[id] = true;
   }
   tally_.kept.reserve(ids.size());
+}
+
+void Monitor::keep_observed_truth(const std::string& topic, const msgs::TypeSupport& type) {
+  rmw::QoS qos;
+  qos.history = rmw::History::kKeepAll;
+  node_->create_generic_subscription(topic, type, qos,
+                                     [this, &type](rmw::MessagePtr m, const graph::MessageInfo&) {
+                                       const auto id = ids_.id_of(type.stamp_ns(m.get()));
+                                       std::lock_guard lock(mutex_);
+                                       if (id && !keep_.empty() && keep_[*id])
+                                         tally_.observed_truth[*id] = std::move(m);
+                                     });
 }
 
 bool Monitor::wait_for(std::size_t expected, int64_t deadline_ns) {

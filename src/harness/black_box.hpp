@@ -5,6 +5,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -76,6 +77,9 @@ class Monitor {
   // Keeps the first reception of each of `ids` for the functional evaluation: a copy of a
   // message shared with the graph (intra), else the message itself. Call before the run starts.
   void keep_outputs(const std::vector<uint64_t>& ids);
+  // Also subscribes `topic` (messages of `type` stamped with IDs) and keeps, for the IDs given to
+  // keep_outputs, the last message of each: the truth observed during the run. Before the run.
+  void keep_observed_truth(const std::string& topic, const msgs::TypeSupport& type);
 
   // Waits until `expected` measured messages arrived or `deadline_ns` passes.
   bool wait_for(std::size_t expected, int64_t deadline_ns);
@@ -86,6 +90,9 @@ class Monitor {
     std::size_t duplicates = 0;
     std::size_t unknown = 0;
     std::vector<std::pair<uint64_t, rmw::MessagePtr>> kept;  // by keep_outputs, in arrival order
+    // State outputs: receptions of an ID already received (not duplicates).
+    std::size_t repeats = 0;
+    std::map<uint64_t, rmw::MessagePtr> observed_truth;  // by keep_observed_truth
   };
   Tally tally() const;
   std::size_t received() const;
@@ -98,7 +105,9 @@ class Monitor {
   std::string topic_;
   MessageIds ids_;
   std::size_t warmup_;
-  std::vector<bool> keep_;  // per id
+  bool state_;
+  std::vector<bool> keep_;               // per id
+  std::vector<std::size_t> kept_index_;  // per id: where in tally_.kept, or SIZE_MAX
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   Tally tally_;

@@ -3,7 +3,9 @@
 #include <map>
 #include <mutex>
 #include <stdexcept>
+#include <utility>
 
+#include "robotperf/datasets/control_commands.hpp"
 #include "robotperf/datasets/hash.hpp"
 #include "robotperf/datasets/synthetic_camera.hpp"
 #include "robotperf/datasets/synthetic_depth.hpp"
@@ -122,6 +124,52 @@ Dataset perception_depth() {
   return d;
 }
 
+Dataset control_rrbot_goals() {
+  Dataset d;
+  d.name = "control/rrbot_goals";
+  d.description = description_of(d.name);
+  d.rate_hz = 1.0 / 6.0;
+  auto goals =
+      make_stream<msgs::JointTrajectory>("goals", "/joint_trajectory_controller/joint_trajectory");
+  for (auto& g : datasets::rrbot_goals()) append(goals, std::move(g));
+  d.frames = goals.messages.size();
+  d.streams.push_back(std::move(goals));
+  d.hash = content_hash(d.streams);
+  return d;
+}
+
+Dataset control_diffbot_cmd_vel() {
+  Dataset d;
+  d.name = "control/diffbot_cmd_vel";
+  d.description = description_of(d.name);
+  d.rate_hz = 5.0;
+  auto cmd = make_stream<msgs::TwistStamped>("cmd_vel", "/diff_drive_controller/cmd_vel");
+  for (auto& c : datasets::diffbot_commands(d.rate_hz, 100)) append(cmd, std::move(c));
+  d.frames = cmd.messages.size();
+  d.streams.push_back(std::move(cmd));
+  d.hash = content_hash(d.streams);
+  return d;
+}
+
+Dataset control_rrbot_commands() {
+  Dataset d;
+  d.name = "control/rrbot_commands";
+  d.description = description_of(d.name);
+  d.rate_hz = 50.0;
+  using datasets::CommandInterface;
+  for (auto [name, kind] : {std::pair{"position", CommandInterface::kPosition},
+                            std::pair{"velocity", CommandInterface::kVelocity},
+                            std::pair{"acceleration", CommandInterface::kAcceleration}}) {
+    auto s = make_stream<msgs::Float64MultiArray>(
+        name, std::string("/forward_") + name + "_controller/commands");
+    for (auto& c : datasets::rrbot_commands(kind, d.rate_hz, 100)) append(s, std::move(c));
+    d.frames = s.messages.size();
+    d.streams.push_back(std::move(s));
+  }
+  d.hash = content_hash(d.streams);
+  return d;
+}
+
 }  // namespace
 
 const DatasetStream& Dataset::stream(const std::string& stream_name) const {
@@ -149,6 +197,18 @@ const std::vector<DatasetInfo>& builtin_datasets() {
        "0.05-8 m; ray-cast room with moving boxes and a doorway beyond range; streams depth "
        "(32FC1 m, NaN = none), depth_mm (16UC1 mm, 0 = none), image, camera_info and the ground "
        "truth depth_truth (64FC1 true depth)"},
+      {"control/rrbot_goals",
+       "the RRBot demo's joint trajectory goals, one point each (zero velocity and acceleration: "
+       "quintic), [0.785, 0.785] -> [0, 0] -> [-0.785, -0.785] -> [0, 0], 4 s to reach each, one "
+       "goal every 6 s; stream goals (trajectory_msgs/JointTrajectory)"},
+      {"control/diffbot_cmd_vel",
+       "DiffBot velocity commands, 5 Hz, 100 frames (20 s): linear.x = 0.25 + 0.2 sin(2 pi t / "
+       "10 s) m/s with a +0.5 m/s step in the first second of every 10 s, angular.z = 0.6 sin(2 "
+       "pi t / 5 s) rad/s; stream cmd_vel (geometry_msgs/TwistStamped)"},
+      {"control/rrbot_commands",
+       "2-joint forward commands, 50 Hz, 100 frames (2 s period): streams position (0.5 sin(pi "
+       "t), -0.5 sin(pi t)) rad, velocity (0.5 cos(pi t), ...) rad/s, acceleration (0.5 sin(pi "
+       "t), ...) rad/s^2 (std_msgs/Float64MultiArray, the message ID in layout.dim[0].label)"},
   };
   return infos;
 }
@@ -167,6 +227,12 @@ Dataset load_dataset(const std::string& name) {
     d = perception_stereo();
   } else if (name == "perception/depth") {
     d = perception_depth();
+  } else if (name == "control/rrbot_goals") {
+    d = control_rrbot_goals();
+  } else if (name == "control/diffbot_cmd_vel") {
+    d = control_diffbot_cmd_vel();
+  } else if (name == "control/rrbot_commands") {
+    d = control_rrbot_commands();
   } else {
     std::string names;
     for (const auto& d : builtin_datasets()) names += (names.empty() ? "" : ", ") + d.name;

@@ -20,4 +20,11 @@ std::unique_ptr<FunctionalEvaluator> make_stereo_disparity_evaluator(const Truth
 EvaluatorInfo depth_point_cloud_info();
 std::unique_ptr<FunctionalEvaluator> make_depth_point_cloud_evaluator(const TruthStreams& truth);
 
+EvaluatorInfo joint_trajectory_goals_info();
+std::unique_ptr<FunctionalEvaluator> make_joint_trajectory_goals_evaluator(
+    const TruthStreams& truth);
+
+EvaluatorInfo diff_drive_odometry_info();
+std::unique_ptr<FunctionalEvaluator> make_diff_drive_odometry_evaluator(const TruthStreams& truth);
+
 }  // namespace robotperf::harness

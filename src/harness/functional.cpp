@@ -20,6 +20,8 @@ const std::vector<Entry>& entries() {
   static const std::vector<Entry> table{
       {stereo_disparity_info(), make_stereo_disparity_evaluator},
       {depth_point_cloud_info(), make_depth_point_cloud_evaluator},
+      {joint_trajectory_goals_info(), make_joint_trajectory_goals_evaluator},
+      {diff_drive_odometry_info(), make_diff_drive_odometry_evaluator},
   };
   return table;
 }
@@ -89,7 +91,8 @@ std::vector<uint64_t> functional_sample_ids(std::size_t count, std::size_t warmu
 
 FunctionalResult evaluate_functional(const FunctionalSpec& spec, const Dataset& dataset,
                                      const std::vector<std::pair<uint64_t, rmw::MessagePtr>>& kept,
-                                     std::size_t requested) {
+                                     std::size_t requested,
+                                     const std::map<uint64_t, rmw::MessagePtr>& observed_truth) {
   FunctionalResult r;
   r.evaluator = spec.evaluator;
   r.requested = requested;
@@ -98,7 +101,14 @@ FunctionalResult evaluate_functional(const FunctionalSpec& spec, const Dataset& 
   const std::size_t frames =
       TruthStreams{&spec, &dataset}[info.truth_roles.front()].messages.size();
   for (const auto& [id, msg] : kept) {
-    evaluator->add(msg.get(), static_cast<std::size_t>(id % frames));
+    if (info.observed_truth_type.empty()) {
+      evaluator->add(msg.get(), static_cast<std::size_t>(id % frames));
+    } else {
+      auto truth = observed_truth.find(id);
+      evaluator->add_observed(msg.get(),
+                              truth == observed_truth.end() ? nullptr : truth->second.get(),
+                              static_cast<std::size_t>(id % frames));
+    }
     ++r.evaluated;
   }
   const auto values = evaluator->metrics();

@@ -220,7 +220,8 @@ EvaluatorInfo stereo_disparity_info() {
           {"disparity"},
           {{"valid_fraction", "fraction", "pixels with a disparity in the search range"},
            {"bad1", "fraction", "valid pixels more than 1 px off the truth (bad-1)"},
-           {"mae_px", "px", "mean absolute disparity error of the valid pixels"}}};
+           {"mae_px", "px", "mean absolute disparity error of the valid pixels"}},
+          ""};
 }
 
 std::unique_ptr<FunctionalEvaluator> make_stereo_disparity_evaluator(const TruthStreams& truth) {
@@ -236,7 +237,8 @@ EvaluatorInfo depth_point_cloud_info() {
            {"mean_error_m", "m", "mean distance of valid points to the true point"},
            {"max_error_m", "m", "largest distance of a valid point to the true point"},
            {"spurious_fraction", "fraction", "pixels without depth that the cloud has a point for"},
-           {"colour_match", "fraction", "valid points whose rgb equals the colour pixel"}}};
+           {"colour_match", "fraction", "valid points whose rgb equals the colour pixel"}},
+          ""};
 }
 
 std::unique_ptr<FunctionalEvaluator> make_depth_point_cloud_evaluator(const TruthStreams& truth) {

@@ -17,6 +17,25 @@ double events_per_frame(const BenchmarkSpec& spec) {
   return 6.0 * static_cast<double>(ports) + 2.0 * static_cast<double>(spec.nodes.size()) + 4.0;
 }
 
+// Events of the control loops, per second, whatever the message rate: a begin and an end per
+// controller update, two controllers at most per controller manager.
+double control_loop_events_per_second(const BenchmarkSpec& spec) {
+  double events = 0;
+  for (const auto& n : spec.nodes) {
+    if (!n.kernel.starts_with("control/")) continue;
+    double rate_hz = 100;  // the controller manager's default
+    if (auto p = n.parameters.find("update_rate"); p != n.parameters.end()) {
+      try {
+        rate_hz = std::stod(p->second);
+      } catch (const std::exception&) {
+        // The kernel refuses the value with a clear message when it starts.
+      }
+    }
+    events += 4.0 * rate_hz;
+  }
+  return events;
+}
+
 }  // namespace
 
 GreyBoxRecording::GreyBoxRecording(const BenchmarkSpec& spec, const RunOptions& options,
@@ -27,7 +46,8 @@ GreyBoxRecording::GreyBoxRecording(const BenchmarkSpec& spec, const RunOptions& 
   s.name_hint = spec.id;
   s.subbuf_bytes = options.trace_subbuf_bytes != 0
                        ? options.trace_subbuf_bytes
-                       : tracing::subbuffer_bytes_for(result.rate_hz * events_per_frame(spec));
+                       : tracing::subbuffer_bytes_for(result.rate_hz * events_per_frame(spec) +
+                                                      control_loop_events_per_second(spec));
   session_ = std::make_unique<tracing::RecordingSession>(s);
   result.trace_dir = session_->output_dir();
   result.trace_subbuf_bytes = session_->subbuf_bytes();

@@ -146,6 +146,8 @@ void NodeProcesses::on_line(Child& child, const std::string& line) {
           if (value.is_number_unsigned()) child.report.counters[name] = value.get<uint64_t>();
         }
       }
+      if (const auto loop = j.find("control_loop"); loop != j.end() && loop->is_object())
+        child.control_loop = *loop;
     }
   }
 }
@@ -191,6 +193,15 @@ std::vector<std::pair<int, std::string>> NodeProcesses::processes() const {
   std::lock_guard lock(mutex_);
   std::vector<std::pair<int, std::string>> out;
   for (const auto& c : children_) out.emplace_back(c.report.pid, c.name);
+  return out;
+}
+
+std::vector<nlohmann::json> NodeProcesses::control_loops() const {
+  std::lock_guard lock(mutex_);
+  std::vector<nlohmann::json> out;
+  for (const auto& c : children_) {
+    if (!c.control_loop.is_null()) out.push_back(c.control_loop);
+  }
   return out;
 }
 

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 #include <vector>
@@ -35,6 +36,9 @@ class NodeProcesses {
   // Asks every child to finish (closes its stdin), collects its report, and
   // kills those that do not exit within `grace_s`.
   std::vector<NodeReport> shutdown(double grace_s);
+  // After shutdown(): the control loop reports the children sent (see control_loop.hpp), in the
+  // order of the graph's nodes.
+  std::vector<nlohmann::json> control_loops() const;
 
  private:
   struct Child {
@@ -47,6 +51,7 @@ class NodeProcesses {
     bool ready = false;
     bool eof = false;
     NodeReport report;
+    nlohmann::json control_loop;  // null unless its kernel runs a control loop
   };
   void supervise();
   void on_line(Child& child, const std::string& line);

@@ -7,16 +7,21 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include "black_box.hpp"
+#include "control_loop.hpp"
 #include "grey_box.hpp"
 #include "measurement.hpp"
 #include "node_processes.hpp"
 #include "robotperf/graph/executor.hpp"
+#include "robotperf/msgs/known_types.hpp"
 
 namespace robotperf::harness {
 namespace {
@@ -147,8 +152,15 @@ void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& ta
 
 }  // namespace
 
-RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
+RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& options) {
+  std::optional<BenchmarkSpec> overridden;
+  if (options.update_rate_hz) {
+    overridden = package_spec;
+    override_update_rate(*overridden, *options.update_rate_hz);
+  }
+  const BenchmarkSpec& spec = overridden ? *overridden : package_spec;
   RunResult r;
+  r.update_rate_hz = options.update_rate_hz;
   r.benchmark_id = spec.id;
   r.benchmark_name = spec.name;
   r.category = spec.category;
@@ -235,6 +247,14 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
     make_evaluator(*spec.functional, dataset);  // a missing truth stream fails before timing
     functional_ids = functional_sample_ids(r.count, r.warmup, spec.functional->sample);
     monitor.keep_outputs(functional_ids);
+    if (const auto& topic = spec.functional->observed_truth_topic; !topic.empty()) {
+      const std::string& type = find_evaluator(spec.functional->evaluator)->observed_truth_type;
+      const msgs::TypeSupport* ts = nullptr;
+      msgs::with_message_type(type, [&]<class T>() { ts = &msgs::type_support<T>(); });
+      if (ts == nullptr || !ts->stamped())
+        throw BenchmarkError("observed truth type " + type + " cannot carry message IDs");
+      monitor.keep_observed_truth(topic, *ts);
+    }
   }
   graph::Executor monitor_executor(1);
   monitor_executor.add_node(monitor.node());
@@ -252,9 +272,16 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
       r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1, {}});
     }
   } else {
-    children =
-        std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw, options.domain_id,
-                                        options.scheduling.node_arguments());
+    std::vector<std::string> node_arguments = options.scheduling.node_arguments();
+    if (options.update_rate_hz) {
+      // The children load the package themselves: they get the override to apply.
+      std::ostringstream hz;
+      hz.precision(17);
+      hz << *options.update_rate_hz;
+      node_arguments.insert(node_arguments.end(), {"--update-rate", hz.str()});
+    }
+    children = std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw,
+                                               options.domain_id, node_arguments);
   }
   std::vector<metrics::ResourceMonitor::Process> graph_processes;
   if (children) {
@@ -299,7 +326,10 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   trace_run_end(r.records.size());
 
   // Drain: wait for the outstanding outputs, at most drain_s after the last send.
-  const std::size_t expected = r.records.size() > r.warmup ? r.records.size() - r.warmup : 0;
+  // A state output keeps reporting after the first reception of each ID: wait the whole drain.
+  const std::size_t expected = spec.output.state             ? SIZE_MAX
+                               : r.records.size() > r.warmup ? r.records.size() - r.warmup
+                                                             : 0;
   const int64_t last_send = r.records.empty() ? rmw::steady_now_ns() : r.records.back().sent_ns;
   monitor.wait_for(expected, last_send + static_cast<int64_t>(r.drain_s * 1e9));
   measurement.end(r);
@@ -308,14 +338,31 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   if (std::string f = failure(); !f.empty()) r.errors.push_back(f);
   graph_executor.stop();
   monitor_executor.stop();
-  if (children) r.nodes = children->shutdown(5.0);
+  if (children) {
+    r.nodes = children->shutdown(5.0);
+    for (const auto& wire : children->control_loops()) {
+      try {
+        r.control_loops.push_back(control_loop_from_wire(wire, ids, r.records, r.warmup));
+      } catch (const nlohmann::json::exception& e) {
+        r.errors.push_back("malformed control loop report from a node process: " +
+                           std::string(e.what()));
+      }
+    }
+  }
   for (std::size_t i = 0; i < kernel_nodes.size(); ++i) {
+    if (auto* loop = dynamic_cast<kernels::ControlLoopSource*>(kernel_nodes[i].get())) {
+      const control::LoopReport report = loop->stop_and_report();
+      ControlLoopResult c = control_loop_timing(report);
+      c.command_to_write = command_to_write(report.writes, ids, r.records, r.warmup);
+      r.control_loops.push_back(std::move(c));
+    }
     if (const auto* c = dynamic_cast<const kernels::NodeCounters*>(kernel_nodes[i].get())) {
       r.nodes[i].counters = c->counters();
     }
   }
   r.completed = r.records.size() == r.count && r.errors.empty();
   summarise(r, spec, tally);
+  r.repeats = tally.repeats;
   // Grey-box: counts, latencies and validity come from the trace.
   if (grey) grey->finish(r);
   if (r.resources.other_cpu_percent &&
@@ -333,8 +380,8 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
   }
   // After timing: the evaluation costs nothing the run measured.
   if (evaluate_outputs) {
-    r.functional =
-        evaluate_functional(*spec.functional, dataset, tally.kept, functional_ids.size());
+    r.functional = evaluate_functional(*spec.functional, dataset, tally.kept, functional_ids.size(),
+                                       tally.observed_truth);
   }
   return r;
 }
@@ -392,15 +439,17 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   auto seconds = [](timeval tv) { return static_cast<double>(tv.tv_sec) + tv.tv_usec * 1e-6; };
-  std::string counters;
+  nlohmann::json stats = {{"cpu_user_s", seconds(usage.ru_utime)},
+                          {"cpu_system_s", seconds(usage.ru_stime)},
+                          {"counters", nlohmann::json::object()}};
+  // The loop's metrics are read here, where the loop ran, and go to the runner with the stats;
+  // stopping the loop first, so that the counters below are not read while it runs.
+  if (auto* loop = dynamic_cast<kernels::ControlLoopSource*>(node.get()))
+    stats["control_loop"] = control_loop_to_wire(loop->stop_and_report());
   if (const auto* c = dynamic_cast<const kernels::NodeCounters*>(node.get())) {
-    for (const auto& [name, value] : c->counters()) {
-      counters += (counters.empty() ? "\"" : ",\"") + name + "\":" + std::to_string(value);
-    }
+    for (const auto& [name, value] : c->counters()) stats["counters"][name] = value;
   }
-  std::cout << "stats {\"cpu_user_s\":" << seconds(usage.ru_utime)
-            << ",\"cpu_system_s\":" << seconds(usage.ru_stime) << ",\"counters\":{" << counters
-            << "}}" << std::endl;
+  std::cout << "stats " << stats.dump() << std::endl;
   return code;
 }
 

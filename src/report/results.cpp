@@ -208,6 +208,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"executor_threads", r.executor_threads},
         {"output_topic", r.output_topic},
         {"domain_id", r.domain_id},
+        {"update_rate_hz", r.update_rate_hz ? json(*r.update_rate_hz) : json(nullptr)},
         {"scheduling", scheduling}}},
       {"dataset", {{"name", r.dataset}, {"hash", r.dataset_hash}, {"frames", r.dataset_frames}}},
       {"machine", sysinfo::to_json(machine)},
@@ -220,7 +221,8 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"lost", r.lost},
         {"loss_percent", r.loss_percent},
         {"duplicates", r.duplicates},
-        {"unknown", r.unknown}}},
+        {"unknown", r.unknown},
+        {"repeats", r.repeats}}},
       {"latency_ms",
        {{"from_scheduled", from_scheduled},
         {"from_sent", metrics::to_json(r.latency_from_sent, 1.0 / kNsPerMs, "ms")},
@@ -239,6 +241,26 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"validity", {{"valid", r.valid}, {"reasons", r.invalid_reasons}}},
       {"functional", functional_json(r.functional)},
   };
+  if (!r.control_loops.empty()) {
+    json loops = json::array();
+    const double us = 1e-3;
+    for (const auto& c : r.control_loops) {
+      loops.push_back(
+          {{"node", c.node},
+           {"update_rate_hz", c.update_rate_hz},
+           {"cpu", c.cpu >= 0 ? json(c.cpu) : json(nullptr)},
+           {"rt_priority", c.rt_priority ? json(c.rt_priority) : json(nullptr)},
+           {"cycles", c.cycles},
+           {"recorded_cycles", c.recorded_cycles},
+           {"deadline_misses", c.deadline_misses},
+           {"update_duration_us", metrics::to_json(c.update_duration, us, "us")},
+           {"cycle_duration_us", metrics::to_json(c.cycle_duration, us, "us")},
+           {"period_jitter_us", metrics::to_json(c.period_jitter, us, "us")},
+           {"wake_latency_us", metrics::to_json(c.wake_latency, us, "us")},
+           {"command_to_write_ms", metrics::to_json(c.command_to_write, 1.0 / kNsPerMs, "ms")}});
+    }
+    out["control_loops"] = loops;
+  }
   if (r.grey) {
     // Grey-box: where the trace is and what it says beyond end-to-end latency.
     out["grey"] = tracing::to_json(*r.grey);
@@ -281,6 +303,7 @@ std::string summary_table(const harness::RunResult& r) {
       << " %)";
   if (r.duplicates) out << ", duplicates " << r.duplicates;
   if (r.unknown) out << ", unknown " << r.unknown;
+  if (r.repeats) out << ", state repeats " << r.repeats;
   out << "\n\n";
   char line[256];
   std::snprintf(line, sizeof line, "%-24s %9s %9s %9s %9s %9s %9s %9s %9s\n", "latency (ms)", "min",
@@ -296,11 +319,33 @@ std::string summary_table(const harness::RunResult& r) {
   row("from scheduled send", r.latency_from_scheduled);
   row("from actual send", r.latency_from_sent);
   row("send lateness", r.send_lateness);
+  for (const auto& c : r.control_loops) {
+    row("command -> hw write", c.command_to_write);
+  }
   out << "\nthroughput: " << fixed(r.throughput_hz, 3) << " Hz out, " << fixed(r.offered_rate_hz, 3)
       << " Hz offered\n";
   if (r.grey) out << "\n" << tracing::breakdown_table(*r.grey) << "\n";
   out << "headline (RobotPerf): latency " << fixed(r.latency_from_scheduled.max / kNsPerMs, 3)
       << " ms (max), throughput " << fixed(r.throughput_hz, 3) << " Hz\n";
+  for (const auto& c : r.control_loops) {
+    out << "\ncontrol loop " << c.node << " at " << fixed(c.update_rate_hz, 1) << " Hz"
+        << (c.cpu >= 0 ? ", CPU " + std::to_string(c.cpu) : std::string())
+        << (c.rt_priority ? ", SCHED_FIFO " + std::to_string(c.rt_priority) : std::string()) << ": "
+        << c.cycles << " cycles, deadline misses " << c.deadline_misses << "\n";
+    std::snprintf(line, sizeof line, "%-24s %9s %9s %9s %9s %9s\n", "  loop (us)", "mean", "p50",
+                  "p99", "max", "min");
+    out << line;
+    auto loop_row = [&](const char* name, const metrics::SampleStats& s) {
+      auto v = [](double ns) { return fixed(ns / 1e3, 1); };
+      std::snprintf(line, sizeof line, "  %-22s %9s %9s %9s %9s %9s\n", name, v(s.mean).c_str(),
+                    v(s.p50).c_str(), v(s.p99).c_str(), v(s.max).c_str(), v(s.min).c_str());
+      out << line;
+    };
+    loop_row("controller update", c.update_duration);
+    loop_row("cycle (read-update-write)", c.cycle_duration);
+    loop_row("period jitter", c.period_jitter);
+    loop_row("wake-up latency", c.wake_latency);
+  }
   out << power_line(r) << resources_line(r);
   if (!r.warnings.empty()) {
     out << "warnings (run rules):\n";

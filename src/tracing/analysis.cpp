@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
+#include <tuple>
 #include <unordered_map>
 
 #include "robotperf/tracing/ctf.hpp"
@@ -45,6 +46,8 @@ enum class Handler : uint8_t {
   kCallbackEnd,
   kRmwPublish,
   kRmwTake,
+  kControllerUpdateBegin,
+  kControllerUpdateEnd,
 };
 
 struct Dispatch {
@@ -95,6 +98,12 @@ Dispatch dispatch_for(const ctf::EventClass& ec, const ctf::Trace& trace) {
       {"ros2:rmw_take",
        Handler::kRmwTake,
        {"rmw_subscription_handle", "source_timestamp", "taken"}},
+      {"robotperf:controller_update_begin",
+       Handler::kControllerUpdateBegin,
+       {"node", "controller", "cycle"}},
+      {"robotperf:controller_update_end",
+       Handler::kControllerUpdateEnd,
+       {"node", "controller", "cycle"}},
   };
   Dispatch d;
   for (const auto& s : specs) {
@@ -161,6 +170,13 @@ struct RmwEvent {
   uint64_t handle;
   int64_t stamp;
 };
+struct ControllerUpdateEvent {
+  int64_t ts;
+  int32_t vpid;
+  uint32_t node, controller;  // interned names
+  uint64_t cycle;
+  bool begin;
+};
 struct Endpoint {
   uint32_t topic;
   uint64_t node_handle;
@@ -185,6 +201,7 @@ struct Collected {
   std::vector<IdEvent> id_events;
   std::vector<CallbackEvent> callbacks;
   std::vector<RmwEvent> rmw_publishes, rmw_takes;
+  std::vector<ControllerUpdateEvent> controller_updates;
 
   HandleMap<std::string> node_names;
   HandleMap<Endpoint> publishers_by_rmw, subscriptions_by_handle, subscriptions_by_rmw;
@@ -314,6 +331,12 @@ void collect(ctf::Trace& trace, Collected& c, TraceAnalysis& a) {
         case Handler::kRmwTake:
           if (d->f[2] < 0 || field(2).as_int() != 0)
             c.rmw_takes.push_back({ts, vpid, field(0).u, field(1).as_int()});
+          break;
+        case Handler::kControllerUpdateBegin:
+        case Handler::kControllerUpdateEnd:
+          c.controller_updates.push_back({ts, vpid, c.intern(field(0).s), c.intern(field(1).s),
+                                          field(2).as_uint(),
+                                          d->handler == Handler::kControllerUpdateBegin});
           break;
       }
     });
@@ -591,6 +614,33 @@ void callback_durations(TraceAnalysis& a, Collected& c, const std::optional<RunI
     a.callbacks.push_back({key.first, key.second, metrics::compute_stats(d)});
 }
 
+// Controller update durations from robotperf:controller_update_begin/end, per controller manager
+// and controller: a begin and an end of the same cycle of the same loop make one update.
+void controller_update_durations(TraceAnalysis& a, Collected& c,
+                                 const std::optional<RunInfo>& run) {
+  std::vector<ControllerUpdateEvent> ev;
+  for (const auto& e : c.controller_updates) {
+    if (!run || run->processes.contains(e.vpid)) ev.push_back(e);
+  }
+  auto key = [](const ControllerUpdateEvent& e) {
+    return std::tuple(e.vpid, e.node, e.controller, e.cycle, !e.begin, e.ts);
+  };
+  std::sort(ev.begin(), ev.end(), [&](const auto& x, const auto& y) { return key(x) < key(y); });
+  std::map<std::pair<std::string, std::string>, std::vector<double>> acc;
+  for (std::size_t i = 0; i + 1 < ev.size(); ++i) {
+    const auto& b = ev[i];
+    const auto& e = ev[i + 1];
+    if (!b.begin || e.begin || b.vpid != e.vpid || b.node != e.node ||
+        b.controller != e.controller || b.cycle != e.cycle)
+      continue;
+    acc[{std::string(c.names[b.node]), std::string(c.names[b.controller])}].push_back(
+        static_cast<double>(e.ts - b.ts));
+    ++i;
+  }
+  for (auto& [k, d] : acc)
+    a.controller_updates.push_back({k.first, k.second, metrics::compute_stats(d)});
+}
+
 // rmw_publish -> rmw_take latencies, matched by topic and source timestamp.
 void topic_latencies(TraceAnalysis& a, Collected& c, const std::optional<RunInfo>& run) {
   struct PubKey {
@@ -693,6 +743,7 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
   }
   callback_durations(a, c, a.run);
   topic_latencies(a, c, a.run);
+  controller_update_durations(a, c, a.run);
 
   if (a.discarded_events > 0) {
     a.invalid_reasons.insert(
@@ -738,6 +789,12 @@ nlohmann::json to_json(const TraceAnalysis& a) {
                       {"subscriber", t.subscriber},
                       {"latency_ms", metrics::to_json(t.latency, 1.0 / kNsPerMs, "ms")}});
   }
+  json controller_updates = json::array();
+  for (const auto& u : a.controller_updates) {
+    controller_updates.push_back({{"node", u.node},
+                                  {"controller", u.controller},
+                                  {"duration_us", metrics::to_json(u.duration, 1e-3, "us")}});
+  }
   return {{"trace",
            {{"folders", a.traces},
             {"streams", a.streams},
@@ -749,7 +806,8 @@ nlohmann::json to_json(const TraceAnalysis& a) {
             {"analysis_s", a.read_seconds}}},
           {"hops", hops},
           {"callbacks", callbacks},
-          {"topics", topics}};
+          {"topics", topics},
+          {"controller_updates", controller_updates}};
 }
 
 std::string breakdown_table(const TraceAnalysis& a) {
@@ -779,6 +837,20 @@ std::string breakdown_table(const TraceAnalysis& a) {
     header("publish -> take (ms), rmw_publish to rmw_take");
     for (const auto& t : a.topics)
       row(t.topic + ": " + t.publisher + " -> " + t.subscriber, t.latency);
+    out << "\n";
+  }
+  if (!a.controller_updates.empty()) {
+    std::snprintf(line, sizeof line, "%-58s %8s %9s %9s %9s %9s\n",
+                  "controller update durations (us)", "count", "mean", "p50", "p99", "max");
+    out << line;
+    auto us = [](double ns) { return fixed(ns / 1e3, 1); };
+    for (const auto& u : a.controller_updates) {
+      const auto& s = u.duration;
+      std::snprintf(line, sizeof line, "%-58s %8zu %9s %9s %9s %9s\n",
+                    (u.node + "  " + u.controller).c_str(), s.count, us(s.mean).c_str(),
+                    us(s.p50).c_str(), us(s.p99).c_str(), us(s.max).c_str());
+      out << line;
+    }
     out << "\n";
   }
   out << "trace: " << a.events << " events in " << a.streams << " streams, " << a.packets

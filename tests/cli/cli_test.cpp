@@ -453,3 +453,130 @@ TEST_F(Cli, BadDatasetOptionsAreOneClearLine) {
     EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << args << ": " << o.out;
   }
 }
+
+// A starved Playback sends its late commands in a burst; those arriving within one loop period
+// replace each other in the controller's one-slot command buffer before the loop takes one, as in
+// ros2_control, and are never actuated: lost in a state stream. Only a burst excuses losses.
+bool playback_burst(const nlohmann::json& result, const nlohmann::json& loop) {
+  const double period_ms = 1e3 / loop["update_rate_hz"].get<double>();
+  return result["latency_ms"]["send_lateness"]["max"].get<double>() > 0.5 * period_ms;
+}
+
+// c1-c5 end to end, kept short: state outputs matched by ID, loop metrics in the results and the
+// functional checks of c1 and c2 passing. Short runs have fewer samples than the packages
+// require, so the only reason for invalidity allowed is that.
+TEST_F(Cli, RunControlBenchmarksC1ToC5) {
+  const std::pair<const char*, const char*> runs[] = {{"c1", "--count 2 --warmup 0"},
+                                                      {"c2", "--count 25 --warmup 2"},
+                                                      {"c3", "--count 120 --warmup 10"},
+                                                      {"c4", "--count 120 --warmup 10"},
+                                                      {"c5", "--count 120 --warmup 10"}};
+  for (const auto& [id, args] : runs) {
+    fs::remove_all(out_);
+    const Outcome o =
+        robotperf(std::string("run ") + id + " " + args + " --quiet --output " + out_.string());
+    EXPECT_NE(o.out.find("control loop controller_manager"), std::string::npos) << o.out;
+    const nlohmann::json j = result_json();
+    ASSERT_TRUE(j.is_object()) << o.out;
+    EXPECT_EQ(j["counts"]["duplicates"], 0) << id;
+    EXPECT_EQ(j["counts"]["unknown"], 0) << id;
+    EXPECT_GT(j["counts"]["repeats"].get<int>(), 0) << id;
+    ASSERT_EQ(j["control_loops"].size(), 1u) << id;
+    const auto& loop = j["control_loops"][0];
+    if (!playback_burst(j, loop)) {
+      EXPECT_EQ(j["counts"]["lost"], 0) << id << "\n" << o.out;
+      for (const auto& reason : j["validity"]["reasons"])
+        EXPECT_NE(reason.get<std::string>().find("fewer than"), std::string::npos) << reason;
+    }
+    EXPECT_GT(loop["cycles"].get<int>(), 0);
+    EXPECT_TRUE(loop["deadline_misses"].is_number());
+    EXPECT_GT(loop["update_duration_us"]["count"].get<int>(), 0);
+    EXPECT_TRUE(loop["period_jitter_us"]["p99"].is_number());
+    // Each command is written to the hardware before the state reflecting it is received, so
+    // the earliest write precedes the earliest state and the latest write the latest state
+    // (comparing one message's write with another's state would not hold under load).
+    const auto& to_write = loop["command_to_write_ms"];
+    const auto& to_state = j["latency_ms"]["from_scheduled"];
+    EXPECT_LT(to_write["min"].get<double>(), to_state["min"].get<double>()) << id;
+    EXPECT_LT(to_write["max"].get<double>(), to_state["max"].get<double>()) << id;
+    if (std::string(id) == "c1" || std::string(id) == "c2") {
+      ASSERT_TRUE(j["functional"].is_object()) << id;
+      EXPECT_EQ(j["functional"]["valid"], true) << j["functional"].dump();
+    }
+  }
+}
+
+// Per-node: the loop runs in the controller's own process, which sends its metrics (and the raw
+// command writes) back to the runner; the command -> write latency is computed there.
+TEST_F(Cli, RunC3OneProcessPerNodeReportsItsLoop) {
+  const Outcome o = robotperf(
+      "run c3 --count 120 --warmup 10 --rmw fastdds --processes per-node "
+      "--quiet --domain " +
+      domain() + " --output " + out_.string());
+  EXPECT_NE(o.out.find("control loop controller_manager"), std::string::npos) << o.out;
+  const auto j = result_json();
+  ASSERT_TRUE(j.is_object()) << o.out;
+  EXPECT_EQ(j["configuration"]["processes"], "per-node");
+  ASSERT_EQ(j["nodes"].size(), 1u);
+  EXPECT_EQ(j["nodes"][0]["exit_status"], "ok") << j["nodes"][0].dump();
+  ASSERT_EQ(j["control_loops"].size(), 1u) << o.out;
+  const auto& loop = j["control_loops"][0];
+  if (!playback_burst(j, loop)) {
+    EXPECT_EQ(j["counts"]["lost"], 0) << o.out;
+  }
+  EXPECT_EQ(loop["node"], "controller_manager");
+  EXPECT_EQ(loop["update_rate_hz"].get<double>(), 100.0);
+  // 120 commands at 100 Hz take more than a second: over a hundred cycles.
+  EXPECT_GT(loop["cycles"].get<int>(), 100);
+  EXPECT_EQ(loop["recorded_cycles"], loop["cycles"]);
+  EXPECT_GT(loop["update_duration_us"]["count"].get<int>(), 100);
+  EXPECT_GT(loop["wake_latency_us"]["min"].get<double>(), 0.0);
+  // Every measured command observed in a state was written to the hardware before.
+  const auto& to_write = loop["command_to_write_ms"];
+  EXPECT_GE(to_write["count"].get<int>(), j["counts"]["matched"].get<int>()) << to_write.dump();
+  EXPECT_LE(to_write["count"].get<int>(), 110) << to_write.dump();
+  EXPECT_LT(to_write["min"].get<double>(), j["latency_ms"]["from_scheduled"]["min"].get<double>());
+  EXPECT_LT(to_write["max"].get<double>(), j["latency_ms"]["from_scheduled"]["max"].get<double>());
+}
+
+// --update-rate runs the controller manager's loop faster than the graph says, and is recorded.
+TEST_F(Cli, UpdateRateOverridesTheControlLoopRate) {
+  const Outcome o = robotperf(
+      "run c3 --rate 100 --update-rate 1000 --count 100 --warmup 10 "
+      "--quiet --output " +
+      out_.string());
+  const auto j = result_json();
+  ASSERT_TRUE(j.is_object()) << o.out;
+  EXPECT_EQ(j["configuration"]["update_rate_hz"].get<double>(), 1000.0);
+  ASSERT_EQ(j["control_loops"].size(), 1u);
+  const auto& loop = j["control_loops"][0];
+  EXPECT_EQ(loop["update_rate_hz"].get<double>(), 1000.0);
+  // About a second of commands: far more cycles than the 100 Hz loop of the graph would run.
+  EXPECT_GT(loop["cycles"].get<int>(), 500) << loop.dump();
+
+  for (const std::string args :
+       {"run c3 --update-rate 0", "run c3 --update-rate -100", "run c3 --update-rate inf",
+        "run c3 --update-rate fast", "run a1 --update-rate 1000"}) {
+    const Outcome bad = robotperf(args + " --count 20 --quiet --output " + (out_ / "bad").string());
+    EXPECT_EQ(bad.exit_code, 2) << args << ": " << bad.out;
+    EXPECT_EQ(std::count(bad.out.begin(), bad.out.end(), '\n'), 1) << args << ": " << bad.out;
+    EXPECT_NE(bad.out.find("--update-rate"), std::string::npos) << args << ": " << bad.out;
+  }
+}
+
+TEST_F(Cli, ControlLoopCpuThatCannotBeHadIsOneClearLine) {
+  // No machine here has CPU 1000: pinning the loop thread there fails before the run.
+  fs::create_directories(out_ / "control" / "c9_bad");
+  const fs::path src = fs::path(ROBOTPERF_SOURCE_DIR) / "benchmarks" / "control" /
+                       "c3_rrbot_forward_command_controller_position";
+  fs::copy_file(src / "benchmark.yaml", out_ / "control" / "c9_bad" / "benchmark.yaml");
+  std::ifstream in(src / "graph.yaml");
+  std::string graph((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  graph.replace(graph.find("cpu: -1"), 7, "cpu: 1000");
+  std::ofstream(out_ / "control" / "c9_bad" / "graph.yaml") << graph;
+  const Outcome o =
+      robotperf("--benchmarks " + out_.string() +
+                " run c3 --count 20 --warmup 2 --quiet --output " + (out_ / "r").string());
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_NE(o.out.find("cannot pin the control loop to CPU 1000"), std::string::npos) << o.out;
+}

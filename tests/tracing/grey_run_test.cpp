@@ -314,6 +314,44 @@ TEST_F(GreyRun, CommandLineRunsGreyAndAnalysesTheTrace) {
   EXPECT_EQ(std::count(missing.out.begin(), missing.out.end(), '\n'), 1) << missing.out;
 }
 
+// The controller manager's tracepoints around each controller update: one begin/end pair per
+// controller per cycle, all inside the trace (the loop stops before the session does).
+TEST_F(GreyRun, ControlLoopTraceHasEveryControllerUpdate) {
+  const fs::path out = dir_ / "results";
+  const Outcome run =
+      robotperf("run c3 --mode grey --count 60 --warmup 5 --quiet --output " + out.string());
+  EXPECT_NE(run.out.find("controller update durations (us)"), std::string::npos) << run.out;
+  fs::path json;
+  for (const auto& e : fs::directory_iterator(out)) {
+    if (e.path().extension() == ".json") json = e.path();
+  }
+  ASSERT_FALSE(json.empty()) << run.out;
+  std::ifstream in(json);
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["grey"]["trace"]["discarded_events"], 0);
+  ASSERT_EQ(j["control_loops"].size(), 1u);
+  const auto cycles = j["control_loops"][0]["cycles"].get<uint64_t>();
+  const auto& updates = j["grey"]["controller_updates"];
+  ASSERT_EQ(updates.size(), 2u) << updates.dump();
+  std::set<std::string> controllers;
+  double traced_mean_sum = 0;
+  for (const auto& u : updates) {
+    EXPECT_EQ(u["node"], "controller_manager");
+    controllers.insert(u["controller"].get<std::string>());
+    const auto& d = u["duration_us"];
+    EXPECT_EQ(d["count"].get<uint64_t>(), cycles) << u.dump();
+    EXPECT_GT(d["min"].get<double>(), 0.0);
+    EXPECT_LE(d["p99"].get<double>(), d["max"].get<double>());
+    traced_mean_sum += d["mean"].get<double>();
+  }
+  EXPECT_TRUE(controllers.contains("forward_position_controller"));
+  EXPECT_TRUE(controllers.contains("joint_state_broadcaster"));
+  // The loop's own update duration spans both controllers (and the tracepoints): no shorter than
+  // the traced updates together, on average.
+  EXPECT_GE(j["control_loops"][0]["update_duration_us"]["mean"].get<double>(),
+            0.9 * traced_mean_sum);
+}
+
 TEST_F(GreyRun, MissingLttngIsOneLineSayingHowToInstallIt) {
   const fs::path out = dir_ / "results";
   const Outcome o =

@@ -27,6 +27,11 @@ struct BoundaryTopic {
   std::string type;    // ROS type, e.g. sensor_msgs/msg/Image
   std::string stream;  // inputs: the dataset stream published on it
   rmw::QoS qos;
+  // Outputs only: a state stream (control benchmarks). Each message carries the ID of the newest
+  // command it reflects and several messages may carry one ID: the first reception is the
+  // latency, later ones are counted as repeats (not duplicates), the functional check keeps the
+  // last, and the Monitor waits the whole drain time.
+  bool state = false;
 };
 
 struct NodeSpec {
@@ -79,5 +84,10 @@ BenchmarkSpec find_benchmark(const std::filesystem::path& root, const std::strin
 
 // The kernel configuration of a node of the spec.
 kernels::KernelConfig kernel_config(const NodeSpec& node);
+
+// Sets the loop rate (update_rate) of every controller manager (control/* kernel) of `spec`.
+// Throws std::invalid_argument with one line when the benchmark has none or `hz` is not a rate a
+// loop can run at (0 < hz <= 100000).
+void override_update_rate(BenchmarkSpec& spec, double hz);
 
 }  // namespace robotperf::harness

@@ -35,6 +35,9 @@ struct FunctionalSpec {
   // Outputs kept for evaluation; 0 keeps every measured output.
   std::size_t sample = 16;
   std::map<std::string, FunctionalThreshold> thresholds;  // by metric name
+  // Evaluators with an `observed_truth_type`: the graph topic that carries the truth observed
+  // during the run (e.g. a simulator's ground-truth pose), matched to outputs by message ID.
+  std::string observed_truth_topic;
 };
 
 struct FunctionalMetricInfo {
@@ -49,6 +52,9 @@ struct EvaluatorInfo {
   std::string output_type;               // ROS type of the outputs it reads
   std::vector<std::string> truth_roles;  // the dataset streams it needs
   std::vector<FunctionalMetricInfo> metrics;
+  // Non-empty when the truth is observed during the run on a graph topic of this type
+  // (functional.observed_truth in graph.yaml) instead of read from the dataset alone.
+  std::string observed_truth_type;
 };
 
 const std::vector<EvaluatorInfo>& evaluator_infos();
@@ -59,6 +65,12 @@ class FunctionalEvaluator {
   virtual ~FunctionalEvaluator() = default;
   // One output message (of the evaluator's output type) produced from dataset frame `frame`.
   virtual void add(const void* output, std::size_t frame) = 0;
+  // The same with the truth observed for this output's message ID (evaluators with an
+  // observed_truth_type); null when none was received.
+  virtual void add_observed(const void* output, const void* observed_truth, std::size_t frame) {
+    (void)observed_truth;
+    add(output, frame);
+  }
   // Every metric of the evaluator's info over the outputs added; NaN when not computable.
   virtual std::map<std::string, double> metrics() const = 0;
   // Defects that make outputs wrong whatever the metrics say (wrong size, encoding, geometry),
@@ -101,8 +113,9 @@ struct FunctionalResult {
 
 // Evaluates the kept outputs (message ID, output) against the dataset: output ID k is frame
 // k mod (frames of the truth streams).
-FunctionalResult evaluate_functional(const FunctionalSpec& spec, const Dataset& dataset,
-                                     const std::vector<std::pair<uint64_t, rmw::MessagePtr>>& kept,
-                                     std::size_t requested);
+FunctionalResult evaluate_functional(
+    const FunctionalSpec& spec, const Dataset& dataset,
+    const std::vector<std::pair<uint64_t, rmw::MessagePtr>>& kept, std::size_t requested,
+    const std::map<uint64_t, rmw::MessagePtr>& observed_truth = {});
 
 }  // namespace robotperf::harness

@@ -29,7 +29,9 @@ enum class ProcessLayout { kSingle, kPerNode };
 enum class RunMode { kBlack, kGrey };
 
 struct RunOptions {
-  std::optional<double> rate_hz;      // default: the benchmark's
+  std::optional<double> rate_hz;  // default: the benchmark's
+  // Control benchmarks: the controller managers' loop rate in Hz (default: the graph's).
+  std::optional<double> update_rate_hz;
   std::optional<std::size_t> count;   // messages to send, warm-up included
   std::optional<double> duration_s;   // alternative to count: rate * duration
   std::optional<std::size_t> warmup;  // default: the benchmark's
@@ -83,6 +85,23 @@ struct NodeReport {
   std::map<std::string, uint64_t> counters;
 };
 
+// The control loop of a control kernel (src/control), over the whole run: nanoseconds.
+struct ControlLoopResult {
+  std::string node;
+  double update_rate_hz = 0;
+  int cpu = -1;         // the loop thread's CPU, -1 when not pinned
+  int rt_priority = 0;  // its SCHED_FIFO priority, 0 when none
+  uint64_t cycles = 0;
+  uint64_t recorded_cycles = 0;  // with timestamps (the buffer's capacity bounds it)
+  uint64_t deadline_misses = 0;  // cycles whose hardware write ended after the next period began
+  metrics::SampleStats update_duration;  // all controllers' update() of one cycle
+  metrics::SampleStats cycle_duration;   // wake-up to the end of the hardware write
+  metrics::SampleStats period_jitter;    // actual period (wake to wake) minus the nominal one
+  metrics::SampleStats wake_latency;     // wake-up minus the cycle's deadline
+  // Measured commands: hardware interface written with the command minus its scheduled send.
+  metrics::SampleStats command_to_write;
+};
+
 struct RunResult {
   std::string benchmark_id;
   std::string benchmark_name;
@@ -112,6 +131,7 @@ struct RunResult {
   std::size_t lost = 0;
   std::size_t duplicates = 0;
   std::size_t unknown = 0;
+  std::size_t repeats = 0;  // state outputs: further receptions of an ID (not an error)
   double loss_percent = 0;
   // Nanoseconds, over matched measured messages.
   metrics::SampleStats latency_from_scheduled;
@@ -138,6 +158,9 @@ struct RunResult {
   // Accuracy of the outputs against the dataset's ground truth; absent when the benchmark
   // names no functional evaluator.
   std::optional<FunctionalResult> functional;
+  // Control kernels: their loops' timing (empty for other benchmarks).
+  std::vector<ControlLoopResult> control_loops;
+  std::optional<double> update_rate_hz;  // the loop rate given with --update-rate
   // Grey-box runs: the analysis of the recorded trace (counts, latencies and
   // validity above then come from it) and where the trace is.
   std::optional<tracing::TraceAnalysis> grey;

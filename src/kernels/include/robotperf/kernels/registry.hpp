@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "robotperf/control/controller_manager.hpp"
 #include "robotperf/graph/node.hpp"
 
 namespace robotperf::kernels {
@@ -63,6 +64,15 @@ class NodeCounters {
  public:
   virtual ~NodeCounters() = default;
   virtual std::map<std::string, uint64_t> counters() const = 0;
+};
+
+// Implemented by kernel nodes that run a control loop (src/control): stops the loop and returns
+// what it recorded (per-cycle timestamps, deadline misses, commands written). The harness calls
+// it once, after the run, to report the loop metrics.
+class ControlLoopSource {
+ public:
+  virtual ~ControlLoopSource() = default;
+  virtual control::LoopReport stop_and_report() = 0;
 };
 
 using KernelFactory =

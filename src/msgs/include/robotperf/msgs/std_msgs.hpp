@@ -78,9 +78,34 @@ void visit_fields(V& v, M& m) {
   v(m.layout);
   v(m.data);
 }
+// Float64MultiArray has no header, so the harness carries a command's message ID (DESIGN.md
+// §3.1) in the label of the first layout dimension: "robotperf_id=<nanoseconds>". The dimension
+// describes the data as a plain vector (size = stride = data.size()), so the layout stays true;
+// forward command controllers read only `data`, as ros2_controllers' do.
+inline constexpr std::string_view kMessageIdLabel = "robotperf_id=";
 template <>
 struct MessageTraits<Float64MultiArray> {
   static constexpr std::string_view ros_type = "std_msgs/msg/Float64MultiArray";
+  // -1 when the message carries no ID.
+  static int64_t id_ns(const Float64MultiArray& m) {
+    if (m.layout.dim.empty()) return -1;
+    const std::string& label = m.layout.dim.front().label;
+    if (label.size() <= kMessageIdLabel.size() ||
+        label.compare(0, kMessageIdLabel.size(), kMessageIdLabel) != 0)
+      return -1;
+    int64_t value = 0;
+    for (std::size_t i = kMessageIdLabel.size(); i < label.size(); ++i) {
+      const char c = label[i];
+      if (c < '0' || c > '9' || value > (INT64_MAX - 9) / 10) return -1;
+      value = value * 10 + (c - '0');
+    }
+    return value;
+  }
+  static void set_id_ns(Float64MultiArray& m, int64_t ns) {
+    const auto n = static_cast<uint32_t>(m.data.size());
+    if (m.layout.dim.empty()) m.layout.dim.push_back({"", n, n});
+    m.layout.dim.front().label = std::string(kMessageIdLabel) + std::to_string(ns);
+  }
 };
 
 }  // namespace robotperf::msgs

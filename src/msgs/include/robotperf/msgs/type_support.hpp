@@ -2,6 +2,7 @@
 // name, create, serialize and deserialize messages without knowing their C++ type.
 #pragma once
 
+#include <concepts>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -33,7 +34,9 @@ struct TypeSupport {
   void (*deserialize)(std::span<const uint8_t> payload, void* msg);
   // For types that start with a std_msgs/Header (null otherwise): read the
   // header stamp in nanoseconds, and copy a message giving it a new stamp.
-  // The harness carries message IDs in the stamp (DESIGN.md §3.1).
+  // The harness carries message IDs in the stamp (DESIGN.md §3.1). Header-less
+  // types with a HasMessageIdField trait (Float64MultiArray) read and write
+  // their ID there instead.
   int64_t (*stamp_ns)(const void* msg);
   std::shared_ptr<void> (*copy_with_stamp_ns)(const void* msg, int64_t stamp_ns);
 
@@ -46,9 +49,19 @@ concept HasHeaderStamp = requires(T& m) {
   m.header.stamp.nanosec;
 };
 
+// Header-less types that carry a message ID elsewhere (MessageTraits<T>::id_ns / set_id_ns),
+// e.g. std_msgs/Float64MultiArray in a layout label.
+template <class T>
+concept HasMessageIdField = requires(T& m, const T& c) {
+  { MessageTraits<T>::id_ns(c) } -> std::same_as<int64_t>;
+  MessageTraits<T>::set_id_ns(m, int64_t{});
+};
+
 template <class T>
 auto stamp_reader() -> int64_t (*)(const void*) {
-  if constexpr (HasHeaderStamp<T>) {
+  if constexpr (HasMessageIdField<T>) {
+    return [](const void* m) { return MessageTraits<T>::id_ns(*static_cast<const T*>(m)); };
+  } else if constexpr (HasHeaderStamp<T>) {
     return [](const void* m) {
       const auto& s = static_cast<const T*>(m)->header.stamp;
       return int64_t{s.sec} * 1'000'000'000 + s.nanosec;
@@ -60,7 +73,13 @@ auto stamp_reader() -> int64_t (*)(const void*) {
 
 template <class T>
 auto stamp_writer() -> std::shared_ptr<void> (*)(const void*, int64_t) {
-  if constexpr (HasHeaderStamp<T>) {
+  if constexpr (HasMessageIdField<T>) {
+    return [](const void* m, int64_t ns) -> std::shared_ptr<void> {
+      auto copy = std::make_shared<T>(*static_cast<const T*>(m));
+      MessageTraits<T>::set_id_ns(*copy, ns);
+      return copy;
+    };
+  } else if constexpr (HasHeaderStamp<T>) {
     return [](const void* m, int64_t ns) -> std::shared_ptr<void> {
       auto copy = std::make_shared<T>(*static_cast<const T*>(m));
       copy->header.stamp.sec = static_cast<int32_t>(ns / 1'000'000'000);

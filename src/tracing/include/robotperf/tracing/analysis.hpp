@@ -69,6 +69,13 @@ struct TopicLatency {
   metrics::SampleStats latency;  // rmw_publish -> rmw_take, ns
 };
 
+// A controller manager's controller (src/control), from robotperf:controller_update_begin/end.
+struct ControllerUpdateStats {
+  std::string node;  // the controller manager
+  std::string controller;
+  metrics::SampleStats duration;  // one update(), ns
+};
+
 struct TraceAnalysis {
   // The trace.
   std::vector<std::string> traces;  // the CTF folders read
@@ -92,6 +99,8 @@ struct TraceAnalysis {
   // Any trace with ros2:* events.
   std::vector<CallbackStats> callbacks;
   std::vector<TopicLatency> topics;
+  // Traces of robotperf control loops.
+  std::vector<ControllerUpdateStats> controller_updates;
 
   bool valid = false;
   std::vector<std::string> invalid_reasons;
@@ -109,7 +118,8 @@ struct AnalyzeOptions {
 // `dir` holds no trace.
 TraceAnalysis analyze_trace(const std::filesystem::path& dir, const AnalyzeOptions& options = {});
 
-// The `grey` block of the results JSON: trace, hops, callbacks, topics. Milliseconds.
+// The `grey` block of the results JSON: trace, hops, callbacks, topics (milliseconds), and
+// controller updates (microseconds).
 nlohmann::json to_json(const TraceAnalysis& analysis);
 
 // Breakdown tables for a terminal: hops, callbacks, topics, and the tracer's losses.

@@ -122,6 +122,29 @@ LTTNG_UST_TRACEPOINT_EVENT(
         lttng_ust_field_integer(int64_t, message_id, message_id_arg)
         lttng_ust_field_integer(uint64_t, size, size_arg)))
 
+/* A controller manager's cycle (src/control): one controller's update begins (with the newest
+ * command the state it reads reflects) and ends (with the command it took this cycle, -1 when
+ * none). `cycle` counts the loop's cycles from 0. */
+LTTNG_UST_TRACEPOINT_EVENT(
+    robotperf, controller_update_begin,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, const char *, controller_arg, uint64_t, cycle_arg,
+                      int64_t, message_id_arg),
+    LTTNG_UST_TP_FIELDS(
+        lttng_ust_field_string(node, node_arg)
+        lttng_ust_field_string(controller, controller_arg)
+        lttng_ust_field_integer(uint64_t, cycle, cycle_arg)
+        lttng_ust_field_integer(int64_t, message_id, message_id_arg)))
+
+LTTNG_UST_TRACEPOINT_EVENT(
+    robotperf, controller_update_end,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, const char *, controller_arg, uint64_t, cycle_arg,
+                      int64_t, message_id_arg),
+    LTTNG_UST_TP_FIELDS(
+        lttng_ust_field_string(node, node_arg)
+        lttng_ust_field_string(controller, controller_arg)
+        lttng_ust_field_integer(uint64_t, cycle, cycle_arg)
+        lttng_ust_field_integer(int64_t, message_id, message_id_arg)))
+
 #endif /* ROBOTPERF_TRACING_TP_ROBOTPERF_H */
 
 #include <lttng/tracepoint-event.h>
