@@ -241,6 +241,7 @@ BenchmarkSpec load_benchmark(const fs::path& dir) {
   spec.name = meta.require_string(meta.root(), "name");
   spec.short_description = meta.get<std::string>(meta.root(), "short", "");
   spec.description = meta.get<std::string>(meta.root(), "description", "");
+  spec.workload = meta.string_map(meta.root(), "workload");
   load_graph(dir / "graph.yaml", spec);
   load_thresholds(meta, spec);
   return spec;

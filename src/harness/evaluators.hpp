@@ -20,4 +20,14 @@ std::unique_ptr<FunctionalEvaluator> make_stereo_disparity_evaluator(const Truth
 EvaluatorInfo depth_point_cloud_info();
 std::unique_ptr<FunctionalEvaluator> make_depth_point_cloud_evaluator(const TruthStreams& truth);
 
+// Manipulation (functional_manipulation.cpp).
+EvaluatorInfo forward_kinematics_info();
+std::unique_ptr<FunctionalEvaluator> make_forward_kinematics_evaluator(const TruthStreams& truth);
+EvaluatorInfo inverse_kinematics_info();
+std::unique_ptr<FunctionalEvaluator> make_inverse_kinematics_evaluator(const TruthStreams& truth);
+EvaluatorInfo collision_info();
+std::unique_ptr<FunctionalEvaluator> make_collision_evaluator(const TruthStreams& truth);
+EvaluatorInfo plan_execution_info();
+std::unique_ptr<FunctionalEvaluator> make_plan_execution_evaluator(const TruthStreams& truth);
+
 }  // namespace robotperf::harness

@@ -20,6 +20,10 @@ const std::vector<Entry>& entries() {
   static const std::vector<Entry> table{
       {stereo_disparity_info(), make_stereo_disparity_evaluator},
       {depth_point_cloud_info(), make_depth_point_cloud_evaluator},
+      {forward_kinematics_info(), make_forward_kinematics_evaluator},
+      {inverse_kinematics_info(), make_inverse_kinematics_evaluator},
+      {collision_info(), make_collision_evaluator},
+      {plan_execution_info(), make_plan_execution_evaluator},
   };
   return table;
 }

@@ -163,10 +163,11 @@ RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options) {
 
   // Everything is loaded before timing starts (DESIGN.md §3.4).
   const Dataset dataset =
-      options.bag ? load_bag_dataset(*options.bag, spec.inputs) : load_dataset(spec.dataset);
+      options.bag ? load_bag_dataset(*options.bag, spec.inputs) : load_dataset(spec.dataset, spec.workload);
   r.dataset = dataset.name;
   r.dataset_hash = dataset.hash;
   r.dataset_frames = dataset.frames;
+  r.dataset_parameters = dataset.parameters;
 
   if (options.bag_timeline) {
     if (dataset.frame_times_ns.empty())

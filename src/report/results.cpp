@@ -123,6 +123,13 @@ nlohmann::json functional_json(const std::optional<harness::FunctionalResult>& f
           {"reasons", f->reasons}};
 }
 
+nlohmann::json dataset_json(const harness::RunResult& r) {
+  nlohmann::json d{{"name", r.dataset}, {"hash", r.dataset_hash}, {"frames", r.dataset_frames}};
+  // Generated request streams: the seed and sizes that reproduce them.
+  if (!r.dataset_parameters.empty()) d["parameters"] = r.dataset_parameters;
+  return d;
+}
+
 }  // namespace
 
 nlohmann::json software_json() {
@@ -207,7 +214,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"output_topic", r.output_topic},
         {"domain_id", r.domain_id},
         {"scheduling", scheduling}}},
-      {"dataset", {{"name", r.dataset}, {"hash", r.dataset_hash}, {"frames", r.dataset_frames}}},
+      {"dataset", dataset_json(r)},
       {"machine", sysinfo::to_json(machine)},
       {"software", software},
       {"warnings", warnings},
@@ -267,7 +274,14 @@ std::string summary_table(const harness::RunResult& r) {
   std::ostringstream out;
   out << r.benchmark_id << " (" << r.benchmark_name << ") · " << (r.grey ? "grey-box · " : "")
       << r.rmw << " · " << r.processes << " process" << (r.processes == "single" ? "" : "es")
-      << " · " << fixed(r.rate_hz, 1) << " Hz · dataset " << r.dataset << "\n";
+      << " · " << fixed(r.rate_hz, 1) << " Hz · dataset " << r.dataset;
+  if (!r.dataset_parameters.empty()) {
+    std::string parameters;
+    for (const auto& [k, v] : r.dataset_parameters)
+      parameters += (parameters.empty() ? "" : ", ") + k + " " + v;
+    out << " (" << parameters << ")";
+  }
+  out << "\n";
   out << "messages: sent " << r.sent << " (warm-up " << r.warmup << "), measured " << r.measured
       << ", matched " << r.matched << ", lost " << r.lost << " (" << fixed(r.loss_percent, 2)
       << " %)";

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <tuple>
 
 namespace {
 
@@ -164,6 +165,23 @@ TEST_F(Cli, RunA3AndA4OnBothTransports) {
   const Outcome d = robotperf("describe a3");
   EXPECT_NE(d.out.find("evaluator stereo_disparity"), std::string::npos) << d.out;
   EXPECT_NE(d.out.find("threshold bad1 <= 0.05"), std::string::npos) << d.out;
+}
+
+// d1-d6 end to end on intra, short: valid, functional checks passed, the workload seed recorded.
+TEST_F(Cli, RunManipulationBenchmarks) {
+  const std::tuple<const char*, const char*, const char*> benchmarks[] = {
+      {"d6", "forward_kinematics", "--count 120"},   {"d4", "inverse_kinematics", "--count 120"},
+      {"d5", "inverse_kinematics", "--count 120"},   {"d2", "collision", "--count 120"},
+      {"d3", "collision", "--count 120"},            {"d1", "plan_execution", "--count 34 --rate 10"}};
+  for (const auto& [id, evaluator, options] : benchmarks) {
+    fs::remove_all(out_);
+    const Outcome o = robotperf(std::string("run ") + id + " " + options + " --output " +
+                                out_.string());
+    ASSERT_EQ(o.exit_code, 0) << id << "\n" << o.out;
+    const nlohmann::json j = result_json();
+    expect_functional_result(j, id, "intra", evaluator);
+    EXPECT_EQ(j["dataset"]["parameters"]["seed"], "1") << j["dataset"].dump();
+  }
 }
 
 TEST_F(Cli, UnknownBenchmarkIsOneClearLine) {

@@ -20,17 +20,17 @@ std::shared_ptr<fcl::CollisionGeometryd> fcl_geometry(const Shape& s) {
 }
 
 struct Body {
-  int link;  // index into RobotModel::links(), -1 for scene objects
-  const std::string* name;
+  int link;          // index into RobotModel::links(), -1 for scene objects
+  std::string name;  // a copy: the scene may be a temporary
 };
 
 class FclChecker final : public CollisionChecker {
  public:
   FclChecker(const RobotModel& model, const Scene& scene) : model_(model) {
     for (std::size_t i = 0; i < model.links().size(); ++i) {
-      bodies_.push_back({static_cast<int>(i), &model.links()[i].name});
+      bodies_.push_back({static_cast<int>(i), model.links()[i].name});
     }
-    for (const auto& o : scene.objects) scene_bodies_.push_back({-1, &o.name});
+    for (const auto& o : scene.objects) scene_bodies_.push_back({-1, o.name});
     for (std::size_t i = 0; i < model.links().size(); ++i) {
       for (const auto& s : model.links()[i].shapes) {
         auto obj = std::make_unique<fcl::CollisionObjectd>(fcl_geometry(s));
@@ -89,7 +89,7 @@ class FclChecker final : public CollisionChecker {
       fcl::CollisionRequestd request;  // one contact, no penetration depth: a boolean query
       fcl::CollisionResultd result;
       if (fcl::collide(a, b, request, result) == 0) return false;
-      q.answer = {true, with_scene, *ba.name, *bb.name};
+      q.answer = {true, with_scene, ba.name, bb.name};
       return true;
     }
   };

@@ -46,6 +46,8 @@ struct BenchmarkSpec {
   std::string short_description;
   std::string description;
   std::string category;  // the folder above the package: perception, control, ...
+  // benchmark.yaml `workload:` — parameters of a generated dataset (seed, requests, ...).
+  std::map<std::string, std::string> workload;
   // From graph.yaml.
   std::string dataset;  // built-in dataset name
   double rate_hz = 30.0;

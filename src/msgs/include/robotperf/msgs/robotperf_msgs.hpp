@@ -37,12 +37,12 @@ struct MessageTraits<CollisionResult> {
 struct PlanExecutionResult {
   Header header;
   bool success = false;
-  double planning_time = 0;         // s, planner and simplification
-  JointTrajectory trajectory;       // empty when planning failed
-  double path_length = 0;           // rad, joint space
-  uint32_t execution_steps = 0;     // JointStates published while executing
-  double max_tracking_error = 0;    // rad
-  double final_error = 0;           // rad
+  double planning_time = 0;       // s, planner and simplification
+  JointTrajectory trajectory;     // empty when planning failed
+  double path_length = 0;         // rad, joint space
+  uint32_t execution_steps = 0;   // JointStates published while executing
+  double max_tracking_error = 0;  // rad
+  double final_error = 0;         // rad
   friend bool operator==(const PlanExecutionResult&, const PlanExecutionResult&) = default;
 };
 template <class V, class M>
