@@ -92,6 +92,9 @@ std::vector<msgs::JointTrajectory> generate_planning_queries(const ManipulationW
   const RobotModel& m = RobotModel::xarm6();
   const manipulation::Scene scene = manipulation::default_scene();
   auto checker = manipulation::make_fcl_checker(m, scene);
+  // Start and goal keep clear of the box and the other links by a margin, so that a planner
+  // checking with link padding up to kPlanningQueryClearance accepts them.
+  auto padded = manipulation::make_fcl_checker(m, scene, kPlanningQueryClearance);
   std::mt19937_64 rng(w.seed);
   // A free state with the flange low in front of the arm, beside the box on the side `side`.
   auto beside = [&](double side) {
@@ -101,8 +104,9 @@ std::vector<msgs::JointTrajectory> generate_planning_queries(const ManipulationW
       if (side * tip.y() < 0.15 || side * tip.y() > 0.45 || tip.x() < 0.3 || tip.x() > 0.6 ||
           tip.z() < 0.05 || tip.z() > 0.35)
         continue;
-      if (manipulation::sampled_ground_truth(m, scene, q.data()).truth ==
-          manipulation::GroundTruth::kFree)
+      if (!padded->check(q.data()).in_collision &&
+          manipulation::sampled_ground_truth(m, scene, q.data()).truth ==
+              manipulation::GroundTruth::kFree)
         return q;
     }
   };

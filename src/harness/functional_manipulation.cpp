@@ -1,7 +1,8 @@
 // Functional evaluators of the manipulation benchmarks (d1-d6). Answers are checked with
 // computations independent of the kernel under test: FK and IK against the URDF's own transform
 // chain (Eigen, not KDL), collision answers against the sampled ground truth and against both
-// FCL and Bullet, plans by re-checking every interpolated state with Bullet (the planner uses FCL).
+// FCL and Bullet, plans by re-checking every interpolated state with FCL and Bullet without the
+// planner's link padding.
 #include <algorithm>
 #include <cmath>
 
@@ -160,6 +161,7 @@ class PlanExecutionEvaluator final : public FunctionalEvaluator {
  public:
   explicit PlanExecutionEvaluator(const DatasetStream& queries)
       : queries_(queries),
+        fcl_(manipulation::make_fcl_checker(RobotModel::xarm6(), manipulation::default_scene())),
         bullet_(
             manipulation::make_bullet_checker(RobotModel::xarm6(), manipulation::default_scene())) {
     require_type(queries, msgs::type_support<msgs::JointTrajectory>(), "plan_execution");
@@ -191,7 +193,9 @@ class PlanExecutionEvaluator final : public FunctionalEvaluator {
       }
     }
     if (!limits_ok) problem("a trajectory exceeds the velocity or acceleration limits");
-    valid_ += ends && limits_ok && manipulation::path_valid(m, *bullet_, path, 0.01);
+    // Both backends without padding, finer than the planner's own motion checks.
+    valid_ += ends && limits_ok && manipulation::path_valid(m, *fcl_, path, kRecheckStep) &&
+              manipulation::path_valid(m, *bullet_, path, kRecheckStep);
     length_sum_ += out.path_length;
     tracking_ = std::max(tracking_, out.max_tracking_error);
   }
@@ -204,8 +208,9 @@ class PlanExecutionEvaluator final : public FunctionalEvaluator {
   }
 
  private:
+  static constexpr double kRecheckStep = 0.005;  // rad
   const DatasetStream& queries_;
-  std::unique_ptr<manipulation::CollisionChecker> bullet_;
+  std::unique_ptr<manipulation::CollisionChecker> fcl_, bullet_;
   std::size_t n_ = 0, succeeded_ = 0, valid_ = 0;
   double length_sum_ = 0, tracking_ = 0;
 };
@@ -254,12 +259,14 @@ std::unique_ptr<FunctionalEvaluator> make_collision_evaluator(const TruthStreams
 
 EvaluatorInfo plan_execution_info() {
   return {"plan_execution",
-          "plans re-checked with Bullet at 0.01 rad steps, limits, ends, and execution tracking",
+          "plans re-checked with FCL and Bullet at 0.005 rad steps, limits, ends, and execution "
+          "tracking",
           "robotperf_msgs/msg/PlanExecutionResult",
           {"query"},
           {{"success_rate", "fraction", "queries planned and executed"},
            {"valid_fraction", "fraction",
-            "plans from start to goal, within the limits and collision-free at every 0.01 rad"},
+            "plans from start to goal, within the limits and collision-free (FCL and Bullet, no "
+            "padding) at every 0.005 rad"},
            {"path_length_mean_rad", "rad", "mean joint-space path length"},
            {"tracking_error_max_rad", "rad", "largest |desired - actual| while executing"}}};
 }

@@ -179,7 +179,8 @@ class PlanNode final : public RequestNode<msgs::JointTrajectory, msgs::JointTraj
   PlanNode(graph::Context& context, const KernelConfig& config)
       : RequestNode(context, config, "query", "trajectory"),
         planner_(RobotModel::xarm6(),
-                 manipulation::make_fcl_checker(RobotModel::xarm6(), manipulation::default_scene()),
+                 manipulation::make_fcl_checker(RobotModel::xarm6(), manipulation::default_scene(),
+                                                padding(config)),
                  plan_options(config)),
         sample_period_s_(positive(config, "sample_period_s", 0.02)),
         velocity_scaling_(positive(config, "velocity_scaling", 1.0)),
@@ -192,7 +193,20 @@ class PlanNode final : public RequestNode<msgs::JointTrajectory, msgs::JointTraj
     o.longest_valid_segment_fraction =
         positive(c, "longest_valid_segment_fraction", o.longest_valid_segment_fraction);
     o.simplify = c.parameters.get_bool("simplify", o.simplify);
+    const int64_t seed =
+        c.parameters.get_int("seed", static_cast<int64_t>(c.workload_seed.value_or(0)));
+    if (seed < 0 || seed > static_cast<int64_t>(UINT32_MAX))
+      throw std::invalid_argument("node '" + c.node_name + "': seed must be within [0, 2^32)");
+    o.seed = static_cast<uint32_t>(seed);
     return o;
+  }
+  // Link padding of the planner's collision checker (m): motions are checked at discrete states,
+  // and the padding keeps the links clear of contact between them.
+  static double padding(const KernelConfig& c) {
+    const double v = c.parameters.get_double("padding_m", 0.0);
+    if (!(v >= 0) || !std::isfinite(v))
+      throw std::invalid_argument("node '" + c.node_name + "': padding_m must be >= 0");
+    return v;
   }
 
   void respond(const msgs::JointTrajectory& query, msgs::JointTrajectory& answer) override {

@@ -2,19 +2,26 @@
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/narrowphase/collision.h>
 
+#include <cmath>
+#include <stdexcept>
+
 #include "robotperf/manipulation/collision.hpp"
 
 namespace robotperf::manipulation {
 namespace {
 
-std::shared_ptr<fcl::CollisionGeometryd> fcl_geometry(const Shape& s) {
+// The shape grown by `padding` on every side (a box, cylinder or sphere that contains the shape's
+// Minkowski sum with a ball of that radius).
+std::shared_ptr<fcl::CollisionGeometryd> fcl_geometry(const Shape& s, double padding = 0) {
   switch (s.type) {
-    case Shape::Type::kBox:
-      return std::make_shared<fcl::Boxd>(s.box_size.x(), s.box_size.y(), s.box_size.z());
+    case Shape::Type::kBox: {
+      const Eigen::Vector3d size = s.box_size.array() + 2 * padding;
+      return std::make_shared<fcl::Boxd>(size.x(), size.y(), size.z());
+    }
     case Shape::Type::kCylinder:
-      return std::make_shared<fcl::Cylinderd>(s.radius, s.length);
+      return std::make_shared<fcl::Cylinderd>(s.radius + padding, s.length + 2 * padding);
     case Shape::Type::kSphere:
-      return std::make_shared<fcl::Sphered>(s.radius);
+      return std::make_shared<fcl::Sphered>(s.radius + padding);
   }
   return nullptr;
 }
@@ -26,14 +33,14 @@ struct Body {
 
 class FclChecker final : public CollisionChecker {
  public:
-  FclChecker(const RobotModel& model, const Scene& scene) : model_(model) {
+  FclChecker(const RobotModel& model, const Scene& scene, double padding) : model_(model) {
     for (std::size_t i = 0; i < model.links().size(); ++i) {
       bodies_.push_back({static_cast<int>(i), model.links()[i].name});
     }
     for (const auto& o : scene.objects) scene_bodies_.push_back({-1, o.name});
     for (std::size_t i = 0; i < model.links().size(); ++i) {
       for (const auto& s : model.links()[i].shapes) {
-        auto obj = std::make_unique<fcl::CollisionObjectd>(fcl_geometry(s));
+        auto obj = std::make_unique<fcl::CollisionObjectd>(fcl_geometry(s, padding));
         obj->setUserData(&bodies_[i]);
         link_shapes_.push_back({static_cast<int>(i), s.origin, obj.get()});
         robot_.registerObject(obj.get());
@@ -106,8 +113,11 @@ class FclChecker final : public CollisionChecker {
 
 }  // namespace
 
-std::unique_ptr<CollisionChecker> make_fcl_checker(const RobotModel& model, const Scene& scene) {
-  return std::make_unique<FclChecker>(model, scene);
+std::unique_ptr<CollisionChecker> make_fcl_checker(const RobotModel& model, const Scene& scene,
+                                                   double padding) {
+  if (!(padding >= 0) || !std::isfinite(padding))
+    throw std::invalid_argument("collision padding must be a finite length >= 0");
+  return std::make_unique<FclChecker>(model, scene, padding);
 }
 
 }  // namespace robotperf::manipulation

@@ -4,10 +4,13 @@
 #include <ompl/geometric/SimpleSetup.h>
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
 #include <ompl/util/Console.h>
+#include <ompl/util/RandomNumbers.h>
 
 #include <chrono>
 #include <cmath>
+#include <iostream>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 
 namespace robotperf::manipulation {
@@ -15,12 +18,32 @@ namespace robotperf::manipulation {
 namespace ob = ompl::base;
 namespace og = ompl::geometric;
 
+namespace {
+
+// Before the SimpleSetup below makes OMPL's first generators; see PlanOptions::seed.
+void seed_ompl(uint32_t seed) {
+  static std::mutex mutex;
+  static std::optional<uint32_t> process_seed;
+  if (seed == 0) return;
+  const std::lock_guard lock(mutex);
+  if (!process_seed) {
+    ompl::RNG::setSeed(seed);
+    process_seed = seed;
+  } else if (*process_seed != seed) {
+    std::cerr << "warning: OMPL's random seed is per process and already " << *process_seed
+              << ": the planner asking for " << seed << " plans with that\n";
+  }
+}
+
+}  // namespace
+
 struct Planner::Impl {
   Impl(const RobotModel& m, std::unique_ptr<CollisionChecker> c, const PlanOptions& o)
       : model(m), checker(std::move(c)), options(o) {
     // OMPL logs every planning request at INFO; keep warnings and errors only.
     static std::once_flag quiet;
     std::call_once(quiet, [] { ompl::msg::setLogLevel(ompl::msg::LOG_WARN); });
+    seed_ompl(o.seed);
     const unsigned n = static_cast<unsigned>(m.dof());
     auto space = std::make_shared<ob::RealVectorStateSpace>(n);
     ob::RealVectorBounds bounds(n);

@@ -37,8 +37,9 @@ struct CollisionRequests {
 CollisionRequests generate_collision_requests(const ManipulationWorkload& workload);
 
 // Planning queries around the box: a JointTrajectory of two points, start (flange on one side of
-// the box, low) and goal (on the other side); both certainly collision-free, the straight
-// joint-space line between them not.
+// the box, low) and goal (on the other side); both certainly collision-free and free with every
+// link grown by kPlanningQueryClearance, the straight joint-space line between them not.
+inline constexpr double kPlanningQueryClearance = 0.01;  // m
 std::vector<msgs::JointTrajectory> generate_planning_queries(const ManipulationWorkload& workload);
 
 }  // namespace robotperf::datasets

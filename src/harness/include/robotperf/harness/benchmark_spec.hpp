@@ -79,7 +79,9 @@ std::vector<BenchmarkSpec> discover_benchmarks(const std::filesystem::path& root
 // listing the known ids when there is no such benchmark.
 BenchmarkSpec find_benchmark(const std::filesystem::path& root, const std::string& id_or_name);
 
-// The kernel configuration of a node of the spec.
-kernels::KernelConfig kernel_config(const NodeSpec& node);
+// The kernel configuration of a node of the spec, with the workload's seed (benchmark.yaml
+// `workload: seed`, already checked by the dataset) when there is one.
+kernels::KernelConfig kernel_config(const NodeSpec& node,
+                                    const std::map<std::string, std::string>& workload = {});
 
 }  // namespace robotperf::harness

@@ -29,8 +29,12 @@ class CollisionChecker {
 
 enum class CollisionBackend { kFcl, kBullet };
 
-// FCL: one DynamicAABBTree broad phase for the links and one for the scene.
-std::unique_ptr<CollisionChecker> make_fcl_checker(const RobotModel& model, const Scene& scene);
+// FCL: one DynamicAABBTree broad phase for the links and one for the scene. `padding` (m) grows
+// every link shape on every side, as MoveIt's link padding does: "free" then means at least that
+// clearance to the scene (twice that between links). Throws std::invalid_argument for a negative
+// padding.
+std::unique_ptr<CollisionChecker> make_fcl_checker(const RobotModel& model, const Scene& scene,
+                                                   double padding = 0);
 // Bullet: a btCollisionWorld with a dynamic AABB tree (btDbvtBroadphase), margins zero.
 std::unique_ptr<CollisionChecker> make_bullet_checker(const RobotModel& model, const Scene& scene);
 std::unique_ptr<CollisionChecker> make_collision_checker(CollisionBackend backend,

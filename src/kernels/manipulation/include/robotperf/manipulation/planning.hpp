@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -20,6 +21,13 @@ struct PlanOptions {
   // longest_valid_segment_fraction).
   double longest_valid_segment_fraction = 0.005;
   bool simplify = true;
+  // OMPL's random numbers come from one generator per process whose seed can be set only before
+  // OMPL makes its first random number generator: the first Planner of a process with a seed
+  // other than 0 sets it (0: OMPL seeds from the clock). A later Planner asking for another seed
+  // cannot change it (a warning says so). With the seed set, a process that plans the same
+  // queries in the same order gets the same plans, as long as RRTConnect and simplification
+  // finish within their time budgets.
+  uint32_t seed = 0;
 };
 
 struct PlanResult {
