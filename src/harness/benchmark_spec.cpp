@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <charconv>
 #include <set>
 #include <sstream>
 
@@ -251,6 +252,7 @@ BenchmarkSpec load_benchmark(const fs::path& dir) {
   spec.name = meta.require_string(meta.root(), "name");
   spec.short_description = meta.get<std::string>(meta.root(), "short", "");
   spec.description = meta.get<std::string>(meta.root(), "description", "");
+  spec.workload = meta.string_map(meta.root(), "workload");
   load_graph(dir / "graph.yaml", spec);
   load_thresholds(meta, spec);
   return spec;
@@ -295,10 +297,19 @@ BenchmarkSpec find_benchmark(const fs::path& root, const std::string& id_or_name
                        "; see 'robotperf list')");
 }
 
-kernels::KernelConfig kernel_config(const NodeSpec& node) {
+kernels::KernelConfig kernel_config(const NodeSpec& node,
+                                    const std::map<std::string, std::string>& workload) {
   kernels::KernelConfig config;
   config.node_name = node.name;
   config.backend = node.backend;
+  if (const auto seed = workload.find("seed"); seed != workload.end()) {
+    uint64_t value = 0;
+    const std::string& text = seed->second;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (ec != std::errc() || end != text.data() + text.size())
+      throw BenchmarkError("workload seed: '" + text + "' is not a valid number");
+    config.workload_seed = value;
+  }
   for (const auto& [k, v] : node.parameters) config.parameters.set(k, v);
   config.topics = node.topics;
   config.qos = node.qos;

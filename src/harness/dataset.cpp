@@ -1,5 +1,6 @@
 #include "robotperf/harness/dataset.hpp"
 
+#include <charconv>
 #include <map>
 #include <mutex>
 #include <stdexcept>
@@ -7,6 +8,7 @@
 
 #include "robotperf/datasets/control_commands.hpp"
 #include "robotperf/datasets/hash.hpp"
+#include "robotperf/datasets/manipulation_requests.hpp"
 #include "robotperf/datasets/synthetic_camera.hpp"
 #include "robotperf/datasets/synthetic_depth.hpp"
 #include "robotperf/datasets/synthetic_stereo.hpp"
@@ -170,6 +172,63 @@ Dataset control_rrbot_commands() {
   return d;
 }
 
+template <class T>
+T workload_number(const std::map<std::string, std::string>& workload, const std::string& key,
+                  T fallback) {
+  auto it = workload.find(key);
+  if (it == workload.end()) return fallback;
+  T value{};
+  const std::string& text = it->second;
+  auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || ptr != text.data() + text.size())
+    throw std::invalid_argument("workload " + key + ": '" + text + "' is not a valid number");
+  return value;
+}
+
+Dataset manipulation(const std::string& name, const std::map<std::string, std::string>& workload) {
+  datasets::ManipulationWorkload w;
+  for (const auto& [key, value] : workload) {
+    if (key != "seed" && key != "requests" && key != "near_fraction")
+      throw std::invalid_argument("dataset " + name + ": unknown workload parameter '" + key +
+                                  "' (known: seed, requests, near_fraction)");
+  }
+  w.seed = workload_number<uint64_t>(workload, "seed", w.seed);
+  w.requests = workload_number<std::size_t>(workload, "requests", w.requests);
+  w.near_fraction = workload_number<double>(workload, "near_fraction", w.near_fraction);
+  Dataset d;
+  d.name = name;
+  d.description = description_of(name);
+  d.rate_hz = 100;
+  d.parameters = {{"seed", std::to_string(w.seed)}, {"requests", std::to_string(w.requests)}};
+  if (name == "manipulation/kinematics") {
+    auto r = datasets::generate_kinematics_requests(w);
+    auto states = make_stream<msgs::JointState>("joint_states", "/fk/joint_states");
+    auto poses = make_stream<msgs::PoseStamped>("poses", "/ik/target_pose");
+    for (auto& s : r.states) append(states, std::move(s));
+    for (auto& p : r.poses) append(poses, std::move(p));
+    d.streams.push_back(std::move(states));
+    d.streams.push_back(std::move(poses));
+  } else if (name == "manipulation/collision") {
+    d.parameters["near_fraction"] = workload.contains("near_fraction")
+                                        ? workload.at("near_fraction")
+                                        : std::to_string(w.near_fraction);
+    auto r = datasets::generate_collision_requests(w);
+    auto states = make_stream<msgs::JointState>("joint_states", "/collision/joint_states");
+    auto truth = make_stream<msgs::CollisionResult>("truth", "/ground_truth/collision");
+    for (auto& s : r.states) append(states, std::move(s));
+    for (auto& t : r.truth) append(truth, std::move(t));
+    d.streams.push_back(std::move(states));
+    d.streams.push_back(std::move(truth));
+  } else {
+    auto queries = make_stream<msgs::JointTrajectory>("queries", "/plan/query");
+    for (auto& q : datasets::generate_planning_queries(w)) append(queries, std::move(q));
+    d.streams.push_back(std::move(queries));
+  }
+  d.frames = d.streams.front().messages.size();
+  d.hash = content_hash(d.streams);
+  return d;
+}
+
 }  // namespace
 
 const DatasetStream& Dataset::stream(const std::string& stream_name) const {
@@ -209,19 +268,40 @@ const std::vector<DatasetInfo>& builtin_datasets() {
        "2-joint forward commands, 50 Hz, 100 frames (2 s period): streams position (0.5 sin(pi "
        "t), -0.5 sin(pi t)) rad, velocity (0.5 cos(pi t), ...) rad/s, acceleration (0.5 sin(pi "
        "t), ...) rad/s^2 (std_msgs/Float64MultiArray, the message ID in layout.dim[0].label)"},
+      {"manipulation/kinematics",
+       "xArm6 joint states uniform within the joint limits and their flange poses (URDF transform "
+       "chain, independent of KDL); streams joint_states (JointState) and poses (PoseStamped): FK "
+       "requests and truth, IK targets that have a solution; workload seed, requests (200)"},
+      {"manipulation/collision",
+       "xArm6 joint states near (flange within 0.15 m) and far from a 0.2 x 0.2 x 0.4 m box at "
+       "(0.45, 0, 0.2), each with a certain sampled ground-truth answer; streams joint_states and "
+       "truth (robotperf_msgs/CollisionResult); workload seed, requests (200), near_fraction "
+       "(0.5)"},
+      {"manipulation/planning",
+       "xArm6 planning queries around the box: start and goal (a JointTrajectory of two points) "
+       "collision-free with the flange low on either side, the straight joint-space line between "
+       "them blocked; stream queries; workload seed, requests (200)"},
   };
   return infos;
 }
 
-Dataset load_dataset(const std::string& name) {
+Dataset load_dataset(const std::string& name, const std::map<std::string, std::string>& workload) {
   // Generated datasets are immutable and take seconds to render: a process that runs a benchmark
   // again (tests, sweeps) reuses them; copies share the messages.
   static std::mutex mutex;
   static std::map<std::string, Dataset> cache;
   std::lock_guard lock(mutex);
-  if (auto it = cache.find(name); it != cache.end()) return it->second;
+  std::string key = name;
+  for (const auto& [k, v] : workload) key += "\n" + k + "=" + v;
+  if (auto it = cache.find(key); it != cache.end()) return it->second;
+  const bool generated = name.starts_with("manipulation/");
+  if (!workload.empty() && !generated)
+    throw std::invalid_argument("dataset " + name + " takes no workload parameters");
   Dataset d;
-  if (name == "perception/image") {
+  if (generated && (name == "manipulation/kinematics" || name == "manipulation/collision" ||
+                    name == "manipulation/planning")) {
+    d = manipulation(name, workload);
+  } else if (name == "perception/image") {
     d = perception_image();
   } else if (name == "perception/stereo") {
     d = perception_stereo();
@@ -238,7 +318,7 @@ Dataset load_dataset(const std::string& name) {
     for (const auto& d : builtin_datasets()) names += (names.empty() ? "" : ", ") + d.name;
     throw std::invalid_argument("unknown dataset '" + name + "' (built-in: " + names + ")");
   }
-  return cache.emplace(name, std::move(d)).first->second;
+  return cache.emplace(key, std::move(d)).first->second;
 }
 
 }  // namespace robotperf::harness

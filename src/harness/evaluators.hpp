@@ -26,5 +26,14 @@ std::unique_ptr<FunctionalEvaluator> make_joint_trajectory_goals_evaluator(
 
 EvaluatorInfo diff_drive_odometry_info();
 std::unique_ptr<FunctionalEvaluator> make_diff_drive_odometry_evaluator(const TruthStreams& truth);
+// Manipulation (functional_manipulation.cpp).
+EvaluatorInfo forward_kinematics_info();
+std::unique_ptr<FunctionalEvaluator> make_forward_kinematics_evaluator(const TruthStreams& truth);
+EvaluatorInfo inverse_kinematics_info();
+std::unique_ptr<FunctionalEvaluator> make_inverse_kinematics_evaluator(const TruthStreams& truth);
+EvaluatorInfo collision_info();
+std::unique_ptr<FunctionalEvaluator> make_collision_evaluator(const TruthStreams& truth);
+EvaluatorInfo plan_execution_info();
+std::unique_ptr<FunctionalEvaluator> make_plan_execution_evaluator(const TruthStreams& truth);
 
 }  // namespace robotperf::harness

@@ -22,6 +22,10 @@ const std::vector<Entry>& entries() {
       {depth_point_cloud_info(), make_depth_point_cloud_evaluator},
       {joint_trajectory_goals_info(), make_joint_trajectory_goals_evaluator},
       {diff_drive_odometry_info(), make_diff_drive_odometry_evaluator},
+      {forward_kinematics_info(), make_forward_kinematics_evaluator},
+      {inverse_kinematics_info(), make_inverse_kinematics_evaluator},
+      {collision_info(), make_collision_evaluator},
+      {plan_execution_info(), make_plan_execution_evaluator},
   };
   return table;
 }

@@ -174,11 +174,12 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   }
 
   // Everything is loaded before timing starts (DESIGN.md §3.4).
-  const Dataset dataset =
-      options.bag ? load_bag_dataset(*options.bag, spec.inputs) : load_dataset(spec.dataset);
+  const Dataset dataset = options.bag ? load_bag_dataset(*options.bag, spec.inputs)
+                                      : load_dataset(spec.dataset, spec.workload);
   r.dataset = dataset.name;
   r.dataset_hash = dataset.hash;
   r.dataset_frames = dataset.frames;
+  r.dataset_parameters = dataset.parameters;
 
   if (options.bag_timeline) {
     if (dataset.frame_times_ns.empty())
@@ -265,7 +266,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   std::vector<std::shared_ptr<graph::Node>> kernel_nodes;
   if (options.processes == ProcessLayout::kSingle) {
     for (const auto& n : spec.nodes) {
-      auto node = kernels::make_kernel_node(n.kernel, context, kernel_config(n));
+      auto node = kernels::make_kernel_node(n.kernel, context, kernel_config(n, spec.workload));
       graph_executor.add_node(node);
       local_nodes.push_back(node);
       kernel_nodes.push_back(node);
@@ -405,7 +406,8 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   t.domain_id = domain_id;
   graph::Context context(rmw::make_transport(rmw, t));
   trace_run_join();
-  auto node = kernels::make_kernel_node(node_spec->kernel, context, kernel_config(*node_spec));
+  auto node = kernels::make_kernel_node(node_spec->kernel, context,
+                                        kernel_config(*node_spec, spec.workload));
   graph::Executor executor(spec.executor_threads);
   executor.add_node(node);
 

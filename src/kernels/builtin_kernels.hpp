@@ -19,4 +19,13 @@ std::shared_ptr<graph::Node> make_diff_drive_controller_node(graph::Context& con
 std::shared_ptr<graph::Node> make_forward_command_controller_node(graph::Context& context,
                                                                   const KernelConfig& config);
 
+// Manipulation (d1-d6), on the built-in xArm6 and its one-box scene.
+std::shared_ptr<graph::Node> make_forward_kinematics_node(graph::Context&, const KernelConfig&);
+std::shared_ptr<graph::Node> make_ik_kdl_node(graph::Context&, const KernelConfig&);
+std::shared_ptr<graph::Node> make_ik_lma_node(graph::Context&, const KernelConfig&);
+std::shared_ptr<graph::Node> make_collision_fcl_node(graph::Context&, const KernelConfig&);
+std::shared_ptr<graph::Node> make_collision_bullet_node(graph::Context&, const KernelConfig&);
+std::shared_ptr<graph::Node> make_plan_node(graph::Context&, const KernelConfig&);
+std::shared_ptr<graph::Node> make_execute_node(graph::Context&, const KernelConfig&);
+
 }  // namespace robotperf::kernels

@@ -75,6 +75,13 @@ const std::map<std::string_view, std::string_view>& definitions() {
        "trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_error\n"
        "trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_output\n"
        "float64 speed_scaling_factor\n"},
+      // robotperf's own (not ROS 2 interfaces): the manipulation kernels' results.
+      {"robotperf_msgs/msg/CollisionResult",
+       "std_msgs/Header header\nbool in_collision\nbool with_scene\nstring first\nstring second\n"},
+      {"robotperf_msgs/msg/PlanExecutionResult",
+       "std_msgs/Header header\nbool success\nfloat64 planning_time\n"
+       "trajectory_msgs/JointTrajectory trajectory\nfloat64 path_length\n"
+       "uint32 execution_steps\nfloat64 max_tracking_error\nfloat64 final_error\n"},
   };
   return table;
 }

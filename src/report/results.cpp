@@ -123,6 +123,13 @@ nlohmann::json functional_json(const std::optional<harness::FunctionalResult>& f
           {"reasons", f->reasons}};
 }
 
+nlohmann::json dataset_json(const harness::RunResult& r) {
+  nlohmann::json d{{"name", r.dataset}, {"hash", r.dataset_hash}, {"frames", r.dataset_frames}};
+  // Generated request streams: the seed and sizes that reproduce them.
+  if (!r.dataset_parameters.empty()) d["parameters"] = r.dataset_parameters;
+  return d;
+}
+
 }  // namespace
 
 nlohmann::json software_json() {
@@ -210,7 +217,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"domain_id", r.domain_id},
         {"update_rate_hz", r.update_rate_hz ? json(*r.update_rate_hz) : json(nullptr)},
         {"scheduling", scheduling}}},
-      {"dataset", {{"name", r.dataset}, {"hash", r.dataset_hash}, {"frames", r.dataset_frames}}},
+      {"dataset", dataset_json(r)},
       {"machine", sysinfo::to_json(machine)},
       {"software", software},
       {"warnings", warnings},
@@ -297,7 +304,14 @@ std::string summary_table(const harness::RunResult& r) {
     if (r.rate_scale != 1.0) out << " x" << r.rate_scale;
     out << ")";
   }
-  out << " · dataset " << r.dataset << "\n";
+  out << " · dataset " << r.dataset;
+  if (!r.dataset_parameters.empty()) {
+    std::string parameters;
+    for (const auto& [k, v] : r.dataset_parameters)
+      parameters += (parameters.empty() ? "" : ", ") + k + " " + v;
+    out << " (" << parameters << ")";
+  }
+  out << "\n";
   out << "messages: sent " << r.sent << " (warm-up " << r.warmup << "), measured " << r.measured
       << ", matched " << r.matched << ", lost " << r.lost << " (" << fixed(r.loss_percent, 2)
       << " %)";

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <tuple>
 
 namespace {
 
@@ -172,6 +173,36 @@ TEST_F(Cli, RunA3AndA4OnBothTransports) {
   const Outcome d = robotperf("describe a3");
   EXPECT_NE(d.out.find("evaluator stereo_disparity"), std::string::npos) << d.out;
   EXPECT_NE(d.out.find("threshold bad1 <= 0.05"), std::string::npos) << d.out;
+}
+
+// d1-d6 end to end on intra, short: valid, functional checks passed, the workload seed recorded.
+TEST_F(Cli, RunManipulationBenchmarks) {
+  const std::tuple<const char*, const char*, const char*> benchmarks[] = {
+      {"d6", "forward_kinematics", "--count 120"},
+      {"d4", "inverse_kinematics", "--count 120"},
+      {"d5", "inverse_kinematics", "--count 120"},
+      {"d2", "collision", "--count 120"},
+      {"d3", "collision", "--count 120"},
+      // A plan takes 0.1 s here, several times that on a loaded machine: at 4 Hz the queue of
+      // queries (10 deep) does not overflow.
+      {"d1", "plan_execution", "--count 34 --rate 4"}};
+  for (const auto& [id, evaluator, options] : benchmarks) {
+    fs::remove_all(out_);
+    const Outcome o =
+        robotperf(std::string("run ") + id + " " + options + " --output " + out_.string());
+    ASSERT_EQ(o.exit_code, 0) << id << "\n" << o.out;
+    const nlohmann::json j = result_json();
+    expect_functional_result(j, id, "intra", evaluator);
+    EXPECT_EQ(j["dataset"]["parameters"]["seed"], "1") << j["dataset"].dump();
+  }
+  // OMPL is seeded from the workload seed: a second d1 process plans the same paths.
+  const auto d1_path_length = [&] {
+    return result_json()["functional"]["metrics"]["path_length_mean_rad"]["value"];
+  };
+  const nlohmann::json first = d1_path_length();
+  fs::remove_all(out_);
+  ASSERT_EQ(robotperf("run d1 --count 34 --rate 4 --output " + out_.string()).exit_code, 0);
+  EXPECT_EQ(d1_path_length(), first);
 }
 
 TEST_F(Cli, UnknownBenchmarkIsOneClearLine) {

@@ -51,6 +51,8 @@ struct BenchmarkSpec {
   std::string short_description;
   std::string description;
   std::string category;  // the folder above the package: perception, control, ...
+  // benchmark.yaml `workload:` — parameters of a generated dataset (seed, requests, ...).
+  std::map<std::string, std::string> workload;
   // From graph.yaml.
   std::string dataset;  // built-in dataset name
   double rate_hz = 30.0;
@@ -82,8 +84,10 @@ std::vector<BenchmarkSpec> discover_benchmarks(const std::filesystem::path& root
 // listing the known ids when there is no such benchmark.
 BenchmarkSpec find_benchmark(const std::filesystem::path& root, const std::string& id_or_name);
 
-// The kernel configuration of a node of the spec.
-kernels::KernelConfig kernel_config(const NodeSpec& node);
+// The kernel configuration of a node of the spec, with the workload's seed (benchmark.yaml
+// `workload: seed`, already checked by the dataset) when there is one.
+kernels::KernelConfig kernel_config(const NodeSpec& node,
+                                    const std::map<std::string, std::string>& workload = {});
 
 // Sets the loop rate (update_rate) of every controller manager (control/* kernel) of `spec`.
 // Throws std::invalid_argument with one line when the benchmark has none or `hz` is not a rate a

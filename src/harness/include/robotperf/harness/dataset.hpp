@@ -33,6 +33,9 @@ struct Dataset {
   std::vector<DatasetStream> streams;
   // Bags only: when each frame was recorded (its earliest message), increasing.
   std::vector<int64_t> frame_times_ns;
+  // Generated request streams: the workload they were generated with, defaults filled in
+  // (seed, requests, ...), recorded with the results.
+  std::map<std::string, std::string> parameters;
 
   // Throws std::invalid_argument naming the available streams.
   const DatasetStream& stream(const std::string& name) const;
@@ -46,8 +49,10 @@ struct DatasetInfo {
 const std::vector<DatasetInfo>& builtin_datasets();
 
 // Loads a built-in dataset (generated once per process, then shared); throws
-// std::invalid_argument for an unknown name.
-Dataset load_dataset(const std::string& name);
+// std::invalid_argument for an unknown name. `workload` configures the generated request streams
+// (manipulation/*: seed, requests, near_fraction); other datasets take none.
+Dataset load_dataset(const std::string& name,
+                     const std::map<std::string, std::string>& workload = {});
 
 // A rosbag2 bag to replay instead of a benchmark's built-in dataset.
 struct BagSelection {

@@ -123,6 +123,7 @@ struct RunResult {
   std::string dataset;
   std::string dataset_hash;
   std::size_t dataset_frames = 0;
+  std::map<std::string, std::string> dataset_parameters;  // generated datasets: seed, requests, ...
   // Counts over the measured (post-warm-up) messages, except unknown and
   // duplicates, which count every reception.
   std::size_t sent = 0;

@@ -5,6 +5,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -44,6 +45,9 @@ struct KernelConfig {
   Parameters parameters;
   std::map<std::string, std::string> topics;  // the kernel's port -> topic
   rmw::QoS qos;
+  // benchmark.yaml's `workload: seed` when the dataset is generated from one: kernels with random
+  // choices of their own (planners) follow it unless their `seed` parameter says otherwise.
+  std::optional<uint64_t> workload_seed;
 
   // The topic wired to `port`; throws std::invalid_argument when none is.
   std::string topic(const std::string& port) const;

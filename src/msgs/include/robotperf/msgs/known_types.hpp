@@ -6,6 +6,7 @@
 
 #include "robotperf/msgs/geometry_msgs.hpp"
 #include "robotperf/msgs/nav_msgs.hpp"
+#include "robotperf/msgs/robotperf_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/msgs/stereo_msgs.hpp"
 #include "robotperf/msgs/tf2_msgs.hpp"
@@ -20,7 +21,8 @@ struct MessageTypeList {};
 using KnownMessageTypes =
     MessageTypeList<Image, CameraInfo, PointCloud2, DisparityImage, JointState, Float64MultiArray,
                     Pose, PoseStamped, Twist, TwistStamped, TransformStamped, Odometry, TFMessage,
-                    JointTrajectory, JointTrajectoryControllerState>;
+                    JointTrajectory, JointTrajectoryControllerState, CollisionResult,
+                    PlanExecutionResult>;
 
 // Calls `f.template operator()<T>()` for the message type named `ros_type`
 // ("sensor_msgs/msg/Image"); returns false when the type is not compiled in.
