@@ -223,7 +223,8 @@ EvaluatorInfo forward_kinematics_info() {
           "geometry_msgs/msg/PoseStamped",
           {"pose"},
           {{"position_error_max_m", "m", "largest position difference"},
-           {"orientation_error_max_rad", "rad", "largest rotation angle between the poses"}}};
+           {"orientation_error_max_rad", "rad", "largest rotation angle between the poses"}},
+          ""};
 }
 std::unique_ptr<FunctionalEvaluator> make_forward_kinematics_evaluator(const TruthStreams& t) {
   return std::make_unique<ForwardKinematicsEvaluator>(t["pose"]);
@@ -237,7 +238,8 @@ EvaluatorInfo inverse_kinematics_info() {
           {{"success_rate", "fraction", "targets answered with a solution"},
            {"position_error_mean_m", "m", "mean position error of the solutions"},
            {"position_error_max_m", "m", "largest position error of a solution"},
-           {"orientation_error_max_rad", "rad", "largest orientation error of a solution"}}};
+           {"orientation_error_max_rad", "rad", "largest orientation error of a solution"}},
+          ""};
 }
 std::unique_ptr<FunctionalEvaluator> make_inverse_kinematics_evaluator(const TruthStreams& t) {
   return std::make_unique<InverseKinematicsEvaluator>(t["target"]);
@@ -251,7 +253,8 @@ EvaluatorInfo collision_info() {
           {{"truth_agreement", "fraction", "answers equal to the sampled ground truth"},
            {"fcl_bullet_agreement", "fraction", "states where FCL and Bullet agree"},
            {"kernel_backends_agreement", "fraction", "answers equal to both FCL and Bullet"},
-           {"colliding_fraction", "fraction", "states in collision (ground truth)"}}};
+           {"colliding_fraction", "fraction", "states in collision (ground truth)"}},
+          ""};
 }
 std::unique_ptr<FunctionalEvaluator> make_collision_evaluator(const TruthStreams& t) {
   return std::make_unique<CollisionEvaluator>(t["truth"], t["state"]);
@@ -268,7 +271,8 @@ EvaluatorInfo plan_execution_info() {
             "plans from start to goal, within the limits and collision-free (FCL and Bullet, no "
             "padding) at every 0.005 rad"},
            {"path_length_mean_rad", "rad", "mean joint-space path length"},
-           {"tracking_error_max_rad", "rad", "largest |desired - actual| while executing"}}};
+           {"tracking_error_max_rad", "rad", "largest |desired - actual| while executing"}},
+          ""};
 }
 std::unique_ptr<FunctionalEvaluator> make_plan_execution_evaluator(const TruthStreams& t) {
   return std::make_unique<PlanExecutionEvaluator>(t["query"]);
