@@ -221,7 +221,9 @@ TEST(Planning, PathAroundTheBoxIsValidAtAFineStep) {
   std::vector<double> bad;
   EXPECT_TRUE(path_valid(arm(), *checker, r.path, 0.002, &bad));
   EXPECT_TRUE(path_valid(arm(), *make_fcl_checker(arm(), scene), r.path, 0.002, &bad));
-  EXPECT_TRUE(path_valid(arm(), planner.checker(), r.path, 0.002, &bad));
+  // The padded model the planner checked with holds at its waypoints; between motion checks only
+  // the unpadded arm is guaranteed clear (the padding covers how far it moves between them).
+  for (const auto& state : r.path) EXPECT_FALSE(planner.checker().check(state.data()).in_collision);
   EXPECT_GT(path_length(r.path), 1.8);
 
   const auto trajectory = time_parameterize(r.path, arm().limits(), 0.01);
