@@ -2,10 +2,13 @@
 // broadcaster on the simulated RRBot multi-interface) at 1 kHz: controller update duration,
 // period jitter and deadline misses, first on the normal scheduler, then at a SCHED_FIFO priority
 // where the machine permits it. Targets: zero deadline misses and p99 period jitter <= 100 us
-// without real-time priority.
+// without real-time priority. A bare clock_nanosleep loop at the same rate runs first: the floor
+// this machine's scheduler and timers set, so that the loop's figures can be read against it.
 //
 //   bench_control [--seconds S] [--rate HZ] [--rt-priority N] [--cpu N]
 #include <sys/mman.h>
+#include <sys/prctl.h>
+#include <time.h>
 
 #include <cerrno>
 #include <chrono>
@@ -16,6 +19,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "robotperf/control/controller_manager.hpp"
 #include "robotperf/control/forward_command_controller.hpp"
@@ -55,6 +59,28 @@ Options parse(int argc, char** argv) {
   }
   if (!(o.seconds > 0) || !(o.rate_hz > 0)) throw std::invalid_argument("values must be positive");
   return o;
+}
+
+// Sleeps to absolute deadlines with nothing else to do, as the control loop's thread would (1 ns
+// timer slack); returns the wake-up minus deadline statistics in microseconds.
+metrics::SampleStats bare_sleep_floor(const Options& o) {
+  prctl(PR_SET_TIMERSLACK, 1UL);
+  const auto period_ns = static_cast<int64_t>(1e9 / o.rate_hz);
+  const auto cycles = static_cast<std::size_t>(o.seconds * o.rate_hz);
+  std::vector<double> wake(cycles);
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  int64_t deadline = now.tv_sec * 1'000'000'000LL + now.tv_nsec;
+  for (std::size_t k = 0; k < cycles; ++k) {
+    deadline += period_ns;
+    const timespec at{static_cast<time_t>(deadline / 1'000'000'000),
+                      static_cast<long>(deadline % 1'000'000'000)};
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &at, nullptr) == EINTR) {
+    }
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    wake[k] = static_cast<double>(now.tv_sec * 1'000'000'000LL + now.tv_nsec - deadline) / 1e3;
+  }
+  return metrics::compute_stats(wake);
 }
 
 // Runs the loop; returns false (after printing why) when the OS refused the scheduling.
@@ -144,6 +170,11 @@ int main(int argc, char** argv) {
         "c3 loop: forward position command controller + joint state broadcaster, RRBot "
         "multi-interface, %.0f Hz for %.0f s per run%s\n",
         o.rate_hz, o.seconds, o.cpu >= 0 ? (", CPU " + std::to_string(o.cpu)).c_str() : "");
+    const auto floor = bare_sleep_floor(o);
+    std::printf(
+        "machine floor: bare clock_nanosleep loop, wake - deadline (us) p50 %.2f  p99 %.2f  max "
+        "%.2f (the loop cannot do better than this machine's timers and scheduler)\n",
+        floor.p50, floor.p99, floor.max);
     run(o, 0);
     if (o.rt_priority > 0) {
       // The real-time variant also locks memory: no page fault may stall the loop.
