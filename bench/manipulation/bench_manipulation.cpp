@@ -28,6 +28,7 @@
 #include "robotperf/harness/run.hpp"
 #include "robotperf/manipulation/collision.hpp"
 #include "robotperf/manipulation/kinematics.hpp"
+#include "robotperf/manipulation/pose_msgs.hpp"
 #include "robotperf/msgs/geometry_msgs.hpp"
 #include "robotperf/msgs/robotperf_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
@@ -142,17 +143,6 @@ std::vector<double> positions(const harness::DatasetStream& states, std::size_t 
       ->position;
 }
 
-Eigen::Isometry3d pose_of(const msgs::PoseStamped& m) {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  const auto& p = m.pose;
-  t.linear() =
-      Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)
-          .normalized()
-          .toRotationMatrix();
-  t.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
-  return t;
-}
-
 void kernel_overheads(const std::vector<std::string>& ids) {
   using manipulation::RobotModel;
   const RobotModel& arm = RobotModel::xarm6();
@@ -197,8 +187,9 @@ void kernel_overheads(const std::vector<std::string>& ids) {
       const std::vector<double> seed_state(arm.dof(), 0.0);
       const auto& poses = d.stream("poses");
       std::shared_ptr<const msgs::PoseStamped> pose;
-      direct = direct_p50_us([&](std::size_t k) { pose = fresh<msgs::PoseStamped>(poses, k); },
-                             [&](std::size_t) { ik.solve(pose_of(*pose), seed_state); });
+      direct = direct_p50_us(
+          [&](std::size_t k) { pose = fresh<msgs::PoseStamped>(poses, k); },
+          [&](std::size_t) { ik.solve(manipulation::isometry_of(pose->pose), seed_state); });
     } else {
       manipulation::ForwardKinematics fk(arm);
       const auto& states = d.stream("joint_states");

@@ -6,6 +6,7 @@
 
 #include "robotperf/manipulation/collision.hpp"
 #include "robotperf/manipulation/planning.hpp"
+#include "robotperf/manipulation/pose_msgs.hpp"
 
 namespace robotperf::datasets {
 namespace {
@@ -50,9 +51,7 @@ KinematicsRequests generate_kinematics_requests(const ManipulationWorkload& w) {
     const Eigen::Isometry3d t = m.tip_pose(q.data());
     msgs::PoseStamped p;
     p.header.frame_id = m.base_link();
-    p.pose.position = {t.translation().x(), t.translation().y(), t.translation().z()};
-    const Eigen::Quaterniond r(t.linear());
-    p.pose.orientation = {r.x(), r.y(), r.z(), r.w()};
+    p.pose = manipulation::pose_msg_of(t);
     out.poses.push_back(p);
     out.states.push_back(joint_state(m, std::move(q)));
   }

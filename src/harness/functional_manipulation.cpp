@@ -10,6 +10,7 @@
 #include "robotperf/manipulation/collision.hpp"
 #include "robotperf/manipulation/kinematics.hpp"
 #include "robotperf/manipulation/planning.hpp"
+#include "robotperf/manipulation/pose_msgs.hpp"
 #include "robotperf/msgs/robotperf_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
 
@@ -25,16 +26,6 @@ void require_type(const DatasetStream& s, const msgs::TypeSupport& type, const s
     throw std::invalid_argument(who + ": truth stream '" + s.name + "' holds " + s.type->ros_type +
                                 ", expected " + type.ros_type);
   }
-}
-
-Eigen::Isometry3d pose_of(const msgs::Pose& p) {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() =
-      Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)
-          .normalized()
-          .toRotationMatrix();
-  t.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
-  return t;
 }
 
 // The positions of a JointState in the model's order, or empty when they do not fit.
@@ -62,7 +53,8 @@ class ForwardKinematicsEvaluator final : public FunctionalEvaluator {
       problem("pose frame is '" + out.header.frame_id + "', expected '" + truth.header.frame_id +
               "'");
     double dp, dr;
-    manipulation::pose_error(pose_of(out.pose), pose_of(truth.pose), dp, dr);
+    manipulation::pose_error(manipulation::isometry_of(out.pose),
+                             manipulation::isometry_of(truth.pose), dp, dr);
     position_ = std::max(position_, dp);
     orientation_ = std::max(orientation_, dr);
     ++n_;
@@ -96,7 +88,7 @@ class InverseKinematicsEvaluator final : public FunctionalEvaluator {
     }
     if (!m.within_limits(q.data(), 1e-9)) problem("a solution is outside the joint limits");
     double dp, dr;
-    manipulation::pose_error(m.tip_pose(q.data()), pose_of(target.pose), dp, dr);
+    manipulation::pose_error(m.tip_pose(q.data()), manipulation::isometry_of(target.pose), dp, dr);
     ++solved_;
     position_ = std::max(position_, dp);
     orientation_ = std::max(orientation_, dr);

@@ -10,26 +10,10 @@
 #include <limits>
 #include <stdexcept>
 
+#include "kdl_frame.hpp"
+
 namespace robotperf::manipulation {
-namespace {
-
-Eigen::Isometry3d to_eigen(const KDL::Frame& f) {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) t.linear()(r, c) = f.M(r, c);
-    t.translation()(r) = f.p(r);
-  }
-  return t;
-}
-
-KDL::Frame to_kdl(const Eigen::Isometry3d& t) {
-  const Eigen::Matrix3d& r = t.linear();
-  return KDL::Frame(KDL::Rotation(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0),
-                                  r(2, 1), r(2, 2)),
-                    KDL::Vector(t.translation().x(), t.translation().y(), t.translation().z()));
-}
-
-}  // namespace
+namespace {}  // namespace
 
 void pose_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double& position_m,
                 double& orientation_rad) {

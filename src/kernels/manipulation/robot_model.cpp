@@ -8,6 +8,8 @@
 #include <kdl/chain.hpp>
 #include <stdexcept>
 
+#include "kdl_frame.hpp"
+
 namespace robotperf::manipulation {
 
 extern const char* const kXarm6Urdf;  // xarm6_urdf.cpp, generated from robots/xarm6.urdf
@@ -21,13 +23,6 @@ Eigen::Isometry3d to_eigen(const urdf::Pose& p) {
   t.linear() = Eigen::Quaterniond(w, x, y, z).normalized().toRotationMatrix();
   t.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
   return t;
-}
-
-KDL::Frame to_kdl(const Eigen::Isometry3d& t) {
-  const Eigen::Matrix3d& r = t.linear();
-  return KDL::Frame(KDL::Rotation(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0),
-                                  r(2, 1), r(2, 2)),
-                    KDL::Vector(t.translation().x(), t.translation().y(), t.translation().z()));
 }
 
 Shape to_shape(const urdf::Collision& c, const std::string& link) {

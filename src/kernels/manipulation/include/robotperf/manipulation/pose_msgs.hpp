@@ -1,0 +1,30 @@
+// geometry_msgs/Pose <-> Eigen rigid transform, for the nodes, datasets and checks that turn
+// requests and answers into the model's poses.
+#pragma once
+
+#include <Eigen/Geometry>
+
+#include "robotperf/msgs/geometry_msgs.hpp"
+
+namespace robotperf::manipulation {
+
+// The quaternion is normalised: a message rounds it, the model needs a rotation.
+inline Eigen::Isometry3d isometry_of(const msgs::Pose& p) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() =
+      Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)
+          .normalized()
+          .toRotationMatrix();
+  t.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
+  return t;
+}
+
+inline msgs::Pose pose_msg_of(const Eigen::Isometry3d& t) {
+  const Eigen::Quaterniond r(t.linear());
+  msgs::Pose p;
+  p.position = {t.translation().x(), t.translation().y(), t.translation().z()};
+  p.orientation = {r.x(), r.y(), r.z(), r.w()};
+  return p;
+}
+
+}  // namespace robotperf::manipulation
