@@ -48,6 +48,9 @@ GreyBoxRecording::GreyBoxRecording(const BenchmarkSpec& spec, const RunOptions& 
                        ? options.trace_subbuf_bytes
                        : tracing::subbuffer_bytes_for(result.rate_hz * events_per_frame(spec) +
                                                       control_loop_events_per_second(spec));
+  // Processes of the graph that are spawned later (per-node) start tracing before they could be
+  // added to a tracker, so only a single-process run is recorded alone.
+  if (options.processes == ProcessLayout::kSingle) s.only_processes = {getpid()};
   session_ = std::make_unique<tracing::RecordingSession>(s);
   result.trace_dir = session_->output_dir();
   result.trace_subbuf_bytes = session_->subbuf_bytes();

@@ -180,6 +180,12 @@ RecordingSession::RecordingSession(SessionOptions options) : options_(std::move(
       lttng({"enable-event", "--userspace", session, "--channel=robotperf", e});
     lttng({"add-context", "--userspace", session, "--channel=robotperf", "--type=vpid",
            "--type=vtid", "--type=procname"});
+    if (!options_.only_processes.empty()) {
+      std::string pids;
+      for (int pid : options_.only_processes)
+        pids += (pids.empty() ? "" : ",") + std::to_string(pid);
+      lttng({"track", "--userspace", session, "--vpid=" + pids});
+    }
     lttng({"start", name_});
   } catch (...) {
     run_command({"lttng", "destroy", name_});

@@ -8,10 +8,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 
 #include "robotperf/harness/run.hpp"
+#include "robotperf/tracing/ctf.hpp"
 #include "robotperf/tracing/session.hpp"
 
 namespace robotperf::harness {
@@ -316,6 +318,48 @@ TEST_F(GreyRun, CommandLineRunsGreyAndAnalysesTheTrace) {
 
 // The controller manager's tracepoints around each controller update: one begin/end pair per
 // controller per cycle, all inside the trace (the loop stops before the session does).
+// Events per recording process (vpid) in every trace under `root`.
+std::map<int64_t, std::size_t> events_by_process(const fs::path& root) {
+  std::map<int64_t, std::size_t> out;
+  for (const auto& dir : tracing::ctf::find_traces(root)) {
+    tracing::ctf::Trace trace(dir);
+    for (std::size_t i = 0; i < trace.stream_count(); ++i) {
+      trace.read_stream(i, [&](const tracing::ctf::Event& e) {
+        const int vpid = trace.stream_context_index(e.cls->stream_id, "vpid");
+        if (vpid >= 0) ++out[e.stream_context[static_cast<std::size_t>(vpid)].as_int()];
+      });
+    }
+  }
+  return out;
+}
+
+// A session limited to this process records none of the events another robotperf process emits
+// meanwhile; the same session unlimited does (so the first check can fail).
+TEST_F(GreyRun, SessionOfOneProcessLeavesOtherProcessesOut) {
+  for (const bool only_this_process : {true, false}) {
+    SCOPED_TRACE(only_this_process ? "only this process" : "every process");
+    tracing::SessionOptions so;
+    so.output_dir = dir_ / (only_this_process ? "alone.trace" : "all.trace");
+    if (only_this_process) so.only_processes = {getpid()};
+    tracing::RecordingSession session(so);
+    const Outcome other =
+        robotperf("run a5 --count 30 --warmup 0 --quiet --output " + (dir_ / "other").string());
+    ASSERT_EQ(other.exit_code, 0) << other.out;
+    RunOptions o;
+    o.count = 40;
+    ASSERT_TRUE(run_benchmark(relay_package(), o).valid);
+    session.stop();
+    const auto counts = events_by_process(so.output_dir);
+    ASSERT_TRUE(counts.contains(getpid()));
+    EXPECT_GT(counts.at(getpid()), 20u);
+    if (only_this_process) {
+      EXPECT_EQ(counts.size(), 1u) << "events of another process were recorded";
+    } else {
+      EXPECT_GE(counts.size(), 2u) << "the other robotperf process emitted nothing to record";
+    }
+  }
+}
+
 TEST_F(GreyRun, ControlLoopTraceHasEveryControllerUpdate) {
   const fs::path out = dir_ / "results";
   const Outcome run =

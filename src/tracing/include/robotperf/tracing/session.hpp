@@ -31,6 +31,10 @@ struct SessionOptions {
   std::size_t subbuf_bytes = 0;      // per-CPU sub-buffer size; 0 = subbuffer_bytes_for(0)
   std::size_t num_subbuf = 4;
   std::vector<std::string> events = {"robotperf:*", "ros2:*"};
+  // When not empty, only these processes are recorded (LTTng's vpid tracker): a session otherwise
+  // records every traced process of the user, and another robotperf run at the same time would
+  // fill its buffers with events of no interest.
+  std::vector<int> only_processes;
   // How long to wait for this process to register with a daemon we started.
   double register_timeout_s = 10.0;
 };
