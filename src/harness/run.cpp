@@ -21,6 +21,7 @@
 #include "measurement.hpp"
 #include "node_processes.hpp"
 #include "robotperf/graph/executor.hpp"
+#include "robotperf/metrics/delivery_validity.hpp"
 #include "robotperf/msgs/known_types.hpp"
 
 namespace robotperf::harness {
@@ -135,18 +136,10 @@ void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& ta
 
   auto invalid = [&](std::string why) { r.invalid_reasons.push_back(std::move(why)); };
   for (const auto& e : r.errors) invalid("run ended early: " + e);
-  if (r.matched < spec.min_samples) {
-    invalid(std::to_string(r.matched) + " matched samples, fewer than the " +
-            std::to_string(spec.min_samples) + " required");
-  }
-  if (r.loss_percent > spec.max_loss_percent) {
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "%.2f %% lost, above the %.2f %% bound", r.loss_percent,
-                  spec.max_loss_percent);
-    invalid(buf);
-  }
-  if (r.duplicates > 0) invalid(std::to_string(r.duplicates) + " duplicate receptions");
-  if (r.unknown > 0) invalid(std::to_string(r.unknown) + " receptions with unknown message IDs");
+  for (auto& why :
+       metrics::delivery_invalid_reasons({r.matched, r.duplicates, r.unknown, r.loss_percent},
+                                         spec.min_samples, spec.max_loss_percent))
+    invalid(std::move(why));
   r.valid = r.invalid_reasons.empty();
 }
 

@@ -11,6 +11,7 @@
 #include <tuple>
 #include <unordered_map>
 
+#include "robotperf/metrics/delivery_validity.hpp"
 #include "robotperf/tracing/ctf.hpp"
 
 namespace robotperf::tracing {
@@ -436,18 +437,10 @@ void summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run,
     invalid("the trace holds " + std::to_string(a.sent) + " input events for " +
             std::to_string(run.sent_reported) + " messages sent");
   }
-  if (a.matched < run.min_samples) {
-    invalid(std::to_string(a.matched) + " matched samples, fewer than the " +
-            std::to_string(run.min_samples) + " required");
-  }
-  if (a.loss_percent > run.max_loss_percent) {
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "%.2f %% lost, above the %.2f %% bound", a.loss_percent,
-                  run.max_loss_percent);
-    invalid(buf);
-  }
-  if (a.duplicates > 0) invalid(std::to_string(a.duplicates) + " duplicate receptions");
-  if (a.unknown > 0) invalid(std::to_string(a.unknown) + " receptions with unknown message IDs");
+  for (auto& why : metrics::delivery_invalid_reasons(
+           {a.matched, a.duplicates, a.unknown, a.loss_percent},
+           static_cast<std::size_t>(run.min_samples), run.max_loss_percent))
+    invalid(std::move(why));
 }
 
 // Per-hop breakdown from the events that carry message IDs.
