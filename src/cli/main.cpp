@@ -722,7 +722,7 @@ int main(int argc, char** argv) {
   std::string dataset_name;
   cli::GenerateOptions generate;
   auto* generate_cmd = dataset_cmd->add_subcommand("generate", "write a built-in dataset as a bag");
-  generate_cmd->add_option("name", dataset_name, "dataset name, e.g. perception/image")->required();
+  generate_cmd->add_option("name", dataset_name, "a registered dataset (robotperf list datasets)")->required();
   generate_cmd->add_option("--out", generate.out, "bag directory (default: the name, / as _)");
   generate_cmd->add_option("--storage", generate.storage, "sqlite3 or mcap (default mcap)")
       ->check(CLI::IsMember({"sqlite3", "mcap"}));

@@ -600,14 +600,18 @@ TEST_F(Cli, ControlLoopCpuThatCannotBeHadIsOneClearLine) {
   fs::create_directories(out_ / "control" / "c9_bad");
   const fs::path src = fs::path(ROBOTPERF_SOURCE_DIR) / "benchmarks" / "control" /
                        "c3_rrbot_forward_command_controller_position";
-  fs::copy_file(src / "benchmark.yaml", out_ / "control" / "c9_bad" / "benchmark.yaml");
+  // Benchmark folders add to the built-in ones: the copy needs an id of its own.
+  std::ifstream meta_in(src / "benchmark.yaml");
+  std::string meta((std::istreambuf_iterator<char>(meta_in)), std::istreambuf_iterator<char>());
+  meta.replace(meta.find("id: c3"), 6, "id: c9");
+  std::ofstream(out_ / "control" / "c9_bad" / "benchmark.yaml") << meta;
   std::ifstream in(src / "graph.yaml");
   std::string graph((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   graph.replace(graph.find("cpu: -1"), 7, "cpu: 1000");
   std::ofstream(out_ / "control" / "c9_bad" / "graph.yaml") << graph;
   const Outcome o =
       robotperf("--benchmarks " + out_.string() +
-                " run c3 --count 20 --warmup 2 --quiet --output " + (out_ / "r").string());
+                " run c9 --count 20 --warmup 2 --quiet --output " + (out_ / "r").string());
   EXPECT_EQ(o.exit_code, 2) << o.out;
   EXPECT_NE(o.out.find("cannot pin the control loop to CPU 1000"), std::string::npos) << o.out;
 }

@@ -263,8 +263,9 @@ std::vector<plugin::ParameterInfo> loop_parameters(const std::string& default_ha
   };
 }
 
-// A begin and an end per controller update, two controllers at most per controller manager.
-const plugin::ControlLoopInfo kLoop{"update_rate", 4.0};
+// The loop's rate parameter; a begin and an end event per controller update, two controllers at
+// most per controller manager.
+plugin::ControlLoopInfo control_loop() { return {"update_rate", 4.0}; }
 
 std::vector<plugin::ParameterInfo> with(std::vector<plugin::ParameterInfo> a,
                                         const std::vector<plugin::ParameterInfo>& b) {
@@ -313,7 +314,7 @@ void register_kernels(plugin::Registrar& registrar) {
                                                     jtc.stopped_velocity_tolerance,
                                                     "velocity below which a joint has stopped, "
                                                     "rad/s")}),
-       .control_loop = kLoop},
+       .control_loop = control_loop()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<JointTrajectoryControllerNode>(context, config);
       });
@@ -347,7 +348,7 @@ void register_kernels(plugin::Registrar& registrar) {
                                                        "(false: Twist, without an ID)")}),
                           with(speed_limit_parameters("linear.x"),
                                speed_limit_parameters("angular.z"))),
-       .control_loop = kLoop},
+       .control_loop = control_loop()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<DiffDriveControllerNode>(context, config);
       });
@@ -363,7 +364,7 @@ void register_kernels(plugin::Registrar& registrar) {
                                                     ForwardCommandControllerConfig{}.interface_name,
                                                     "command interface: position, velocity or "
                                                     "acceleration")}),
-       .control_loop = kLoop},
+       .control_loop = control_loop()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<ForwardCommandControllerNode>(context, config);
       });

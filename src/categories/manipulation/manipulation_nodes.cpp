@@ -286,10 +286,6 @@ std::vector<plugin::ParameterInfo> ik_parameters() {
                                 "seed of the random restarts")};
 }
 
-const std::vector<plugin::PortInfo> kStateIn{{"joint_states", "sensor_msgs/msg/JointState"}};
-const std::vector<plugin::PortInfo> kPose{{"pose", "geometry_msgs/msg/PoseStamped"}};
-const std::vector<plugin::PortInfo> kStateOut{{"joint_states", "sensor_msgs/msg/JointState"}};
-
 template <class Node, class... Args>
 plugin::KernelFactory factory(Args... args) {
   return [=](graph::Context& context, const KernelConfig& config) {
@@ -300,26 +296,29 @@ plugin::KernelFactory factory(Args... args) {
 }  // namespace
 
 void register_kernels(plugin::Registrar& registrar) {
+  const std::vector<plugin::PortInfo> state_in{{"joint_states", "sensor_msgs/msg/JointState"}};
+  const std::vector<plugin::PortInfo> pose{{"pose", "geometry_msgs/msg/PoseStamped"}};
+  const std::vector<plugin::PortInfo> state_out{{"joint_states", "sensor_msgs/msg/JointState"}};
   registrar.add_kernel({.name = "manipulation/forward_kinematics",
                         .description = "xArm6 flange pose of a joint state (KDL "
                                        "ChainFkSolverPos_recursive)",
-                        .inputs = kStateIn,
-                        .outputs = kPose},
+                        .inputs = state_in,
+                        .outputs = pose},
                        factory<ForwardKinematicsNode>());
   registrar.add_kernel(
       {.name = "manipulation/ik_kdl",
        .description = "xArm6 joint state for a target pose: Newton-Raphson with joint limits on "
                       "KDL, random restarts within the timeout (MoveIt's KDL plugin)",
-       .inputs = kPose,
-       .outputs = kStateOut,
+       .inputs = pose,
+       .outputs = state_out,
        .parameters = ik_parameters()},
       factory<InverseKinematicsNode>(IkSolver::kNewtonRaphsonJL));
   registrar.add_kernel(
       {.name = "manipulation/ik_lma",
        .description = "xArm6 joint state for a target pose: KDL ChainIkSolverPos_LMA, random "
                       "restarts within the timeout (MoveIt's LMA plugin)",
-       .inputs = kPose,
-       .outputs = kStateOut,
+       .inputs = pose,
+       .outputs = state_out,
        .parameters = ik_parameters()},
       factory<InverseKinematicsNode>(IkSolver::kLevenbergMarquardt));
   const std::vector<plugin::PortInfo> collision_out{
@@ -327,13 +326,13 @@ void register_kernels(plugin::Registrar& registrar) {
   registrar.add_kernel({.name = "manipulation/collision_fcl",
                         .description = "boolean collision query of an xArm6 joint state vs the "
                                        "box, then self-collision (FCL)",
-                        .inputs = kStateIn,
+                        .inputs = state_in,
                         .outputs = collision_out},
                        factory<CollisionNode>(CollisionBackend::kFcl));
   registrar.add_kernel({.name = "manipulation/collision_bullet",
                         .description = "boolean collision query of an xArm6 joint state vs the "
                                        "box, then self-collision (Bullet)",
-                        .inputs = kStateIn,
+                        .inputs = state_in,
                         .outputs = collision_out},
                        factory<CollisionNode>(CollisionBackend::kBullet));
   const PlanOptions plan;

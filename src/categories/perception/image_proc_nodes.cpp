@@ -100,8 +100,9 @@ plugin::ParameterInfo interpolation_declaration() {
 }
 
 // image_transport's camera subscriber: the image and its CameraInfo.
-const std::vector<plugin::PortInfo> kCameraInputs{{"image", "sensor_msgs/msg/Image"},
-                                                  {"camera_info", "sensor_msgs/msg/CameraInfo"}};
+std::vector<plugin::PortInfo> camera_inputs() {
+  return {{"image", "sensor_msgs/msg/Image"}, {"camera_info", "sensor_msgs/msg/CameraInfo"}};
+}
 
 }  // namespace
 
@@ -110,7 +111,7 @@ void register_image_proc_kernels(plugin::Registrar& registrar) {
       {.name = "image_proc/rectify",
        .description = "undistort and rectify an image with its CameraInfo (cached map, cv::remap), "
                       "as image_proc",
-       .inputs = kCameraInputs,
+       .inputs = camera_inputs(),
        .outputs = {{"image_rect", "sensor_msgs/msg/Image"}},
        .parameters = {interpolation_declaration()}},
       [](graph::Context& context, const KernelConfig& config) {
@@ -120,7 +121,7 @@ void register_image_proc_kernels(plugin::Registrar& registrar) {
   registrar.add_kernel(
       {.name = "image_proc/resize",
        .description = "resize an image and scale its CameraInfo (K, P, ROI), as image_proc",
-       .inputs = kCameraInputs,
+       .inputs = camera_inputs(),
        .outputs = {{"resize", "sensor_msgs/msg/Image"},
                    {"resize_info", "sensor_msgs/msg/CameraInfo"}},
        .parameters =
