@@ -11,7 +11,8 @@ install(DIRECTORY ${CMAKE_SOURCE_DIR}/benchmarks/ DESTINATION ${ROBOTPERF_INSTAL
 set(ROBOTPERF_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/robotperf)
 install(EXPORT robotperfTargets NAMESPACE robotperf:: DESTINATION ${ROBOTPERF_CMAKE_DIR})
 configure_package_config_file(${CMAKE_SOURCE_DIR}/cmake/robotperfConfig.cmake.in
-  ${CMAKE_BINARY_DIR}/robotperfConfig.cmake INSTALL_DESTINATION ${ROBOTPERF_CMAKE_DIR})
+  ${CMAKE_BINARY_DIR}/robotperfConfig.cmake INSTALL_DESTINATION ${ROBOTPERF_CMAKE_DIR}
+  PATH_VARS CMAKE_INSTALL_BINDIR)
 # 0.x: a new minor version may change the plug-in API (its version is checked at load time too).
 write_basic_package_version_file(${CMAKE_BINARY_DIR}/robotperfConfigVersion.cmake
   VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)

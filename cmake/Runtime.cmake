@@ -11,7 +11,9 @@ set(CMAKE_INSTALL_RPATH "$ORIGIN/../${CMAKE_INSTALL_LIBDIR}")
 # headers (the folder holding robotperf/) installed under include/.
 function(robotperf_runtime_library target)
   cmake_parse_arguments(R "" "HEADERS" "" ${ARGN})
-  set_target_properties(${target} PROPERTIES
+  # Imported as robotperf::msgs, robotperf::plugin, ...
+  string(REGEX REPLACE "^robotperf_" "" export_name ${target})
+  set_target_properties(${target} PROPERTIES EXPORT_NAME ${export_name}
     VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR}.${PROJECT_VERSION_MINOR})
   install(TARGETS ${target} EXPORT robotperfTargets
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}

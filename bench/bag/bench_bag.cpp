@@ -22,8 +22,8 @@
 #include <string>
 #include <vector>
 
-#include "robotperf/categories/builtin.hpp"
 #include "robotperf/bag/bag.hpp"
+#include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/msgs/definitions.hpp"
 

@@ -18,9 +18,9 @@
 #include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/run.hpp"
+#include "robotperf/msgs/stereo_msgs.hpp"
 #include "robotperf/perception/depth_image_proc.hpp"
 #include "robotperf/perception/stereo_image_proc.hpp"
-#include "robotperf/msgs/stereo_msgs.hpp"
 #include "robotperf/sysinfo/run_rules.hpp"
 
 using namespace robotperf;
@@ -121,7 +121,7 @@ int main() {
   {
     const harness::Dataset d = harness::load_dataset("perception/stereo");
     perception::DisparityProcessor bm;  // stereo_image_proc defaults, as a3's graph.yaml
-    msgs::DisparityImage out;        // reused, as the node reuses its output once released
+    msgs::DisparityImage out;           // reused, as the node reuses its output once released
     std::shared_ptr<const msgs::Image> left, right;
     std::shared_ptr<const msgs::CameraInfo> left_info, right_info;
     compare(

@@ -123,7 +123,8 @@ std::vector<fs::path> benchmark_roots(const std::vector<std::string>& flags) {
   const fs::path installed =
       self_executable().parent_path().parent_path() / build_info::kInstalledBenchmarksDir;
   std::error_code ec;
-  roots.push_back(fs::is_directory(installed, ec) ? installed : fs::path(build_info::kBenchmarksDir));
+  roots.push_back(fs::is_directory(installed, ec) ? installed
+                                                  : fs::path(build_info::kBenchmarksDir));
   if (const char* env = std::getenv("ROBOTPERF_BENCHMARKS"); env && *env) {
     std::stringstream entries(env);
     std::string entry;
@@ -722,7 +723,8 @@ int main(int argc, char** argv) {
   std::string dataset_name;
   cli::GenerateOptions generate;
   auto* generate_cmd = dataset_cmd->add_subcommand("generate", "write a built-in dataset as a bag");
-  generate_cmd->add_option("name", dataset_name, "a registered dataset (robotperf list datasets)")->required();
+  generate_cmd->add_option("name", dataset_name, "a registered dataset (robotperf list datasets)")
+      ->required();
   generate_cmd->add_option("--out", generate.out, "bag directory (default: the name, / as _)");
   generate_cmd->add_option("--storage", generate.storage, "sqlite3 or mcap (default mcap)")
       ->check(CLI::IsMember({"sqlite3", "mcap"}));

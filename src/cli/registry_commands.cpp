@@ -26,12 +26,15 @@ void parameters(std::ostream& out, const std::vector<plugin::ParameterInfo>& lis
   out << "  " << heading << ":\n";
   for (const auto& p : list) {
     out << "    " << p.name << " (" << plugin::type_name(p.type);
-    if (p.default_value) out << ", default " << (p.default_value->empty() ? "\"\"" : *p.default_value);
+    if (p.default_value)
+      out << ", default " << (p.default_value->empty() ? "\"\"" : *p.default_value);
     out << "): " << p.doc << "\n";
   }
 }
 
-std::string origin(const std::string& where) { return "from " + where; }
+std::string origin(const std::string& where) {
+  return "from " + where;
+}
 
 }  // namespace
 

@@ -5,13 +5,13 @@
 #include <set>
 
 #include "robotperf/bag/bag.hpp"
-#include "robotperf/plugin/content_hash.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/msgs/definitions.hpp"
 #include "robotperf/msgs/dynamic.hpp"
 #include "robotperf/msgs/known_types.hpp"
 #include "robotperf/msgs/serialized_message.hpp"
+#include "robotperf/plugin/content_hash.hpp"
 
 namespace robotperf::harness {
 namespace {

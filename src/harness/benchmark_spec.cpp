@@ -3,8 +3,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
-#include <cmath>
 #include <charconv>
+#include <cmath>
 #include <set>
 #include <sstream>
 
@@ -117,9 +117,9 @@ BoundaryTopic boundary_topic(const YamlFile& file, const YAML::Node& n, bool is_
 void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   const YamlFile file(path);
   const YAML::Node& root = file.root();
-  file.allow_keys(root, {"plugins", "dataset", "rate_hz", "count", "warmup", "drain_s",
-                         "executor_threads", "validity", "inputs", "output", "nodes",
-                         "functional"});
+  file.allow_keys(
+      root, {"plugins", "dataset", "rate_hz", "count", "warmup", "drain_s", "executor_threads",
+             "validity", "inputs", "output", "nodes", "functional"});
   // Plug-ins first: they may register the kernels, dataset and evaluator named below.
   if (const YAML::Node plugins = root["plugins"]; plugins.IsDefined()) {
     if (!plugins.IsSequence()) file.fail(plugins, "'plugins' must be a list of files");
@@ -192,7 +192,8 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
     node.qos = file.qos(n);
     for (const auto& [port, topic] : node.topics) {
       const plugin::PortInfo* p = info.find_port(port);
-      if (p == nullptr) file.fail(n["topics"], "kernel " + node.kernel + " has no port '" + port + "'");
+      if (p == nullptr)
+        file.fail(n["topics"], "kernel " + node.kernel + " has no port '" + port + "'");
       // A port of a fixed type wired to a boundary topic must carry the boundary's type.
       for (const BoundaryTopic* b : boundary) {
         if (b->topic == topic && !p->type.empty() && p->type != b->type) {
@@ -210,9 +211,9 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
     functional.evaluator = file.require_string(f, "evaluator");
     const plugin::EvaluatorEntry* entry = plugin::registry().find_evaluator(functional.evaluator);
     if (entry == nullptr) {
-      file.fail(f["evaluator"], "unknown functional evaluator '" + functional.evaluator +
-                                    "' (registered: " +
-                                    plugin::names_of(plugin::registry().evaluators()) + ")");
+      file.fail(f["evaluator"],
+                "unknown functional evaluator '" + functional.evaluator +
+                    "' (registered: " + plugin::names_of(plugin::registry().evaluators()) + ")");
     }
     const plugin::EvaluatorInfo* info = &entry->info;
     functional.parameters = file.string_map(f, "parameters");
@@ -327,9 +328,9 @@ std::vector<BenchmarkSpec> discover_benchmarks(const std::vector<fs::path>& root
   std::ranges::sort(out, [](const auto& a, const auto& b) { return a.id < b.id; });
   for (std::size_t i = 1; i < out.size(); ++i) {
     if (out[i].id == out[i - 1].id) {
-      throw BenchmarkError("benchmark id " + out[i].id + " is defined twice: " +
-                           out[i - 1].dir.string() + " and " + out[i].dir.string() +
-                           " (give one of them another id)");
+      throw BenchmarkError("benchmark id " + out[i].id +
+                           " is defined twice: " + out[i - 1].dir.string() + " and " +
+                           out[i].dir.string() + " (give one of them another id)");
     }
   }
   return out;
@@ -381,8 +382,8 @@ plugin::KernelConfig kernel_config(const NodeSpec& node,
     config.workload_seed = value;
   }
   try {
-    config.parameters =
-        plugin::Parameters(kernel_of(node).info.parameters, node.parameters, "node '" + node.name + "'");
+    config.parameters = plugin::Parameters(kernel_of(node).info.parameters, node.parameters,
+                                           "node '" + node.name + "'");
   } catch (const std::invalid_argument& e) {
     throw BenchmarkError(e.what());
   }

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "black_box.hpp"
-#include "robotperf/plugin/control_loop.hpp"
 #include "robotperf/harness/run.hpp"
+#include "robotperf/plugin/control_loop.hpp"
 
 namespace robotperf::harness {
 

@@ -26,8 +26,8 @@ void check_generated(const plugin::DatasetEntry& entry, const std::vector<Datase
     if (s.name != declared.name || s.type == nullptr || s.type->ros_type != declared.type) {
       throw std::runtime_error(who + " generated stream " + std::to_string(i) + " as '" + s.name +
                                "' (" + (s.type ? s.type->ros_type : std::string("no type")) +
-                               "), its description says '" + declared.name + "' (" +
-                               declared.type + ")");
+                               "), its description says '" + declared.name + "' (" + declared.type +
+                               ")");
     }
     if (s.messages.size() != streams.front().messages.size()) {
       throw std::runtime_error(who + " generated " + std::to_string(s.messages.size()) +
@@ -45,7 +45,8 @@ void check_generated(const plugin::DatasetEntry& entry, const std::vector<Datase
 Dataset generate(const plugin::DatasetEntry& entry,
                  const std::map<std::string, std::string>& workload) {
   const auto& info = entry.info;
-  const plugin::Parameters parameters(info.workload, workload, "dataset " + info.name + " workload");
+  const plugin::Parameters parameters(info.workload, workload,
+                                      "dataset " + info.name + " workload");
   Dataset d;
   d.streams = entry.generate(parameters);
   check_generated(entry, d.streams);

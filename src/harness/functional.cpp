@@ -47,7 +47,8 @@ std::unique_ptr<plugin::FunctionalEvaluator> make_evaluator(const FunctionalSpec
                                       "evaluator " + spec.evaluator);
   auto evaluator = entry.make(truth, parameters);
   if (!evaluator)
-    throw std::runtime_error("evaluator " + spec.evaluator + " (" + entry.origin + ") made nothing");
+    throw std::runtime_error("evaluator " + spec.evaluator + " (" + entry.origin +
+                             ") made nothing");
   return evaluator;
 }
 

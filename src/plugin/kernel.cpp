@@ -48,8 +48,7 @@ void trace_controller_update_begin(const char* manager, const char* controller, 
 
 void trace_controller_update_end(const char* manager, const char* controller, uint64_t cycle,
                                  int64_t taken_command) {
-  lttng_ust_tracepoint(robotperf, controller_update_end, manager, controller, cycle,
-                       taken_command);
+  lttng_ust_tracepoint(robotperf, controller_update_end, manager, controller, cycle, taken_command);
 }
 
 }  // namespace robotperf::plugin

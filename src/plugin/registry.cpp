@@ -69,8 +69,8 @@ void check_kernel(const KernelInfo& info, const KernelFactory& factory) {
   if (info.control_loop) {
     const auto rate =
         std::ranges::find(info.parameters, info.control_loop->rate_parameter, &ParameterInfo::name);
-    if (rate == info.parameters.end() ||
-        rate->type != ParameterType::kDouble || !rate->default_value) {
+    if (rate == info.parameters.end() || rate->type != ParameterType::kDouble ||
+        !rate->default_value) {
       throw std::invalid_argument(who + ": control loop rate parameter '" +
                                   info.control_loop->rate_parameter +
                                   "' is not a declared double parameter with a default");
@@ -104,7 +104,8 @@ void check_evaluator(const EvaluatorInfo& info, const EvaluatorFactory& factory)
   const std::string who = "evaluator " + info.name;
   if (!factory) throw std::invalid_argument(who + ": no factory");
   check_type(who + " output", info.output_type);
-  if (!info.observed_truth_type.empty()) check_type(who + " observed truth", info.observed_truth_type);
+  if (!info.observed_truth_type.empty())
+    check_type(who + " observed truth", info.observed_truth_type);
   if (info.truth_roles.empty()) throw std::invalid_argument(who + ": no truth role");
   std::set<std::string> roles, metrics;
   for (const auto& r : info.truth_roles) {
@@ -195,8 +196,7 @@ Registrar::~Registrar() = default;
 Registry::Registry() : state_(std::make_unique<State>()) {}
 Registry::~Registry() = default;
 
-void Registry::add(const std::string& origin,
-                   const std::function<void(Registrar&)>& register_all) {
+void Registry::add(const std::string& origin, const std::function<void(Registrar&)>& register_all) {
   add_as(origin, origin, register_all);
 }
 
@@ -208,8 +208,9 @@ void Registry::add_as(const std::string& origin, const std::string& label,
   } catch (const std::exception& e) {
     throw PluginError(label + ": registration failed: " + e.what());
   } catch (...) {
-    throw PluginError(label + ": registration failed with an exception that is not a "
-                              "std::exception");
+    throw PluginError(label +
+                      ": registration failed with an exception that is not a "
+                      "std::exception");
   }
   std::lock_guard lock(mutex_);
   try {
@@ -237,13 +238,14 @@ void Registry::load(const fs::path& file) {
   void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (handle == nullptr) {
     const char* why = dlerror();
-    throw PluginError(where + ": cannot be loaded as a shared library: " +
-                      (why ? why : "unknown error"));
+    throw PluginError(where +
+                      ": cannot be loaded as a shared library: " + (why ? why : "unknown error"));
   }
   using VersionFunction = int (*)();
   using RegisterFunction = void (*)(Registrar&);
   auto version = reinterpret_cast<VersionFunction>(dlsym(handle, "robotperf_plugin_api_version"));
-  auto register_all = reinterpret_cast<RegisterFunction>(dlsym(handle, "robotperf_plugin_register"));
+  auto register_all =
+      reinterpret_cast<RegisterFunction>(dlsym(handle, "robotperf_plugin_register"));
   if (version == nullptr || register_all == nullptr) {
     dlclose(handle);
     throw PluginError(where +

@@ -1,8 +1,8 @@
-#include "robotperf/plugin/content_hash.hpp"
-
 #include <gtest/gtest.h>
 
 #include <string_view>
+
+#include "robotperf/plugin/content_hash.hpp"
 
 namespace robotperf::plugin {
 namespace {

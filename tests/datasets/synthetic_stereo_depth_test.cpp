@@ -5,9 +5,9 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "robotperf/perception/image_proc.hpp"
 #include "robotperf/perception/synthetic_depth.hpp"
 #include "robotperf/perception/synthetic_stereo.hpp"
-#include "robotperf/perception/image_proc.hpp"
 
 namespace robotperf::perception {
 namespace {

@@ -8,8 +8,8 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
-#include "robotperf/perception/synthetic_camera.hpp"
 #include "robotperf/perception/camera_model.hpp"
+#include "robotperf/perception/synthetic_camera.hpp"
 
 namespace robotperf::perception {
 namespace {

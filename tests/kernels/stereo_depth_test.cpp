@@ -5,13 +5,13 @@
 #include <cstring>
 #include <opencv2/core.hpp>
 
-#include "robotperf/perception/synthetic_depth.hpp"
-#include "robotperf/perception/synthetic_stereo.hpp"
 #include "robotperf/perception/camera_model.hpp"
 #include "robotperf/perception/depth_image_proc.hpp"
 #include "robotperf/perception/image_proc.hpp"
-#include "robotperf/plugin/message_sync.hpp"
 #include "robotperf/perception/stereo_image_proc.hpp"
+#include "robotperf/perception/synthetic_depth.hpp"
+#include "robotperf/perception/synthetic_stereo.hpp"
+#include "robotperf/plugin/message_sync.hpp"
 
 namespace robotperf::perception {
 namespace {

@@ -86,28 +86,27 @@ class ScaledEvaluator final : public plugin::FunctionalEvaluator {
 }  // namespace
 
 ROBOTPERF_PLUGIN(registrar) {
-  registrar.add_kernel(
-      {.name = "test_plugin/scale",
-       .description = "scale joint positions",
-       .backends = {"cpu", "test_backend"},
-       .inputs = {{"input", "sensor_msgs/msg/JointState"}},
-       .outputs = {{"output", "sensor_msgs/msg/JointState"}},
-       .parameters = {plugin::double_parameter("factor", 2.0, "scale factor")}},
-      [](graph::Context& context, const plugin::KernelConfig& config) {
-        return std::make_shared<ScaleNode>(context, config);
-      });
-  registrar.add_dataset({.name = "test_plugin/joints",
-                         .description = "seeded joint states and their scaled truth",
-                         .rate_hz = 50,
-                         .frames = 40,
-                         .streams = {{"states", "/test_plugin/states",
-                                      "sensor_msgs/msg/JointState", false, "inputs"},
-                                     {"scaled", "/test_plugin/scaled",
-                                      "sensor_msgs/msg/JointState", true, "scaled inputs"}},
-                         .workload = {plugin::int_parameter("seed", 7, "random seed"),
-                                      plugin::int_parameter("frames", 40, "frames"),
-                                      plugin::double_parameter("factor", 2.0, "truth scale")}},
-                        joint_streams);
+  registrar.add_kernel({.name = "test_plugin/scale",
+                        .description = "scale joint positions",
+                        .backends = {"cpu", "test_backend"},
+                        .inputs = {{"input", "sensor_msgs/msg/JointState"}},
+                        .outputs = {{"output", "sensor_msgs/msg/JointState"}},
+                        .parameters = {plugin::double_parameter("factor", 2.0, "scale factor")}},
+                       [](graph::Context& context, const plugin::KernelConfig& config) {
+                         return std::make_shared<ScaleNode>(context, config);
+                       });
+  registrar.add_dataset(
+      {.name = "test_plugin/joints",
+       .description = "seeded joint states and their scaled truth",
+       .rate_hz = 50,
+       .frames = 40,
+       .streams = {{"states", "/test_plugin/states", "sensor_msgs/msg/JointState", false, "inputs"},
+                   {"scaled", "/test_plugin/scaled", "sensor_msgs/msg/JointState", true,
+                    "scaled inputs"}},
+       .workload = {plugin::int_parameter("seed", 7, "random seed"),
+                    plugin::int_parameter("frames", 40, "frames"),
+                    plugin::double_parameter("factor", 2.0, "truth scale")}},
+      joint_streams);
   registrar.add_evaluator(
       {.name = "test_plugin/scaled",
        .description = "outputs against the scaled truth",

@@ -8,6 +8,7 @@
 
 #include "../harness/test_package.hpp"
 #include "robotperf/harness/run.hpp"
+#include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/plugin/registry.hpp"
 #include "robotperf/plugin/version.hpp"
 
@@ -36,6 +37,10 @@ TEST(PluginLoader, LoadsAPluginOnceWithItsOrigin) {
   EXPECT_EQ(k->info.backends, (std::vector<std::string>{"cpu", "test_backend"}));
   EXPECT_NE(registry().find_dataset("test_plugin/joints"), nullptr);
   EXPECT_NE(registry().find_evaluator("test_plugin/scaled"), nullptr);
+  // A message type has one TypeSupport in the process, whichever module asks for it: the
+  // plug-in's dataset and this test's code agree on it.
+  const harness::Dataset d = harness::load_dataset("test_plugin/joints");
+  EXPECT_EQ(d.stream("states").type, &msgs::type_support<msgs::JointState>());
   // The built-in categories are there beside it.
   EXPECT_EQ(registry().find_kernel("util/relay")->origin, "built-in util");
 }
@@ -72,16 +77,14 @@ TEST(PluginLoader, AnotherApiVersionIsRefused) {
 TEST(PluginLoader, ANameTakenByABuiltInCategoryIsRefused) {
   const std::string e = load_error(DUPLICATE_PLUGIN);
   EXPECT_NE(e.find(fs::canonical(DUPLICATE_PLUGIN).string()), std::string::npos) << e;
-  EXPECT_NE(e.find("kernel 'util/relay' is already registered by built-in util"),
-            std::string::npos)
+  EXPECT_NE(e.find("kernel 'util/relay' is already registered by built-in util"), std::string::npos)
       << e;
   EXPECT_EQ(registry().find_kernel("util/relay")->origin, "built-in util");
 }
 
 TEST(PluginLoader, APluginThatThrowsWhileRegisteringLeavesNothing) {
   const std::string e = load_error(THROWING_PLUGIN);
-  EXPECT_NE(e.find("registration failed: no licence for this accelerator"), std::string::npos)
-      << e;
+  EXPECT_NE(e.find("registration failed: no licence for this accelerator"), std::string::npos) << e;
   EXPECT_EQ(registry().find_kernel("throwing_plugin/kept_nowhere"), nullptr);
   EXPECT_EQ(std::ranges::count(registry().plugins(), fs::canonical(THROWING_PLUGIN)), 0);
 }
@@ -142,8 +145,8 @@ TEST(PluginLoader, AnEvaluatorParameterChangesTheVerdict) {
   std::ofstream(package.dir() / "graph.yaml") << graph;
   std::ofstream(package.dir() / "benchmark.yaml", std::ios::app)
       << "functional:\n  thresholds:\n    match_fraction: {min: 1.0}\n";
-  const harness::RunResult r = harness::run_benchmark(harness::load_benchmark(package.dir()),
-                                                      quick());
+  const harness::RunResult r =
+      harness::run_benchmark(harness::load_benchmark(package.dir()), quick());
   ASSERT_TRUE(r.functional.has_value());
   EXPECT_FALSE(r.functional->valid);
   EXPECT_LT(r.functional->metrics.at(0).value, 1.0);

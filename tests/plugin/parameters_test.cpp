@@ -23,9 +23,10 @@ TEST(Parameters, DefaultsAreReadInTheirDeclaredType) {
 }
 
 TEST(Parameters, GivenValuesWin) {
-  const Parameters p(declared(), {{"flag", "false"}, {"count", "-3"}, {"scale", "2e-3"},
-                                  {"mode", "slow"}, {"seed", "9"}},
-                     "node 'n'");
+  const Parameters p(
+      declared(),
+      {{"flag", "false"}, {"count", "-3"}, {"scale", "2e-3"}, {"mode", "slow"}, {"seed", "9"}},
+      "node 'n'");
   EXPECT_FALSE(p.get_bool("flag"));
   EXPECT_EQ(p.get_int("count"), -3);
   EXPECT_DOUBLE_EQ(p.get_double("scale"), 2e-3);

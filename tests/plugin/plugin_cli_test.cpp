@@ -33,7 +33,9 @@ Outcome robotperf(const std::string& args) {
   return run(std::string(ROBOTPERF_EXECUTABLE) + " " + args);
 }
 
-std::size_t lines(const std::string& s) { return std::ranges::count(s, '\n'); }
+std::size_t lines(const std::string& s) {
+  return std::ranges::count(s, '\n');
+}
 
 class PluginCli : public ::testing::Test {
  protected:
@@ -88,8 +90,9 @@ TEST_F(PluginCli, ListsWhatAPluginRegistersAndWhereItCameFrom) {
 TEST_F(PluginCli, PluginPathLoadsFilesAndFolders) {
   fs::create_directories(dir_ / "plugins");
   fs::copy_file(GOOD_PLUGIN, dir_ / "plugins" / "libgood.so");
-  const auto o = run("ROBOTPERF_PLUGIN_PATH=/nonexistent-is-an-error:" + (dir_ / "plugins").string() +
-                     " " + ROBOTPERF_EXECUTABLE + " list kernels");
+  const auto o =
+      run("ROBOTPERF_PLUGIN_PATH=/nonexistent-is-an-error:" + (dir_ / "plugins").string() + " " +
+          ROBOTPERF_EXECUTABLE + " list kernels");
   EXPECT_EQ(o.exit_code, 2) << o.out;
   EXPECT_EQ(o.out, "robotperf: plug-in /nonexistent-is-an-error: file not found\n");
   const auto ok = run("ROBOTPERF_PLUGIN_PATH=" + (dir_ / "plugins").string() + " " +
@@ -133,11 +136,10 @@ TEST_F(PluginCli, BenchmarkFoldersAddToTheBuiltInOnes) {
   EXPECT_EQ(missing.exit_code, 2) << missing.out;
   EXPECT_NE(missing.out.find("unknown kernel 'test_plugin/scale'"), std::string::npos)
       << missing.out;
-  const auto described = robotperf("--benchmarks " + folder.string() + " describe x1 --plugin " +
-                                   GOOD_PLUGIN);
+  const auto described =
+      robotperf("--benchmarks " + folder.string() + " describe x1 --plugin " + GOOD_PLUGIN);
   EXPECT_EQ(described.exit_code, 0) << described.out;
-  EXPECT_NE(described.out.find("param factor = 2 (default)"), std::string::npos)
-      << described.out;
+  EXPECT_NE(described.out.find("param factor = 2 (default)"), std::string::npos) << described.out;
 }
 
 TEST_F(PluginCli, ADuplicateIdNamesBothPackages) {
@@ -154,9 +156,10 @@ TEST_F(PluginCli, ADuplicateIdNamesBothPackages) {
 
 TEST_F(PluginCli, PerNodeChildrenLoadThePlugin) {
   const fs::path folder = benchmark_folder();
-  const auto o = robotperf("--plugin " + std::string(GOOD_PLUGIN) + " --benchmarks " +
-                           folder.string() + " run x1 --rmw fastdds --processes per-node --count 30" +
-                           " --quiet --domain " + domain() + " --output " + (dir_ / "out").string());
+  const auto o =
+      robotperf("--plugin " + std::string(GOOD_PLUGIN) + " --benchmarks " + folder.string() +
+                " run x1 --rmw fastdds --processes per-node --count 30" + " --quiet --domain " +
+                domain() + " --output " + (dir_ / "out").string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   std::vector<fs::path> results;
   for (const auto& e : fs::directory_iterator(dir_ / "out"))

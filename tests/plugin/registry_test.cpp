@@ -15,9 +15,8 @@ KernelInfo kernel(const std::string& name) {
 }
 
 KernelFactory no_node() {
-  return [](graph::Context&, const KernelConfig&) -> std::shared_ptr<graph::Node> {
-    return nullptr;
-  };
+  return
+      [](graph::Context&, const KernelConfig&) -> std::shared_ptr<graph::Node> { return nullptr; };
 }
 
 std::string error_of(Registry& r, const std::string& origin,
@@ -113,12 +112,11 @@ TEST(Registry, UnusableDescriptionsAreRefused) {
        }},
       {"no metric",
        [](Registrar& reg) {
-         reg.add_evaluator({.name = "d/ev",
-                            .output_type = "sensor_msgs/msg/Image",
-                            .truth_roles = {"truth"}},
-                           [](const TruthStreams&, const Parameters&) {
-                             return std::unique_ptr<FunctionalEvaluator>();
-                           });
+         reg.add_evaluator(
+             {.name = "d/ev", .output_type = "sensor_msgs/msg/Image", .truth_roles = {"truth"}},
+             [](const TruthStreams&, const Parameters&) {
+               return std::unique_ptr<FunctionalEvaluator>();
+             });
        }},
   };
   for (const auto& [problem, fn] : cases) {

@@ -265,7 +265,9 @@ std::vector<plugin::ParameterInfo> loop_parameters(const std::string& default_ha
 
 // The loop's rate parameter; a begin and an end event per controller update, two controllers at
 // most per controller manager.
-plugin::ControlLoopInfo control_loop() { return {"update_rate", 4.0}; }
+plugin::ControlLoopInfo control_loop() {
+  return {"update_rate", 4.0};
+}
 
 std::vector<plugin::ParameterInfo> with(std::vector<plugin::ParameterInfo> a,
                                         const std::vector<plugin::ParameterInfo>& b) {
@@ -300,20 +302,20 @@ void register_kernels(plugin::Registrar& registrar) {
                       "tolerances) on simulated hardware, as ros2_control + ros2_controllers",
        .inputs = {{"joint_trajectory", "trajectory_msgs/msg/JointTrajectory"}},
        .outputs = {{"controller_state", "control_msgs/msg/JointTrajectoryControllerState"}},
-       .parameters = with(loop_parameters("rrbot"),
-                          {plugin::double_parameter("path_tolerance", 0.0,
-                                                    "largest position error along the path, "
-                                                    "rad, every joint (0: not checked)"),
-                           plugin::double_parameter("goal_tolerance", 0.0,
-                                                    "largest position error at the goal, rad, "
-                                                    "every joint (0: not checked)"),
-                           plugin::double_parameter("goal_time", jtc.goal_time_s,
-                                                    "abort a goal not reached this long after "
-                                                    "its last point, s (0: no limit)"),
-                           plugin::double_parameter("stopped_velocity_tolerance",
-                                                    jtc.stopped_velocity_tolerance,
-                                                    "velocity below which a joint has stopped, "
-                                                    "rad/s")}),
+       .parameters = with(
+           loop_parameters("rrbot"),
+           {plugin::double_parameter("path_tolerance", 0.0,
+                                     "largest position error along the path, "
+                                     "rad, every joint (0: not checked)"),
+            plugin::double_parameter("goal_tolerance", 0.0,
+                                     "largest position error at the goal, rad, "
+                                     "every joint (0: not checked)"),
+            plugin::double_parameter("goal_time", jtc.goal_time_s,
+                                     "abort a goal not reached this long after "
+                                     "its last point, s (0: no limit)"),
+            plugin::double_parameter("stopped_velocity_tolerance", jtc.stopped_velocity_tolerance,
+                                     "velocity below which a joint has stopped, "
+                                     "rad/s")}),
        .control_loop = control_loop()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<JointTrajectoryControllerNode>(context, config);
@@ -329,25 +331,24 @@ void register_kernels(plugin::Registrar& registrar) {
        .outputs = {{"odom", "nav_msgs/msg/Odometry"},
                    {"tf", "tf2_msgs/msg/TFMessage"},
                    {"ground_truth", "nav_msgs/msg/Odometry"}},
-       .parameters = with(with(loop_parameters("diffbot"),
-                               {plugin::double_parameter("wheel_separation", dd.wheel_separation,
-                                                         "distance between the wheels, m (the "
-                                                         "controller's and the robot's)"),
-                                plugin::double_parameter("wheel_radius", dd.wheel_radius,
-                                                         "wheel radius, m"),
-                                plugin::bool_parameter("open_loop", dd.open_loop,
-                                                       "odometry from the commands (true) or "
-                                                       "the wheel positions (false)"),
-                                plugin::double_parameter("cmd_vel_timeout", dd.cmd_vel_timeout_s,
-                                                         "stop when no command came for this "
-                                                         "long, s"),
-                                plugin::double_parameter("publish_rate", dd.publish_rate_hz,
-                                                         "odometry and TF rate, Hz"),
-                                plugin::bool_parameter("use_stamped_vel", true,
-                                                       "cmd_vel is geometry_msgs/TwistStamped "
-                                                       "(false: Twist, without an ID)")}),
-                          with(speed_limit_parameters("linear.x"),
-                               speed_limit_parameters("angular.z"))),
+       .parameters =
+           with(with(loop_parameters("diffbot"),
+                     {plugin::double_parameter("wheel_separation", dd.wheel_separation,
+                                               "distance between the wheels, m (the "
+                                               "controller's and the robot's)"),
+                      plugin::double_parameter("wheel_radius", dd.wheel_radius, "wheel radius, m"),
+                      plugin::bool_parameter("open_loop", dd.open_loop,
+                                             "odometry from the commands (true) or "
+                                             "the wheel positions (false)"),
+                      plugin::double_parameter("cmd_vel_timeout", dd.cmd_vel_timeout_s,
+                                               "stop when no command came for this "
+                                               "long, s"),
+                      plugin::double_parameter("publish_rate", dd.publish_rate_hz,
+                                               "odometry and TF rate, Hz"),
+                      plugin::bool_parameter("use_stamped_vel", true,
+                                             "cmd_vel is geometry_msgs/TwistStamped "
+                                             "(false: Twist, without an ID)")}),
+                with(speed_limit_parameters("linear.x"), speed_limit_parameters("angular.z"))),
        .control_loop = control_loop()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<DiffDriveControllerNode>(context, config);

@@ -11,7 +11,6 @@
 #include <future>
 #include <stdexcept>
 
-
 namespace robotperf::control {
 namespace {
 

@@ -119,8 +119,7 @@ void register_evaluators(plugin::Registrar& registrar) {
       });
   registrar.add_evaluator(
       {.name = "diff_drive_odometry",
-       .description =
-           "odometry against the simulated robot's true pose reported in the same cycle",
+       .description = "odometry against the simulated robot's true pose reported in the same cycle",
        .output_type = "nav_msgs/msg/Odometry",
        .truth_roles = {"commands"},
        .metrics = {{"position_error_max_m", "m",

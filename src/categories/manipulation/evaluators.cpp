@@ -217,8 +217,7 @@ void register_evaluators(plugin::Registrar& registrar) {
       });
   registrar.add_evaluator(
       {.name = "inverse_kinematics",
-       .description =
-           "solutions' flange poses (URDF transform chain, not KDL) against the targets",
+       .description = "solutions' flange poses (URDF transform chain, not KDL) against the targets",
        .output_type = "sensor_msgs/msg/JointState",
        .truth_roles = {"target"},
        .metrics = {{"success_rate", "fraction", "targets answered with a solution"},

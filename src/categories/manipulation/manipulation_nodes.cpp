@@ -279,11 +279,11 @@ class ExecuteNode final : public RequestNode<msgs::JointTrajectory, msgs::PlanEx
 
 std::vector<plugin::ParameterInfo> ik_parameters() {
   const IkOptions o;
-  return {plugin::int_parameter("max_iterations", o.max_iterations, "solver iterations per attempt"),
-          plugin::double_parameter("eps", o.eps, "the solver's convergence tolerance"),
-          plugin::double_parameter("timeout_s", o.timeout_s, "all attempts together, s"),
-          plugin::int_parameter("seed", static_cast<int64_t>(o.seed),
-                                "seed of the random restarts")};
+  return {
+      plugin::int_parameter("max_iterations", o.max_iterations, "solver iterations per attempt"),
+      plugin::double_parameter("eps", o.eps, "the solver's convergence tolerance"),
+      plugin::double_parameter("timeout_s", o.timeout_s, "all attempts together, s"),
+      plugin::int_parameter("seed", static_cast<int64_t>(o.seed), "seed of the random restarts")};
 }
 
 template <class Node, class... Args>

@@ -11,7 +11,6 @@
 namespace robotperf::manipulation {
 namespace {
 
-
 // Uniform draws through the raw 64-bit engine, so the stream is the same with every standard
 // library (std::uniform_real_distribution is implementation-defined).
 double uniform(std::mt19937_64& rng, double lo, double hi) {

@@ -91,11 +91,10 @@ void register_datasets(plugin::Registrar& registrar) {
                     "left calibration"},
                    {"right_image", "/right/image_rect", "sensor_msgs/msg/Image", false,
                     "rectified right image"},
-                   {"right_camera_info", "/right/camera_info", "sensor_msgs/msg/CameraInfo",
-                    false, "right calibration (P[3] = -fx * baseline)"},
-                   {"disparity_truth", "/ground_truth/disparity",
-                    "stereo_msgs/msg/DisparityImage", true,
-                    "per-pixel true disparity of the left view, NaN where occluded"}}},
+                   {"right_camera_info", "/right/camera_info", "sensor_msgs/msg/CameraInfo", false,
+                    "right calibration (P[3] = -fx * baseline)"},
+                   {"disparity_truth", "/ground_truth/disparity", "stereo_msgs/msg/DisparityImage",
+                    true, "per-pixel true disparity of the left view, NaN where occluded"}}},
       stereo_streams);
   const SyntheticDepthConfig depth;
   registrar.add_dataset(
@@ -105,8 +104,8 @@ void register_datasets(plugin::Registrar& registrar) {
                       "beyond range",
        .rate_hz = depth.rate_hz,
        .frames = depth.frames,
-       .streams = {{"depth", "/camera/depth_registered/image_rect", "sensor_msgs/msg/Image",
-                    false, "32FC1 depth in metres, NaN = none"},
+       .streams = {{"depth", "/camera/depth_registered/image_rect", "sensor_msgs/msg/Image", false,
+                    "32FC1 depth in metres, NaN = none"},
                    {"depth_mm", "/camera/depth_registered/image_rect_mm", "sensor_msgs/msg/Image",
                     false, "16UC1 depth in millimetres, 0 = none"},
                    {"image", "/camera/rgb/image_rect_color", "sensor_msgs/msg/Image", false,

@@ -6,8 +6,8 @@
 #include <stdexcept>
 
 #include "category.hpp"
-#include "robotperf/perception/image_proc.hpp"
 #include "robotperf/msgs/stereo_msgs.hpp"
+#include "robotperf/perception/image_proc.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -228,13 +228,13 @@ void register_evaluators(plugin::Registrar& registrar) {
            "organised point cloud against the scene's true 3D points and the colour image",
        .output_type = "sensor_msgs/msg/PointCloud2",
        .truth_roles = {"depth", "camera_info", "image"},
-       .metrics =
-           {{"valid_fraction", "fraction", "points with depth in the scene that the cloud has"},
-            {"mean_error_m", "m", "mean distance of valid points to the true point"},
-            {"max_error_m", "m", "largest distance of a valid point to the true point"},
-            {"spurious_fraction", "fraction",
-             "pixels without depth that the cloud has a point for"},
-            {"colour_match", "fraction", "valid points whose rgb equals the colour pixel"}}},
+       .metrics = {{"valid_fraction", "fraction",
+                    "points with depth in the scene that the cloud has"},
+                   {"mean_error_m", "m", "mean distance of valid points to the true point"},
+                   {"max_error_m", "m", "largest distance of a valid point to the true point"},
+                   {"spurious_fraction", "fraction",
+                    "pixels without depth that the cloud has a point for"},
+                   {"colour_match", "fraction", "valid points whose rgb equals the colour pixel"}}},
       [](const plugin::TruthStreams& truth, const plugin::Parameters&) {
         return std::make_unique<DepthPointCloudEvaluator>(truth["depth"], truth["camera_info"],
                                                           truth["image"]);

@@ -106,8 +106,7 @@ class DisparityNode final : public SkippingNode {
     p.algorithm = static_cast<StereoAlgorithm>(algorithm);
     p.prefilter_size = int_value(c, "prefilter_size");
     p.prefilter_cap = int_value(c, "prefilter_cap");
-    p.correlation_window_size =
-        int_value(c, "correlation_window_size");
+    p.correlation_window_size = int_value(c, "correlation_window_size");
     p.min_disparity = int_value(c, "min_disparity");
     p.disparity_range = int_value(c, "disparity_range");
     p.texture_threshold = int_value(c, "texture_threshold");

@@ -6,9 +6,9 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
-#include "robotperf/plugin/content_hash.hpp"
 #include "robotperf/perception/camera_model.hpp"
 #include "robotperf/perception/image_proc.hpp"
+#include "robotperf/plugin/content_hash.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -223,7 +223,7 @@ std::vector<CameraFrame> generate_camera_sequence(const SyntheticCameraConfig& c
     const msgs::Header header = frame_header(config, k);
     cv::Mat raw =
         perception::prepare_image(frame.image, header, "rgb8", static_cast<int>(config.width),
-                               static_cast<int>(config.height));
+                                  static_cast<int>(config.height));
     scene.render_raw(k, canvas, raw);
     frame.info = info;
     frame.info.header = header;
@@ -237,7 +237,7 @@ msgs::Image render_ideal_camera_frame(const SyntheticCameraConfig& config, uint3
   msgs::Image image;
   cv::Mat view =
       perception::prepare_image(image, frame_header(config, index), "rgb8",
-                             static_cast<int>(config.width), static_cast<int>(config.height));
+                                static_cast<int>(config.width), static_cast<int>(config.height));
   scene.render_ideal(index, view);
   return image;
 }

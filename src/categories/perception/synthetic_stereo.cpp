@@ -61,10 +61,10 @@ std::vector<StereoFrame> generate_stereo_sequence(const SyntheticStereoConfig& c
   const int height = static_cast<int>(config.height);
   const msgs::CameraInfo left_info =
       perception::make_pinhole_camera_info(config.width, config.height, config.hfov_rad,
-                                        {0.0, 0.0, 0.0, 0.0, 0.0}, config.left_frame_id);
+                                           {0.0, 0.0, 0.0, 0.0, 0.0}, config.left_frame_id);
   msgs::CameraInfo right_info =
       perception::make_pinhole_camera_info(config.width, config.height, config.hfov_rad,
-                                        {0.0, 0.0, 0.0, 0.0, 0.0}, config.right_frame_id);
+                                           {0.0, 0.0, 0.0, 0.0, 0.0}, config.right_frame_id);
   const double f = left_info.k[0];
   const double cx = left_info.k[2];
   const double cy = left_info.k[5];

@@ -6,6 +6,8 @@ namespace robotperf::util {
 
 void register_relay_kernel(plugin::Registrar& registrar);
 
-void register_category(plugin::Registrar& registrar) { register_relay_kernel(registrar); }
+void register_category(plugin::Registrar& registrar) {
+  register_relay_kernel(registrar);
+}
 
 }  // namespace robotperf::util

@@ -69,13 +69,12 @@ void register_relay_kernel(plugin::Registrar& registrar) {
                       "harness checks",
        .inputs = {{"input", ""}},
        .outputs = {{"output", ""}},
-       .parameters =
-           {plugin::string_parameter("type", "sensor_msgs/msg/Image",
-                                     "ROS type of the messages relayed"),
-            plugin::double_parameter("delay_ms", 0.0, "hold each message this long, ms"),
-            plugin::int_parameter("drop_every", 0, "drop every k-th message (0: none)"),
-            plugin::int_parameter("fail_after", 0,
-                                  "throw from the callback on message n + 1 (0: never)")}},
+       .parameters = {plugin::string_parameter("type", "sensor_msgs/msg/Image",
+                                               "ROS type of the messages relayed"),
+                      plugin::double_parameter("delay_ms", 0.0, "hold each message this long, ms"),
+                      plugin::int_parameter("drop_every", 0, "drop every k-th message (0: none)"),
+                      plugin::int_parameter(
+                          "fail_after", 0, "throw from the callback on message n + 1 (0: never)")}},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<RelayNode>(context, config);
       });

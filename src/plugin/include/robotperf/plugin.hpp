@@ -28,13 +28,13 @@
 
 // Defines the plug-in's entry points: the API version it was built against, which robotperf
 // checks before anything else, and the registration function, whose body follows the macro.
-#define ROBOTPERF_PLUGIN(registrar)                                                            \
-  static void robotperf_plugin_register_body(::robotperf::plugin::Registrar& registrar);       \
-  extern "C" __attribute__((visibility("default"))) int robotperf_plugin_api_version() {       \
-    return ROBOTPERF_PLUGIN_API_VERSION;                                                       \
-  }                                                                                            \
-  extern "C" __attribute__((visibility("default"))) void robotperf_plugin_register(            \
-      ::robotperf::plugin::Registrar& r) {                                                     \
-    robotperf_plugin_register_body(r);                                                         \
-  }                                                                                            \
+#define ROBOTPERF_PLUGIN(registrar)                                                      \
+  static void robotperf_plugin_register_body(::robotperf::plugin::Registrar& registrar); \
+  extern "C" __attribute__((visibility("default"))) int robotperf_plugin_api_version() { \
+    return ROBOTPERF_PLUGIN_API_VERSION;                                                 \
+  }                                                                                      \
+  extern "C" __attribute__((visibility("default"))) void robotperf_plugin_register(      \
+      ::robotperf::plugin::Registrar& r) {                                               \
+    robotperf_plugin_register_body(r);                                                   \
+  }                                                                                      \
   static void robotperf_plugin_register_body(::robotperf::plugin::Registrar& registrar)

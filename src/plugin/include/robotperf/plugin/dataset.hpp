@@ -20,17 +20,17 @@ namespace robotperf::plugin {
 // One kind of message of a dataset, one per frame (e.g. "image", "camera_info").
 struct StreamInfo {
   std::string name{};
-  std::string topic;  // where it is recorded when written as a bag ("/camera/image_raw")
-  std::string type{};   // ROS type, e.g. sensor_msgs/msg/Image
+  std::string topic;   // where it is recorded when written as a bag ("/camera/image_raw")
+  std::string type{};  // ROS type, e.g. sensor_msgs/msg/Image
   bool truth = false;  // ground truth, for evaluators; never played into the graph
-  std::string doc{};     // one line
+  std::string doc{};   // one line
 };
 
 struct DatasetInfo {
   std::string name{};         // "<category>/<dataset>", e.g. perception/image
   std::string description{};  // one line
-  double rate_hz = 0;       // the rate it was recorded (or generated) at
-  std::size_t frames = 0;   // with the default workload
+  double rate_hz = 0;         // the rate it was recorded (or generated) at
+  std::size_t frames = 0;     // with the default workload
   std::vector<StreamInfo> streams{};
   // benchmark.yaml `workload:` parameters (e.g. seed, requests); none for a fixed sequence.
   std::vector<ParameterInfo> workload{};

@@ -83,7 +83,8 @@ template <class... Inputs>
 void trace_kernel_init(const graph::Node& node, const char* kernel, int64_t message_id,
                        const Inputs&... inputs) {
   if (kernel_trace_enabled()) {
-    const uint64_t bytes = (uint64_t{0} + ... + msgs::type_support<Inputs>().serialized_size(&inputs));
+    const uint64_t bytes =
+        (uint64_t{0} + ... + msgs::type_support<Inputs>().serialized_size(&inputs));
     trace_kernel_init(node.name().c_str(), kernel, message_id, bytes);
   }
 }
