@@ -9,28 +9,17 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "../command_line.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Outcome {
-  int exit_code = -1;
-  std::string out;  // stdout and stderr together
-};
+using robotperf::test_support::Outcome;
+using robotperf::test_support::robotperf_cli;
 
 Outcome run(const std::string& command) {
-  Outcome o;
-  FILE* p = popen((command + " 2>&1").c_str(), "r");
-  if (p == nullptr) return o;
-  std::array<char, 4096> buf;
-  while (std::size_t n = fread(buf.data(), 1, buf.size(), p)) o.out.append(buf.data(), n);
-  const int status = pclose(p);
-  o.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return o;
-}
-
-Outcome robotperf(const std::string& args) {
-  return run(std::string(ROBOTPERF_EXECUTABLE) + " " + args);
+  return robotperf::test_support::shell(command);
 }
 
 std::size_t lines(const std::string& s) {
@@ -71,7 +60,7 @@ class PluginCli : public ::testing::Test {
 };
 
 TEST_F(PluginCli, ListsWhatAPluginRegistersAndWhereItCameFrom) {
-  const auto o = robotperf(std::string("--plugin ") + GOOD_PLUGIN + " list kernels");
+  const auto o = robotperf_cli(std::string("--plugin ") + GOOD_PLUGIN + " list kernels");
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("test_plugin/scale  (from " + fs::canonical(GOOD_PLUGIN).string() +
                        "; backends: cpu, test_backend)"),
@@ -79,10 +68,10 @@ TEST_F(PluginCli, ListsWhatAPluginRegistersAndWhereItCameFrom) {
       << o.out;
   EXPECT_NE(o.out.find("factor (double, default 2): scale factor"), std::string::npos);
   EXPECT_NE(o.out.find("image_proc/rectify  (from built-in perception"), std::string::npos);
-  const auto d = robotperf(std::string("list datasets --plugin ") + GOOD_PLUGIN);
+  const auto d = robotperf_cli(std::string("list datasets --plugin ") + GOOD_PLUGIN);
   EXPECT_NE(d.out.find("test_plugin/joints"), std::string::npos) << d.out;
   EXPECT_NE(d.out.find("[truth] scaled inputs"), std::string::npos) << d.out;
-  const auto e = robotperf(std::string("list evaluators --plugin ") + GOOD_PLUGIN);
+  const auto e = robotperf_cli(std::string("list evaluators --plugin ") + GOOD_PLUGIN);
   EXPECT_NE(e.out.find("test_plugin/scaled"), std::string::npos) << e.out;
   EXPECT_NE(e.out.find("tolerance (double, default 1e-12)"), std::string::npos) << e.out;
 }
@@ -114,7 +103,7 @@ TEST_F(PluginCli, EachLoadingErrorIsOneLineAndExitCode2) {
       {THROWING_PLUGIN, "registration failed: no licence for this accelerator"},
   };
   for (const auto& [file, problem] : cases) {
-    const auto o = robotperf("--plugin " + file + " list kernels");
+    const auto o = robotperf_cli("--plugin " + file + " list kernels");
     EXPECT_EQ(o.exit_code, 2) << file << ": " << o.out;
     EXPECT_EQ(lines(o.out), 1u) << o.out;
     EXPECT_NE(o.out.find("robotperf: plug-in " + fs::weakly_canonical(file).string() + ": "),
@@ -126,18 +115,18 @@ TEST_F(PluginCli, EachLoadingErrorIsOneLineAndExitCode2) {
 
 TEST_F(PluginCli, BenchmarkFoldersAddToTheBuiltInOnes) {
   const fs::path folder = benchmark_folder();
-  const auto o = robotperf("--plugin " + std::string(GOOD_PLUGIN) + " --benchmarks " +
-                           folder.string() + " list");
+  const auto o = robotperf_cli("--plugin " + std::string(GOOD_PLUGIN) + " --benchmarks " +
+                               folder.string() + " list");
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("a1  "), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("x1  x1_scale"), std::string::npos) << o.out;
   // Without the plug-in the package cannot be loaded, and says why.
-  const auto missing = robotperf("--benchmarks " + folder.string() + " describe x1");
+  const auto missing = robotperf_cli("--benchmarks " + folder.string() + " describe x1");
   EXPECT_EQ(missing.exit_code, 2) << missing.out;
   EXPECT_NE(missing.out.find("unknown kernel 'test_plugin/scale'"), std::string::npos)
       << missing.out;
   const auto described =
-      robotperf("--benchmarks " + folder.string() + " describe x1 --plugin " + GOOD_PLUGIN);
+      robotperf_cli("--benchmarks " + folder.string() + " describe x1 --plugin " + GOOD_PLUGIN);
   EXPECT_EQ(described.exit_code, 0) << described.out;
   EXPECT_NE(described.out.find("param factor = 2 (default)"), std::string::npos) << described.out;
 }
@@ -146,7 +135,7 @@ TEST_F(PluginCli, ADuplicateIdNamesBothPackages) {
   const fs::path copy = dir_ / "benchmarks" / "perception" / "a5_resize";
   fs::create_directories(copy.parent_path());
   fs::copy(fs::path(ROBOTPERF_SOURCE_DIR) / "benchmarks/perception/a5_resize", copy);
-  const auto o = robotperf("--benchmarks " + (dir_ / "benchmarks").string() + " run a5");
+  const auto o = robotperf_cli("--benchmarks " + (dir_ / "benchmarks").string() + " run a5");
   EXPECT_EQ(o.exit_code, 2) << o.out;
   EXPECT_EQ(lines(o.out), 1u) << o.out;
   EXPECT_NE(o.out.find("benchmark id a5 is defined twice"), std::string::npos) << o.out;
@@ -157,9 +146,9 @@ TEST_F(PluginCli, ADuplicateIdNamesBothPackages) {
 TEST_F(PluginCli, PerNodeChildrenLoadThePlugin) {
   const fs::path folder = benchmark_folder();
   const auto o =
-      robotperf("--plugin " + std::string(GOOD_PLUGIN) + " --benchmarks " + folder.string() +
-                " run x1 --rmw fastdds --processes per-node --count 30" + " --quiet --domain " +
-                domain() + " --output " + (dir_ / "out").string());
+      robotperf_cli("--plugin " + std::string(GOOD_PLUGIN) + " --benchmarks " + folder.string() +
+                    " run x1 --rmw fastdds --processes per-node --count 30" + " --quiet --domain " +
+                    domain() + " --output " + (dir_ / "out").string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   std::vector<fs::path> results;
   for (const auto& e : fs::directory_iterator(dir_ / "out"))
