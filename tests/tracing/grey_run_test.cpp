@@ -264,6 +264,35 @@ TEST_F(GreyRun, PerNodeProcessesAreTracedAsPartOfTheRun) {
   EXPECT_TRUE(cross_process_topic);
 }
 
+// A plug-in's kernel emits its kernel events through the plug-in API, from its own shared
+// library: the trace shows the kernel hop of every measured message as for a built-in kernel.
+TEST_F(GreyRun, APluginKernelIsTracedThroughThePluginApi) {
+  const fs::path pkg = dir_ / "pkg" / "test" / "t2_plugin";
+  fs::create_directories(pkg);
+  std::ofstream(pkg / "benchmark.yaml")
+      << "id: t2\nname: t2_plugin\nshort: test\ndescription: test\nresults: []\n";
+  std::ofstream(pkg / "graph.yaml")
+      << "plugins: [" << GOOD_PLUGIN << "]\n"
+      << "dataset: test_plugin/joints\nrate_hz: 50\nwarmup: 2\n"
+         "validity: {min_samples: 10, max_loss_percent: 0.0}\n"
+         "inputs:\n  - {topic: /states, type: sensor_msgs/msg/JointState, stream: states}\n"
+         "output: {topic: /scaled, type: sensor_msgs/msg/JointState}\n"
+         "nodes:\n  - name: scale\n    kernel: test_plugin/scale\n"
+         "    topics: {input: /states, output: /scaled}\n";
+  RunOptions o;
+  o.count = 30;
+  const RunResult g = run_benchmark(load_benchmark(pkg), grey(o, "plugin.trace"));
+  ASSERT_TRUE(g.grey.has_value());
+  ASSERT_TRUE(g.valid) << reasons(g);
+  bool kernel = false;
+  for (const auto& h : g.grey->hops) {
+    if (h.kind != "kernel") continue;
+    kernel = h.label() == "scale: test_plugin/scale";
+    EXPECT_EQ(h.duration.count, g.measured) << h.label();
+  }
+  EXPECT_TRUE(kernel);
+}
+
 using robotperf::test_support::Outcome;
 using robotperf::test_support::robotperf_cli;
 
