@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "robotperf/bag/bag.hpp"
+#include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/msgs/definitions.hpp"
 
@@ -126,6 +127,7 @@ ReadFigures time_read(const fs::path& dir) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  robotperf::categories::register_builtin_categories();
   uint64_t size_mb = 1024;
   fs::path root;
   bool keep = false;

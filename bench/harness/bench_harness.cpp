@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/run.hpp"
 
 namespace fs = std::filesystem;
@@ -52,6 +53,7 @@ void report(const char* label, const harness::RunResult& r, double target_p50_us
 }  // namespace
 
 int main() {
+  robotperf::categories::register_builtin_categories();
   const fs::path root =
       fs::temp_directory_path() / ("robotperf-bench-harness-" + std::to_string(getpid()));
   const int domain = 200 + getpid() % 30;

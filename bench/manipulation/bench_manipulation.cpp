@@ -23,6 +23,7 @@
 #include <thread>
 #include <vector>
 
+#include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/run.hpp"
@@ -177,12 +178,11 @@ void kernel_overheads(const std::vector<std::string>& ids) {
       options.solver = kernel == "manipulation/ik_kdl"
                            ? manipulation::IkSolver::kNewtonRaphsonJL
                            : manipulation::IkSolver::kLevenbergMarquardt;
-      const kernels::KernelConfig c = harness::kernel_config(spec.nodes.front(), spec.workload);
-      options.eps = c.parameters.get_double("eps", options.eps);
-      options.max_iterations =
-          static_cast<unsigned>(c.parameters.get_int("max_iterations", options.max_iterations));
-      options.timeout_s = c.parameters.get_double("timeout_s", options.timeout_s);
-      options.seed = static_cast<uint64_t>(c.parameters.get_int("seed", 0));
+      const plugin::KernelConfig c = harness::kernel_config(spec.nodes.front(), spec.workload);
+      options.eps = c.parameters.get_double("eps");
+      options.max_iterations = static_cast<unsigned>(c.parameters.get_int("max_iterations"));
+      options.timeout_s = c.parameters.get_double("timeout_s");
+      options.seed = static_cast<uint64_t>(c.parameters.get_int("seed"));
       manipulation::InverseKinematics ik(arm, options);
       const std::vector<double> seed_state(arm.dof(), 0.0);
       const auto& poses = d.stream("poses");
@@ -260,6 +260,7 @@ void fcl_vs_bullet() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  robotperf::categories::register_builtin_categories();
   std::vector<std::string> ids(argv + 1, argv + argc);
   if (ids.empty()) ids = {"d2", "d3", "d4", "d5", "d6"};
   try {

@@ -15,11 +15,12 @@
 #include <thread>
 #include <vector>
 
+#include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/run.hpp"
-#include "robotperf/kernels/depth_image_proc.hpp"
-#include "robotperf/kernels/stereo_image_proc.hpp"
 #include "robotperf/msgs/stereo_msgs.hpp"
+#include "robotperf/perception/depth_image_proc.hpp"
+#include "robotperf/perception/stereo_image_proc.hpp"
 #include "robotperf/sysinfo/run_rules.hpp"
 
 using namespace robotperf;
@@ -109,6 +110,7 @@ void compare(const char* label, const char* id, P&& prepare, F&& call) {
 }  // namespace
 
 int main() {
+  robotperf::categories::register_builtin_categories();
   std::printf(
       "Kernel time in the graph (intra, black-box p50 from send) vs a direct call (p50), "
       "%zu frames at 10 Hz\n",
@@ -118,8 +120,8 @@ int main() {
 
   {
     const harness::Dataset d = harness::load_dataset("perception/stereo");
-    kernels::DisparityProcessor bm;  // stereo_image_proc defaults, as a3's graph.yaml
-    msgs::DisparityImage out;        // reused, as the node reuses its output once released
+    perception::DisparityProcessor bm;  // stereo_image_proc defaults, as a3's graph.yaml
+    msgs::DisparityImage out;           // reused, as the node reuses its output once released
     std::shared_ptr<const msgs::Image> left, right;
     std::shared_ptr<const msgs::CameraInfo> left_info, right_info;
     compare(
@@ -144,7 +146,7 @@ int main() {
           image = fresh<msgs::Image>(d, "image", k);
           info = fresh<msgs::CameraInfo>(d, "camera_info", k);
         },
-        [&](std::size_t) { kernels::point_cloud_xyzrgb(*depth, *image, *info, {}, cloud); });
+        [&](std::size_t) { perception::point_cloud_xyzrgb(*depth, *image, *info, {}, cloud); });
   }
   return 0;
 }

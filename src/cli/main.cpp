@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -11,8 +12,10 @@
 #include <sstream>
 
 #include "bag_commands.hpp"
+#include "registry_commands.hpp"
 #include "robotperf/bag/bag.hpp"
 #include "robotperf/build_info.hpp"
+#include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/run.hpp"
@@ -106,12 +109,6 @@ void add_scheduling_options(CLI::App* command, SchedulingArgs& a) {
   command->add_flag("--mlock", a.lock_memory, "lock the graph's memory (mlockall)");
 }
 
-fs::path benchmarks_root(const std::string& flag) {
-  if (!flag.empty()) return flag;
-  if (const char* env = std::getenv("ROBOTPERF_BENCHMARKS"); env && *env) return env;
-  return build_info::kBenchmarksDir;
-}
-
 fs::path self_executable() {
   std::error_code ec;
   fs::path p = fs::read_symlink("/proc/self/exe", ec);
@@ -119,9 +116,38 @@ fs::path self_executable() {
   return p;
 }
 
-int list_benchmarks(const fs::path& root) {
+// The built-in benchmarks (installed beside the executable, else the source tree's), then the
+// folders of ROBOTPERF_BENCHMARKS (':'-separated) and of --benchmarks.
+std::vector<fs::path> benchmark_roots(const std::vector<std::string>& flags) {
+  std::vector<fs::path> roots;
+  const fs::path installed =
+      self_executable().parent_path().parent_path() / build_info::kInstalledBenchmarksDir;
+  std::error_code ec;
+  roots.push_back(fs::is_directory(installed, ec) ? installed
+                                                  : fs::path(build_info::kBenchmarksDir));
+  if (const char* env = std::getenv("ROBOTPERF_BENCHMARKS"); env && *env) {
+    std::stringstream entries(env);
+    std::string entry;
+    while (std::getline(entries, entry, ':')) {
+      if (!entry.empty()) roots.emplace_back(entry);
+    }
+  }
+  for (const auto& f : flags) roots.emplace_back(f);
+  // A folder given twice (or the built-in one again) is read once.
+  std::vector<fs::path> unique;
+  for (const auto& r : roots) {
+    const fs::path canonical = fs::weakly_canonical(r, ec);
+    if (std::ranges::none_of(unique, [&](const fs::path& u) { return u == canonical; }))
+      unique.push_back(ec ? r : canonical);
+  }
+  return unique;
+}
+
+using Roots = std::vector<fs::path>;
+
+int list_benchmarks(const Roots& roots) {
   std::vector<std::string> broken;
-  const auto specs = harness::discover_benchmarks(root, &broken);
+  const auto specs = harness::discover_benchmarks(roots, &broken);
   // Columns as wide as their longest entry.
   int id_width = 2, name_width = 4, category_width = 8;
   for (const auto& s : specs) {
@@ -140,15 +166,15 @@ int list_benchmarks(const fs::path& root) {
   return kExitOk;
 }
 
-int describe_benchmark(const fs::path& root, const std::string& id) {
-  const auto s = harness::find_benchmark(root, id);
+int describe_benchmark(const Roots& roots, const std::string& id) {
+  const auto s = harness::find_benchmark(roots, id);
   std::cout << s.id << " — " << s.name << " (" << s.category << ")\n";
   if (!s.short_description.empty()) std::cout << s.short_description << "\n";
   std::cout << "\n" << s.description << "\n";
   std::cout << "package:   " << s.dir.string() << "\n";
   std::cout << "dataset:   " << s.dataset;
-  for (const auto& d : harness::builtin_datasets()) {
-    if (d.name == s.dataset) std::cout << " — " << d.description;
+  if (const auto* d = plugin::registry().find_dataset(s.dataset)) {
+    std::cout << " — " << d->info.description << " (from " << d->origin << ")";
   }
   std::cout << "\nrate:      " << s.rate_hz << " Hz, "
             << (s.count ? std::to_string(s.count) : "dataset-length") << " messages, warm-up "
@@ -158,13 +184,9 @@ int describe_benchmark(const fs::path& root, const std::string& id) {
   std::cout << "inputs:\n";
   for (const auto& in : s.inputs)
     std::cout << "  " << in.topic << "  [" << in.type << "] <- stream " << in.stream << "\n";
+  for (const auto& p : s.plugins) std::cout << "plug-in:   " << p.string() << "\n";
   std::cout << "nodes:\n";
-  for (const auto& n : s.nodes) {
-    std::cout << "  " << n.name << ": " << n.kernel << " (" << n.backend << ")\n";
-    for (const auto& [port, topic] : n.topics)
-      std::cout << "      " << port << " = " << topic << "\n";
-    for (const auto& [k, v] : n.parameters) std::cout << "      param " << k << " = " << v << "\n";
-  }
+  for (const auto& n : s.nodes) cli::describe_node(std::cout, n);
   std::cout << "output:\n  " << s.output.topic << "  [" << s.output.type << "] -> monitor\n";
   if (s.functional) {
     const auto& f = *s.functional;
@@ -173,6 +195,8 @@ int describe_benchmark(const fs::path& root, const std::string& id) {
               << " sampled outputs\n";
     for (const auto& [role, stream] : f.truth)
       std::cout << "  truth " << role << " <- stream " << stream << "\n";
+    for (const auto& [name, value] : f.parameters)
+      std::cout << "  param " << name << " = " << value << "\n";
     for (const auto& [metric, t] : f.thresholds) {
       std::cout << "  threshold " << metric;
       if (t.min) std::cout << " >= " << *t.min;
@@ -204,6 +228,7 @@ struct RunArgs {
   SchedulingArgs scheduling;
   std::string mode = "black";
   std::size_t trace_subbuf = 0;
+  std::vector<std::string> plugins;  // --plugin: loaded by per-node children too
 };
 
 // "--remap from:=to" and "--window START:END" (seconds, either may be empty).
@@ -238,8 +263,8 @@ harness::BagSelection bag_selection(const RunArgs& a) {
   return bag;
 }
 
-int run(const fs::path& root, const RunArgs& a) {
-  const auto spec = harness::find_benchmark(root, a.id);
+int run(const Roots& roots, const RunArgs& a) {
+  const auto spec = harness::find_benchmark(roots, a.id);
   harness::RunOptions o;
   if (a.dataset) o.bag = bag_selection(a);
   if (a.rate_scale != 1.0 && a.rate != "bag")
@@ -265,7 +290,11 @@ int run(const fs::path& root, const RunArgs& a) {
   o.domain_id = a.domain ? *a.domain : rmw::domain_id_from_environment();
   o.processes = a.processes == "per-node" ? harness::ProcessLayout::kPerNode
                                           : harness::ProcessLayout::kSingle;
-  o.node_command = {self_executable().string(), "node"};
+  // Every child loads the plug-ins this process was given (the package's own `plugins:` it
+  // loads with the package, ROBOTPERF_PLUGIN_PATH it inherits).
+  o.node_command = {self_executable().string()};
+  for (const auto& p : a.plugins) o.node_command.insert(o.node_command.end(), {"--plugin", p});
+  o.node_command.push_back("node");
   o.power = a.power.options();
   o.scheduling = a.scheduling.options();
   o.strict = a.strict;
@@ -377,7 +406,7 @@ struct ExportArgs {
   std::string hardware, category;
 };
 
-int export_results(const fs::path& root, const ExportArgs& a) {
+int export_results(const Roots& roots, const ExportArgs& a) {
   const auto runs = collect_runs(a.results);
   report::ExportOptions options{a.hardware, a.category};
   // Entries per target file ("" = standard output), in run order.
@@ -396,7 +425,7 @@ int export_results(const fs::path& root, const ExportArgs& a) {
     }
     fs::path file = a.merge;
     if (a.merge_package)
-      file = harness::find_benchmark(root, run.benchmark_id).dir / "benchmark.yaml";
+      file = harness::find_benchmark(roots, run.benchmark_id).dir / "benchmark.yaml";
     auto& entries = target(file);
     for (auto& e : report::export_entries(run, options)) entries.push_back(std::move(e));
   }
@@ -466,10 +495,10 @@ int import_published(const std::vector<std::string>& paths, const std::string& i
   return kExitOk;
 }
 
-int readme(const fs::path& root, const std::vector<std::string>& ids, bool check) {
+int readme(const Roots& roots, const std::vector<std::string>& ids, bool check) {
   int status = kExitOk;
   for (const auto& id : ids) {
-    const auto spec = harness::find_benchmark(root, id);
+    const auto spec = harness::find_benchmark(roots, id);
     const fs::path file = spec.dir / "README.md";
     const std::string text = report::render_package_readme(spec.dir);
     if (check) {
@@ -531,11 +560,20 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version",
                        std::string(build_info::kVersion) + " (" + build_info::kGitRevision + ")");
   app.require_subcommand(1);
-  std::string benchmarks_flag;
-  app.add_option("--benchmarks", benchmarks_flag,
-                 "folder of benchmark packages (default: the source tree's)");
+  // Global options may also follow the subcommand (robotperf run a1 --plugin lib.so).
+  app.fallthrough();
+  std::vector<std::string> benchmarks_flags, plugin_flags;
+  app.add_option("--benchmarks", benchmarks_flags,
+                 "also use the benchmark packages of this folder (<category>/<package>/; "
+                 "repeatable)");
+  app.add_option("--plugin", plugin_flags,
+                 "load this plug-in (a shared library built against robotperf; repeatable)");
 
-  auto* list_cmd = app.add_subcommand("list", "list the benchmarks");
+  std::string list_what = "benchmarks";
+  auto* list_cmd = app.add_subcommand(
+      "list", "list the benchmarks, or the registered kernels, datasets or evaluators");
+  list_cmd->add_option("what", list_what, "benchmarks (default), kernels, datasets or evaluators")
+      ->check(CLI::IsMember({"benchmarks", "kernels", "datasets", "evaluators"}));
 
   std::string describe_id;
   auto* describe_cmd =
@@ -685,7 +723,8 @@ int main(int argc, char** argv) {
   std::string dataset_name;
   cli::GenerateOptions generate;
   auto* generate_cmd = dataset_cmd->add_subcommand("generate", "write a built-in dataset as a bag");
-  generate_cmd->add_option("name", dataset_name, "dataset name, e.g. perception/image")->required();
+  generate_cmd->add_option("name", dataset_name, "a registered dataset (robotperf list datasets)")
+      ->required();
   generate_cmd->add_option("--out", generate.out, "bag directory (default: the name, / as _)");
   generate_cmd->add_option("--storage", generate.storage, "sqlite3 or mcap (default mcap)")
       ->check(CLI::IsMember({"sqlite3", "mcap"}));
@@ -727,10 +766,18 @@ int main(int argc, char** argv) {
   }
 
   try {
-    const fs::path root = benchmarks_root(benchmarks_flag);
-    if (*list_cmd) return list_benchmarks(root);
-    if (*describe_cmd) return describe_benchmark(root, describe_id);
-    if (*run_cmd) return run(root, ra);
+    categories::register_builtin_categories();
+    cli::load_plugins(plugin_flags);
+    ra.plugins = plugin_flags;
+    const Roots roots = benchmark_roots(benchmarks_flags);
+    if (*list_cmd) {
+      if (list_what == "kernels") return cli::list_kernels(std::cout);
+      if (list_what == "datasets") return cli::list_datasets(std::cout);
+      if (list_what == "evaluators") return cli::list_evaluators(std::cout);
+      return list_benchmarks(roots);
+    }
+    if (*describe_cmd) return describe_benchmark(roots, describe_id);
+    if (*run_cmd) return run(roots, ra);
     if (*results_list_cmd) {
       const auto scan = report::scan_results(list_dir);
       for (const auto& sk : scan.skipped)
@@ -738,9 +785,9 @@ int main(int argc, char** argv) {
       std::cout << report::runs_table(scan.runs);
       return kExitOk;
     }
-    if (*export_cmd) return export_results(root, ea);
+    if (*export_cmd) return export_results(roots, ea);
     if (*import_cmd) return import_published(import_paths, import_into);
-    if (*readme_cmd) return readme(root, readme_ids, readme_check);
+    if (*readme_cmd) return readme(roots, readme_ids, readme_check);
     if (*report_cmd) return make_report(rpa);
     if (*bag_info_cmd) return cli::bag_info(bag_path);
     if (*bag_echo_cmd) return cli::bag_echo(bag_path, echo);
@@ -762,6 +809,9 @@ int main(int argc, char** argv) {
       return harness::run_node_process(spec, node_name, node_rmw, node_domain,
                                        node_scheduling.options());
     }
+  } catch (const plugin::PluginError& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitUsage;
   } catch (const harness::RunRefused& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
     return kExitRefused;

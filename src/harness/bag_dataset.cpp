@@ -5,13 +5,13 @@
 #include <set>
 
 #include "robotperf/bag/bag.hpp"
-#include "robotperf/datasets/hash.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/msgs/definitions.hpp"
 #include "robotperf/msgs/dynamic.hpp"
 #include "robotperf/msgs/known_types.hpp"
 #include "robotperf/msgs/serialized_message.hpp"
+#include "robotperf/plugin/content_hash.hpp"
 
 namespace robotperf::harness {
 namespace {
@@ -173,7 +173,7 @@ Dataset load_bag_dataset(const BagSelection& selection, const std::vector<Bounda
   const int64_t span = d.frame_times_ns.back() - d.frame_times_ns.front();
   d.rate_hz =
       span > 0 ? static_cast<double>(frames.size() - 1) * 1e9 / static_cast<double>(span) : 0.0;
-  datasets::Fnv1a64 hash;
+  plugin::Fnv1a64 hash;
   for (const auto& s : d.streams) {
     hash.add_string(s.name).add_string(s.type->ros_type);
     for (const auto& msg : s.messages)

@@ -3,8 +3,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
-#include <cmath>
 #include <charconv>
+#include <cmath>
 #include <set>
 #include <sstream>
 
@@ -117,8 +117,23 @@ BoundaryTopic boundary_topic(const YamlFile& file, const YAML::Node& n, bool is_
 void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   const YamlFile file(path);
   const YAML::Node& root = file.root();
-  file.allow_keys(root, {"dataset", "rate_hz", "count", "warmup", "drain_s", "executor_threads",
-                         "validity", "inputs", "output", "nodes", "functional"});
+  file.allow_keys(
+      root, {"plugins", "dataset", "rate_hz", "count", "warmup", "drain_s", "executor_threads",
+             "validity", "inputs", "output", "nodes", "functional"});
+  // Plug-ins first: they may register the kernels, dataset and evaluator named below.
+  if (const YAML::Node plugins = root["plugins"]; plugins.IsDefined()) {
+    if (!plugins.IsSequence()) file.fail(plugins, "'plugins' must be a list of files");
+    for (const auto& entry : plugins) {
+      if (!entry.IsScalar()) file.fail(entry, "a plug-in is a file name");
+      const fs::path plugin = spec.dir / entry.as<std::string>();
+      try {
+        plugin::registry().load(plugin);
+      } catch (const plugin::PluginError& e) {
+        file.fail(entry, e.what());
+      }
+      spec.plugins.push_back(plugin);
+    }
+  }
   spec.dataset = file.require_string(root, "dataset");
   spec.rate_hz = file.get<double>(root, "rate_hz", 30.0);
   if (!(spec.rate_hz > 0)) file.fail(root["rate_hz"], "rate_hz must be positive");
@@ -142,6 +157,8 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   if (!root["output"].IsDefined()) file.fail(root, "missing 'output'");
   spec.output = boundary_topic(file, root["output"], false);
 
+  std::vector<const BoundaryTopic*> boundary{&spec.output};
+  for (const auto& in : spec.inputs) boundary.push_back(&in);
   const YAML::Node nodes = root["nodes"];
   if (!nodes.IsSequence()) file.fail(root, "'nodes' must be a list");
   std::set<std::string> names;
@@ -151,30 +168,60 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
     node.name = file.require_string(n, "name");
     if (!names.insert(node.name).second) file.fail(n, "duplicate node name '" + node.name + "'");
     node.kernel = file.require_string(n, "kernel");
-    const kernels::KernelInfo* info = kernels::find_kernel(node.kernel);
-    if (info == nullptr) file.fail(n["kernel"], "unknown kernel '" + node.kernel + "'");
+    const plugin::KernelEntry* entry = plugin::registry().find_kernel(node.kernel);
+    if (entry == nullptr) {
+      file.fail(n["kernel"], "unknown kernel '" + node.kernel + "' (registered: " +
+                                 plugin::names_of(plugin::registry().kernels()) +
+                                 "; a plug-in's kernel needs --plugin or 'plugins:')");
+    }
+    const plugin::KernelInfo& info = entry->info;
     node.backend = file.get<std::string>(n, "backend", "cpu");
+    if (std::ranges::count(info.backends, node.backend) == 0) {
+      std::string backends;
+      for (const auto& b : info.backends) backends += (backends.empty() ? "" : ", ") + b;
+      file.fail(n["backend"], "kernel " + node.kernel + " has no backend '" + node.backend +
+                                  "' (it has: " + backends + ")");
+    }
     node.parameters = file.string_map(n, "parameters");
+    try {
+      plugin::Parameters(info.parameters, node.parameters, "node '" + node.name + "'");
+    } catch (const std::invalid_argument& e) {
+      file.fail(n["parameters"], e.what());
+    }
     node.topics = file.string_map(n, "topics");
     node.qos = file.qos(n);
     for (const auto& [port, topic] : node.topics) {
-      const bool known = std::ranges::count(info->input_ports, port) +
-                         std::ranges::count(info->output_ports, port);
-      if (!known) file.fail(n["topics"], "kernel " + node.kernel + " has no port '" + port + "'");
+      const plugin::PortInfo* p = info.find_port(port);
+      if (p == nullptr)
+        file.fail(n["topics"], "kernel " + node.kernel + " has no port '" + port + "'");
+      // A port of a fixed type wired to a boundary topic must carry the boundary's type.
+      for (const BoundaryTopic* b : boundary) {
+        if (b->topic == topic && !p->type.empty() && p->type != b->type) {
+          file.fail(n["topics"], "port '" + port + "' of " + node.kernel + " carries " + p->type +
+                                     ", but " + topic + " is declared " + b->type);
+        }
+      }
     }
     spec.nodes.push_back(std::move(node));
   }
 
   if (const YAML::Node f = root["functional"]; f.IsDefined()) {
-    file.allow_keys(f, {"evaluator", "truth", "sample", "observed_truth"});
+    file.allow_keys(f, {"evaluator", "truth", "sample", "observed_truth", "parameters"});
     FunctionalSpec functional;
     functional.evaluator = file.require_string(f, "evaluator");
-    const EvaluatorInfo* info = find_evaluator(functional.evaluator);
-    if (info == nullptr) {
-      std::string known;
-      for (const auto& e : evaluator_infos()) known += (known.empty() ? "" : ", ") + e.name;
-      file.fail(f["evaluator"], "unknown functional evaluator '" + functional.evaluator +
-                                    "' (known: " + known + ")");
+    const plugin::EvaluatorEntry* entry = plugin::registry().find_evaluator(functional.evaluator);
+    if (entry == nullptr) {
+      file.fail(f["evaluator"],
+                "unknown functional evaluator '" + functional.evaluator +
+                    "' (registered: " + plugin::names_of(plugin::registry().evaluators()) + ")");
+    }
+    const plugin::EvaluatorInfo* info = &entry->info;
+    functional.parameters = file.string_map(f, "parameters");
+    try {
+      plugin::Parameters(info->parameters, functional.parameters,
+                         "evaluator " + functional.evaluator);
+    } catch (const std::invalid_argument& e) {
+      file.fail(f["parameters"], e.what());
     }
     if (info->output_type != spec.output.type) {
       file.fail(f["evaluator"], "evaluator " + info->name + " reads " + info->output_type +
@@ -211,7 +258,8 @@ void load_thresholds(const YamlFile& meta, BenchmarkSpec& spec) {
   if (!spec.functional) {
     meta.fail(f, "functional thresholds are given but graph.yaml names no functional evaluator");
   }
-  const EvaluatorInfo& info = *find_evaluator(spec.functional->evaluator);
+  const plugin::EvaluatorInfo& info =
+      plugin::registry().find_evaluator(spec.functional->evaluator)->info;
   const YAML::Node thresholds = f["thresholds"];
   if (!thresholds.IsDefined() || thresholds.IsNull()) return;
   if (!thresholds.IsMap()) meta.fail(thresholds, "'thresholds' must be a mapping");
@@ -258,32 +306,44 @@ BenchmarkSpec load_benchmark(const fs::path& dir) {
   return spec;
 }
 
-std::vector<BenchmarkSpec> discover_benchmarks(const fs::path& root,
+std::vector<BenchmarkSpec> discover_benchmarks(const std::vector<fs::path>& roots,
                                                std::vector<std::string>* broken) {
   std::vector<BenchmarkSpec> out;
-  std::error_code ec;
-  if (!fs::is_directory(root, ec)) {
-    throw BenchmarkError("benchmarks folder not found: " + root.string() +
-                         " (set --benchmarks or ROBOTPERF_BENCHMARKS)");
-  }
-  for (const auto& category : fs::directory_iterator(root)) {
-    if (!category.is_directory()) continue;
-    for (const auto& package : fs::directory_iterator(category.path())) {
-      if (!fs::exists(package.path() / "graph.yaml")) continue;
-      try {
-        out.push_back(load_benchmark(package.path()));
-      } catch (const BenchmarkError& e) {
-        if (broken) broken->push_back(e.what());
+  for (const auto& root : roots) {
+    std::error_code ec;
+    if (!fs::is_directory(root, ec))
+      throw BenchmarkError("benchmarks folder not found: " + root.string());
+    for (const auto& category : fs::directory_iterator(root)) {
+      if (!category.is_directory()) continue;
+      for (const auto& package : fs::directory_iterator(category.path())) {
+        if (!fs::exists(package.path() / "graph.yaml")) continue;
+        try {
+          out.push_back(load_benchmark(package.path()));
+        } catch (const BenchmarkError& e) {
+          if (broken) broken->push_back(e.what());
+        }
       }
     }
   }
   std::ranges::sort(out, [](const auto& a, const auto& b) { return a.id < b.id; });
+  for (std::size_t i = 1; i < out.size(); ++i) {
+    if (out[i].id == out[i - 1].id) {
+      throw BenchmarkError("benchmark id " + out[i].id +
+                           " is defined twice: " + out[i - 1].dir.string() + " and " +
+                           out[i].dir.string() + " (give one of them another id)");
+    }
+  }
   return out;
 }
 
-BenchmarkSpec find_benchmark(const fs::path& root, const std::string& id_or_name) {
+std::vector<BenchmarkSpec> discover_benchmarks(const fs::path& root,
+                                               std::vector<std::string>* broken) {
+  return discover_benchmarks(std::vector<fs::path>{root}, broken);
+}
+
+BenchmarkSpec find_benchmark(const std::vector<fs::path>& roots, const std::string& id_or_name) {
   std::vector<std::string> broken;
-  auto all = discover_benchmarks(root, &broken);
+  auto all = discover_benchmarks(roots, &broken);
   for (auto& spec : all) {
     if (spec.id == id_or_name || spec.name == id_or_name) return std::move(spec);
   }
@@ -297,9 +357,20 @@ BenchmarkSpec find_benchmark(const fs::path& root, const std::string& id_or_name
                        "; see 'robotperf list')");
 }
 
-kernels::KernelConfig kernel_config(const NodeSpec& node,
-                                    const std::map<std::string, std::string>& workload) {
-  kernels::KernelConfig config;
+BenchmarkSpec find_benchmark(const fs::path& root, const std::string& id_or_name) {
+  return find_benchmark(std::vector<fs::path>{root}, id_or_name);
+}
+
+const plugin::KernelEntry& kernel_of(const NodeSpec& node) {
+  const plugin::KernelEntry* entry = plugin::registry().find_kernel(node.kernel);
+  if (entry == nullptr)
+    throw BenchmarkError("node '" + node.name + "': unknown kernel '" + node.kernel + "'");
+  return *entry;
+}
+
+plugin::KernelConfig kernel_config(const NodeSpec& node,
+                                   const std::map<std::string, std::string>& workload) {
+  plugin::KernelConfig config;
   config.node_name = node.name;
   config.backend = node.backend;
   if (const auto seed = workload.find("seed"); seed != workload.end()) {
@@ -310,10 +381,30 @@ kernels::KernelConfig kernel_config(const NodeSpec& node,
       throw BenchmarkError("workload seed: '" + text + "' is not a valid number");
     config.workload_seed = value;
   }
-  for (const auto& [k, v] : node.parameters) config.parameters.set(k, v);
+  try {
+    config.parameters = plugin::Parameters(kernel_of(node).info.parameters, node.parameters,
+                                           "node '" + node.name + "'");
+  } catch (const std::invalid_argument& e) {
+    throw BenchmarkError(e.what());
+  }
   config.topics = node.topics;
   config.qos = node.qos;
   return config;
+}
+
+std::shared_ptr<graph::Node> make_kernel_node(const NodeSpec& node, graph::Context& context,
+                                              const std::map<std::string, std::string>& workload) {
+  const plugin::KernelEntry& entry = kernel_of(node);
+  if (std::ranges::count(entry.info.backends, node.backend) == 0) {
+    throw std::invalid_argument("node '" + node.name + "': kernel " + node.kernel +
+                                " has no backend '" + node.backend + "'");
+  }
+  auto built = entry.factory(context, kernel_config(node, workload));
+  if (!built) {
+    throw std::runtime_error("node '" + node.name + "': kernel " + node.kernel + " (" +
+                             entry.origin + ") built no node");
+  }
+  return built;
 }
 
 void override_update_rate(BenchmarkSpec& spec, double hz) {
@@ -322,17 +413,18 @@ void override_update_rate(BenchmarkSpec& spec, double hz) {
     throw std::invalid_argument("--update-rate must be a rate in Hz, above 0 and at most 100000");
   bool found = false;
   for (auto& n : spec.nodes) {
-    if (!n.kernel.starts_with("control/")) continue;
+    const auto& loop = kernel_of(n).info.control_loop;
+    if (!loop) continue;
     std::ostringstream text;
     text.precision(17);
     text << hz;
-    n.parameters["update_rate"] = text.str();
+    n.parameters[loop->rate_parameter] = text.str();
     found = true;
   }
   if (!found)
     throw std::invalid_argument(
-        "--update-rate applies to control benchmarks (a controller "
-        "manager's loop); " +
+        "--update-rate applies to benchmarks whose kernels run a control loop (a controller "
+        "manager's); " +
         spec.id + " has none");
 }
 

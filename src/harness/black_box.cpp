@@ -190,8 +190,8 @@ void Monitor::on_message(const rmw::MessagePtr& msg, bool shared_with_graph, int
                        type_->serialized_size(msg.get()));
   const auto id = ids_.id_of(stamp);
   // A kept output the graph shares with us (intra) is copied rather than held: holding it would
-  // make a node that reuses its output buffer once released (stereo_depth_nodes.cpp) allocate and
-  // page-fault a fresh one for the next frame, a cost the measurement would add to the graph.
+  // make a node that reuses its output buffer once released allocate and page-fault a fresh one
+  // for the next frame, a cost the measurement would add to the graph.
   // keep_ is written only before the run starts.
   rmw::MessagePtr kept;
   if (id && !keep_.empty() && keep_[*id])

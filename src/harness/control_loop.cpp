@@ -31,7 +31,7 @@ metrics::SampleStats stats_from_wire(const json& j) {
 
 }  // namespace
 
-ControlLoopResult control_loop_timing(const control::LoopReport& loop) {
+ControlLoopResult control_loop_timing(const plugin::LoopReport& loop) {
   ControlLoopResult c;
   c.node = loop.name;
   c.update_rate_hz = loop.update_rate_hz;
@@ -62,7 +62,7 @@ ControlLoopResult control_loop_timing(const control::LoopReport& loop) {
   return c;
 }
 
-metrics::SampleStats command_to_write(const std::vector<control::CommandWrite>& writes,
+metrics::SampleStats command_to_write(const std::vector<plugin::CommandWrite>& writes,
                                       const MessageIds& ids,
                                       const std::vector<MessageRecord>& records,
                                       std::size_t warmup) {
@@ -75,7 +75,7 @@ metrics::SampleStats command_to_write(const std::vector<control::CommandWrite>& 
   return metrics::compute_stats(to_write);
 }
 
-json control_loop_to_wire(const control::LoopReport& loop) {
+json control_loop_to_wire(const plugin::LoopReport& loop) {
   const ControlLoopResult c = control_loop_timing(loop);
   json writes = json::array();
   for (const auto& w : loop.writes) writes.push_back({w.command_id, w.write_end_ns});
@@ -108,7 +108,7 @@ ControlLoopResult control_loop_from_wire(const json& wire, const MessageIds& ids
   c.cycle_duration = stats_from_wire(wire.at("cycle_duration_ns"));
   c.period_jitter = stats_from_wire(wire.at("period_jitter_ns"));
   c.wake_latency = stats_from_wire(wire.at("wake_latency_ns"));
-  std::vector<control::CommandWrite> writes;
+  std::vector<plugin::CommandWrite> writes;
   for (const auto& w : wire.at("writes"))
     writes.push_back({w.at(0).get<int64_t>(), w.at(1).get<int64_t>()});
   c.command_to_write = command_to_write(writes, ids, records, warmup);

@@ -1,4 +1,4 @@
-// Private to the harness: the loop metrics of control kernels (src/control), computed from a
+// Private to the harness: the loop metrics of kernels that run a control loop, computed from a
 // loop's report in the process that ran it and, for per-node runs, shipped to the runner as JSON
 // on the child's stats line (the command writes travel raw: only the runner knows the messages'
 // scheduled send times). CLOCK_MONOTONIC is system-wide, so the times compare across processes.
@@ -9,22 +9,22 @@
 #include <vector>
 
 #include "black_box.hpp"
-#include "robotperf/control/controller_manager.hpp"
 #include "robotperf/harness/run.hpp"
+#include "robotperf/plugin/control_loop.hpp"
 
 namespace robotperf::harness {
 
 // Everything of the loop's result but command_to_write.
-ControlLoopResult control_loop_timing(const control::LoopReport& loop);
+ControlLoopResult control_loop_timing(const plugin::LoopReport& loop);
 
 // Hardware written with a measured command minus that command's scheduled send.
-metrics::SampleStats command_to_write(const std::vector<control::CommandWrite>& writes,
+metrics::SampleStats command_to_write(const std::vector<plugin::CommandWrite>& writes,
                                       const MessageIds& ids,
                                       const std::vector<MessageRecord>& records,
                                       std::size_t warmup);
 
 // The child's side: the timing (nanoseconds) and the raw command writes.
-nlohmann::json control_loop_to_wire(const control::LoopReport& loop);
+nlohmann::json control_loop_to_wire(const plugin::LoopReport& loop);
 
 // The runner's side; throws nlohmann::json::exception on a malformed message.
 ControlLoopResult control_loop_from_wire(const nlohmann::json& wire, const MessageIds& ids,

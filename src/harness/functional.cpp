@@ -4,31 +4,10 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "evaluators.hpp"
+#include "robotperf/plugin/registry.hpp"
 
 namespace robotperf::harness {
 namespace {
-
-using Factory = std::unique_ptr<FunctionalEvaluator> (*)(const TruthStreams&);
-
-struct Entry {
-  EvaluatorInfo info;
-  Factory factory;
-};
-
-const std::vector<Entry>& entries() {
-  static const std::vector<Entry> table{
-      {stereo_disparity_info(), make_stereo_disparity_evaluator},
-      {depth_point_cloud_info(), make_depth_point_cloud_evaluator},
-      {joint_trajectory_goals_info(), make_joint_trajectory_goals_evaluator},
-      {diff_drive_odometry_info(), make_diff_drive_odometry_evaluator},
-      {forward_kinematics_info(), make_forward_kinematics_evaluator},
-      {inverse_kinematics_info(), make_inverse_kinematics_evaluator},
-      {collision_info(), make_collision_evaluator},
-      {plan_execution_info(), make_plan_execution_evaluator},
-  };
-  return table;
-}
 
 std::string number(double v) {
   char buf[64];
@@ -36,51 +15,41 @@ std::string number(double v) {
   return buf;
 }
 
+const plugin::EvaluatorEntry& evaluator_entry(const std::string& name) {
+  const plugin::EvaluatorEntry* entry = plugin::registry().find_evaluator(name);
+  if (entry == nullptr) {
+    throw std::invalid_argument("unknown functional evaluator '" + name + "' (registered: " +
+                                plugin::names_of(plugin::registry().evaluators()) + ")");
+  }
+  return *entry;
+}
+
+plugin::TruthStreams truth_streams(const FunctionalSpec& spec, const Dataset& dataset) {
+  std::map<std::string, const DatasetStream*> by_role;
+  for (const auto& [role, stream] : spec.truth) by_role[role] = &dataset.stream(stream);
+  return plugin::TruthStreams(spec.evaluator, std::move(by_role));
+}
+
 }  // namespace
 
-const DatasetStream& TruthStreams::operator[](const std::string& role) const {
-  auto it = spec->truth.find(role);
-  if (it == spec->truth.end()) {
-    throw std::invalid_argument("evaluator " + spec->evaluator + ": no truth stream given for '" +
-                                role + "'");
-  }
-  return dataset->stream(it->second);
-}
-
-const std::vector<EvaluatorInfo>& evaluator_infos() {
-  static const std::vector<EvaluatorInfo> infos = [] {
-    std::vector<EvaluatorInfo> out;
-    for (const auto& e : entries()) out.push_back(e.info);
-    return out;
-  }();
-  return infos;
-}
-
-const EvaluatorInfo* find_evaluator(const std::string& name) {
-  for (const auto& info : evaluator_infos()) {
-    if (info.name == name) return &info;
-  }
-  return nullptr;
-}
-
-std::unique_ptr<FunctionalEvaluator> make_evaluator(const FunctionalSpec& spec,
-                                                    const Dataset& dataset) {
-  for (const auto& e : entries()) {
-    if (e.info.name != spec.evaluator) continue;
-    const TruthStreams truth{&spec, &dataset};
-    for (const auto& role : e.info.truth_roles) {
-      const DatasetStream& s = truth[role];
-      if (s.messages.empty()) {
-        throw std::invalid_argument("evaluator " + spec.evaluator + ": truth stream '" + s.name +
-                                    "' is empty");
-      }
+std::unique_ptr<plugin::FunctionalEvaluator> make_evaluator(const FunctionalSpec& spec,
+                                                            const Dataset& dataset) {
+  const plugin::EvaluatorEntry& entry = evaluator_entry(spec.evaluator);
+  const plugin::TruthStreams truth = truth_streams(spec, dataset);
+  for (const auto& role : entry.info.truth_roles) {
+    const DatasetStream& s = truth[role];
+    if (s.messages.empty()) {
+      throw std::invalid_argument("evaluator " + spec.evaluator + ": truth stream '" + s.name +
+                                  "' is empty");
     }
-    return e.factory(truth);
   }
-  std::string known;
-  for (const auto& e : entries()) known += (known.empty() ? "" : ", ") + e.info.name;
-  throw std::invalid_argument("unknown functional evaluator '" + spec.evaluator +
-                              "' (known: " + known + ")");
+  const plugin::Parameters parameters(entry.info.parameters, spec.parameters,
+                                      "evaluator " + spec.evaluator);
+  auto evaluator = entry.make(truth, parameters);
+  if (!evaluator)
+    throw std::runtime_error("evaluator " + spec.evaluator + " (" + entry.origin +
+                             ") made nothing");
+  return evaluator;
 }
 
 std::vector<uint64_t> functional_sample_ids(std::size_t count, std::size_t warmup,
@@ -101,9 +70,8 @@ FunctionalResult evaluate_functional(const FunctionalSpec& spec, const Dataset& 
   r.evaluator = spec.evaluator;
   r.requested = requested;
   const auto evaluator = make_evaluator(spec, dataset);
-  const EvaluatorInfo& info = *find_evaluator(spec.evaluator);
-  const std::size_t frames =
-      TruthStreams{&spec, &dataset}[info.truth_roles.front()].messages.size();
+  const plugin::EvaluatorInfo& info = evaluator_entry(spec.evaluator).info;
+  const std::size_t frames = truth_streams(spec, dataset)[info.truth_roles.front()].messages.size();
   for (const auto& [id, msg] : kept) {
     if (info.observed_truth_type.empty()) {
       evaluator->add(msg.get(), static_cast<std::size_t>(id % frames));

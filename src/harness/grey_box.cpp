@@ -17,21 +17,16 @@ double events_per_frame(const BenchmarkSpec& spec) {
   return 6.0 * static_cast<double>(ports) + 2.0 * static_cast<double>(spec.nodes.size()) + 4.0;
 }
 
-// Events of the control loops, per second, whatever the message rate: a begin and an end per
-// controller update, two controllers at most per controller manager.
+// Events of the control loops, per second, whatever the message rate (each kernel with a loop
+// says how many one cycle emits).
 double control_loop_events_per_second(const BenchmarkSpec& spec) {
   double events = 0;
   for (const auto& n : spec.nodes) {
-    if (!n.kernel.starts_with("control/")) continue;
-    double rate_hz = 100;  // the controller manager's default
-    if (auto p = n.parameters.find("update_rate"); p != n.parameters.end()) {
-      try {
-        rate_hz = std::stod(p->second);
-      } catch (const std::exception&) {
-        // The kernel refuses the value with a clear message when it starts.
-      }
-    }
-    events += 4.0 * rate_hz;
+    const auto& loop = kernel_of(n).info.control_loop;
+    if (!loop) continue;
+    // Parameters were checked when the package was loaded: the rate converts.
+    const plugin::Parameters p(kernel_of(n).info.parameters, n.parameters, n.name);
+    events += loop->trace_events_per_cycle * p.get_double(loop->rate_parameter);
   }
   return events;
 }

@@ -23,6 +23,8 @@
 #include "robotperf/graph/executor.hpp"
 #include "robotperf/metrics/delivery_validity.hpp"
 #include "robotperf/msgs/known_types.hpp"
+#include "robotperf/plugin/control_loop.hpp"
+#include "robotperf/plugin/registry.hpp"
 
 namespace robotperf::harness {
 namespace {
@@ -37,9 +39,9 @@ Wiring wiring_of(const BenchmarkSpec& spec) {
   for (const auto& in : spec.inputs) w.published.insert(in.topic);
   w.subscribed.insert(spec.output.topic);
   for (const auto& node : spec.nodes) {
-    const kernels::KernelInfo* info = kernels::find_kernel(node.kernel);
+    const plugin::KernelInfo& info = kernel_of(node).info;
     for (const auto& [port, topic] : node.topics) {
-      const bool is_input = std::ranges::count(info->input_ports, port) > 0;
+      const bool is_input = std::ranges::count(info.inputs, port, &plugin::PortInfo::name) > 0;
       (is_input ? w.subscribed : w.published).insert(topic);
     }
   }
@@ -242,7 +244,8 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     functional_ids = functional_sample_ids(r.count, r.warmup, spec.functional->sample);
     monitor.keep_outputs(functional_ids);
     if (const auto& topic = spec.functional->observed_truth_topic; !topic.empty()) {
-      const std::string& type = find_evaluator(spec.functional->evaluator)->observed_truth_type;
+      const std::string& type =
+          plugin::registry().find_evaluator(spec.functional->evaluator)->info.observed_truth_type;
       const msgs::TypeSupport* ts = nullptr;
       msgs::with_message_type(type, [&]<class T>() { ts = &msgs::type_support<T>(); });
       if (ts == nullptr || !ts->stamped())
@@ -259,7 +262,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   std::vector<std::shared_ptr<graph::Node>> kernel_nodes;
   if (options.processes == ProcessLayout::kSingle) {
     for (const auto& n : spec.nodes) {
-      auto node = kernels::make_kernel_node(n.kernel, context, kernel_config(n, spec.workload));
+      auto node = make_kernel_node(n, context, spec.workload);
       graph_executor.add_node(node);
       local_nodes.push_back(node);
       kernel_nodes.push_back(node);
@@ -344,13 +347,13 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     }
   }
   for (std::size_t i = 0; i < kernel_nodes.size(); ++i) {
-    if (auto* loop = dynamic_cast<kernels::ControlLoopSource*>(kernel_nodes[i].get())) {
-      const control::LoopReport report = loop->stop_and_report();
+    if (auto* loop = dynamic_cast<plugin::ControlLoopSource*>(kernel_nodes[i].get())) {
+      const plugin::LoopReport report = loop->stop_and_report();
       ControlLoopResult c = control_loop_timing(report);
       c.command_to_write = command_to_write(report.writes, ids, r.records, r.warmup);
       r.control_loops.push_back(std::move(c));
     }
-    if (const auto* c = dynamic_cast<const kernels::NodeCounters*>(kernel_nodes[i].get())) {
+    if (const auto* c = dynamic_cast<const plugin::NodeCounters*>(kernel_nodes[i].get())) {
       r.nodes[i].counters = c->counters();
     }
   }
@@ -399,8 +402,7 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   t.domain_id = domain_id;
   graph::Context context(rmw::make_transport(rmw, t));
   trace_run_join();
-  auto node = kernels::make_kernel_node(node_spec->kernel, context,
-                                        kernel_config(*node_spec, spec.workload));
+  auto node = make_kernel_node(*node_spec, context, spec.workload);
   graph::Executor executor(spec.executor_threads);
   executor.add_node(node);
 
@@ -439,9 +441,9 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
                           {"counters", nlohmann::json::object()}};
   // The loop's metrics are read here, where the loop ran, and go to the runner with the stats;
   // stopping the loop first, so that the counters below are not read while it runs.
-  if (auto* loop = dynamic_cast<kernels::ControlLoopSource*>(node.get()))
+  if (auto* loop = dynamic_cast<plugin::ControlLoopSource*>(node.get()))
     stats["control_loop"] = control_loop_to_wire(loop->stop_and_report());
-  if (const auto* c = dynamic_cast<const kernels::NodeCounters*>(node.get())) {
+  if (const auto* c = dynamic_cast<const plugin::NodeCounters*>(node.get())) {
     for (const auto& [name, value] : c->counters()) stats["counters"][name] = value;
   }
   std::cout << "stats " << stats.dump() << std::endl;

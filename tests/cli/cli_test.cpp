@@ -11,26 +11,14 @@
 #include <string>
 #include <tuple>
 
+#include "../command_line.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Outcome {
-  int exit_code = -1;
-  std::string out;  // stdout and stderr together
-};
-
-Outcome robotperf(const std::string& args) {
-  const std::string cmd = std::string(ROBOTPERF_EXECUTABLE) + " " + args + " 2>&1";
-  Outcome o;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (p == nullptr) return o;
-  std::array<char, 4096> buf;
-  while (std::size_t n = fread(buf.data(), 1, buf.size(), p)) o.out.append(buf.data(), n);
-  const int status = pclose(p);
-  o.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return o;
-}
+using robotperf::test_support::Outcome;
+using robotperf::test_support::robotperf_cli;
 
 class Cli : public ::testing::Test {
  protected:
@@ -81,20 +69,20 @@ void expect_clean_a1_result(const nlohmann::json& j, const std::string& rmw) {
 }
 
 TEST_F(Cli, ListAndDescribe) {
-  const Outcome list = robotperf("list");
+  const Outcome list = robotperf_cli("list");
   EXPECT_EQ(list.exit_code, 0);
   for (const char* id : {"a1_perception_2nodes", "a2_rectify", "a3_stereo_image_proc",
                          "a4_depth_image_proc", "a5_resize"}) {
     EXPECT_NE(list.out.find(id), std::string::npos) << list.out;
   }
-  const Outcome d = robotperf("describe a1");
+  const Outcome d = robotperf_cli("describe a1");
   EXPECT_EQ(d.exit_code, 0);
   EXPECT_NE(d.out.find("image_proc/rectify"), std::string::npos);
   EXPECT_NE(d.out.find("/resize/image"), std::string::npos);
 }
 
 TEST_F(Cli, RunA1OnIntra) {
-  const Outcome o = robotperf("run a1 --count 60 --rmw intra --csv --output " + out_.string());
+  const Outcome o = robotperf_cli("run a1 --count 60 --rmw intra --csv --output " + out_.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("result: VALID"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("· 30.0 Hz · dataset perception/image"), std::string::npos) << o.out;
@@ -109,15 +97,15 @@ TEST_F(Cli, RunA1OnIntra) {
 }
 
 TEST_F(Cli, RunA1OnFastDds) {
-  const Outcome o = robotperf("run a1 --count 60 --rmw fastdds --domain " + domain() +
-                              " --output " + out_.string());
+  const Outcome o = robotperf_cli("run a1 --count 60 --rmw fastdds --domain " + domain() +
+                                  " --output " + out_.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   expect_clean_a1_result(result_json(), "fastdds");
 }
 
 TEST_F(Cli, RunA1OneProcessPerNode) {
   // At 5 Hz even a loaded 2-core machine moves 1.2 MB frames between processes in time.
-  const Outcome o = robotperf(
+  const Outcome o = robotperf_cli(
       "run a1 --count 60 --rate 10 --rmw fastdds --processes per-node --cpus 0 "
       "--domain " +
       domain() + " --output " + out_.string());
@@ -163,14 +151,14 @@ TEST_F(Cli, RunA3AndA4OnBothTransports) {
     for (const std::string rmw : {"intra", "fastdds"}) {
       fs::remove_all(out_);
       // 10 Hz leaves a loaded 2-core machine room for 10 MB point clouds through Fast DDS.
-      const Outcome o = robotperf(std::string("run ") + id + " --count 40 --rate 10 --rmw " + rmw +
-                                  " --domain " + domain() + " --output " + out_.string());
+      const Outcome o = robotperf_cli(std::string("run ") + id + " --count 40 --rate 10 --rmw " +
+                                      rmw + " --domain " + domain() + " --output " + out_.string());
       ASSERT_EQ(o.exit_code, 0) << id << " " << rmw << "\n" << o.out;
       EXPECT_NE(o.out.find("functional result: VALID"), std::string::npos) << o.out;
       expect_functional_result(result_json(), id, rmw, evaluator);
     }
   }
-  const Outcome d = robotperf("describe a3");
+  const Outcome d = robotperf_cli("describe a3");
   EXPECT_NE(d.out.find("evaluator stereo_disparity"), std::string::npos) << d.out;
   EXPECT_NE(d.out.find("threshold bad1 <= 0.05"), std::string::npos) << d.out;
 }
@@ -189,7 +177,7 @@ TEST_F(Cli, RunManipulationBenchmarks) {
   for (const auto& [id, evaluator, options] : benchmarks) {
     fs::remove_all(out_);
     const Outcome o =
-        robotperf(std::string("run ") + id + " " + options + " --output " + out_.string());
+        robotperf_cli(std::string("run ") + id + " " + options + " --output " + out_.string());
     ASSERT_EQ(o.exit_code, 0) << id << "\n" << o.out;
     const nlohmann::json j = result_json();
     expect_functional_result(j, id, "intra", evaluator);
@@ -201,12 +189,12 @@ TEST_F(Cli, RunManipulationBenchmarks) {
   };
   const nlohmann::json first = d1_path_length();
   fs::remove_all(out_);
-  ASSERT_EQ(robotperf("run d1 --count 34 --rate 4 --output " + out_.string()).exit_code, 0);
+  ASSERT_EQ(robotperf_cli("run d1 --count 34 --rate 4 --output " + out_.string()).exit_code, 0);
   EXPECT_EQ(d1_path_length(), first);
 }
 
 TEST_F(Cli, UnknownBenchmarkIsOneClearLine) {
-  const Outcome o = robotperf("run z9 --output " + out_.string());
+  const Outcome o = robotperf_cli("run z9 --output " + out_.string());
   EXPECT_EQ(o.exit_code, 2);
   EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << o.out;
   EXPECT_NE(o.out.find("unknown benchmark 'z9'"), std::string::npos) << o.out;
@@ -216,20 +204,20 @@ TEST_F(Cli, UnknownBenchmarkIsOneClearLine) {
 TEST_F(Cli, BadOptionIsOneClearLine) {
   for (const char* args :
        {"run a1 --rate fast", "run a1 --rmw zenoh", "run a1 --count 5 --duration 2", "fly a1"}) {
-    const Outcome o = robotperf(args);
+    const Outcome o = robotperf_cli(args);
     EXPECT_EQ(o.exit_code, 2) << args << "\n" << o.out;
     EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << args << "\n" << o.out;
   }
 }
 
 TEST_F(Cli, WarmupNotBelowCountIsRefused) {
-  const Outcome o = robotperf("run a2 --count 5 --warmup 5 --output " + out_.string());
+  const Outcome o = robotperf_cli("run a2 --count 5 --warmup 5 --output " + out_.string());
   EXPECT_EQ(o.exit_code, 2);
   EXPECT_NE(o.out.find("warm-up"), std::string::npos) << o.out;
 }
 
 TEST_F(Cli, ResultHasMachineSoftwarePowerResourcesAndWarnings) {
-  const Outcome o = robotperf("run a2 --count 40 --output " + out_.string());
+  const Outcome o = robotperf_cli("run a2 --count 40 --output " + out_.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   const auto j = result_json();
   const auto& m = j["machine"];
@@ -270,7 +258,7 @@ TEST_F(Cli, ResultHasMachineSoftwarePowerResourcesAndWarnings) {
 }
 
 TEST_F(Cli, ExternalMeterGivesEnergyPerMessageAndThroughputPerWatt) {
-  const Outcome o = robotperf(
+  const Outcome o = robotperf_cli(
       "run a2 --count 40 --power-meter 'echo 12.5' --power-sources external --power-period 0.05 "
       "--output " +
       out_.string());
@@ -291,14 +279,14 @@ TEST_F(Cli, ExternalMeterGivesEnergyPerMessageAndThroughputPerWatt) {
 
 TEST_F(Cli, BrokenPowerMeterIsOneClearLine) {
   const Outcome o =
-      robotperf("run a2 --count 20 --power-meter 'echo nope' --output " + out_.string());
+      robotperf_cli("run a2 --count 20 --power-meter 'echo nope' --output " + out_.string());
   EXPECT_EQ(o.exit_code, 2) << o.out;
   EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << o.out;
   EXPECT_NE(o.out.find("expected watts"), std::string::npos) << o.out;
 }
 
 TEST_F(Cli, StrictRefusesWhenARunRuleIsBroken) {
-  const Outcome o = robotperf("run a2 --count 20 --strict --output " + out_.string());
+  const Outcome o = robotperf_cli("run a2 --count 20 --strict --output " + out_.string());
   EXPECT_EQ(o.exit_code, 4) << o.out;
   EXPECT_NE(o.out.find("--strict: not running"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("samples: 15 measured messages"), std::string::npos) << o.out;
@@ -306,10 +294,10 @@ TEST_F(Cli, StrictRefusesWhenARunRuleIsBroken) {
 }
 
 TEST_F(Cli, PinnedRunIsRecorded) {
-  const Outcome o = robotperf("run a2 --count 40 --cpus 0 --output " + out_.string());
+  const Outcome o = robotperf_cli("run a2 --count 40 --cpus 0 --output " + out_.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_EQ(result_json()["configuration"]["scheduling"]["cpus"], "0");
-  const Outcome bad = robotperf("run a2 --count 20 --cpus 1-x --output " + out_.string());
+  const Outcome bad = robotperf_cli("run a2 --count 20 --cpus 1-x --output " + out_.string());
   EXPECT_EQ(bad.exit_code, 2) << bad.out;
   EXPECT_NE(bad.out.find("bad CPU list '1-x'"), std::string::npos) << bad.out;
 }
@@ -320,7 +308,8 @@ TEST_F(Cli, SysinfoShowsMachineSoftwareAndPowerSources) {
   std::ofstream(zone / "name") << "package-0\n";
   std::ofstream(zone / "energy_uj") << "123456\n";
   std::ofstream(zone / "max_energy_range_uj") << "262143328850\n";
-  const Outcome o = robotperf("sysinfo --sysfs-root " + out_.string() + " --power-sources rapl");
+  const Outcome o =
+      robotperf_cli("sysinfo --sysfs-root " + out_.string() + " --power-sources rapl");
   ASSERT_EQ(o.exit_code, 0) << o.out;
   const auto j = nlohmann::json::parse(o.out);
   EXPECT_FALSE(j["machine"]["cpu"]["logical_cpus"].is_null());
@@ -329,7 +318,7 @@ TEST_F(Cli, SysinfoShowsMachineSoftwareAndPowerSources) {
   EXPECT_EQ(j["power"]["sources"][0]["name"], "rapl:package-0");
   EXPECT_EQ(j["power"]["sources"][0]["kind"], "energy_counter");
 
-  const Outcome here = robotperf("sysinfo");
+  const Outcome here = robotperf_cli("sysinfo");
   ASSERT_EQ(here.exit_code, 0) << here.out;
   const auto h = nlohmann::json::parse(here.out);
   if (h["power"]["sources"].empty()) {
@@ -344,7 +333,7 @@ namespace {
 const std::string kSharedBags = std::string(ROBOTPERF_SHARED_DATA_DIR) + "/rosbag2/";
 
 TEST_F(Cli, BagInfoLikeRos2BagInfo) {
-  const Outcome o = robotperf("bag info " + kSharedBags + "sqlite3_cdr_test");
+  const Outcome o = robotperf_cli("bag info " + kSharedBags + "sqlite3_cdr_test");
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("Storage id:        sqlite3"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("Messages:          7"), std::string::npos) << o.out;
@@ -354,7 +343,7 @@ TEST_F(Cli, BagInfoLikeRos2BagInfo) {
 }
 
 TEST_F(Cli, BagEchoAndConvert) {
-  Outcome o = robotperf("bag echo " + kSharedBags + "mcap_talker --topic /topic --limit 4");
+  Outcome o = robotperf_cli("bag echo " + kSharedBags + "mcap_talker --topic /topic --limit 4");
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("--- /topic [std_msgs/msg/String] at 1585866236.613084249\n"
                        "data: 'Hello, world! 3'\n"),
@@ -362,24 +351,24 @@ TEST_F(Cli, BagEchoAndConvert) {
       << o.out;
   EXPECT_EQ(o.out.find("Hello, world! 4"), std::string::npos) << "--limit 4 printed more";
 
-  o = robotperf("bag convert " + kSharedBags + "mcap_talker " + (out_ / "db").string() +
-                " --storage sqlite3");
+  o = robotperf_cli("bag convert " + kSharedBags + "mcap_talker " + (out_ / "db").string() +
+                    " --storage sqlite3");
   ASSERT_EQ(o.exit_code, 0) << o.out;
   // sqlite3 schema 3 (Humble) has no place for definitions: they come from .msg files.
-  o = robotperf("bag echo " + (out_ / "db").string() + " --topic /topic");
+  o = robotperf_cli("bag echo " + (out_ / "db").string() + " --topic /topic");
   EXPECT_EQ(o.exit_code, 2) << o.out;
   EXPECT_NE(o.out.find("no definition of std_msgs/msg/String"), std::string::npos) << o.out;
-  o = robotperf("bag echo " + (out_ / "db").string() + " --topic /topic --msg-dir " +
-                ROBOTPERF_SHARED_DATA_DIR + "/msg");
+  o = robotperf_cli("bag echo " + (out_ / "db").string() + " --topic /topic --msg-dir " +
+                    ROBOTPERF_SHARED_DATA_DIR + "/msg");
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("data: 'Hello, world! 9'"), std::string::npos) << o.out;
 }
 
 TEST_F(Cli, DatasetGenerateWritesARealBag) {
   const std::string bag = (out_ / "image").string();
-  Outcome o = robotperf("dataset generate perception/image --out " + bag);
+  Outcome o = robotperf_cli("dataset generate perception/image --out " + bag);
   ASSERT_EQ(o.exit_code, 0) << o.out;
-  o = robotperf("bag info " + bag);
+  o = robotperf_cli("bag info " + bag);
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("Storage id:        mcap"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("/camera/image_raw          68 msgs  sensor_msgs/msg/Image"),
@@ -389,7 +378,7 @@ TEST_F(Cli, DatasetGenerateWritesARealBag) {
             std::string::npos)
       << o.out;
   // The bag carries the definitions, so any reader can decode it.
-  o = robotperf("bag echo " + bag + " --topic /camera/image_raw --limit 1");
+  o = robotperf_cli("bag echo " + bag + " --topic /camera/image_raw --limit 1");
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("encoding: 'rgb8'"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("data: '<921600 bytes>'"), std::string::npos) << o.out;
@@ -402,7 +391,7 @@ TEST_F(Cli, BadBagIsOneClearLine) {
            "dataset generate no/such",
            "bag convert " + kSharedBags + "mcap_talker " + (out_ / "x").string() +
                " --compression brotli"}) {
-    const Outcome o = robotperf(args);
+    const Outcome o = robotperf_cli(args);
     EXPECT_EQ(o.exit_code, 2) << args << ": " << o.out;
     EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << args << ": " << o.out;
   }
@@ -412,10 +401,10 @@ TEST_F(Cli, BadBagIsOneClearLine) {
 
 TEST_F(Cli, RunReplaysABagOnItsOwnTimeline) {
   const std::string bag = (out_ / "camera").string();
-  Outcome o = robotperf("dataset generate perception/image --out " + bag);
+  Outcome o = robotperf_cli("dataset generate perception/image --out " + bag);
   ASSERT_EQ(o.exit_code, 0) << o.out;
-  o = robotperf("run a1 --dataset " + bag + " --rate bag --rate-scale 2 --count 60 --output " +
-                out_.string() + " --quiet");
+  o = robotperf_cli("run a1 --dataset " + bag + " --rate bag --rate-scale 2 --count 60 --output " +
+                    out_.string() + " --quiet");
   ASSERT_EQ(o.exit_code, 0) << o.out;
   const auto j = result_json();
   expect_clean_a1_result(j, "intra");
@@ -432,11 +421,11 @@ TEST_F(Cli, RunReplaysABagOnItsOwnTimeline) {
 // recorded CDR payloads as they are, with the IDs written into their header bytes.
 TEST_F(Cli, RunReplaysABagIntoOneProcessPerNode) {
   const std::string bag = (out_ / "camera").string();
-  Outcome o = robotperf("dataset generate perception/image --out " + bag);
+  Outcome o = robotperf_cli("dataset generate perception/image --out " + bag);
   ASSERT_EQ(o.exit_code, 0) << o.out;
-  o = robotperf("run a1 --dataset " + bag +
-                " --count 40 --rate 10 --rmw fastdds --processes per-node --domain " + domain() +
-                " --quiet --output " + out_.string());
+  o = robotperf_cli("run a1 --dataset " + bag +
+                    " --count 40 --rate 10 --rmw fastdds --processes per-node --domain " +
+                    domain() + " --quiet --output " + out_.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   auto j = result_json();
   EXPECT_EQ(j["dataset"]["name"], bag);
@@ -453,12 +442,12 @@ TEST_F(Cli, RunReplaysABagIntoOneProcessPerNode) {
   // a4's generated dataset plays into a4 as it is, three inputs a frame; a bag has no ground
   // truth, so the outputs are not checked, and the result says so.
   const std::string depth_bag = (out_ / "depth").string();
-  o = robotperf("dataset generate perception/depth --out " + depth_bag);
+  o = robotperf_cli("dataset generate perception/depth --out " + depth_bag);
   ASSERT_EQ(o.exit_code, 0) << o.out;
   fs::remove(result_json_path());
-  o = robotperf("run a4 --dataset " + depth_bag +
-                " --count 35 --rate 10 --rmw fastdds --processes per-node --domain " + domain() +
-                " --quiet --output " + out_.string());
+  o = robotperf_cli("run a4 --dataset " + depth_bag +
+                    " --count 35 --rate 10 --rmw fastdds --processes per-node --domain " +
+                    domain() + " --quiet --output " + out_.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("functional: outputs not checked"), std::string::npos) << o.out;
   j = result_json();
@@ -471,7 +460,7 @@ TEST_F(Cli, RunReplaysABagIntoOneProcessPerNode) {
 
 TEST_F(Cli, BadDatasetOptionsAreOneClearLine) {
   const std::string bag = (out_ / "camera").string();
-  ASSERT_EQ(robotperf("dataset generate perception/image --out " + bag).exit_code, 0);
+  ASSERT_EQ(robotperf_cli("dataset generate perception/image --out " + bag).exit_code, 0);
   for (const std::string& args :
        std::vector<std::string>{"run a1 --dataset " + bag + " --remap /nope:=/camera/image_raw",
                                 "run a1 --dataset " + bag + " --remap nonsense",
@@ -479,7 +468,7 @@ TEST_F(Cli, BadDatasetOptionsAreOneClearLine) {
                                 "run a1 --dataset " + bag + " --window 100:200",
                                 "run a1 --rate bag", "run a1 --dataset " + bag + " --rate-scale 2",
                                 "run a1 --dataset " + (out_ / "missing").string()}) {
-    const Outcome o = robotperf(args);
+    const Outcome o = robotperf_cli(args);
     EXPECT_EQ(o.exit_code, 2) << args << ": " << o.out;
     EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << args << ": " << o.out;
   }
@@ -505,7 +494,7 @@ TEST_F(Cli, RunControlBenchmarksC1ToC5) {
   for (const auto& [id, args] : runs) {
     fs::remove_all(out_);
     const Outcome o =
-        robotperf(std::string("run ") + id + " " + args + " --quiet --output " + out_.string());
+        robotperf_cli(std::string("run ") + id + " " + args + " --quiet --output " + out_.string());
     EXPECT_NE(o.out.find("control loop controller_manager"), std::string::npos) << o.out;
     const nlohmann::json j = result_json();
     ASSERT_TRUE(j.is_object()) << o.out;
@@ -540,7 +529,7 @@ TEST_F(Cli, RunControlBenchmarksC1ToC5) {
 // Per-node: the loop runs in the controller's own process, which sends its metrics (and the raw
 // command writes) back to the runner; the command -> write latency is computed there.
 TEST_F(Cli, RunC3OneProcessPerNodeReportsItsLoop) {
-  const Outcome o = robotperf(
+  const Outcome o = robotperf_cli(
       "run c3 --count 120 --warmup 10 --rmw fastdds --processes per-node "
       "--quiet --domain " +
       domain() + " --output " + out_.string());
@@ -572,7 +561,7 @@ TEST_F(Cli, RunC3OneProcessPerNodeReportsItsLoop) {
 
 // --update-rate runs the controller manager's loop faster than the graph says, and is recorded.
 TEST_F(Cli, UpdateRateOverridesTheControlLoopRate) {
-  const Outcome o = robotperf(
+  const Outcome o = robotperf_cli(
       "run c3 --rate 100 --update-rate 1000 --count 100 --warmup 10 "
       "--quiet --output " +
       out_.string());
@@ -588,7 +577,8 @@ TEST_F(Cli, UpdateRateOverridesTheControlLoopRate) {
   for (const std::string args :
        {"run c3 --update-rate 0", "run c3 --update-rate -100", "run c3 --update-rate inf",
         "run c3 --update-rate fast", "run a1 --update-rate 1000"}) {
-    const Outcome bad = robotperf(args + " --count 20 --quiet --output " + (out_ / "bad").string());
+    const Outcome bad =
+        robotperf_cli(args + " --count 20 --quiet --output " + (out_ / "bad").string());
     EXPECT_EQ(bad.exit_code, 2) << args << ": " << bad.out;
     EXPECT_EQ(std::count(bad.out.begin(), bad.out.end(), '\n'), 1) << args << ": " << bad.out;
     EXPECT_NE(bad.out.find("--update-rate"), std::string::npos) << args << ": " << bad.out;
@@ -600,14 +590,18 @@ TEST_F(Cli, ControlLoopCpuThatCannotBeHadIsOneClearLine) {
   fs::create_directories(out_ / "control" / "c9_bad");
   const fs::path src = fs::path(ROBOTPERF_SOURCE_DIR) / "benchmarks" / "control" /
                        "c3_rrbot_forward_command_controller_position";
-  fs::copy_file(src / "benchmark.yaml", out_ / "control" / "c9_bad" / "benchmark.yaml");
+  // Benchmark folders add to the built-in ones: the copy needs an id of its own.
+  std::ifstream meta_in(src / "benchmark.yaml");
+  std::string meta((std::istreambuf_iterator<char>(meta_in)), std::istreambuf_iterator<char>());
+  meta.replace(meta.find("id: c3"), 6, "id: c9");
+  std::ofstream(out_ / "control" / "c9_bad" / "benchmark.yaml") << meta;
   std::ifstream in(src / "graph.yaml");
   std::string graph((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   graph.replace(graph.find("cpu: -1"), 7, "cpu: 1000");
   std::ofstream(out_ / "control" / "c9_bad" / "graph.yaml") << graph;
   const Outcome o =
-      robotperf("--benchmarks " + out_.string() +
-                " run c3 --count 20 --warmup 2 --quiet --output " + (out_ / "r").string());
+      robotperf_cli("--benchmarks " + out_.string() +
+                    " run c9 --count 20 --warmup 2 --quiet --output " + (out_ / "r").string());
   EXPECT_EQ(o.exit_code, 2) << o.out;
   EXPECT_NE(o.out.find("cannot pin the control loop to CPU 1000"), std::string::npos) << o.out;
 }

@@ -10,31 +10,17 @@
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
+#include "../command_line.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
 
 const fs::path kPublished = fs::path(ROBOTPERF_SHARED_DATA_DIR) / "robotperf/perception";
 
-struct Outcome {
-  int exit_code = -1;
-  std::string out;  // stdout and stderr together
-};
-
-Outcome shell(const std::string& cmd) {
-  Outcome o;
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  if (p == nullptr) return o;
-  std::array<char, 4096> buf;
-  while (std::size_t n = fread(buf.data(), 1, buf.size(), p)) o.out.append(buf.data(), n);
-  const int status = pclose(p);
-  o.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return o;
-}
-
-Outcome robotperf(const std::string& args) {
-  return shell(std::string(ROBOTPERF_EXECUTABLE) + " " + args);
-}
+using robotperf::test_support::Outcome;
+using robotperf::test_support::robotperf_cli;
+using robotperf::test_support::shell;
 
 std::string read_text(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -55,7 +41,7 @@ class ResultsCli : public ::testing::Test {
     fs::remove_all(dir_);
     for (const char* args : {"run a5 --count 40 --csv", "run a5 --count 40", "run a2 --count 40"}) {
       const auto o =
-          robotperf(std::string(args) + " --quiet --output " + (dir_ / "results").string());
+          robotperf_cli(std::string(args) + " --quiet --output " + (dir_ / "results").string());
       ASSERT_EQ(o.exit_code, 0) << o.out;
     }
   }
@@ -65,19 +51,19 @@ class ResultsCli : public ::testing::Test {
 fs::path ResultsCli::dir_;
 
 TEST_F(ResultsCli, ListShowsEveryRun) {
-  const auto o = robotperf("results list " + (dir_ / "results").string());
+  const auto o = robotperf_cli("results list " + (dir_ / "results").string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_EQ(count(o.out, "a5-intra-"), 2u) << o.out;
   EXPECT_EQ(count(o.out, "a2-intra-"), 1u) << o.out;
   EXPECT_EQ(count(o.out, " valid\n"), 3u) << o.out;
-  const auto missing = robotperf("results list " + (dir_ / "nothing").string());
+  const auto missing = robotperf_cli("results list " + (dir_ / "nothing").string());
   EXPECT_EQ(missing.exit_code, 2);
   EXPECT_NE(missing.out.find("no such results folder"), std::string::npos);
 }
 
 TEST_F(ResultsCli, ExportMergeImportRoundTrip) {
   const auto yaml =
-      robotperf("results export --format benchmark-yaml " + (dir_ / "results").string());
+      robotperf_cli("results export --format benchmark-yaml " + (dir_ / "results").string());
   ASSERT_EQ(yaml.exit_code, 0) << yaml.out;
   EXPECT_EQ(yaml.out.rfind("results:\n", 0), 0u) << yaml.out;
   EXPECT_EQ(count(yaml.out, "metric: latency"), 3u);
@@ -89,19 +75,19 @@ TEST_F(ResultsCli, ExportMergeImportRoundTrip) {
   fs::copy_file(kPublished / "a5_resize/benchmark.yaml", copy,
                 fs::copy_options::overwrite_existing);
   const std::string before = read_text(copy);
-  const auto merge = robotperf("results export --merge " + copy.string() + " " +
-                               (dir_ / "results").string() + "/a5-intra-*.json");
+  const auto merge = robotperf_cli("results export --merge " + copy.string() + " " +
+                                   (dir_ / "results").string() + "/a5-intra-*.json");
   ASSERT_EQ(merge.exit_code, 0) << merge.out;
   EXPECT_NE(merge.out.find("added 4 result(s)"), std::string::npos) << merge.out;
   const std::string after = read_text(copy);
   EXPECT_GT(after.size(), before.size());
-  const auto again = robotperf("results export --merge " + copy.string() + " " +
-                               (dir_ / "results").string() + "/a5-intra-*.json");
+  const auto again = robotperf_cli("results export --merge " + copy.string() + " " +
+                                   (dir_ / "results").string() + "/a5-intra-*.json");
   EXPECT_NE(again.out.find("added 0 result(s), 4 already there"), std::string::npos) << again.out;
   EXPECT_EQ(read_text(copy), after);
 
   const auto imported =
-      robotperf("results import " + copy.string() + " --into " + (dir_ / "imported").string());
+      robotperf_cli("results import " + copy.string() + " --into " + (dir_ / "imported").string());
   ASSERT_EQ(imported.exit_code, 0) << imported.out;
   EXPECT_NE(imported.out.find("a5_resize"), std::string::npos);
   EXPECT_NE(imported.out.find("rows that break the measurement rules"), std::string::npos);
@@ -109,19 +95,19 @@ TEST_F(ResultsCli, ExportMergeImportRoundTrip) {
 }
 
 TEST_F(ResultsCli, ImportFlagsThePublishedA1Rows) {
-  const auto o = robotperf("results import " + (kPublished / "a1_perception_2nodes").string());
+  const auto o = robotperf_cli("results import " + (kPublished / "a1_perception_2nodes").string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("negative min latency"), std::string::npos);
   EXPECT_NE(o.out.find("is above 100 %"), std::string::npos);
   EXPECT_NE(o.out.find("W <= 0"), std::string::npos);
-  const auto bad = robotperf("results import " + (dir_ / "nope.yaml").string());
+  const auto bad = robotperf_cli("results import " + (dir_ / "nope.yaml").string());
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_EQ(count(bad.out, "\n"), 1u) << bad.out;  // one line
 }
 
 TEST_F(ResultsCli, ReportNeedsAnOutputAndExistingInputs) {
-  EXPECT_EQ(robotperf("report " + (dir_ / "results").string()).exit_code, 2);
-  const auto o = robotperf("report " + (dir_ / "missing").string() + " --html x.html");
+  EXPECT_EQ(robotperf_cli("report " + (dir_ / "results").string()).exit_code, 2);
+  const auto o = robotperf_cli("report " + (dir_ / "missing").string() + " --html x.html");
   EXPECT_EQ(o.exit_code, 2);
   EXPECT_NE(o.out.find("no such file or folder"), std::string::npos) << o.out;
 }
@@ -130,8 +116,9 @@ TEST_F(ResultsCli, ReportRendersInHeadlessChromium) {
   const auto which = shell("command -v chromium");
   ASSERT_EQ(which.exit_code, 0) << "chromium is not installed: run scripts/install-deps.sh";
   const fs::path html = dir_ / "report.html";
-  const auto o = robotperf("report " + (dir_ / "results").string() + " " + kPublished.string() +
-                           " --html " + html.string() + " --md " + (dir_ / "report.md").string());
+  const auto o =
+      robotperf_cli("report " + (dir_ / "results").string() + " " + kPublished.string() +
+                    " --html " + html.string() + " --md " + (dir_ / "report.md").string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
 
   const std::string chromium =
@@ -179,7 +166,7 @@ TEST_F(ResultsCli, ReportRendersInHeadlessChromium) {
 
 TEST_F(ResultsCli, RunWritesItsReport) {
   const fs::path out = dir_ / "with-report";
-  const auto o = robotperf("run a5 --count 40 --quiet --report --output " + out.string());
+  const auto o = robotperf_cli("run a5 --count 40 --quiet --report --output " + out.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   std::size_t reports = 0;
   for (const auto& e : fs::directory_iterator(out)) {
@@ -195,16 +182,25 @@ TEST_F(ResultsCli, RunWritesItsReport) {
 
 TEST_F(ResultsCli, ReadmeCheckSaysWhenOutOfDate) {
   const fs::path root = dir_ / "benchmarks";
+  const fs::path package = root / "perception/x5_resize";
   fs::create_directories(root / "perception");
-  fs::copy(fs::path(ROBOTPERF_SOURCE_DIR) / "benchmarks/perception/a5_resize",
-           root / "perception/a5_resize", fs::copy_options::recursive);
-  EXPECT_EQ(robotperf("--benchmarks " + root.string() + " readme a5 --check").exit_code, 0);
-  std::ofstream(root / "perception/a5_resize/README.md", std::ios::app) << "edited\n";
-  const auto stale = robotperf("--benchmarks " + root.string() + " readme a5 --check");
+  fs::copy(fs::path(ROBOTPERF_SOURCE_DIR) / "benchmarks/perception/a5_resize", package,
+           fs::copy_options::recursive);
+  // Benchmark folders add to the built-in ones: the copy needs an id of its own.
+  std::ifstream meta_in(package / "benchmark.yaml");
+  std::string meta((std::istreambuf_iterator<char>(meta_in)), std::istreambuf_iterator<char>());
+  meta_in.close();
+  meta.replace(meta.find("id: a5"), 6, "id: x5");
+  std::ofstream(package / "benchmark.yaml") << meta;
+  const std::string benchmarks = "--benchmarks " + root.string();
+  EXPECT_EQ(robotperf_cli(benchmarks + " readme x5").exit_code, 0);
+  EXPECT_EQ(robotperf_cli(benchmarks + " readme x5 --check").exit_code, 0);
+  std::ofstream(package / "README.md", std::ios::app) << "edited\n";
+  const auto stale = robotperf_cli(benchmarks + " readme x5 --check");
   EXPECT_EQ(stale.exit_code, 1);
   EXPECT_NE(stale.out.find("out of date"), std::string::npos);
-  EXPECT_EQ(robotperf("--benchmarks " + root.string() + " readme a5").exit_code, 0);
-  EXPECT_EQ(robotperf("--benchmarks " + root.string() + " readme a5 --check").exit_code, 0);
+  EXPECT_EQ(robotperf_cli(benchmarks + " readme x5").exit_code, 0);
+  EXPECT_EQ(robotperf_cli(benchmarks + " readme x5 --check").exit_code, 0);
 }
 
 }  // namespace

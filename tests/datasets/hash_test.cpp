@@ -1,10 +1,10 @@
-#include "robotperf/datasets/hash.hpp"
-
 #include <gtest/gtest.h>
 
 #include <string_view>
 
-namespace robotperf::datasets {
+#include "robotperf/plugin/content_hash.hpp"
+
+namespace robotperf::plugin {
 namespace {
 
 uint64_t hash_raw(std::string_view text) {
@@ -34,4 +34,4 @@ TEST(Fnv1a64, HexDigest) {
 }
 
 }  // namespace
-}  // namespace robotperf::datasets
+}  // namespace robotperf::plugin

@@ -1,4 +1,4 @@
-#include "robotperf/datasets/synthetic_camera.hpp"
+#include "robotperf/perception/synthetic_camera.hpp"
 
 #include <gtest/gtest.h>
 
@@ -7,9 +7,9 @@
 #include <opencv2/core.hpp>
 #include <stdexcept>
 
-#include "robotperf/kernels/image_proc.hpp"
+#include "robotperf/perception/image_proc.hpp"
 
-namespace robotperf::datasets {
+namespace robotperf::perception {
 namespace {
 
 class SyntheticCamera : public ::testing::Test {
@@ -72,10 +72,10 @@ TEST_F(SyntheticCamera, CarriesThePinholePlumbBobModel) {
 }
 
 TEST_F(SyntheticCamera, ShowsAMovingBoxOverATexturedScene) {
-  const cv::Mat first = kernels::image_view(frames_->front().image);
-  const cv::Mat last = kernels::image_view(frames_->back().image);
+  const cv::Mat first = perception::image_view(frames_->front().image);
+  const cv::Mat last = perception::image_view(frames_->back().image);
   // Consecutive frames differ (the box moves) but only in part of the image.
-  const cv::Mat second = kernels::image_view(frames_->at(1).image);
+  const cv::Mat second = perception::image_view(frames_->at(1).image);
   cv::Mat changed;
   cv::compare(first, second, changed, cv::CMP_NE);
   const double changed_fraction =
@@ -164,4 +164,4 @@ TEST(SyntheticCameraConfig, WithoutDistortionRawEqualsIdeal) {
 }
 
 }  // namespace
-}  // namespace robotperf::datasets
+}  // namespace robotperf::perception

@@ -5,14 +5,14 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "robotperf/datasets/synthetic_depth.hpp"
-#include "robotperf/datasets/synthetic_stereo.hpp"
-#include "robotperf/kernels/image_proc.hpp"
+#include "robotperf/perception/image_proc.hpp"
+#include "robotperf/perception/synthetic_depth.hpp"
+#include "robotperf/perception/synthetic_stereo.hpp"
 
-namespace robotperf::datasets {
+namespace robotperf::perception {
 namespace {
 
-using kernels::image_view;
+using perception::image_view;
 
 SyntheticStereoConfig small_stereo() {
   SyntheticStereoConfig c;
@@ -174,4 +174,4 @@ TEST(SyntheticDepth, RejectsBadConfigurations) {
 }
 
 }  // namespace
-}  // namespace robotperf::datasets
+}  // namespace robotperf::perception

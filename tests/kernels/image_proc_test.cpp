@@ -1,4 +1,4 @@
-#include "robotperf/kernels/image_proc.hpp"
+#include "robotperf/perception/image_proc.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,15 +8,15 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
-#include "robotperf/datasets/synthetic_camera.hpp"
-#include "robotperf/kernels/camera_model.hpp"
+#include "robotperf/perception/camera_model.hpp"
+#include "robotperf/perception/synthetic_camera.hpp"
 
-namespace robotperf::kernels {
+namespace robotperf::perception {
 namespace {
 
-using datasets::CameraFrame;
-using datasets::kCheckerTilePx;
-using datasets::SyntheticCameraConfig;
+using perception::CameraFrame;
+using perception::kCheckerTilePx;
+using perception::SyntheticCameraConfig;
 
 msgs::Image make_image(const std::string& encoding, uint32_t width, uint32_t height,
                        uint32_t bytes_per_pixel) {
@@ -156,7 +156,7 @@ class RectifySynthetic : public ::testing::Test {
   static void SetUpTestSuite() {
     config_ = new SyntheticCameraConfig();
     config_->frames = 10;
-    frames_ = new std::vector<CameraFrame>(datasets::generate_camera_sequence(*config_));
+    frames_ = new std::vector<CameraFrame>(perception::generate_camera_sequence(*config_));
   }
   static void TearDownTestSuite() {
     delete frames_;
@@ -200,7 +200,7 @@ TEST_F(RectifySynthetic, MatchesTheIdealRenderInTheInterior) {
   for (const uint32_t index : {0u, 9u}) {
     const CameraFrame& frame = (*frames_)[index];
     const msgs::Image rectified = rectifier.rectify(frame.image, frame.info);
-    const msgs::Image ideal = datasets::render_ideal_camera_frame(*config_, index);
+    const msgs::Image ideal = perception::render_ideal_camera_frame(*config_, index);
     const cv::Rect interior(8, 8, 640 - 16, 480 - 16);
     const double rectified_error =
         cv::norm(image_view(rectified)(interior), image_view(ideal)(interior), cv::NORM_L1) /
@@ -586,4 +586,4 @@ TEST(CameraModel, PinholeFromHorizontalFieldOfView) {
 }
 
 }  // namespace
-}  // namespace robotperf::kernels
+}  // namespace robotperf::perception

@@ -5,16 +5,20 @@
 #include <cstring>
 #include <opencv2/core.hpp>
 
-#include "robotperf/datasets/synthetic_depth.hpp"
-#include "robotperf/datasets/synthetic_stereo.hpp"
-#include "robotperf/kernels/camera_model.hpp"
-#include "robotperf/kernels/depth_image_proc.hpp"
-#include "robotperf/kernels/image_proc.hpp"
-#include "robotperf/kernels/message_sync.hpp"
-#include "robotperf/kernels/stereo_image_proc.hpp"
+#include "robotperf/perception/camera_model.hpp"
+#include "robotperf/perception/depth_image_proc.hpp"
+#include "robotperf/perception/image_proc.hpp"
+#include "robotperf/perception/stereo_image_proc.hpp"
+#include "robotperf/perception/synthetic_depth.hpp"
+#include "robotperf/perception/synthetic_stereo.hpp"
+#include "robotperf/plugin/message_sync.hpp"
 
-namespace robotperf::kernels {
+namespace robotperf::perception {
 namespace {
+
+using plugin::MessageSync;
+using plugin::SyncOptions;
+using plugin::SyncPolicy;
 
 // ---------------------------------------------------------------------------------------------
 // MessageSync
@@ -130,9 +134,9 @@ TEST(MessageSync, ApproximateRespectsMaxInterval) {
 class Disparity : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    datasets::SyntheticStereoConfig c;
+    perception::SyntheticStereoConfig c;
     c.frames = 2;
-    frames_ = new std::vector<datasets::StereoFrame>(datasets::generate_stereo_sequence(c));
+    frames_ = new std::vector<perception::StereoFrame>(perception::generate_stereo_sequence(c));
   }
   static void TearDownTestSuite() { delete frames_; }
 
@@ -156,9 +160,9 @@ class Disparity : public ::testing::Test {
     return {static_cast<double>(bad) / valid, static_cast<double>(valid) / evaluated};
   }
 
-  static std::vector<datasets::StereoFrame>* frames_;
+  static std::vector<perception::StereoFrame>* frames_;
 };
-std::vector<datasets::StereoFrame>* Disparity::frames_ = nullptr;
+std::vector<perception::StereoFrame>* Disparity::frames_ = nullptr;
 
 TEST_F(Disparity, FillsTheDisparityImageAsStereoImageProc) {
   const auto& f = (*frames_)[0];
@@ -388,9 +392,9 @@ TEST(PointCloudXyzrgb, RejectsWhatDepthImageProcRejects) {
 }
 
 TEST(PointCloudXyzrgb, ScenePointsMatchTheTruth) {
-  datasets::SyntheticDepthConfig config;
+  perception::SyntheticDepthConfig config;
   config.frames = 1;
-  const auto frames = datasets::generate_depth_sequence(config);
+  const auto frames = perception::generate_depth_sequence(config);
   const auto& f = frames[0];
   for (const msgs::Image* depth : {&f.depth, &f.depth_mm}) {
     msgs::PointCloud2 c;
@@ -413,4 +417,4 @@ TEST(PointCloudXyzrgb, ScenePointsMatchTheTruth) {
 }
 
 }  // namespace
-}  // namespace robotperf::kernels
+}  // namespace robotperf::perception

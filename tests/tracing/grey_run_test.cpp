@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "../command_line.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/tracing/ctf.hpp"
 #include "robotperf/tracing/session.hpp"
@@ -263,26 +264,42 @@ TEST_F(GreyRun, PerNodeProcessesAreTracedAsPartOfTheRun) {
   EXPECT_TRUE(cross_process_topic);
 }
 
-struct Outcome {
-  int exit_code = -1;
-  std::string out;
-};
-
-Outcome robotperf(const std::string& args, const std::string& env = "") {
-  const std::string cmd = env + " " + std::string(ROBOTPERF_EXECUTABLE) + " " + args + " 2>&1";
-  Outcome o;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (p == nullptr) return o;
-  char buf[4096];
-  while (std::size_t n = fread(buf, 1, sizeof buf, p)) o.out.append(buf, n);
-  const int status = pclose(p);
-  o.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return o;
+// A plug-in's kernel emits its kernel events through the plug-in API, from its own shared
+// library: the trace shows the kernel hop of every measured message as for a built-in kernel.
+TEST_F(GreyRun, APluginKernelIsTracedThroughThePluginApi) {
+  const fs::path pkg = dir_ / "pkg" / "test" / "t2_plugin";
+  fs::create_directories(pkg);
+  std::ofstream(pkg / "benchmark.yaml")
+      << "id: t2\nname: t2_plugin\nshort: test\ndescription: test\nresults: []\n";
+  std::ofstream(pkg / "graph.yaml")
+      << "plugins: [" << GOOD_PLUGIN << "]\n"
+      << "dataset: test_plugin/joints\nrate_hz: 50\nwarmup: 2\n"
+         "validity: {min_samples: 10, max_loss_percent: 0.0}\n"
+         "inputs:\n  - {topic: /states, type: sensor_msgs/msg/JointState, stream: states}\n"
+         "output: {topic: /scaled, type: sensor_msgs/msg/JointState}\n"
+         "nodes:\n  - name: scale\n    kernel: test_plugin/scale\n"
+         "    topics: {input: /states, output: /scaled}\n";
+  RunOptions o;
+  o.count = 30;
+  const RunResult g = run_benchmark(load_benchmark(pkg), grey(o, "plugin.trace"));
+  ASSERT_TRUE(g.grey.has_value());
+  ASSERT_TRUE(g.valid) << reasons(g);
+  bool kernel = false;
+  for (const auto& h : g.grey->hops) {
+    if (h.kind != "kernel") continue;
+    kernel = h.label() == "scale: test_plugin/scale";
+    EXPECT_EQ(h.duration.count, g.measured) << h.label();
+  }
+  EXPECT_TRUE(kernel);
 }
+
+using robotperf::test_support::Outcome;
+using robotperf::test_support::robotperf_cli;
 
 TEST_F(GreyRun, CommandLineRunsGreyAndAnalysesTheTrace) {
   const fs::path out = dir_ / "results";
-  const Outcome run = robotperf("run a2 --mode grey --count 40 --quiet --output " + out.string());
+  const Outcome run =
+      robotperf_cli("run a2 --mode grey --count 40 --quiet --output " + out.string());
   ASSERT_EQ(run.exit_code, 0) << run.out;
   EXPECT_NE(run.out.find("per-hop breakdown"), std::string::npos) << run.out;
   EXPECT_NE(run.out.find("kernel  rectify: image_proc/rectify"), std::string::npos) << run.out;
@@ -303,7 +320,7 @@ TEST_F(GreyRun, CommandLineRunsGreyAndAnalysesTheTrace) {
 
   const fs::path analysis = dir_ / "analysis.json";
   const Outcome again =
-      robotperf("trace analyze " + trace.string() + " --json " + analysis.string());
+      robotperf_cli("trace analyze " + trace.string() + " --json " + analysis.string());
   ASSERT_EQ(again.exit_code, 0) << again.out;
   std::ifstream ain(analysis);
   const auto a = nlohmann::json::parse(ain);
@@ -311,7 +328,7 @@ TEST_F(GreyRun, CommandLineRunsGreyAndAnalysesTheTrace) {
   EXPECT_EQ(a["run"]["latency_ms"]["from_scheduled"]["p50"],
             j["latency_ms"]["from_scheduled"]["p50"]);
 
-  const Outcome missing = robotperf("trace analyze " + (dir_ / "no-such-trace").string());
+  const Outcome missing = robotperf_cli("trace analyze " + (dir_ / "no-such-trace").string());
   EXPECT_EQ(missing.exit_code, 2) << missing.out;
   EXPECT_EQ(std::count(missing.out.begin(), missing.out.end(), '\n'), 1) << missing.out;
 }
@@ -343,7 +360,7 @@ TEST_F(GreyRun, SessionOfOneProcessLeavesOtherProcessesOut) {
     if (only_this_process) so.only_processes = {getpid()};
     tracing::RecordingSession session(so);
     const Outcome other =
-        robotperf("run a5 --count 30 --warmup 0 --quiet --output " + (dir_ / "other").string());
+        robotperf_cli("run a5 --count 30 --warmup 0 --quiet --output " + (dir_ / "other").string());
     ASSERT_EQ(other.exit_code, 0) << other.out;
     RunOptions o;
     o.count = 40;
@@ -363,7 +380,7 @@ TEST_F(GreyRun, SessionOfOneProcessLeavesOtherProcessesOut) {
 TEST_F(GreyRun, ControlLoopTraceHasEveryControllerUpdate) {
   const fs::path out = dir_ / "results";
   const Outcome run =
-      robotperf("run c3 --mode grey --count 60 --warmup 5 --quiet --output " + out.string());
+      robotperf_cli("run c3 --mode grey --count 60 --warmup 5 --quiet --output " + out.string());
   EXPECT_NE(run.out.find("controller update durations (us)"), std::string::npos) << run.out;
   fs::path json;
   for (const auto& e : fs::directory_iterator(out)) {
@@ -399,12 +416,12 @@ TEST_F(GreyRun, ControlLoopTraceHasEveryControllerUpdate) {
 TEST_F(GreyRun, MissingLttngIsOneLineSayingHowToInstallIt) {
   const fs::path out = dir_ / "results";
   const Outcome o =
-      robotperf("run a2 --mode grey --count 10 --output " + out.string(), "PATH=/nonexistent");
+      robotperf_cli("run a2 --mode grey --count 10 --output " + out.string(), "PATH=/nonexistent");
   EXPECT_EQ(o.exit_code, 2) << o.out;
   EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << o.out;
   EXPECT_NE(o.out.find("apt-get install lttng-tools"), std::string::npos) << o.out;
-  const Outcome black = robotperf("run a2 --count 10 --warmup 0 --quiet --output " + out.string(),
-                                  "PATH=/nonexistent");
+  const Outcome black = robotperf_cli(
+      "run a2 --count 10 --warmup 0 --quiet --output " + out.string(), "PATH=/nonexistent");
   EXPECT_NE(black.exit_code, 2) << "black-box runs do not need LTTng: " << black.out;
 }
 

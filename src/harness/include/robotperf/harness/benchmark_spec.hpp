@@ -10,7 +10,8 @@
 #include <vector>
 
 #include "robotperf/harness/functional.hpp"
-#include "robotperf/kernels/registry.hpp"
+#include "robotperf/plugin/kernel.hpp"
+#include "robotperf/plugin/registry.hpp"
 #include "robotperf/rmw/transport.hpp"
 
 namespace robotperf::harness {
@@ -45,6 +46,8 @@ struct NodeSpec {
 
 struct BenchmarkSpec {
   std::filesystem::path dir;
+  // graph.yaml `plugins:`, resolved against the package folder; loaded with the package.
+  std::vector<std::filesystem::path> plugins;
   // From benchmark.yaml.
   std::string id;    // "a1"
   std::string name;  // "a1_perception_2nodes"
@@ -72,24 +75,39 @@ struct BenchmarkSpec {
   const NodeSpec* find_node(const std::string& name) const;
 };
 
-// Reads and checks <dir>/benchmark.yaml and <dir>/graph.yaml; throws BenchmarkError.
+// Reads and checks <dir>/benchmark.yaml and <dir>/graph.yaml, loading the plug-ins graph.yaml
+// names first; throws BenchmarkError.
 BenchmarkSpec load_benchmark(const std::filesystem::path& dir);
 
-// Every package under <root>/<category>/<package>/ with a graph.yaml, sorted by id.
-// Packages that fail to load are returned in `broken` as one line each.
+// Every package under <root>/<category>/<package>/ with a graph.yaml, of every root, sorted by id.
+// Packages that fail to load are returned in `broken` as one line each. Two packages with one id
+// are a BenchmarkError naming both.
+std::vector<BenchmarkSpec> discover_benchmarks(const std::vector<std::filesystem::path>& roots,
+                                               std::vector<std::string>* broken = nullptr);
 std::vector<BenchmarkSpec> discover_benchmarks(const std::filesystem::path& root,
                                                std::vector<std::string>* broken = nullptr);
 
 // By id ("a1") or full name ("a1_perception_2nodes"); throws BenchmarkError
 // listing the known ids when there is no such benchmark.
+BenchmarkSpec find_benchmark(const std::vector<std::filesystem::path>& roots,
+                             const std::string& id_or_name);
 BenchmarkSpec find_benchmark(const std::filesystem::path& root, const std::string& id_or_name);
 
-// The kernel configuration of a node of the spec, with the workload's seed (benchmark.yaml
-// `workload: seed`, already checked by the dataset) when there is one.
-kernels::KernelConfig kernel_config(const NodeSpec& node,
-                                    const std::map<std::string, std::string>& workload = {});
+// The registered kernel a node runs; throws BenchmarkError when none is registered by that name.
+const plugin::KernelEntry& kernel_of(const NodeSpec& node);
 
-// Sets the loop rate (update_rate) of every controller manager (control/* kernel) of `spec`.
+// The kernel configuration of a node of the spec, its parameters checked against the kernel's
+// declarations, with the workload's seed (benchmark.yaml `workload: seed`) when there is one.
+// Throws BenchmarkError.
+plugin::KernelConfig kernel_config(const NodeSpec& node,
+                                   const std::map<std::string, std::string>& workload = {});
+
+// Builds the node's kernel in `context`; throws std::invalid_argument naming the node when the
+// kernel refuses its configuration or has no such backend.
+std::shared_ptr<graph::Node> make_kernel_node(const NodeSpec& node, graph::Context& context,
+                                              const std::map<std::string, std::string>& workload);
+
+// Sets the loop rate of every kernel of `spec` that runs a control loop (its rate parameter).
 // Throws std::invalid_argument with one line when the benchmark has none or `hz` is not a rate a
 // loop can run at (0 < hz <= 100000).
 void override_update_rate(BenchmarkSpec& spec, double hz);

@@ -9,50 +9,25 @@
 #include <string>
 #include <vector>
 
-#include "robotperf/msgs/type_support.hpp"
-#include "robotperf/rmw/transport.hpp"
+#include "robotperf/plugin/dataset.hpp"
 
 namespace robotperf::harness {
 
-// One kind of message of a dataset, one per frame (e.g. "image", "camera_info").
-// Streams loaded from a bag hold msgs::SerializedMessage payloads under
-// msgs::serialized_type_support(<their ROS type>), all with a std_msgs/Header.
-struct DatasetStream {
-  std::string name;
-  std::string topic;  // where it is recorded when written as a bag ("/camera/image_raw")
-  const msgs::TypeSupport* type = nullptr;
-  std::vector<rmw::MessagePtr> messages;
-};
+// Datasets are what the plug-in API defines; the DataLoader fills them from the registered
+// generators or from a bag.
+using plugin::Dataset;
+using plugin::DatasetStream;
 
-struct Dataset {
-  std::string name;
-  std::string description;
-  std::string hash;  // content hash of every message of every stream
-  std::size_t frames = 0;
-  double rate_hz = 0;  // the rate it was recorded (or generated) at
-  std::vector<DatasetStream> streams;
-  // Bags only: when each frame was recorded (its earliest message), increasing.
-  std::vector<int64_t> frame_times_ns;
-  // Generated request streams: the workload they were generated with, defaults filled in
-  // (seed, requests, ...), recorded with the results.
-  std::map<std::string, std::string> parameters;
-
-  // Throws std::invalid_argument naming the available streams.
-  const DatasetStream& stream(const std::string& name) const;
-};
-
-struct DatasetInfo {
-  std::string name;
-  std::string description;
-};
-
-const std::vector<DatasetInfo>& builtin_datasets();
-
-// Loads a built-in dataset (generated once per process, then shared); throws
-// std::invalid_argument for an unknown name. `workload` configures the generated request streams
-// (manipulation/*: seed, requests, near_fraction); other datasets take none.
+// Loads a registered dataset, generated once per process and workload, then shared (copies share
+// the messages). `workload` sets the generator's workload parameters (benchmark.yaml
+// `workload:`). Throws std::invalid_argument for an unknown dataset or workload parameter, and
+// std::runtime_error naming the generator when what it generated does not match its description.
 Dataset load_dataset(const std::string& name,
                      const std::map<std::string, std::string>& workload = {});
+
+// The content hash of the streams' CDR bytes: identifies the data as it goes on the wire, whatever
+// produced it.
+std::string content_hash(const std::vector<DatasetStream>& streams);
 
 // A rosbag2 bag to replay instead of a benchmark's built-in dataset.
 struct BagSelection {

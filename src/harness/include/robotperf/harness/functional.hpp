@@ -3,8 +3,8 @@
 // The Monitor keeps a bounded sample of the outputs it receives (chosen before the run, spread
 // evenly over the measured messages); after timing, an evaluator named in graph.yaml compares
 // each kept output with the dataset's ground truth for the frame it came from, and the metrics
-// are judged against thresholds stated in benchmark.yaml. Evaluators are generic over message
-// types: a new benchmark category adds an evaluator and a dataset with ground-truth streams.
+// are judged against thresholds stated in benchmark.yaml. Evaluators are registered through the
+// plug-in API (robotperf/plugin/evaluator.hpp) by the categories and by plug-ins.
 #pragma once
 
 #include <cstddef>
@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "robotperf/harness/dataset.hpp"
+#include "robotperf/plugin/evaluator.hpp"
 #include "robotperf/rmw/transport.hpp"
 
 namespace robotperf::harness {
@@ -38,56 +39,14 @@ struct FunctionalSpec {
   // Evaluators with an `observed_truth_type`: the graph topic that carries the truth observed
   // during the run (e.g. a simulator's ground-truth pose), matched to outputs by message ID.
   std::string observed_truth_topic;
+  // graph.yaml `functional: parameters:`, checked against the evaluator's declarations.
+  std::map<std::string, std::string> parameters;
 };
 
-struct FunctionalMetricInfo {
-  std::string name;
-  std::string unit;
-  std::string description;
-};
-
-struct EvaluatorInfo {
-  std::string name;
-  std::string description;
-  std::string output_type;               // ROS type of the outputs it reads
-  std::vector<std::string> truth_roles;  // the dataset streams it needs
-  std::vector<FunctionalMetricInfo> metrics;
-  // Non-empty when the truth is observed during the run on a graph topic of this type
-  // (functional.observed_truth in graph.yaml) instead of read from the dataset alone.
-  std::string observed_truth_type;
-};
-
-const std::vector<EvaluatorInfo>& evaluator_infos();
-const EvaluatorInfo* find_evaluator(const std::string& name);
-
-class FunctionalEvaluator {
- public:
-  virtual ~FunctionalEvaluator() = default;
-  // One output message (of the evaluator's output type) produced from dataset frame `frame`.
-  virtual void add(const void* output, std::size_t frame) = 0;
-  // The same with the truth observed for this output's message ID (evaluators with an
-  // observed_truth_type); null when none was received.
-  virtual void add_observed(const void* output, const void* observed_truth, std::size_t frame) {
-    (void)observed_truth;
-    add(output, frame);
-  }
-  // Every metric of the evaluator's info over the outputs added; NaN when not computable.
-  virtual std::map<std::string, double> metrics() const = 0;
-  // Defects that make outputs wrong whatever the metrics say (wrong size, encoding, geometry),
-  // each described once.
-  const std::set<std::string>& problems() const { return problems_; }
-
- protected:
-  void problem(std::string what) { problems_.insert(std::move(what)); }
-
- private:
-  std::set<std::string> problems_;
-};
-
-// Throws std::invalid_argument for an unknown evaluator or a truth stream the dataset lacks or
-// holds in the wrong type.
-std::unique_ptr<FunctionalEvaluator> make_evaluator(const FunctionalSpec& spec,
-                                                    const Dataset& dataset);
+// Throws std::invalid_argument for an unknown evaluator, a parameter it does not take, or a truth
+// stream the dataset lacks or holds in the wrong type.
+std::unique_ptr<plugin::FunctionalEvaluator> make_evaluator(const FunctionalSpec& spec,
+                                                            const Dataset& dataset);
 
 // The message IDs whose outputs are kept: `sample` measured IDs in [warmup, count) spread evenly
 // (every measured ID when sample is 0 or not smaller than their number).

@@ -81,11 +81,12 @@ struct NodeReport {
   std::string exit_status;  // "ok" or how it ended
   double cpu_user_s = -1;   // -1 when unknown
   double cpu_system_s = -1;
-  // What the kernel counted (kernels::NodeCounters), e.g. inputs that never paired.
+  // What the kernel counted (plugin::NodeCounters), e.g. inputs that never paired.
   std::map<std::string, uint64_t> counters;
 };
 
-// The control loop of a control kernel (src/control), over the whole run: nanoseconds.
+// The control loop of a kernel that runs one (plugin::ControlLoopSource), over the whole run:
+// nanoseconds.
 struct ControlLoopResult {
   std::string node;
   double update_rate_hz = 0;

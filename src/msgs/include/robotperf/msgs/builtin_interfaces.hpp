@@ -53,4 +53,8 @@ struct MessageTraits<Duration> {
   static constexpr std::string_view ros_type = "builtin_interfaces/msg/Duration";
 };
 
+// Their type supports live in the msgs library (type_support_instances.cpp).
+extern template const TypeSupport& type_support<Time>();
+extern template const TypeSupport& type_support<Duration>();
+
 }  // namespace robotperf::msgs

@@ -199,4 +199,17 @@ struct MessageTraits<TransformStamped> {
   static constexpr std::string_view ros_type = "geometry_msgs/msg/TransformStamped";
 };
 
+// Their type supports live in the msgs library (type_support_instances.cpp).
+extern template const TypeSupport& type_support<Vector3>();
+extern template const TypeSupport& type_support<Point>();
+extern template const TypeSupport& type_support<Quaternion>();
+extern template const TypeSupport& type_support<Pose>();
+extern template const TypeSupport& type_support<PoseStamped>();
+extern template const TypeSupport& type_support<PoseWithCovariance>();
+extern template const TypeSupport& type_support<Twist>();
+extern template const TypeSupport& type_support<TwistStamped>();
+extern template const TypeSupport& type_support<TwistWithCovariance>();
+extern template const TypeSupport& type_support<Transform>();
+extern template const TypeSupport& type_support<TransformStamped>();
+
 }  // namespace robotperf::msgs

@@ -27,4 +27,7 @@ struct MessageTraits<Odometry> {
   static constexpr std::string_view ros_type = "nav_msgs/msg/Odometry";
 };
 
+// Their type supports live in the msgs library (type_support_instances.cpp).
+extern template const TypeSupport& type_support<Odometry>();
+
 }  // namespace robotperf::msgs

@@ -62,4 +62,8 @@ struct MessageTraits<PlanExecutionResult> {
   static constexpr std::string_view ros_type = "robotperf_msgs/msg/PlanExecutionResult";
 };
 
+// Their type supports live in the msgs library (type_support_instances.cpp).
+extern template const TypeSupport& type_support<CollisionResult>();
+extern template const TypeSupport& type_support<PlanExecutionResult>();
+
 }  // namespace robotperf::msgs

@@ -176,4 +176,12 @@ struct MessageTraits<JointState> {
   static constexpr std::string_view ros_type = "sensor_msgs/msg/JointState";
 };
 
+// Their type supports live in the msgs library (type_support_instances.cpp).
+extern template const TypeSupport& type_support<RegionOfInterest>();
+extern template const TypeSupport& type_support<CameraInfo>();
+extern template const TypeSupport& type_support<Image>();
+extern template const TypeSupport& type_support<PointField>();
+extern template const TypeSupport& type_support<PointCloud2>();
+extern template const TypeSupport& type_support<JointState>();
+
 }  // namespace robotperf::msgs

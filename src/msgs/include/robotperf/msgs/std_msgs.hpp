@@ -108,4 +108,10 @@ struct MessageTraits<Float64MultiArray> {
   }
 };
 
+// Their type supports live in the msgs library (type_support_instances.cpp).
+extern template const TypeSupport& type_support<Header>();
+extern template const TypeSupport& type_support<MultiArrayDimension>();
+extern template const TypeSupport& type_support<MultiArrayLayout>();
+extern template const TypeSupport& type_support<Float64MultiArray>();
+
 }  // namespace robotperf::msgs

@@ -34,4 +34,7 @@ struct MessageTraits<DisparityImage> {
   static constexpr std::string_view ros_type = "stereo_msgs/msg/DisparityImage";
 };
 
+// Their type supports live in the msgs library (type_support_instances.cpp).
+extern template const TypeSupport& type_support<DisparityImage>();
+
 }  // namespace robotperf::msgs

@@ -21,4 +21,7 @@ struct MessageTraits<TFMessage> {
   static constexpr std::string_view ros_type = "tf2_msgs/msg/TFMessage";
 };
 
+// Their type supports live in the msgs library (type_support_instances.cpp).
+extern template const TypeSupport& type_support<TFMessage>();
+
 }  // namespace robotperf::msgs

@@ -110,4 +110,10 @@ struct MessageTraits<JointTrajectoryControllerState> {
   static constexpr std::string_view ros_type = "control_msgs/msg/JointTrajectoryControllerState";
 };
 
+// Their type supports live in the msgs library (type_support_instances.cpp).
+extern template const TypeSupport& type_support<JointTrajectoryPoint>();
+extern template const TypeSupport& type_support<JointTrajectory>();
+extern template const TypeSupport& type_support<MultiDOFJointTrajectoryPoint>();
+extern template const TypeSupport& type_support<JointTrajectoryControllerState>();
+
 }  // namespace robotperf::msgs

@@ -69,7 +69,8 @@ struct TopicLatency {
   metrics::SampleStats latency;  // rmw_publish -> rmw_take, ns
 };
 
-// A controller manager's controller (src/control), from robotperf:controller_update_begin/end.
+// A controller manager's controller (the control category), from
+// robotperf:controller_update_begin/end.
 struct ControllerUpdateStats {
   std::string node;  // the controller manager
   std::string controller;

@@ -1,0 +1,384 @@
+// The manipulation kernels (d1-d6) as graph nodes: one request message in, one answer out, the
+// request's header (and so its message ID) copied to the answer.
+#include <Eigen/Geometry>
+#include <iostream>
+#include <stdexcept>
+
+#include "category.hpp"
+#include "robotperf/manipulation/collision.hpp"
+#include "robotperf/manipulation/kinematics.hpp"
+#include "robotperf/manipulation/planning.hpp"
+#include "robotperf/manipulation/pose_msgs.hpp"
+#include "robotperf/msgs/geometry_msgs.hpp"
+#include "robotperf/msgs/robotperf_msgs.hpp"
+#include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/msgs/trajectory_msgs.hpp"
+
+namespace robotperf::manipulation {
+namespace {
+
+using plugin::KernelConfig;
+
+double positive(const KernelConfig& c, const std::string& name) {
+  const double v = c.parameters.get_double(name);
+  if (!(v > 0) || !std::isfinite(v))
+    throw std::invalid_argument("node '" + c.node_name + "': " + name + " must be > 0");
+  return v;
+}
+
+// The request's joint positions in the model's joint order: by name when the message names its
+// joints, else positionally. Throws std::invalid_argument for a state that does not fit.
+std::vector<double> model_positions(const RobotModel& m, const std::vector<std::string>& names,
+                                    const std::vector<double>& position) {
+  if (names.empty()) {
+    if (position.size() != m.dof())
+      throw std::invalid_argument("joint state has " + std::to_string(position.size()) +
+                                  " positions, the arm " + std::to_string(m.dof()) + " joints");
+    return position;
+  }
+  if (names.size() != position.size())
+    throw std::invalid_argument("joint state has " + std::to_string(names.size()) + " names but " +
+                                std::to_string(position.size()) + " positions");
+  std::vector<double> q(m.dof());
+  for (std::size_t j = 0; j < m.dof(); ++j) {
+    std::size_t k = 0;
+    while (k < names.size() && names[k] != m.joint_names()[j]) ++k;
+    if (k == names.size())
+      throw std::invalid_argument("joint state has no joint '" + m.joint_names()[j] + "'");
+    q[j] = position[k];
+  }
+  return q;
+}
+
+// A node that answers each request; requests it cannot use are skipped and counted (the frame
+// shows as lost at the Monitor), as a ROS node logs and drops them.
+template <class Request, class Answer>
+class RequestNode : public graph::Node, public plugin::NodeCounters {
+ public:
+  RequestNode(graph::Context& context, const KernelConfig& config, const char* in, const char* out)
+      : graph::Node(context, config.node_name) {
+    output_ = create_publisher<Answer>(config.topic(out), config.qos);
+    input_ = create_subscription<Request>(
+        config.topic(in), config.qos, [this](std::shared_ptr<const Request> request) {
+          try {
+            auto answer = std::make_shared<Answer>();
+            answer->header = request->header;
+            respond(*request, *answer);
+            ++answered_;
+            output_->publish(std::shared_ptr<const Answer>(std::move(answer)));
+          } catch (const std::invalid_argument& e) {
+            if (rejected_++ == 0)
+              std::cerr << "robotperf node " << name() << ": skipping request: " << e.what()
+                        << "\n";
+          }
+        });
+  }
+  std::map<std::string, uint64_t> counters() const override {
+    return {{"requests_answered", answered_}, {"requests_rejected", rejected_}};
+  }
+
+ protected:
+  virtual void respond(const Request& request, Answer& answer) = 0;
+  std::shared_ptr<graph::Publisher<Answer>> output_;
+
+ private:
+  std::shared_ptr<graph::GenericSubscription> input_;
+  uint64_t answered_ = 0;
+  uint64_t rejected_ = 0;
+};
+
+class ForwardKinematicsNode final : public RequestNode<msgs::JointState, msgs::PoseStamped> {
+ public:
+  ForwardKinematicsNode(graph::Context& context, const KernelConfig& config)
+      : RequestNode(context, config, "joint_states", "pose"), fk_(RobotModel::xarm6()) {}
+
+ private:
+  void respond(const msgs::JointState& request, msgs::PoseStamped& answer) override {
+    const RobotModel& m = RobotModel::xarm6();
+    const auto q = model_positions(m, request.name, request.position);
+    const Eigen::Isometry3d t = fk_.tip_pose(q.data());
+    answer.header.frame_id = m.base_link();
+    answer.pose = manipulation::pose_msg_of(t);
+  }
+  manipulation::ForwardKinematics fk_;
+};
+
+manipulation::IkOptions ik_options(const KernelConfig& c, manipulation::IkSolver solver) {
+  manipulation::IkOptions o;
+  o.solver = solver;
+  const int64_t iterations = c.parameters.get_int("max_iterations");
+  if (iterations < 1 || iterations > 1000000)
+    throw std::invalid_argument("node '" + c.node_name + "': max_iterations must be 1..1e6");
+  o.max_iterations = static_cast<unsigned>(iterations);
+  o.eps = positive(c, "eps");
+  o.timeout_s = positive(c, "timeout_s");
+  o.seed = static_cast<uint64_t>(c.parameters.get_int("seed"));
+  return o;
+}
+
+// Answers a target pose with a JointState: the solution, or no positions when none was found
+// within the timeout (MoveIt's NO_IK_SOLUTION).
+class InverseKinematicsNode final : public RequestNode<msgs::PoseStamped, msgs::JointState> {
+ public:
+  InverseKinematicsNode(graph::Context& context, const KernelConfig& config,
+                        manipulation::IkSolver solver)
+      : RequestNode(context, config, "pose", "joint_states"),
+        ik_(RobotModel::xarm6(), ik_options(config, solver)),
+        seed_state_(RobotModel::xarm6().dof(), 0.0) {}
+
+ private:
+  void respond(const msgs::PoseStamped& request, msgs::JointState& answer) override {
+    const auto& p = request.pose;
+    const Eigen::Quaterniond r(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
+    if (!(std::abs(r.norm() - 1.0) < 1e-3))
+      throw std::invalid_argument("target orientation is not a unit quaternion");
+    const Eigen::Isometry3d target = manipulation::isometry_of(p);
+    const manipulation::IkResult result = ik_.solve(target, seed_state_);
+    answer.name = RobotModel::xarm6().joint_names();
+    if (result.success) answer.position = result.q;
+  }
+  manipulation::InverseKinematics ik_;
+  std::vector<double> seed_state_;
+};
+
+class CollisionNode final : public RequestNode<msgs::JointState, msgs::CollisionResult> {
+ public:
+  CollisionNode(graph::Context& context, const KernelConfig& config,
+                manipulation::CollisionBackend backend)
+      : RequestNode(context, config, "joint_states", "collision"),
+        checker_(manipulation::make_collision_checker(backend, RobotModel::xarm6(),
+                                                      manipulation::default_scene())) {}
+
+ private:
+  void respond(const msgs::JointState& request, msgs::CollisionResult& answer) override {
+    const auto q = model_positions(RobotModel::xarm6(), request.name, request.position);
+    const manipulation::CollisionAnswer a = checker_->check(q.data());
+    answer.in_collision = a.in_collision;
+    answer.with_scene = a.with_scene;
+    answer.first = a.first;
+    answer.second = a.second;
+  }
+  std::unique_ptr<manipulation::CollisionChecker> checker_;
+};
+
+msgs::Duration duration_of(double seconds) {
+  msgs::Duration d;
+  const auto ns = static_cast<int64_t>(std::llround(seconds * 1e9));
+  d.sec = static_cast<int32_t>(ns / 1000000000);
+  d.nanosec = static_cast<uint32_t>(ns % 1000000000);
+  return d;
+}
+
+// A planning query (JointTrajectory: first point start, last point goal) answered with the
+// time-parameterised trajectory; no points when planning failed.
+class PlanNode final : public RequestNode<msgs::JointTrajectory, msgs::JointTrajectory> {
+ public:
+  PlanNode(graph::Context& context, const KernelConfig& config)
+      : RequestNode(context, config, "query", "trajectory"),
+        planner_(RobotModel::xarm6(),
+                 manipulation::make_fcl_checker(RobotModel::xarm6(), manipulation::default_scene(),
+                                                padding(config)),
+                 plan_options(config)),
+        sample_period_s_(positive(config, "sample_period_s")),
+        velocity_scaling_(positive(config, "velocity_scaling")),
+        acceleration_scaling_(positive(config, "acceleration_scaling")) {}
+
+ private:
+  static manipulation::PlanOptions plan_options(const KernelConfig& c) {
+    manipulation::PlanOptions o;
+    o.planning_time_s = positive(c, "planning_time_s");
+    o.longest_valid_segment_fraction = positive(c, "longest_valid_segment_fraction");
+    o.simplify = c.parameters.get_bool("simplify");
+    const int64_t seed =
+        c.parameters.get_int("seed", static_cast<int64_t>(c.workload_seed.value_or(0)));
+    if (seed < 0 || seed > static_cast<int64_t>(UINT32_MAX))
+      throw std::invalid_argument("node '" + c.node_name + "': seed must be within [0, 2^32)");
+    o.seed = static_cast<uint32_t>(seed);
+    return o;
+  }
+  // Link padding of the planner's collision checker (m): motions are checked at discrete states,
+  // and the padding keeps the links clear of contact between them.
+  static double padding(const KernelConfig& c) {
+    const double v = c.parameters.get_double("padding_m");
+    if (!(v >= 0) || !std::isfinite(v))
+      throw std::invalid_argument("node '" + c.node_name + "': padding_m must be >= 0");
+    return v;
+  }
+
+  void respond(const msgs::JointTrajectory& query, msgs::JointTrajectory& answer) override {
+    const RobotModel& m = RobotModel::xarm6();
+    if (query.points.size() < 2) throw std::invalid_argument("a query needs start and goal points");
+    const auto start = model_positions(m, query.joint_names, query.points.front().positions);
+    const auto goal = model_positions(m, query.joint_names, query.points.back().positions);
+    answer.joint_names = m.joint_names();
+    const manipulation::PlanResult plan = planner_.plan(start, goal);
+    if (!plan.success) return;
+    for (auto& s : manipulation::time_parameterize(plan.path, m.limits(), sample_period_s_,
+                                                   velocity_scaling_, acceleration_scaling_)) {
+      msgs::JointTrajectoryPoint p;
+      p.positions = std::move(s.position);
+      p.velocities = std::move(s.velocity);
+      p.accelerations = std::move(s.acceleration);
+      p.time_from_start = duration_of(s.time_s);
+      answer.points.push_back(std::move(p));
+    }
+  }
+  manipulation::Planner planner_;
+  double sample_period_s_, velocity_scaling_, acceleration_scaling_;
+};
+
+// Executes a trajectory on a simulated position-controlled arm in simulated time: publishes the
+// arm's JointState every control step on `joint_states`, then the result.
+class ExecuteNode final : public RequestNode<msgs::JointTrajectory, msgs::PlanExecutionResult> {
+ public:
+  ExecuteNode(graph::Context& context, const KernelConfig& config)
+      : RequestNode(context, config, "trajectory", "result") {
+    options_.control_rate_hz = positive(config, "control_rate_hz");
+    options_.lag_s = positive(config, "lag_s");
+    options_.settle_s = config.parameters.get_double("settle_s");
+    if (!(options_.settle_s >= 0))
+      throw std::invalid_argument("node '" + config.node_name + "': settle_s must be >= 0");
+    states_ = create_publisher<msgs::JointState>(config.topic("joint_states"), config.qos);
+  }
+
+ private:
+  void respond(const msgs::JointTrajectory& trajectory,
+               msgs::PlanExecutionResult& answer) override {
+    const RobotModel& m = RobotModel::xarm6();
+    answer.trajectory = trajectory;
+    if (trajectory.points.empty()) return;  // planning failed: nothing to execute
+    std::vector<manipulation::TrajectorySample> samples;
+    manipulation::JointPath path;
+    for (const auto& p : trajectory.points) {
+      const auto q = model_positions(m, trajectory.joint_names, p.positions);
+      if (p.velocities.size() != q.size())
+        throw std::invalid_argument("trajectory points need velocities");
+      const double t = p.time_from_start.sec + p.time_from_start.nanosec * 1e-9;
+      if (!samples.empty() && !(t > samples.back().time_s))
+        throw std::invalid_argument("trajectory times must increase");
+      samples.push_back({t, q, p.velocities, {}});
+      path.push_back(q);
+    }
+    const auto result = manipulation::execute(samples, options_, [&](const auto& step) {
+      auto state = std::make_shared<msgs::JointState>();
+      state->header = trajectory.header;
+      state->name = m.joint_names();
+      state->position = step.position;
+      state->velocity = step.velocity;
+      states_->publish(std::shared_ptr<const msgs::JointState>(std::move(state)));
+    });
+    answer.success = true;
+    answer.path_length = manipulation::path_length(path);
+    answer.execution_steps = static_cast<uint32_t>(result.steps);
+    answer.max_tracking_error = result.max_tracking_error;
+    answer.final_error = result.final_error;
+  }
+  manipulation::ExecutionOptions options_;
+  std::shared_ptr<graph::Publisher<msgs::JointState>> states_;
+};
+
+std::vector<plugin::ParameterInfo> ik_parameters() {
+  const IkOptions o;
+  return {
+      plugin::int_parameter("max_iterations", o.max_iterations, "solver iterations per attempt"),
+      plugin::double_parameter("eps", o.eps, "the solver's convergence tolerance"),
+      plugin::double_parameter("timeout_s", o.timeout_s, "all attempts together, s"),
+      plugin::int_parameter("seed", static_cast<int64_t>(o.seed), "seed of the random restarts")};
+}
+
+template <class Node, class... Args>
+plugin::KernelFactory factory(Args... args) {
+  return [=](graph::Context& context, const KernelConfig& config) {
+    return std::make_shared<Node>(context, config, args...);
+  };
+}
+
+}  // namespace
+
+void register_kernels(plugin::Registrar& registrar) {
+  const std::vector<plugin::PortInfo> state_in{{"joint_states", "sensor_msgs/msg/JointState"}};
+  const std::vector<plugin::PortInfo> pose{{"pose", "geometry_msgs/msg/PoseStamped"}};
+  const std::vector<plugin::PortInfo> state_out{{"joint_states", "sensor_msgs/msg/JointState"}};
+  registrar.add_kernel({.name = "manipulation/forward_kinematics",
+                        .description = "xArm6 flange pose of a joint state (KDL "
+                                       "ChainFkSolverPos_recursive)",
+                        .inputs = state_in,
+                        .outputs = pose},
+                       factory<ForwardKinematicsNode>());
+  registrar.add_kernel(
+      {.name = "manipulation/ik_kdl",
+       .description = "xArm6 joint state for a target pose: Newton-Raphson with joint limits on "
+                      "KDL, random restarts within the timeout (MoveIt's KDL plugin)",
+       .inputs = pose,
+       .outputs = state_out,
+       .parameters = ik_parameters()},
+      factory<InverseKinematicsNode>(IkSolver::kNewtonRaphsonJL));
+  registrar.add_kernel(
+      {.name = "manipulation/ik_lma",
+       .description = "xArm6 joint state for a target pose: KDL ChainIkSolverPos_LMA, random "
+                      "restarts within the timeout (MoveIt's LMA plugin)",
+       .inputs = pose,
+       .outputs = state_out,
+       .parameters = ik_parameters()},
+      factory<InverseKinematicsNode>(IkSolver::kLevenbergMarquardt));
+  const std::vector<plugin::PortInfo> collision_out{
+      {"collision", "robotperf_msgs/msg/CollisionResult"}};
+  registrar.add_kernel({.name = "manipulation/collision_fcl",
+                        .description = "boolean collision query of an xArm6 joint state vs the "
+                                       "box, then self-collision (FCL)",
+                        .inputs = state_in,
+                        .outputs = collision_out},
+                       factory<CollisionNode>(CollisionBackend::kFcl));
+  registrar.add_kernel({.name = "manipulation/collision_bullet",
+                        .description = "boolean collision query of an xArm6 joint state vs the "
+                                       "box, then self-collision (Bullet)",
+                        .inputs = state_in,
+                        .outputs = collision_out},
+                       factory<CollisionNode>(CollisionBackend::kBullet));
+  const PlanOptions plan;
+  const std::vector<plugin::PortInfo> trajectory{
+      {"trajectory", "trajectory_msgs/msg/JointTrajectory"}};
+  registrar.add_kernel(
+      {.name = "manipulation/plan",
+       .description = "plan a start -> goal query around the box (OMPL RRTConnect, FCL "
+                      "validity), simplify, time-parameterise within the velocity and "
+                      "acceleration limits",
+       .inputs = {{"query", "trajectory_msgs/msg/JointTrajectory"}},
+       .outputs = trajectory,
+       .parameters =
+           {plugin::double_parameter("planning_time_s", plan.planning_time_s,
+                                     "RRTConnect's budget, s (simplification gets what is left)"),
+            plugin::double_parameter("longest_valid_segment_fraction",
+                                     plan.longest_valid_segment_fraction,
+                                     "motion check step as a fraction of the joint space's extent"),
+            plugin::bool_parameter("simplify", plan.simplify, "shortcut and smooth the path"),
+            plugin::computed_parameter("seed", plugin::ParameterType::kInt,
+                                       "OMPL's seed, [0, 2^32) (default: the workload seed, else "
+                                       "0: from the clock)"),
+            plugin::double_parameter("padding_m", 0.0,
+                                     "link padding of the planner's collision checks, m"),
+            plugin::double_parameter("sample_period_s", 0.02,
+                                     "time between the trajectory's points, s"),
+            plugin::double_parameter("velocity_scaling", 1.0,
+                                     "fraction of the joints' velocity limits used"),
+            plugin::double_parameter("acceleration_scaling", 1.0,
+                                     "fraction of the joints' acceleration limits used")}},
+      factory<PlanNode>());
+  const ExecutionOptions execution;
+  registrar.add_kernel(
+      {.name = "manipulation/execute",
+       .description = "execute a trajectory on a simulated position-controlled xArm6, "
+                      "publishing its joint states, then the result",
+       .inputs = trajectory,
+       .outputs = {{"joint_states", "sensor_msgs/msg/JointState"},
+                   {"result", "robotperf_msgs/msg/PlanExecutionResult"}},
+       .parameters = {plugin::double_parameter("control_rate_hz", execution.control_rate_hz,
+                                               "simulated controller rate, Hz"),
+                      plugin::double_parameter("lag_s", execution.lag_s,
+                                               "first-order lag of the joints, s"),
+                      plugin::double_parameter("settle_s", execution.settle_s,
+                                               "control time after the trajectory's end, s")}},
+      factory<ExecuteNode>());
+}
+
+}  // namespace robotperf::manipulation

@@ -1,0 +1,13 @@
+// Private to the perception category: the parts it registers.
+#pragma once
+
+#include "robotperf/plugin.hpp"
+
+namespace robotperf::perception {
+
+void register_image_proc_kernels(plugin::Registrar& registrar);
+void register_stereo_depth_kernels(plugin::Registrar& registrar);
+void register_datasets(plugin::Registrar& registrar);
+void register_evaluators(plugin::Registrar& registrar);
+
+}  // namespace robotperf::perception

@@ -1,0 +1,120 @@
+// The perception datasets: a distorted camera, a rectified stereo pair and registered depth +
+// colour, rendered deterministically with their ground truth.
+#include "category.hpp"
+#include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/msgs/stereo_msgs.hpp"
+#include "robotperf/perception/synthetic_camera.hpp"
+#include "robotperf/perception/synthetic_depth.hpp"
+#include "robotperf/perception/synthetic_stereo.hpp"
+
+namespace robotperf::perception {
+namespace {
+
+using plugin::append;
+using plugin::DatasetStream;
+using plugin::make_stream;
+
+std::vector<DatasetStream> camera_streams(const plugin::Parameters&) {
+  auto images = make_stream<msgs::Image>("image", "/camera/image_raw");
+  auto infos = make_stream<msgs::CameraInfo>("camera_info", "/camera/camera_info");
+  for (auto& f : generate_camera_sequence()) {
+    append(images, std::move(f.image));
+    append(infos, std::move(f.info));
+  }
+  return {std::move(images), std::move(infos)};
+}
+
+// The pair is rectified: its topics are those a3 takes, so that the bag `dataset generate`
+// writes plays into a3 without remapping.
+std::vector<DatasetStream> stereo_streams(const plugin::Parameters&) {
+  auto left = make_stream<msgs::Image>("left_image", "/left/image_rect");
+  auto left_info = make_stream<msgs::CameraInfo>("left_camera_info", "/left/camera_info");
+  auto right = make_stream<msgs::Image>("right_image", "/right/image_rect");
+  auto right_info = make_stream<msgs::CameraInfo>("right_camera_info", "/right/camera_info");
+  auto truth = make_stream<msgs::DisparityImage>("disparity_truth", "/ground_truth/disparity");
+  for (auto& f : generate_stereo_sequence()) {
+    append(left, std::move(f.left));
+    append(left_info, std::move(f.left_info));
+    append(right, std::move(f.right));
+    append(right_info, std::move(f.right_info));
+    append(truth, std::move(f.truth));
+  }
+  return {std::move(left), std::move(left_info), std::move(right), std::move(right_info),
+          std::move(truth)};
+}
+
+// Depth registered to the colour camera, on the topics a4 takes (depth_image_proc's names).
+std::vector<DatasetStream> depth_streams(const plugin::Parameters&) {
+  auto depth = make_stream<msgs::Image>("depth", "/camera/depth_registered/image_rect");
+  auto depth_mm = make_stream<msgs::Image>("depth_mm", "/camera/depth_registered/image_rect_mm");
+  auto image = make_stream<msgs::Image>("image", "/camera/rgb/image_rect_color");
+  auto info = make_stream<msgs::CameraInfo>("camera_info", "/camera/rgb/camera_info");
+  auto truth = make_stream<msgs::Image>("depth_truth", "/ground_truth/depth");
+  for (auto& f : generate_depth_sequence()) {
+    append(depth, std::move(f.depth));
+    append(depth_mm, std::move(f.depth_mm));
+    append(image, std::move(f.colour));
+    append(info, std::move(f.info));
+    append(truth, std::move(f.truth_depth));
+  }
+  return {std::move(depth), std::move(depth_mm), std::move(image), std::move(info),
+          std::move(truth)};
+}
+
+}  // namespace
+
+void register_datasets(plugin::Registrar& registrar) {
+  const SyntheticCameraConfig camera;
+  registrar.add_dataset(
+      {.name = "perception/image",
+       .description = "synthetic 640x480 rgb8 camera, 30 Hz, 68 frames, plumb_bob k1=-0.25 "
+                      "k2=0.12 p1=-0.00028 p2=-5e-5, hfov 1.047 rad; checkerboard with a moving "
+                      "box",
+       .rate_hz = camera.rate_hz,
+       .frames = camera.frames,
+       .streams = {{"image", "/camera/image_raw", "sensor_msgs/msg/Image", false,
+                    "the distorted camera image"},
+                   {"camera_info", "/camera/camera_info", "sensor_msgs/msg/CameraInfo", false,
+                    "its calibration (plumb_bob)"}}},
+      camera_streams);
+  const SyntheticStereoConfig stereo;
+  registrar.add_dataset(
+      {.name = "perception/stereo",
+       .description = "synthetic rectified 640x480 rgb8 stereo pair, 10 Hz, 10 frames, baseline "
+                      "0.10 m, hfov 1.089 rad; ray-cast textured room with moving boxes (depth "
+                      "1.6-6 m)",
+       .rate_hz = stereo.rate_hz,
+       .frames = stereo.frames,
+       .streams = {{"left_image", "/left/image_rect", "sensor_msgs/msg/Image", false,
+                    "rectified left image"},
+                   {"left_camera_info", "/left/camera_info", "sensor_msgs/msg/CameraInfo", false,
+                    "left calibration"},
+                   {"right_image", "/right/image_rect", "sensor_msgs/msg/Image", false,
+                    "rectified right image"},
+                   {"right_camera_info", "/right/camera_info", "sensor_msgs/msg/CameraInfo", false,
+                    "right calibration (P[3] = -fx * baseline)"},
+                   {"disparity_truth", "/ground_truth/disparity", "stereo_msgs/msg/DisparityImage",
+                    true, "per-pixel true disparity of the left view, NaN where occluded"}}},
+      stereo_streams);
+  const SyntheticDepthConfig depth;
+  registrar.add_dataset(
+      {.name = "perception/depth",
+       .description = "synthetic registered 640x480 depth + rgb8 colour, 30 Hz, 20 frames, hfov "
+                      "1.089 rad, range 0.05-8 m; ray-cast room with moving boxes and a doorway "
+                      "beyond range",
+       .rate_hz = depth.rate_hz,
+       .frames = depth.frames,
+       .streams = {{"depth", "/camera/depth_registered/image_rect", "sensor_msgs/msg/Image", false,
+                    "32FC1 depth in metres, NaN = none"},
+                   {"depth_mm", "/camera/depth_registered/image_rect_mm", "sensor_msgs/msg/Image",
+                    false, "16UC1 depth in millimetres, 0 = none"},
+                   {"image", "/camera/rgb/image_rect_color", "sensor_msgs/msg/Image", false,
+                    "rgb8 colour"},
+                   {"camera_info", "/camera/rgb/camera_info", "sensor_msgs/msg/CameraInfo", false,
+                    "the colour camera's calibration"},
+                   {"depth_truth", "/ground_truth/depth", "sensor_msgs/msg/Image", true,
+                    "64FC1 true depth"}}},
+      depth_streams);
+}
+
+}  // namespace robotperf::perception

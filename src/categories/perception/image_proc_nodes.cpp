@@ -1,0 +1,143 @@
+// image_proc/rectify and image_proc/resize as graph nodes.
+#include <stdexcept>
+
+#include "camera_sync.hpp"
+#include "category.hpp"
+#include "robotperf/perception/image_proc.hpp"
+
+namespace robotperf::perception {
+namespace {
+
+using plugin::KernelConfig;
+
+int interpolation_parameter(const KernelConfig& config) {
+  const int64_t v = config.parameters.get_int("interpolation");
+  if (v < cv::INTER_NEAREST || v > cv::INTER_LANCZOS4) {
+    throw std::invalid_argument(
+        "node '" + config.node_name +
+        "': interpolation must be 0..4 (nearest, linear, cubic, area, lanczos4)");
+  }
+  return static_cast<int>(v);
+}
+
+// Subscribes `image` and `camera_info` and hands exact-time pairs to process().
+class CameraNode : public graph::Node {
+ protected:
+  CameraNode(graph::Context& context, const KernelConfig& config)
+      : Node(context, config.node_name),
+        sync_([this](const auto& img, const auto& info) { process(img, info); }) {
+    image_sub_ = create_subscription<msgs::Image>(
+        config.topic("image"), config.qos,
+        [this](std::shared_ptr<const msgs::Image> m) { sync_.add(std::move(m)); });
+    info_sub_ = create_subscription<msgs::CameraInfo>(
+        config.topic("camera_info"), config.qos,
+        [this](std::shared_ptr<const msgs::CameraInfo> m) { sync_.add(std::move(m)); });
+  }
+  virtual void process(const CameraSync::ImagePtr& image, const CameraSync::InfoPtr& info) = 0;
+
+ private:
+  CameraSync sync_;
+  std::shared_ptr<graph::GenericSubscription> image_sub_, info_sub_;
+};
+
+class RectifyNode final : public CameraNode {
+ public:
+  RectifyNode(graph::Context& context, const KernelConfig& config)
+      : CameraNode(context, config), rectifier_(interpolation_parameter(config)) {
+    output_ = create_publisher<msgs::Image>(config.topic("image_rect"), config.qos);
+  }
+
+ private:
+  void process(const CameraSync::ImagePtr& image, const CameraSync::InfoPtr& info) override {
+    auto out = std::make_shared<msgs::Image>();
+    plugin::trace_kernel_init(*this, kKernel, image->header.stamp.to_ns(), *image);
+    rectifier_.rectify(*image, *info, *out);
+    plugin::trace_kernel_fini(*this, kKernel, *out);
+    output_->publish(std::shared_ptr<const msgs::Image>(std::move(out)));
+  }
+
+  static constexpr const char* kKernel = "image_proc/rectify";
+  Rectifier rectifier_;
+  std::shared_ptr<graph::Publisher<msgs::Image>> output_;
+};
+
+class ResizeNode final : public CameraNode {
+ public:
+  ResizeNode(graph::Context& context, const KernelConfig& config) : CameraNode(context, config) {
+    const auto& p = config.parameters;
+    params_.use_scale = p.get_bool("use_scale");
+    params_.scale_height = p.get_double("scale_height");
+    params_.scale_width = p.get_double("scale_width");
+    params_.height = static_cast<int>(p.get_int("height"));
+    params_.width = static_cast<int>(p.get_int("width"));
+    params_.interpolation = interpolation_parameter(config);
+    image_out_ = create_publisher<msgs::Image>(config.topic("resize"), config.qos);
+    info_out_ = create_publisher<msgs::CameraInfo>(config.topic("resize_info"), config.qos);
+  }
+
+ private:
+  void process(const CameraSync::ImagePtr& image, const CameraSync::InfoPtr& info) override {
+    auto out = std::make_shared<msgs::Image>();
+    auto out_info = std::make_shared<msgs::CameraInfo>();
+    plugin::trace_kernel_init(*this, kKernel, image->header.stamp.to_ns(), *image);
+    resize(*image, *info, params_, *out, *out_info);
+    plugin::trace_kernel_fini(*this, kKernel, *out);
+    // CameraInfo first: a subscriber pairing on the image then finds its partner waiting.
+    info_out_->publish(std::shared_ptr<const msgs::CameraInfo>(std::move(out_info)));
+    image_out_->publish(std::shared_ptr<const msgs::Image>(std::move(out)));
+  }
+
+  static constexpr const char* kKernel = "image_proc/resize";
+  ResizeParams params_;
+  std::shared_ptr<graph::Publisher<msgs::Image>> image_out_;
+  std::shared_ptr<graph::Publisher<msgs::CameraInfo>> info_out_;
+};
+
+plugin::ParameterInfo interpolation_declaration() {
+  return plugin::int_parameter("interpolation", cv::INTER_LINEAR,
+                               "cv::InterpolationFlags: 0 nearest, 1 linear, 2 cubic, 3 area, "
+                               "4 lanczos4");
+}
+
+// image_transport's camera subscriber: the image and its CameraInfo.
+std::vector<plugin::PortInfo> camera_inputs() {
+  return {{"image", "sensor_msgs/msg/Image"}, {"camera_info", "sensor_msgs/msg/CameraInfo"}};
+}
+
+}  // namespace
+
+void register_image_proc_kernels(plugin::Registrar& registrar) {
+  registrar.add_kernel(
+      {.name = "image_proc/rectify",
+       .description = "undistort and rectify an image with its CameraInfo (cached map, cv::remap), "
+                      "as image_proc",
+       .inputs = camera_inputs(),
+       .outputs = {{"image_rect", "sensor_msgs/msg/Image"}},
+       .parameters = {interpolation_declaration()}},
+      [](graph::Context& context, const KernelConfig& config) {
+        return std::make_shared<RectifyNode>(context, config);
+      });
+  const ResizeParams defaults;
+  registrar.add_kernel(
+      {.name = "image_proc/resize",
+       .description = "resize an image and scale its CameraInfo (K, P, ROI), as image_proc",
+       .inputs = camera_inputs(),
+       .outputs = {{"resize", "sensor_msgs/msg/Image"},
+                   {"resize_info", "sensor_msgs/msg/CameraInfo"}},
+       .parameters =
+           {plugin::bool_parameter("use_scale", defaults.use_scale,
+                                   "true: scale by scale_width x scale_height; false: resize to "
+                                   "width x height"),
+            plugin::double_parameter("scale_height", defaults.scale_height, "height factor"),
+            plugin::double_parameter("scale_width", defaults.scale_width, "width factor"),
+            plugin::int_parameter("height", defaults.height,
+                                  "target height without use_scale; -1 keeps the input's"),
+            plugin::int_parameter("width", defaults.width,
+                                  "target width without use_scale; -1 keeps the input's"),
+            interpolation_declaration()}},
+      [](graph::Context& context, const KernelConfig& config) {
+        return std::make_shared<ResizeNode>(context, config);
+      });
+}
+
+}  // namespace robotperf::perception

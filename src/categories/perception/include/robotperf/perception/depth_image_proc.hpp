@@ -1,0 +1,44 @@
+#pragma once
+
+// Depth image to coloured point cloud as ROS 2 depth_image_proc's PointCloudXyzrgbNode computes
+// it, without the node plumbing.
+
+#include <cstdint>
+
+#include "robotperf/msgs/sensor_msgs.hpp"
+
+namespace robotperf::perception {
+
+// Byte layout of the cloud, as sensor_msgs' PointCloud2Modifier lays out fields "xyz", "rgb":
+// x, y, z float32 at 0, 4, 8, padding to 16; rgb (packed b, g, r, 0 bytes in a float32) at 16,
+// padding to 32.
+inline constexpr uint32_t kXyzrgbOffsetX = 0;
+inline constexpr uint32_t kXyzrgbOffsetY = 4;
+inline constexpr uint32_t kXyzrgbOffsetZ = 8;
+inline constexpr uint32_t kXyzrgbOffsetRgb = 16;
+inline constexpr uint32_t kXyzrgbPointStep = 32;
+
+struct PointCloudXyzrgbParams {
+  // Depth given to invalid pixels, in metres; 0 makes them NaN points (depth_image_proc's
+  // "range_max", default 0).
+  double range_max = 0.0;
+};
+
+// Builds the organised cloud (height x width of the depth image) of a registered depth image and
+// its colour image, with the colour camera's CameraInfo (fx, fy, cx, cy from P, as
+// image_geometry reads them):
+// - depth: 32FC1 in metres (valid when finite) or 16UC1 in millimetres (valid when non-zero);
+//   x = (u - cx) * z / fx, y = (v - cy) * z / fy, in float as depth_image_proc computes them;
+//   invalid depth gives NaN x, y, z (or range_max when set);
+// - colour: rgb8, rgba8, bgr8, bgra8 or mono8; resized (bilinear) to the depth size when it
+//   differs, the camera model then scaled by depth width / colour width;
+// - header = the depth image's; is_dense false; little-endian;
+// - cloud.data is reused, without clearing, when it already has the cloud's size (its padding
+//   bytes are then left as they are: zero when this function made the cloud).
+// Throws std::invalid_argument for other encodings, differing frame_ids, a CameraInfo without a
+// focal length, or a bad image.
+void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
+                        const msgs::CameraInfo& info, const PointCloudXyzrgbParams& params,
+                        msgs::PointCloud2& cloud);
+
+}  // namespace robotperf::perception

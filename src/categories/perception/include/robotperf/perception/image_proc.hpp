@@ -1,0 +1,132 @@
+#pragma once
+
+// Image processing as ROS 2 image_proc does it (RectifyNode, ResizeNode), on OpenCV, without
+// the node plumbing: these functions are what the graph nodes call per message.
+
+#include <array>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "robotperf/msgs/sensor_msgs.hpp"
+
+namespace robotperf::perception {
+
+// ---------------------------------------------------------------------------------------------
+// sensor_msgs/Image <-> cv::Mat
+// ---------------------------------------------------------------------------------------------
+
+// The OpenCV element type (e.g. CV_8UC3) that stores one pixel of a ROS image encoding, as
+// cv_bridge maps them: rgb8/bgr8, rgba8/bgra8, rgb16/bgr16, rgba16/bgra16, mono8, mono16,
+// bayer_*8/16, yuv422/uyvy/yuyv, and the generic "<depth>C<channels>" names (8UC1, 16UC1,
+// 32FC1, 64FC3, ...). Throws std::invalid_argument for any other encoding.
+int cv_type_from_encoding(std::string_view encoding);
+
+// Zero-copy views of an image's pixel buffer. They validate first and throw
+// std::invalid_argument if the encoding is unknown, the image is big-endian with multi-byte
+// elements, step is smaller than a row or not a multiple of the element size, or data does
+// not hold exactly step * height bytes. A zero-sized image gives an empty cv::Mat.
+// The view stays valid while image.data is neither resized nor destroyed.
+cv::Mat image_view(msgs::Image& image);
+// The returned header is mutable only because cv::Mat has no read-only form; never write
+// through it.
+cv::Mat image_view(const msgs::Image& image);
+
+// Makes `image` a densely packed width x height image with `encoding`, `header` and the host's
+// byte order (as cv_bridge does), reusing the capacity of image.data, and returns a view of its
+// (uninitialised) pixels. OpenCV functions given this view as destination write into
+// image.data without reallocating.
+cv::Mat prepare_image(msgs::Image& image, const msgs::Header& header, std::string_view encoding,
+                      int width, int height);
+
+// ---------------------------------------------------------------------------------------------
+// Rectification (image_proc RectifyNode + image_geometry::PinholeCameraModel)
+// ---------------------------------------------------------------------------------------------
+
+// Rectifies camera images with the undistort-rectify map of their CameraInfo. The map is built
+// (cv::initUndistortRectifyMap, fixed-point CV_16SC2 maps) only when the camera model changes:
+// size, distortion model, D, K, R, P or binning rebuild it; a new ROI only re-crops it.
+//
+// Per image, in image_proc's order: K[0] == 0 (uncalibrated) throws std::invalid_argument;
+// if every element of D is zero (or D is empty) the image passes through unchanged (copied),
+// whatever R and P say; otherwise the image is remapped with border constant 0 (NaN for float
+// images). Distortion models: plumb_bob (D of 4 or 5), rational_polynomial (D of 8); others
+// throw.
+// Binning and ROI are honoured as image_geometry does; the image must have the reduced size
+// (ROI size divided by binning), else std::invalid_argument.
+//
+// Not thread-safe: one Rectifier per stream.
+class Rectifier {
+ public:
+  // `interpolation`: cv::InterpolationFlags value, INTER_NEAREST .. INTER_LANCZOS4
+  // (image_proc's "interpolation" parameter, default 1 = INTER_LINEAR).
+  explicit Rectifier(int interpolation = cv::INTER_LINEAR);
+
+  // Writes the rectified image (same header, encoding and size) into `rectified`, reusing its
+  // buffer. `rectified` must not be `raw`.
+  void rectify(const msgs::Image& raw, const msgs::CameraInfo& info, msgs::Image& rectified);
+  msgs::Image rectify(const msgs::Image& raw, const msgs::CameraInfo& info);
+
+  int interpolation() const { return interpolation_; }
+  // How many times the full undistort-rectify map has been computed.
+  uint64_t map_computations() const { return map_computations_; }
+
+ private:
+  // What the full-resolution map depends on, normalised as image_geometry does (binning 0 = 1).
+  struct MapInputs {
+    uint32_t width = 0;
+    uint32_t height = 0;
+    std::string distortion_model;
+    std::vector<double> d;
+    std::array<double, 9> k{};
+    std::array<double, 9> r{};
+    std::array<double, 12> p{};
+    uint32_t binning_x = 1;
+    uint32_t binning_y = 1;
+    // Whether `info` has these inputs (compared in place: no copy per image).
+    bool matches(const msgs::CameraInfo& info) const;
+  };
+
+  void update_maps(const msgs::CameraInfo& info);
+
+  int interpolation_;
+  uint64_t map_computations_ = 0;
+  bool have_maps_ = false;
+  MapInputs map_inputs_;
+  // ROI in full-resolution pixels, all-zero normalised to the full image.
+  cv::Rect roi_;
+  cv::Mat full_map_xy_, full_map_fraction_;
+  // The maps cropped to the ROI (the full maps themselves when the ROI is the full image).
+  cv::Mat map_xy_, map_fraction_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Resize (image_proc ResizeNode)
+// ---------------------------------------------------------------------------------------------
+
+// image_proc ResizeNode's parameters, with its defaults.
+struct ResizeParams {
+  // true: scale by scale_width x scale_height; false: resize to width x height.
+  bool use_scale = true;
+  double scale_height = 1.0;
+  double scale_width = 1.0;
+  // Target size when !use_scale; -1 keeps the input's.
+  int height = -1;
+  int width = -1;
+  // cv::InterpolationFlags value, INTER_NEAREST .. INTER_LANCZOS4.
+  int interpolation = cv::INTER_LINEAR;
+};
+
+// Resizes `image` into `out` (same header and encoding, reusing out's buffer; must not be
+// `image`) and writes `info` adjusted to the new size into `out_info` (may be `info`): height
+// and width, K[0], K[2], P[0], P[2], P[3] times the x scale, K[4], K[5], P[5], P[6] times the y
+// scale, ROI offsets and size scaled (truncated), as image_proc does. With use_scale, the image
+// size is rounded (cv::resize) and the CameraInfo size truncated, as in image_proc.
+// Throws std::invalid_argument for non-positive scales or sizes, or a bad image.
+void resize(const msgs::Image& image, const msgs::CameraInfo& info, const ResizeParams& params,
+            msgs::Image& out, msgs::CameraInfo& out_info);
+
+}  // namespace robotperf::perception

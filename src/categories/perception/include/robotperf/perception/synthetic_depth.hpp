@@ -1,0 +1,42 @@
+#pragma once
+
+// A deterministic registered depth + colour sequence of a known scene, standing in for
+// RobotPerf's perception/depth_image1 source: an ideal pinhole RGB-D camera in a textured room
+// (floor, side wall, back wall with a doorway to a corridor beyond the sensor's range) with boxes
+// moving through it, ray-cast so that every pixel's true depth is known.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "robotperf/msgs/sensor_msgs.hpp"
+
+namespace robotperf::perception {
+
+struct SyntheticDepthConfig {
+  uint32_t width = 640;
+  uint32_t height = 480;
+  uint32_t frames = 20;
+  double rate_hz = 30.0;
+  double hfov_rad = 1.089;
+  double min_range_m = 0.05;  // the sensor reports no depth outside [min, max]
+  double max_range_m = 8.0;
+  std::string frame_id = "camera_color_optical_frame";
+};
+
+struct DepthFrame {
+  msgs::Image depth;      // 32FC1 metres, NaN where there is no depth
+  msgs::Image depth_mm;   // 16UC1 millimetres (rounded), 0 where there is no depth
+  msgs::Image colour;     // rgb8, registered to the depth image
+  msgs::CameraInfo info;  // make_pinhole_camera_info, D all zero
+  // Ground truth: 64FC1 true Z of the pixel centre's ray in metres, NaN where there is no depth.
+  // The true point is ((u - cx) Z / fx, (v - cy) Z / fy, Z).
+  msgs::Image truth_depth;
+};
+
+// Frames 0 .. frames-1, frame k stamped k / rate_hz s, one sample per pixel at its centre. Same
+// bytes on every machine. Throws std::invalid_argument for a zero size, rate_hz <= 0, a bad
+// range or hfov outside (0, pi).
+std::vector<DepthFrame> generate_depth_sequence(const SyntheticDepthConfig& config = {});
+
+}  // namespace robotperf::perception

@@ -1,0 +1,283 @@
+// stereo_image_proc/disparity and depth_image_proc/point_cloud_xyzrgb as graph nodes.
+#include <cmath>
+#include <iostream>
+#include <stdexcept>
+
+#include "category.hpp"
+#include "robotperf/perception/depth_image_proc.hpp"
+#include "robotperf/perception/stereo_image_proc.hpp"
+
+namespace robotperf::perception {
+namespace {
+
+using plugin::KernelConfig;
+using plugin::MessageSync;
+using plugin::SyncOptions;
+using plugin::SyncPolicy;
+
+int int_value(const KernelConfig& config, const std::string& name) {
+  const int64_t v = config.parameters.get_int(name);
+  if (v < INT32_MIN || v > INT32_MAX) {
+    throw std::invalid_argument("node '" + config.node_name + "': " + name + " is out of range");
+  }
+  return static_cast<int>(v);
+}
+
+SyncOptions sync_options(const KernelConfig& config, bool approximate) {
+  SyncOptions o;
+  o.policy = approximate ? SyncPolicy::kApproximate : SyncPolicy::kExact;
+  const int64_t queue = config.parameters.get_int("queue_size");
+  if (queue < 1)
+    throw std::invalid_argument("node '" + config.node_name + "': queue_size must be >= 1");
+  o.queue_size = static_cast<std::size_t>(queue);
+  return o;
+}
+
+template <class T>
+int64_t stamp_of(const std::shared_ptr<const T>& m) {
+  return m->header.stamp.to_ns();
+}
+
+// Output messages of megabytes: the last one published is reused once every subscriber has let
+// go of it (like a ROS 2 loaned message), so the kernel writes into memory already mapped instead
+// of page-faulting a fresh buffer on every frame.
+template <class T>
+class OutputPool {
+ public:
+  std::shared_ptr<T> acquire() {
+    // use_count 1: only we hold it, and nobody can take a new reference from us.
+    if (last_ && last_.use_count() == 1) return last_;
+    last_ = std::make_shared<T>();
+    return last_;
+  }
+
+ private:
+  std::shared_ptr<T> last_;
+};
+
+// Inputs rejected by the kernel (a bad image, mismatched frames) are skipped and counted, as the
+// ROS nodes log and skip them: the frame shows as lost at the Monitor.
+class SkippingNode : public graph::Node, public plugin::NodeCounters {
+ protected:
+  using graph::Node::Node;
+  template <class F>
+  void guarded(F&& f) {
+    try {
+      f();
+    } catch (const std::invalid_argument& e) {
+      if (rejected_++ == 0)
+        std::cerr << "robotperf node " << name() << ": skipping input: " << e.what() << "\n";
+    }
+  }
+  uint64_t rejected_ = 0;
+};
+
+class DisparityNode final : public SkippingNode {
+ public:
+  enum Input { kLeftImage, kLeftInfo, kRightImage, kRightInfo };
+
+  DisparityNode(graph::Context& context, const KernelConfig& config)
+      : SkippingNode(context, config.node_name),
+        processor_(params_from(config)),
+        sync_(sync_options(config, config.parameters.get_bool("approximate_sync")),
+              [this](const auto& set) { process(set); }) {
+    output_ = create_publisher<msgs::DisparityImage>(config.topic("disparity"), config.qos);
+    subscribe<msgs::Image>(config, "left_image", kLeftImage);
+    subscribe<msgs::CameraInfo>(config, "left_camera_info", kLeftInfo);
+    subscribe<msgs::Image>(config, "right_image", kRightImage);
+    subscribe<msgs::CameraInfo>(config, "right_camera_info", kRightInfo);
+  }
+
+  std::map<std::string, uint64_t> counters() const override {
+    const auto& d = sync_.dropped();
+    return {{"sets_processed", sync_.emitted()},           {"unpaired_left_image", d[kLeftImage]},
+            {"unpaired_left_camera_info", d[kLeftInfo]},   {"unpaired_right_image", d[kRightImage]},
+            {"unpaired_right_camera_info", d[kRightInfo]}, {"rejected_sets", rejected_}};
+  }
+
+ private:
+  static StereoParams params_from(const KernelConfig& c) {
+    StereoParams p;
+    const int algorithm = int_value(c, "stereo_algorithm");
+    if (algorithm != 0 && algorithm != 1) {
+      throw std::invalid_argument("node '" + c.node_name +
+                                  "': stereo_algorithm must be 0 (StereoBM) or 1 (StereoSGBM)");
+    }
+    p.algorithm = static_cast<StereoAlgorithm>(algorithm);
+    p.prefilter_size = int_value(c, "prefilter_size");
+    p.prefilter_cap = int_value(c, "prefilter_cap");
+    p.correlation_window_size = int_value(c, "correlation_window_size");
+    p.min_disparity = int_value(c, "min_disparity");
+    p.disparity_range = int_value(c, "disparity_range");
+    p.texture_threshold = int_value(c, "texture_threshold");
+    p.speckle_size = int_value(c, "speckle_size");
+    p.speckle_range = int_value(c, "speckle_range");
+    p.uniqueness_ratio = int_value(c, "uniqueness_ratio");
+    p.p1 = int_value(c, "P1");
+    p.p2 = int_value(c, "P2");
+    p.disp12_max_diff = int_value(c, "disp12_max_diff");
+    p.sgbm_mode = int_value(c, "sgbm_mode");
+    try {
+      validate(p);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("node '" + c.node_name + "': " + e.what());
+    }
+    return p;
+  }
+
+  template <class T>
+  void subscribe(const KernelConfig& config, const char* port, Input input) {
+    subscriptions_.push_back(create_subscription<T>(config.topic(port), config.qos,
+                                                    [this, input](std::shared_ptr<const T> m) {
+                                                      const int64_t stamp = stamp_of(m);
+                                                      sync_.add(input, std::move(m), stamp);
+                                                    }));
+  }
+
+  void process(const MessageSync<4>::Set& set) {
+    guarded([&] {
+      std::shared_ptr<msgs::DisparityImage> out = pool_.acquire();
+      const auto& left = *std::static_pointer_cast<const msgs::Image>(set[kLeftImage]);
+      const auto& right = *std::static_pointer_cast<const msgs::Image>(set[kRightImage]);
+      plugin::trace_kernel_init(*this, kKernel, left.header.stamp.to_ns(), left, right);
+      processor_.compute(left, right,
+                         *std::static_pointer_cast<const msgs::CameraInfo>(set[kLeftInfo]),
+                         *std::static_pointer_cast<const msgs::CameraInfo>(set[kRightInfo]), *out);
+      plugin::trace_kernel_fini(*this, kKernel, *out);
+      output_->publish(std::shared_ptr<const msgs::DisparityImage>(std::move(out)));
+    });
+  }
+
+  static constexpr const char* kKernel = "stereo_image_proc/disparity";
+  DisparityProcessor processor_;
+  OutputPool<msgs::DisparityImage> pool_;
+  MessageSync<4> sync_;
+  std::shared_ptr<graph::Publisher<msgs::DisparityImage>> output_;
+  std::vector<std::shared_ptr<graph::GenericSubscription>> subscriptions_;
+};
+
+class PointCloudXyzrgbNode final : public SkippingNode {
+ public:
+  enum Input { kDepth, kImage, kInfo };
+
+  PointCloudXyzrgbNode(graph::Context& context, const KernelConfig& config)
+      : SkippingNode(context, config.node_name),
+        sync_(sync_options(config, !config.parameters.get_bool("exact_sync")),
+              [this](const auto& set) { process(set); }) {
+    params_.range_max = config.parameters.get_double("range_max");
+    if (!(params_.range_max >= 0.0) || !std::isfinite(params_.range_max)) {
+      throw std::invalid_argument("node '" + config.node_name + "': range_max must be >= 0");
+    }
+    output_ = create_publisher<msgs::PointCloud2>(config.topic("points"), config.qos);
+    subscribe<msgs::Image>(config, "depth", kDepth);
+    subscribe<msgs::Image>(config, "image", kImage);
+    subscribe<msgs::CameraInfo>(config, "camera_info", kInfo);
+  }
+
+  std::map<std::string, uint64_t> counters() const override {
+    const auto& d = sync_.dropped();
+    return {{"sets_processed", sync_.emitted()},
+            {"unpaired_depth", d[kDepth]},
+            {"unpaired_image", d[kImage]},
+            {"unpaired_camera_info", d[kInfo]},
+            {"rejected_sets", rejected_}};
+  }
+
+ private:
+  template <class T>
+  void subscribe(const KernelConfig& config, const char* port, Input input) {
+    subscriptions_.push_back(create_subscription<T>(config.topic(port), config.qos,
+                                                    [this, input](std::shared_ptr<const T> m) {
+                                                      const int64_t stamp = stamp_of(m);
+                                                      sync_.add(input, std::move(m), stamp);
+                                                    }));
+  }
+
+  void process(const MessageSync<3>::Set& set) {
+    guarded([&] {
+      std::shared_ptr<msgs::PointCloud2> cloud = pool_.acquire();
+      const auto& depth = *std::static_pointer_cast<const msgs::Image>(set[kDepth]);
+      const auto& image = *std::static_pointer_cast<const msgs::Image>(set[kImage]);
+      plugin::trace_kernel_init(*this, kKernel, depth.header.stamp.to_ns(), depth, image);
+      point_cloud_xyzrgb(depth, image,
+                         *std::static_pointer_cast<const msgs::CameraInfo>(set[kInfo]), params_,
+                         *cloud);
+      plugin::trace_kernel_fini(*this, kKernel, *cloud);
+      output_->publish(std::shared_ptr<const msgs::PointCloud2>(std::move(cloud)));
+    });
+  }
+
+  static constexpr const char* kKernel = "depth_image_proc/point_cloud_xyzrgb";
+  PointCloudXyzrgbParams params_;
+  OutputPool<msgs::PointCloud2> pool_;
+  MessageSync<3> sync_;
+  std::shared_ptr<graph::Publisher<msgs::PointCloud2>> output_;
+  std::vector<std::shared_ptr<graph::GenericSubscription>> subscriptions_;
+};
+
+plugin::ParameterInfo queue_size_declaration() {
+  return plugin::int_parameter("queue_size", 5,
+                               "frames (exact sync) or messages per input (approximate sync) "
+                               "waiting to be paired");
+}
+
+}  // namespace
+
+void register_stereo_depth_kernels(plugin::Registrar& registrar) {
+  const StereoParams d;
+  using plugin::int_parameter;  // the declarations, not int_value()
+  registrar.add_kernel(
+      {.name = "stereo_image_proc/disparity",
+       .description = "disparity of a rectified stereo pair (StereoBM, or StereoSGBM), as "
+                      "stereo_image_proc",
+       .inputs = {{"left_image", "sensor_msgs/msg/Image"},
+                  {"left_camera_info", "sensor_msgs/msg/CameraInfo"},
+                  {"right_image", "sensor_msgs/msg/Image"},
+                  {"right_camera_info", "sensor_msgs/msg/CameraInfo"}},
+       .outputs = {{"disparity", "stereo_msgs/msg/DisparityImage"}},
+       .parameters =
+           {int_parameter("stereo_algorithm", static_cast<int>(d.algorithm),
+                          "0 StereoBM, 1 StereoSGBM"),
+            int_parameter("prefilter_size", d.prefilter_size, "StereoBM: odd, 5..255"),
+            int_parameter("prefilter_cap", d.prefilter_cap, "1..63"),
+            int_parameter("correlation_window_size", d.correlation_window_size,
+                          "odd; StereoBM 5..255, StereoSGBM 1..255"),
+            int_parameter("min_disparity", d.min_disparity, "smallest disparity searched, px"),
+            int_parameter("disparity_range", d.disparity_range,
+                          "disparities searched, a positive multiple of 16"),
+            int_parameter("texture_threshold", d.texture_threshold, "StereoBM only"),
+            int_parameter("speckle_size", d.speckle_size, "largest speckle filtered out, px"),
+            int_parameter("speckle_range", d.speckle_range, "disparity spread within a speckle"),
+            int_parameter("uniqueness_ratio", d.uniqueness_ratio, "margin of the best match, %"),
+            int_parameter("P1", d.p1, "StereoSGBM smoothness penalty, small changes"),
+            int_parameter("P2", d.p2, "StereoSGBM smoothness penalty, large changes"),
+            int_parameter("disp12_max_diff", d.disp12_max_diff,
+                          "StereoSGBM left-right check tolerance"),
+            int_parameter("sgbm_mode", d.sgbm_mode,
+                          "cv::StereoSGBM mode: 0 SGBM, 1 HH, 2 SGBM_3WAY, 3 HH4"),
+            plugin::bool_parameter("approximate_sync", false,
+                                   "pair inputs by nearby stamps instead of equal ones"),
+            queue_size_declaration()}},
+      [](graph::Context& context, const KernelConfig& config) {
+        return std::make_shared<DisparityNode>(context, config);
+      });
+  registrar.add_kernel(
+      {.name = "depth_image_proc/point_cloud_xyzrgb",
+       .description = "organised xyz + rgb point cloud from registered depth and colour, as "
+                      "depth_image_proc",
+       .inputs = {{"depth", "sensor_msgs/msg/Image"},
+                  {"image", "sensor_msgs/msg/Image"},
+                  {"camera_info", "sensor_msgs/msg/CameraInfo"}},
+       .outputs = {{"points", "sensor_msgs/msg/PointCloud2"}},
+       .parameters = {plugin::double_parameter("range_max", PointCloudXyzrgbParams{}.range_max,
+                                               "depth given to invalid pixels, m; 0 makes them "
+                                               "NaN points"),
+                      plugin::bool_parameter("exact_sync", false,
+                                             "pair inputs by equal stamps instead of nearby ones"),
+                      queue_size_declaration()}},
+      [](graph::Context& context, const KernelConfig& config) {
+        return std::make_shared<PointCloudXyzrgbNode>(context, config);
+      });
+}
+
+}  // namespace robotperf::perception

@@ -1,0 +1,141 @@
+#include "robotperf/perception/stereo_image_proc.hpp"
+
+#include <algorithm>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <string>
+
+#include "robotperf/perception/image_proc.hpp"
+
+namespace robotperf::perception {
+namespace {
+
+constexpr int kDisparitiesPerPixel = 16;  // OpenCV's fixed-point disparity scale
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument(what);
+}
+
+bool odd_in(int v, int lo, int hi) {
+  return v % 2 == 1 && v >= lo && v <= hi;
+}
+
+// cv_bridge's conversion to mono8 for the 8-bit colour encodings.
+void to_mono8(const msgs::Image& image, const char* which, cv::Mat& mono) {
+  const cv::Mat view = image_view(image);
+  if (image.encoding == "mono8" || image.encoding == "8UC1") {
+    mono = view;
+  } else if (image.encoding == "rgb8") {
+    cv::cvtColor(view, mono, cv::COLOR_RGB2GRAY);
+  } else if (image.encoding == "bgr8") {
+    cv::cvtColor(view, mono, cv::COLOR_BGR2GRAY);
+  } else if (image.encoding == "rgba8") {
+    cv::cvtColor(view, mono, cv::COLOR_RGBA2GRAY);
+  } else if (image.encoding == "bgra8") {
+    cv::cvtColor(view, mono, cv::COLOR_BGRA2GRAY);
+  } else {
+    throw std::invalid_argument(std::string("disparity: ") + which + " image encoding '" +
+                                image.encoding +
+                                "' cannot be converted to mono8 (use mono8, rgb8, bgr8, rgba8 or "
+                                "bgra8)");
+  }
+}
+
+}  // namespace
+
+void validate(const StereoParams& p) {
+  const bool bm = p.algorithm == StereoAlgorithm::kBlockMatching;
+  require(
+      p.algorithm == StereoAlgorithm::kBlockMatching || p.algorithm == StereoAlgorithm::kSemiGlobal,
+      "stereo_algorithm must be 0 (block matching) or 1 (semi-global block matching)");
+  if (bm) {
+    require(odd_in(p.prefilter_size, 5, 255), "prefilter_size must be odd, 5..255");
+    require(odd_in(p.correlation_window_size, 5, 255),
+            "correlation_window_size must be odd, 5..255 for block matching");
+    require(p.texture_threshold >= 0, "texture_threshold must be >= 0");
+  } else {
+    require(odd_in(p.correlation_window_size, 1, 255),
+            "correlation_window_size must be odd, 1..255");
+    require(p.p1 >= 0 && p.p2 > p.p1, "P2 must be greater than P1, both >= 0");
+    require(p.sgbm_mode >= 0 && p.sgbm_mode <= 3, "sgbm_mode must be 0..3");
+  }
+  require(p.prefilter_cap >= 1 && p.prefilter_cap <= 63, "prefilter_cap must be 1..63");
+  require(p.disparity_range > 0 && p.disparity_range % 16 == 0,
+          "disparity_range must be a positive multiple of 16");
+  require(p.uniqueness_ratio >= 0, "uniqueness_ratio must be >= 0");
+  require(p.speckle_size >= 0, "speckle_size must be >= 0");
+  require(p.speckle_range >= 0, "speckle_range must be >= 0");
+}
+
+DisparityProcessor::DisparityProcessor(const StereoParams& params) : params_(params) {
+  validate(params_);
+  if (params_.algorithm == StereoAlgorithm::kBlockMatching) {
+    auto bm = cv::StereoBM::create(params_.disparity_range, params_.correlation_window_size);
+    bm->setPreFilterSize(params_.prefilter_size);
+    bm->setPreFilterCap(params_.prefilter_cap);
+    bm->setTextureThreshold(params_.texture_threshold);
+    bm->setUniquenessRatio(params_.uniqueness_ratio);
+    matcher_ = bm;
+  } else {
+    auto sgbm = cv::StereoSGBM::create(
+        params_.min_disparity, params_.disparity_range, params_.correlation_window_size, params_.p1,
+        params_.p2, params_.disp12_max_diff, params_.prefilter_cap, params_.uniqueness_ratio,
+        params_.speckle_size, params_.speckle_range, params_.sgbm_mode);
+    matcher_ = sgbm;
+  }
+  matcher_->setMinDisparity(params_.min_disparity);
+  matcher_->setNumDisparities(params_.disparity_range);
+  matcher_->setBlockSize(params_.correlation_window_size);
+  matcher_->setSpeckleWindowSize(params_.speckle_size);
+  matcher_->setSpeckleRange(params_.speckle_range);
+  matcher_->setDisp12MaxDiff(params_.disp12_max_diff);
+}
+
+void DisparityProcessor::compute(const msgs::Image& left, const msgs::Image& right,
+                                 const msgs::CameraInfo& left_info,
+                                 const msgs::CameraInfo& right_info, msgs::DisparityImage& out) {
+  require(left.width == right.width && left.height == right.height,
+          "disparity: left image is " + std::to_string(left.width) + "x" +
+              std::to_string(left.height) + ", right image " + std::to_string(right.width) + "x" +
+              std::to_string(right.height));
+  require(left_info.width == left.width && left_info.height == left.height &&
+              right_info.width == right.width && right_info.height == right.height,
+          "disparity: image sizes do not match their CameraInfo");
+  require(right_info.p[0] != 0.0, "disparity: right CameraInfo has no focal length (P[0] = 0)");
+  require(left.width > 0 && left.height > 0, "disparity: empty images");
+
+  to_mono8(left, "left", left_mono_);
+  to_mono8(right, "right", right_mono_);
+  matcher_->compute(left_mono_, right_mono_, disparity16_);
+
+  const int width = static_cast<int>(left.width);
+  const int height = static_cast<int>(left.height);
+  out.header = left_info.header;
+  cv::Mat disparity = prepare_image(out.image, left_info.header, "32FC1", width, height);
+  // Principal points of a rectified pair may differ in x; disparities are relative to them.
+  const double cx_offset = left_info.p[2] - right_info.p[2];
+  disparity16_.convertTo(disparity, CV_32F, 1.0 / kDisparitiesPerPixel, -cx_offset);
+
+  out.f = static_cast<float>(right_info.p[0]);
+  out.t = static_cast<float>(-right_info.p[3] / right_info.p[0]);
+
+  // Pixels the matcher can give a disparity to: the correlation window fits, and the search
+  // range fits left of the pixel.
+  const int border = params_.correlation_window_size / 2;
+  const int min_d = params_.min_disparity;
+  const int left_edge = params_.disparity_range + min_d + border - 1;
+  const int right_margin = min_d >= 0 ? border + min_d : std::max(border, -min_d);
+  const int right_edge = width - 1 - right_margin;
+  const int top = border;
+  const int bottom = height - 1 - border;
+  out.valid_window.x_offset = static_cast<uint32_t>(std::max(left_edge, 0));
+  out.valid_window.y_offset = static_cast<uint32_t>(top);
+  out.valid_window.width = static_cast<uint32_t>(std::max(right_edge - left_edge, 0));
+  out.valid_window.height = static_cast<uint32_t>(std::max(bottom - top, 0));
+  out.valid_window.do_rectify = false;
+  out.min_disparity = static_cast<float>(min_d);
+  out.max_disparity = static_cast<float>(min_d + params_.disparity_range - 1);
+  out.delta_d = 1.0f / kDisparitiesPerPixel;
+}
+
+}  // namespace robotperf::perception

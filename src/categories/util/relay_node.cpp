@@ -1,0 +1,83 @@
+// util/relay: republishes what it receives. With delay_ms it holds each
+// message for a known time, with drop_every = k it drops every k-th message,
+// and with fail_after = n its callback throws on message n + 1, so the harness
+// can be checked against a graph whose behaviour is known exactly.
+#include <chrono>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include "robotperf/plugin.hpp"
+
+namespace robotperf::util {
+namespace {
+
+using plugin::KernelConfig;
+
+class RelayNode final : public graph::Node {
+ public:
+  RelayNode(graph::Context& context, const KernelConfig& config) : Node(context, config.node_name) {
+    const std::string type = config.parameters.get_string("type");
+    delay_ = std::chrono::microseconds(
+        static_cast<int64_t>(config.parameters.get_double("delay_ms") * 1000.0));
+    drop_every_ = config.parameters.get_int("drop_every");
+    fail_after_ = config.parameters.get_int("fail_after");
+    if (delay_.count() < 0)
+      throw std::invalid_argument("node '" + name() + "': delay_ms must be >= 0");
+    if (drop_every_ < 0)
+      throw std::invalid_argument("node '" + name() + "': drop_every must be >= 0");
+    if (fail_after_ < 0)
+      throw std::invalid_argument("node '" + name() + "': fail_after must be >= 0");
+
+    bool known = msgs::with_message_type(type, [&]<class T>() {
+      const auto& ts = msgs::type_support<T>();
+      output_ = create_generic_publisher(config.topic("output"), ts, config.qos);
+      input_ = create_generic_subscription(
+          config.topic("input"), ts, config.qos,
+          [this](rmw::MessagePtr m, const graph::MessageInfo&) { relay(std::move(m)); });
+    });
+    if (!known)
+      throw std::invalid_argument("node '" + name() + "': unsupported message type " + type);
+  }
+
+ private:
+  void relay(rmw::MessagePtr msg) {
+    ++received_;
+    if (fail_after_ > 0 && received_ > fail_after_) {
+      throw std::runtime_error("failing on purpose after " + std::to_string(fail_after_) +
+                               " messages (fail_after)");
+    }
+    if (drop_every_ > 0 && received_ % drop_every_ == 0) return;
+    if (delay_.count() > 0) std::this_thread::sleep_for(delay_);
+    output_->publish(std::move(msg));
+  }
+
+  std::chrono::microseconds delay_{0};
+  int64_t drop_every_ = 0;
+  int64_t fail_after_ = 0;
+  int64_t received_ = 0;
+  std::shared_ptr<graph::GenericPublisher> output_;
+  std::shared_ptr<graph::GenericSubscription> input_;
+};
+
+}  // namespace
+
+void register_relay_kernel(plugin::Registrar& registrar) {
+  registrar.add_kernel(
+      {.name = "util/relay",
+       .description = "republish each message unchanged; delay_ms, drop_every and fail_after for "
+                      "harness checks",
+       .inputs = {{"input", ""}},
+       .outputs = {{"output", ""}},
+       .parameters = {plugin::string_parameter("type", "sensor_msgs/msg/Image",
+                                               "ROS type of the messages relayed"),
+                      plugin::double_parameter("delay_ms", 0.0, "hold each message this long, ms"),
+                      plugin::int_parameter("drop_every", 0, "drop every k-th message (0: none)"),
+                      plugin::int_parameter(
+                          "fail_after", 0, "throw from the callback on message n + 1 (0: never)")}},
+      [](graph::Context& context, const KernelConfig& config) {
+        return std::make_shared<RelayNode>(context, config);
+      });
+}
+
+}  // namespace robotperf::util

@@ -1,0 +1,99 @@
+// Kernels: what a benchmark graph's nodes run. A kernel is registered with a description of its
+// ports, parameters and backends, and a factory that builds its node in a graph context.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "robotperf/graph/node.hpp"
+#include "robotperf/plugin/parameters.hpp"
+
+namespace robotperf::plugin {
+
+// A port: the role of one topic of the node, wired to a topic name in graph.yaml.
+struct PortInfo {
+  std::string name{};  // "image"
+  // ROS type ("sensor_msgs/msg/Image"); empty when a parameter chooses it.
+  std::string type{};
+};
+
+// A kernel that runs a periodic control loop (ControlLoopSource): the parameter that sets its
+// rate (run --update-rate overrides it) and the grey-box events one cycle emits, to size the
+// trace buffers.
+struct ControlLoopInfo {
+  std::string rate_parameter{};  // a declared double parameter, in Hz, with a default
+  double trace_events_per_cycle = 0;
+};
+
+struct KernelInfo {
+  std::string name{};         // "image_proc/rectify": <package>/<kernel>
+  std::string description{};  // one line
+  std::vector<std::string> backends{"cpu"};
+  std::vector<PortInfo> inputs{};
+  std::vector<PortInfo> outputs{};
+  std::vector<ParameterInfo> parameters{};
+  std::optional<ControlLoopInfo> control_loop{};
+
+  const PortInfo* find_port(const std::string& port) const;
+};
+
+struct KernelConfig {
+  std::string node_name{};
+  std::string backend = "cpu";
+  Parameters parameters{};                      // checked against the kernel's declarations
+  std::map<std::string, std::string> topics{};  // port -> topic
+  rmw::QoS qos{};
+  // benchmark.yaml's `workload: seed` when the dataset is generated from one: kernels with random
+  // choices of their own (planners) follow it unless a parameter of theirs says otherwise.
+  std::optional<uint64_t> workload_seed{};
+
+  // The topic wired to `port`; throws std::invalid_argument when none is.
+  std::string topic(const std::string& port) const;
+};
+
+// Builds the kernel's node; throws std::invalid_argument with one line for a value it cannot
+// use (the harness reports it naming the node).
+using KernelFactory =
+    std::function<std::shared_ptr<graph::Node>(graph::Context&, const KernelConfig&)>;
+
+// Implemented by kernel nodes that count inputs they received but could not use (frames whose
+// inputs never paired, inputs rejected as malformed). The harness reports the counts with the
+// node; it reads them only while the node's callbacks are not running.
+class NodeCounters {
+ public:
+  virtual ~NodeCounters();
+  virtual std::map<std::string, uint64_t> counters() const = 0;
+};
+
+// Grey-box: robotperf:kernel_init and kernel_fini around a kernel's computation, so that the
+// trace analysis can split a node's time into the kernel and the rest. `message_id` is the
+// input's ID (its header stamp in nanoseconds), `bytes` its or the output's CDR size.
+bool kernel_trace_enabled();
+void trace_kernel_init(const char* node, const char* kernel, int64_t message_id, uint64_t bytes);
+void trace_kernel_fini(const char* node, const char* kernel, int64_t message_id, uint64_t bytes);
+
+// The same with the sizes of the messages the kernel reads (summed) or writes, computed only
+// while a session records; the output's ID is its header stamp.
+template <class... Inputs>
+void trace_kernel_init(const graph::Node& node, const char* kernel, int64_t message_id,
+                       const Inputs&... inputs) {
+  if (kernel_trace_enabled()) {
+    const uint64_t bytes =
+        (uint64_t{0} + ... + msgs::type_support<Inputs>().serialized_size(&inputs));
+    trace_kernel_init(node.name().c_str(), kernel, message_id, bytes);
+  }
+}
+template <class T>
+void trace_kernel_fini(const graph::Node& node, const char* kernel, const T& output) {
+  if (kernel_trace_enabled()) {
+    trace_kernel_fini(node.name().c_str(), kernel, output.header.stamp.to_ns(),
+                      msgs::type_support<T>().serialized_size(&output));
+  }
+}
+
+}  // namespace robotperf::plugin

@@ -1,0 +1,81 @@
+// Parameters of kernels, dataset generators and evaluators: declared with a type, a default and
+// a one-line doc, given as text in graph.yaml or benchmark.yaml, checked when they are read in.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace robotperf::plugin {
+
+enum class ParameterType { kBool, kInt, kDouble, kString };
+
+// "bool", "int", "double", "string".
+const char* type_name(ParameterType type);
+
+struct ParameterInfo {
+  std::string name{};
+  ParameterType type = ParameterType::kString;
+  // The value when none is given, as text; absent when the code computes it from other
+  // parameters or the workload (the doc then says how).
+  std::optional<std::string> default_value{};
+  std::string doc{};  // one line
+};
+
+// Declarations with their default in the declared type.
+ParameterInfo bool_parameter(std::string name, bool default_value, std::string doc);
+ParameterInfo int_parameter(std::string name, int64_t default_value, std::string doc);
+ParameterInfo double_parameter(std::string name, double default_value, std::string doc);
+ParameterInfo string_parameter(std::string name, std::string default_value, std::string doc);
+// A parameter whose default depends on something else: read it with a fallback.
+ParameterInfo computed_parameter(std::string name, ParameterType type, std::string doc);
+
+// The parameters given to one kernel, generator or evaluator, checked against its declarations.
+class Parameters {
+ public:
+  Parameters() = default;
+  // Throws std::invalid_argument naming `owner` and the parameter when a name is not declared
+  // (listing those that are) or a value does not convert to its declared type.
+  Parameters(std::vector<ParameterInfo> declared, const std::map<std::string, std::string>& values,
+             const std::string& owner);
+
+  // Whether the value was given (rather than defaulted).
+  bool has(const std::string& name) const { return values_.contains(name); }
+
+  // The value given, else the declared default. Reading a parameter that was not declared, in
+  // another type than declared, or without a default through these is a bug of the caller: it
+  // throws std::logic_error.
+  bool get_bool(const std::string& name) const;
+  int64_t get_int(const std::string& name) const;
+  double get_double(const std::string& name) const;
+  std::string get_string(const std::string& name) const;
+
+  // For parameters declared with computed_parameter(): the value given, else `fallback`.
+  bool get_bool(const std::string& name, bool fallback) const;
+  int64_t get_int(const std::string& name, int64_t fallback) const;
+  double get_double(const std::string& name, double fallback) const;
+  std::string get_string(const std::string& name, const std::string& fallback) const;
+
+  const std::vector<ParameterInfo>& declared() const { return declared_; }
+  // The values given, as text.
+  const std::map<std::string, std::string>& values() const { return values_; }
+  // Every declared parameter with the value it takes: given, else its default; parameters
+  // without a static default appear only when given.
+  std::map<std::string, std::string> effective() const;
+
+ private:
+  const ParameterInfo& declaration(const std::string& name, ParameterType type) const;
+  std::optional<std::string> text(const std::string& name, ParameterType type) const;
+
+  std::vector<ParameterInfo> declared_;
+  std::map<std::string, std::string> values_;
+  std::string owner_;
+};
+
+// Converts `text` as a value of `type` would be read; throws std::invalid_argument saying why
+// not. Used to check values and defaults before anything runs.
+void check_value(ParameterType type, const std::string& text);
+
+}  // namespace robotperf::plugin

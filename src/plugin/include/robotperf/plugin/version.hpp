@@ -1,0 +1,7 @@
+// The version of the plug-in API. A plug-in records the version it was built against
+// (ROBOTPERF_PLUGIN in plugin.hpp); robotperf refuses a plug-in built against another one,
+// because the types it registers would not be laid out as robotperf expects.
+#pragma once
+
+// Raised whenever a type or function a plug-in sees changes incompatibly.
+#define ROBOTPERF_PLUGIN_API_VERSION 1

@@ -1,0 +1,310 @@
+#include "robotperf/plugin/registry.hpp"
+
+#include <dlfcn.h>
+
+#include <algorithm>
+#include <cctype>
+#include <deque>
+#include <map>
+#include <set>
+
+#include "robotperf/msgs/known_types.hpp"
+#include "robotperf/plugin/version.hpp"
+
+namespace robotperf::plugin {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool known_type(const std::string& ros_type) {
+  return msgs::with_message_type(ros_type, []<class T>() {});
+}
+
+void check_name(const std::string& what, const std::string& name) {
+  if (name.empty()) throw std::invalid_argument(what + " without a name");
+  for (unsigned char c : name) {
+    if (std::isspace(c) || !std::isprint(c))
+      throw std::invalid_argument(what + " '" + name + "': names are printable, without spaces");
+  }
+}
+
+void check_type(const std::string& who, const std::string& type) {
+  if (!known_type(type)) {
+    throw std::invalid_argument(who + ": message type '" + type +
+                                "' is not one robotperf knows (robotperf/msgs/known_types.hpp)");
+  }
+}
+
+void check_parameters(const std::string& who, const std::vector<ParameterInfo>& parameters) {
+  std::set<std::string> names;
+  for (const auto& p : parameters) {
+    check_name(who + ": parameter", p.name);
+    if (!names.insert(p.name).second)
+      throw std::invalid_argument(who + ": parameter '" + p.name + "' declared twice");
+    if (p.default_value) {
+      try {
+        check_value(p.type, *p.default_value);
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(who + ": default of parameter '" + p.name + "': " + e.what());
+      }
+    }
+  }
+}
+
+void check_kernel(const KernelInfo& info, const KernelFactory& factory) {
+  check_name("kernel", info.name);
+  const std::string who = "kernel " + info.name;
+  if (!factory) throw std::invalid_argument(who + ": no factory");
+  if (info.backends.empty()) throw std::invalid_argument(who + ": no backend");
+  std::set<std::string> ports;
+  for (const auto* list : {&info.inputs, &info.outputs}) {
+    for (const auto& port : *list) {
+      check_name(who + ": port", port.name);
+      if (!ports.insert(port.name).second)
+        throw std::invalid_argument(who + ": port '" + port.name + "' declared twice");
+      if (!port.type.empty()) check_type(who + " port " + port.name, port.type);
+    }
+  }
+  check_parameters(who, info.parameters);
+  if (info.control_loop) {
+    const auto rate =
+        std::ranges::find(info.parameters, info.control_loop->rate_parameter, &ParameterInfo::name);
+    if (rate == info.parameters.end() || rate->type != ParameterType::kDouble ||
+        !rate->default_value) {
+      throw std::invalid_argument(who + ": control loop rate parameter '" +
+                                  info.control_loop->rate_parameter +
+                                  "' is not a declared double parameter with a default");
+    }
+  }
+}
+
+void check_dataset(const DatasetInfo& info, const DatasetGenerator& generator) {
+  check_name("dataset", info.name);
+  const std::string who = "dataset " + info.name;
+  if (!generator) throw std::invalid_argument(who + ": no generator");
+  if (!(info.rate_hz > 0)) throw std::invalid_argument(who + ": rate_hz must be positive");
+  if (info.streams.empty()) throw std::invalid_argument(who + ": no stream");
+  std::set<std::string> names;
+  for (const auto& s : info.streams) {
+    check_name(who + ": stream", s.name);
+    if (!names.insert(s.name).second)
+      throw std::invalid_argument(who + ": stream '" + s.name + "' declared twice");
+    check_type(who + " stream " + s.name, s.type);
+    try {
+      rmw::dds_topic_name(s.topic);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(who + " stream " + s.name + ": " + e.what());
+    }
+  }
+  check_parameters(who, info.workload);
+}
+
+void check_evaluator(const EvaluatorInfo& info, const EvaluatorFactory& factory) {
+  check_name("evaluator", info.name);
+  const std::string who = "evaluator " + info.name;
+  if (!factory) throw std::invalid_argument(who + ": no factory");
+  check_type(who + " output", info.output_type);
+  if (!info.observed_truth_type.empty())
+    check_type(who + " observed truth", info.observed_truth_type);
+  if (info.truth_roles.empty()) throw std::invalid_argument(who + ": no truth role");
+  std::set<std::string> roles, metrics;
+  for (const auto& r : info.truth_roles) {
+    check_name(who + ": truth role", r);
+    if (!roles.insert(r).second)
+      throw std::invalid_argument(who + ": truth role '" + r + "' declared twice");
+  }
+  if (info.metrics.empty()) throw std::invalid_argument(who + ": no metric");
+  for (const auto& m : info.metrics) {
+    check_name(who + ": metric", m.name);
+    if (!metrics.insert(m.name).second)
+      throw std::invalid_argument(who + ": metric '" + m.name + "' declared twice");
+  }
+  check_parameters(who, info.parameters);
+}
+
+// Collects what one registration adds, checking each description as it comes.
+class StagingRegistrar final : public Registrar {
+ public:
+  void add_kernel(KernelInfo info, KernelFactory factory) override {
+    check_kernel(info, factory);
+    kernels.push_back({std::move(info), std::move(factory), {}});
+  }
+  void add_dataset(DatasetInfo info, DatasetGenerator generator) override {
+    check_dataset(info, generator);
+    datasets.push_back({std::move(info), std::move(generator), {}});
+  }
+  void add_evaluator(EvaluatorInfo info, EvaluatorFactory factory) override {
+    check_evaluator(info, factory);
+    evaluators.push_back({std::move(info), std::move(factory), {}});
+  }
+
+  std::vector<KernelEntry> kernels;
+  std::vector<DatasetEntry> datasets;
+  std::vector<EvaluatorEntry> evaluators;
+};
+
+template <class Entry>
+const Entry* find_in(const std::map<std::string, Entry>& entries, const std::string& name) {
+  auto it = entries.find(name);
+  return it == entries.end() ? nullptr : &it->second;
+}
+
+template <class Entry>
+std::vector<const Entry*> all_of(const std::map<std::string, Entry>& entries) {
+  std::vector<const Entry*> out;
+  for (const auto& [name, e] : entries) out.push_back(&e);
+  return out;
+}
+
+// The registered name clashes with one already there or with another of the same registration.
+template <class Entry>
+void check_unique(const char* what, const std::vector<Entry>& staged,
+                  const std::map<std::string, Entry>& existing) {
+  std::set<std::string> names;
+  for (const auto& e : staged) {
+    if (auto it = existing.find(e.info.name); it != existing.end()) {
+      throw std::invalid_argument(std::string(what) + " '" + e.info.name +
+                                  "' is already registered by " + it->second.origin);
+    }
+    if (!names.insert(e.info.name).second)
+      throw std::invalid_argument(std::string(what) + " '" + e.info.name + "' registered twice");
+  }
+}
+
+template <class Entry>
+void commit(std::vector<Entry>& staged, std::map<std::string, Entry>& into,
+            const std::string& origin) {
+  for (auto& e : staged) {
+    e.origin = origin;
+    std::string name = e.info.name;
+    into.emplace(std::move(name), std::move(e));
+  }
+}
+
+}  // namespace
+
+struct Registry::State {
+  // std::map: entries never move, so the pointers handed out stay valid.
+  std::map<std::string, KernelEntry> kernels;
+  std::map<std::string, DatasetEntry> datasets;
+  std::map<std::string, EvaluatorEntry> evaluators;
+  std::vector<fs::path> plugins;
+};
+
+Registrar::~Registrar() = default;
+
+Registry::Registry() : state_(std::make_unique<State>()) {}
+Registry::~Registry() = default;
+
+void Registry::add(const std::string& origin, const std::function<void(Registrar&)>& register_all) {
+  add_as(origin, origin, register_all);
+}
+
+void Registry::add_as(const std::string& origin, const std::string& label,
+                      const std::function<void(Registrar&)>& register_all) {
+  StagingRegistrar staged;
+  try {
+    register_all(staged);
+  } catch (const std::exception& e) {
+    throw PluginError(label + ": registration failed: " + e.what());
+  } catch (...) {
+    throw PluginError(label +
+                      ": registration failed with an exception that is not a "
+                      "std::exception");
+  }
+  std::lock_guard lock(mutex_);
+  try {
+    check_unique("kernel", staged.kernels, state_->kernels);
+    check_unique("dataset", staged.datasets, state_->datasets);
+    check_unique("evaluator", staged.evaluators, state_->evaluators);
+  } catch (const std::invalid_argument& e) {
+    throw PluginError(label + ": " + e.what());
+  }
+  commit(staged.kernels, state_->kernels, origin);
+  commit(staged.datasets, state_->datasets, origin);
+  commit(staged.evaluators, state_->evaluators, origin);
+}
+
+void Registry::load(const fs::path& file) {
+  std::error_code ec;
+  const fs::path path = fs::canonical(file, ec);
+  if (ec) throw PluginError("plug-in " + file.string() + ": file not found");
+  {
+    std::lock_guard lock(mutex_);
+    if (std::ranges::count(state_->plugins, path)) return;
+  }
+  const std::string where = "plug-in " + path.string();
+  // RTLD_LOCAL: two plug-ins may define the same internal names without clashing.
+  void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (handle == nullptr) {
+    const char* why = dlerror();
+    throw PluginError(where +
+                      ": cannot be loaded as a shared library: " + (why ? why : "unknown error"));
+  }
+  using VersionFunction = int (*)();
+  using RegisterFunction = void (*)(Registrar&);
+  auto version = reinterpret_cast<VersionFunction>(dlsym(handle, "robotperf_plugin_api_version"));
+  auto register_all =
+      reinterpret_cast<RegisterFunction>(dlsym(handle, "robotperf_plugin_register"));
+  if (version == nullptr || register_all == nullptr) {
+    dlclose(handle);
+    throw PluginError(where +
+                      ": not a robotperf plug-in (it has no robotperf_plugin_api_version and "
+                      "robotperf_plugin_register; define them with ROBOTPERF_PLUGIN from "
+                      "robotperf/plugin.hpp)");
+  }
+  if (const int v = version(); v != ROBOTPERF_PLUGIN_API_VERSION) {
+    dlclose(handle);
+    throw PluginError(where + ": built against plug-in API version " + std::to_string(v) +
+                      ", this robotperf has version " +
+                      std::to_string(ROBOTPERF_PLUGIN_API_VERSION) +
+                      ": rebuild it against this robotperf");
+  }
+  // The library stays loaded for the life of the process: its factories and the code of the
+  // nodes they build live in it.
+  add_as(path.string(), where, [&](Registrar& r) { register_all(r); });
+  std::lock_guard lock(mutex_);
+  state_->plugins.push_back(path);
+}
+
+const KernelEntry* Registry::find_kernel(const std::string& name) const {
+  std::lock_guard lock(mutex_);
+  return find_in(state_->kernels, name);
+}
+
+const DatasetEntry* Registry::find_dataset(const std::string& name) const {
+  std::lock_guard lock(mutex_);
+  return find_in(state_->datasets, name);
+}
+
+const EvaluatorEntry* Registry::find_evaluator(const std::string& name) const {
+  std::lock_guard lock(mutex_);
+  return find_in(state_->evaluators, name);
+}
+
+std::vector<const KernelEntry*> Registry::kernels() const {
+  std::lock_guard lock(mutex_);
+  return all_of(state_->kernels);
+}
+
+std::vector<const DatasetEntry*> Registry::datasets() const {
+  std::lock_guard lock(mutex_);
+  return all_of(state_->datasets);
+}
+
+std::vector<const EvaluatorEntry*> Registry::evaluators() const {
+  std::lock_guard lock(mutex_);
+  return all_of(state_->evaluators);
+}
+
+std::vector<fs::path> Registry::plugins() const {
+  std::lock_guard lock(mutex_);
+  return state_->plugins;
+}
+
+Registry& registry() {
+  static Registry instance;
+  return instance;
+}
+
+}  // namespace robotperf::plugin

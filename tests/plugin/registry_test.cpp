@@ -1,0 +1,144 @@
+// The registry: what a registration adds is checked, and kept only if all of it is.
+#include "robotperf/plugin/registry.hpp"
+
+#include <gtest/gtest.h>
+
+namespace robotperf::plugin {
+namespace {
+
+KernelInfo kernel(const std::string& name) {
+  return {.name = name,
+          .description = "test",
+          .inputs = {{"in", "sensor_msgs/msg/Image"}},
+          .outputs = {{"out", "sensor_msgs/msg/Image"}},
+          .parameters = {int_parameter("n", 1, "n")}};
+}
+
+KernelFactory no_node() {
+  return
+      [](graph::Context&, const KernelConfig&) -> std::shared_ptr<graph::Node> { return nullptr; };
+}
+
+std::string error_of(Registry& r, const std::string& origin,
+                     const std::function<void(Registrar&)>& fn) {
+  try {
+    r.add(origin, fn);
+  } catch (const PluginError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Registry, AddsWhatARegistrationRegistersWithItsOrigin) {
+  Registry r;
+  r.add("lib_a.so", [](Registrar& reg) { reg.add_kernel(kernel("a/k"), no_node()); });
+  const KernelEntry* k = r.find_kernel("a/k");
+  ASSERT_NE(k, nullptr);
+  EXPECT_EQ(k->origin, "lib_a.so");
+  EXPECT_EQ(k->info.find_port("out")->type, "sensor_msgs/msg/Image");
+  EXPECT_EQ(r.find_kernel("a/other"), nullptr);
+  EXPECT_EQ(r.kernels().size(), 1u);
+}
+
+TEST(Registry, ANameTakenByAnotherOriginIsRefusedNamingBoth) {
+  Registry r;
+  r.add("first.so", [](Registrar& reg) { reg.add_kernel(kernel("a/k"), no_node()); });
+  const std::string e = error_of(r, "second.so", [](Registrar& reg) {
+    reg.add_kernel(kernel("b/k"), no_node());
+    reg.add_kernel(kernel("a/k"), no_node());
+  });
+  EXPECT_NE(e.find("second.so"), std::string::npos) << e;
+  EXPECT_NE(e.find("'a/k' is already registered by first.so"), std::string::npos) << e;
+  // All or nothing: b/k, registered first, is not kept either.
+  EXPECT_EQ(r.find_kernel("b/k"), nullptr);
+}
+
+TEST(Registry, ARegistrationThatThrowsAddsNothing) {
+  Registry r;
+  const std::string e = error_of(r, "broken.so", [](Registrar& reg) {
+    reg.add_kernel(kernel("c/k"), no_node());
+    throw std::runtime_error("device not found");
+  });
+  EXPECT_NE(e.find("broken.so: registration failed: device not found"), std::string::npos) << e;
+  EXPECT_EQ(r.find_kernel("c/k"), nullptr);
+}
+
+TEST(Registry, UnusableDescriptionsAreRefused) {
+  const std::vector<std::pair<std::string, std::function<void(Registrar&)>>> cases{
+      {"is not one robotperf knows",
+       [](Registrar& reg) {
+         KernelInfo k = kernel("d/k");
+         k.inputs[0].type = "my_msgs/msg/Unknown";
+         reg.add_kernel(k, no_node());
+       }},
+      {"port 'in' declared twice",
+       [](Registrar& reg) {
+         KernelInfo k = kernel("d/k");
+         k.outputs[0].name = "in";
+         reg.add_kernel(k, no_node());
+       }},
+      {"default of parameter 'n'",
+       [](Registrar& reg) {
+         KernelInfo k = kernel("d/k");
+         k.parameters[0].default_value = "many";
+         reg.add_kernel(k, no_node());
+       }},
+      {"without a name", [](Registrar& reg) { reg.add_kernel(kernel(""), no_node()); }},
+      {"no backend",
+       [](Registrar& reg) {
+         KernelInfo k = kernel("d/k");
+         k.backends.clear();
+         reg.add_kernel(k, no_node());
+       }},
+      {"control loop rate parameter",
+       [](Registrar& reg) {
+         KernelInfo k = kernel("d/k");
+         k.control_loop = ControlLoopInfo{"rate", 2};
+         reg.add_kernel(k, no_node());
+       }},
+      {"no generator",
+       [](Registrar& reg) {
+         reg.add_dataset({.name = "d/ds",
+                          .rate_hz = 1,
+                          .streams = {{"s", "/s", "sensor_msgs/msg/Image", false, ""}}},
+                         nullptr);
+       }},
+      {"topic",
+       [](Registrar& reg) {
+         reg.add_dataset({.name = "d/ds",
+                          .rate_hz = 1,
+                          .streams = {{"s", "not a topic", "sensor_msgs/msg/Image", false, ""}}},
+                         [](const Parameters&) { return std::vector<DatasetStream>{}; });
+       }},
+      {"no metric",
+       [](Registrar& reg) {
+         reg.add_evaluator(
+             {.name = "d/ev", .output_type = "sensor_msgs/msg/Image", .truth_roles = {"truth"}},
+             [](const TruthStreams&, const Parameters&) {
+               return std::unique_ptr<FunctionalEvaluator>();
+             });
+       }},
+  };
+  for (const auto& [problem, fn] : cases) {
+    Registry r;
+    const std::string e = error_of(r, "x.so", fn);
+    EXPECT_NE(e.find(problem), std::string::npos) << problem << ": " << e;
+    EXPECT_TRUE(r.kernels().empty() && r.datasets().empty() && r.evaluators().empty());
+  }
+}
+
+TEST(Registry, KernelsDatasetsAndEvaluatorsHaveTheirOwnNames) {
+  Registry r;
+  r.add("x.so", [](Registrar& reg) {
+    reg.add_kernel(kernel("same/name"), no_node());
+    reg.add_dataset({.name = "same/name",
+                     .rate_hz = 1,
+                     .streams = {{"s", "/s", "sensor_msgs/msg/Image", false, ""}}},
+                    [](const Parameters&) { return std::vector<DatasetStream>{}; });
+  });
+  EXPECT_NE(r.find_kernel("same/name"), nullptr);
+  EXPECT_NE(r.find_dataset("same/name"), nullptr);
+}
+
+}  // namespace
+}  // namespace robotperf::plugin
