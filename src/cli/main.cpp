@@ -1,4 +1,5 @@
 // robotperf: the command-line front end.
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -93,7 +94,10 @@ struct SchedulingArgs {
 
   harness::SchedulingOptions options() const {
     harness::SchedulingOptions o;
-    if (!cpus.empty()) o.cpus = harness::parse_cpu_list(cpus);
+    if (!cpus.empty()) {
+      o.cpus = harness::parse_cpu_list(cpus);
+      harness::check_cpus_allowed(o.cpus);
+    }
     o.rt_priority = rt_priority;
     o.lock_memory = lock_memory;
     return o;
@@ -144,6 +148,27 @@ std::vector<fs::path> benchmark_roots(const std::vector<std::string>& flags) {
 }
 
 using Roots = std::vector<fs::path>;
+
+// Creates `folder` if needed and checks that a file can be written in it; throws
+// std::invalid_argument naming `option` and the reason.
+void require_writable_folder(const fs::path& folder, const std::string& option) {
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  const fs::path probe = folder / (".robotperf-write-check-" + std::to_string(getpid()));
+  if (!ec) {
+    const int fd = open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (fd < 0) {
+      ec.assign(errno, std::generic_category());
+    } else {
+      close(fd);
+      fs::remove(probe, ec);
+    }
+  }
+  if (ec) {
+    throw std::invalid_argument(option + " " + folder.string() + ": cannot write there (" +
+                                ec.message() + "); give a folder you can write to");
+  }
+}
 
 int list_benchmarks(const Roots& roots) {
   std::vector<std::string> broken;
@@ -305,8 +330,10 @@ int run(const Roots& roots, const RunArgs& a) {
       if (sent == total) std::fputc('\n', stderr);
     };
   }
-  // Fail on an unwritable output folder before spending time on the run.
-  fs::create_directories(a.output);
+  // Fail on an unwritable output folder, or a sub-buffer size LTTng refuses, before spending time
+  // on the run.
+  require_writable_folder(a.output, "--output");
+  if (a.mode == "grey" && a.trace_subbuf != 0) tracing::check_subbuffer_bytes(a.trace_subbuf);
   if (a.mode == "grey") {
     o.mode = harness::RunMode::kGrey;
     // Recorded under a temporary name, renamed after the results file once the run is named.
@@ -752,6 +779,12 @@ int main(int argc, char** argv) {
   SchedulingArgs node_scheduling;
   add_scheduling_options(node_cmd, node_scheduling);
 
+  // Without a command: what the commands are, not only that one is missing.
+  if (argc == 1) {
+    std::cerr << app.help()
+              << "robotperf: give a command (robotperf list, robotperf run a1, ...)\n";
+    return kExitUsage;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

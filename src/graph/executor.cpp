@@ -91,7 +91,7 @@ bool Executor::run_ready_work(int64_t& next_deadline) {
         did_work |= entity->execute();
         next_deadline = std::min(next_deadline, entity->next_deadline_ns());
       } catch (const std::exception& e) {
-        throw std::runtime_error("node '" + node->name() + "': " + e.what());
+        throw NodeError(node->name(), e.what());
       }
     }
   }

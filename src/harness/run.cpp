@@ -335,6 +335,17 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   if (std::string f = failure(); !f.empty()) r.errors.push_back(f);
   graph_executor.stop();
   monitor_executor.stop();
+  if (auto e = graph_executor.error()) {
+    // The node whose callback threw ended the run: say so in its report, as for a child.
+    try {
+      std::rethrow_exception(e);
+    } catch (const graph::NodeError& failed) {
+      for (auto& n : r.nodes) {
+        if (n.name == failed.node()) n.exit_status = "its callback threw during the run";
+      }
+    } catch (...) {
+    }
+  }
   if (children) {
     r.nodes = children->shutdown(5.0);
     for (const auto& wire : children->control_loops()) {

@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
+#include <stdexcept>
 #include <thread>
 
 extern char** environ;
@@ -144,7 +145,18 @@ std::size_t subbuffer_bytes_for(double events_per_second) {
   return size;
 }
 
+void check_subbuffer_bytes(std::size_t bytes) {
+  const auto page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  constexpr std::size_t kMax = std::size_t{1} << 30;
+  if (bytes < page || bytes > kMax || (bytes & (bytes - 1)) != 0) {
+    throw std::invalid_argument("trace sub-buffer size " + std::to_string(bytes) +
+                                " bytes: LTTng takes a power of two from the page size (" +
+                                std::to_string(page) + ") to 1 GiB, e.g. 262144");
+  }
+}
+
 RecordingSession::RecordingSession(SessionOptions options) : options_(std::move(options)) {
+  if (options_.subbuf_bytes != 0) check_subbuffer_bytes(options_.subbuf_bytes);
   std::string why;
   if (!lttng_available(&why)) throw TracingUnavailable(why);
   if (options_.subbuf_bytes == 0) options_.subbuf_bytes = subbuffer_bytes_for(0);

@@ -5,6 +5,7 @@
 #include <exception>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -16,6 +17,17 @@ namespace robotperf::graph {
 // Runs the callbacks of its nodes. With one thread it is rclcpp's
 // single-threaded executor; with more, callbacks of different nodes run in
 // parallel while each node's own callbacks stay mutually exclusive.
+// A callback of a node threw: the node's name, and what it threw.
+class NodeError : public std::runtime_error {
+ public:
+  NodeError(std::string node, const std::string& what)
+      : std::runtime_error("node '" + node + "': " + what), node_(std::move(node)) {}
+  const std::string& node() const { return node_; }
+
+ private:
+  std::string node_;
+};
+
 class Executor {
  public:
   explicit Executor(std::size_t threads = 1);
