@@ -397,6 +397,7 @@ int analyze(const TraceArgs& a) {
           {"measured", analysis.measured},
           {"matched", analysis.matched},
           {"lost", analysis.lost},
+          {"unobserved", analysis.unobserved},
           {"duplicates", analysis.duplicates},
           {"unknown", analysis.unknown},
           {"latency_ms",

@@ -226,6 +226,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"measured", r.measured},
         {"matched", r.matched},
         {"lost", r.lost},
+        {"unobserved", r.unobserved},
         {"loss_percent", r.loss_percent},
         {"duplicates", r.duplicates},
         {"unknown", r.unknown},
@@ -317,6 +318,7 @@ std::string summary_table(const harness::RunResult& r) {
       << " %)";
   if (r.duplicates) out << ", duplicates " << r.duplicates;
   if (r.unknown) out << ", unknown " << r.unknown;
+  if (r.unobserved) out << ", unobserved " << r.unobserved << " (trace events discarded)";
   if (r.repeats) out << ", state repeats " << r.repeats;
   out << "\n\n";
   char line[256];

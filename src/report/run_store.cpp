@@ -143,8 +143,11 @@ std::vector<std::string> impossible_figures(const StoredRun& run) {
     out.push_back(std::to_string(run.matched) + " matched of " + std::to_string(run.measured) +
                   " measured");
   }
-  if (run.measured > 0 && run.lost != run.measured - std::min(run.matched, run.measured))
-    out.push_back("lost " + std::to_string(run.lost) + " is not measured - matched");
+  if (run.measured > 0 &&
+      run.lost + run.unobserved != run.measured - std::min(run.matched, run.measured)) {
+    out.push_back("lost " + std::to_string(run.lost) + " is not measured - matched" +
+                  (run.unobserved ? " - unobserved" : ""));
+  }
   if (run.throughput_hz < 0) out.push_back("throughput " + fmt(run.throughput_hz) + " Hz < 0");
   if (run.power_w && !(*run.power_w >= 0)) out.push_back("power " + fmt(*run.power_w) + " W");
   return out;
@@ -211,6 +214,7 @@ StoredRun load_run(const fs::path& path) {
     run.measured = count_of(counts, "measured", "counts.measured");
     run.matched = count_of(counts, "matched", "counts.matched");
     run.lost = count_of(counts, "lost", "counts.lost");
+    run.unobserved = count_of(counts, "unobserved", "counts.unobserved");
     run.latency = latency_summary(member(latency, "from_scheduled"));
   } catch (const ReportError& e) {
     throw ReportError(path.string() + ": " + e.what());

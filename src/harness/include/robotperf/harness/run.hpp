@@ -131,6 +131,8 @@ struct RunResult {
   std::size_t measured = 0;
   std::size_t matched = 0;
   std::size_t lost = 0;
+  // Grey-box: measured messages whose output event the tracer may have discarded (not lost).
+  std::size_t unobserved = 0;
   std::size_t duplicates = 0;
   std::size_t unknown = 0;
   std::size_t repeats = 0;  // state outputs: further receptions of an ID (not an error)
