@@ -1,9 +1,11 @@
 // robotperf: the command-line front end.
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -254,6 +256,43 @@ struct RunArgs {
   std::string mode = "black";
   std::size_t trace_subbuf = 0;
   std::vector<std::string> plugins;  // --plugin: loaded by per-node children too
+  double callback_timeout_s = 30.0;
+};
+
+// The first SIGINT or SIGTERM ends the run cleanly (the harness polls this); a second one ends
+// the process at once.
+std::atomic<int> g_interrupted{0};
+
+void on_interrupt(int signal_number) {
+  if (g_interrupted.exchange(signal_number) != 0) {
+    constexpr char kMessage[] = "\nrobotperf: interrupted again: stopping now\n";
+    (void)!write(STDERR_FILENO, kMessage, sizeof kMessage - 1);
+    harness::kill_node_processes();
+    _exit(128 + signal_number);
+  }
+  constexpr char kMessage[] =
+      "\nrobotperf: interrupted: ending the run, keeping what it measured (again to force)\n";
+  (void)!write(STDERR_FILENO, kMessage, sizeof kMessage - 1);
+}
+
+// Handles SIGINT and SIGTERM while it lives.
+class InterruptHandling {
+ public:
+  InterruptHandling() {
+    struct sigaction action {};
+    action.sa_handler = on_interrupt;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, &previous_int_);
+    sigaction(SIGTERM, &action, &previous_term_);
+  }
+  ~InterruptHandling() {
+    sigaction(SIGINT, &previous_int_, nullptr);
+    sigaction(SIGTERM, &previous_term_, nullptr);
+  }
+
+ private:
+  struct sigaction previous_int_ {};
+  struct sigaction previous_term_ {};
 };
 
 // "--remap from:=to" and "--window START:END" (seconds, either may be empty).
@@ -323,6 +362,8 @@ int run(const Roots& roots, const RunArgs& a) {
   o.power = a.power.options();
   o.scheduling = a.scheduling.options();
   o.strict = a.strict;
+  o.callback_timeout_s = a.callback_timeout_s;
+  o.interrupted = &g_interrupted;
   if (!a.quiet && isatty(STDERR_FILENO)) {
     o.progress = [&](std::size_t sent, std::size_t total, std::size_t received) {
       std::fprintf(stderr, "\r[%s] sent %zu/%zu  received %zu ", spec.id.c_str(), sent, total,
@@ -341,7 +382,18 @@ int run(const Roots& roots, const RunArgs& a) {
     o.trace_subbuf_bytes = a.trace_subbuf;
   }
 
-  auto result = harness::run_benchmark(spec, o);
+  harness::RunResult result;
+  {
+    const InterruptHandling interrupts;
+    try {
+      result = harness::run_benchmark(spec, o);
+    } catch (...) {
+      // Nothing of a run that did not happen is left behind.
+      std::error_code ec;
+      if (!o.trace_dir.empty()) fs::remove_all(o.trace_dir, ec);
+      throw;
+    }
+  }
   const fs::path base = fs::path(a.output) / report::result_basename(result);
   if (result.grey) {
     const fs::path trace = base.string() + ".trace";
@@ -371,7 +423,16 @@ int run(const Roots& roots, const RunArgs& a) {
     std::cout << "report: " << base.string() << ".report.html\n";
   }
   const bool functional_ok = !result.functional || result.functional->valid;
-  return result.valid && functional_ok ? kExitOk : kExitInvalidResult;
+  int code = result.valid && functional_ok ? kExitOk : kExitInvalidResult;
+  if (result.interrupted) code = 128 + g_interrupted.load();
+  if (result.threads_abandoned) {
+    // A callback that never returned still runs on objects that must never be destroyed: end
+    // here, with everything written, without running destructors.
+    std::cout.flush();
+    std::fflush(nullptr);
+    std::_Exit(code);
+  }
+  return code;
 }
 
 struct TraceArgs {
@@ -617,6 +678,11 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--update-rate", ra.update_rate,
                       "control benchmarks: the controller manager's loop rate in Hz (default: "
                       "the graph's update_rate), e.g. 1000 to stress the loop");
+  run_cmd
+      ->add_option("--callback-timeout", ra.callback_timeout_s,
+                   "seconds a node's callback may run before the run ends with the node named "
+                   "as hung (default 30)")
+      ->check(CLI::PositiveNumber);
   run_cmd->add_option("--rate-scale", ra.rate_scale, "with --rate bag: play this many times faster")
       ->check(CLI::PositiveNumber);
   auto* dataset_opt = run_cmd->add_option(
@@ -777,6 +843,8 @@ int main(int argc, char** argv) {
   node_cmd->add_option("--domain", node_domain);
   std::optional<double> node_update_rate;
   node_cmd->add_option("--update-rate", node_update_rate);
+  double node_callback_timeout_s = 30.0;
+  node_cmd->add_option("--callback-timeout", node_callback_timeout_s);
   SchedulingArgs node_scheduling;
   add_scheduling_options(node_cmd, node_scheduling);
 
@@ -841,11 +909,14 @@ int main(int argc, char** argv) {
       harness::BenchmarkSpec spec = harness::load_benchmark(node_package);
       if (node_update_rate) harness::override_update_rate(spec, *node_update_rate);
       return harness::run_node_process(spec, node_name, node_rmw, node_domain,
-                                       node_scheduling.options());
+                                       node_scheduling.options(), node_callback_timeout_s);
     }
   } catch (const plugin::PluginError& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
     return kExitUsage;
+  } catch (const harness::RunInterrupted& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return 128 + g_interrupted.load();
   } catch (const harness::RunRefused& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
     return kExitRefused;

@@ -245,6 +245,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"resources", metrics::to_json(r.resources)},
       {"nodes", nodes},
       {"completed", r.completed},
+      {"interrupted", r.interrupted},
       {"errors", r.errors},
       {"validity", {{"valid", r.valid}, {"reasons", r.invalid_reasons}}},
       {"functional", functional_json(r.functional)},
