@@ -44,28 +44,28 @@ constexpr FoldConstants fold_by(unsigned bits) {
 
 constexpr std::size_t kBlock = 256;  // four 512-bit registers
 
-// Only the functions in this region use AVX-512; crc32() calls them after checking the CPU.
-#pragma GCC push_options
-#pragma GCC target("avx512f,avx512vl,vpclmulqdq")
+// Only the functions marked so use AVX-512; crc32() calls them after checking the CPU. (A function
+// attribute, not a `#pragma GCC target` region: clang honours only the attribute.)
+#define ROBOTPERF_AVX512_CLMUL __attribute__((target("avx512f,avx512vl,vpclmulqdq")))
 
-__m512i fold(__m512i lanes, __m512i k) {
+ROBOTPERF_AVX512_CLMUL __m512i fold(__m512i lanes, __m512i k) {
   return _mm512_xor_si512(_mm512_clmulepi64_epi128(lanes, k, 0x00),
                           _mm512_clmulepi64_epi128(lanes, k, 0x11));
 }
 
 // The constants of one fold per lane, the lane-0 ones first.
-__m512i per_lane(FoldConstants k0, FoldConstants k1, FoldConstants k2, FoldConstants k3) {
+ROBOTPERF_AVX512_CLMUL __m512i per_lane(FoldConstants k0, FoldConstants k1, FoldConstants k2, FoldConstants k3) {
   auto q = [](uint64_t v) { return static_cast<long long>(v); };
   return _mm512_set_epi64(q(k3.high), q(k3.low), q(k2.high), q(k2.low), q(k1.high), q(k1.low),
                           q(k0.high), q(k0.low));
 }
 
-__m512i load(const uint8_t* at) {
+ROBOTPERF_AVX512_CLMUL __m512i load(const uint8_t* at) {
   return _mm512_loadu_si512(at);
 }
 
 // Needs at least kBlock bytes.
-uint32_t crc32_vpclmulqdq(const uint8_t* p, std::size_t n, uint32_t crc) {
+ROBOTPERF_AVX512_CLMUL uint32_t crc32_vpclmulqdq(const uint8_t* p, std::size_t n, uint32_t crc) {
   static constexpr FoldConstants k2048 = fold_by(8 * kBlock), k512 = fold_by(512),
                                  k384 = fold_by(384), k256 = fold_by(256), k128 = fold_by(128);
   // The running CRC, inverted as the register of the byte-wise algorithm, enters as the first
@@ -105,7 +105,7 @@ uint32_t crc32_vpclmulqdq(const uint8_t* p, std::size_t n, uint32_t crc) {
   return libdeflate_crc32(so_far, p, n);
 }
 
-#pragma GCC pop_options
+#undef ROBOTPERF_AVX512_CLMUL
 
 bool has_vpclmulqdq() {
   static const bool has = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&

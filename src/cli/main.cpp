@@ -1,8 +1,11 @@
 // robotperf: the command-line front end.
+#include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -93,7 +96,10 @@ struct SchedulingArgs {
 
   harness::SchedulingOptions options() const {
     harness::SchedulingOptions o;
-    if (!cpus.empty()) o.cpus = harness::parse_cpu_list(cpus);
+    if (!cpus.empty()) {
+      o.cpus = harness::parse_cpu_list(cpus);
+      harness::check_cpus_allowed(o.cpus);
+    }
     o.rt_priority = rt_priority;
     o.lock_memory = lock_memory;
     return o;
@@ -144,6 +150,27 @@ std::vector<fs::path> benchmark_roots(const std::vector<std::string>& flags) {
 }
 
 using Roots = std::vector<fs::path>;
+
+// Creates `folder` if needed and checks that a file can be written in it; throws
+// std::invalid_argument naming `option` and the reason.
+void require_writable_folder(const fs::path& folder, const std::string& option) {
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  const fs::path probe = folder / (".robotperf-write-check-" + std::to_string(getpid()));
+  if (!ec) {
+    const int fd = open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (fd < 0) {
+      ec.assign(errno, std::generic_category());
+    } else {
+      close(fd);
+      fs::remove(probe, ec);
+    }
+  }
+  if (ec) {
+    throw std::invalid_argument(option + " " + folder.string() + ": cannot write there (" +
+                                ec.message() + "); give a folder you can write to");
+  }
+}
 
 int list_benchmarks(const Roots& roots) {
   std::vector<std::string> broken;
@@ -229,6 +256,43 @@ struct RunArgs {
   std::string mode = "black";
   std::size_t trace_subbuf = 0;
   std::vector<std::string> plugins;  // --plugin: loaded by per-node children too
+  double callback_timeout_s = 30.0;
+};
+
+// The first SIGINT or SIGTERM ends the run cleanly (the harness polls this); a second one ends
+// the process at once.
+std::atomic<int> g_interrupted{0};
+
+void on_interrupt(int signal_number) {
+  if (g_interrupted.exchange(signal_number) != 0) {
+    constexpr char kMessage[] = "\nrobotperf: interrupted again: stopping now\n";
+    (void)!write(STDERR_FILENO, kMessage, sizeof kMessage - 1);
+    harness::kill_node_processes();
+    _exit(128 + signal_number);
+  }
+  constexpr char kMessage[] =
+      "\nrobotperf: interrupted: ending the run, keeping what it measured (again to force)\n";
+  (void)!write(STDERR_FILENO, kMessage, sizeof kMessage - 1);
+}
+
+// Handles SIGINT and SIGTERM while it lives.
+class InterruptHandling {
+ public:
+  InterruptHandling() {
+    struct sigaction action {};
+    action.sa_handler = on_interrupt;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, &previous_int_);
+    sigaction(SIGTERM, &action, &previous_term_);
+  }
+  ~InterruptHandling() {
+    sigaction(SIGINT, &previous_int_, nullptr);
+    sigaction(SIGTERM, &previous_term_, nullptr);
+  }
+
+ private:
+  struct sigaction previous_int_ {};
+  struct sigaction previous_term_ {};
 };
 
 // "--remap from:=to" and "--window START:END" (seconds, either may be empty).
@@ -298,6 +362,8 @@ int run(const Roots& roots, const RunArgs& a) {
   o.power = a.power.options();
   o.scheduling = a.scheduling.options();
   o.strict = a.strict;
+  o.callback_timeout_s = a.callback_timeout_s;
+  o.interrupted = &g_interrupted;
   if (!a.quiet && isatty(STDERR_FILENO)) {
     o.progress = [&](std::size_t sent, std::size_t total, std::size_t received) {
       std::fprintf(stderr, "\r[%s] sent %zu/%zu  received %zu ", spec.id.c_str(), sent, total,
@@ -305,8 +371,10 @@ int run(const Roots& roots, const RunArgs& a) {
       if (sent == total) std::fputc('\n', stderr);
     };
   }
-  // Fail on an unwritable output folder before spending time on the run.
-  fs::create_directories(a.output);
+  // Fail on an unwritable output folder, or a sub-buffer size LTTng refuses, before spending time
+  // on the run.
+  require_writable_folder(a.output, "--output");
+  if (a.mode == "grey" && a.trace_subbuf != 0) tracing::check_subbuffer_bytes(a.trace_subbuf);
   if (a.mode == "grey") {
     o.mode = harness::RunMode::kGrey;
     // Recorded under a temporary name, renamed after the results file once the run is named.
@@ -314,7 +382,18 @@ int run(const Roots& roots, const RunArgs& a) {
     o.trace_subbuf_bytes = a.trace_subbuf;
   }
 
-  auto result = harness::run_benchmark(spec, o);
+  harness::RunResult result;
+  {
+    const InterruptHandling interrupts;
+    try {
+      result = harness::run_benchmark(spec, o);
+    } catch (...) {
+      // Nothing of a run that did not happen is left behind.
+      std::error_code ec;
+      if (!o.trace_dir.empty()) fs::remove_all(o.trace_dir, ec);
+      throw;
+    }
+  }
   const fs::path base = fs::path(a.output) / report::result_basename(result);
   if (result.grey) {
     const fs::path trace = base.string() + ".trace";
@@ -344,7 +423,16 @@ int run(const Roots& roots, const RunArgs& a) {
     std::cout << "report: " << base.string() << ".report.html\n";
   }
   const bool functional_ok = !result.functional || result.functional->valid;
-  return result.valid && functional_ok ? kExitOk : kExitInvalidResult;
+  int code = result.valid && functional_ok ? kExitOk : kExitInvalidResult;
+  if (result.interrupted) code = 128 + g_interrupted.load();
+  if (result.threads_abandoned) {
+    // A callback that never returned still runs on objects that must never be destroyed: end
+    // here, with everything written, without running destructors.
+    std::cout.flush();
+    std::fflush(nullptr);
+    std::_Exit(code);
+  }
+  return code;
 }
 
 struct TraceArgs {
@@ -370,6 +458,7 @@ int analyze(const TraceArgs& a) {
           {"measured", analysis.measured},
           {"matched", analysis.matched},
           {"lost", analysis.lost},
+          {"unobserved", analysis.unobserved},
           {"duplicates", analysis.duplicates},
           {"unknown", analysis.unknown},
           {"latency_ms",
@@ -589,6 +678,11 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--update-rate", ra.update_rate,
                       "control benchmarks: the controller manager's loop rate in Hz (default: "
                       "the graph's update_rate), e.g. 1000 to stress the loop");
+  run_cmd
+      ->add_option("--callback-timeout", ra.callback_timeout_s,
+                   "seconds a node's callback may run before the run ends with the node named "
+                   "as hung (default 30)")
+      ->check(CLI::PositiveNumber);
   run_cmd->add_option("--rate-scale", ra.rate_scale, "with --rate bag: play this many times faster")
       ->check(CLI::PositiveNumber);
   auto* dataset_opt = run_cmd->add_option(
@@ -749,9 +843,17 @@ int main(int argc, char** argv) {
   node_cmd->add_option("--domain", node_domain);
   std::optional<double> node_update_rate;
   node_cmd->add_option("--update-rate", node_update_rate);
+  double node_callback_timeout_s = 30.0;
+  node_cmd->add_option("--callback-timeout", node_callback_timeout_s);
   SchedulingArgs node_scheduling;
   add_scheduling_options(node_cmd, node_scheduling);
 
+  // Without a command: what the commands are, not only that one is missing.
+  if (argc == 1) {
+    std::cerr << app.help()
+              << "robotperf: give a command (robotperf list, robotperf run a1, ...)\n";
+    return kExitUsage;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -807,11 +909,14 @@ int main(int argc, char** argv) {
       harness::BenchmarkSpec spec = harness::load_benchmark(node_package);
       if (node_update_rate) harness::override_update_rate(spec, *node_update_rate);
       return harness::run_node_process(spec, node_name, node_rmw, node_domain,
-                                       node_scheduling.options());
+                                       node_scheduling.options(), node_callback_timeout_s);
     }
   } catch (const plugin::PluginError& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
     return kExitUsage;
+  } catch (const harness::RunInterrupted& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return 128 + g_interrupted.load();
   } catch (const harness::RunRefused& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
     return kExitRefused;

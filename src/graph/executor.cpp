@@ -7,6 +7,7 @@ namespace robotperf::graph {
 
 Executor::Executor(std::size_t threads) : threads_(threads) {
   if (threads_ == 0) throw std::invalid_argument("an executor needs at least one thread");
+  busy_ = std::make_unique<Busy[]>(threads_);
 }
 
 Executor::~Executor() {
@@ -21,8 +22,9 @@ void Executor::add_node(std::shared_ptr<Node> node) {
 
 void Executor::spin() {
   std::vector<std::thread> helpers;
-  for (std::size_t i = 1; i < threads_; ++i) helpers.emplace_back([this] { run_worker(); });
-  run_worker();
+  for (std::size_t i = 1; i < threads_; ++i)
+    helpers.emplace_back([this, i] { run_worker(busy_[i]); });
+  run_worker(busy_[0]);
   for (auto& t : helpers) t.join();
   std::lock_guard lock(mutex_);
   if (error_) std::rethrow_exception(error_);
@@ -30,12 +32,16 @@ void Executor::spin() {
 
 void Executor::start() {
   if (background_.joinable()) throw std::logic_error("executor already started");
+  finished_ = false;
   background_ = std::thread([this] {
     try {
       spin();
     } catch (...) {
       // Kept in error_ for the owner, who polls error() or gets it from stop().
     }
+    std::lock_guard lock(mutex_);
+    finished_ = true;
+    finished_cv_.notify_all();
   });
 }
 
@@ -48,18 +54,45 @@ void Executor::cancel() {
   signal_->stop();
 }
 
+bool Executor::stop_within(std::chrono::nanoseconds timeout) {
+  cancel();
+  if (!background_.joinable()) return true;
+  {
+    std::unique_lock lock(mutex_);
+    if (!finished_cv_.wait_for(lock, timeout, [&] { return finished_; })) {
+      background_.detach();
+      return false;
+    }
+  }
+  background_.join();
+  return true;
+}
+
+std::optional<RunningCallback> Executor::running_longer_than(int64_t limit_ns,
+                                                             int64_t now_ns) const {
+  std::optional<RunningCallback> longest;
+  for (std::size_t i = 0; i < threads_; ++i) {
+    const int64_t since = busy_[i].since_ns.load(std::memory_order_acquire);
+    const Node* node = busy_[i].node.load(std::memory_order_acquire);
+    if (since == 0 || node == nullptr || now_ns - since <= limit_ns) continue;
+    if (!longest || now_ns - since > longest->running_ns)
+      longest = RunningCallback{node->name(), now_ns - since};
+  }
+  return longest;
+}
+
 std::exception_ptr Executor::error() const {
   std::lock_guard lock(mutex_);
   return error_;
 }
 
-void Executor::run_worker() {
+void Executor::run_worker(Busy& busy) {
   while (!signal_->stopped()) {
     const uint64_t seen = signal_->generation();
     bool did_work = false;
     int64_t deadline = INT64_MAX;
     try {
-      did_work = run_ready_work(deadline);
+      did_work = run_ready_work(deadline, busy);
     } catch (...) {
       {
         std::lock_guard lock(mutex_);
@@ -76,7 +109,7 @@ void Executor::run_worker() {
 // one message per subscription. Returns whether any callback ran, and in
 // `next_deadline` the earliest timer deadline of the nodes it visited (a node
 // busy on another thread is rescanned by that thread when it is done).
-bool Executor::run_ready_work(int64_t& next_deadline) {
+bool Executor::run_ready_work(int64_t& next_deadline, Busy& busy) {
   std::vector<std::shared_ptr<Node>> nodes;
   {
     std::lock_guard lock(mutex_);
@@ -86,13 +119,18 @@ bool Executor::run_ready_work(int64_t& next_deadline) {
   for (const auto& node : nodes) {
     std::unique_lock exclusive(node->callback_mutex(), std::try_to_lock);
     if (!exclusive.owns_lock()) continue;  // another thread is in this node
+    // Nodes stay alive while the executor holds them: a watchdog may read the name.
+    busy.node.store(node.get(), std::memory_order_release);
     for (const auto& entity : node->entities()) {
+      busy.since_ns.store(rmw::steady_now_ns(), std::memory_order_release);
       try {
         did_work |= entity->execute();
         next_deadline = std::min(next_deadline, entity->next_deadline_ns());
       } catch (const std::exception& e) {
-        throw std::runtime_error("node '" + node->name() + "': " + e.what());
+        busy.since_ns.store(0, std::memory_order_release);
+        throw NodeError(node->name(), e.what());
       }
+      busy.since_ns.store(0, std::memory_order_release);
     }
   }
   return did_work;

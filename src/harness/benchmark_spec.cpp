@@ -13,6 +13,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
+constexpr std::size_t kMaxExecutorThreads = 256;
+
 // Reads one YAML file and reports every problem as "<file>:<line>: <what>".
 class YamlFile {
  public:
@@ -142,12 +144,18 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   spec.drain_s = file.get<double>(root, "drain_s", 2.0);
   if (!(spec.drain_s >= 0)) file.fail(root["drain_s"], "drain_s must be >= 0");
   spec.executor_threads = file.get<std::size_t>(root, "executor_threads", 1);
-  if (spec.executor_threads == 0)
-    file.fail(root["executor_threads"], "executor_threads must be >= 1");
+  // More threads than that only contend: the graph's nodes run one callback at a time each.
+  if (spec.executor_threads == 0 || spec.executor_threads > kMaxExecutorThreads) {
+    file.fail(root["executor_threads"],
+              "executor_threads must be 1 to " + std::to_string(kMaxExecutorThreads));
+  }
   if (const YAML::Node v = root["validity"]; v.IsDefined()) {
     file.allow_keys(v, {"min_samples", "max_loss_percent"});
     spec.min_samples = file.get<std::size_t>(v, "min_samples", spec.min_samples);
     spec.max_loss_percent = file.get<double>(v, "max_loss_percent", spec.max_loss_percent);
+    if (!(spec.max_loss_percent >= 0 && spec.max_loss_percent <= 100))
+      file.fail(v["max_loss_percent"], "max_loss_percent must be within 0-100");
+    if (spec.min_samples == 0) file.fail(v["min_samples"], "min_samples must be >= 1");
   }
 
   const YAML::Node inputs = root["inputs"];

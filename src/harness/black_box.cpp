@@ -30,6 +30,8 @@ const msgs::TypeSupport& type_support_by_name(const std::string& ros_type,
 
 // The Playback starts preparing a message at least this long before its deadline.
 constexpr int64_t kMinPrepareLeadNs = 2'000'000;
+// While the Playback waits for a far deadline, how often it checks whether to stop.
+constexpr int64_t kStopCheckNs = 100'000'000;
 
 void sleep_until_ns(int64_t deadline_ns) {
   timespec ts{static_cast<time_t>(deadline_ns / 1'000'000'000),
@@ -142,7 +144,15 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
     // handles that message (for a core, for memory bandwidth, and for the wake-up of the node
     // that has to take it). The lead is a multiple of the longest preparation seen, so that a
     // slow copy on a busy machine still ends before the deadline.
-    sleep_until_ns(r.scheduled_ns - std::max(kMinPrepareLeadNs, 4 * longest_prepare_ns));
+    // Long waits (low rates) in slices, so that a stop is seen within kStopCheckNs.
+    const int64_t prepare_at = r.scheduled_ns - std::max(kMinPrepareLeadNs, 4 * longest_prepare_ns);
+    bool stopped = false;
+    while (!stopped && rmw::steady_now_ns() + kStopCheckNs < prepare_at) {
+      sleep_until_ns(rmw::steady_now_ns() + kStopCheckNs);
+      stopped = should_stop();
+    }
+    if (stopped) break;
+    sleep_until_ns(prepare_at);
     const int64_t prepare_start = rmw::steady_now_ns();
     for (std::size_t i = 0; i < inputs_.size(); ++i) {
       const Input& in = inputs_[i];

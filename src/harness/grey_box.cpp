@@ -67,6 +67,7 @@ void GreyBoxRecording::finish(RunResult& r) {
   r.loss_percent = a.loss_percent;
   r.duplicates = a.duplicates;
   r.unknown = a.unknown;
+  r.unobserved = a.unobserved;
   r.latency_from_scheduled = a.latency_from_scheduled;
   r.latency_from_sent = a.latency_from_sent;
   r.send_lateness = a.send_lateness;

@@ -52,6 +52,7 @@ std::vector<sysinfo::RunWarning> check_run_rules_for(const RunResult& r,
   in.sanitized = build_info::kSanitized;
   in.measured_messages = r.count - r.warmup;
   in.other_load_percent = other_load_percent;
+  in.grey_box = !r.trace_dir.empty();  // set when the grey-box recording started
   return sysinfo::check_run_rules(in);
 }
 

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstring>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <stdexcept>
 
 #include "robotperf/rmw/transport.hpp"
@@ -32,7 +33,16 @@ void make_pipe(int fds[2]) {
   if (pipe2(fds, O_CLOEXEC) != 0) throw std::runtime_error(std::string("pipe: ") + strerror(errno));
 }
 
+// The process group of the node processes under way (0: none): the children run in a group of
+// their own, so that a terminal's Ctrl-C reaches only the runner, which stops them, and so that
+// they can all be killed at once.
+std::atomic<pid_t> g_children_group{0};
+
 }  // namespace
+
+void kill_node_processes() noexcept {
+  if (const pid_t group = g_children_group.load(); group > 0) kill(-group, SIGKILL);
+}
 
 NodeProcesses::NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::string>& command,
                              const std::string& rmw, int domain_id,
@@ -62,7 +72,13 @@ NodeProcesses::NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::s
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_adddup2(&actions, in[0], STDIN_FILENO);
     posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
-    const int rc = posix_spawn(&c.pid, argv[0], &actions, nullptr, argv.data(), environ);
+    // The first child leads a new process group; the others join it.
+    posix_spawnattr_t attributes;
+    posix_spawnattr_init(&attributes);
+    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+    posix_spawnattr_setpgroup(&attributes, group_);
+    const int rc = posix_spawn(&c.pid, argv[0], &actions, &attributes, argv.data(), environ);
+    posix_spawnattr_destroy(&attributes);
     posix_spawn_file_actions_destroy(&actions);
     close(in[0]);
     close(out[1]);
@@ -75,6 +91,10 @@ NodeProcesses::NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::s
     c.to_child = in[1];
     c.from_child = out[0];
     c.report.pid = c.pid;
+    if (group_ == 0) {
+      group_ = c.pid;
+      g_children_group = group_;
+    }
     children_.push_back(std::move(c));
   }
   supervisor_ = std::thread([this] { supervise(); });
@@ -82,6 +102,7 @@ NodeProcesses::NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::s
 
 NodeProcesses::~NodeProcesses() {
   shutdown(2.0);
+  g_children_group = 0;
   close(wake_pipe_[0]);
   close(wake_pipe_[1]);
 }
@@ -136,6 +157,13 @@ void NodeProcesses::supervise() {
 void NodeProcesses::on_line(Child& child, const std::string& line) {
   if (line == "ready") {
     child.ready = true;
+  } else if (line.rfind("hung ", 0) == 0) {
+    // The child's watchdog: one of its callbacks ran past the callback timeout.
+    child.hung = true;
+    if (failure_.empty()) {
+      failure_ = "node '" + child.name + "' (pid " + std::to_string(child.report.pid) +
+                 ") hung: " + line.substr(5);
+    }
   } else if (line.rfind("stats ", 0) == 0) {
     const auto j = nlohmann::json::parse(line.substr(6), nullptr, false);
     if (!j.is_discarded()) {
@@ -157,22 +185,31 @@ void NodeProcesses::reap(Child& child, bool wait) {
   int status = 0;
   const pid_t r = waitpid(child.pid, &status, wait ? 0 : WNOHANG);
   if (r == child.pid) {
-    child.report.exit_status = describe_status(status);
+    child.report.exit_status = child.hung ? "hung: its watchdog ended it (a callback ran past the "
+                                            "callback timeout)"
+                                          : describe_status(status);
     child.pid = -1;
   }
 }
 
-void NodeProcesses::wait_ready(int64_t deadline_ns) {
+bool NodeProcesses::wait_ready(int64_t deadline_ns, const std::function<bool()>& abandon) {
   std::unique_lock lock(mutex_);
-  const auto deadline =
-      std::chrono::steady_clock::time_point(std::chrono::nanoseconds(deadline_ns));
-  const bool ok = cv_.wait_until(lock, deadline, [&] {
+  auto done = [&] {
     if (!failure_.empty()) return true;
     for (const auto& c : children_) {
       if (!c.ready) return false;
     }
     return true;
-  });
+  };
+  // In slices of 100 ms, to see `abandon` too.
+  bool ok = false;
+  while (!(ok = done())) {
+    const int64_t now = rmw::steady_now_ns();
+    if (now >= deadline_ns) break;
+    if (abandon()) return false;
+    const int64_t until = std::min(deadline_ns, now + 100'000'000);
+    cv_.wait_until(lock, std::chrono::steady_clock::time_point(std::chrono::nanoseconds(until)));
+  }
   if (!failure_.empty()) throw std::runtime_error(failure_ + " (before it was ready)");
   if (!ok) {
     std::string waiting;
@@ -182,6 +219,7 @@ void NodeProcesses::wait_ready(int64_t deadline_ns) {
     throw std::runtime_error("nodes not connected in time: " + waiting +
                              " (their topics found no peers; check the transport and graph.yaml)");
   }
+  return true;
 }
 
 std::string NodeProcesses::failure() const {
@@ -227,7 +265,10 @@ std::vector<NodeReport> NodeProcesses::shutdown(double grace_s) {
     };
     if (!cv_.wait_until(lock, deadline, all_done)) {
       for (auto& c : children_) {
-        if (!c.eof && c.pid > 0) kill(c.pid, SIGKILL);
+        if (!c.eof && c.pid > 0) {
+          kill(c.pid, SIGKILL);
+          c.killed = true;
+        }
       }
     }
   }
@@ -242,6 +283,11 @@ std::vector<NodeReport> NodeProcesses::shutdown(double grace_s) {
   std::lock_guard lock(mutex_);
   for (auto& c : children_) {
     reap(c, true);
+    if (c.killed) {
+      std::ostringstream grace;
+      grace << grace_s;
+      c.report.exit_status = "did not stop within " + grace.str() + " s after the run: killed";
+    }
     out.push_back(c.report);
   }
   return out;

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <functional>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -28,7 +29,8 @@ class NodeProcesses {
 
   // Waits until every child reported ready; throws std::runtime_error when one
   // died or the deadline passed first.
-  void wait_ready(int64_t deadline_ns);
+  // Gives up (returns false) as soon as `abandon` returns true.
+  bool wait_ready(int64_t deadline_ns, const std::function<bool()>& abandon);
   // A child that ended before shutdown() was asked: its description, else empty.
   std::string failure() const;
   // Pid and node name of every child.
@@ -50,6 +52,8 @@ class NodeProcesses {
     std::string buffer;
     bool ready = false;
     bool eof = false;
+    bool killed = false;  // did not stop when asked: SIGKILL
+    bool hung = false;    // its watchdog reported a stuck callback
     NodeReport report;
     nlohmann::json control_loop;  // null unless its kernel runs a control loop
   };
@@ -58,6 +62,7 @@ class NodeProcesses {
   void reap(Child& child, bool wait);
 
   std::vector<Child> children_;
+  pid_t group_ = 0;  // the children's process group
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   bool stopping_ = false;

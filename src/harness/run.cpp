@@ -1,5 +1,7 @@
 #include "robotperf/harness/run.hpp"
 
+#include <signal.h>
+#include <string.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -28,6 +30,20 @@
 
 namespace robotperf::harness {
 namespace {
+
+// How often the run looks for an interrupt or a stuck callback while it waits.
+constexpr int64_t kWatchPeriodNs = 100'000'000;
+// How long the graph's executor gets to stop after the run before its threads are given up.
+constexpr int64_t kStopGraceNs = 2'000'000'000;
+// The exit status of a node process whose watchdog found a callback stuck.
+constexpr int kNodeHungExit = 5;
+
+std::string seconds_text(double s) {
+  std::ostringstream text;
+  text.precision(6);
+  text << s;
+  return text.str();
+}
 
 struct Wiring {
   std::set<std::string> published;   // topics someone in the whole graph publishes
@@ -65,11 +81,14 @@ std::string unconnected_endpoint(const std::vector<std::shared_ptr<graph::Node>>
 }
 
 // Polls matched counts: discovery offers no single event for "graph complete".
-void wait_connected(const std::vector<std::shared_ptr<graph::Node>>& nodes, const Wiring& w,
-                    int64_t deadline_ns) {
+// Returns false as soon as `abandon` returns true.
+bool wait_connected(
+    const std::vector<std::shared_ptr<graph::Node>>& nodes, const Wiring& w, int64_t deadline_ns,
+    const std::function<bool()>& abandon = [] { return false; }) {
   while (true) {
     const std::string missing = unconnected_endpoint(nodes, w);
-    if (missing.empty()) return;
+    if (missing.empty()) return true;
+    if (abandon()) return false;
     if (rmw::steady_now_ns() > deadline_ns) {
       throw std::runtime_error("graph did not connect in time: " + missing + " has no peer");
     }
@@ -207,6 +226,8 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
                                 std::to_string(r.count) + ")");
   }
   r.drain_s = options.drain_s.value_or(spec.drain_s);
+  if (!(options.callback_timeout_s > 0) || !std::isfinite(options.callback_timeout_s))
+    throw std::invalid_argument("--callback-timeout must be a positive number of seconds");
   r.domain_id = options.domain_id;
   r.scheduling = options.scheduling;
 
@@ -217,7 +238,9 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   std::optional<GreyBoxRecording> grey;
   if (options.mode == RunMode::kGrey) grey.emplace(spec, options, r);
 
-  graph::Context context(transport_for(options));
+  // On the heap: a callback that never returns keeps using the context and the graph's executor,
+  // which are then left alive (see abandon below).
+  auto context = std::make_unique<graph::Context>(transport_for(options));
   const auto period_ns = static_cast<int64_t>(std::llround(1e9 / r.rate_hz));
   const auto wall_now = std::chrono::duration_cast<std::chrono::milliseconds>(
       std::chrono::system_clock::now().time_since_epoch());
@@ -232,10 +255,10 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   if (publish_serialized)
     playback_context = std::make_unique<graph::Context>(transport_for(options));
   Playback playback(
-      publish_serialized ? *playback_context : context, spec, dataset, ids, publish_serialized,
+      publish_serialized ? *playback_context : *context, spec, dataset, ids, publish_serialized,
       options.bag_timeline ? timeline_schedule(dataset.frame_times_ns, options.rate_scale, r.count)
                            : std::vector<int64_t>{});
-  Monitor monitor(context, spec.output, ids, r.warmup);
+  Monitor monitor(*context, spec.output, ids, r.warmup);
   std::vector<uint64_t> functional_ids;
   // A bag brings no ground truth to check the outputs against.
   const bool evaluate_outputs = spec.functional && !options.bag;
@@ -256,14 +279,14 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   graph::Executor monitor_executor(1);
   monitor_executor.add_node(monitor.node());
 
-  graph::Executor graph_executor(spec.executor_threads);
+  auto graph_executor = std::make_unique<graph::Executor>(spec.executor_threads);
   std::vector<std::shared_ptr<graph::Node>> local_nodes{playback.node(), monitor.node()};
   std::unique_ptr<NodeProcesses> children;
   std::vector<std::shared_ptr<graph::Node>> kernel_nodes;
   if (options.processes == ProcessLayout::kSingle) {
     for (const auto& n : spec.nodes) {
-      auto node = make_kernel_node(n, context, spec.workload);
-      graph_executor.add_node(node);
+      auto node = make_kernel_node(n, *context, spec.workload);
+      graph_executor->add_node(node);
       local_nodes.push_back(node);
       kernel_nodes.push_back(node);
       r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1, {}});
@@ -277,6 +300,8 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
       hz << *options.update_rate_hz;
       node_arguments.insert(node_arguments.end(), {"--update-rate", hz.str()});
     }
+    node_arguments.insert(node_arguments.end(),
+                          {"--callback-timeout", seconds_text(options.callback_timeout_s)});
     children = std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw,
                                                options.domain_id, node_arguments);
   }
@@ -291,9 +316,14 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   const int64_t connect_deadline =
       rmw::steady_now_ns() + static_cast<int64_t>(options.connect_timeout_s * 1e9);
   monitor_executor.start();
-  graph_executor.start();
-  if (children) children->wait_ready(connect_deadline);
-  wait_connected(local_nodes, wiring_of(spec), connect_deadline);
+  graph_executor->start();
+  auto interrupted = [&] { return options.interrupted && options.interrupted->load() != 0; };
+  if ((children && !children->wait_ready(connect_deadline, interrupted)) ||
+      !wait_connected(local_nodes, wiring_of(spec), connect_deadline, interrupted)) {
+    throw RunInterrupted(std::string("interrupted by SIG") +
+                         sigabbrev_np(options.interrupted->load()) +
+                         " before the run started: nothing was measured");
+  }
 
   r.warnings = check_run_rules_for(r, measurement.probe_other_load());
   if (options.strict && !r.warnings.empty()) {
@@ -307,8 +337,27 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
                                             "): a bag has no ground truth to check them against"});
   }
 
+  const auto callback_limit_ns = static_cast<int64_t>(options.callback_timeout_s * 1e9);
+  // Why the run must end now: an interrupt, a callback stuck past the timeout, or a failure.
+  std::string stop_now;
+  auto must_stop = [&]() -> const std::string& {
+    if (stop_now.empty()) {
+      if (options.interrupted && options.interrupted->load() != 0) {
+        r.interrupted = true;
+        stop_now = std::string("interrupted by SIG") + sigabbrev_np(options.interrupted->load());
+      } else if (auto stuck =
+                     graph_executor->running_longer_than(callback_limit_ns, rmw::steady_now_ns())) {
+        stop_now = "node '" + stuck->node + "' hung: its callback has run for " +
+                   seconds_text(static_cast<double>(stuck->running_ns) * 1e-9) +
+                   " s, longer than the callback timeout (" +
+                   seconds_text(options.callback_timeout_s) + " s, --callback-timeout)";
+      }
+    }
+    return stop_now;
+  };
   auto failure = [&]() -> std::string {
-    if (auto e = graph_executor.error()) return what_of(e);
+    if (const std::string& why = must_stop(); !why.empty()) return why;
+    if (auto e = graph_executor->error()) return what_of(e);
     if (auto e = monitor_executor.error()) return what_of(e);
     if (children) return children->failure();
     return {};
@@ -328,15 +377,49 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
                                : r.records.size() > r.warmup ? r.records.size() - r.warmup
                                                              : 0;
   const int64_t last_send = r.records.empty() ? rmw::steady_now_ns() : r.records.back().sent_ns;
-  monitor.wait_for(expected, last_send + static_cast<int64_t>(r.drain_s * 1e9));
+  const int64_t drain_end = last_send + static_cast<int64_t>(r.drain_s * 1e9);
+  // In slices, so that an interrupt or a hung callback ends the drain too.
+  while (!monitor.wait_for(expected, std::min(drain_end, rmw::steady_now_ns() + kWatchPeriodNs))) {
+    if (rmw::steady_now_ns() >= drain_end || !must_stop().empty()) break;
+  }
   measurement.end(r);
   const Monitor::Tally tally = monitor.tally();
 
   if (std::string f = failure(); !f.empty()) r.errors.push_back(f);
-  graph_executor.stop();
   monitor_executor.stop();
+  // A callback still stuck in the graph cannot be stopped: its threads, its executor and the
+  // context they use are left to it (never destroyed), and the caller ends the process after
+  // writing the result (RunResult::threads_abandoned).
+  std::string stuck_node;
+  if (!graph_executor->stop_within(std::chrono::nanoseconds(kStopGraceNs))) {
+    if (auto stuck = graph_executor->running_longer_than(0, rmw::steady_now_ns()))
+      stuck_node = stuck->node;
+    if (r.errors.empty()) {
+      r.errors.push_back("node '" + stuck_node +
+                         "' did not return from its callback when the "
+                         "run ended");
+    }
+    r.threads_abandoned = true;
+    (void)graph_executor.release();
+    (void)context.release();
+  }
+  if (auto e = r.threads_abandoned ? nullptr : graph_executor->error()) {
+    // The node whose callback threw ended the run: say so in its report, as for a child.
+    try {
+      std::rethrow_exception(e);
+    } catch (const graph::NodeError& failed) {
+      for (auto& n : r.nodes) {
+        if (n.name == failed.node()) n.exit_status = "its callback threw during the run";
+      }
+    } catch (...) {
+    }
+  }
   if (children) {
     r.nodes = children->shutdown(5.0);
+    for (const auto& n : r.nodes) {
+      if (n.exit_status.starts_with("did not stop"))
+        r.errors.push_back("node '" + n.name + "' " + n.exit_status);
+    }
     for (const auto& wire : children->control_loops()) {
       try {
         r.control_loops.push_back(control_loop_from_wire(wire, ids, r.records, r.warmup));
@@ -347,6 +430,11 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     }
   }
   for (std::size_t i = 0; i < kernel_nodes.size(); ++i) {
+    // A node still in its callback is not read: its state is in use.
+    if (r.nodes[i].name == stuck_node) {
+      r.nodes[i].exit_status = "hung: still in its callback when the run ended";
+      continue;
+    }
     if (auto* loop = dynamic_cast<plugin::ControlLoopSource*>(kernel_nodes[i].get())) {
       const plugin::LoopReport report = loop->stop_and_report();
       ControlLoopResult c = control_loop_timing(report);
@@ -384,7 +472,10 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
 }
 
 int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
-                     const std::string& rmw, int domain_id, const SchedulingOptions& scheduling) {
+                     const std::string& rmw, int domain_id, const SchedulingOptions& scheduling,
+                     double callback_timeout_s) {
+  // Ctrl-C in a terminal reaches the whole process group: the runner stops us when it is done.
+  signal(SIGINT, SIG_IGN);
   const NodeSpec* node_spec = spec.find_node(node_name);
   if (node_spec == nullptr) {
     std::cerr << "robotperf node: benchmark " << spec.id << " has no node '" << node_name << "'\n";
@@ -416,6 +507,22 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
     executor.cancel();
   });
 
+  // A callback stuck past the timeout: tell the runner, then end, since it will not return.
+  std::atomic<bool> done = false;
+  const auto limit_ns = static_cast<int64_t>(callback_timeout_s * 1e9);
+  std::thread watchdog([&] {
+    while (!done) {
+      std::this_thread::sleep_for(std::chrono::nanoseconds(kWatchPeriodNs));
+      if (auto stuck = executor.running_longer_than(limit_ns, rmw::steady_now_ns())) {
+        std::cout << "hung its callback has run for "
+                  << seconds_text(static_cast<double>(stuck->running_ns) * 1e-9)
+                  << " s, longer than the callback timeout (" << seconds_text(callback_timeout_s)
+                  << " s, --callback-timeout)" << std::endl;
+        std::_Exit(kNodeHungExit);
+      }
+    }
+  });
+
   int code = 0;
   try {
     // Matching happens in the transport's threads; messages that arrive
@@ -427,6 +534,8 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
     std::cerr << "robotperf node " << node_name << ": " << e.what() << "\n";
     code = 3;
   }
+  done = true;
+  watchdog.join();
   if (!stdin_closed) {
     // Failed on our own: leave without waiting for the runner.
     std::cout.flush();

@@ -65,9 +65,34 @@ std::string format_cpu_list(const std::vector<unsigned>& cpus) {
   return out;
 }
 
+std::vector<unsigned> allowed_cpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) != 0)
+    throw std::runtime_error(std::string("sched_getaffinity: ") + std::strerror(errno));
+  std::vector<unsigned> cpus;
+  for (unsigned cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
+    if (CPU_ISSET(cpu, &set)) cpus.push_back(cpu);
+  }
+  return cpus;
+}
+
+void check_cpus_allowed(const std::vector<unsigned>& cpus) {
+  const auto allowed = allowed_cpus();
+  std::vector<unsigned> missing;
+  for (unsigned cpu : cpus) {
+    if (!std::binary_search(allowed.begin(), allowed.end(), cpu)) missing.push_back(cpu);
+  }
+  if (missing.empty()) return;
+  throw std::invalid_argument(
+      "--cpus: CPU " + format_cpu_list(missing) + " " + (missing.size() == 1 ? "is" : "are") +
+      " not available to this process (it may run on " + format_cpu_list(allowed) + ")");
+}
+
 ScopedScheduling::ScopedScheduling(const SchedulingOptions& options) {
   try {
     if (!options.cpus.empty()) {
+      check_cpus_allowed(options.cpus);
       if (sched_getaffinity(0, sizeof affinity_, &affinity_) != 0) {
         throw std::runtime_error(std::string("sched_getaffinity: ") + std::strerror(errno));
       }

@@ -3,6 +3,8 @@
 
 #include <time.h>
 
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 namespace robotperf::metrics {
@@ -29,10 +31,26 @@ nlohmann::json number_or_null(bool available, double value) {
 }  // namespace
 
 void EnergyIntegrator::add(int64_t time_ns, std::optional<double> value, const std::string& error) {
-  if (!value) {
+  auto fail = [&](const std::string& why) {
     ++failed_;
-    if (first_error_.empty()) first_error_ = error;
-    return;
+    if (first_error_.empty()) first_error_ = why;
+  };
+  if (!value) return fail(error);
+  const bool gauge = info_.kind == PowerSourceKind::kPowerGauge;
+  if (!std::isfinite(*value) || (gauge && (*value < 0 || *value > kMaxPhysicalWatts))) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "reading %g %s is not physical (expected 0 to %g W)", *value,
+                  gauge ? "W" : "J", kMaxPhysicalWatts);
+    return fail(buf);
+  }
+  if (!gauge && last_value_ && time_ns > last_ns_ && *value > *last_value_ &&
+      (*value - *last_value_) / (static_cast<double>(time_ns - last_ns_) * 1e-9) >
+          kMaxPhysicalWatts) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "energy counter rose %g J in %g s: more than %g W",
+                  *value - *last_value_, static_cast<double>(time_ns - last_ns_) * 1e-9,
+                  kMaxPhysicalWatts);
+    return fail(buf);
   }
   ++readings_;
   if (!last_value_) {

@@ -505,9 +505,10 @@ class ExternalMeterSource : public PowerSource {
     std::string first;
     tokens >> first;
     const auto watts = parse_number(first);
-    if (!watts || *watts < 0) {
+    if (!watts || !(*watts >= 0) || *watts > kMaxPhysicalWatts) {
       error = "power meter '" + command_ + "' printed '" + trim(output).substr(0, 60) +
-              "', expected watts (a non-negative number) as its first word";
+              "', expected watts (a number from 0 to " + std::to_string(int(kMaxPhysicalWatts)) +
+              ") as its first word";
       return std::nullopt;
     }
     return *watts;

@@ -226,6 +226,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"measured", r.measured},
         {"matched", r.matched},
         {"lost", r.lost},
+        {"unobserved", r.unobserved},
         {"loss_percent", r.loss_percent},
         {"duplicates", r.duplicates},
         {"unknown", r.unknown},
@@ -244,6 +245,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"resources", metrics::to_json(r.resources)},
       {"nodes", nodes},
       {"completed", r.completed},
+      {"interrupted", r.interrupted},
       {"errors", r.errors},
       {"validity", {{"valid", r.valid}, {"reasons", r.invalid_reasons}}},
       {"functional", functional_json(r.functional)},
@@ -317,6 +319,7 @@ std::string summary_table(const harness::RunResult& r) {
       << " %)";
   if (r.duplicates) out << ", duplicates " << r.duplicates;
   if (r.unknown) out << ", unknown " << r.unknown;
+  if (r.unobserved) out << ", unobserved " << r.unobserved << " (trace events discarded)";
   if (r.repeats) out << ", state repeats " << r.repeats;
   out << "\n\n";
   char line[256];

@@ -46,10 +46,20 @@ std::vector<std::string> strings(const json& j) {
   return out;
 }
 
+// A count of the results file: absent is 0; anything but a non-negative integer is a file that
+// cannot be trusted, named with the field.
+std::size_t count_of(const json& j, const char* key, const std::string& field) {
+  const auto it = j.find(key);
+  if (it == j.end() || it->is_null()) return 0;
+  if (!it->is_number_unsigned())
+    throw ReportError(field + " is " + it->dump() + ", expected a count (an integer >= 0)");
+  return it->get<std::size_t>();
+}
+
 LatencySummary latency_summary(const json& block) {
   LatencySummary s;
   if (!block.is_object()) return s;
-  s.count = block.value("count", std::size_t{0});
+  s.count = count_of(block, "count", "latency_ms.from_scheduled.count");
   s.min = number_or_nan(block, "min");
   s.mean = number_or_nan(block, "mean");
   s.rms = number_or_nan(block, "rms");
@@ -119,6 +129,30 @@ std::string collapse_spaces(const std::string& s) {
   return out;
 }
 
+std::vector<std::string> impossible_figures(const StoredRun& run) {
+  std::vector<std::string> out;
+  auto fmt = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return std::string(buf);
+  };
+  if (run.latency.min < 0) out.push_back("latency min " + fmt(run.latency.min) + " ms < 0");
+  if (run.loss_percent < 0 || run.loss_percent > 100)
+    out.push_back("loss " + fmt(run.loss_percent) + " % outside 0-100 %");
+  if (run.matched > run.measured) {
+    out.push_back(std::to_string(run.matched) + " matched of " + std::to_string(run.measured) +
+                  " measured");
+  }
+  if (run.measured > 0 &&
+      run.lost + run.unobserved != run.measured - std::min(run.matched, run.measured)) {
+    out.push_back("lost " + std::to_string(run.lost) + " is not measured - matched" +
+                  (run.unobserved ? " - unobserved" : ""));
+  }
+  if (run.throughput_hz < 0) out.push_back("throughput " + fmt(run.throughput_hz) + " Hz < 0");
+  if (run.power_w && !(*run.power_w >= 0)) out.push_back("power " + fmt(*run.power_w) + " W");
+  return out;
+}
+
 }  // namespace
 
 std::string StoredRun::stem() const {
@@ -175,12 +209,17 @@ StoredRun load_run(const fs::path& path) {
   run.hardware = hardware_label(machine);
   run.hardware_category = hardware_category(machine);
   const json& counts = member(j, "counts");
-  run.measured = counts.value("measured", std::size_t{0});
-  run.matched = counts.value("matched", std::size_t{0});
-  run.lost = counts.value("lost", std::size_t{0});
-  run.loss_percent = number_or_nan(counts, "loss_percent");
   const json& latency = member(j, "latency_ms");
-  run.latency = latency_summary(member(latency, "from_scheduled"));
+  try {
+    run.measured = count_of(counts, "measured", "counts.measured");
+    run.matched = count_of(counts, "matched", "counts.matched");
+    run.lost = count_of(counts, "lost", "counts.lost");
+    run.unobserved = count_of(counts, "unobserved", "counts.unobserved");
+    run.latency = latency_summary(member(latency, "from_scheduled"));
+  } catch (const ReportError& e) {
+    throw ReportError(path.string() + ": " + e.what());
+  }
+  run.loss_percent = number_or_nan(counts, "loss_percent");
   run.histogram = log_histogram_from_json(member(latency, "from_scheduled_histogram"));
   const json& throughput = member(j, "throughput");
   run.throughput_hz = number_or_nan(throughput, "output_hz");
@@ -191,6 +230,12 @@ StoredRun load_run(const fs::path& path) {
   run.invalid_reasons = strings(member(validity, "reasons"));
   run.warnings = strings(member(j, "warnings"));
   if (run.warnings.empty()) run.warnings = strings(member(member(j, "run_rules"), "warnings"));
+  // Figures no measurement can produce make the run invalid, as they make a published row flagged
+  // (an edited or corrupted file, or a defect of whatever wrote it).
+  for (auto& why : impossible_figures(run)) {
+    run.valid = false;
+    run.invalid_reasons.push_back("impossible figure: " + why);
+  }
   fs::path csv = path;
   csv.replace_extension(".latencies.csv");
   if (fs::exists(csv)) run.csv_path = csv;

@@ -19,9 +19,10 @@ std::optional<std::string> read_word(const fs::path& path) {
 
 // Why tracing looks active, or empty. An LTTng session daemon means sessions may be recording;
 // ftrace counts when it is on with a tracer or events enabled.
-std::string tracing_activity(const fs::path& root) {
+std::string tracing_activity(const fs::path& root, bool lttng_expected) {
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(root / "proc", ec)) {
+    if (lttng_expected) break;
     const std::string pid = entry.path().filename().string();
     if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos) continue;
     if (read_word(entry.path() / "comm") == "lttng-sessiond") {
@@ -105,9 +106,11 @@ std::vector<RunWarning> check_run_rules(const RunRuleInputs& in) {
                   *in.other_load_percent);
     warn("system_busy", message);
   }
-  if (const std::string tracing = tracing_activity(in.root); !tracing.empty()) {
-    warn("tracing", "tracing may be active during a black-box run: " + tracing +
-                        "; it adds overhead to what is measured");
+  if (const std::string tracing = tracing_activity(in.root, in.grey_box); !tracing.empty()) {
+    warn("tracing", in.grey_box ? "tracing beside this grey-box run's own LTTng session: " +
+                                      tracing + "; it adds overhead to what is measured"
+                                : "tracing may be active during a black-box run: " + tracing +
+                                      "; it adds overhead to what is measured");
   }
   // p99 interpolates the largest samples below 100 of them, p99.9 below 1000.
   if (in.measured_messages < 1000) {

@@ -409,7 +409,9 @@ void summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run,
     receptions.push_back(m.received_ns);
   }
   a.sent = a.messages.size();
-  a.lost = a.measured - a.matched;
+  // Trace loss is never message loss: with events discarded, a missing output event says nothing.
+  if (a.discarded_events > 0 || a.lost_packets > 0) a.unobserved = a.measured - a.matched;
+  a.lost = a.measured - a.matched - a.unobserved;
   a.loss_percent =
       a.measured ? 100.0 * static_cast<double>(a.lost) / static_cast<double>(a.measured) : 0.0;
   a.latency_from_scheduled = metrics::compute_stats(to_doubles(from_scheduled));
@@ -864,6 +866,7 @@ std::string analysis_summary(const TraceAnalysis& a) {
         << " %)";
     if (a.duplicates) out << ", duplicates " << a.duplicates;
     if (a.unknown) out << ", unknown " << a.unknown;
+    if (a.unobserved) out << ", unobserved " << a.unobserved << " (trace events discarded)";
     out << "\n\n";
     char line[256];
     std::snprintf(line, sizeof line, "%-24s %9s %9s %9s %9s %9s %9s %9s %9s\n", "latency (ms)",

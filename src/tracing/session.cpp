@@ -9,7 +9,10 @@
 #include <cctype>
 #include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <cstdlib>
+#include <fstream>
+#include <stdexcept>
 #include <thread>
 
 extern char** environ;
@@ -104,6 +107,30 @@ bool registered(pid_t pid) {
          r.output.find("PID: " + std::to_string(pid) + " ") != std::string::npos;
 }
 
+// Where the session daemon of this user writes its pid (lttng-sessiond(8): the root daemon in
+// /var/run/lttng, a user's in $LTTNG_HOME/.lttng, else $HOME/.lttng).
+fs::path daemon_pid_file() {
+  if (getuid() == 0) return "/var/run/lttng/lttng-sessiond.pid";
+  const char* home = std::getenv("LTTNG_HOME");
+  if (home == nullptr || *home == '\0') home = std::getenv("HOME");
+  return fs::path(home ? home : "") / ".lttng" / "lttng-sessiond.pid";
+}
+
+// Stops the session daemon once no recording session is left (another program may still use
+// it), so that a daemon robotperf started does not outlive its run.
+void stop_daemon_when_idle() {
+  const CommandResult sessions = run_command({"lttng", "list"});
+  if (sessions.exit_code != 0 ||
+      sessions.output.find("Currently no available recording session") == std::string::npos)
+    return;
+  std::ifstream in(daemon_pid_file());
+  pid_t pid = 0;
+  if (!(in >> pid) || pid <= 0 || kill(pid, SIGTERM) != 0) return;
+  // It removes its pid file last: wait for it, briefly.
+  for (int i = 0; i < 250 && kill(pid, 0) == 0; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+}
+
 std::string unique_name(const std::string& hint) {
   static std::atomic<unsigned> counter{0};
   std::string clean;
@@ -144,7 +171,18 @@ std::size_t subbuffer_bytes_for(double events_per_second) {
   return size;
 }
 
+void check_subbuffer_bytes(std::size_t bytes) {
+  const auto page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  constexpr std::size_t kMax = std::size_t{1} << 30;
+  if (bytes < page || bytes > kMax || (bytes & (bytes - 1)) != 0) {
+    throw std::invalid_argument("trace sub-buffer size " + std::to_string(bytes) +
+                                " bytes: LTTng takes a power of two from the page size (" +
+                                std::to_string(page) + ") to 1 GiB, e.g. 262144");
+  }
+}
+
 RecordingSession::RecordingSession(SessionOptions options) : options_(std::move(options)) {
+  if (options_.subbuf_bytes != 0) check_subbuffer_bytes(options_.subbuf_bytes);
   std::string why;
   if (!lttng_available(&why)) throw TracingUnavailable(why);
   if (options_.subbuf_bytes == 0) options_.subbuf_bytes = subbuffer_bytes_for(0);
@@ -196,6 +234,7 @@ RecordingSession::RecordingSession(SessionOptions options) : options_(std::move(
 
 RecordingSession::~RecordingSession() {
   if (active_) run_command({"lttng", "destroy", name_});
+  if (started_daemon_) stop_daemon_when_idle();
 }
 
 void RecordingSession::stop() {

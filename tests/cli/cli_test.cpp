@@ -397,6 +397,36 @@ TEST_F(Cli, BadBagIsOneClearLine) {
   }
 }
 
+TEST_F(Cli, WithoutACommandItListsTheCommands) {
+  const Outcome o = robotperf_cli("");
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.out.find("give a command"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("run"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("list"), std::string::npos) << o.out;
+}
+
+// Checks before timing: each is one line, exit 2, and nothing is run or written.
+TEST_F(Cli, SettingsThatCannotWorkAreRefusedBeforeTheRun) {
+  fs::create_directories(out_);
+  const fs::path file = out_ / "a-file";
+  std::ofstream(file) << "x";
+  const std::pair<std::string, std::string> cases[] = {
+      {"--output " + (file / "results").string(), "cannot write there"},
+      {"--cpus 1000", "CPU 1000 is not available to this process"},
+      {"--mode grey --trace-subbuf-size 1", "LTTng takes a power of two"},
+      {"--power-meter 'echo 1e308'", "expected watts (a number from 0 to 100000)"},
+  };
+  for (const auto& [args, message] : cases) {
+    const Outcome o =
+        robotperf_cli("run a5 --count 20 --quiet " + args + " --domain " + domain() +
+                      (args.starts_with("--output") ? "" : " --output " + (out_ / "r").string()));
+    EXPECT_EQ(o.exit_code, 2) << args << ": " << o.out;
+    EXPECT_EQ(std::ranges::count(o.out, '\n'), 1) << o.out;
+    EXPECT_NE(o.out.find(message), std::string::npos) << args << ": " << o.out;
+  }
+  EXPECT_FALSE(fs::exists(out_ / "r") && !fs::is_empty(out_ / "r"));
+}
+
 }  // namespace
 
 TEST_F(Cli, RunReplaysABagOnItsOwnTimeline) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "robotperf/harness/dataset.hpp"
+#include "robotperf/harness/run.hpp"
 #include "test_package.hpp"
 
 namespace robotperf::harness {
@@ -78,6 +79,36 @@ TEST(BenchmarkSpec, RejectsUnknownKeysKernelsPortsAndParameters) {
     g.replace(g.find("stream: image}"), 14, "stream: image, qos: fastest}");
     TestPackage q("qos", g);
     EXPECT_NE(error_of(q.dir()).find("unknown QoS profile 'fastest'"), std::string::npos);
+  }
+}
+
+TEST(BenchmarkSpec, RefusesValuesOutsideTheirLimits) {
+  const std::pair<std::string, std::string> cases[] = {
+      {"executor_threads: 100000\n", "executor_threads must be 1 to 256"},
+      {"executor_threads: 0\n", "executor_threads must be 1 to 256"},
+  };
+  for (const auto& [extra, message] : cases) {
+    TestPackage p("limits", relay_graph("", extra));
+    const std::string err = error_of(p.dir());
+    EXPECT_NE(err.find("graph.yaml:5: " + message), std::string::npos) << err;
+  }
+  std::string loss = relay_graph("");
+  loss.replace(loss.find("max_loss_percent: 0.0"), 21, "max_loss_percent: -5");
+  TestPackage negative("loss", loss);
+  EXPECT_NE(error_of(negative.dir()).find("max_loss_percent must be within 0-100"),
+            std::string::npos);
+  std::string samples = relay_graph("");
+  samples.replace(samples.find("min_samples: 5"), 14, "min_samples: 0");
+  TestPackage none("samples", samples);
+  EXPECT_NE(error_of(none.dir()).find("min_samples must be >= 1"), std::string::npos);
+  TestPackage fail_after("fail_after", relay_graph("fail_after: -1"));
+  RunOptions o;
+  o.count = 5;
+  try {
+    run_benchmark(load_benchmark(fail_after.dir()), o);
+    FAIL() << "a negative fail_after was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("fail_after must be >= 0"), std::string::npos);
   }
 }
 

@@ -113,6 +113,9 @@ TEST(BlackBox, FailingNodeEndsTheRunEarlyAndKeepsWhatWasMeasured) {
   EXPECT_EQ(r.matched, 10u);
   EXPECT_LT(r.sent, 60u);
   EXPECT_FALSE(r.valid);
+  // The node is reported as the one that ended the run, as a child process would be.
+  ASSERT_EQ(r.nodes.size(), 1u);
+  EXPECT_EQ(r.nodes[0].exit_status, "its callback threw during the run");
 }
 
 TEST(BlackBox, FastDdsInOneProcessLosesNothing) {

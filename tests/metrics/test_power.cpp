@@ -128,6 +128,33 @@ TEST(Rapl, CounterGoingBackWithoutWrapRangeIsUnavailable) {
   EXPECT_NE(r.unavailable_reason.find("went backwards"), std::string::npos);
 }
 
+TEST(EnergyIntegrator, ReadingsThatAreNotPhysicalAreFailedReadings) {
+  PowerSourceInfo gauge;
+  gauge.name = "g";
+  EnergyIntegrator g(gauge);
+  g.add(0, 10.0);
+  g.add(kSecond / 2, std::nan(""));
+  g.add(kSecond, 1e9);  // a gigawatt
+  g.add(2 * kSecond, 10.0);
+  auto r = g.result();
+  EXPECT_EQ(r.readings, 2u);
+  EXPECT_EQ(r.failed_readings, 2u);
+  EXPECT_NE(r.first_error.find("not physical"), std::string::npos) << r.first_error;
+  EXPECT_NEAR(r.energy_j, 20.0, 1e-9);  // 10 W over the 2 s between the good readings
+
+  PowerSourceInfo counter;
+  counter.name = "c";
+  counter.kind = PowerSourceKind::kEnergyCounter;
+  EnergyIntegrator c(counter);
+  c.add(0, 100.0);
+  c.add(kSecond, 1e12);  // a terajoule in a second
+  c.add(2 * kSecond, 140.0);
+  r = c.result();
+  EXPECT_EQ(r.failed_readings, 1u);
+  EXPECT_NE(r.first_error.find("more than 100000 W"), std::string::npos) << r.first_error;
+  EXPECT_NEAR(r.energy_j, 40.0, 1e-9);
+}
+
 // A discrete GPU gauge (power1_average), an ACPI meter (power1_input with a label), an energy
 // counter, and a temperature-only sensor that is not a power source.
 void write_hwmon(const FixtureRoot& root, int gpu_w, int acpi_w, uint64_t energy_uj) {
@@ -348,6 +375,9 @@ TEST_F(ExternalMeter, BrokenCommandsAreClearErrors) {
   };
   EXPECT_NE(message("echo hello").find("expected watts"), std::string::npos);
   EXPECT_NE(message("echo -3").find("expected watts"), std::string::npos);
+  // Finite but not physical: it would make throughput per watt 0.
+  EXPECT_NE(message("echo 1e308").find("expected watts (a number from 0 to 100000)"),
+            std::string::npos);
   EXPECT_NE(message("exit 3").find("exit status 3"), std::string::npos);
   EXPECT_NE(message("sleep 5").find("did not finish within"), std::string::npos);
 }

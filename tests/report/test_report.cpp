@@ -213,6 +213,39 @@ TEST_F(Report, ResultsWithoutMachineOrSoftwareStillReport) {
   EXPECT_EQ(export_entries(input.runs[0], {}).size(), 2u);
 }
 
+TEST_F(Report, AFileWithAWrongTypedFieldIsSkippedNamingTheField) {
+  write_two_machines(10, 11);
+  const auto path = testing::write_sample(dir_, {});
+  auto j = nlohmann::json::parse(read_text(path));
+  j["counts"]["measured"] = "many";
+  std::ofstream(path) << j.dump();
+  const RunScan scan = scan_results(dir_);
+  EXPECT_EQ(scan.runs.size(), 4u);  // the others are read
+  ASSERT_EQ(scan.skipped.size(), 1u);
+  EXPECT_NE(scan.skipped[0].find(path.filename().string()), std::string::npos) << scan.skipped[0];
+  EXPECT_NE(scan.skipped[0].find("counts.measured is \"many\""), std::string::npos)
+      << scan.skipped[0];
+  EXPECT_EQ(load_report_inputs({dir_}).runs.size(), 4u);
+}
+
+TEST_F(Report, ImpossibleFiguresMakeALocalRunInvalid) {
+  const auto path = testing::write_sample(dir_, {});
+  auto j = nlohmann::json::parse(read_text(path));
+  j["latency_ms"]["from_scheduled"]["min"] = -0.5;
+  j["counts"]["loss_percent"] = 250.0;
+  std::ofstream(path) << j.dump();
+  const StoredRun run = load_run(path);
+  EXPECT_FALSE(run.valid);
+  std::string reasons;
+  for (const auto& r : run.invalid_reasons) reasons += r + "; ";
+  EXPECT_NE(reasons.find("impossible figure: latency min -0.5 ms < 0"), std::string::npos)
+      << reasons;
+  EXPECT_NE(reasons.find("impossible figure: loss 250 % outside 0-100 %"), std::string::npos)
+      << reasons;
+  // Never plotted, so never in a median.
+  EXPECT_NE(render_markdown(load_report_inputs({dir_}), {}).find("INVALID"), std::string::npos);
+}
+
 TEST_F(Report, BadInputsGiveOneClearLine) {
   write_two_machines(10, 11);
   std::ofstream(dir_ / "garbage.json") << "{not json";

@@ -92,6 +92,22 @@ TEST(RunRules, FtraceWithATracerAndUnknownFrequency) {
             std::string::npos);
 }
 
+TEST(RunRules, AGreyBoxRunsOwnLttngDaemonIsNoWarningButOtherTracingIs) {
+  FixtureRoot root;
+  root.write("proc/4711/comm", "lttng-sessiond\n");
+  RunRuleInputs in = clean(root.path());
+  in.measured_messages = 5000;
+  in.grey_box = true;
+  EXPECT_TRUE(check_run_rules(in).empty());
+  root.write("sys/kernel/tracing/tracing_on", "1\n");
+  root.write("sys/kernel/tracing/current_tracer", "function\n");
+  const auto warnings = check_run_rules(in);
+  ASSERT_EQ(rules_of(warnings), (std::vector<std::string>{"tracing"}));
+  EXPECT_NE(warnings[0].message.find("beside this grey-box run's own LTTng session"),
+            std::string::npos)
+      << warnings[0].message;
+}
+
 TEST(RunRules, BusyThresholdIsStrict) {
   FixtureRoot root;
   RunRuleInputs in = clean(root.path());

@@ -247,6 +247,12 @@ TEST(Analyzer, DiscardedEventsAreReportedAndInvalidate) {
   EXPECT_NE(a.invalid_reasons[0].find("discarded 7 events"), std::string::npos)
       << a.invalid_reasons[0];
   EXPECT_EQ(to_json(a)["trace"]["discarded_events"], 7);
+  // The message without an output event is not counted lost: its event may be among those
+  // discarded.
+  EXPECT_EQ(a.matched + 1, a.measured);
+  EXPECT_EQ(a.unobserved, 1u);
+  EXPECT_EQ(a.lost, 0u);
+  EXPECT_EQ(a.loss_percent, 0.0);
 }
 
 TEST(Analyzer, TraceWithoutRobotperfRunStillGivesCallbacksAndTopics) {

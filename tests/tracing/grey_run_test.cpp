@@ -221,6 +221,10 @@ TEST_F(GreyRun, TinySubbuffersUnderLoadAreReportedAndInvalid) {
             std::string::npos)
       << reasons(r);
   EXPECT_EQ(r.trace_subbuf_bytes, 4096u);
+  // Outputs whose events were discarded are not lost messages: the black-box run of the same
+  // graph loses none.
+  EXPECT_EQ(r.lost, 0u);
+  EXPECT_EQ(r.unobserved, r.measured - r.matched);
 }
 
 TEST_F(GreyRun, LoopedDatasetHasNoKeyCollisions) {
@@ -295,6 +299,55 @@ TEST_F(GreyRun, APluginKernelIsTracedThroughThePluginApi) {
 
 using robotperf::test_support::Outcome;
 using robotperf::test_support::robotperf_cli;
+
+// Ctrl-C during a grey run: the partial result and its trace are kept, the LTTng session is
+// destroyed and no temporary trace folder is left.
+TEST_F(GreyRun, AnInterruptedRunDestroysItsSessionAndKeepsItsTrace) {
+  const fs::path out = dir_ / "results";
+  const fs::path readings = dir_ / "readings";
+  robotperf::test_support::Background run(
+      std::string(ROBOTPERF_EXECUTABLE) + " run a2 --mode grey --count 3000 --quiet " +
+          "--power-meter 'echo x >> " + readings.string() + "; echo 5' --output " + out.string(),
+      dir_ / "log");
+  // The meter is read once before the run, then in the measured window.
+  ASSERT_TRUE(robotperf::test_support::eventually(
+      [&] {
+        std::ifstream in(readings);
+        return std::count(std::istreambuf_iterator<char>(in), {}, '\n') >= 2;
+      },
+      std::chrono::seconds(60)))
+      << run.output();
+  const pid_t pid = run.pid();
+  run.signal(SIGINT);
+  ASSERT_EQ(run.wait(std::chrono::seconds(60)), 130) << run.output();
+  std::size_t results = 0, traces = 0;
+  for (const auto& e : fs::directory_iterator(out)) {
+    EXPECT_FALSE(e.path().filename().string().starts_with(".trace-")) << e.path();
+    results += e.path().extension() == ".json";
+    traces += e.path().extension() == ".trace";
+  }
+  EXPECT_EQ(results, 1u);
+  EXPECT_EQ(traces, 1u);
+  const auto sessions = robotperf::test_support::shell("lttng list");
+  EXPECT_EQ(sessions.out.find("-" + std::to_string(pid) + "-"), std::string::npos) << sessions.out;
+}
+
+// A grey run that had to start the LTTng session daemon stops it again, so that it does not
+// outlive the run (and later black-box runs do not find tracing active).
+TEST_F(GreyRun, ADaemonTheRunStartedIsStoppedAfterIt) {
+  auto daemon_running = [] {
+    return robotperf::test_support::shell("pgrep -x lttng-sessiond").exit_code == 0;
+  };
+  robotperf::test_support::shell("lttng destroy --all; pkill -x lttng-sessiond");
+  ASSERT_TRUE(robotperf::test_support::eventually([&] { return !daemon_running(); },
+                                                  std::chrono::seconds(10)));
+  const auto run = robotperf_cli("run a2 --mode grey --count 40 --quiet --output " +
+                                 (dir_ / "results").string());
+  const bool left_running = daemon_running();
+  tracing::ensure_session_daemon();  // for the tests that follow
+  EXPECT_EQ(run.exit_code, 0) << run.out;
+  EXPECT_FALSE(left_running);
+}
 
 TEST_F(GreyRun, CommandLineRunsGreyAndAnalysesTheTrace) {
   const fs::path out = dir_ / "results";

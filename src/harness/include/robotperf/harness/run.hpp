@@ -1,6 +1,7 @@
 // Running a benchmark black-box: Playback -> graph under test -> Monitor.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -40,6 +41,11 @@ struct RunOptions {
   ProcessLayout processes = ProcessLayout::kSingle;
   int domain_id = 0;
   double connect_timeout_s = 15.0;  // discovery and node start-up, before timing
+  // A callback running longer than this ends the run with its node named as hung.
+  double callback_timeout_s = 30.0;
+  // Set (to the signal's number) by whoever handles SIGINT/SIGTERM: the run ends at once, keeping
+  // what it measured, marked interrupted.
+  const std::atomic<int>* interrupted = nullptr;
   // For per-node runs: the robotperf executable and the arguments that make it
   // run one node ("node" subcommand); the runner appends its own.
   std::vector<std::string> node_command;
@@ -131,6 +137,8 @@ struct RunResult {
   std::size_t measured = 0;
   std::size_t matched = 0;
   std::size_t lost = 0;
+  // Grey-box: measured messages whose output event the tracer may have discarded (not lost).
+  std::size_t unobserved = 0;
   std::size_t duplicates = 0;
   std::size_t unknown = 0;
   std::size_t repeats = 0;  // state outputs: further receptions of an ID (not an error)
@@ -144,7 +152,11 @@ struct RunResult {
   double offered_rate_hz = 0;  // input rate actually achieved by the Playback
   double window_s = 0;         // from the first measured send to the last reception
   int64_t started_unix_ns = 0;
-  bool completed = false;  // false when the run was cut short
+  bool completed = false;    // false when the run was cut short
+  bool interrupted = false;  // cut short by SIGINT/SIGTERM (RunOptions::interrupted)
+  // A callback never returned: its threads still run, using objects the run left alive for them.
+  // End the process (std::_Exit) once the result is written; never destroy it normally.
+  bool threads_abandoned = false;
   std::vector<std::string> errors;
   bool valid = false;
   std::vector<std::string> invalid_reasons;
@@ -176,17 +188,28 @@ class RunRefused : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// An interrupt (RunOptions::interrupted) came before timing started: nothing was measured.
+class RunInterrupted : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 // Runs the benchmark. Problems that stop the run before timing (bad spec,
 // unknown transport, graph that never connects) throw; problems during the
 // run (a node that dies or throws) end it early and are reported in
 // `errors`, with what was measured until then.
 RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options);
 
+// Kills the node processes of a per-node run under way at once; async-signal-safe, for a process
+// that must end now (a second Ctrl-C).
+void kill_node_processes() noexcept;
+
 // The per-node child side: builds one node of `spec`, reports "ready" on
 // stdout once its endpoints are matched, runs until stdin closes, then prints
-// a final "stats" line. Returns the process exit code.
+// a final "stats" line. Returns the process exit code. A callback stuck longer than
+// `callback_timeout_s` is reported on a "hung" line, and the process ends at once.
 int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
                      const std::string& rmw, int domain_id,
-                     const SchedulingOptions& scheduling = {});
+                     const SchedulingOptions& scheduling = {}, double callback_timeout_s = 30.0);
 
 }  // namespace robotperf::harness

@@ -23,9 +23,14 @@ struct SchedulingOptions {
 std::vector<unsigned> parse_cpu_list(const std::string& text);
 std::string format_cpu_list(const std::vector<unsigned>& cpus);
 
+// The CPUs this process may run on (its affinity mask).
+std::vector<unsigned> allowed_cpus();
+// Throws std::invalid_argument naming the CPUs of `cpus` this process may not run on.
+void check_cpus_allowed(const std::vector<unsigned>& cpus);
+
 // Applies the options to the calling thread (threads it creates afterwards inherit them) and,
-// for memory, to the process; undoes them when destroyed. Throws std::runtime_error saying what
-// the OS refused and what to do.
+// for memory, to the process; undoes them when destroyed. Throws std::invalid_argument for CPUs
+// this process may not use, std::runtime_error saying what else the OS refused and what to do.
 class ScopedScheduling {
  public:
   explicit ScopedScheduling(const SchedulingOptions& options);

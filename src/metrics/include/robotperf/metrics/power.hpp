@@ -102,7 +102,12 @@ struct PowerReport {
   double sampler_cpu_s = 0;  // CPU time of the sampling thread itself
 };
 
-// Integrates the readings of one source, in time order.
+// The most a single machine under test can draw: a rack of the densest accelerators stays below
+// it. A reading (or an energy step) beyond it is a broken sensor or meter, never a measurement.
+inline constexpr double kMaxPhysicalWatts = 100'000;
+
+// Integrates the readings of one source, in time order. Readings that are not finite, negative
+// (gauges), or imply more than kMaxPhysicalWatts are counted as failed readings.
 class EnergyIntegrator {
  public:
   explicit EnergyIntegrator(PowerSourceInfo info) : info_(std::move(info)) {}

@@ -42,6 +42,7 @@ struct StoredRun {
   std::string hardware;           // short platform name: CPU model, plus GPU models
   std::string hardware_category;  // RobotPerf category guessed from the machine
   std::size_t measured = 0, matched = 0, lost = 0;
+  std::size_t unobserved = 0;  // grey-box: messages whose trace events may have been discarded
   double loss_percent = kNoValue;
   LatencySummary latency;  // from the scheduled send time: the RobotPerf-compatible latency
   double throughput_hz = kNoValue;

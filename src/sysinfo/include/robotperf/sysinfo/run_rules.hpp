@@ -26,6 +26,8 @@ struct RunRuleInputs {
   std::size_t measured_messages = 0;
   // CPU used by processes other than the graph's just before the run, in % of one core.
   std::optional<double> other_load_percent;
+  // A grey-box run records LTTng events by design: the session daemon it uses is not a warning.
+  bool grey_box = false;
   std::filesystem::path root = "/";  // where proc/ and sys/ are (fixture trees in tests)
 };
 

@@ -92,6 +92,10 @@ struct TraceAnalysis {
   std::optional<RunInfo> run;
   std::vector<MessageTimes> messages;  // by index
   std::size_t sent = 0, measured = 0, matched = 0, lost = 0, duplicates = 0, unknown = 0;
+  // Measured messages without an output event while the tracer discarded events or lost packets:
+  // the output may have been delivered and its event discarded, so they are not counted as lost
+  // (the discard alone makes the result invalid).
+  std::size_t unobserved = 0;
   double loss_percent = 0;
   metrics::SampleStats latency_from_scheduled, latency_from_sent, send_lateness;  // ns
   double throughput_hz = 0, offered_rate_hz = 0, window_s = 0;

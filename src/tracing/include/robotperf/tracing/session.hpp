@@ -73,4 +73,8 @@ bool ensure_session_daemon();
 // emitting `events_per_second`: four sub-buffers hold half a second of events.
 std::size_t subbuffer_bytes_for(double events_per_second);
 
+// Throws std::invalid_argument unless LTTng takes `bytes` as a sub-buffer size: a power of two
+// from the page size to 1 GiB.
+void check_subbuffer_bytes(std::size_t bytes);
+
 }  // namespace robotperf::tracing
