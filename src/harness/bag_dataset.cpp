@@ -56,11 +56,12 @@ Dataset load_bag_dataset(const BagSelection& selection, const std::vector<Bounda
     auto it = selection.remaps.find(bag_topic);
     return it == selection.remaps.end() ? bag_topic : it->second;
   };
-  for (const auto& [from, to] : selection.remaps) {
+  for (const auto& remap : selection.remaps) {
+    const std::string& from = remap.first;
     if (std::none_of(info.topics.begin(), info.topics.end(),
                      [&](const bag::TopicInfo& t) { return t.name == from; })) {
-      throw BenchmarkError("--remap " + from + ":=" + to + ": bag " + path + " has no topic " +
-                           from);
+      throw BenchmarkError("--remap " + from + ":=" + remap.second + ": bag " + path +
+                           " has no topic " + from);
     }
   }
 

@@ -532,6 +532,10 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
     executor.spin();  // until the watcher cancels it, or a callback throws
   } catch (const std::exception& e) {
     std::cerr << "robotperf node " << node_name << ": " << e.what() << "\n";
+    // The runner records it with the node's exit status (one line on the wire).
+    std::string what = e.what();
+    std::ranges::replace(what, '\n', ' ');
+    std::cout << "error " << what << std::endl;
     code = 3;
   }
   done = true;
@@ -555,7 +559,8 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   if (const auto* c = dynamic_cast<const plugin::NodeCounters*>(node.get())) {
     for (const auto& [name, value] : c->counters()) stats["counters"][name] = value;
   }
-  std::cout << "stats " << stats.dump() << std::endl;
+  std::cout << "stats " << stats.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)
+            << std::endl;
   return code;
 }
 

@@ -1,0 +1,116 @@
+#!/usr/bin/env bash
+# Soak test (not run by CI): one long run of a benchmark over Fast DDS with a process per node,
+# sampling the resident memory of robotperf and of every node process while it runs.
+#
+#   scripts/soak.sh [seconds, default 3600] [benchmark, default a1]
+#
+# Environment: ROBOTPERF (the executable, default build/robotperf), SOAK_DOMAIN (DDS domain,
+# default 213), SOAK_DIR (where the result and memory samples go, default a new temporary
+# folder), SOAK_MAX_GROWTH_MIB (allowed RSS growth of any process between the end of the first
+# tenth of the run and its last tenth, default 8).
+#
+# Passes (exit 0) when the run completed and is valid with 0 lost, 0 unknown and 0 duplicate
+# messages, and no process's memory grew by more than the allowance. Prints the figures either way.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+seconds=${1:-3600}
+benchmark=${2:-a1}
+robotperf=${ROBOTPERF:-$root/build/robotperf}
+domain=${SOAK_DOMAIN:-213}
+dir=${SOAK_DIR:-$(mktemp -d "${TMPDIR:-/tmp}/robotperf-soak.XXXXXX")}
+max_growth_kib=$((${SOAK_MAX_GROWTH_MIB:-8} * 1024))
+period=$((seconds / 360 > 10 ? 10 : (seconds / 360 < 1 ? 1 : seconds / 360)))
+
+[ -x "$robotperf" ] || {
+  echo "soak.sh: $robotperf not found; build first (scripts/build.sh) or set ROBOTPERF" >&2
+  exit 2
+}
+mkdir -p "$dir/results"
+samples="$dir/memory.csv"
+echo "elapsed_s,pid,name,rss_kib" >"$samples"
+
+"$robotperf" run "$benchmark" --rmw fastdds --processes per-node --duration "$seconds" \
+  --domain "$domain" --output "$dir/results" --quiet >"$dir/run.log" 2>&1 &
+run_pid=$!
+trap 'kill -INT "$run_pid" 2>/dev/null || true' INT TERM
+
+# The run and every process below it (node processes run in their own process groups, but stay
+# robotperf's children).
+descendants() {
+  local pid=$1 child
+  echo "$pid"
+  for child in $(cat /proc/"$pid"/task/*/children 2>/dev/null); do descendants "$child"; done
+}
+
+start=$(date +%s)
+echo "soak: $benchmark for ${seconds}s over fastdds, per-node, domain $domain; samples in $samples"
+while kill -0 "$run_pid" 2>/dev/null; do
+  now=$(($(date +%s) - start))
+  for pid in $(descendants "$run_pid"); do
+    rss=$(awk '/^VmRSS:/ {print $2}' /proc/"$pid"/status 2>/dev/null) || continue
+    [ -n "$rss" ] || continue
+    name=$(tr '\0' ' ' </proc/"$pid"/cmdline 2>/dev/null | awk '{
+      for (i = 1; i <= NF; ++i) if ($i == "--node") { print "node:" $(i + 1); exit }
+      print "robotperf" }')
+    echo "$now,$pid,$name,$rss" >>"$samples"
+  done
+  sleep "$period" &
+  wait $! || true
+done
+status=0
+wait "$run_pid" || status=$?
+cat "$dir/run.log"
+[ "$status" -eq 0 ] || echo "soak: robotperf exited $status"
+
+result=$(ls "$dir"/results/*.json 2>/dev/null | head -n 1)
+[ -n "$result" ] || {
+  echo "soak: FAILED, no result written"
+  exit 1
+}
+
+# Memory: per process, the largest RSS in the first tenth (after start-up) against the largest in
+# the last tenth of the run.
+memory_ok=1
+if ! awk -F, -v total="$seconds" -v limit="$max_growth_kib" 'NR > 1 {
+    name[$2] = $3
+    if ($1 >= total * 0.05 && $1 <= total * 0.1 && $4 > early[$2]) early[$2] = $4
+    if ($1 >= total * 0.9 && $4 > late[$2]) late[$2] = $4
+  }
+  END {
+    bad = 0
+    for (p in name) {
+      if (!(p in early) || !(p in late)) continue
+      growth = late[p] - early[p]
+      printf "memory: %-20s pid %-7s %8.1f MiB -> %8.1f MiB (%+.1f MiB)\n", name[p], p,
+             early[p] / 1024, late[p] / 1024, growth / 1024
+      if (growth > limit) bad = 1
+    }
+    exit bad
+  }' "$samples"; then
+  memory_ok=0
+fi
+
+# The result: complete, valid, nothing lost, unknown or duplicated.
+flat=$(tr -d ' \n' <"$result")
+section() { echo "$flat" | grep -o "\"$1\":{[^}]*}" | head -n 1; }
+field() { echo "$1" | grep -o "\"$2\":[^,}]*" | head -n 1 | cut -d: -f2; }
+counts=$(section counts)
+latency=$(section from_scheduled)
+echo "result: $result"
+echo "counts: sent $(field "$counts" sent), measured $(field "$counts" measured)," \
+  "matched $(field "$counts" matched), lost $(field "$counts" lost)," \
+  "unknown $(field "$counts" unknown), duplicates $(field "$counts" duplicates)"
+echo "latency_ms: p50 $(field "$latency" p50), p99 $(field "$latency" p99)," \
+  "p99.9 $(field "$latency" p999), max $(field "$latency" max)"
+
+ok=1
+[[ $flat == *'"completed":true'* && $flat == *'"interrupted":false'* ]] || ok=0
+[ "$(field "$(section validity)" valid)" = true ] || ok=0
+[ "$(field "$counts" lost)" = 0 ] && [ "$(field "$counts" unknown)" = 0 ] &&
+  [ "$(field "$counts" duplicates)" = 0 ] || ok=0
+if [ "$ok" = 1 ] && [ "$memory_ok" = 1 ] && [ "$status" -eq 0 ]; then
+  echo "soak: PASSED"
+else
+  echo "soak: FAILED"
+  exit 1
+fi
