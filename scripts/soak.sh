@@ -6,8 +6,8 @@
 #
 # Environment: ROBOTPERF (the executable, default build/robotperf), SOAK_DOMAIN (DDS domain,
 # default 213), SOAK_DIR (where the result and memory samples go, default a new temporary
-# folder), SOAK_MAX_GROWTH_MIB (allowed RSS growth of any process between the end of the first
-# tenth of the run and its last tenth, default 8).
+# folder), SOAK_MAX_GROWTH_MIB (allowed RSS growth of any process over the second half of the run,
+# default 4).
 #
 # Passes (exit 0) when the run completed and is valid with 0 lost, 0 unknown and 0 duplicate
 # messages, and no process's memory grew by more than the allowance. Prints the figures either way.
@@ -18,7 +18,7 @@ benchmark=${2:-a1}
 robotperf=${ROBOTPERF:-$root/build/robotperf}
 domain=${SOAK_DOMAIN:-213}
 dir=${SOAK_DIR:-$(mktemp -d "${TMPDIR:-/tmp}/robotperf-soak.XXXXXX")}
-max_growth_kib=$((${SOAK_MAX_GROWTH_MIB:-8} * 1024))
+max_growth_kib=$((${SOAK_MAX_GROWTH_MIB:-4} * 1024))
 period=$((seconds / 360 > 10 ? 10 : (seconds / 360 < 1 ? 1 : seconds / 360)))
 
 [ -x "$robotperf" ] || {
@@ -68,21 +68,24 @@ result=$(ls "$dir"/results/*.json 2>/dev/null | head -n 1)
   exit 1
 }
 
-# Memory: per process, the largest RSS in the first tenth (after start-up) against the largest in
-# the last tenth of the run.
+# Memory: per process, the largest RSS around the middle of the run (45-50 %) against the largest
+# in its last tenth. A leak grows all the time and shows there; a step taken once while the machine
+# was loaded (queues filling, then glibc keeping the pages) is a high-water mark, not a leak: the
+# growth since the first tenth is printed too, so that such a step is visible.
 memory_ok=1
 if ! awk -F, -v total="$seconds" -v limit="$max_growth_kib" 'NR > 1 {
     name[$2] = $3
     if ($1 >= total * 0.05 && $1 <= total * 0.1 && $4 > early[$2]) early[$2] = $4
+    if ($1 >= total * 0.45 && $1 <= total * 0.5 && $4 > middle[$2]) middle[$2] = $4
     if ($1 >= total * 0.9 && $4 > late[$2]) late[$2] = $4
   }
   END {
     bad = 0
     for (p in name) {
-      if (!(p in early) || !(p in late)) continue
-      growth = late[p] - early[p]
-      printf "memory: %-20s pid %-7s %8.1f MiB -> %8.1f MiB (%+.1f MiB)\n", name[p], p,
-             early[p] / 1024, late[p] / 1024, growth / 1024
+      if (!(p in early) || !(p in middle) || !(p in late)) continue
+      growth = late[p] - middle[p]
+      printf "memory: %-20s pid %-7s %7.1f MiB (first tenth) %7.1f MiB (middle) %7.1f MiB (end): %+.1f MiB over the second half\n",
+             name[p], p, early[p] / 1024, middle[p] / 1024, late[p] / 1024, growth / 1024
       if (growth > limit) bad = 1
     }
     exit bad
