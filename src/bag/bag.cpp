@@ -531,17 +531,21 @@ void Writer::close() {
   impl_->close();
 }
 
-uint64_t convert(const fs::path& in, const fs::path& out, const WriteOptions& options) {
+uint64_t convert(const fs::path& in, const fs::path& out, const WriteOptions& options,
+                 const std::function<void(TopicInfo&)>& complete) {
   Reader reader(in);
   Writer writer(out, options);
   std::vector<std::size_t> ids;
-  for (const auto& t : reader.topics()) ids.push_back(writer.add_topic(t));
+  const auto add = [&](TopicInfo topic) {
+    if (complete) complete(topic);
+    ids.push_back(writer.add_topic(topic));
+  };
+  for (const auto& t : reader.topics()) add(t);
   uint64_t n = 0;
   Message m;
   while (reader.next(m)) {
     // Topics first seen in a later file of a split bag.
-    while (ids.size() < reader.topics().size())
-      ids.push_back(writer.add_topic(reader.topics()[ids.size()]));
+    while (ids.size() < reader.topics().size()) add(reader.topics()[ids.size()]);
     writer.write(ids.at(m.topic), m.timestamp_ns, m.data);
     ++n;
   }

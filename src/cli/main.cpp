@@ -847,7 +847,8 @@ int main(int argc, char** argv) {
   bag_echo_cmd->add_option("--topic", echo.topics, "only this topic (repeatable)");
   bag_echo_cmd->add_option("--limit", echo.limit, "print at most N messages");
   bag_echo_cmd->add_option("--msg-dir", echo.msg_dirs,
-                           "folder of .msg files for types the bag has no definition of");
+                           "folder of .msg files (<pkg>/msg/*.msg, or flat) for types the bag "
+                           "has no definition of");
   bag_echo_cmd->add_option("--max-array", echo.max_array,
                            "summarise arrays longer than this (default 64)");
   cli::ConvertOptions convert;
@@ -863,6 +864,9 @@ int main(int argc, char** argv) {
   bag_convert_cmd->add_option("--chunk-size", convert.chunk_size, "MCAP chunk size in bytes");
   bag_convert_cmd->add_option("--max-file-size", convert.max_file_mib,
                               "split into files of about this many MiB (0 = one file)");
+  bag_convert_cmd->add_option(
+      "--msg-dir", convert.msg_dirs,
+      "folder of .msg files giving the definitions the bag lacks, written into the new bag");
 
   auto* dataset_cmd = app.add_subcommand("dataset", "the built-in datasets");
   dataset_cmd->require_subcommand(1);

@@ -85,6 +85,11 @@ Dataset load_bag_dataset(const BagSelection& selection, const std::vector<Bounda
                            input.type + "); its topics: " + names +
                            "; map one onto it with --remap <bag topic>:=" + input.topic);
     }
+    if (source->serialization_format != "cdr") {
+      throw BenchmarkError("bag topic " + source->name + " is serialized as '" +
+                           source->serialization_format +
+                           "': robotperf replays CDR only (rosbag2's default format)");
+    }
     if (!starts_with_header(*source)) {
       throw BenchmarkError("bag topic " + source->name + ": type " + source->type +
                            " does not start with a std_msgs/Header, so its messages cannot "

@@ -1,5 +1,6 @@
 #include "robotperf/msgs/dynamic.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <fstream>
@@ -401,6 +402,7 @@ std::string normalize_type_name(std::string_view name) {
 MessageDefinition parse_msg(const std::string& type, std::string_view text) {
   MessageDefinition def;
   def.type = normalize_type_name(type);
+  def.text = std::string(text);
   const std::string package = package_of(def.type);
   std::size_t line_no = 0;
   std::istringstream lines{std::string(text)};
@@ -423,6 +425,10 @@ MessageDefinition parse_msg(const std::string& type, std::string_view text) {
         throw DefinitionError(context + ": bad field name '" + name + "'");
     }
     def.fields.push_back({name, parse_type(type_token, package, context)});
+  }
+  // rosidl gives a type without fields (std_msgs/msg/Empty) one uint8 member, which CDR carries.
+  if (def.fields.empty()) {
+    def.fields.push_back({"structure_needs_at_least_one_member", {Primitive::kUint8, "", {}, 0}});
   }
   return def;
 }
@@ -463,27 +469,54 @@ void TypeRegistry::add_ros2msg(const std::string& type, std::string_view schema)
 
 std::size_t TypeRegistry::add_directory(const fs::path& dir, const std::string& package) {
   if (!fs::is_directory(dir)) throw DefinitionError(dir.string() + ": no such directory");
+  // A flat folder's package is a guess: the folder's name, or its parent's for a folder named
+  // "msg" (<pkg>/msg given directly). Its files are also kept by name, for adopt().
+  const fs::path canonical = fs::weakly_canonical(dir);
+  const std::string guess = !package.empty() ? package
+                            : canonical.filename() == "msg"
+                                ? canonical.parent_path().filename().string()
+                                : canonical.filename().string();
   std::size_t n = 0;
   for (const auto& entry : fs::recursive_directory_iterator(dir)) {
     if (!entry.is_regular_file() || entry.path().extension() != ".msg") continue;
     const fs::path parent = entry.path().parent_path();
-    std::string pkg;
-    if (parent.filename() == "msg" && parent != dir) {
-      pkg = parent.parent_path().filename().string();
-    } else {
-      pkg = package.empty() ? dir.filename().string() : package;
-    }
+    const bool flat = parent == dir;
+    const std::string pkg =
+        parent.filename() == "msg" && !flat ? parent.parent_path().filename().string() : guess;
     std::ifstream in(entry.path());
     std::stringstream text;
     text << in.rdbuf();
+    const std::string name = entry.path().stem().string();
     try {
-      add_msg(pkg + "/msg/" + entry.path().stem().string(), text.str());
+      add_msg(pkg + "/msg/" + name, text.str());
     } catch (const DefinitionError& e) {
       throw DefinitionError(entry.path().string() + ": " + e.what());
     }
+    if (flat && package.empty()) unpackaged_[name] = text.str();
     ++n;
   }
   return n;
+}
+
+std::size_t TypeRegistry::adopt(const std::string& type) {
+  std::size_t adopted = 0;
+  std::set<std::string> seen;
+  std::vector<std::string> todo = {normalize_type_name(type)};
+  while (!todo.empty()) {
+    const std::string t = todo.back();
+    todo.pop_back();
+    if (!seen.insert(t).second) continue;
+    if (!contains(t)) {
+      auto flat = unpackaged_.find(t.substr(t.rfind('/') + 1));
+      if (flat == unpackaged_.end()) continue;
+      add_msg(t, flat->second);
+      ++adopted;
+    }
+    for (const Field& f : get(t).fields) {
+      if (f.type.primitive == Primitive::kMessage) todo.push_back(f.type.message_type);
+    }
+  }
+  return adopted;
 }
 
 bool TypeRegistry::contains(const std::string& type) const {
@@ -511,6 +544,32 @@ void TypeRegistry::check_complete(const std::string& type) const {
         }
       };
   visit(normalize_type_name(type), "");
+}
+
+std::string TypeRegistry::ros2msg_schema(const std::string& type) const {
+  check_complete(type);
+  const std::string root = normalize_type_name(type);
+  std::vector<std::string> order;  // dependencies, depth first, each once
+  std::function<void(const std::string&)> visit = [&](const std::string& t) {
+    for (const Field& f : get(t).fields) {
+      const std::string& dep = f.type.message_type;
+      if (f.type.primitive != Primitive::kMessage || dep == root ||
+          std::find(order.begin(), order.end(), dep) != order.end())
+        continue;
+      order.push_back(dep);
+      visit(dep);
+    }
+  };
+  visit(root);
+  std::string out = get(root).text;
+  for (const std::string& dep : order) {
+    if (!out.empty() && out.back() != '\n') out += '\n';
+    // "pkg/msg/Type" is named "pkg/Type" after MSG:, as rosbag2 writes it.
+    std::string name = dep;
+    if (const auto at = name.find("/msg/"); at != std::string::npos) name.erase(at, 4);
+    out += std::string(80, '=') + "\nMSG: " + name + "\n" + get(dep).text;
+  }
+  return out;
 }
 
 const Value& Value::operator[](const std::string& name) const {

@@ -60,6 +60,35 @@ TEST(DynamicCodec, CdrTestBagWithMsgFiles) {
   check_cdr_test_bag(registry);
 }
 
+// A flat folder named "msg" without a package: its files are adopted by name for the types a bag
+// asks for, and a ros2msg schema composed from them decodes the bag as the bag's own does.
+TEST(DynamicCodec, FlatMsgFolderIsAdoptedAndComposesSchemas) {
+  dyn::TypeRegistry flat;
+  EXPECT_GE(flat.add_directory("/usr/share/test_interface_files/msg"), 10u);
+  EXPECT_FALSE(flat.contains("msg/msg/Arrays"));
+  EXPECT_FALSE(flat.contains("test_msgs/msg/Arrays"));
+  EXPECT_GE(flat.adopt("test_msgs/msg/Arrays"), 2u);  // Arrays and the BasicTypes it nests
+  EXPECT_EQ(flat.adopt("test_msgs/msg/BasicTypes"), 0u);
+  dyn::TypeRegistry composed;
+  for (const std::string type : {"test_msgs/msg/Arrays", "test_msgs/msg/BasicTypes"}) {
+    const std::string schema = flat.ros2msg_schema(type);
+    composed.add_ros2msg(type, schema);
+  }
+  EXPECT_NE(flat.ros2msg_schema("test_msgs/msg/Arrays").find("\nMSG: test_msgs/BasicTypes\n"),
+            std::string::npos);
+  check_cdr_test_bag(composed);
+}
+
+// std_msgs/msg/Empty's definition is empty; rosidl gives it one uint8 member, which CDR carries.
+TEST(DynamicCodec, ATypeWithoutFieldsHasItsPlaceholderMember) {
+  dyn::TypeRegistry registry;
+  registry.add_ros2msg("std_msgs/msg/Empty", "");
+  const std::vector<uint8_t> payload = {0, 1, 0, 0, 0};
+  const dyn::Value v = dyn::decode(registry, "std_msgs/msg/Empty", payload);
+  EXPECT_EQ(std::get<uint64_t>(v["structure_needs_at_least_one_member"].data), 0u);
+  EXPECT_EQ(dyn::encode(registry, "std_msgs/msg/Empty", v), payload);
+}
+
 TEST(DynamicCodec, TalkerStringsAndLogs) {
   Reader reader(reference_bag("mcap_talker"));
   const dyn::TypeRegistry registry = registry_from_bag(reader);

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <set>
@@ -160,9 +161,10 @@ class Writer {
 };
 
 // Copies every message, topic, QoS and definition of the bag at `in` into a
-// new bag at `out`; returns the number of messages copied.
+// new bag at `out`; returns the number of messages copied. `complete`, when
+// given, sees each topic before it is written (to add a missing definition).
 uint64_t convert(const std::filesystem::path& in, const std::filesystem::path& out,
-                 const WriteOptions& options);
+                 const WriteOptions& options, const std::function<void(TopicInfo&)>& complete = {});
 
 // One storage file being written.
 class StorageWriter {
