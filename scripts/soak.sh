@@ -3,6 +3,7 @@
 # sampling the resident memory of robotperf and of every node process while it runs.
 #
 #   scripts/soak.sh [seconds, default 3600] [benchmark, default a1]
+#   scripts/soak.sh --analyse DIR    # judges a finished soak again from its folder
 #
 # Environment: ROBOTPERF (the executable, default build/robotperf), SOAK_DOMAIN (DDS domain,
 # default 213), SOAK_DIR (where the result and memory samples go, default a new temporary
@@ -13,54 +14,65 @@
 # messages, and no process's memory grew by more than the allowance. Prints the figures either way.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-seconds=${1:-3600}
-benchmark=${2:-a1}
+max_growth_kib=$((${SOAK_MAX_GROWTH_MIB:-4} * 1024))
+analyse_only=0
+if [ "${1:-}" = --analyse ]; then
+  analyse_only=1
+  dir=${2:?"soak.sh --analyse needs the soak's folder"}
+  # The run's length, as sampled.
+  seconds=$(awk -F, 'NR > 1 && $1 > m { m = $1 } END { print m + 0 }' "$dir/memory.csv")
+  status=0
+else
+  seconds=${1:-3600}
+  benchmark=${2:-a1}
+  dir=${SOAK_DIR:-$(mktemp -d "${TMPDIR:-/tmp}/robotperf-soak.XXXXXX")}
+fi
 robotperf=${ROBOTPERF:-$root/build/robotperf}
 domain=${SOAK_DOMAIN:-213}
-dir=${SOAK_DIR:-$(mktemp -d "${TMPDIR:-/tmp}/robotperf-soak.XXXXXX")}
-max_growth_kib=$((${SOAK_MAX_GROWTH_MIB:-4} * 1024))
+samples="$dir/memory.csv"
 period=$((seconds / 360 > 10 ? 10 : (seconds / 360 < 1 ? 1 : seconds / 360)))
 
-[ -x "$robotperf" ] || {
-  echo "soak.sh: $robotperf not found; build first (scripts/build.sh) or set ROBOTPERF" >&2
-  exit 2
-}
-mkdir -p "$dir/results"
-samples="$dir/memory.csv"
-echo "elapsed_s,pid,name,rss_kib" >"$samples"
+if [ "$analyse_only" = 0 ]; then
+  [ -x "$robotperf" ] || {
+    echo "soak.sh: $robotperf not found; build first (scripts/build.sh) or set ROBOTPERF" >&2
+    exit 2
+  }
+  mkdir -p "$dir/results"
+  echo "elapsed_s,pid,name,rss_kib" >"$samples"
 
-"$robotperf" run "$benchmark" --rmw fastdds --processes per-node --duration "$seconds" \
-  --domain "$domain" --output "$dir/results" --quiet >"$dir/run.log" 2>&1 &
-run_pid=$!
-trap 'kill -INT "$run_pid" 2>/dev/null || true' INT TERM
+  "$robotperf" run "$benchmark" --rmw fastdds --processes per-node --duration "$seconds" \
+    --domain "$domain" --output "$dir/results" --quiet >"$dir/run.log" 2>&1 &
+  run_pid=$!
+  trap 'kill -INT "$run_pid" 2>/dev/null || true' INT TERM
 
-# The run and every process below it (node processes run in their own process groups, but stay
-# robotperf's children).
-descendants() {
-  local pid=$1 child
-  echo "$pid"
-  for child in $(cat /proc/"$pid"/task/*/children 2>/dev/null); do descendants "$child"; done
-}
+  # The run and every process below it (node processes run in their own process groups, but stay
+  # robotperf's children).
+  descendants() {
+    local pid=$1 child
+    echo "$pid"
+    for child in $(cat /proc/"$pid"/task/*/children 2>/dev/null); do descendants "$child"; done
+  }
 
-start=$(date +%s)
-echo "soak: $benchmark for ${seconds}s over fastdds, per-node, domain $domain; samples in $samples"
-while kill -0 "$run_pid" 2>/dev/null; do
-  now=$(($(date +%s) - start))
-  for pid in $(descendants "$run_pid"); do
-    rss=$(awk '/^VmRSS:/ {print $2}' /proc/"$pid"/status 2>/dev/null) || continue
-    [ -n "$rss" ] || continue
-    name=$(tr '\0' ' ' </proc/"$pid"/cmdline 2>/dev/null | awk '{
-      for (i = 1; i <= NF; ++i) if ($i == "--node") { print "node:" $(i + 1); exit }
-      print "robotperf" }')
-    echo "$now,$pid,$name,$rss" >>"$samples"
+  start=$(date +%s)
+  echo "soak: $benchmark for ${seconds}s over fastdds, per-node, domain $domain; samples in $samples"
+  while kill -0 "$run_pid" 2>/dev/null; do
+    now=$(($(date +%s) - start))
+    for pid in $(descendants "$run_pid"); do
+      rss=$(awk '/^VmRSS:/ {print $2}' /proc/"$pid"/status 2>/dev/null) || continue
+      [ -n "$rss" ] || continue
+      name=$(tr '\0' ' ' </proc/"$pid"/cmdline 2>/dev/null | awk '{
+        for (i = 1; i <= NF; ++i) if ($i == "--node") { print "node:" $(i + 1); exit }
+        print "robotperf" }')
+      echo "$now,$pid,$name,$rss" >>"$samples"
+    done
+    sleep "$period" &
+    wait $! || true
   done
-  sleep "$period" &
-  wait $! || true
-done
-status=0
-wait "$run_pid" || status=$?
-cat "$dir/run.log"
-[ "$status" -eq 0 ] || echo "soak: robotperf exited $status"
+  status=0
+  wait "$run_pid" || status=$?
+  cat "$dir/run.log"
+  [ "$status" -eq 0 ] || echo "soak: robotperf exited $status"
+fi
 
 result=$(ls "$dir"/results/*.json 2>/dev/null | head -n 1)
 [ -n "$result" ] || {
