@@ -6,6 +6,8 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -131,6 +133,21 @@ TEST_F(BagCli, AHumbleBagGetsItsDefinitionsFromAFlatMsgFolder) {
   o = robotperf_cli("bag echo " + path("full"));
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("[test_msgs/msg/Arrays]"), std::string::npos) << o.out;
+}
+
+// A Jazzy bag's service event topic: its definition is the .srv text, '---' line and all.
+TEST_F(BagCli, ServiceEventTopicsDecode) {
+  std::ifstream in(std::string("/usr/share/test_interface_files/srv/BasicTypes.srv"));
+  const std::string srv((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<uint8_t> payload = {0, 1, 0, 0, 2, 0, 0, 0, 5, 0, 0, 0, 6, 0, 0, 0};
+  payload.resize(payload.size() + 16 + 4);  // client_gid, padding to sequence_number
+  for (const uint8_t b : {9, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}) payload.push_back(b);
+  const std::string bag = bag_of("events", "test_msgs/srv/BasicTypes_Event", "cdr", srv, payload);
+  const Outcome o = robotperf_cli("bag echo " + bag + " --limit 1");
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("event_type: 2"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("sequence_number: 9"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("request: []"), std::string::npos) << o.out;
 }
 
 TEST_F(BagCli, ATypeWithoutFieldsDecodes) {
