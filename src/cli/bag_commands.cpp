@@ -182,6 +182,15 @@ int bag_convert(const std::string& in, const std::string& out, const ConvertOpti
   return 0;
 }
 
+int bag_reindex(const std::string& dir) {
+  const bag::BagInfo info = bag::reindex(dir);
+  std::cout << "wrote " << (fs::path(dir) / "metadata.yaml").string() << ": " << info.files.size()
+            << " file" << (info.files.size() == 1 ? "" : "s") << ", " << info.topics.size()
+            << " topic" << (info.topics.size() == 1 ? "" : "s") << ", " << info.message_count
+            << " messages\n";
+  return 0;
+}
+
 int dataset_generate(const std::string& name, const GenerateOptions& options) {
   const harness::Dataset dataset = harness::load_dataset(name);
   std::string out = options.out;

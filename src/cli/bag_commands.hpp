@@ -27,6 +27,8 @@ struct ConvertOptions {
   std::vector<std::string> msg_dirs;  // .msg files for types the bag has no definition of
 };
 int bag_convert(const std::string& in, const std::string& out, const ConvertOptions& options);
+// `bag reindex <dir>`: metadata.yaml for a bag directory without one.
+int bag_reindex(const std::string& dir);
 
 struct GenerateOptions {
   std::string out;  // default: the dataset name with '/' replaced by '_'

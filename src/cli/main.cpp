@@ -868,6 +868,12 @@ int main(int argc, char** argv) {
       "--msg-dir", convert.msg_dirs,
       "folder of .msg files giving the definitions the bag lacks, written into the new bag");
 
+  std::string reindex_dir;
+  auto* bag_reindex_cmd = bag_cmd->add_subcommand(
+      "reindex", "write metadata.yaml for a bag directory that lost it, from its storage files");
+  bag_reindex_cmd->add_option("dir", reindex_dir, "bag directory with .db3 or .mcap files")
+      ->required();
+
   auto* dataset_cmd = app.add_subcommand("dataset", "the built-in datasets");
   dataset_cmd->require_subcommand(1);
   std::string dataset_name;
@@ -950,6 +956,7 @@ int main(int argc, char** argv) {
     if (*bag_info_cmd) return cli::bag_info(bag_path);
     if (*bag_echo_cmd) return cli::bag_echo(bag_path, echo);
     if (*bag_convert_cmd) return cli::bag_convert(bag_path, convert_out, convert);
+    if (*bag_reindex_cmd) return cli::bag_reindex(reindex_dir);
     if (*generate_cmd) return cli::dataset_generate(dataset_name, generate);
     if (*analyze_cmd) return analyze(ta);
     if (*sysinfo_cmd) {

@@ -150,6 +150,33 @@ TEST_F(BagCli, ServiceEventTopicsDecode) {
   EXPECT_NE(o.out.find("request: []"), std::string::npos) << o.out;
 }
 
+// A split bag that lost its metadata.yaml: reindex writes it again from the storage files, in
+// the order of their split index, and will not overwrite one that exists.
+TEST_F(BagCli, ReindexRestoresASplitBagsMetadata) {
+  ASSERT_EQ(robotperf_cli("bag convert " + kSharedBags + "mcap_talker " + path("split") +
+                          " --max-file-size 0.001")
+                .exit_code,
+            0);
+  const Outcome before = robotperf_cli("bag info " + path("split"));
+  fs::remove(dir_ / "split" / "metadata.yaml");
+  Outcome o = robotperf_cli("bag info " + path("split"));
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.out.find("robotperf bag reindex"), std::string::npos) << o.out;
+  o = robotperf_cli("bag reindex " + path("split"));
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("3 topics, 20 messages"), std::string::npos) << o.out;
+  const Outcome after = robotperf_cli("bag info " + path("split"));
+  EXPECT_EQ(after.out, before.out);  // files in split order, counts, times, QoS: all as written
+  o = robotperf_cli("bag echo " + path("split") + " --topic /topic");
+  EXPECT_NE(o.out.find("Hello, world! 9"), std::string::npos) << o.out;
+  o = robotperf_cli("bag reindex " + path("split"));
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.out.find("has one already"), std::string::npos) << o.out;
+  o = robotperf_cli("bag reindex " + dir_.string());
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.out.find("no .db3 or .mcap file to index"), std::string::npos) << o.out;
+}
+
 TEST_F(BagCli, ATypeWithoutFieldsDecodes) {
   // std_msgs/msg/Empty: a 0-byte ros2msg definition, one uint8 member on the wire.
   const std::string bag = bag_of("empty", "std_msgs/msg/Empty", "cdr", "", {0, 1, 0, 0, 0});

@@ -160,6 +160,12 @@ class Writer {
   std::unique_ptr<Impl> impl_;
 };
 
+// Writes <dir>/metadata.yaml for a bag directory that has none, from its storage
+// files (as `ros2 bag reindex`), and returns the bag's info read back. Throws
+// BagError when the directory already has one, holds no storage file, mixes
+// storages, or gives one topic two types.
+BagInfo reindex(const std::filesystem::path& dir);
+
 // Copies every message, topic, QoS and definition of the bag at `in` into a
 // new bag at `out`; returns the number of messages copied. `complete`, when
 // given, sees each topic before it is written (to add a missing definition).
