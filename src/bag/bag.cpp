@@ -575,8 +575,8 @@ BagInfo reindex(const fs::path& dir) {
   for (const auto& [index, file] : found) {
     if (sniff_storage(file) != info.storage) {
       throw BagError(file.string() + ": is " + to_string(sniff_storage(file)) + " but " +
-                     found.front().second.filename().string() + " is " +
-                     to_string(info.storage) + "; a bag has one storage");
+                     found.front().second.filename().string() + " is " + to_string(info.storage) +
+                     "; a bag has one storage");
     }
     const auto reader = open_storage(file, {});
     FileInfo f;

@@ -188,8 +188,10 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   }
 
   // Everything is loaded before timing starts (DESIGN.md §3.4).
-  const Dataset dataset = options.bag ? load_bag_dataset(*options.bag, spec.inputs)
-                                      : load_dataset(spec.dataset, spec.workload);
+  std::vector<std::string> corrupt_messages;
+  const Dataset dataset = options.bag
+                              ? load_bag_dataset(*options.bag, spec.inputs, &corrupt_messages)
+                              : load_dataset(spec.dataset, spec.workload);
   r.dataset = dataset.name;
   r.dataset_hash = dataset.hash;
   r.dataset_frames = dataset.frames;
@@ -331,6 +333,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     for (const auto& w : r.warnings) broken += "\n  " + w.rule + ": " + w.message;
     throw RunRefused("--strict: not running, run rules broken:" + broken);
   }
+  for (const auto& line : corrupt_messages) r.warnings.push_back({"corrupt_messages", line});
   if (spec.functional && !evaluate_outputs) {
     r.warnings.push_back({"functional", "outputs not checked for accuracy (" +
                                             spec.functional->evaluator +
