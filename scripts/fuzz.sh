@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang (into ./build-fuzz) and runs each for
 # a bounded time: scripts/fuzz.sh [seconds per target, default 60] [target...]
+# FUZZ_RUNS=N stops a target after N executions instead, if that comes first.
 # Needs clang-14 and libclang-rt-14-dev (Debian). Crashing inputs are kept in
 # build-fuzz/findings/<target>/; the corpora grow in build-fuzz/corpus/<target>/.
 set -euo pipefail
@@ -8,9 +9,9 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 seconds=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fuzz_mcap_reader fuzz_cdr_typed fuzz_cdr_dynamic fuzz_msg_parser)
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_mcap_reader fuzz_sqlite_reader fuzz_cdr_typed fuzz_cdr_dynamic
+  fuzz_msg_parser fuzz_benchmark_packages fuzz_results_json fuzz_ctf_trace)
 build="$root/build-fuzz"
-data="$root/../shared/data"
 
 for tool in clang-14 clang++-14; do
   command -v "$tool" >/dev/null || {
@@ -24,23 +25,14 @@ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DROBOTPERF_BUILD_TESTS=OFF -DROBOTPERF_BUILD_BENCH=OFF >/dev/null
 cmake --build "$build" -j "$(nproc)" --target "${targets[@]}"
 
-# Seeds: real bags and .msg files from the shared data, when present.
-seed() {
-  local target=$1 corpus=$2
-  case $target in
-    fuzz_mcap_reader) find "$data/rosbag2" -name '*.mcap' -exec cp {} "$corpus/" \; 2>/dev/null || true ;;
-    fuzz_msg_parser) find "$data/msg" -name '*.msg' -size -8k -exec cp {} "$corpus/" \; 2>/dev/null || true ;;
-  esac
-}
-
 status=0
 for target in "${targets[@]}"; do
   corpus="$build/corpus/$target"
   findings="$build/findings/$target"
   mkdir -p "$corpus" "$findings"
-  [ -n "$(ls -A "$corpus")" ] || seed "$target" "$corpus"
+  [ -n "$(ls -A "$corpus")" ] || "$root/fuzz/seeds.sh" "$target" "$corpus"
   echo "== $target for ${seconds}s"
-  if ! "$build/fuzz/$target" "$corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+  if ! "$build/fuzz/$target" "$corpus" -max_total_time="$seconds" -runs="${FUZZ_RUNS:--1}" -timeout=10 -rss_limit_mb=2048 \
       -max_len=65536 -artifact_prefix="$findings/" -print_final_stats=1 2>"$build/$target.log"; then
     echo "$target FAILED: see $build/$target.log and $findings/" >&2
     tail -n 30 "$build/$target.log" >&2

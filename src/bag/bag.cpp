@@ -274,7 +274,8 @@ BagInfo read_info(const fs::path& path) {
     if (!fs::exists(path / kMetadataFile)) {
       throw BagError(path.string() +
                      ": no metadata.yaml, so not a rosbag2 bag directory (pass a "
-                     ".db3 or .mcap file to read one storage file alone)");
+                     ".db3 or .mcap file to read one storage file alone, or write one from the "
+                     "storage files with 'robotperf bag reindex')");
     }
     BagInfo info = read_metadata(path);
     check_compression(info);
@@ -385,6 +386,65 @@ bool Reader::next(Message& out) {
   return true;
 }
 
+namespace {
+
+// metadata.yaml version 5: the fields ROS 2 Humble reads; Iron and Jazzy read it too. Written
+// beside and renamed: a crash never leaves a half-written metadata.yaml.
+void write_metadata_file(const fs::path& dir, Storage storage, const std::vector<TopicInfo>& topics,
+                         const std::vector<FileInfo>& files) {
+  int64_t start = 0;
+  int64_t end = 0;
+  uint64_t count = 0;
+  for (const auto& f : files) {
+    if (f.message_count == 0) continue;
+    start = count ? std::min(start, f.starting_time_ns) : f.starting_time_ns;
+    end = count ? std::max(end, f.starting_time_ns + f.duration_ns)
+                : f.starting_time_ns + f.duration_ns;
+    count += f.message_count;
+  }
+  std::ostringstream y;
+  y << "rosbag2_bagfile_information:\n"
+    << "  version: 5\n"
+    << "  storage_identifier: " << to_string(storage) << "\n"
+    << "  duration:\n    nanoseconds: " << (end - start) << "\n"
+    << "  starting_time:\n    nanoseconds_since_epoch: " << start << "\n"
+    << "  message_count: " << count << "\n"
+    << "  topics_with_message_count:\n";
+  for (const auto& t : topics) {
+    y << "    - topic_metadata:\n"
+      << "        name: " << quoted(t.name) << "\n"
+      << "        type: " << quoted(t.type) << "\n"
+      << "        serialization_format: " << quoted(t.serialization_format) << "\n"
+      << "        offered_qos_profiles: " << quoted(qos_with_integer_enums(t.offered_qos_profiles))
+      << "\n"
+      << "      message_count: " << t.message_count << "\n";
+  }
+  y << "  compression_format: \"\"\n"
+    << "  compression_mode: \"\"\n"
+    << "  relative_file_paths:\n";
+  for (const auto& f : files) y << "    - " << quoted(f.path.string()) << "\n";
+  y << "  files:\n";
+  for (const auto& f : files) {
+    y << "    - path: " << quoted(f.path.string()) << "\n"
+      << "      starting_time:\n        nanoseconds_since_epoch: " << f.starting_time_ns << "\n"
+      << "      duration:\n        nanoseconds: " << f.duration_ns << "\n"
+      << "      message_count: " << f.message_count << "\n";
+  }
+  const fs::path target = dir / kMetadataFile;
+  const fs::path tmp = dir / (std::string(kMetadataFile) + ".tmp");
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    out << y.str();
+    out.flush();
+    if (!out) throw BagError(tmp.string() + ": write failed");
+  }
+  std::error_code ec;
+  fs::rename(tmp, target, ec);
+  if (ec) throw BagError(target.string() + ": cannot write: " + ec.message());
+}
+
+}  // namespace
+
 class Writer::Impl {
  public:
   Impl(const fs::path& dir, WriteOptions options) : dir_(dir), options_(options) {
@@ -446,59 +506,7 @@ class Writer::Impl {
     files_.push_back(f);
   }
 
-  // Version 5: the fields ROS 2 Humble reads; Iron and Jazzy read it too.
-  void write_metadata() {
-    int64_t start = 0;
-    int64_t end = 0;
-    uint64_t count = 0;
-    for (const auto& f : files_) {
-      if (f.message_count == 0) continue;
-      start = count ? std::min(start, f.starting_time_ns) : f.starting_time_ns;
-      end = count ? std::max(end, f.starting_time_ns + f.duration_ns)
-                  : f.starting_time_ns + f.duration_ns;
-      count += f.message_count;
-    }
-    std::ostringstream y;
-    y << "rosbag2_bagfile_information:\n"
-      << "  version: 5\n"
-      << "  storage_identifier: " << to_string(options_.storage) << "\n"
-      << "  duration:\n    nanoseconds: " << (end - start) << "\n"
-      << "  starting_time:\n    nanoseconds_since_epoch: " << start << "\n"
-      << "  message_count: " << count << "\n"
-      << "  topics_with_message_count:\n";
-    for (const auto& t : topics_) {
-      y << "    - topic_metadata:\n"
-        << "        name: " << quoted(t.name) << "\n"
-        << "        type: " << quoted(t.type) << "\n"
-        << "        serialization_format: " << quoted(t.serialization_format) << "\n"
-        << "        offered_qos_profiles: "
-        << quoted(qos_with_integer_enums(t.offered_qos_profiles)) << "\n"
-        << "      message_count: " << t.message_count << "\n";
-    }
-    y << "  compression_format: \"\"\n"
-      << "  compression_mode: \"\"\n"
-      << "  relative_file_paths:\n";
-    for (const auto& f : files_) y << "    - " << quoted(f.path.string()) << "\n";
-    y << "  files:\n";
-    for (const auto& f : files_) {
-      y << "    - path: " << quoted(f.path.string()) << "\n"
-        << "      starting_time:\n        nanoseconds_since_epoch: " << f.starting_time_ns << "\n"
-        << "      duration:\n        nanoseconds: " << f.duration_ns << "\n"
-        << "      message_count: " << f.message_count << "\n";
-    }
-    // Written beside and renamed: a crash never leaves a half-written metadata.yaml.
-    const fs::path target = dir_ / kMetadataFile;
-    const fs::path tmp = dir_ / (std::string(kMetadataFile) + ".tmp");
-    {
-      std::ofstream out(tmp, std::ios::trunc);
-      out << y.str();
-      out.flush();
-      if (!out) throw BagError(tmp.string() + ": write failed");
-    }
-    std::error_code ec;
-    fs::rename(tmp, target, ec);
-    if (ec) throw BagError(target.string() + ": cannot write: " + ec.message());
-  }
+  void write_metadata() { write_metadata_file(dir_, options_.storage, topics_, files_); }
 
   fs::path dir_;
   WriteOptions options_;
@@ -531,17 +539,89 @@ void Writer::close() {
   impl_->close();
 }
 
-uint64_t convert(const fs::path& in, const fs::path& out, const WriteOptions& options) {
+BagInfo reindex(const fs::path& dir) {
+  if (!fs::is_directory(dir)) throw BagError(dir.string() + ": not a directory");
+  if (fs::exists(dir / kMetadataFile)) {
+    throw BagError((dir / kMetadataFile).string() +
+                   ": the bag has one already; remove it to index the storage files again");
+  }
+  // The storage files, in the order of their split index (<name>_<n>.<ext>), then by name.
+  std::vector<std::pair<long, fs::path>> found;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const auto ext = e.path().extension();
+    if (!e.is_regular_file()) continue;
+    if (ext == ".zstd") {
+      throw BagError(e.path().string() +
+                     ": a file-compressed bag cannot be indexed (its metadata.yaml says how it was "
+                     "compressed); decompress its files first");
+    }
+    if (ext != ".db3" && ext != ".mcap") continue;
+    const std::string stem = e.path().stem().string();
+    const auto underscore = stem.rfind('_');
+    long index = -1;
+    if (underscore != std::string::npos && underscore + 1 < stem.size() &&
+        stem.find_first_not_of("0123456789", underscore + 1) == std::string::npos) {
+      index = std::stol(stem.substr(underscore + 1));
+    }
+    found.emplace_back(index, e.path());
+  }
+  if (found.empty()) throw BagError(dir.string() + ": no .db3 or .mcap file to index");
+  std::sort(found.begin(), found.end());
+
+  BagInfo info;
+  info.path = dir;
+  info.storage = sniff_storage(found.front().second);
+  std::map<std::string, std::size_t> topic_index;
+  for (const auto& [index, file] : found) {
+    if (sniff_storage(file) != info.storage) {
+      throw BagError(file.string() + ": is " + to_string(sniff_storage(file)) + " but " +
+                     found.front().second.filename().string() + " is " + to_string(info.storage) +
+                     "; a bag has one storage");
+    }
+    const auto reader = open_storage(file, {});
+    FileInfo f;
+    f.path = file.filename();
+    for (const auto& t : reader->topics()) {
+      f.message_count += t.message_count;
+      auto [it, added] = topic_index.try_emplace(t.name, info.topics.size());
+      if (added) {
+        info.topics.push_back(t);
+        continue;
+      }
+      TopicInfo& known = info.topics[it->second];
+      if (known.type != t.type) {
+        throw BagError(file.string() + ": topic " + t.name + " holds " + t.type + ", but " +
+                       known.type + " in an earlier file");
+      }
+      known.message_count += t.message_count;
+    }
+    if (f.message_count) {
+      f.starting_time_ns = reader->start_time_ns();
+      f.duration_ns = reader->end_time_ns() - reader->start_time_ns();
+    }
+    info.message_count += f.message_count;
+    info.bytes += fs::file_size(file);
+    info.files.push_back(f);
+  }
+  write_metadata_file(dir, info.storage, info.topics, info.files);
+  return read_info(dir);
+}
+
+uint64_t convert(const fs::path& in, const fs::path& out, const WriteOptions& options,
+                 const std::function<void(TopicInfo&)>& complete) {
   Reader reader(in);
   Writer writer(out, options);
   std::vector<std::size_t> ids;
-  for (const auto& t : reader.topics()) ids.push_back(writer.add_topic(t));
+  const auto add = [&](TopicInfo topic) {
+    if (complete) complete(topic);
+    ids.push_back(writer.add_topic(topic));
+  };
+  for (const auto& t : reader.topics()) add(t);
   uint64_t n = 0;
   Message m;
   while (reader.next(m)) {
     // Topics first seen in a later file of a split bag.
-    while (ids.size() < reader.topics().size())
-      ids.push_back(writer.add_topic(reader.topics()[ids.size()]));
+    while (ids.size() < reader.topics().size()) add(reader.topics()[ids.size()]);
     writer.write(ids.at(m.topic), m.timestamp_ns, m.data);
     ++n;
   }

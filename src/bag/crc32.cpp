@@ -54,7 +54,8 @@ ROBOTPERF_AVX512_CLMUL __m512i fold(__m512i lanes, __m512i k) {
 }
 
 // The constants of one fold per lane, the lane-0 ones first.
-ROBOTPERF_AVX512_CLMUL __m512i per_lane(FoldConstants k0, FoldConstants k1, FoldConstants k2, FoldConstants k3) {
+ROBOTPERF_AVX512_CLMUL __m512i per_lane(FoldConstants k0, FoldConstants k1, FoldConstants k2,
+                                        FoldConstants k3) {
   auto q = [](uint64_t v) { return static_cast<long long>(v); };
   return _mm512_set_epi64(q(k3.high), q(k3.low), q(k2.high), q(k2.low), q(k1.high), q(k1.low),
                           q(k0.high), q(k0.low));

@@ -373,8 +373,10 @@ class McapReader final : public StorageReader {
                std::to_string(c.schema_id) + ", which the file lacks");
         }
         t.type = s->second.name;
-        t.definition_encoding = s->second.encoding;
-        t.definition = s->second.data;
+        if (s->second.encoding != "unknown") {
+          t.definition_encoding = s->second.encoding;
+          t.definition = s->second.data;
+        }
       }
       if (auto q = c.metadata.find("offered_qos_profiles"); q != c.metadata.end())
         t.offered_qos_profiles = q->second;
@@ -536,7 +538,9 @@ class McapWriter final : public StorageWriter {
         b_.begin_record(mcap::kSchema);
         b_.u16(schema_id);
         b_.string(t.type);
-        b_.string(t.definition_encoding.empty() ? "ros2msg" : t.definition_encoding);
+        // rosbag2's mark of a type whose definition it could not find: "unknown", no data (an
+        // empty "ros2msg" would claim a type without fields).
+        b_.string(t.definition_encoding.empty() ? "unknown" : t.definition_encoding);
         b_.bytes32({reinterpret_cast<const uint8_t*>(t.definition.data()), t.definition.size()});
         b_.finish_record();
         schemas_.push_back(b_.bytes());

@@ -5,6 +5,7 @@
 #include <sqlite3.h>
 
 #include <map>
+#include <set>
 
 #include "robotperf/bag/bag.hpp"
 #include "robotperf/bag/qos.hpp"
@@ -139,7 +140,8 @@ class SqliteReader final : public StorageReader {
       t.serialization_format = q.text(3);
       t.offered_qos_profiles = q.text(4);
       t.type_description_hash = q.text(5);
-      if (auto it = definitions.find(t.type); it != definitions.end()) {
+      if (auto it = definitions.find(t.type);
+          it != definitions.end() && it->second.first != "unknown") {
         t.definition_encoding = it->second.first;
         t.definition = it->second.second;
       }
@@ -202,7 +204,9 @@ class SqliteReader final : public StorageReader {
   std::unique_ptr<Statement> messages_;
 };
 
-// Schema 3, the newest that ROS 2 Humble reads; Iron and Jazzy read it too.
+// Schema 4, Iron's and Jazzy's layout: topics with type_description_hash, and message_definitions
+// holding each type's definition, which Iron and later read back (from schema 4 on). Humble's
+// plug-in selects the tables and columns it knows by name and ignores the others.
 class SqliteWriter final : public StorageWriter {
  public:
   explicit SqliteWriter(const fs::path& file)
@@ -210,19 +214,28 @@ class SqliteWriter final : public StorageWriter {
     db_.exec(
         "PRAGMA journal_mode=MEMORY; PRAGMA synchronous=OFF; PRAGMA page_size=4096;"
         "CREATE TABLE schema(schema_version INTEGER PRIMARY KEY,ros_distro TEXT NOT NULL);"
-        "INSERT INTO schema VALUES(3,'humble');"
+        "INSERT INTO schema VALUES(4,'jazzy');"
         "CREATE TABLE metadata(id INTEGER PRIMARY KEY,metadata_version INTEGER NOT NULL,"
         "metadata TEXT NOT NULL);"
         "CREATE TABLE topics(id INTEGER PRIMARY KEY,name TEXT NOT NULL,type TEXT NOT NULL,"
-        "serialization_format TEXT NOT NULL,offered_qos_profiles TEXT NOT NULL);"
+        "serialization_format TEXT NOT NULL,offered_qos_profiles TEXT NOT NULL,"
+        "type_description_hash TEXT NOT NULL);"
+        "CREATE TABLE message_definitions(id INTEGER PRIMARY KEY,topic_type TEXT NOT NULL,"
+        "encoding TEXT NOT NULL,encoded_message_definition TEXT NOT NULL,"
+        "type_description_hash TEXT NOT NULL);"
         "CREATE TABLE messages(id INTEGER PRIMARY KEY,topic_id INTEGER NOT NULL,"
         "timestamp INTEGER NOT NULL, data BLOB NOT NULL);"
         "CREATE INDEX timestamp_idx ON messages (timestamp ASC);"
         "BEGIN TRANSACTION;");
     insert_topic_ = std::make_unique<Statement>(
         db_.get(),
-        "INSERT INTO topics (id, name, type, serialization_format, offered_qos_profiles) "
-        "VALUES (?, ?, ?, ?, ?)",
+        "INSERT INTO topics (id, name, type, serialization_format, offered_qos_profiles, "
+        "type_description_hash) VALUES (?, ?, ?, ?, ?, ?)",
+        file);
+    insert_definition_ = std::make_unique<Statement>(
+        db_.get(),
+        "INSERT INTO message_definitions (topic_type, encoding, encoded_message_definition, "
+        "type_description_hash) VALUES (?, ?, ?, ?)",
         file);
     insert_message_ = std::make_unique<Statement>(
         db_.get(), "INSERT INTO messages (topic_id, timestamp, data) VALUES (?, ?, ?)", file);
@@ -240,8 +253,19 @@ class SqliteWriter final : public StorageWriter {
     insert_topic_->bind(3, t.type);
     insert_topic_->bind(4, t.serialization_format);
     insert_topic_->bind(5, qos_with_integer_enums(t.offered_qos_profiles));
+    insert_topic_->bind(6, t.type_description_hash);
     insert_topic_->step();
     insert_topic_->reset();
+    // One row per type; an encoding with an empty text is a definition too (std_msgs/msg/Empty).
+    if (!t.definition_encoding.empty() && t.definition_encoding != "unknown" &&
+        defined_types_.insert(t.type).second) {
+      insert_definition_->bind(1, t.type);
+      insert_definition_->bind(2, t.definition_encoding);
+      insert_definition_->bind(3, t.definition);
+      insert_definition_->bind(4, t.type_description_hash);
+      insert_definition_->step();
+      insert_definition_->reset();
+    }
   }
 
   void write(std::size_t topic, int64_t timestamp_ns, std::span<const uint8_t> data) override {
@@ -261,6 +285,7 @@ class SqliteWriter final : public StorageWriter {
     if (closed_) return;
     closed_ = true;
     insert_topic_.reset();
+    insert_definition_.reset();
     insert_message_.reset();
     db_.exec("COMMIT;");
   }
@@ -275,7 +300,9 @@ class SqliteWriter final : public StorageWriter {
   fs::path file_;
   Database db_;
   std::unique_ptr<Statement> insert_topic_;
+  std::unique_ptr<Statement> insert_definition_;
   std::unique_ptr<Statement> insert_message_;
+  std::set<std::string> defined_types_;
   uint64_t bytes_ = 0;
   uint64_t committed_bytes_ = 0;
   std::size_t pending_ = 0;

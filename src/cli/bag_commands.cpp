@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <ctime>
 #include <iostream>
+#include <set>
 
 #include "robotperf/bag/bag.hpp"
 #include "robotperf/bag/qos.hpp"
@@ -99,19 +100,35 @@ int bag_echo(const std::string& path, const EchoOptions& options) {
   msgs::dynamic::TypeRegistry registry;
   for (const auto& dir : options.msg_dirs) registry.add_directory(dir);
   for (const auto& t : reader.topics()) {
-    if (t.definition_encoding == "ros2msg" && !t.definition.empty()) {
+    // An empty ros2msg text is a definition too: a type without fields (std_msgs/msg/Empty).
+    if (t.definition_encoding == "ros2msg") {
       registry.add_ros2msg(t.type, t.definition);
     } else if (auto builtin = msgs::ros2msg_schema(t.type); builtin && !registry.contains(t.type)) {
       registry.add_ros2msg(t.type, *builtin);
     }
+    registry.adopt(t.type);
   }
   bag::Message m;
   std::size_t printed = 0;
+  std::set<std::size_t> warned;
   while ((!options.limit || printed < *options.limit) && reader.next(m)) {
     const bag::TopicInfo& topic = reader.topics()[m.topic];
+    if (topic.serialization_format != "cdr") {
+      throw bag::BagError(path + ": topic " + topic.name + " is serialized as '" +
+                          topic.serialization_format + "': robotperf decodes CDR only");
+    }
     msgs::dynamic::Value value;
     try {
       value = msgs::dynamic::decode(registry, topic.type, m.data);
+      // A definition that leaves bytes over is not the one the message was written with (CDR
+      // pads to 4 at most): say so once per topic rather than print misread fields silently.
+      const std::size_t used = msgs::dynamic::encode(registry, topic.type, value).size();
+      if (m.data.size() >= used + 4 && warned.insert(m.topic).second) {
+        std::cerr << "robotperf: warning: " << topic.name << ": the definition of " << topic.type
+                  << " accounts for " << used << " of the " << m.data.size()
+                  << " bytes of its messages; it is probably not the type they were written "
+                     "with, and the fields below may be misread\n";
+      }
     } catch (const msgs::dynamic::DefinitionError& e) {
       throw msgs::dynamic::DefinitionError(std::string(e.what()) + "; the bag carries none for " +
                                            topic.name + ", pass --msg-dir with its .msg files");
@@ -133,10 +150,44 @@ int bag_convert(const std::string& in, const std::string& out, const ConvertOpti
   w.compression = bag::compression_from_string(options.compression);
   w.chunk_size = options.chunk_size;
   w.max_file_bytes = static_cast<uint64_t>(options.max_file_mib * 1024 * 1024);
-  const uint64_t n = bag::convert(in, out, w);
+  // Topics the bag carries no definition for get robotperf's, or one from --msg-dir, so that the
+  // converted bag can be decoded; those for which none is found are named.
+  msgs::dynamic::TypeRegistry registry;
+  for (const auto& dir : options.msg_dirs) registry.add_directory(dir);
+  std::set<std::string> undefined;
+  const auto complete = [&](bag::TopicInfo& topic) {
+    if (!topic.definition_encoding.empty()) return;
+    if (auto builtin = msgs::ros2msg_schema(topic.type)) {
+      topic.definition_encoding = "ros2msg";
+      topic.definition = *builtin;
+      return;
+    }
+    registry.adopt(topic.type);
+    try {
+      topic.definition = registry.ros2msg_schema(topic.type);
+      topic.definition_encoding = "ros2msg";
+    } catch (const msgs::dynamic::DefinitionError&) {
+      undefined.insert(topic.type + " (" + topic.name + ")");
+    }
+  };
+  const uint64_t n = bag::convert(in, out, w, complete);
+  for (const auto& what : undefined) {
+    std::cerr << "robotperf: warning: no definition of " << what
+              << " in the bag, in robotperf or under --msg-dir: it is written as 'unknown', and "
+                 "readers cannot decode its messages without the .msg files\n";
+  }
   std::cout << "wrote " << n << " messages to " << out << " (" << bag::to_string(w.storage)
             << (w.storage == bag::Storage::kMcap ? ", " + bag::to_string(w.compression) : "")
             << ")\n";
+  return 0;
+}
+
+int bag_reindex(const std::string& dir) {
+  const bag::BagInfo info = bag::reindex(dir);
+  std::cout << "wrote " << (fs::path(dir) / "metadata.yaml").string() << ": " << info.files.size()
+            << " file" << (info.files.size() == 1 ? "" : "s") << ", " << info.topics.size()
+            << " topic" << (info.topics.size() == 1 ? "" : "s") << ", " << info.message_count
+            << " messages\n";
   return 0;
 }
 

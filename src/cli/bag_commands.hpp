@@ -24,8 +24,11 @@ struct ConvertOptions {
   std::string compression = "zstd";
   std::size_t chunk_size = 4 * 1024 * 1024;
   double max_file_mib = 0;
+  std::vector<std::string> msg_dirs;  // .msg files for types the bag has no definition of
 };
 int bag_convert(const std::string& in, const std::string& out, const ConvertOptions& options);
+// `bag reindex <dir>`: metadata.yaml for a bag directory without one.
+int bag_reindex(const std::string& dir);
 
 struct GenerateOptions {
   std::string out;  // default: the dataset name with '/' replaced by '_'

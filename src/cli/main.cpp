@@ -12,6 +12,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
+#include <optional>
 #include <sstream>
 
 #include "bag_commands.hpp"
@@ -295,6 +297,46 @@ class InterruptHandling {
   struct sigaction previous_term_ {};
 };
 
+// Writes a run's files (<base><suffix> for each) atomically. When the output folder refuses them
+// (a full disk, say), they go to a folder of their own under the temporary directory instead and
+// stderr says where: a measured run is not thrown away. Returns the base the files were written
+// under, or nothing when they could be written nowhere (stderr says why).
+std::optional<fs::path> write_result_files(const fs::path& base,
+                                           const std::map<std::string, std::string>& files) {
+  std::vector<fs::path> written;
+  const auto write_all = [&](const fs::path& to) {
+    for (const auto& [suffix, content] : files) {
+      report::write_file_atomically(to.string() + suffix, content);
+      written.push_back(to.string() + suffix);
+    }
+  };
+  try {
+    write_all(base);
+    return base;
+  } catch (const std::exception& e) {
+    std::cerr << "robotperf: " << e.what() << "\n";
+  }
+  // All of a run's files stay together: those that did fit go with the others.
+  for (const auto& file : written) {
+    std::error_code ignored;
+    fs::remove(file, ignored);
+  }
+  const fs::path elsewhere = fs::temp_directory_path() /
+                             ("robotperf-unsaved-" + std::to_string(getpid())) / base.filename();
+  try {
+    fs::create_directories(elsewhere.parent_path());
+    write_all(elsewhere);
+  } catch (const std::exception& e) {
+    std::cerr << "robotperf: the results could not be kept anywhere (" << e.what()
+              << "): the summary above is all there is\n";
+    return std::nullopt;
+  }
+  std::cerr << "robotperf: the results were written to " << elsewhere.parent_path().string()
+            << " instead; move them where they belong once " << base.parent_path().string()
+            << " has room\n";
+  return elsewhere;
+}
+
 // "--remap from:=to" and "--window START:END" (seconds, either may be empty).
 harness::BagSelection bag_selection(const RunArgs& a) {
   harness::BagSelection bag;
@@ -394,23 +436,28 @@ int run(const Roots& roots, const RunArgs& a) {
       throw;
     }
   }
-  const fs::path base = fs::path(a.output) / report::result_basename(result);
+  fs::path base = fs::path(a.output) / report::result_basename(result);
   if (result.grey) {
     const fs::path trace = base.string() + ".trace";
     fs::rename(result.trace_dir, trace);
     result.trace_dir = trace;
   }
   const auto machine = sysinfo::collect_machine_info();
-  const auto json = report::result_to_json(result, machine);
-  report::write_file_atomically(base.string() + ".json", json.dump(2) + "\n");
-  if (a.csv)
-    report::write_file_atomically(base.string() + ".latencies.csv", report::latencies_csv(result));
-
+  // The summary first: whatever happens to the files, what was measured is on the screen.
   std::cout << report::summary_table(result);
   std::cout << "machine: " << sysinfo::summary_line(machine) << "\n";
-  std::cout << "results: " << base.string() << ".json" << (a.csv ? " (+ .latencies.csv)" : "")
-            << (result.grey ? " (+ .trace)" : "") << "\n";
-  if (a.report) {
+  std::map<std::string, std::string> files = {
+      {".json", report::result_to_json(result, machine)
+                        .dump(2, ' ', false, nlohmann::json::error_handler_t::replace) +
+                    "\n"}};
+  if (a.csv) files[".latencies.csv"] = report::latencies_csv(result);
+  const auto kept = write_result_files(base, files);
+  const bool moved = kept && *kept != base;
+  if (kept) base = *kept;
+  if (kept)
+    std::cout << "results: " << base.string() << ".json" << (a.csv ? " (+ .latencies.csv)" : "")
+              << (result.grey ? " (+ .trace)" : "") << "\n";
+  if (a.report && kept && !moved) {
     report::ReportInput input;
     input.runs.push_back(report::load_run(base.string() + ".json"));
     // The package's accepted results, for context, when it has any.
@@ -425,6 +472,8 @@ int run(const Roots& roots, const RunArgs& a) {
   const bool functional_ok = !result.functional || result.functional->valid;
   int code = result.valid && functional_ok ? kExitOk : kExitInvalidResult;
   if (result.interrupted) code = 128 + g_interrupted.load();
+  // Results not where they were asked for are an error of the run, whatever it measured.
+  if (!kept || moved) code = kExitError;
   if (result.threads_abandoned) {
     // A callback that never returned still runs on objects that must never be destroyed: end
     // here, with everything written, without running destructors.
@@ -466,7 +515,8 @@ int analyze(const TraceArgs& a) {
             {"from_sent", metrics::to_json(analysis.latency_from_sent, 1e-6, "ms")}}},
           {"throughput_hz", analysis.throughput_hz}};
     }
-    report::write_file_atomically(a.json, j.dump(2) + "\n");
+    report::write_file_atomically(
+        a.json, j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   }
   return analysis.valid ? kExitOk : kExitInvalidResult;
 }
@@ -575,7 +625,9 @@ int import_published(const std::vector<std::string>& paths, const std::string& i
     flagged += report::flagged_rows_report(b);
     if (!into.empty()) {
       const fs::path out = fs::path(into) / ("published-" + b.category + "-" + b.name + ".json");
-      report::write_file_atomically(out, report::to_json(b).dump(1) + "\n");
+      report::write_file_atomically(
+          out,
+          report::to_json(b).dump(1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
     }
   }
   if (!flagged.empty()) std::cout << "\nrows that break the measurement rules:\n" << flagged;
@@ -795,7 +847,8 @@ int main(int argc, char** argv) {
   bag_echo_cmd->add_option("--topic", echo.topics, "only this topic (repeatable)");
   bag_echo_cmd->add_option("--limit", echo.limit, "print at most N messages");
   bag_echo_cmd->add_option("--msg-dir", echo.msg_dirs,
-                           "folder of .msg files for types the bag has no definition of");
+                           "folder of .msg files (<pkg>/msg/*.msg, or flat) for types the bag "
+                           "has no definition of");
   bag_echo_cmd->add_option("--max-array", echo.max_array,
                            "summarise arrays longer than this (default 64)");
   cli::ConvertOptions convert;
@@ -811,6 +864,15 @@ int main(int argc, char** argv) {
   bag_convert_cmd->add_option("--chunk-size", convert.chunk_size, "MCAP chunk size in bytes");
   bag_convert_cmd->add_option("--max-file-size", convert.max_file_mib,
                               "split into files of about this many MiB (0 = one file)");
+  bag_convert_cmd->add_option(
+      "--msg-dir", convert.msg_dirs,
+      "folder of .msg files giving the definitions the bag lacks, written into the new bag");
+
+  std::string reindex_dir;
+  auto* bag_reindex_cmd = bag_cmd->add_subcommand(
+      "reindex", "write metadata.yaml for a bag directory that lost it, from its storage files");
+  bag_reindex_cmd->add_option("dir", reindex_dir, "bag directory with .db3 or .mcap files")
+      ->required();
 
   auto* dataset_cmd = app.add_subcommand("dataset", "the built-in datasets");
   dataset_cmd->require_subcommand(1);
@@ -894,6 +956,7 @@ int main(int argc, char** argv) {
     if (*bag_info_cmd) return cli::bag_info(bag_path);
     if (*bag_echo_cmd) return cli::bag_echo(bag_path, echo);
     if (*bag_convert_cmd) return cli::bag_convert(bag_path, convert_out, convert);
+    if (*bag_reindex_cmd) return cli::bag_reindex(reindex_dir);
     if (*generate_cmd) return cli::dataset_generate(dataset_name, generate);
     if (*analyze_cmd) return analyze(ta);
     if (*sysinfo_cmd) {
@@ -902,7 +965,8 @@ int main(int argc, char** argv) {
           {"software", report::software_json()},
           {"power",
            metrics::sources_to_json(metrics::discover_power_sources(sysinfo_power.options()))}};
-      std::cout << description.dump(2) << "\n";
+      std::cout << description.dump(2, ' ', false, nlohmann::json::error_handler_t::replace)
+                << "\n";
       return kExitOk;
     }
     if (*node_cmd) {

@@ -1,5 +1,9 @@
 #include "robotperf/graph/node.hpp"
 
+#include <cxxabi.h>
+
+#include <cstdlib>
+#include <memory>
 #include <stdexcept>
 
 #include "robotperf/tracing/tracepoints.hpp"
@@ -10,6 +14,17 @@ namespace {
 // The message ID (header stamp) of a message, or kNoMessageId for types without a header.
 int64_t message_id(const msgs::TypeSupport& type, const void* msg) {
   return type.stamped() ? type.stamp_ns(msg) : tracing::kNoMessageId;
+}
+
+// Records the symbol of a callback (ros2:rclcpp_callback_register): the demangled name of its
+// callable's type. Demangling allocates, so only while traced.
+void trace_callback_register(const void* callback, const std::type_info& callable) {
+  if (!lttng_ust_tracepoint_enabled(ros2, rclcpp_callback_register)) return;
+  int status = 0;
+  const std::unique_ptr<char, decltype(&std::free)> demangled(
+      abi::__cxa_demangle(callable.name(), nullptr, nullptr, &status), &std::free);
+  lttng_ust_do_tracepoint(ros2, rclcpp_callback_register, callback,
+                          status == 0 && demangled ? demangled.get() : callable.name());
 }
 
 }  // namespace
@@ -85,7 +100,7 @@ void Timer::cancel() {
 }
 
 void GenericPublisher::publish(rmw::MessagePtr msg) {
-  lttng_ust_tracepoint(ros2, rclcpp_publish, this, msg.get());
+  lttng_ust_tracepoint(ros2, rclcpp_publish, msg.get());
   if (lttng_ust_tracepoint_enabled(robotperf, publish)) {
     // Sizing walks the message without writing it, and only while traced.
     lttng_ust_do_tracepoint(robotperf, publish, node_name_.c_str(), topic_.c_str(),
@@ -124,11 +139,13 @@ std::shared_ptr<Timer> Node::create_timer(std::chrono::nanoseconds period,
                                           std::function<void()> callback) {
   if (period.count() <= 0)
     throw std::invalid_argument("timer period must be positive in node " + name_);
+  const std::type_info& callable = callable_type(callback);
   auto timer =
       std::make_shared<Timer>(period, std::move(callback), rmw::steady_now_ns() + period.count());
   lttng_ust_tracepoint(ros2, rcl_timer_init, timer.get(), static_cast<int64_t>(period.count()));
   lttng_ust_tracepoint(ros2, rclcpp_timer_callback_added, timer.get(), timer->callback_handle());
   lttng_ust_tracepoint(ros2, rclcpp_timer_link_node, timer.get(), this);
+  trace_callback_register(timer->callback_handle(), callable);
   add_entity(timer);
   notify();  // an executor already spinning must learn the new deadline
   return timer;
@@ -181,7 +198,8 @@ std::shared_ptr<GenericPublisher> Node::create_generic_publisher(const std::stri
 
 std::shared_ptr<GenericSubscription> Node::create_generic_subscription(
     const std::string& topic, const msgs::TypeSupport& type, const QoS& qos,
-    GenericSubscription::Callback callback) {
+    GenericSubscription::Callback callback, const std::type_info* callable) {
+  const std::type_info& callable_or_held = callable ? *callable : callable_type(callback);
   auto sub = std::make_shared<GenericSubscription>(topic, type, name_, std::move(callback));
   sub->attach(context_.transport().create_subscription(topic, type, qos, [this] { notify(); }));
   // One object stands for both of ROS 2's layers: rcl handle = rclcpp subscription.
@@ -189,6 +207,7 @@ std::shared_ptr<GenericSubscription> Node::create_generic_subscription(
                        topic.c_str(), qos.depth);
   lttng_ust_tracepoint(ros2, rclcpp_subscription_init, sub.get(), sub.get());
   lttng_ust_tracepoint(ros2, rclcpp_subscription_callback_added, sub.get(), sub->callback_handle());
+  trace_callback_register(sub->callback_handle(), callable_or_held);
   add_entity(sub);
   return sub;
 }

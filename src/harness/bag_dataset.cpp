@@ -1,8 +1,12 @@
 // DataLoader for rosbag2 bags: the benchmark's input topics, undecoded, in memory.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <functional>
 #include <map>
+#include <memory>
 #include <set>
+#include <span>
 
 #include "robotperf/bag/bag.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
@@ -40,6 +44,36 @@ bool starts_with_header(const bag::TopicInfo& topic) {
   return stamped;
 }
 
+// Decodes payloads of one bag topic fully, to find corrupt ones: with robotperf's codec for the
+// types it has, else with the bag's own definition; a type with neither is not checked.
+class PayloadCheck {
+ public:
+  explicit PayloadCheck(const bag::TopicInfo& topic) : type_(topic.type) {
+    msgs::with_message_type(topic.type, [&]<class T>() {
+      decode_ = [](std::span<const uint8_t> payload) {
+        T msg;
+        msgs::type_support<T>().deserialize(payload, &msg);
+      };
+    });
+    if (!decode_ && topic.definition_encoding == "ros2msg") {
+      registry_ = std::make_shared<msgs::dynamic::TypeRegistry>();
+      registry_->add_ros2msg(topic.type, topic.definition);
+      decode_ = [registry = registry_, type = type_](std::span<const uint8_t> payload) {
+        (void)msgs::dynamic::decode(*registry, type, payload);
+      };
+    }
+  }
+  // Throws msgs::CdrError for a payload that does not decode.
+  void check(std::span<const uint8_t> payload) const {
+    if (decode_) decode_(payload);
+  }
+
+ private:
+  std::string type_;
+  std::shared_ptr<msgs::dynamic::TypeRegistry> registry_;
+  std::function<void(std::span<const uint8_t>)> decode_;
+};
+
 struct Recorded {
   int64_t time_ns;   // bag timestamp (reception time)
   int64_t stamp_ns;  // header.stamp
@@ -48,7 +82,8 @@ struct Recorded {
 
 }  // namespace
 
-Dataset load_bag_dataset(const BagSelection& selection, const std::vector<BoundaryTopic>& inputs) {
+Dataset load_bag_dataset(const BagSelection& selection, const std::vector<BoundaryTopic>& inputs,
+                         std::vector<std::string>* corrupt) {
   const std::string path = selection.path.string();
   if (inputs.empty()) throw BenchmarkError("a benchmark without inputs cannot replay bag " + path);
   const bag::BagInfo info = bag::read_info(selection.path);
@@ -56,11 +91,12 @@ Dataset load_bag_dataset(const BagSelection& selection, const std::vector<Bounda
     auto it = selection.remaps.find(bag_topic);
     return it == selection.remaps.end() ? bag_topic : it->second;
   };
-  for (const auto& [from, to] : selection.remaps) {
+  for (const auto& remap : selection.remaps) {
+    const std::string& from = remap.first;
     if (std::none_of(info.topics.begin(), info.topics.end(),
                      [&](const bag::TopicInfo& t) { return t.name == from; })) {
-      throw BenchmarkError("--remap " + from + ":=" + to + ": bag " + path + " has no topic " +
-                           from);
+      throw BenchmarkError("--remap " + from + ":=" + remap.second + ": bag " + path +
+                           " has no topic " + from);
     }
   }
 
@@ -83,6 +119,11 @@ Dataset load_bag_dataset(const BagSelection& selection, const std::vector<Bounda
       throw BenchmarkError("bag " + path + " has nothing for input " + input.topic + " (" +
                            input.type + "); its topics: " + names +
                            "; map one onto it with --remap <bag topic>:=" + input.topic);
+    }
+    if (source->serialization_format != "cdr") {
+      throw BenchmarkError("bag topic " + source->name + " is serialized as '" +
+                           source->serialization_format +
+                           "': robotperf replays CDR only (rosbag2's default format)");
     }
     if (!starts_with_header(*source)) {
       throw BenchmarkError("bag topic " + source->name + ": type " + source->type +
@@ -107,6 +148,16 @@ Dataset load_bag_dataset(const BagSelection& selection, const std::vector<Bounda
   std::map<std::string, std::size_t> input_of_topic;
   for (std::size_t i = 0; i < sources.size(); ++i) input_of_topic[sources[i]->name] = i;
   std::vector<std::vector<Recorded>> recorded(inputs.size());
+  // Every message is decoded once here, before timing, as the subscribers will decode it: one
+  // that cannot be would be dropped by the graph's first node and counted as lost.
+  std::vector<PayloadCheck> checks;
+  for (const auto* source : sources) checks.emplace_back(*source);
+  struct Corrupt {
+    std::size_t count = 0;
+    int64_t first_ns = 0;
+    std::string why;
+  };
+  std::vector<Corrupt> corrupted(inputs.size());
   bag::Reader reader(selection.path, read);
   bag::Message m;
   while (reader.next(m)) {
@@ -115,13 +166,28 @@ Dataset load_bag_dataset(const BagSelection& selection, const std::vector<Bounda
     int64_t stamp = 0;
     try {
       stamp = msgs::read_header_stamp_ns(m.data);
+      checks[i].check(m.data);
     } catch (const msgs::CdrError& e) {
-      throw bag::BagError(path + ": message on " + topic.name +
-                          " has no readable header: " + e.what());
+      if (corrupted[i].count++ == 0) {
+        corrupted[i].first_ns = m.timestamp_ns;
+        corrupted[i].why = e.what();
+      }
+      continue;
     }
     auto payload = std::make_shared<msgs::SerializedMessage>();
     payload->cdr = std::move(m.data);
     recorded[i].push_back({m.timestamp_ns, stamp, std::move(payload)});
+  }
+
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    if (corrupted[i].count == 0 || corrupt == nullptr) continue;
+    char first[64];
+    std::snprintf(first, sizeof first, "%.9f", static_cast<double>(corrupted[i].first_ns) * 1e-9);
+    corrupt->push_back("bag " + path + ": " + std::to_string(corrupted[i].count) + " message" +
+                       (corrupted[i].count == 1 ? "" : "s") + " on " + sources[i]->name +
+                       " do not decode as " + sources[i]->type + " (the first at " + first +
+                       " s: " + corrupted[i].why +
+                       "); left out of the replay, neither sent nor counted as lost");
   }
 
   // Frames: the first input's messages in order, joined by equal header

@@ -158,8 +158,9 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
     if (spec.min_samples == 0) file.fail(v["min_samples"], "min_samples must be >= 1");
   }
 
+  // A missing key is an invalid node in yaml-cpp: asking its type throws, so check it is defined.
   const YAML::Node inputs = root["inputs"];
-  if (!inputs.IsSequence() || inputs.size() == 0)
+  if (!inputs.IsDefined() || !inputs.IsSequence() || inputs.size() == 0)
     file.fail(root, "'inputs' must be a non-empty list");
   for (const auto& n : inputs) spec.inputs.push_back(boundary_topic(file, n, true));
   if (!root["output"].IsDefined()) file.fail(root, "missing 'output'");
@@ -168,7 +169,7 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   std::vector<const BoundaryTopic*> boundary{&spec.output};
   for (const auto& in : spec.inputs) boundary.push_back(&in);
   const YAML::Node nodes = root["nodes"];
-  if (!nodes.IsSequence()) file.fail(root, "'nodes' must be a list");
+  if (!nodes.IsDefined() || !nodes.IsSequence()) file.fail(root, "'nodes' must be a list");
   std::set<std::string> names;
   for (const auto& n : nodes) {
     file.allow_keys(n, {"name", "kernel", "backend", "parameters", "topics", "qos"});
@@ -303,14 +304,20 @@ BenchmarkSpec load_benchmark(const fs::path& dir) {
   BenchmarkSpec spec;
   spec.dir = dir;
   spec.category = dir.parent_path().filename().string();
-  const YamlFile meta(dir / "benchmark.yaml");
-  spec.id = meta.require_string(meta.root(), "id");
-  spec.name = meta.require_string(meta.root(), "name");
-  spec.short_description = meta.get<std::string>(meta.root(), "short", "");
-  spec.description = meta.get<std::string>(meta.root(), "description", "");
-  spec.workload = meta.string_map(meta.root(), "workload");
-  load_graph(dir / "graph.yaml", spec);
-  load_thresholds(meta, spec);
+  // Every shape of node is checked before use; yaml-cpp's own exceptions (a mapping used as a
+  // key, say) still become one line naming the package.
+  try {
+    const YamlFile meta(dir / "benchmark.yaml");
+    spec.id = meta.require_string(meta.root(), "id");
+    spec.name = meta.require_string(meta.root(), "name");
+    spec.short_description = meta.get<std::string>(meta.root(), "short", "");
+    spec.description = meta.get<std::string>(meta.root(), "description", "");
+    spec.workload = meta.string_map(meta.root(), "workload");
+    load_graph(dir / "graph.yaml", spec);
+    load_thresholds(meta, spec);
+  } catch (const YAML::Exception& e) {
+    throw BenchmarkError(dir.string() + ": unexpected YAML structure: " + e.what());
+  }
   return spec;
 }
 
@@ -407,7 +414,19 @@ std::shared_ptr<graph::Node> make_kernel_node(const NodeSpec& node, graph::Conte
     throw std::invalid_argument("node '" + node.name + "': kernel " + node.kernel +
                                 " has no backend '" + node.backend + "'");
   }
-  auto built = entry.factory(context, kernel_config(node, workload));
+  const std::string who = "node '" + node.name + "'";
+  std::shared_ptr<graph::Node> built;
+  try {
+    built = entry.factory(context, kernel_config(node, workload));
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    throw std::invalid_argument(what.starts_with(who) ? what : who + ": " + what);
+  } catch (const std::exception& e) {
+    // A kernel that cannot start (a missing device, a plug-in's own failure) is named with where
+    // it came from.
+    throw std::runtime_error(who + ": kernel " + node.kernel + " (" + entry.origin +
+                             ") failed to start: " + e.what());
+  }
   if (!built) {
     throw std::runtime_error("node '" + node.name + "': kernel " + node.kernel + " (" +
                              entry.origin + ") built no node");

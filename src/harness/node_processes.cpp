@@ -145,8 +145,10 @@ void NodeProcesses::supervise() {
         close(c.from_child);
         reap(c, true);
         if (!stopping_ && failure_.empty()) {
-          failure_ = "node '" + c.name + "' (pid " + std::to_string(c.report.pid) + ") " +
-                     c.report.exit_status + " during the run";
+          const std::string who =
+              "node '" + c.name + "' (pid " + std::to_string(c.report.pid) + ")";
+          failure_ = c.error.empty() ? who + " " + c.report.exit_status + " during the run"
+                                     : who + ": " + c.error + " (" + c.report.exit_status + ")";
         }
       }
       cv_.notify_all();
@@ -164,6 +166,8 @@ void NodeProcesses::on_line(Child& child, const std::string& line) {
       failure_ = "node '" + child.name + "' (pid " + std::to_string(child.report.pid) +
                  ") hung: " + line.substr(5);
     }
+  } else if (line.rfind("error ", 0) == 0) {
+    child.error = line.substr(6);
   } else if (line.rfind("stats ", 0) == 0) {
     const auto j = nlohmann::json::parse(line.substr(6), nullptr, false);
     if (!j.is_discarded()) {

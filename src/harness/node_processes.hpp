@@ -54,6 +54,7 @@ class NodeProcesses {
     bool eof = false;
     bool killed = false;  // did not stop when asked: SIGKILL
     bool hung = false;    // its watchdog reported a stuck callback
+    std::string error;    // what it reported before failing on its own (a callback threw)
     NodeReport report;
     nlohmann::json control_loop;  // null unless its kernel runs a control loop
   };

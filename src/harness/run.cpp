@@ -188,8 +188,10 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   }
 
   // Everything is loaded before timing starts (DESIGN.md §3.4).
-  const Dataset dataset = options.bag ? load_bag_dataset(*options.bag, spec.inputs)
-                                      : load_dataset(spec.dataset, spec.workload);
+  std::vector<std::string> corrupt_messages;
+  const Dataset dataset = options.bag
+                              ? load_bag_dataset(*options.bag, spec.inputs, &corrupt_messages)
+                              : load_dataset(spec.dataset, spec.workload);
   r.dataset = dataset.name;
   r.dataset_hash = dataset.hash;
   r.dataset_frames = dataset.frames;
@@ -331,6 +333,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     for (const auto& w : r.warnings) broken += "\n  " + w.rule + ": " + w.message;
     throw RunRefused("--strict: not running, run rules broken:" + broken);
   }
+  for (const auto& line : corrupt_messages) r.warnings.push_back({"corrupt_messages", line});
   if (spec.functional && !evaluate_outputs) {
     r.warnings.push_back({"functional", "outputs not checked for accuracy (" +
                                             spec.functional->evaluator +
@@ -532,6 +535,10 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
     executor.spin();  // until the watcher cancels it, or a callback throws
   } catch (const std::exception& e) {
     std::cerr << "robotperf node " << node_name << ": " << e.what() << "\n";
+    // The runner records it with the node's exit status (one line on the wire).
+    std::string what = e.what();
+    std::ranges::replace(what, '\n', ' ');
+    std::cout << "error " << what << std::endl;
     code = 3;
   }
   done = true;
@@ -555,7 +562,8 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   if (const auto* c = dynamic_cast<const plugin::NodeCounters*>(node.get())) {
     for (const auto& [name, value] : c->counters()) stats["counters"][name] = value;
   }
-  std::cout << "stats " << stats.dump() << std::endl;
+  std::cout << "stats " << stats.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)
+            << std::endl;
   return code;
 }
 

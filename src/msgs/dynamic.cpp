@@ -1,13 +1,16 @@
 #include "robotperf/msgs/dynamic.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cstring>
 #include <fstream>
 #include <functional>
 #include <set>
 #include <sstream>
 
 #include "robotperf/msgs/cdr.hpp"
+#include "robotperf/msgs/definitions.hpp"
 
 namespace robotperf::msgs::dynamic {
 namespace {
@@ -26,6 +29,36 @@ const std::map<std::string_view, Primitive>& primitive_names() {
       {"wstring", Primitive::kWString},
   };
   return names;
+}
+
+// The parts of a .srv (request, response) or .action (goal, result, feedback) text: the lines
+// between separator lines "---". A .msg text is one part.
+std::vector<std::string> interface_parts(std::string_view text) {
+  std::vector<std::string> parts(1);
+  std::istringstream lines{std::string(text)};
+  std::string line;
+  while (std::getline(lines, line)) {
+    const auto begin = line.find_first_not_of(" \t\r");
+    const auto end = line.find_last_not_of(" \t\r");
+    if (begin != std::string::npos && line.substr(begin, end - begin + 1) == "---") {
+      parts.emplace_back();
+    } else {
+      parts.back() += line + "\n";
+    }
+  }
+  return parts;
+}
+
+// Definitions of the standard types services and actions are built from, for bags whose schemas
+// do not carry them: robotperf's compiled-in ones, and these two.
+std::string standard_definition(const std::string& type) {
+  if (type == "service_msgs/msg/ServiceEventInfo") {
+    return "uint8 REQUEST_SENT = 0\nuint8 REQUEST_RECEIVED = 1\nuint8 RESPONSE_SENT = 2\n"
+           "uint8 RESPONSE_RECEIVED = 3\nuint8 event_type\nbuiltin_interfaces/Time stamp\n"
+           "char[16] client_gid\nint64 sequence_number\n";
+  }
+  if (type == "unique_identifier_msgs/msg/UUID") return "uint8[16] uuid\n";
+  return ros2msg_schema(type).value();
 }
 
 std::string package_of(const std::string& type) {
@@ -401,6 +434,7 @@ std::string normalize_type_name(std::string_view name) {
 MessageDefinition parse_msg(const std::string& type, std::string_view text) {
   MessageDefinition def;
   def.type = normalize_type_name(type);
+  def.text = std::string(text);
   const std::string package = package_of(def.type);
   std::size_t line_no = 0;
   std::istringstream lines{std::string(text)};
@@ -424,6 +458,10 @@ MessageDefinition parse_msg(const std::string& type, std::string_view text) {
     }
     def.fields.push_back({name, parse_type(type_token, package, context)});
   }
+  // rosidl gives a type without fields (std_msgs/msg/Empty) one uint8 member, which CDR carries.
+  if (def.fields.empty()) {
+    def.fields.push_back({"structure_needs_at_least_one_member", {Primitive::kUint8, "", {}, 0}});
+  }
   return def;
 }
 
@@ -438,7 +476,15 @@ void TypeRegistry::add_ros2msg(const std::string& type, std::string_view schema)
   std::istringstream lines{std::string(schema)};
   std::string line;
   auto flush = [&] {
-    if (!current.empty()) add(parse_msg(current, text));
+    if (!current.empty()) {
+      // A .srv or .action text (parts between "---" lines), as rosbag2 records the definition
+      // of a service's or action's types.
+      if (interface_parts(text).size() > 1) {
+        add_interface(current, text);
+      } else {
+        add(parse_msg(current, text));
+      }
+    }
     text.clear();
   };
   bool expect_name = false;
@@ -450,9 +496,11 @@ void TypeRegistry::add_ros2msg(const std::string& type, std::string_view schema)
       continue;
     }
     if (expect_name) {
-      if (line.rfind("MSG: ", 0) != 0)
+      const auto colon = line.find(": ");
+      const std::string kind = line.substr(0, colon);
+      if (colon == std::string::npos || (kind != "MSG" && kind != "SRV" && kind != "ACTION"))
         throw DefinitionError(type + ": ros2msg schema section without a 'MSG: pkg/Type' line");
-      current = normalize_type_name(line.substr(5));
+      current = normalize_type_name(line.substr(colon + 2));
       expect_name = false;
       continue;
     }
@@ -461,29 +509,128 @@ void TypeRegistry::add_ros2msg(const std::string& type, std::string_view schema)
   flush();
 }
 
+void TypeRegistry::add_interface(const std::string& type, std::string_view text) {
+  const std::string full = normalize_type_name(type);
+  const auto first = full.find('/');
+  const auto last = full.rfind('/');
+  const std::string package = full.substr(0, first);
+  const std::string kind = full.substr(first + 1, last - first - 1);
+  std::string base = full.substr(last + 1);
+  const std::vector<std::string> parts = interface_parts(text);
+  if ((kind != "srv" || parts.size() != 2) && (kind != "action" || parts.size() != 3)) {
+    throw DefinitionError(full + ": a definition with " + std::to_string(parts.size()) +
+                          " parts between '---' lines is neither a service (2, pkg/srv/...) nor "
+                          "an action (3, pkg/action/...)");
+  }
+  // The type asked for names one of the derived types: strip its suffix to get the interface.
+  static const char* const kSuffixes[] = {"_SendGoal_Request",
+                                          "_SendGoal_Response",
+                                          "_SendGoal_Event",
+                                          "_GetResult_Request",
+                                          "_GetResult_Response",
+                                          "_GetResult_Event",
+                                          "_FeedbackMessage",
+                                          "_Request",
+                                          "_Response",
+                                          "_Event",
+                                          "_Goal",
+                                          "_Result",
+                                          "_Feedback"};
+  for (const char* suffix : kSuffixes) {
+    if (base.size() > std::strlen(suffix) && base.ends_with(suffix)) {
+      base.resize(base.size() - std::strlen(suffix));
+      break;
+    }
+  }
+  const std::string prefix = package + "/" + kind + "/" + base;
+  // The types ROS 2 generates around them use these standard types, when the registry lacks them.
+  for (const char* standard : {"builtin_interfaces/msg/Time", "service_msgs/msg/ServiceEventInfo",
+                               "unique_identifier_msgs/msg/UUID"}) {
+    if (!contains(standard)) add_ros2msg(standard, standard_definition(standard));
+  }
+  const auto event = [&](const std::string& service) {
+    add_msg(service + "_Event", "service_msgs/ServiceEventInfo info\n" + service +
+                                    "_Request[<=1] request\n" + service +
+                                    "_Response[<=1] response\n");
+  };
+  if (kind == "srv") {
+    add_msg(prefix + "_Request", parts[0]);
+    add_msg(prefix + "_Response", parts[1]);
+    event(prefix);
+    return;
+  }
+  add_msg(prefix + "_Goal", parts[0]);
+  add_msg(prefix + "_Result", parts[1]);
+  add_msg(prefix + "_Feedback", parts[2]);
+  add_msg(prefix + "_FeedbackMessage",
+          "unique_identifier_msgs/UUID goal_id\n" + prefix + "_Feedback feedback\n");
+  add_msg(prefix + "_SendGoal_Request",
+          "unique_identifier_msgs/UUID goal_id\n" + prefix + "_Goal goal\n");
+  add_msg(prefix + "_SendGoal_Response", "bool accepted\nbuiltin_interfaces/Time stamp\n");
+  event(prefix + "_SendGoal");
+  add_msg(prefix + "_GetResult_Request", "unique_identifier_msgs/UUID goal_id\n");
+  add_msg(prefix + "_GetResult_Response", "int8 status\n" + prefix + "_Result result\n");
+  event(prefix + "_GetResult");
+}
+
 std::size_t TypeRegistry::add_directory(const fs::path& dir, const std::string& package) {
   if (!fs::is_directory(dir)) throw DefinitionError(dir.string() + ": no such directory");
+  // A flat folder's package is a guess: the folder's name, or its parent's for a folder named
+  // "msg" (<pkg>/msg given directly). Its files are also kept by name, for adopt().
+  const fs::path canonical = fs::weakly_canonical(dir);
+  const std::string guess = !package.empty() ? package
+                            : canonical.filename() == "msg"
+                                ? canonical.parent_path().filename().string()
+                                : canonical.filename().string();
   std::size_t n = 0;
   for (const auto& entry : fs::recursive_directory_iterator(dir)) {
-    if (!entry.is_regular_file() || entry.path().extension() != ".msg") continue;
+    const std::string extension = entry.path().extension().string();
+    if (!entry.is_regular_file() ||
+        (extension != ".msg" && extension != ".srv" && extension != ".action"))
+      continue;
+    const std::string kind = extension.substr(1);
     const fs::path parent = entry.path().parent_path();
-    std::string pkg;
-    if (parent.filename() == "msg" && parent != dir) {
-      pkg = parent.parent_path().filename().string();
-    } else {
-      pkg = package.empty() ? dir.filename().string() : package;
-    }
+    const bool flat = parent == dir;
+    const std::string pkg =
+        parent.filename() == kind && !flat ? parent.parent_path().filename().string() : guess;
     std::ifstream in(entry.path());
     std::stringstream text;
     text << in.rdbuf();
+    const std::string name = entry.path().stem().string();
     try {
-      add_msg(pkg + "/msg/" + entry.path().stem().string(), text.str());
+      if (kind == "msg") {
+        add_msg(pkg + "/msg/" + name, text.str());
+      } else {
+        add_interface(pkg + "/" + kind + "/" + name, text.str());
+      }
     } catch (const DefinitionError& e) {
       throw DefinitionError(entry.path().string() + ": " + e.what());
     }
+    if (flat && package.empty() && kind == "msg") unpackaged_[name] = text.str();
     ++n;
   }
   return n;
+}
+
+std::size_t TypeRegistry::adopt(const std::string& type) {
+  std::size_t adopted = 0;
+  std::set<std::string> seen;
+  std::vector<std::string> todo = {normalize_type_name(type)};
+  while (!todo.empty()) {
+    const std::string t = todo.back();
+    todo.pop_back();
+    if (!seen.insert(t).second) continue;
+    if (!contains(t)) {
+      auto flat = unpackaged_.find(t.substr(t.rfind('/') + 1));
+      if (flat == unpackaged_.end()) continue;
+      add_msg(t, flat->second);
+      ++adopted;
+    }
+    for (const Field& f : get(t).fields) {
+      if (f.type.primitive == Primitive::kMessage) todo.push_back(f.type.message_type);
+    }
+  }
+  return adopted;
 }
 
 bool TypeRegistry::contains(const std::string& type) const {
@@ -511,6 +658,32 @@ void TypeRegistry::check_complete(const std::string& type) const {
         }
       };
   visit(normalize_type_name(type), "");
+}
+
+std::string TypeRegistry::ros2msg_schema(const std::string& type) const {
+  check_complete(type);
+  const std::string root = normalize_type_name(type);
+  std::vector<std::string> order;  // dependencies, depth first, each once
+  std::function<void(const std::string&)> visit = [&](const std::string& t) {
+    for (const Field& f : get(t).fields) {
+      const std::string& dep = f.type.message_type;
+      if (f.type.primitive != Primitive::kMessage || dep == root ||
+          std::find(order.begin(), order.end(), dep) != order.end())
+        continue;
+      order.push_back(dep);
+      visit(dep);
+    }
+  };
+  visit(root);
+  std::string out = get(root).text;
+  for (const std::string& dep : order) {
+    if (!out.empty() && out.back() != '\n') out += '\n';
+    // "pkg/msg/Type" is named "pkg/Type" after MSG:, as rosbag2 writes it.
+    std::string name = dep;
+    if (const auto at = name.find("/msg/"); at != std::string::npos) name.erase(at, 4);
+    out += std::string(80, '=') + "\nMSG: " + name + "\n" + get(dep).text;
+  }
+  return out;
 }
 
 const Value& Value::operator[](const std::string& name) const {

@@ -247,28 +247,34 @@ PublishedBenchmark import_benchmark_yaml(const fs::path& path_in) {
     throw ReportError(path.string() +
                       ": not a benchmark.yaml (expected a mapping with id, name, "
                       "results)");
-  PublishedBenchmark b;
-  b.source = path;
-  b.id = scalar_text(root, "id");
-  b.name = scalar_text(root, "name");
-  if (b.id.empty() && b.name.empty())
-    throw ReportError(path.string() + ": not a benchmark.yaml (no 'id' or 'name')");
-  if (b.id.empty()) b.id = b.name.substr(0, b.name.find('_'));
-  b.short_description = scalar_text(root, "short");
-  b.description = scalar_text(root, "description");
-  b.graph = scalar_text(root, "graph");
-  b.reproduction = scalar_text(root, "reproduction");
-  const fs::path package = path.parent_path();
-  b.category = package.has_parent_path() ? fs::absolute(package).parent_path().filename().string()
-                                         : std::string();
-  if (b.category != category_from_id(b.id)) {
-    // A file outside a <category>/<package>/ tree: fall back on RobotPerf's id letters.
-    const std::string by_id = category_from_id(b.id);
-    if (!by_id.empty()) b.category = by_id;
+  // yaml-cpp's own exceptions (a mapping where a scalar belongs, say) become one line naming the
+  // file.
+  try {
+    PublishedBenchmark b;
+    b.source = path;
+    b.id = scalar_text(root, "id");
+    b.name = scalar_text(root, "name");
+    if (b.id.empty() && b.name.empty())
+      throw ReportError(path.string() + ": not a benchmark.yaml (no 'id' or 'name')");
+    if (b.id.empty()) b.id = b.name.substr(0, b.name.find('_'));
+    b.short_description = scalar_text(root, "short");
+    b.description = scalar_text(root, "description");
+    b.graph = scalar_text(root, "graph");
+    b.reproduction = scalar_text(root, "reproduction");
+    const fs::path package = path.parent_path();
+    b.category = package.has_parent_path() ? fs::absolute(package).parent_path().filename().string()
+                                           : std::string();
+    if (b.category != category_from_id(b.id)) {
+      // A file outside a <category>/<package>/ tree: fall back on RobotPerf's id letters.
+      const std::string by_id = category_from_id(b.id);
+      if (!by_id.empty()) b.category = by_id;
+    }
+    b.results = read_results(root["results"], path);
+    for (auto& r : b.results) check_published(r);
+    return b;
+  } catch (const YAML::Exception& e) {
+    throw ReportError(where(path, e.mark) + ": unexpected YAML structure: " + e.msg);
   }
-  b.results = read_results(root["results"], path);
-  for (auto& r : b.results) check_published(r);
-  return b;
 }
 
 std::vector<PublishedResult> export_entries(const StoredRun& run, const ExportOptions& options) {

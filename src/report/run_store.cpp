@@ -182,7 +182,7 @@ StoredRun load_run(const fs::path& path) {
   run.path = path;
   try {
     run.json = json::parse(in);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number too large
     throw ReportError(path.string() + ": not valid JSON (" + e.what() +
                       "); is it a robotperf results file?");
   }

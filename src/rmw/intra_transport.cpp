@@ -108,8 +108,8 @@ class IntraPublisher final : public PublisherHandle {
   }
 
   void publish(MessagePtr msg) override {
-    const int64_t now = steady_now_ns();
-    // The timestamp is the source timestamp subscriptions see in rmw_take.
+    // The source timestamp subscriptions see in rmw_take, on DDS's clock as fastdds's.
+    const int64_t now = wall_now_ns();
     lttng_ust_tracepoint(ros2, rmw_publish, this, msg.get(), now);
     std::lock_guard lock(registry_->mutex);
     for (IntraSubscription* sub : registry_->topics[topic_].subscriptions) sub->deliver(msg, now);

@@ -43,6 +43,12 @@ int64_t steady_now_ns() {
   return int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
 }
 
+int64_t wall_now_ns() {
+  timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
 std::string dds_topic_name(const std::string& ros_topic) {
   auto bad = [&](const char* why) {
     return std::invalid_argument("invalid topic name '" + ros_topic + "': " + why);

@@ -43,6 +43,7 @@ enum class Handler : uint8_t {
   kTimerInit,
   kTimerCallbackAdded,
   kTimerLinkNode,
+  kCallbackRegister,
   kCallbackStart,
   kCallbackEnd,
   kRmwPublish,
@@ -93,6 +94,7 @@ Dispatch dispatch_for(const ctf::EventClass& ec, const ctf::Trace& trace) {
        Handler::kTimerCallbackAdded,
        {"timer_handle", "callback"}},
       {"ros2:rclcpp_timer_link_node", Handler::kTimerLinkNode, {"timer_handle", "node_handle"}},
+      {"ros2:rclcpp_callback_register", Handler::kCallbackRegister, {"callback", "symbol"}},
       {"ros2:callback_start", Handler::kCallbackStart, {"callback"}},
       {"ros2:callback_end", Handler::kCallbackEnd, {"callback"}},
       {"ros2:rmw_publish", Handler::kRmwPublish, {"rmw_publisher_handle", "timestamp"}},
@@ -210,6 +212,10 @@ struct Collected {
   HandleMap<uint64_t> callback_subscription, callback_timer;
   HandleMap<int64_t> timer_period;
   HandleMap<uint64_t> timer_node;
+  HandleMap<std::string_view> callback_symbol;
+
+  // What the trace's metadata declares, for saying why a table is missing.
+  bool has_rmw_publish = false, rmw_publish_has_timestamp = false;
 };
 
 void collect(ctf::Trace& trace, Collected& c, TraceAnalysis& a) {
@@ -221,7 +227,13 @@ void collect(ctf::Trace& trace, Collected& c, TraceAnalysis& a) {
   c.outputs.reserve(c.outputs.size() + estimate / 8);
   c.callbacks.reserve(c.callbacks.size() + estimate / 4);
   std::unordered_map<const ctf::EventClass*, Dispatch> dispatch;
-  for (const auto& ec : trace.metadata().events) dispatch[ec.get()] = dispatch_for(*ec, trace);
+  for (const auto& ec : trace.metadata().events) {
+    dispatch[ec.get()] = dispatch_for(*ec, trace);
+    if (ec->name == "ros2:rmw_publish") {
+      c.has_rmw_publish = true;
+      c.rmw_publish_has_timestamp |= ec->field_index("timestamp") >= 0;
+    }
+  }
   const ctf::EventClass* last_class = nullptr;
   const Dispatch* d = nullptr;
 
@@ -320,6 +332,9 @@ void collect(ctf::Trace& trace, Collected& c, TraceAnalysis& a) {
           break;
         case Handler::kTimerLinkNode:
           c.timer_node[{vpid, field(0).u}] = field(1).u;
+          break;
+        case Handler::kCallbackRegister:
+          c.callback_symbol[{vpid, field(0).u}] = field(1).s;
           break;
         case Handler::kCallbackStart:
         case Handler::kCallbackEnd:
@@ -562,11 +577,15 @@ void callback_durations(TraceAnalysis& a, Collected& c, const std::optional<RunI
     if (x.vtid != y.vtid) return x.vtid < y.vtid;
     return x.ts < y.ts;
   });
-  std::map<std::pair<std::string, std::string>, std::vector<double>> acc;
-  HandleMap<std::pair<std::string, std::string>> names;
-  auto name_of = [&](int32_t vpid, uint64_t cb) -> const std::pair<std::string, std::string>& {
+  using Name = std::tuple<std::string, std::string, std::string>;  // node, source, symbol
+  std::map<Name, std::vector<double>> acc;
+  HandleMap<Name> names;
+  auto name_of = [&](int32_t vpid, uint64_t cb) -> const Name& {
     auto [it, inserted] = names.try_emplace({vpid, cb});
     if (!inserted) return it->second;
+    std::string symbol;
+    if (auto sym = c.callback_symbol.find({vpid, cb}); sym != c.callback_symbol.end())
+      symbol = sym->second;
     if (auto s = c.callback_subscription.find({vpid, cb}); s != c.callback_subscription.end()) {
       uint64_t handle = s->second;
       if (auto r = c.rclcpp_subscriptions.find({vpid, handle}); r != c.rclcpp_subscriptions.end())
@@ -574,7 +593,7 @@ void callback_durations(TraceAnalysis& a, Collected& c, const std::optional<RunI
       if (auto ep = c.subscriptions_by_handle.find({vpid, handle});
           ep != c.subscriptions_by_handle.end()) {
         it->second = {node_name(c, vpid, ep->second.node_handle),
-                      std::string(c.names[ep->second.topic])};
+                      std::string(c.names[ep->second.topic]), symbol};
         return it->second;
       }
     }
@@ -588,10 +607,10 @@ void callback_durations(TraceAnalysis& a, Collected& c, const std::optional<RunI
         std::snprintf(buf, sizeof buf, "timer %g ms", static_cast<double>(p->second) / kNsPerMs);
         source = buf;
       }
-      it->second = {node, source};
+      it->second = {node, source, symbol};
       return it->second;
     }
-    it->second = {"?", "callback " + hex(cb)};
+    it->second = {"?", "callback " + hex(cb), symbol};
     return it->second;
   };
   std::vector<std::pair<uint64_t, int64_t>> stack;
@@ -605,8 +624,55 @@ void callback_durations(TraceAnalysis& a, Collected& c, const std::optional<RunI
       stack.pop_back();
     }
   }
-  for (auto& [key, d] : acc)
-    a.callbacks.push_back({key.first, key.second, metrics::compute_stats(d)});
+  for (auto& [key, d] : acc) {
+    a.callbacks.push_back(
+        {std::get<0>(key), std::get<1>(key), std::get<2>(key), metrics::compute_stats(d)});
+  }
+}
+
+// Why each table the trace cannot fill is empty, from the events it lacks.
+void explain_missing_tables(TraceAnalysis& a, const Collected& c) {
+  if (a.hops.empty()) {
+    a.unavailable.push_back(
+        a.run ? "per-hop breakdown: no robotperf:publish / callback_entry / kernel events of the "
+                "run's nodes"
+              : "per-hop breakdown and end-to-end latency: no robotperf run in the trace "
+                "(robotperf:run_begin); they need a graph run by robotperf");
+  }
+  if (a.callbacks.empty()) {
+    a.unavailable.push_back(
+        c.callbacks.empty()
+            ? "callback durations: no ros2:callback_start / callback_end events"
+            : "callback durations: no callback_start / callback_end pair in the run's processes");
+  } else if (c.callback_symbol.empty()) {
+    a.unavailable.push_back(
+        "callback symbols: no ros2:rclcpp_callback_register events (tracing started after the "
+        "callbacks were registered, or a tracer that does not record them)");
+  }
+  if (a.topics.empty()) {
+    std::string why;
+    if (!c.has_rmw_publish || (c.rmw_publishes.empty() && c.rmw_publish_has_timestamp)) {
+      why = "no ros2:rmw_publish events";
+    } else if (!c.rmw_publish_has_timestamp) {
+      why =
+          "ros2:rmw_publish has no timestamp field (ros2_tracing before Jazzy does not record "
+          "it), so takes cannot be paired with their publishes";
+    } else if (c.rmw_takes.empty()) {
+      why = "no ros2:rmw_take events";
+    } else if (c.publishers_by_rmw.empty() || c.subscriptions_by_rmw.empty()) {
+      why =
+          "no ros2:rcl_publisher_init / rcl_subscription_init events to name the topics "
+          "(tracing started after the nodes were created)";
+    } else {
+      why = "no rmw_take's source_timestamp equals an rmw_publish timestamp of its topic";
+    }
+    a.unavailable.push_back("publish -> take latencies: " + why);
+  }
+  if (a.controller_updates.empty()) {
+    a.unavailable.push_back(
+        "controller update durations: no robotperf:controller_update events (the graph runs no "
+        "control loop)");
+  }
 }
 
 // Controller update durations from robotperf:controller_update_begin/end, per controller manager
@@ -681,6 +747,27 @@ std::string fixed(double v, int decimals) {
   return buf;
 }
 
+// A demangled symbol for a table: parameter lists shortened to "(...)", anonymous namespaces
+// dropped ("A::(anonymous namespace)::B::B(Context&, Config const&)::{lambda(Ptr)#1}" becomes
+// "A::B::B(...)::{lambda(...)#1}").
+std::string short_symbol(std::string_view symbol) {
+  std::string s(symbol);
+  for (std::size_t at; (at = s.find("(anonymous namespace)::")) != std::string::npos;)
+    s.erase(at, std::string_view("(anonymous namespace)::").size());
+  std::string out;
+  int depth = 0;
+  for (const char ch : s) {
+    if (ch == '(') {
+      if (depth++ == 0) out += "(...";
+    } else if (ch == ')') {
+      if (depth > 0 && --depth == 0) out += ')';
+    } else if (depth == 0) {
+      out += ch;
+    }
+  }
+  return out;
+}
+
 std::string ms(double ns) {
   return fixed(ns / kNsPerMs, 3);
 }
@@ -739,6 +826,7 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
   callback_durations(a, c, a.run);
   topic_latencies(a, c, a.run);
   controller_update_durations(a, c, a.run);
+  explain_missing_tables(a, c);
 
   if (a.discarded_events > 0) {
     a.invalid_reasons.insert(
@@ -775,6 +863,7 @@ nlohmann::json to_json(const TraceAnalysis& a) {
   for (const auto& cb : a.callbacks) {
     callbacks.push_back({{"node", cb.node},
                          {"source", cb.source},
+                         {"symbol", cb.symbol},
                          {"duration_ms", metrics::to_json(cb.duration, 1.0 / kNsPerMs, "ms")}});
   }
   json topics = json::array();
@@ -802,7 +891,8 @@ nlohmann::json to_json(const TraceAnalysis& a) {
           {"hops", hops},
           {"callbacks", callbacks},
           {"topics", topics},
-          {"controller_updates", controller_updates}};
+          {"controller_updates", controller_updates},
+          {"unavailable", a.unavailable}};
 }
 
 std::string breakdown_table(const TraceAnalysis& a) {
@@ -825,7 +915,10 @@ std::string breakdown_table(const TraceAnalysis& a) {
   }
   if (!a.callbacks.empty()) {
     header("callback durations (ms)");
-    for (const auto& cb : a.callbacks) row(cb.node + "  " + cb.source, cb.duration);
+    for (const auto& cb : a.callbacks) {
+      row(cb.node + "  " + cb.source, cb.duration);
+      if (!cb.symbol.empty()) out << "    " << short_symbol(cb.symbol) << "\n";
+    }
     out << "\n";
   }
   if (!a.topics.empty()) {
@@ -846,6 +939,11 @@ std::string breakdown_table(const TraceAnalysis& a) {
                     us(s.p50).c_str(), us(s.p99).c_str(), us(s.max).c_str());
       out << line;
     }
+    out << "\n";
+  }
+  if (!a.unavailable.empty()) {
+    out << "not in this trace:\n";
+    for (const auto& line_text : a.unavailable) out << "  " << line_text << "\n";
     out << "\n";
   }
   out << "trace: " << a.events << " events in " << a.streams << " streams, " << a.packets

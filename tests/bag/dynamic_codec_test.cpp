@@ -1,5 +1,8 @@
 // The .msg-driven codec on the real ROS 2 bags: definitions from the bags'
 // own schemas, from the test_msgs .msg files and from ../shared/data/msg.
+#include <fstream>
+#include <sstream>
+
 #include "bag_test_util.hpp"
 #include "robotperf/msgs/cdr.hpp"
 #include "robotperf/msgs/definitions.hpp"
@@ -58,6 +61,84 @@ TEST(DynamicCodec, CdrTestBagWithMsgFiles) {
   dyn::TypeRegistry registry;
   EXPECT_GE(registry.add_directory("/usr/share/test_interface_files/msg", "test_msgs"), 10u);
   check_cdr_test_bag(registry);
+}
+
+// A flat folder named "msg" without a package: its files are adopted by name for the types a bag
+// asks for, and a ros2msg schema composed from them decodes the bag as the bag's own does.
+TEST(DynamicCodec, FlatMsgFolderIsAdoptedAndComposesSchemas) {
+  dyn::TypeRegistry flat;
+  EXPECT_GE(flat.add_directory("/usr/share/test_interface_files/msg"), 10u);
+  EXPECT_FALSE(flat.contains("msg/msg/Arrays"));
+  EXPECT_FALSE(flat.contains("test_msgs/msg/Arrays"));
+  EXPECT_GE(flat.adopt("test_msgs/msg/Arrays"), 2u);  // Arrays and the BasicTypes it nests
+  EXPECT_EQ(flat.adopt("test_msgs/msg/BasicTypes"), 0u);
+  dyn::TypeRegistry composed;
+  for (const std::string type : {"test_msgs/msg/Arrays", "test_msgs/msg/BasicTypes"}) {
+    const std::string schema = flat.ros2msg_schema(type);
+    composed.add_ros2msg(type, schema);
+  }
+  EXPECT_NE(flat.ros2msg_schema("test_msgs/msg/Arrays").find("\nMSG: test_msgs/BasicTypes\n"),
+            std::string::npos);
+  check_cdr_test_bag(composed);
+}
+
+// std_msgs/msg/Empty's definition is empty; rosidl gives it one uint8 member, which CDR carries.
+TEST(DynamicCodec, ATypeWithoutFieldsHasItsPlaceholderMember) {
+  dyn::TypeRegistry registry;
+  registry.add_ros2msg("std_msgs/msg/Empty", "");
+  const std::vector<uint8_t> payload = {0, 1, 0, 0, 0};
+  const dyn::Value v = dyn::decode(registry, "std_msgs/msg/Empty", payload);
+  EXPECT_EQ(std::get<uint64_t>(v["structure_needs_at_least_one_member"].data), 0u);
+  EXPECT_EQ(dyn::encode(registry, "std_msgs/msg/Empty", v), payload);
+}
+
+std::string file_text(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Jazzy records a service event topic's definition as the .srv text itself (request, "---",
+// response): the _Request, _Response and _Event types are derived from it, the event with
+// service_msgs/ServiceEventInfo.
+TEST(DynamicCodec, ServiceEventTypesComeFromTheSrvText) {
+  dyn::TypeRegistry registry;
+  registry.add_ros2msg("test_msgs/srv/BasicTypes_Event",
+                       file_text("/usr/share/test_interface_files/srv/BasicTypes.srv"));
+  EXPECT_EQ(registry.get("test_msgs/srv/BasicTypes_Request").fields.size(), 14u);
+  EXPECT_EQ(registry.get("test_msgs/srv/BasicTypes_Response").fields.size(), 14u);
+  // event_type 1, stamp 5 s 6 ns, a 16-byte gid, sequence 7, no request, no response.
+  std::vector<uint8_t> payload = {0, 1, 0, 0, 1, 0, 0, 0, 5, 0, 0, 0, 6, 0, 0, 0};
+  for (uint8_t b = 0; b < 16; ++b) payload.push_back(b);
+  for (const uint8_t b : {0, 0, 0, 0, 7, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0})
+    payload.push_back(b);
+  const dyn::Value v = dyn::decode(registry, "test_msgs/srv/BasicTypes_Event", payload);
+  const std::string yaml = dyn::to_yaml(v);
+  EXPECT_NE(yaml.find("event_type: 1"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("sequence_number: 7"), std::string::npos) << yaml;
+  EXPECT_EQ(dyn::encode(registry, "test_msgs/srv/BasicTypes_Event", v), payload);
+}
+
+TEST(DynamicCodec, ActionTypesComeFromTheActionText) {
+  dyn::TypeRegistry registry;
+  registry.add_interface("test_msgs/action/Fibonacci_FeedbackMessage",
+                         file_text("/usr/share/test_interface_files/action/Fibonacci.action"));
+  for (const std::string suffix :
+       {"_Goal", "_Result", "_Feedback", "_FeedbackMessage", "_SendGoal_Request",
+        "_SendGoal_Response", "_SendGoal_Event", "_GetResult_Request", "_GetResult_Response",
+        "_GetResult_Event"}) {
+    EXPECT_NO_THROW(registry.check_complete("test_msgs/action/Fibonacci" + suffix)) << suffix;
+  }
+  // goal_id (16 bytes), then the feedback's int32[] sequence {0, 1}.
+  std::vector<uint8_t> payload = {0, 1, 0, 0};
+  for (uint8_t b = 0; b < 16; ++b) payload.push_back(b);
+  for (const uint8_t b : {2, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0}) payload.push_back(b);
+  const dyn::Value v = dyn::decode(registry, "test_msgs/action/Fibonacci_FeedbackMessage", payload);
+  EXPECT_EQ(dyn::encode(registry, "test_msgs/action/Fibonacci_FeedbackMessage", v), payload);
+  // A text with the wrong number of parts for its kind is one clear error.
+  EXPECT_THROW(registry.add_interface("test_msgs/srv/Broken_Request", "int8 a\n---\n---\n"),
+               dyn::DefinitionError);
 }
 
 TEST(DynamicCodec, TalkerStringsAndLogs) {

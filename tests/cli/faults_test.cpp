@@ -1,12 +1,15 @@
-// Faults a run must survive and say how it ended: a node whose callback hangs, Ctrl-C, SIGTERM.
+// Faults a run must survive and say how it ended: a node whose callback hangs, Ctrl-C, SIGTERM, a
+// plug-in kernel that throws or crashes, a node process (a DDS peer) that vanishes, a full disk.
 // Each keeps the partial result, leaves no process behind and exits with its own status.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "../command_line.hpp"
 
@@ -28,8 +31,10 @@ class Faults : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  // A benchmark folder with f1: the camera stream through a relay with `relay_parameters`.
-  std::string benchmarks(const std::string& relay_parameters) {
+  // A benchmark folder with f1: the camera stream through a relay with `relay_parameters`; the
+  // relay is `kernel`, util/relay unless a test names the faulty plug-in's.
+  std::string benchmarks(const std::string& relay_parameters,
+                         const std::string& kernel = "util/relay") {
     const fs::path package = dir_ / "benchmarks" / "test" / "f1_relay";
     fs::create_directories(package);
     std::ofstream(package / "benchmark.yaml")
@@ -39,9 +44,11 @@ class Faults : public ::testing::Test {
            "validity: {min_samples: 5, max_loss_percent: 0.0}\n"
            "inputs:\n  - {topic: /in, type: sensor_msgs/msg/Image, stream: image}\n"
            "output: {topic: /out, type: sensor_msgs/msg/Image}\n"
-           "nodes:\n  - name: relay\n    kernel: util/relay\n    parameters: {"
-        << relay_parameters << "}\n    topics: {input: /in, output: /out}\n";
-    return "--benchmarks " + (dir_ / "benchmarks").string();
+           "nodes:\n  - name: relay\n    kernel: "
+        << kernel << "\n    parameters: {" << relay_parameters
+        << "}\n    topics: {input: /in, output: /out}\n";
+    return "--benchmarks " + (dir_ / "benchmarks").string() +
+           (kernel == "util/relay" ? "" : " --plugin " FAULTY_PLUGIN);
   }
   std::string domain() const { return std::to_string(10 + getpid() % 20); }
 
@@ -63,11 +70,12 @@ class Faults : public ::testing::Test {
     return n;
   }
 
-  // Whether a node process of this test's package still runs (the brackets keep pgrep's own
-  // shell out of the match).
+  // The pgrep/pkill pattern of this test's node processes (the brackets keep pgrep's own shell
+  // out of the match; options such as --plugin may stand before `node`).
+  std::string node_pattern() const { return "'[r]obotperf.* node " + dir_.string() + "'"; }
+  // Whether a node process of this test's package still runs.
   bool children_left() const {
-    return robotperf::test_support::shell("pgrep -f '[r]obotperf node " + dir_.string() + "'")
-               .exit_code == 0;
+    return robotperf::test_support::shell("pgrep -f " + node_pattern()).exit_code == 0;
   }
 
   fs::path dir_;
@@ -147,6 +155,110 @@ TEST_F(Faults, ASecondInterruptForcesAndStopsTheNodeProcesses) {
   EXPECT_NE(run.output().find("interrupted again: stopping now"), std::string::npos)
       << run.output();
   EXPECT_TRUE(eventually([&] { return !children_left(); }, std::chrono::seconds(10)));
+}
+
+TEST_F(Faults, APluginKernelThatThrowsEndsTheRunNamingIt) {
+  for (const std::string layout : {"single", "per-node"}) {
+    fs::remove_all(dir_ / "results");
+    const auto o = robotperf_cli(
+        benchmarks("throw_after: 10", "faulty_plugin/relay") + " run f1 --count 40 --quiet --rmw " +
+        (layout == "single" ? "intra" : "fastdds --processes per-node") + " --domain " + domain() +
+        " --output " + (dir_ / "results").string());
+    EXPECT_EQ(o.exit_code, 3) << layout << ": " << o.out;
+    const auto j = result();
+    ASSERT_TRUE(j.is_object()) << layout << ": no result written: " << o.out;
+    EXPECT_EQ(j["completed"], false) << layout;
+    EXPECT_EQ(j["validity"]["valid"], false) << layout;
+    EXPECT_GE(j["counts"]["matched"].get<int>(), 1) << layout << ": what it measured is kept";
+    EXPECT_NE(j["errors"].dump().find("node 'relay'"), std::string::npos) << j["errors"].dump();
+    EXPECT_NE(j["errors"].dump().find("device lost after 10 frames"), std::string::npos)
+        << layout << j["errors"].dump();
+    EXPECT_NE(j["nodes"][0]["exit_status"].get<std::string>(), "ok") << layout;
+    EXPECT_FALSE(children_left()) << layout;
+  }
+}
+
+TEST_F(Faults, APluginKernelThatRefusesToStartIsOneLine) {
+  for (const std::string layout : {"single", "per-node"}) {
+    fs::remove_all(dir_ / "results");
+    const auto o = robotperf_cli(
+        benchmarks("refuse: true", "faulty_plugin/relay") + " run f1 --count 40 --quiet --rmw " +
+        (layout == "single" ? "intra" : "fastdds --processes per-node") + " --domain " + domain() +
+        " --output " + (dir_ / "results").string());
+    EXPECT_EQ(o.exit_code, 1) << layout;
+    EXPECT_NE(o.out.find("node 'relay': kernel faulty_plugin/relay"), std::string::npos)
+        << layout << ": " << o.out;
+    EXPECT_NE(o.out.find("the accelerator this kernel needs is not present"), std::string::npos)
+        << layout << ": " << o.out;
+    EXPECT_EQ(o.out.find("terminate called"), std::string::npos) << o.out;
+    EXPECT_FALSE(children_left()) << layout;
+  }
+}
+
+// The relay is the Playback's and the Monitor's DDS peer: its process crashes (abort) or is
+// killed from outside mid-run. The run ends naming it, keeps what it measured, and counts the
+// frames the dead node took with it as lost.
+TEST_F(Faults, ANodeProcessThatVanishesMidRunIsNamed) {
+  for (const std::string how : {"crash", "kill"}) {
+    fs::remove_all(dir_ / "results");
+    const fs::path readings = dir_ / ("readings-" + how);
+    Background run(std::string(ROBOTPERF_EXECUTABLE) + " " +
+                       benchmarks(how == "crash" ? "abort_after: 10" : "", "faulty_plugin/relay") +
+                       " run f1 --count 200 --rmw fastdds --processes per-node --quiet "
+                       "--power-meter 'echo x >> " +
+                       readings.string() + "; echo 5' --domain " + domain() + " --output " +
+                       (dir_ / "results").string(),
+                   dir_ / ("log-" + how));
+    if (how == "kill") {
+      ASSERT_TRUE(eventually([&] { return readings_of(readings) >= 3; }, std::chrono::seconds(60)))
+          << run.output();
+      ASSERT_EQ(robotperf::test_support::shell("pkill -KILL -f " + node_pattern()).exit_code, 0);
+    }
+    EXPECT_EQ(run.wait(std::chrono::seconds(60)), 3) << how << ": " << run.output();
+    const auto j = result();
+    ASSERT_TRUE(j.is_object()) << how << ": no result written: " << run.output();
+    EXPECT_EQ(j["validity"]["valid"], false) << how;
+    EXPECT_GT(j["counts"]["lost"].get<int>(), 0) << how << ": " << j["counts"].dump();
+    const std::string status = j["nodes"][0]["exit_status"];
+    EXPECT_NE(status.find("killed by signal"), std::string::npos) << how << ": " << status;
+    EXPECT_FALSE(children_left()) << how;
+  }
+}
+
+// --output on a full file system (a small tmpfs, mounted in a user and mount namespace of the
+// test's own): the summary is printed, the results go to a folder under TMPDIR that stderr names,
+// exit 1, and the files already in the output folder are untouched, with no temporary file left.
+TEST_F(Faults, AFullDiskKeepsTheResultElsewhere) {
+  if (robotperf::test_support::shell("unshare --user --map-root-user --mount true").exit_code !=
+      0) {
+    GTEST_SKIP() << "no user namespaces here: cannot mount a small tmpfs";
+  }
+  const fs::path full = dir_ / "full";
+  fs::create_directories(full);
+  const std::string script =
+      "mount -t tmpfs -o size=64k tmpfs " + full.string() + " && echo previous > " + full.string() +
+      "/earlier.json && head -c 57344 /dev/zero > " + full.string() +
+      "/filler && TMPDIR=" + dir_.string() + " " + ROBOTPERF_EXECUTABLE + " " + benchmarks("") +
+      " run f1 --count 30 --quiet --csv --output " + full.string() + "; echo exit=\\$?; cat " +
+      full.string() + "/earlier.json; ls -A " + full.string();
+  const auto o = robotperf::test_support::shell("unshare --user --map-root-user --mount sh -c \"" +
+                                                script + "\"");
+  EXPECT_NE(o.out.find("exit=1"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("No space left on device"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("result:"), std::string::npos) << "no summary: " << o.out;
+  EXPECT_NE(o.out.find("previous\nearlier.json\nfiller\n"), std::string::npos)
+      << "the full folder changed: " << o.out;
+  // The result kept elsewhere is whole.
+  std::vector<fs::path> kept;
+  for (const auto& e : fs::recursive_directory_iterator(dir_)) {
+    if (e.path().string().find("robotperf-unsaved-") != std::string::npos) kept.push_back(e.path());
+  }
+  std::sort(kept.begin(), kept.end());
+  ASSERT_EQ(kept.size(), 3u) << "expected the folder, the .json and the .latencies.csv";
+  std::ifstream in(kept[1]);
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["counts"]["sent"], 30);
+  EXPECT_NE(o.out.find(kept[0].string()), std::string::npos) << "stderr names where: " << o.out;
 }
 
 }  // namespace

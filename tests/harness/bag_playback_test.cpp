@@ -44,9 +44,11 @@ bag::TopicInfo topic_info(const std::string& name, const std::string& type) {
 
 // perception/image as a bag, like `dataset generate` writes it, with the
 // topics renamed by `rename` and frame k recorded at `time_of(k)`.
+// Frames in `corrupt_images` get an image whose payload is cut in half (its header still reads).
 void write_camera_bag(const fs::path& dir, bag::Storage storage,
                       const std::map<std::string, std::string>& rename = {},
-                      const std::function<int64_t(std::size_t)>& time_of = {}) {
+                      const std::function<int64_t(std::size_t)>& time_of = {},
+                      const std::set<std::size_t>& corrupt_images = {}) {
   const Dataset d = load_dataset("perception/image");
   bag::WriteOptions w;
   w.storage = storage;
@@ -66,6 +68,8 @@ void write_camera_bag(const fs::path& dir, bag::Storage storage,
       auto msg = s.type->copy_with_stamp_ns(s.messages[k].get(), t);
       buffer.resize(s.type->serialized_size(msg.get()));
       s.type->serialize(msg.get(), buffer);
+      if (s.type->ros_type == "sensor_msgs/msg/Image" && corrupt_images.contains(k))
+        buffer.resize(buffer.size() / 2);
       writer.write(ids[i], t + int64_t(i) * 100'000, buffer);
     }
   }
@@ -163,6 +167,24 @@ TEST(BagPlayback, A1OnFastddsPublishesRecordedBytesWithRemapping) {
   o.bag->remaps = {{"/front/image", "/camera/image_raw"}, {"/front/info", "/camera/camera_info"}};
   const RunResult r = run_benchmark(a1(), o);
   expect_all_matched(r, 80);
+}
+
+// A corrupt message in a bag is found when the bag is loaded and left out, with a warning: it is
+// never sent, so the graph is never blamed for dropping it.
+TEST(BagPlayback, CorruptMessagesAreReportedNotCountedAsLost) {
+  TempDir tmp("corrupt");
+  write_camera_bag(tmp.path() / "bag", bag::Storage::kMcap, {}, {}, {5, 17});
+  const RunResult r = run_benchmark(a1(), bag_run(tmp.path() / "bag", "intra", 40));
+  expect_all_matched(r, 40);
+  EXPECT_EQ(r.dataset_frames, 66u);  // 68 frames, two without a usable image
+  std::string warnings;
+  for (const auto& w : r.warnings) {
+    if (w.rule == "corrupt_messages") warnings += w.message + "\n";
+  }
+  EXPECT_NE(warnings.find("2 messages on /camera/image_raw do not decode as sensor_msgs/msg/Image"),
+            std::string::npos)
+      << warnings;
+  EXPECT_NE(warnings.find("neither sent nor counted as lost"), std::string::npos) << warnings;
 }
 
 TEST(BagPlayback, TypesWithoutHeaderAreRefused) {

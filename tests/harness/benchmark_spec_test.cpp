@@ -112,6 +112,26 @@ TEST(BenchmarkSpec, RefusesValuesOutsideTheirLimits) {
   }
 }
 
+// Found by fuzz_benchmark_packages: a graph.yaml without `nodes:` or `inputs:` threw yaml-cpp's
+// "invalid node" instead of a BenchmarkError.
+TEST(BenchmarkSpec, MissingListsAndOddKeysAreOneLineErrors) {
+  std::string no_nodes = relay_graph("");
+  no_nodes.erase(no_nodes.find("nodes:"));
+  TestPackage p("no_nodes", no_nodes);
+  EXPECT_NE(error_of(p.dir()).find("'nodes' must be a list"), std::string::npos);
+
+  std::string no_inputs = relay_graph("");
+  const auto inputs = no_inputs.find("inputs:");
+  no_inputs.erase(inputs, no_inputs.find("output:") - inputs);
+  TestPackage q("no_inputs", no_inputs);
+  EXPECT_NE(error_of(q.dir()).find("'inputs' must be a non-empty list"), std::string::npos);
+
+  // A mapping used as a key is yaml-cpp's BadConversion: still one line naming the package.
+  TestPackage r("map_key", relay_graph("", "{a: 1}: 2\n"));
+  const std::string err = error_of(r.dir());
+  EXPECT_NE(err.find(r.dir().string()), std::string::npos) << err;
+}
+
 TEST(BenchmarkSpec, MissingFileIsReported) {
   TestPackage p("missing", relay_graph(""));
   std::filesystem::remove(p.dir() / "graph.yaml");

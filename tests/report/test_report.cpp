@@ -249,9 +249,15 @@ TEST_F(Report, ImpossibleFiguresMakeALocalRunInvalid) {
 TEST_F(Report, BadInputsGiveOneClearLine) {
   write_two_machines(10, 11);
   std::ofstream(dir_ / "garbage.json") << "{not json";
+  // Found by fuzz_results_json: a number beyond double's range is JSON's out_of_range, not a
+  // parse error, and it escaped load_run.
+  std::ofstream(dir_ / "huge.json")
+      << R"({"schema": "robotperf.result/1", "x": 37.14e228590092565})";
   const auto input = load_report_inputs({dir_});  // skipped inside a folder
-  ASSERT_EQ(input.skipped.size(), 1u);
+  ASSERT_EQ(input.skipped.size(), 2u);
   EXPECT_NE(input.skipped[0].find("garbage.json"), std::string::npos);
+  EXPECT_NE(input.skipped[1].find("huge.json: not valid JSON"), std::string::npos)
+      << input.skipped[1];
   EXPECT_THROW(load_report_inputs({dir_ / "garbage.json"}), ReportError);  // named: an error
   EXPECT_THROW(load_report_inputs({dir_ / "missing"}), ReportError);
   ReportOptions options;

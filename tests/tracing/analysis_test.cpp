@@ -277,6 +277,40 @@ TEST(Analyzer, TraceWithoutRobotperfRunStillGivesCallbacksAndTopics) {
   EXPECT_NE(analysis_summary(a).find("no robotperf run"), std::string::npos);
 }
 
+// ros2_tracing's rclcpp_callback_register names callbacks; a Humble trace (rmw_publish without a
+// timestamp) cannot pair publishes with takes, and the analysis says so instead of dropping the
+// table silently.
+TEST(Analyzer, CallbackSymbolsAndWhyATableIsMissing) {
+  TempDir dir("humble");
+  CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false);
+  testing::define_robotperf_events(w, testing::Ros2Layout::kHumble);
+  w.event(0, "ros2:rcl_node_init", 100, 7, 7,
+          {V(uint64_t{1}), V(uint64_t{0}), V(std::string("talker")), V(std::string("/"))});
+  w.event(0, "ros2:rcl_timer_init", 110, 7, 7, {V(uint64_t{2}), V(int64_t{500'000'000})});
+  w.event(0, "ros2:rclcpp_timer_callback_added", 120, 7, 7, {V(uint64_t{2}), V(uint64_t{3})});
+  w.event(0, "ros2:rclcpp_timer_link_node", 130, 7, 7, {V(uint64_t{2}), V(uint64_t{1})});
+  const std::string symbol =
+      "demo::(anonymous namespace)::Talker::Talker(rclcpp::NodeOptions const&)::{lambda()#1}";
+  w.event(0, "ros2:rclcpp_callback_register", 140, 7, 7, {V(uint64_t{3}), V(symbol)});
+  w.event(0, "ros2:rmw_publish", 900, 7, 7, {V(uint64_t{0x99})});
+  w.event(0, "ros2:callback_start", 1000, 7, 7, {V(uint64_t{3}), V(int64_t{0})});
+  w.event(0, "ros2:callback_end", 1700, 7, 7, {V(uint64_t{3})});
+  w.finish();
+  const TraceAnalysis a = analyze_trace(dir.path());
+  ASSERT_EQ(a.callbacks.size(), 1u);
+  EXPECT_EQ(a.callbacks[0].symbol, symbol);
+  const std::string table = breakdown_table(a);
+  EXPECT_NE(table.find("demo::Talker::Talker(...)::{lambda(...)#1}"), std::string::npos) << table;
+  EXPECT_NE(table.find("publish -> take latencies: ros2:rmw_publish has no timestamp field"),
+            std::string::npos)
+      << table;
+  EXPECT_NE(table.find("per-hop breakdown and end-to-end latency: no robotperf run"),
+            std::string::npos)
+      << table;
+  EXPECT_EQ(to_json(a)["callbacks"][0]["symbol"], symbol);
+  EXPECT_EQ(to_json(a)["unavailable"].size(), a.unavailable.size());
+}
+
 TEST(CtfReader, CorruptTracesGiveClearErrors) {
   TempDir dir("corrupt");
   CtfWriter w(dir.path(), CtfWriter::Header::kLarge, false);

@@ -360,9 +360,13 @@ struct event_header_large {
   std::map<int, Stream> s_;
 };
 
+// The ros2_tracing layout a test trace imitates: robotperf's own (Jazzy's), or Humble's, whose
+// rmw_publish records no publisher handle and no timestamp.
+enum class Ros2Layout { kJazzy, kHumble };
+
 // The robotperf and ros2 event classes robotperf's analysis reads, with the
 // field layout of src/tracing/tracepoints.
-inline void define_robotperf_events(CtfWriter& w) {
+inline void define_robotperf_events(CtfWriter& w, Ros2Layout layout = Ros2Layout::kJazzy) {
   using K = FieldKind;
   w.define("robotperf:run_begin", {{"benchmark", K::kString},
                                    {"rmw", K::kString},
@@ -411,8 +415,13 @@ inline void define_robotperf_events(CtfWriter& w) {
            {{"timer_handle", K::kHex64}, {"node_handle", K::kHex64}});
   w.define("ros2:callback_start", {{"callback", K::kHex64}, {"is_intra_process", K::kI32}});
   w.define("ros2:callback_end", {{"callback", K::kHex64}});
-  w.define("ros2:rmw_publish",
-           {{"rmw_publisher_handle", K::kHex64}, {"message", K::kHex64}, {"timestamp", K::kI64}});
+  if (layout == Ros2Layout::kHumble) {
+    w.define("ros2:rmw_publish", {{"message", K::kHex64}});
+  } else {
+    w.define("ros2:rmw_publish",
+             {{"rmw_publisher_handle", K::kHex64}, {"message", K::kHex64}, {"timestamp", K::kI64}});
+  }
+  w.define("ros2:rclcpp_callback_register", {{"callback", K::kHex64}, {"symbol", K::kString}});
   w.define("ros2:rmw_take", {{"rmw_subscription_handle", K::kHex64},
                              {"message", K::kHex64},
                              {"source_timestamp", K::kI64},

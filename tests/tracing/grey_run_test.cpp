@@ -132,10 +132,36 @@ TEST_F(GreyRun, A1AgreesWithBlackBoxAndExplainsWhereTheTimeGoes) {
   for (const auto& c : g.grey->callbacks) callback_nodes.insert(c.node);
   EXPECT_TRUE(callback_nodes.contains("rectify"));
   EXPECT_TRUE(callback_nodes.contains("resize"));
+  // Each callback is named by ros2:rclcpp_callback_register: the kernel's own lambda, demangled.
+  for (const auto& c : g.grey->callbacks) {
+    if (c.node != "rectify" && c.node != "resize") continue;
+    EXPECT_NE(c.symbol.find("::{lambda("), std::string::npos) << c.node << ": " << c.symbol;
+    EXPECT_EQ(c.symbol.find("_Z"), std::string::npos) << "not demangled: " << c.symbol;
+  }
   EXPECT_FALSE(g.grey->topics.empty());
 
   // Our reader sees every event babeltrace2 sees.
   EXPECT_EQ(g.grey->events, babeltrace_events(g.trace_dir));
+
+  // ros2_tracing's Humble-and-later layouts, as babeltrace2 prints them: rclcpp_publish carries
+  // the message only, and rmw_publish's timestamp is DDS's wall-clock source timestamp on intra
+  // as on fastdds.
+  const auto first_line = [&](const std::string& event) {
+    return robotperf::test_support::shell("babeltrace2 '" + g.trace_dir.string() +
+                                          "' 2>/dev/null | grep -m1 '" + event + ":'")
+        .out;
+  };
+  const std::string publish = first_line("ros2:rclcpp_publish");
+  EXPECT_NE(publish.find("{ message = 0x"), std::string::npos) << publish;
+  EXPECT_EQ(publish.find("publisher_handle"), std::string::npos) << publish;
+  const std::string rmw_publish = first_line("ros2:rmw_publish");
+  const auto at = rmw_publish.find("timestamp = ");
+  ASSERT_NE(at, std::string::npos) << rmw_publish;
+  const int64_t stamp = std::stoll(rmw_publish.substr(at + 12));
+  const int64_t wall_now = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                               std::chrono::system_clock::now().time_since_epoch())
+                               .count();
+  EXPECT_NEAR(static_cast<double>(stamp), static_cast<double>(wall_now), 3600e9) << rmw_publish;
 }
 
 // a4 (three inputs per frame, one 9.8 MB cloud out): the trace sees every frame the Monitor saw,

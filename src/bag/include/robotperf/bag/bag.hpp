@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <set>
@@ -159,10 +160,17 @@ class Writer {
   std::unique_ptr<Impl> impl_;
 };
 
+// Writes <dir>/metadata.yaml for a bag directory that has none, from its storage
+// files (as `ros2 bag reindex`), and returns the bag's info read back. Throws
+// BagError when the directory already has one, holds no storage file, mixes
+// storages, or gives one topic two types.
+BagInfo reindex(const std::filesystem::path& dir);
+
 // Copies every message, topic, QoS and definition of the bag at `in` into a
-// new bag at `out`; returns the number of messages copied.
+// new bag at `out`; returns the number of messages copied. `complete`, when
+// given, sees each topic before it is written (to add a missing definition).
 uint64_t convert(const std::filesystem::path& in, const std::filesystem::path& out,
-                 const WriteOptions& options);
+                 const WriteOptions& options, const std::function<void(TopicInfo&)>& complete = {});
 
 // One storage file being written.
 class StorageWriter {

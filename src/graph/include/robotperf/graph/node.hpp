@@ -15,6 +15,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <typeinfo>
 #include <vector>
 
 #include "robotperf/msgs/type_support.hpp"
@@ -156,6 +157,17 @@ class Timer final : public Entity {
   std::function<void()> callback_;
 };
 
+// The type of a callable a node registers (for a std::function, the callable it holds): its name
+// is the callback's symbol in traces.
+template <class F>
+const std::type_info& callable_type(const F& callable) {
+  if constexpr (requires { callable.target_type(); }) {
+    return callable ? callable.target_type() : typeid(F);
+  } else {
+    return typeid(F);
+  }
+}
+
 class Node {
  public:
   Node(Context& context, std::string name);
@@ -189,15 +201,19 @@ class Node {
         f(std::static_pointer_cast<const T>(std::move(m)));
       };
     }
-    return create_generic_subscription(topic, msgs::type_support<T>(), qos, std::move(cb));
+    const std::type_info& callable = callable_type(callback);
+    return create_generic_subscription(topic, msgs::type_support<T>(), qos, std::move(cb),
+                                       &callable);
   }
 
   std::shared_ptr<GenericPublisher> create_generic_publisher(const std::string& topic,
                                                              const msgs::TypeSupport& type,
                                                              const QoS& qos = QoS{});
+  // `callable`: the type of the callback the node wrote, whose name ros2:rclcpp_callback_register
+  // records (default: the type `callback` holds).
   std::shared_ptr<GenericSubscription> create_generic_subscription(
       const std::string& topic, const msgs::TypeSupport& type, const QoS& qos,
-      GenericSubscription::Callback callback);
+      GenericSubscription::Callback callback, const std::type_info* callable = nullptr);
 
   std::shared_ptr<Timer> create_timer(std::chrono::nanoseconds period,
                                       std::function<void()> callback);

@@ -47,7 +47,11 @@ struct BoundaryTopic;  // benchmark_spec.hpp, which includes this header
 // are equal form one frame (e.g. an image and its camera_info); frames that
 // miss a topic are left out. Throws BenchmarkError (bag::BagError for
 // unreadable files) when an input has no topic, a type differs, or a type
-// has no std_msgs/Header to carry message IDs.
-Dataset load_bag_dataset(const BagSelection& bag, const std::vector<BoundaryTopic>& inputs);
+// has no std_msgs/Header to carry message IDs. Messages that do not decode as
+// their type (a corrupt payload, a header that cannot be read) are left out of
+// the replay, so that the graph is never blamed for them; `corrupt`, when
+// given, gets one line per topic that had any, saying how many and why.
+Dataset load_bag_dataset(const BagSelection& bag, const std::vector<BoundaryTopic>& inputs,
+                         std::vector<std::string>* corrupt = nullptr);
 
 }  // namespace robotperf::harness

@@ -59,6 +59,7 @@ struct Field {
 struct MessageDefinition {
   std::string type;  // "pkg/msg/Type"
   std::vector<Field> fields;
+  std::string text;  // the .msg text it was parsed from
 };
 
 // "pkg/Type" or "pkg/msg/Type" -> "pkg/msg/Type".
@@ -71,20 +72,35 @@ class TypeRegistry {
  public:
   void add(MessageDefinition definition);
   void add_msg(const std::string& type, std::string_view text) { add(parse_msg(type, text)); }
-  // A bag schema: `type`'s .msg, then "====...\nMSG: pkg/Type\n<text>" sections.
+  // A bag schema: `type`'s .msg, then "====...\nMSG: pkg/Type\n<text>" sections. A section
+  // holding a .srv or .action text defines the types derived from it (add_interface).
   void add_ros2msg(const std::string& type, std::string_view schema);
-  // Every .msg under `dir`: as <pkg>/msg/<Type>.msg, or directly in `dir`
-  // (then in package `package`, default the folder's name). Returns how many.
+  // A service's (pkg/srv/...) or action's (pkg/action/...) text, named by any type derived from
+  // it: defines <Name>_Request, _Response and _Event (ServiceEventInfo info, request[<=1],
+  // response[<=1]), or for actions <Name>_Goal, _Result, _Feedback, _FeedbackMessage and the
+  // _SendGoal and _GetResult services with their events.
+  void add_interface(const std::string& type, std::string_view text);
+  // Every .msg (.srv, .action) under `dir`: as <pkg>/msg/<Type>.msg, or directly in `dir` (then in
+  // package `package`, default the folder's name, or its parent's for a folder named "msg").
+  // Returns how many.
   std::size_t add_directory(const std::filesystem::path& dir, const std::string& package = "");
+  // Defines `type` and the types it needs that are still unknown from .msg files a flat folder
+  // gave without a package (add_directory with no `package`), matched by name: a flat folder of
+  // test_msgs files serves test_msgs/msg/Arrays whatever the folder is called. Returns how many.
+  std::size_t adopt(const std::string& type);
 
   bool contains(const std::string& type) const;
   // Throws DefinitionError naming the type, and what needs it, when unknown.
   const MessageDefinition& get(const std::string& type) const;
   // Checks that every type `type` depends on is known.
   void check_complete(const std::string& type) const;
+  // `type`'s definition as a bag's ros2msg schema: its .msg text, then each type it depends on
+  // as "====...\nMSG: pkg/Type\n<text>". Throws DefinitionError when one is unknown.
+  std::string ros2msg_schema(const std::string& type) const;
 
  private:
   std::map<std::string, MessageDefinition> types_;
+  std::map<std::string, std::string> unpackaged_;  // name -> .msg text, from flat folders
 };
 
 struct Value;

@@ -42,8 +42,10 @@ struct QoS {
 };
 
 struct MessageInfo {
-  int64_t source_timestamp_ns = 0;     // publication time on the sender (steady clock for intra)
-  int64_t reception_timestamp_ns = 0;  // arrival at the transport on the receiver
+  // DDS's source timestamp on every transport: the publication time on the sender, wall clock
+  // (CLOCK_REALTIME) ns. It pairs a take with its publish; latencies use the monotonic clock.
+  int64_t source_timestamp_ns = 0;
+  int64_t reception_timestamp_ns = 0;  // arrival at the transport on the receiver (wall clock)
   bool from_intra_process = false;
 };
 
@@ -96,6 +98,9 @@ int domain_id_from_environment();
 
 // Monotonic time (CLOCK_MONOTONIC) in nanoseconds: the one clock of DESIGN.md §3.2.
 int64_t steady_now_ns();
+// Wall-clock time (CLOCK_REALTIME) in nanoseconds since the epoch: DDS's source timestamps, which
+// ros2:rmw_publish and ros2:rmw_take record on every transport.
+int64_t wall_now_ns();
 
 // "/camera/image_raw" -> "rt/camera/image_raw"; validates the ROS name.
 std::string dds_topic_name(const std::string& ros_topic);

@@ -59,6 +59,7 @@ struct Hop {
 struct CallbackStats {
   std::string node;
   std::string source;             // the topic, or "timer <period>"
+  std::string symbol;             // ros2:rclcpp_callback_register's demangled symbol, or empty
   metrics::SampleStats duration;  // ns
 };
 
@@ -106,6 +107,8 @@ struct TraceAnalysis {
   std::vector<TopicLatency> topics;
   // Traces of robotperf control loops.
   std::vector<ControllerUpdateStats> controller_updates;
+  // One line per table (or column) the trace cannot provide, saying why: which events it lacks.
+  std::vector<std::string> unavailable;
 
   bool valid = false;
   std::vector<std::string> invalid_reasons;

@@ -55,12 +55,11 @@ LTTNG_UST_TRACEPOINT_EVENT(
         lttng_ust_field_string(topic_name, topic_name_arg)
         lttng_ust_field_integer(const size_t, queue_depth, queue_depth_arg)))
 
+/* Humble and later record the message only (Galactic also had publisher_handle). */
 LTTNG_UST_TRACEPOINT_EVENT(
     ros2, rclcpp_publish,
-    LTTNG_UST_TP_ARGS(const void *, publisher_handle_arg, const void *, message_arg),
-    LTTNG_UST_TP_FIELDS(
-        lttng_ust_field_integer_hex(const void *, publisher_handle, publisher_handle_arg)
-        lttng_ust_field_integer_hex(const void *, message, message_arg)))
+    LTTNG_UST_TP_ARGS(const void *, message_arg),
+    LTTNG_UST_TP_FIELDS(lttng_ust_field_integer_hex(const void *, message, message_arg)))
 
 LTTNG_UST_TRACEPOINT_EVENT(
     ros2, rcl_publish,
@@ -154,6 +153,14 @@ LTTNG_UST_TRACEPOINT_EVENT(
     LTTNG_UST_TP_FIELDS(
         lttng_ust_field_integer_hex(const void *, timer_handle, timer_handle_arg)
         lttng_ust_field_integer_hex(const void *, node_handle, node_handle_arg)))
+
+/* The callback's symbol: its demangled type (lambdas and function objects) or function name. */
+LTTNG_UST_TRACEPOINT_EVENT(
+    ros2, rclcpp_callback_register,
+    LTTNG_UST_TP_ARGS(const void *, callback_arg, const char *, symbol_arg),
+    LTTNG_UST_TP_FIELDS(
+        lttng_ust_field_integer_hex(const void *, callback, callback_arg)
+        lttng_ust_field_string(symbol, symbol_arg)))
 
 LTTNG_UST_TRACEPOINT_EVENT(
     ros2, callback_start,

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Fills a corpus folder with seed inputs for one fuzz target, from the repo's own files (benchmark
+# packages, fuzz/seeds/<target>/) and the shared reference data (real rosbag2 bags, .msg files,
+# published RobotPerf benchmark.yaml files) when it is there:
+#   fuzz/seeds.sh <target> <corpus folder>
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+target=$1
+corpus=$2
+data=${ROBOTPERF_SHARED_DATA:-$root/../shared/data}
+mkdir -p "$corpus"
+
+[ -d "$root/fuzz/seeds/$target" ] && cp "$root/fuzz/seeds/$target"/* "$corpus/"
+case $target in
+  fuzz_mcap_reader) find "$data/rosbag2" -name '*.mcap' -exec cp {} "$corpus/" \; 2>/dev/null || true ;;
+  fuzz_sqlite_reader) find "$data/rosbag2" -name '*.db3' -exec cp {} "$corpus/" \; 2>/dev/null || true ;;
+  fuzz_msg_parser)
+    find "$data/msg" -name '*.msg' -size -8k -exec cp {} "$corpus/" \; 2>/dev/null || true
+    ;;
+  fuzz_benchmark_packages)
+    # The target's input: benchmark.yaml, a "---8<---" line, graph.yaml.
+    for graph in "$root"/benchmarks/*/*/graph.yaml; do
+      package=$(dirname "$graph")
+      { cat "$package/benchmark.yaml" && printf '\n---8<---\n' && cat "$graph"; } \
+        >"$corpus/$(basename "$package").yaml"
+    done
+    find "$data/robotperf" -name benchmark.yaml 2>/dev/null | while read -r published; do
+      cp "$published" "$corpus/published-$(basename "$(dirname "$published")").yaml"
+    done
+    ;;
+esac

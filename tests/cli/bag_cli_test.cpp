@@ -1,0 +1,217 @@
+// Real-world bags through the bag verbs: definitions kept by conversion in both directions,
+// Humble bags without definitions, flat .msg folders, types without fields, definitions that do
+// not match the payload, and serialization formats other than CDR.
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "../command_line.hpp"
+#include "robotperf/bag/bag.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using robotperf::test_support::Outcome;
+using robotperf::test_support::robotperf_cli;
+
+const std::string kSharedBags = std::string(ROBOTPERF_SHARED_DATA_DIR) + "/rosbag2/";
+// ros2-test-interface-files: test_msgs' .msg files in one flat folder named "msg".
+const std::string kTestMsgs = "/usr/share/test_interface_files/msg";
+
+class BagCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("robotperf-bag-cli-" + std::to_string(getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+  // ROS 2's sqlite3 test bag as Humble writes it: schema 3, no message_definitions table.
+  std::string humble_bag() const {
+    const fs::path copy = dir_ / "humble.db3";
+    for (const auto& e : fs::directory_iterator(kSharedBags + "sqlite3_cdr_test")) {
+      if (e.path().extension() == ".db3") fs::copy_file(e.path(), copy);
+    }
+    sqlite3* db = nullptr;
+    EXPECT_EQ(sqlite3_open(copy.c_str(), &db), SQLITE_OK);
+    EXPECT_EQ(
+        sqlite3_exec(db, "DROP TABLE message_definitions; UPDATE schema SET schema_version=3;",
+                     nullptr, nullptr, nullptr),
+        SQLITE_OK);
+    sqlite3_close(db);
+    return copy.string();
+  }
+
+  // A bag with one topic of `type`, `format` and definition `definition`, holding `payload`.
+  std::string bag_of(const std::string& name, const std::string& type, const std::string& format,
+                     const std::string& definition, const std::vector<uint8_t>& payload) const {
+    robotperf::bag::WriteOptions w;
+    w.storage = robotperf::bag::Storage::kMcap;
+    robotperf::bag::Writer writer(dir_ / name, w);
+    robotperf::bag::TopicInfo t;
+    t.name = "/t";
+    t.type = type;
+    t.serialization_format = format;
+    t.definition_encoding = "ros2msg";
+    t.definition = definition;
+    const std::size_t id = writer.add_topic(t);
+    for (int64_t k = 0; k < 3; ++k) writer.write(id, 1'000'000'000 + k, payload);
+    writer.close();
+    return path(name);
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(BagCli, ConversionKeepsDefinitionsBothWays) {
+  // MCAP -> sqlite3 -> MCAP: every type still decodes from the bag alone at each step.
+  ASSERT_EQ(robotperf_cli("bag convert " + kSharedBags + "mcap_talker " + path("db") +
+                          " --storage sqlite3")
+                .exit_code,
+            0);
+  ASSERT_EQ(robotperf_cli("bag convert " + path("db") + " " + path("mcap")).exit_code, 0);
+  for (const std::string bag : {"db", "mcap"}) {
+    const Outcome o = robotperf_cli("bag echo " + path(bag));
+    ASSERT_EQ(o.exit_code, 0) << bag << ": " << o.out;
+    EXPECT_NE(o.out.find("msg: 'Publishing: ''Hello, world! 9'''"), std::string::npos) << o.out;
+    EXPECT_NE(o.out.find("data: 'Hello, world! 9'"), std::string::npos) << o.out;
+  }
+  // The sqlite3 file has Iron's and Jazzy's layout, with a definition per type.
+  sqlite3* db = nullptr;
+  fs::path file;
+  for (const auto& e : fs::directory_iterator(dir_ / "db")) {
+    if (e.path().extension() == ".db3") file = e.path();
+  }
+  ASSERT_EQ(sqlite3_open_v2(file.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* q = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(db,
+                               "SELECT (SELECT schema_version FROM schema), COUNT(*), "
+                               "MIN(length(encoded_message_definition)) FROM message_definitions",
+                               -1, &q, nullptr),
+            SQLITE_OK);
+  ASSERT_EQ(sqlite3_step(q), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(q, 0), 4);
+  EXPECT_EQ(sqlite3_column_int(q, 1), 3);  // String, Log, ParameterEvent
+  EXPECT_GT(sqlite3_column_int(q, 2), 10);
+  sqlite3_finalize(q);
+  sqlite3_close(db);
+}
+
+TEST_F(BagCli, AHumbleBagGetsItsDefinitionsFromAFlatMsgFolder) {
+  const std::string humble = humble_bag();
+  Outcome o = robotperf_cli("bag echo " + humble + " --topic /test_topic --limit 1");
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.out.find("no definition of test_msgs/msg/BasicTypes"), std::string::npos) << o.out;
+  // A flat folder named msg: its files serve test_msgs/msg/* by name (not msg/msg/*).
+  o = robotperf_cli("bag echo " + humble + " --msg-dir " + kTestMsgs);
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("[test_msgs/msg/Arrays]"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("- 'Complex Hello1'"), std::string::npos) << o.out;
+
+  // Converting without the .msg files says which types stay undefined...
+  o = robotperf_cli("bag convert " + humble + " " + path("bare"));
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("warning: no definition of test_msgs/msg/Arrays (/array_topic)"),
+            std::string::npos)
+      << o.out;
+  EXPECT_EQ(robotperf_cli("bag echo " + path("bare")).exit_code, 2);
+  // ...and with them writes full definitions, dependencies included, into the new bag.
+  o = robotperf_cli("bag convert " + humble + " " + path("full") + " --msg-dir " + kTestMsgs);
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_EQ(o.out.find("warning"), std::string::npos) << o.out;
+  o = robotperf_cli("bag echo " + path("full"));
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("[test_msgs/msg/Arrays]"), std::string::npos) << o.out;
+}
+
+// A Jazzy bag's service event topic: its definition is the .srv text, '---' line and all.
+TEST_F(BagCli, ServiceEventTopicsDecode) {
+  std::ifstream in(std::string("/usr/share/test_interface_files/srv/BasicTypes.srv"));
+  const std::string srv((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<uint8_t> payload = {0, 1, 0, 0, 2, 0, 0, 0, 5, 0, 0, 0, 6, 0, 0, 0};
+  payload.resize(payload.size() + 16 + 4);  // client_gid, padding to sequence_number
+  for (const uint8_t b : {9, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}) payload.push_back(b);
+  const std::string bag = bag_of("events", "test_msgs/srv/BasicTypes_Event", "cdr", srv, payload);
+  const Outcome o = robotperf_cli("bag echo " + bag + " --limit 1");
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("event_type: 2"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("sequence_number: 9"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("request: []"), std::string::npos) << o.out;
+}
+
+// A split bag that lost its metadata.yaml: reindex writes it again from the storage files, in
+// the order of their split index, and will not overwrite one that exists.
+TEST_F(BagCli, ReindexRestoresASplitBagsMetadata) {
+  ASSERT_EQ(robotperf_cli("bag convert " + kSharedBags + "mcap_talker " + path("split") +
+                          " --max-file-size 0.001")
+                .exit_code,
+            0);
+  const Outcome before = robotperf_cli("bag info " + path("split"));
+  fs::remove(dir_ / "split" / "metadata.yaml");
+  Outcome o = robotperf_cli("bag info " + path("split"));
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.out.find("robotperf bag reindex"), std::string::npos) << o.out;
+  o = robotperf_cli("bag reindex " + path("split"));
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("3 topics, 20 messages"), std::string::npos) << o.out;
+  const Outcome after = robotperf_cli("bag info " + path("split"));
+  EXPECT_EQ(after.out, before.out);  // files in split order, counts, times, QoS: all as written
+  o = robotperf_cli("bag echo " + path("split") + " --topic /topic");
+  EXPECT_NE(o.out.find("Hello, world! 9"), std::string::npos) << o.out;
+  o = robotperf_cli("bag reindex " + path("split"));
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.out.find("has one already"), std::string::npos) << o.out;
+  o = robotperf_cli("bag reindex " + dir_.string());
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.out.find("no .db3 or .mcap file to index"), std::string::npos) << o.out;
+}
+
+TEST_F(BagCli, ATypeWithoutFieldsDecodes) {
+  // std_msgs/msg/Empty: a 0-byte ros2msg definition, one uint8 member on the wire.
+  const std::string bag = bag_of("empty", "std_msgs/msg/Empty", "cdr", "", {0, 1, 0, 0, 0});
+  const Outcome o = robotperf_cli("bag echo " + bag);
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("--- /t [std_msgs/msg/Empty]"), std::string::npos) << o.out;
+  EXPECT_EQ(o.out.find("warning"), std::string::npos) << o.out;
+}
+
+TEST_F(BagCli, ADefinitionThatLeavesBytesOverIsWarnedOnce) {
+  // A "level" read out of the first byte of a 12-byte payload.
+  const std::string bag = bag_of("mismatch", "demo_msgs/msg/Level", "cdr", "uint8 level\n",
+                                 {0, 1, 0, 0, 251, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12});
+  const Outcome o = robotperf_cli("bag echo " + bag);
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("level: 251"), std::string::npos) << o.out;
+  const std::string warning = "the definition of demo_msgs/msg/Level accounts for 5 of the 16";
+  const auto at = o.out.find(warning);
+  ASSERT_NE(at, std::string::npos) << o.out;
+  EXPECT_EQ(o.out.find("accounts for", at + warning.size()), std::string::npos) << "warned twice";
+}
+
+TEST_F(BagCli, SerializationFormatsOtherThanCdrAreRefused) {
+  const std::string bag =
+      bag_of("proto", "std_msgs/msg/String", "protobuf", "string data\n", {1, 2, 3, 4});
+  Outcome o = robotperf_cli("bag echo " + bag);
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_NE(o.out.find("/t is serialized as 'protobuf': robotperf decodes CDR only"),
+            std::string::npos)
+      << o.out;
+  // Conversion copies the bytes and the format untouched.
+  o = robotperf_cli("bag convert " + bag + " " + path("copy") + " --storage sqlite3");
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  o = robotperf_cli("bag info " + path("copy"));
+  EXPECT_NE(o.out.find("[protobuf]"), std::string::npos) << o.out;
+}
+
+}  // namespace
