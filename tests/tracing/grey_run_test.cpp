@@ -108,8 +108,10 @@ TEST_F(GreyRun, A1AgreesWithBlackBoxAndExplainsWhereTheTimeGoes) {
   EXPECT_EQ(g.sent, black.sent);
   EXPECT_EQ(g.matched, g.measured);
   EXPECT_EQ(g.duplicates + g.unknown, 0u);
-  // Same configuration, same statistics: medians within 30 % or 2 ms.
-  const double tolerance = std::max(0.3 * black.latency_from_scheduled.p50, 2 * kMs);
+  // Same configuration, same statistics: medians within half or 5 ms. The two runs follow each
+  // other, so load that comes and goes on a busy 2-core machine moves one median and not the
+  // other by a few ms (4 ms seen beside a fuzzer); a grey-box error is larger than that.
+  const double tolerance = std::max(0.5 * black.latency_from_scheduled.p50, 5 * kMs);
   EXPECT_NEAR(g.latency_from_scheduled.p50, black.latency_from_scheduled.p50, tolerance);
   EXPECT_GE(g.latency_from_sent.min, 0.0);
 
