@@ -223,9 +223,18 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   }
   r.warmup = options.warmup.value_or(spec.warmup);
   if (r.warmup >= r.count) {
+    // With --duration the count is derived: say from what, since a slow benchmark (c1 sends a
+    // goal every few seconds) gives few messages in a short duration.
+    std::string derived;
+    if (!options.count && options.duration_s) {
+      std::ostringstream text;
+      text << " = " << *options.duration_s << " s x " << r.rate_hz
+           << " Hz; give a longer --duration or a --count";
+      derived = text.str();
+    }
     throw std::invalid_argument("warm-up (" + std::to_string(r.warmup) +
                                 ") must be smaller than the message count (" +
-                                std::to_string(r.count) + ")");
+                                std::to_string(r.count) + derived + ")");
   }
   r.drain_s = options.drain_s.value_or(spec.drain_s);
   if (!(options.callback_timeout_s > 0) || !std::isfinite(options.callback_timeout_s))

@@ -420,6 +420,13 @@ TEST_F(Cli, SettingsThatCannotWorkAreRefusedBeforeTheRun) {
     EXPECT_NE(o.out.find(message), std::string::npos) << args << ": " << o.out;
   }
   EXPECT_FALSE(fs::exists(out_ / "r") && !fs::is_empty(out_ / "r"));
+  // A --duration too short for the rate says what the count was derived from.
+  const Outcome o = robotperf_cli("run a5 --rate 1 --duration 0.4 --warmup 1 --quiet --output " +
+                                  (out_ / "r").string());
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_NE(o.out.find("message count (0 = 0.4 s x 1 Hz; give a longer --duration or a --count)"),
+            std::string::npos)
+      << o.out;
 }
 
 }  // namespace
