@@ -194,7 +194,13 @@ void check_published(PublishedResult& r) {
   for (std::sregex_iterator it(r.note.begin(), r.note.end(), figure), end; it != end; ++it) {
     std::string name = (*it)[1].str();
     std::ranges::transform(name, name.begin(), [](unsigned char c) { return std::tolower(c); });
-    const double v = std::stod((*it)[2].str());
+    // A figure beyond double's range (from_chars refuses it) is flagged, not taken.
+    const auto parsed = parse_number((*it)[2].str());
+    if (!parsed) {
+      r.flags.push_back("the note's " + name + " (" + (*it)[2].str() + ") is not a number");
+      continue;
+    }
+    const double v = *parsed;
     auto& slot = name == "mean"  ? r.note_mean
                  : name == "rms" ? r.note_rms
                  : name == "min" ? r.note_min
@@ -207,11 +213,15 @@ void check_published(PublishedResult& r) {
   }
   std::smatch m;
   if (std::regex_search(r.note, m, loss)) {
-    r.note_loss_percent = std::stod(m[1].str());
-    if (*r.note_loss_percent > 100.0)
+    r.note_loss_percent = parse_number(m[1].str());
+    if (!r.note_loss_percent) {
+      r.flags.push_back("the note's loss (" + m[1].str() + " %) is not a number");
+    } else if (*r.note_loss_percent > 100.0) {
       r.flags.push_back("loss " + m[1].str() +
                         " % is above 100 % (lost messages counted by position, not by ID)");
-    if (*r.note_loss_percent < 0) r.flags.push_back("negative loss " + m[1].str() + " %");
+    } else if (*r.note_loss_percent < 0) {
+      r.flags.push_back("negative loss " + m[1].str() + " %");
+    }
   }
   if (!std::isfinite(r.value)) {
     r.flags.push_back(r.value_text.empty() ? "no value"

@@ -152,6 +152,22 @@ TEST_F(BenchmarkYaml, PowerBelowOneMilliwattIsFlagged) {
   EXPECT_TRUE(has_flag(r, "negative latency"));
 }
 
+// Found by fuzz_benchmark_packages: a figure in a note beyond double's range threw stod's
+// out_of_range out of import.
+TEST_F(BenchmarkYaml, NoteFiguresBeyondDoubleAreFlaggedNotThrown) {
+  PublishedResult r;
+  r.metric = "latency";
+  r.value = 5;
+  r.value_text = "5";
+  const std::string huge = "1" + std::string(400, '0');
+  r.note = "mean 1e999 ms, max 7 ms, lost " + huge + " %";
+  EXPECT_NO_THROW(check_published(r));
+  EXPECT_TRUE(has_flag(r, "the note's mean (1e999) is not a number"));
+  EXPECT_TRUE(has_flag(r, "the note's loss (" + huge + " %) is not a number"));
+  EXPECT_EQ(r.note_max, 7.0);
+  EXPECT_FALSE(r.note_mean.has_value());
+}
+
 TEST_F(BenchmarkYaml, ExportGivesRobotPerfEntries) {
   const auto entries = sample_entries();
   ASSERT_EQ(entries.size(), 3u);
