@@ -261,6 +261,12 @@ struct RunArgs {
   double callback_timeout_s = 30.0;
 };
 
+// JSON as text for a file or the terminal: bytes that are not UTF-8 (names from a trace or a bag)
+// are replaced, not refused, so that what was measured is always written.
+std::string json_text(const nlohmann::json& j, int indent) {
+  return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 // The first SIGINT or SIGTERM ends the run cleanly (the harness polls this); a second one ends
 // the process at once.
 std::atomic<int> g_interrupted{0};
@@ -447,9 +453,7 @@ int run(const Roots& roots, const RunArgs& a) {
   std::cout << report::summary_table(result);
   std::cout << "machine: " << sysinfo::summary_line(machine) << "\n";
   std::map<std::string, std::string> files = {
-      {".json", report::result_to_json(result, machine)
-                        .dump(2, ' ', false, nlohmann::json::error_handler_t::replace) +
-                    "\n"}};
+      {".json", json_text(report::result_to_json(result, machine), 2) + "\n"}};
   if (a.csv) files[".latencies.csv"] = report::latencies_csv(result);
   const auto kept = write_result_files(base, files);
   const bool moved = kept && *kept != base;
@@ -515,8 +519,7 @@ int analyze(const TraceArgs& a) {
             {"from_sent", metrics::to_json(analysis.latency_from_sent, 1e-6, "ms")}}},
           {"throughput_hz", analysis.throughput_hz}};
     }
-    report::write_file_atomically(
-        a.json, j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+    report::write_file_atomically(a.json, json_text(j, 2) + "\n");
   }
   return analysis.valid ? kExitOk : kExitInvalidResult;
 }
@@ -625,9 +628,7 @@ int import_published(const std::vector<std::string>& paths, const std::string& i
     flagged += report::flagged_rows_report(b);
     if (!into.empty()) {
       const fs::path out = fs::path(into) / ("published-" + b.category + "-" + b.name + ".json");
-      report::write_file_atomically(
-          out,
-          report::to_json(b).dump(1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+      report::write_file_atomically(out, json_text(report::to_json(b), 1) + "\n");
     }
   }
   if (!flagged.empty()) std::cout << "\nrows that break the measurement rules:\n" << flagged;
@@ -965,8 +966,7 @@ int main(int argc, char** argv) {
           {"software", report::software_json()},
           {"power",
            metrics::sources_to_json(metrics::discover_power_sources(sysinfo_power.options()))}};
-      std::cout << description.dump(2, ' ', false, nlohmann::json::error_handler_t::replace)
-                << "\n";
+      std::cout << json_text(description, 2) << "\n";
       return kExitOk;
     }
     if (*node_cmd) {
