@@ -9,6 +9,7 @@
 #include <fastdds/rtps/common/SerializedPayload.h>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
 
 #include <array>
 #include <chrono>
@@ -19,6 +20,7 @@
 #include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
@@ -36,6 +38,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -172,16 +175,89 @@ dds::DataReaderQos reader_qos(const dds::Subscriber& subscriber, const QoS& qos)
   return out;
 }
 
+ParticipantId participant_id(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) {
+  ParticipantId id;
+  std::memcpy(id.data(), prefix.value, id.size());
+  return id;
+}
+
+// What discovery tells about the other participants of the domain. Fast DDS calls it from its
+// own threads.
+class PeerListener final : public dds::DomainParticipantListener {
+ public:
+  void on_participant_discovery(
+      dds::DomainParticipant*, eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
+    using Info = eprosima::fastrtps::rtps::ParticipantDiscoveryInfo;
+    if (info.status != Info::DISCOVERED_PARTICIPANT && info.status != Info::CHANGED_QOS_PARTICIPANT)
+      return;
+    const auto& data = info.info;
+    std::lock_guard lock(mutex_);
+    const ParticipantId id = participant_id(data.m_guid.guidPrefix);
+    announced_.insert(id);
+    PeerParticipant& peer = peer_locked(id);
+    peer.name = data.m_participantName.to_string();
+    const auto& bytes = data.m_userData.data_vec();
+    peer.user_data.assign(bytes.begin(), bytes.end());
+    peer.addresses.clear();
+    for (const auto& locator : data.default_locators.unicast) {
+      if (locator.kind == LOCATOR_KIND_UDPv4 || locator.kind == LOCATOR_KIND_UDPv6) {
+        peer.addresses.push_back(eprosima::fastrtps::rtps::IPLocator::ip_to_string(locator) + ":" +
+                                 std::to_string(locator.port));
+      }
+    }
+  }
+  void on_subscriber_discovery(dds::DomainParticipant*,
+                               eprosima::fastrtps::rtps::ReaderDiscoveryInfo&& info) override {
+    add_topic(info.info.guid().guidPrefix, info.info.topicName().to_string());
+  }
+  void on_publisher_discovery(dds::DomainParticipant*,
+                              eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override {
+    add_topic(info.info.guid().guidPrefix, info.info.topicName().to_string());
+  }
+
+  // Those announced so far, but `self`: Fast DDS reports a participant's own endpoints too.
+  std::vector<PeerParticipant> peers(const ParticipantId& self) const {
+    std::lock_guard lock(mutex_);
+    std::vector<PeerParticipant> out;
+    for (const auto& [id, peer] : peers_) {
+      if (id != self && announced_.contains(id)) out.push_back(peer);
+    }
+    return out;
+  }
+
+ private:
+  PeerParticipant& peer_locked(const ParticipantId& id) {
+    PeerParticipant& peer = peers_[id];
+    peer.id = id;
+    return peer;
+  }
+  void add_topic(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix, std::string dds_topic) {
+    // ROS topics travel as "rt/<name>"; others (DDS-only) are listed as DDS names them.
+    if (dds_topic.starts_with("rt/")) dds_topic.erase(0, 2);
+    std::lock_guard lock(mutex_);
+    peer_locked(participant_id(prefix)).topics.insert(std::move(dds_topic));
+  }
+
+  mutable std::mutex mutex_;
+  // Endpoints may be reported before their participant: only announced participants are peers.
+  std::map<ParticipantId, PeerParticipant> peers_;
+  std::set<ParticipantId> announced_;
+};
+
 // The participant and the entities every endpoint shares. Publisher and
 // subscription handles keep it alive, so they may outlive their Transport.
 class Participant {
  public:
-  explicit Participant(int domain_id) {
+  explicit Participant(const TransportOptions& options) {
     auto* factory = dds::DomainParticipantFactory::get_instance();
-    participant_ = factory->create_participant(domain_id, fastdds_participant_qos());
+    dds::DomainParticipantQos qos = fastdds_participant_qos();
+    qos.user_data().data_vec().assign(options.user_data.begin(), options.user_data.end());
+    // Only the discovery callbacks, which no status mask filters.
+    participant_ = factory->create_participant(options.domain_id, qos, &peer_listener_,
+                                               dds::StatusMask::none());
     if (participant_ == nullptr) {
       throw TransportError("fastdds: cannot create a DomainParticipant on domain " +
-                           std::to_string(domain_id));
+                           std::to_string(options.domain_id));
     }
     publisher_ = participant_->create_publisher(participant_->get_default_publisher_qos());
     subscriber_ = participant_->create_subscriber(participant_->get_default_subscriber_qos());
@@ -196,6 +272,8 @@ class Participant {
 
   dds::Publisher& publisher() { return *publisher_; }
   dds::Subscriber& subscriber() { return *subscriber_; }
+  ParticipantId id() const { return participant_id(participant_->guid().guidPrefix); }
+  std::vector<PeerParticipant> peers() const { return peer_listener_.peers(id()); }
 
   // The topic for `ros_topic`, created on first use; a second type is an error.
   dds::Topic& topic(const std::string& ros_topic, const msgs::TypeSupport& type) {
@@ -237,6 +315,8 @@ class Participant {
     dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
   }
 
+  // Declared before the participant that calls it, so that it outlives it.
+  PeerListener peer_listener_;
   dds::DomainParticipant* participant_ = nullptr;
   dds::Publisher* publisher_ = nullptr;
   dds::Subscriber* subscriber_ = nullptr;
@@ -352,6 +432,7 @@ class FastddsSubscription final : public SubscriptionHandle {
         info->source_timestamp_ns = sample_info.source_timestamp.to_ns();
         info->reception_timestamp_ns = sample_info.reception_timestamp.to_ns();
         info->from_intra_process = false;
+        info->sender = participant_id(sample_info.sample_identity.writer_guid().guidPrefix);
       }
       return msg;
     }
@@ -374,7 +455,7 @@ class FastddsSubscription final : public SubscriptionHandle {
 class FastddsTransport final : public Transport {
  public:
   explicit FastddsTransport(const TransportOptions& options)
-      : participant_(std::make_shared<Participant>(options.domain_id)) {}
+      : participant_(std::make_shared<Participant>(options)) {}
 
   std::string name() const override { return "fastdds"; }
 
@@ -391,6 +472,8 @@ class FastddsTransport final : public Transport {
     return std::make_unique<FastddsSubscription>(participant_, topic, type, qos,
                                                  std::move(on_ready));
   }
+  std::vector<PeerParticipant> peers() const override { return participant_->peers(); }
+  ParticipantId participant() const override { return participant_->id(); }
 
  private:
   std::shared_ptr<Participant> participant_;

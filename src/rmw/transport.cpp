@@ -3,8 +3,11 @@
 #include <time.h>
 
 #include <cctype>
+#include <chrono>
 #include <cstdlib>
+#include <random>
 #include <stdexcept>
+#include <thread>
 
 #include "fastdds_transport.hpp"
 #include "intra_transport.hpp"
@@ -24,6 +27,16 @@ std::unique_ptr<Transport> make_transport(const std::string& name,
   throw std::invalid_argument("unknown transport '" + name + "' (choose intra or fastdds)");
 }
 
+std::string to_hex(const ParticipantId& id) {
+  static constexpr char kDigits[] = "0123456789abcdef";
+  std::string out;
+  for (uint8_t b : id) {
+    out += kDigits[b >> 4];
+    out += kDigits[b & 15];
+  }
+  return out;
+}
+
 int domain_id_from_environment() {
   const char* value = std::getenv("ROS_DOMAIN_ID");
   if (value == nullptr || *value == '\0') return 0;
@@ -35,6 +48,30 @@ int domain_id_from_environment() {
                                 "' is not a domain id between 0 and 232");
   }
   return static_cast<int>(id);
+}
+
+int find_quiet_domain(const std::string& transport, double listen_s) {
+  if (transport == "intra") return 0;
+  constexpr int kTries = 16;
+  std::random_device entropy;
+  std::uniform_int_distribution<int> domain(1, 232);
+  for (int t = 0; t < kTries; ++t) {
+    const int candidate = domain(entropy);
+    TransportOptions options;
+    options.domain_id = candidate;
+    const auto probe = make_transport(transport, options);
+    // Participants answer a newcomer's first announcements, usually within milliseconds, and
+    // announce themselves periodically (Fast DDS: every 3 s), which bounds the wait.
+    const int64_t end = steady_now_ns() + static_cast<int64_t>(listen_s * 1e9);
+    bool quiet = true;
+    while (quiet && steady_now_ns() < end) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      quiet = probe->peers().empty();
+    }
+    if (quiet) return candidate;
+  }
+  throw TransportError("--domain auto: " + std::to_string(kTries) +
+                       " domains tried, all have participants; give a --domain");
 }
 
 int64_t steady_now_ns() {

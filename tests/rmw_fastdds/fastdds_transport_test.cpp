@@ -261,6 +261,46 @@ TEST(FastddsTransport, CountsMatchedEndpoints) {
   EXPECT_TRUE(wait_until([&] { return local_sub->matched_publishers() == 1; }));
 }
 
+// What robotperf tells runs apart by: the other participants, with their USER_DATA and topics,
+// and the participant each sample came from.
+TEST(FastddsTransport, DiscoversPeersAndTheSenderOfEachSample) {
+  TransportOptions mine{test_domain(12), "robotperf_run=aaaa;"};
+  TransportOptions theirs{test_domain(12), "robotperf_run=bbbb;"};
+  auto transport = make_fastdds_transport(mine);
+  auto other = make_fastdds_transport(theirs);
+  const std::string topic = test_topic("peers");
+  const auto& type = msgs::type_support<Image>();
+  Inbox inbox;
+  auto sub = transport->create_subscription(topic, type, QoS{}, inbox.on_ready());
+  auto pub = other->create_publisher(topic, type, QoS{});
+  ASSERT_TRUE(wait_until([&] { return pub->matched_subscriptions() == 1; }));
+  std::vector<PeerParticipant> peers;
+  ASSERT_TRUE(wait_until([&] {
+    peers = transport->peers();
+    return peers.size() == 1 && peers[0].topics.contains(topic);
+  })) << peers.size();
+  EXPECT_EQ(peers[0].user_data, "robotperf_run=bbbb;");
+  EXPECT_EQ(peers[0].name, "robotperf");
+  EXPECT_EQ(to_hex(peers[0].id).size(), 24u);
+
+  pub->publish(std::make_shared<Image>(make_image(4, 2, 1)));
+  MessageInfo info;
+  ASSERT_NE(inbox.take(*sub, &info), nullptr);
+  EXPECT_EQ(info.sender, peers[0].id);
+}
+
+// A newcomer sees a participant that was already there within the time --domain auto listens
+// (usually at once: the existing one answers the newcomer's first announcements; at the latest
+// at its next periodic announcement, every 3 s by default).
+TEST(FastddsTransport, ANewcomerDiscoversAnExistingParticipantWhileDomainAutoListens) {
+  auto existing = make_fastdds_transport({test_domain(13), "robotperf_run=cccc;"});
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // its first announcements are over
+  const auto start = std::chrono::steady_clock::now();
+  auto newcomer = make_fastdds_transport({test_domain(13)});
+  ASSERT_TRUE(wait_until([&] { return !newcomer->peers().empty(); }));
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::milliseconds(3500));
+}
+
 TEST(FastddsTransport, HandlesMayOutliveTheirTransport) {
   auto transport = make_fastdds_transport({test_domain(8)});
   Pair<Image> images(*transport, test_topic("outlive"), QoS{});

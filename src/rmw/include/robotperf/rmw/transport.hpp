@@ -6,12 +6,16 @@
 // and the executor later `take`s it on its own thread.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <set>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "robotperf/msgs/type_support.hpp"
 
@@ -41,12 +45,30 @@ struct QoS {
   friend bool operator==(const QoS&, const QoS&) = default;
 };
 
+// A DDS participant's GUID prefix.
+using ParticipantId = std::array<uint8_t, 12>;
+
+// Another participant a transport discovered on its domain.
+struct PeerParticipant {
+  ParticipantId id{};
+  std::string name;
+  std::string user_data;               // its USER_DATA QoS, as text
+  std::vector<std::string> addresses;  // its unicast locators ("192.168.1.5:7411")
+  std::set<std::string> topics;        // the ROS names of its endpoints seen so far
+};
+
+// "0f1e...": the 24 hex digits of a participant id.
+std::string to_hex(const ParticipantId& id);
+
 struct MessageInfo {
   // DDS's source timestamp on every transport: the publication time on the sender, wall clock
   // (CLOCK_REALTIME) ns. It pairs a take with its publish; latencies use the monotonic clock.
   int64_t source_timestamp_ns = 0;
   int64_t reception_timestamp_ns = 0;  // arrival at the transport on the receiver (wall clock)
   bool from_intra_process = false;
+  // The DDS participant that wrote it (its GUID prefix); all zero where the transport has no
+  // participants (intra).
+  ParticipantId sender{};
 };
 
 // Errors a transport reports to the user (bad topic, type clash, DDS failure).
@@ -83,10 +105,22 @@ class Transport {
   virtual std::unique_ptr<SubscriptionHandle> create_subscription(
       const std::string& topic, const msgs::TypeSupport& type, const QoS& qos,
       std::function<void()> on_ready) = 0;
+  // The other participants discovered on the domain since the transport started, including
+  // those that have left since (none for transports without discovery).
+  virtual std::vector<PeerParticipant> peers() const { return {}; }
+  // This transport's own participant (all zero for transports without participants).
+  virtual ParticipantId participant() const { return {}; }
 };
 
 struct TransportOptions {
+  TransportOptions() = default;
+  explicit(false) TransportOptions(int domain, std::string participant_user_data = {})
+      : domain_id(domain), user_data(std::move(participant_user_data)) {}
+
   int domain_id = 0;  // DDS domain; ROS_DOMAIN_ID when set
+  // The participant's USER_DATA, which every other participant on the domain sees: "key=value;"
+  // pairs as ROS 2 uses it. robotperf marks the participants of one run with it.
+  std::string user_data;
 };
 
 // "intra" or "fastdds"; throws std::invalid_argument naming the valid choices.
@@ -95,6 +129,11 @@ std::unique_ptr<Transport> make_transport(const std::string& name,
 
 // Reads ROS_DOMAIN_ID (0 when unset); throws std::invalid_argument when malformed.
 int domain_id_from_environment();
+
+// A DDS domain on which `transport` discovers no other participant within `listen_s`: domains
+// 1 to 232 tried in a random order (0, ROS 2's default, is left to robots). Transports without
+// discovery (intra) get 0. Throws TransportError when none of the tries is quiet.
+int find_quiet_domain(const std::string& transport, double listen_s = 3.5);
 
 // Monotonic time (CLOCK_MONOTONIC) in nanoseconds: the one clock of DESIGN.md §3.2.
 int64_t steady_now_ns();
