@@ -4,6 +4,7 @@
 #include <thread>
 
 #include "robotperf/build_info.hpp"
+#include "robotperf/metrics/latency_stats.hpp"
 #include "robotperf/rmw/transport.hpp"
 
 namespace robotperf::harness {
@@ -51,6 +52,7 @@ std::vector<sysinfo::RunWarning> check_run_rules_for(const RunResult& r,
   in.build_type = build_info::kBuildType;
   in.sanitized = build_info::kSanitized;
   in.measured_messages = r.count - r.warmup;
+  in.samples_for_p99_bound = metrics::samples_for_upper_bound(0.99);
   in.other_load_percent = other_load_percent;
   in.grey_box = !r.trace_dir.empty();  // set when the grey-box recording started
   return sysinfo::check_run_rules(in);

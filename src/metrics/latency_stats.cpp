@@ -37,6 +37,39 @@ nlohmann::json scaled_or_null(double value, double scale) {
 
 }  // namespace
 
+OrderStatisticRanks percentile_interval_ranks(std::size_t n, double q, double confidence) {
+  if (!(q > 0.0 && q < 1.0) || !(confidence > 0.0 && confidence < 1.0))
+    throw std::invalid_argument("percentile_interval_ranks: q and confidence must be in (0, 1)");
+  OrderStatisticRanks ranks;
+  if (n == 0) return ranks;
+  // B ~ Bin(n, q), the number of samples at or below the true quantile. [x(l), x(u)] covers it
+  // when l <= B < u, so l is the largest rank with P(B <= l - 1) <= tail and u the smallest with
+  // P(B <= u - 1) >= 1 - tail.
+  const double tail = (1.0 - confidence) / 2.0;
+  const double nd = static_cast<double>(n);
+  // Beyond 12 standard deviations from the mean the binomial's mass is far below any tail used.
+  const double sd = std::sqrt(nd * q * (1.0 - q));
+  const double from = std::max(0.0, std::floor(nd * q - 12.0 * sd - 2.0));
+  const double to = std::min(nd, std::ceil(nd * q + 12.0 * sd + 2.0));
+  const double log_n_factorial = std::lgamma(nd + 1.0);
+  double cdf = 0.0;  // P(B <= k)
+  for (auto k = static_cast<std::size_t>(from); k <= static_cast<std::size_t>(to); ++k) {
+    const double kd = static_cast<double>(k);
+    cdf += std::exp(log_n_factorial - std::lgamma(kd + 1.0) - std::lgamma(nd - kd + 1.0) +
+                    kd * std::log(q) + (nd - kd) * std::log1p(-q));
+    // Rank j = k + 1 has P(B <= j - 1) = cdf.
+    if (cdf <= tail) ranks.lower = k + 1;
+    if (cdf >= 1.0 - tail && ranks.upper == 0 && k + 1 <= n) ranks.upper = k + 1;
+  }
+  return ranks;
+}
+
+std::size_t samples_for_upper_bound(double q, double confidence) {
+  // x(n) bounds the quantile from above once P(B <= n - 1) = 1 - q^n >= 1 - tail.
+  const double tail = (1.0 - confidence) / 2.0;
+  return static_cast<std::size_t>(std::ceil(std::log(tail) / std::log(q)));
+}
+
 double quantile_of_sorted(std::span<const double> sorted_samples, double q) {
   if (!(q >= 0.0 && q <= 1.0)) {
     throw std::invalid_argument("quantile must be in [0, 1], got " + std::to_string(q));
@@ -91,6 +124,17 @@ SampleStats compute_stats(std::span<const double> samples) {
   stats.p90 = quantile_of_sorted(sorted, 0.90);
   stats.p99 = quantile_of_sorted(sorted, 0.99);
   stats.p999 = quantile_of_sorted(sorted, 0.999);
+  auto interval = [&](double q) {
+    const OrderStatisticRanks ranks = percentile_interval_ranks(sorted.size(), q);
+    PercentileInterval ci;
+    if (ranks.lower > 0) ci.lower = sorted[ranks.lower - 1];
+    if (ranks.upper > 0) ci.upper = sorted[ranks.upper - 1];
+    return ci;
+  };
+  stats.p50_ci = interval(0.50);
+  stats.p90_ci = interval(0.90);
+  stats.p99_ci = interval(0.99);
+  stats.p999_ci = interval(0.999);
   return stats;
 }
 
@@ -107,6 +151,12 @@ nlohmann::json to_json(const SampleStats& stats, double scale, std::string_view 
       {"p999", scaled_or_null(stats.p999, scale)},
       {"max", scaled_or_null(stats.max, scale)},
   };
+  for (const auto& [name, ci] : {std::pair{"p50_ci95", stats.p50_ci},
+                                 {"p90_ci95", stats.p90_ci},
+                                 {"p99_ci95", stats.p99_ci},
+                                 {"p999_ci95", stats.p999_ci}}) {
+    json[name] = {scaled_or_null(ci.lower, scale), scaled_or_null(ci.upper, scale)};
+  }
   if (!unit.empty()) json["unit"] = std::string(unit);
   return json;
 }

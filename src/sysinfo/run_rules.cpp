@@ -112,13 +112,13 @@ std::vector<RunWarning> check_run_rules(const RunRuleInputs& in) {
                                 : "tracing may be active during a black-box run: " + tracing +
                                       "; it adds overhead to what is measured");
   }
-  // p99 interpolates the largest samples below 100 of them, p99.9 below 1000.
-  if (in.measured_messages < 1000) {
-    const std::string which = in.measured_messages < 100 ? "p99 and p99.9 need" : "p99.9 needs";
-    const std::string needed = in.measured_messages < 100 ? "100 and 1000" : "1000";
-    warn("samples", std::to_string(in.measured_messages) + " measured messages: " + which +
-                        " at least " + needed +
-                        " samples to be more than the largest few; use --count or --duration");
+  // Below this the p99 is the largest few samples, and no sample bounds it from above.
+  if (in.measured_messages < in.samples_for_p99_bound) {
+    warn("samples", std::to_string(in.measured_messages) +
+                        " measured messages: the p99's 95 % interval has no upper end below " +
+                        std::to_string(in.samples_for_p99_bound) +
+                        " samples (each percentile is reported with the interval its samples "
+                        "give); use --count or --duration");
   }
   return warnings;
 }

@@ -166,5 +166,73 @@ TEST(StatsToJson, NaNBecomesNull) {
   EXPECT_TRUE(single.at("max").is_number());
 }
 
+// The textbook interval of a median of 100 samples: x(40) to x(61).
+TEST(PercentileInterval, MedianOfAHundredIsTheTextbookInterval) {
+  const OrderStatisticRanks r = percentile_interval_ranks(100, 0.5);
+  EXPECT_EQ(r.lower, 40u);
+  EXPECT_EQ(r.upper, 61u);
+  const SampleStats s = compute_stats(one_to(100));
+  EXPECT_DOUBLE_EQ(s.p50_ci.lower, 40.0);
+  EXPECT_DOUBLE_EQ(s.p50_ci.upper, 61.0);
+  EXPECT_LE(s.p50_ci.lower, s.p50);
+  EXPECT_GE(s.p50_ci.upper, s.p50);
+}
+
+TEST(PercentileInterval, TooFewSamplesLeaveTheUpperEndOpen) {
+  EXPECT_EQ(samples_for_upper_bound(0.99), 368u);
+  EXPECT_EQ(samples_for_upper_bound(0.999), 3688u);
+  const SampleStats few = compute_stats(one_to(367));
+  EXPECT_TRUE(std::isnan(few.p99_ci.upper));
+  EXPECT_FALSE(std::isnan(few.p99_ci.lower));
+  const SampleStats enough = compute_stats(one_to(368));
+  EXPECT_DOUBLE_EQ(enough.p99_ci.upper, 368.0);
+  // One sample bounds nothing.
+  const SampleStats one = compute_stats(std::vector<double>{5.0});
+  EXPECT_TRUE(std::isnan(one.p50_ci.lower));
+  EXPECT_TRUE(std::isnan(one.p50_ci.upper));
+  EXPECT_THROW(percentile_interval_ranks(10, 1.0), std::invalid_argument);
+}
+
+// The intervals hold what they claim: over many sample sets from a known distribution, about 95 %
+// of them contain the true percentile (at least 95 % by construction, a little more since ranks
+// are whole numbers).
+TEST(PercentileInterval, CoversTheTruePercentileAtTheStatedRate) {
+  std::mt19937_64 generator(3);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const int trials = 2000;
+  int covered_p90 = 0, covered_p50 = 0;
+  std::vector<double> samples(300);
+  for (int t = 0; t < trials; ++t) {
+    for (double& x : samples) x = uniform(generator);
+    const SampleStats s = compute_stats(samples);
+    covered_p90 += s.p90_ci.lower <= 0.9 && 0.9 <= s.p90_ci.upper;
+    covered_p50 += s.p50_ci.lower <= 0.5 && 0.5 <= s.p50_ci.upper;
+  }
+  for (int covered : {covered_p90, covered_p50}) {
+    const double rate = static_cast<double>(covered) / trials;
+    EXPECT_GT(rate, 0.935);
+    EXPECT_LT(rate, 0.985);
+  }
+}
+
+TEST(PercentileInterval, LargeSampleCountsStayFastAndNarrow) {
+  const auto start = std::chrono::steady_clock::now();
+  const OrderStatisticRanks r = percentile_interval_ranks(10'000'000, 0.999);
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(2));
+  // 10^7 samples: the p99.9 rank 9'990'000 give or take two standard deviations (100 each).
+  EXPECT_GT(r.lower, 9'989'700u);
+  EXPECT_LT(r.lower, 9'990'000u);
+  EXPECT_GT(r.upper, 9'990'000u);
+  EXPECT_LT(r.upper, 9'990'300u);
+}
+
+TEST(StatsToJson, IntervalsArePairsWithNullForAnOpenEnd) {
+  const nlohmann::json json = to_json(compute_stats(one_to(100)), 2.0);
+  EXPECT_DOUBLE_EQ(json.at("p50_ci95").at(0).get<double>(), 80.0);
+  EXPECT_DOUBLE_EQ(json.at("p50_ci95").at(1).get<double>(), 122.0);
+  EXPECT_TRUE(json.at("p99_ci95").at(1).is_null());
+  EXPECT_TRUE(json.at("p999_ci95").at(1).is_null());
+}
+
 }  // namespace
 }  // namespace robotperf::metrics

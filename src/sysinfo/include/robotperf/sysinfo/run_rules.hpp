@@ -1,6 +1,6 @@
 // Run rules: conditions under which a benchmark's numbers do not mean what they seem (a Debug
 // build, a CPU clock that follows the load, other load on the machine, tracing during a
-// black-box run, too few samples for the percentiles reported). They are checked before a run;
+// black-box run, too few samples to bound the p99 from above). They are checked before a run;
 // each one found becomes a warning recorded in the result (or, with --strict, a refusal).
 #pragma once
 
@@ -24,6 +24,9 @@ struct RunRuleInputs {
   std::string build_type;  // CMAKE_BUILD_TYPE of this robotperf
   bool sanitized = false;
   std::size_t measured_messages = 0;
+  // The fewest samples whose 95 % interval of the p99 has an upper end
+  // (metrics::samples_for_upper_bound(0.99)); fewer measured messages are warned about.
+  std::size_t samples_for_p99_bound = 368;
   // CPU used by processes other than the graph's just before the run, in % of one core.
   std::optional<double> other_load_percent;
   // A grey-box run records LTTng events by design: the session daemon it uses is not a warning.
