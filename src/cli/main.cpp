@@ -15,6 +15,7 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <thread>
 
 #include "bag_commands.hpp"
 #include "registry_commands.hpp"
@@ -23,6 +24,7 @@
 #include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
+#include "robotperf/harness/peak_search.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/msgs/cdr.hpp"
 #include "robotperf/msgs/dynamic.hpp"
@@ -32,6 +34,7 @@
 #include "robotperf/report/report.hpp"
 #include "robotperf/report/results.hpp"
 #include "robotperf/report/run_store.hpp"
+#include "robotperf/report/series.hpp"
 #include "robotperf/sysinfo/machine.hpp"
 #include "robotperf/tracing/analysis.hpp"
 #include "robotperf/tracing/ctf.hpp"
@@ -244,6 +247,17 @@ struct RunArgs {
   std::optional<std::string> dataset, window;
   std::vector<std::string> remaps;
   double rate_scale = 1.0;
+  std::string arrival = "fixed";
+  uint64_t arrival_seed = 1;
+  // --find-peak and its bounds.
+  bool find_peak = false;
+  std::optional<double> loss_bound, latency_bound;
+  double latency_percentile = 99;
+  std::optional<std::string> rate_range;
+  double peak_resolution = 5;
+  // --repeat N [--repeat-pause S]
+  std::size_t repeat = 1;
+  double repeat_pause = 0;
   std::optional<std::size_t> count, warmup;
   std::string rmw = "intra";
   std::string processes = "single";
@@ -252,7 +266,7 @@ struct RunArgs {
   bool quiet = false;
   bool report = false;
   bool strict = false;
-  std::optional<int> domain;
+  std::optional<std::string> domain;  // a number, or "auto"
   PowerArgs power;
   SchedulingArgs scheduling;
   std::string mode = "black";
@@ -375,73 +389,26 @@ harness::BagSelection bag_selection(const RunArgs& a) {
   return bag;
 }
 
-int run(const Roots& roots, const RunArgs& a) {
-  const auto spec = harness::find_benchmark(roots, a.id);
-  harness::RunOptions o;
-  if (a.dataset) o.bag = bag_selection(a);
-  if (a.rate_scale != 1.0 && a.rate != "bag")
-    throw std::invalid_argument("--rate-scale only applies with --rate bag");
-  if (a.rate == "bag") {
-    o.bag_timeline = true;
-    o.rate_scale = a.rate_scale;
-  } else if (a.rate) {
-    std::size_t used = 0;
-    try {
-      o.rate_hz = std::stod(*a.rate, &used);
-    } catch (const std::exception&) {
-    }
-    if (used == 0 || used != a.rate->size())
-      throw std::invalid_argument("--rate " + *a.rate + ": expected a rate in Hz or 'bag'");
+// One run of `spec`; a grey run's trace folder is removed when the run does not happen.
+harness::RunResult measure(const harness::BenchmarkSpec& spec, const harness::RunOptions& o) {
+  const InterruptHandling interrupts;
+  try {
+    return harness::run_benchmark(spec, o);
+  } catch (...) {
+    std::error_code ec;
+    if (!o.trace_dir.empty()) fs::remove_all(o.trace_dir, ec);
+    throw;
   }
-  o.update_rate_hz = a.update_rate;
-  o.count = a.count;
-  o.duration_s = a.duration;
-  o.warmup = a.warmup;
-  o.drain_s = a.drain;
-  o.rmw = a.rmw;
-  o.domain_id = a.domain ? *a.domain : rmw::domain_id_from_environment();
-  o.processes = a.processes == "per-node" ? harness::ProcessLayout::kPerNode
-                                          : harness::ProcessLayout::kSingle;
-  // Every child loads the plug-ins this process was given (the package's own `plugins:` it
-  // loads with the package, ROBOTPERF_PLUGIN_PATH it inherits).
-  o.node_command = {self_executable().string()};
-  for (const auto& p : a.plugins) o.node_command.insert(o.node_command.end(), {"--plugin", p});
-  o.node_command.push_back("node");
-  o.power = a.power.options();
-  o.scheduling = a.scheduling.options();
-  o.strict = a.strict;
-  o.callback_timeout_s = a.callback_timeout_s;
-  o.interrupted = &g_interrupted;
-  if (!a.quiet && isatty(STDERR_FILENO)) {
-    o.progress = [&](std::size_t sent, std::size_t total, std::size_t received) {
-      std::fprintf(stderr, "\r[%s] sent %zu/%zu  received %zu ", spec.id.c_str(), sent, total,
-                   received);
-      if (sent == total) std::fputc('\n', stderr);
-    };
-  }
-  // Fail on an unwritable output folder, or a sub-buffer size LTTng refuses, before spending time
-  // on the run.
-  require_writable_folder(a.output, "--output");
-  if (a.mode == "grey" && a.trace_subbuf != 0) tracing::check_subbuffer_bytes(a.trace_subbuf);
-  if (a.mode == "grey") {
-    o.mode = harness::RunMode::kGrey;
-    // Recorded under a temporary name, renamed after the results file once the run is named.
-    o.trace_dir = fs::path(a.output) / (".trace-" + std::to_string(getpid()));
-    o.trace_subbuf_bytes = a.trace_subbuf;
-  }
+}
 
-  harness::RunResult result;
-  {
-    const InterruptHandling interrupts;
-    try {
-      result = harness::run_benchmark(spec, o);
-    } catch (...) {
-      // Nothing of a run that did not happen is left behind.
-      std::error_code ec;
-      if (!o.trace_dir.empty()) fs::remove_all(o.trace_dir, ec);
-      throw;
-    }
-  }
+struct WrittenRun {
+  int code = kExitOk;            // the exit status this run alone would give
+  std::optional<fs::path> json;  // where its results file went, when it was written
+};
+
+// Prints the run's summary, then writes its results (and report, trace, CSV as asked).
+WrittenRun write_run(const harness::BenchmarkSpec& spec, const RunArgs& a,
+                     harness::RunResult& result) {
   fs::path base = fs::path(a.output) / report::result_basename(result);
   if (result.grey) {
     const fs::path trace = base.string() + ".trace";
@@ -473,19 +440,174 @@ int run(const Roots& roots, const RunArgs& a) {
                                   report::render_html(input, options));
     std::cout << "report: " << base.string() << ".report.html\n";
   }
+  WrittenRun out;
   const bool functional_ok = !result.functional || result.functional->valid;
-  int code = result.valid && functional_ok ? kExitOk : kExitInvalidResult;
-  if (result.interrupted) code = 128 + g_interrupted.load();
+  out.code = result.valid && functional_ok ? kExitOk : kExitInvalidResult;
+  if (result.interrupted) out.code = 128 + g_interrupted.load();
   // Results not where they were asked for are an error of the run, whatever it measured.
-  if (!kept || moved) code = kExitError;
+  if (!kept || moved) out.code = kExitError;
+  if (kept) out.json = base.string() + ".json";
   if (result.threads_abandoned) {
     // A callback that never returned still runs on objects that must never be destroyed: end
     // here, with everything written, without running destructors.
     std::cout.flush();
     std::fflush(nullptr);
-    std::_Exit(code);
+    std::_Exit(out.code);
   }
+  return out;
+}
+
+// --repeat N: N runs, each with a fresh graph, each written as usual; then the run-to-run view of
+// the headline figures (report::series_summary), printed and written beside the first run.
+int run_series(const harness::BenchmarkSpec& spec, const RunArgs& a, harness::RunOptions o) {
+  const InterruptHandling interrupts;  // also over the pauses
+  report::Series series(spec.id);
+  int code = kExitOk;
+  for (std::size_t i = 0; i < a.repeat; ++i) {
+    if (i > 0 && a.repeat_pause > 0) {
+      // Interruptible: a Ctrl-C during the pause ends the series like one during a run.
+      const auto until =
+          std::chrono::steady_clock::now() + std::chrono::duration<double>(a.repeat_pause);
+      while (std::chrono::steady_clock::now() < until && g_interrupted.load() == 0)
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    if (g_interrupted.load() != 0) break;
+    if (!a.quiet) std::fprintf(stderr, "[%s] run %zu of %zu\n", spec.id.c_str(), i + 1, a.repeat);
+    harness::RunResult result = measure(spec, o);
+    const WrittenRun written = write_run(spec, a, result);
+    series.add(result, written.json);
+    if (written.code != kExitOk && code == kExitOk) code = written.code;
+    if (result.interrupted || written.code == kExitError) break;
+  }
+  std::cout << "\n" << report::series_table(series);
+  if (!series.files().empty()) {
+    const fs::path path = fs::path(series.files().front()).replace_extension(".series.json");
+    report::write_file_atomically(path, json_text(report::series_json(series), 2) + "\n");
+    std::cout << "series: " << path.string() << "\n";
+  }
+  if (g_interrupted.load() != 0 && code == kExitOk) code = 128 + g_interrupted.load();
   return code;
+}
+
+// --find-peak's bounds from the command line; the step length is --duration (default 5 s), the
+// start --rate-range's low end, else --rate, else the benchmark's rate.
+harness::PeakSearchOptions peak_search_options(const RunArgs& a) {
+  harness::PeakSearchOptions search;
+  search.loss_bound_percent = a.loss_bound;
+  search.latency_bound_ms = a.latency_bound;
+  search.latency_percentile = a.latency_percentile;
+  search.resolution_percent = a.peak_resolution;
+  if (a.duration) search.step_duration_s = *a.duration;
+  if (a.rate_range) {
+    const auto colon = a.rate_range->find(':');
+    std::size_t used_low = 0, used_high = 0;
+    double low = 0, high = 0;
+    try {
+      if (colon != std::string::npos) {
+        low = std::stod(a.rate_range->substr(0, colon), &used_low);
+        high = std::stod(a.rate_range->substr(colon + 1), &used_high);
+      }
+    } catch (const std::exception&) {
+      used_low = 0;
+    }
+    if (colon == std::string::npos || used_low != colon ||
+        used_high != a.rate_range->size() - colon - 1 || !(low > 0) || !(high >= low) ||
+        !std::isfinite(high))
+      throw std::invalid_argument("--rate-range " + *a.rate_range +
+                                  ": expected LO:HI in Hz with 0 < LO <= HI");
+    search.rate_low_hz = low;
+    search.rate_high_hz = high;
+  }
+  return search;
+}
+
+int run(const Roots& roots, const RunArgs& a) {
+  const auto spec = harness::find_benchmark(roots, a.id);
+  harness::RunOptions o;
+  if (a.dataset) o.bag = bag_selection(a);
+  if (a.rate_scale != 1.0 && a.rate != "bag")
+    throw std::invalid_argument("--rate-scale only applies with --rate bag");
+  if (a.rate == "bag") {
+    o.bag_timeline = true;
+    o.rate_scale = a.rate_scale;
+  } else if (a.rate) {
+    std::size_t used = 0;
+    try {
+      o.rate_hz = std::stod(*a.rate, &used);
+    } catch (const std::exception&) {
+    }
+    if (used == 0 || used != a.rate->size())
+      throw std::invalid_argument("--rate " + *a.rate + ": expected a rate in Hz or 'bag'");
+  }
+  o.arrival = harness::ArrivalPattern::parse(a.arrival);
+  o.arrival.seed = a.arrival_seed;
+  o.update_rate_hz = a.update_rate;
+  o.count = a.count;
+  o.duration_s = a.duration;
+  o.warmup = a.warmup;
+  o.drain_s = a.drain;
+  o.rmw = a.rmw;
+  if (!a.domain) {
+    o.domain_id = rmw::domain_id_from_environment();
+  } else if (*a.domain == "auto") {
+    o.domain_id = rmw::find_quiet_domain(a.rmw);
+    if (!a.quiet) std::fprintf(stderr, "robotperf: --domain auto: domain %d\n", o.domain_id);
+  } else {
+    o.domain_id = std::stoi(*a.domain);
+  }
+  o.processes = a.processes == "per-node" ? harness::ProcessLayout::kPerNode
+                                          : harness::ProcessLayout::kSingle;
+  // Every child loads the plug-ins this process was given (the package's own `plugins:` it
+  // loads with the package, ROBOTPERF_PLUGIN_PATH it inherits).
+  o.node_command = {self_executable().string()};
+  for (const auto& p : a.plugins) o.node_command.insert(o.node_command.end(), {"--plugin", p});
+  o.node_command.push_back("node");
+  o.power = a.power.options();
+  o.scheduling = a.scheduling.options();
+  o.strict = a.strict;
+  o.callback_timeout_s = a.callback_timeout_s;
+  o.interrupted = &g_interrupted;
+  if (!a.quiet && isatty(STDERR_FILENO)) {
+    o.progress = [&](std::size_t sent, std::size_t total, std::size_t received) {
+      std::fprintf(stderr, "\r[%s] sent %zu/%zu  received %zu ", spec.id.c_str(), sent, total,
+                   received);
+      if (sent == total) std::fputc('\n', stderr);
+    };
+  }
+  // Fail on an unwritable output folder, or a sub-buffer size LTTng refuses, before spending time
+  // on the run.
+  require_writable_folder(a.output, "--output");
+  if (a.mode == "grey" && a.trace_subbuf != 0) tracing::check_subbuffer_bytes(a.trace_subbuf);
+  if (a.mode == "grey") {
+    o.mode = harness::RunMode::kGrey;
+    // Recorded under a temporary name, renamed after the results file once the run is named.
+    o.trace_dir = fs::path(a.output) / (".trace-" + std::to_string(getpid()));
+    o.trace_subbuf_bytes = a.trace_subbuf;
+  }
+
+  if (a.find_peak) {
+    if (a.mode == "grey") throw std::invalid_argument("--find-peak runs black-box only");
+    if (a.repeat > 1) throw std::invalid_argument("--find-peak is one search: not with --repeat");
+    harness::PeakSearchOptions search = peak_search_options(a);
+    o.duration_s.reset();
+    o.progress = nullptr;
+    const InterruptHandling interrupts;
+    std::size_t steps = 0;
+    auto found = harness::find_peak(spec, o, search, [&](const harness::PeakStep& s) {
+      if (a.quiet) return;
+      std::fprintf(stderr, "[%s] peak search step %zu: %.1f Hz: %s\n", spec.id.c_str(), ++steps,
+                   s.rate_hz, s.passed ? "sustained" : ("failed: " + s.reason).c_str());
+    });
+    if (!found.peak) {
+      std::cout << report::peak_search_table(found.record);
+      std::cout << "result: no rate met the bounds; nothing written\n";
+      return g_interrupted.load() ? 128 + g_interrupted.load() : kExitInvalidResult;
+    }
+    return write_run(spec, a, *found.peak).code;
+  }
+  if (a.repeat > 1) return run_series(spec, a, o);
+  harness::RunResult result = measure(spec, o);
+  return write_run(spec, a, result).code;
 }
 
 struct TraceArgs {
@@ -745,18 +867,63 @@ int main(int argc, char** argv) {
       ->needs(dataset_opt);
   run_cmd->add_option("--window", ra.window, "only the bag's messages in START:END seconds")
       ->needs(dataset_opt);
-  auto* count_opt = run_cmd->add_option("--count", ra.count, "messages to send, warm-up included");
+  auto* find_peak_flag = run_cmd->add_flag(
+      "--find-peak", ra.find_peak,
+      "search for the highest input rate the graph sustains (each step a full run of --duration "
+      "seconds, default 5, from --rate or the benchmark's rate upwards)");
+  run_cmd
+      ->add_option("--loss-bound", ra.loss_bound,
+                   "with --find-peak: the most loss (%) a sustained rate may have (default: the "
+                   "benchmark's max_loss_percent)")
+      ->needs(find_peak_flag);
+  run_cmd
+      ->add_option("--latency-bound", ra.latency_bound,
+                   "with --find-peak: the latency (ms) the --latency-percentile must stay within")
+      ->needs(find_peak_flag);
+  run_cmd
+      ->add_option("--latency-percentile", ra.latency_percentile,
+                   "with --latency-bound: which percentile of the latency (default 99)")
+      ->needs(find_peak_flag);
+  run_cmd
+      ->add_option("--rate-range", ra.rate_range,
+                   "with --find-peak: LO:HI, the rates searched (default: from the start rate to "
+                   "1 MHz)")
+      ->needs(find_peak_flag);
+  run_cmd
+      ->add_option("--peak-resolution", ra.peak_resolution,
+                   "with --find-peak: stop bisecting when the failing rate is within this many "
+                   "percent of the sustained one (default 5)")
+      ->needs(find_peak_flag);
+  run_cmd
+      ->add_option("--repeat", ra.repeat,
+                   "run N times, each with a fresh graph, and summarise the series: the median of "
+                   "each headline figure with its 95 % interval and the run-to-run spread")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{10000}));
+  run_cmd->add_option("--repeat-pause", ra.repeat_pause, "with --repeat: seconds between runs")
+      ->check(CLI::Range(0.0, 3600.0));
+  run_cmd->add_option("--arrival", ra.arrival,
+                      "when messages are sent at the rate: fixed (default), poisson (random "
+                      "intervals of mean 1/rate) or burst:N (N back to back every N/rate)");
+  run_cmd->add_option("--arrival-seed", ra.arrival_seed,
+                      "with --arrival poisson: the schedule's seed (default 1)");
+  auto* count_opt = run_cmd->add_option("--count", ra.count, "messages to send, warm-up included")
+                        ->check(CLI::PositiveNumber);
+  find_peak_flag->excludes(count_opt);
   run_cmd->add_option("--duration", ra.duration, "seconds to send for (count = rate x duration)")
       ->excludes(count_opt);
-  run_cmd->add_option("--warmup", ra.warmup,
-                      "first messages not counted (default: the benchmark's)");
+  run_cmd
+      ->add_option("--warmup", ra.warmup, "first messages not counted (default: the benchmark's)")
+      ->check(CLI::NonNegativeNumber);
   run_cmd->add_option("--drain", ra.drain, "seconds to wait for outputs after the last send");
   run_cmd->add_option("--rmw", ra.rmw, "transport: intra or fastdds")
       ->check(CLI::IsMember({"intra", "fastdds"}));
   run_cmd->add_option("--processes", ra.processes, "single (all nodes in one process) or per-node")
       ->check(CLI::IsMember({"single", "per-node"}));
-  run_cmd->add_option("--domain", ra.domain, "DDS domain id (default: ROS_DOMAIN_ID or 0)")
-      ->check(CLI::Range(0, 232));
+  run_cmd
+      ->add_option("--domain", ra.domain,
+                   "DDS domain id, or 'auto': one no other participant uses (default: "
+                   "ROS_DOMAIN_ID or 0)")
+      ->check(CLI::Range(0, 232) | CLI::IsMember({"auto"}));
   run_cmd->add_option("--output", ra.output, "folder for the results files (default: ./results)");
   run_cmd->add_flag("--csv", ra.csv, "also write the per-message latencies as CSV");
   run_cmd->add_flag("--quiet", ra.quiet, "no progress line");
@@ -908,6 +1075,8 @@ int main(int argc, char** argv) {
   node_cmd->add_option("--update-rate", node_update_rate);
   double node_callback_timeout_s = 30.0;
   node_cmd->add_option("--callback-timeout", node_callback_timeout_s);
+  std::string node_run_token;
+  node_cmd->add_option("--run-token", node_run_token);
   SchedulingArgs node_scheduling;
   add_scheduling_options(node_cmd, node_scheduling);
 
@@ -973,7 +1142,8 @@ int main(int argc, char** argv) {
       harness::BenchmarkSpec spec = harness::load_benchmark(node_package);
       if (node_update_rate) harness::override_update_rate(spec, *node_update_rate);
       return harness::run_node_process(spec, node_name, node_rmw, node_domain,
-                                       node_scheduling.options(), node_callback_timeout_s);
+                                       node_scheduling.options(), node_callback_timeout_s,
+                                       node_run_token);
     }
   } catch (const plugin::PluginError& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());

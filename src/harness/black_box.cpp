@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <random>
 #include <stdexcept>
 
 #include "robotperf/msgs/known_types.hpp"
@@ -42,14 +43,6 @@ void sleep_until_ns(int64_t deadline_ns) {
 
 }  // namespace
 
-std::optional<uint64_t> MessageIds::id_of(int64_t stamp) const {
-  const int64_t offset = stamp - base_ns;
-  if (offset < 0 || offset % period_ns != 0) return std::nullopt;
-  const auto id = static_cast<uint64_t>(offset / period_ns);
-  if (id >= count) return std::nullopt;
-  return id;
-}
-
 std::vector<int64_t> timeline_schedule(const std::vector<int64_t>& frame_times_ns, double scale,
                                        std::size_t count) {
   const std::size_t n = frame_times_ns.size();
@@ -66,6 +59,72 @@ std::vector<int64_t> timeline_schedule(const std::vector<int64_t>& frame_times_n
     const double recorded =
         static_cast<double>(k / n) * loop + static_cast<double>(frame_times_ns[k % n] - first);
     schedule[k] = std::llround(recorded / scale);
+  }
+  return schedule;
+}
+
+ArrivalPattern ArrivalPattern::parse(const std::string& text) {
+  ArrivalPattern p;
+  if (text == "fixed") return p;
+  if (text == "poisson") {
+    p.kind = Kind::kPoisson;
+    return p;
+  }
+  if (text.starts_with("burst:")) {
+    const std::string n = text.substr(6);
+    std::size_t used = 0;
+    unsigned long long burst = 0;
+    try {
+      if (!n.empty() && n[0] != '-') burst = std::stoull(n, &used);
+    } catch (const std::exception&) {
+    }
+    if (used == n.size() && burst >= 1 && burst <= 1'000'000) {
+      p.kind = Kind::kBurst;
+      p.burst = static_cast<std::size_t>(burst);
+      return p;
+    }
+  }
+  throw std::invalid_argument("--arrival " + text +
+                              ": expected fixed, poisson or burst:N (N from 1 to 1000000)");
+}
+
+std::string ArrivalPattern::name() const {
+  switch (kind) {
+    case Kind::kPoisson:
+      return "poisson";
+    case Kind::kBurst:
+      return "burst:" + std::to_string(burst);
+    case Kind::kFixed:
+      break;
+  }
+  return "fixed";
+}
+
+std::vector<int64_t> arrival_schedule(const ArrivalPattern& pattern, int64_t period_ns,
+                                      std::size_t count) {
+  std::vector<int64_t> schedule(count);
+  switch (pattern.kind) {
+    case ArrivalPattern::Kind::kFixed:
+      for (std::size_t k = 0; k < count; ++k) schedule[k] = static_cast<int64_t>(k) * period_ns;
+      break;
+    case ArrivalPattern::Kind::kBurst: {
+      const auto burst = static_cast<int64_t>(pattern.burst);
+      for (std::size_t k = 0; k < count; ++k)
+        schedule[k] = static_cast<int64_t>(k) / burst * burst * period_ns;
+      break;
+    }
+    case ArrivalPattern::Kind::kPoisson: {
+      std::mt19937_64 generator(pattern.seed);
+      // The first message opens the run; each later one follows an exponential interval.
+      double t = 0;
+      for (std::size_t k = 1; k < count; ++k) {
+        // u in [0, 1) from the top 53 bits; -ln(1 - u) is exponential with mean 1.
+        const double u = static_cast<double>(generator() >> 11) * 0x1.0p-53;
+        t += -std::log1p(-u) * static_cast<double>(period_ns);
+        schedule[k] = std::llround(t);
+      }
+      break;
+    }
   }
   return schedule;
 }
@@ -128,24 +187,28 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
   // The default 50 µs timer slack would show up as send lateness.
   prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
   records.assign(ids_.count, MessageRecord{});
-  std::vector<rmw::MessagePtr> next(inputs_.size());
+  // The messages of one deadline (several in a burst), per input.
+  std::vector<std::vector<rmw::MessagePtr>> next;
   // The first deadline leaves time to prepare the first message.
   const int64_t start_ns = rmw::steady_now_ns() + 10'000'000;
+  auto deadline = [&](uint64_t k) {
+    return start_ns +
+           (schedule_ns_.empty() ? static_cast<int64_t>(k) * ids_.period_ns : schedule_ns_[k]);
+  };
   int64_t longest_prepare_ns = 0;
   std::size_t sent = 0;
-  for (uint64_t k = 0; k < ids_.count; ++k) {
+  for (uint64_t first = 0; first < ids_.count;) {
     if (should_stop()) break;
-    MessageRecord& r = records[k];
-    r.id = k;
-    r.scheduled_ns = start_ns + (schedule_ns_.empty() ? static_cast<int64_t>(k) * ids_.period_ns
-                                                      : schedule_ns_[k]);
+    const int64_t due = deadline(first);
+    uint64_t end = first + 1;
+    while (end < ids_.count && deadline(end) == due) ++end;
     // Prepare before the deadline, so copying the payload is not measured, but only just before
     // it: copying megabytes right after the previous send would compete with the graph while it
     // handles that message (for a core, for memory bandwidth, and for the wake-up of the node
     // that has to take it). The lead is a multiple of the longest preparation seen, so that a
     // slow copy on a busy machine still ends before the deadline.
     // Long waits (low rates) in slices, so that a stop is seen within kStopCheckNs.
-    const int64_t prepare_at = r.scheduled_ns - std::max(kMinPrepareLeadNs, 4 * longest_prepare_ns);
+    const int64_t prepare_at = due - std::max(kMinPrepareLeadNs, 4 * longest_prepare_ns);
     bool stopped = false;
     while (!stopped && rmw::steady_now_ns() + kStopCheckNs < prepare_at) {
       sleep_until_ns(rmw::steady_now_ns() + kStopCheckNs);
@@ -154,31 +217,40 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
     if (stopped) break;
     sleep_until_ns(prepare_at);
     const int64_t prepare_start = rmw::steady_now_ns();
-    for (std::size_t i = 0; i < inputs_.size(); ++i) {
-      const Input& in = inputs_[i];
-      next[i] = in.copy_with_stamp(k % in.messages.size(), ids_.stamp_ns(k));
+    next.assign(end - first, std::vector<rmw::MessagePtr>(inputs_.size()));
+    for (uint64_t k = first; k < end; ++k) {
+      for (std::size_t i = 0; i < inputs_.size(); ++i) {
+        const Input& in = inputs_[i];
+        next[k - first][i] = in.copy_with_stamp(k % in.messages.size(), ids_.stamp_ns(k));
+      }
     }
     longest_prepare_ns = std::max(longest_prepare_ns, rmw::steady_now_ns() - prepare_start);
-    sleep_until_ns(r.scheduled_ns);
-    r.sent_ns = rmw::steady_now_ns();
-    lttng_ust_tracepoint(robotperf, input, node_->name().c_str(), ids_.stamp_ns(k), k,
-                         r.scheduled_ns);
-    for (std::size_t i = 0; i < inputs_.size(); ++i)
-      inputs_[i].publisher->publish(std::move(next[i]));
-    ++sent;
-    if (after_send) after_send(sent);
+    sleep_until_ns(due);
+    for (uint64_t k = first; k < end; ++k) {
+      MessageRecord& r = records[k];
+      r.id = k;
+      r.scheduled_ns = due;
+      r.sent_ns = rmw::steady_now_ns();
+      lttng_ust_tracepoint(robotperf, input, node_->name().c_str(), ids_.stamp_ns(k), k, due);
+      for (std::size_t i = 0; i < inputs_.size(); ++i)
+        inputs_[i].publisher->publish(std::move(next[k - first][i]));
+      ++sent;
+      if (after_send) after_send(sent);
+    }
+    first = end;
   }
   records.resize(sent);
   return sent;
 }
 
 Monitor::Monitor(graph::Context& context, const BoundaryTopic& output, MessageIds ids,
-                 std::size_t warmup)
+                 std::size_t warmup, RunIsolation* isolation)
     : node_(std::make_shared<graph::Node>(context, "robotperf_monitor")),
       type_(&type_support_by_name(output.type, output.topic)),
       topic_(output.topic),
       ids_(ids),
       warmup_(warmup),
+      isolation_(isolation),
       state_(output.state) {
   tally_.received_ns.assign(ids_.count, -1);
   // The Monitor keeps everything the graph delivered: a briefly starved
@@ -190,15 +262,25 @@ Monitor::Monitor(graph::Context& context, const BoundaryTopic& output, MessageId
                                        // Read the clock first: everything after is monitor
                                        // overhead.
                                        const int64_t now = rmw::steady_now_ns();
-                                       on_message(m, info.from_intra_process, now);
+                                       on_message(m, info, now);
                                      });
 }
 
-void Monitor::on_message(const rmw::MessagePtr& msg, bool shared_with_graph, int64_t now_ns) {
+void Monitor::on_message(const rmw::MessagePtr& msg, const graph::MessageInfo& info,
+                         int64_t now_ns) {
   const int64_t stamp = type_->stamp_ns(msg.get());
+  const auto id = ids_.id_of(stamp);
+  if (isolation_ != nullptr && isolation_->foreign(info.sender, stamp, id.has_value())) {
+    // Not traced either: the grey-box analysis would count it as an unknown output.
+    {
+      std::lock_guard lock(mutex_);
+      ++tally_.foreign;
+    }
+    return;
+  }
   lttng_ust_tracepoint(robotperf, output, node_->name().c_str(), topic_.c_str(), stamp,
                        type_->serialized_size(msg.get()));
-  const auto id = ids_.id_of(stamp);
+  const bool shared_with_graph = info.from_intra_process;
   // A kept output the graph shares with us (intra) is copied rather than held: holding it would
   // make a node that reuses its output buffer once released allocate and page-fault a fresh one
   // for the next frame, a cost the measurement would add to the graph.
@@ -244,13 +326,15 @@ void Monitor::keep_outputs(const std::vector<uint64_t>& ids) {
 void Monitor::keep_observed_truth(const std::string& topic, const msgs::TypeSupport& type) {
   rmw::QoS qos;
   qos.history = rmw::History::kKeepAll;
-  node_->create_generic_subscription(topic, type, qos,
-                                     [this, &type](rmw::MessagePtr m, const graph::MessageInfo&) {
-                                       const auto id = ids_.id_of(type.stamp_ns(m.get()));
-                                       std::lock_guard lock(mutex_);
-                                       if (id && !keep_.empty() && keep_[*id])
-                                         tally_.observed_truth[*id] = std::move(m);
-                                     });
+  node_->create_generic_subscription(
+      topic, type, qos, [this, &type](rmw::MessagePtr m, const graph::MessageInfo& info) {
+        const int64_t stamp = type.stamp_ns(m.get());
+        const auto id = ids_.id_of(stamp);
+        if (isolation_ != nullptr && isolation_->foreign(info.sender, stamp, id.has_value()))
+          return;
+        std::lock_guard lock(mutex_);
+        if (id && !keep_.empty() && keep_[*id]) tally_.observed_truth[*id] = std::move(m);
+      });
 }
 
 bool Monitor::wait_for(std::size_t expected, int64_t deadline_ns) {

@@ -16,26 +16,23 @@
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/run.hpp"
+#include "run_isolation.hpp"
 
 namespace robotperf::harness {
-
-// Message k of a run carries the header stamp base + k·period: unique within
-// the run even when the dataset loops, increasing like a real clock (so
-// time-based pairing in nodes still works), and exactly invertible.
-struct MessageIds {
-  int64_t base_ns = 0;
-  int64_t period_ns = 1;
-  std::size_t count = 0;
-
-  int64_t stamp_ns(uint64_t id) const { return base_ns + static_cast<int64_t>(id) * period_ns; }
-  std::optional<uint64_t> id_of(int64_t stamp_ns) const;
-};
 
 // For replaying a bag on its own timeline: the send time of message k relative
 // to the first, for `count` messages, the recorded intervals divided by
 // `scale`; the dataset loops with one mean interval between its last and first frame.
 std::vector<int64_t> timeline_schedule(const std::vector<int64_t>& frame_times_ns, double scale,
                                        std::size_t count);
+
+// The send time of message k relative to the first, for `count` messages at a mean interval of
+// `period_ns`, following `pattern`. Poisson intervals come from a 64-bit Mersenne Twister seeded
+// with pattern.seed, turned into exponential ones here (not by the standard library, whose
+// distributions differ between implementations), so that a seed means the same schedule
+// everywhere.
+std::vector<int64_t> arrival_schedule(const ArrivalPattern& pattern, int64_t period_ns,
+                                      std::size_t count);
 
 class Playback {
  public:
@@ -47,8 +44,9 @@ class Playback {
            MessageIds ids, bool publish_serialized = false, std::vector<int64_t> schedule_ns = {});
   std::shared_ptr<graph::Node> node() const { return node_; }
 
-  // Sends ids.count messages, message k at start + k·period (absolute
-  // deadlines: a late send does not delay the next ones). Fills `records`.
+  // Sends ids.count messages, message k at start + k·period or start + schedule_ns[k] (absolute
+  // deadlines: a late send does not delay the next ones); messages due at the same time (bursts)
+  // are all prepared before it and sent back to back. Fills `records`.
   // Stops early when `should_stop` returns true; returns the number sent.
   std::size_t run(std::vector<MessageRecord>& records, const std::function<bool()>& should_stop,
                   const std::function<void(std::size_t sent)>& after_send);
@@ -70,8 +68,10 @@ class Playback {
 
 class Monitor {
  public:
-  // Counts receptions of ids >= `warmup` towards received_measured().
-  Monitor(graph::Context& context, const BoundaryTopic& output, MessageIds ids, std::size_t warmup);
+  // Counts receptions of ids >= `warmup` towards received_measured(). With `isolation`, another
+  // run's receptions are counted as foreign and otherwise ignored.
+  Monitor(graph::Context& context, const BoundaryTopic& output, MessageIds ids, std::size_t warmup,
+          RunIsolation* isolation = nullptr);
   std::shared_ptr<graph::Node> node() const { return node_; }
 
   // Keeps the first reception of each of `ids` for the functional evaluation: a copy of a
@@ -89,6 +89,7 @@ class Monitor {
     std::size_t received_measured = 0;
     std::size_t duplicates = 0;
     std::size_t unknown = 0;
+    std::size_t foreign = 0;                                 // another run's (RunIsolation)
     std::vector<std::pair<uint64_t, rmw::MessagePtr>> kept;  // by keep_outputs, in arrival order
     // State outputs: receptions of an ID already received (not duplicates).
     std::size_t repeats = 0;
@@ -98,13 +99,14 @@ class Monitor {
   std::size_t received() const;
 
  private:
-  void on_message(const rmw::MessagePtr& msg, bool shared_with_graph, int64_t now_ns);
+  void on_message(const rmw::MessagePtr& msg, const graph::MessageInfo& info, int64_t now_ns);
 
   std::shared_ptr<graph::Node> node_;
   const msgs::TypeSupport* type_;
   std::string topic_;
   MessageIds ids_;
   std::size_t warmup_;
+  RunIsolation* isolation_;
   bool state_;
   std::vector<bool> keep_;               // per id
   std::vector<std::size_t> kept_index_;  // per id: where in tally_.kept, or SIZE_MAX

@@ -96,6 +96,83 @@ bool wait_connected(
   }
 }
 
+// Bounds on what a run may be asked for (DESIGN.md §3): the Playback's clock cannot pace
+// messages closer than a microsecond, a week is longer than any benchmark needs, and every
+// nanosecond figure derived from these must fit in 64 bits.
+constexpr double kMinPeriodS = 1e-6;
+constexpr double kMaxSpanS = 7 * 24 * 3600.0;
+constexpr double kMaxWaitS = 24 * 3600.0;
+// What each message costs the run before it starts: its record, the Monitor's reception time, and
+// the schedule (bag timelines).
+constexpr double kBytesPerMessage =
+    sizeof(MessageRecord) + sizeof(int64_t) + sizeof(int64_t) + sizeof(bool);
+
+std::string number_text(double v) {
+  std::ostringstream text;
+  text.precision(6);
+  text << v;
+  return text.str();
+}
+
+// A rate in Hz that gives a period the Playback can keep: one line naming `what` otherwise.
+void check_rate(double hz, const std::string& what) {
+  if (!std::isfinite(hz) || !(hz > 0))
+    throw std::invalid_argument(what + " must be a positive number of Hz (got " + number_text(hz) +
+                                ")");
+  if (1.0 / hz < kMinPeriodS)
+    throw std::invalid_argument(what + " " + number_text(hz) +
+                                " Hz is a period below 1 us, shorter than the Playback can pace");
+  if (1.0 / hz > kMaxSpanS)
+    throw std::invalid_argument(what + " " + number_text(hz) +
+                                " Hz is a period longer than a week; give a higher rate");
+}
+
+void check_seconds(double s, const std::string& what, bool zero_allowed, double max_s) {
+  if (!std::isfinite(s) || s < 0 || (!zero_allowed && s == 0))
+    throw std::invalid_argument(what + " must be a " +
+                                (zero_allowed ? "non-negative" : "positive") +
+                                " number of seconds (got " + number_text(s) + ")");
+  if (s > max_s)
+    throw std::invalid_argument(what + " " + number_text(s) + " s is longer than the " +
+                                number_text(max_s) + " s robotperf allows");
+}
+
+// The values given to the run, before anything is loaded.
+void check_run_options(const RunOptions& o) {
+  if (o.rate_hz) check_rate(*o.rate_hz, "--rate");
+  if (o.duration_s) check_seconds(*o.duration_s, "--duration", false, kMaxSpanS);
+  if (o.drain_s) check_seconds(*o.drain_s, "--drain", true, kMaxWaitS);
+  check_seconds(o.connect_timeout_s, "--connect-timeout", false, kMaxWaitS);
+  check_seconds(o.callback_timeout_s, "--callback-timeout", false, kMaxWaitS);
+  if (o.bag_timeline && (!std::isfinite(o.rate_scale) || !(o.rate_scale > 0)))
+    throw std::invalid_argument("--rate-scale must be a positive number");
+  if (o.count && *o.count == 0) throw std::invalid_argument("--count must be at least 1");
+  if (o.bag_timeline && o.arrival.kind != ArrivalPattern::Kind::kFixed)
+    throw std::invalid_argument(
+        "--arrival " + o.arrival.name() +
+        " replaces the bag's timeline: give one of --rate bag and --arrival");
+}
+
+// The run as derived (rate from a bag, count from a duration): its schedule must fit in time
+// and its records in memory.
+void check_run_size(const RunResult& r) {
+  const double span_s = static_cast<double>(r.count) / r.rate_hz;
+  if (span_s > kMaxSpanS) {
+    throw std::invalid_argument(std::to_string(r.count) + " messages at " + number_text(r.rate_hz) +
+                                " Hz take " + number_text(span_s) +
+                                " s, longer than a week; give a smaller --count or --duration");
+  }
+  const double bytes = static_cast<double>(r.count) * kBytesPerMessage;
+  const double memory =
+      static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  if (bytes > memory / 4) {
+    throw std::invalid_argument(
+        std::to_string(r.count) + " messages need " + number_text(bytes / (1 << 30)) +
+        " GiB for their per-message records, more than a quarter of this machine's " +
+        number_text(memory / (1 << 30)) + " GiB; give a smaller --count or --duration");
+  }
+}
+
 std::string what_of(const std::exception_ptr& e) {
   try {
     std::rethrow_exception(e);
@@ -106,10 +183,24 @@ std::string what_of(const std::exception_ptr& e) {
   }
 }
 
-std::unique_ptr<rmw::Transport> transport_for(const RunOptions& options) {
+std::unique_ptr<rmw::Transport> transport_for(const RunOptions& options,
+                                              const std::string& user_data) {
   rmw::TransportOptions t;
   t.domain_id = options.domain_id;
+  t.user_data = user_data;
   return rmw::make_transport(options.rmw, t);
+}
+
+// The participants of `more` not yet in `seen`, added to it.
+void add_peers(std::vector<rmw::PeerParticipant>& seen, std::vector<rmw::PeerParticipant> more) {
+  for (auto& peer : more) {
+    auto it = std::ranges::find(seen, peer.id, &rmw::PeerParticipant::id);
+    if (it == seen.end()) {
+      seen.push_back(std::move(peer));
+    } else {
+      it->topics.insert(peer.topics.begin(), peer.topics.end());
+    }
+  }
 }
 
 void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& tally) {
@@ -167,6 +258,7 @@ void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& ta
 }  // namespace
 
 RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& options) {
+  check_run_options(options);
   std::optional<BenchmarkSpec> overridden;
   if (options.update_rate_hz) {
     overridden = package_spec;
@@ -200,24 +292,32 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   if (options.bag_timeline) {
     if (dataset.frame_times_ns.empty())
       throw std::invalid_argument("--rate bag needs a recorded dataset (--dataset <bag>)");
-    if (!(options.rate_scale > 0) || !std::isfinite(options.rate_scale))
-      throw std::invalid_argument("--rate-scale must be a positive number");
     // The mean recorded rate: what count, duration and the message IDs go by.
     r.rate_hz = dataset.rate_hz * options.rate_scale;
     r.timeline = "bag";
     r.rate_scale = options.rate_scale;
     if (!(r.rate_hz > 0))
       throw std::invalid_argument("--rate bag: the bag's frames all have the same time");
+    check_rate(r.rate_hz, "the bag's mean rate times --rate-scale,");
   } else {
     r.rate_hz = options.rate_hz.value_or(spec.rate_hz);
+    check_rate(r.rate_hz, options.rate_hz ? "--rate" : "the benchmark's rate_hz");
+    if (options.arrival.kind == ArrivalPattern::Kind::kPoisson) {
+      r.timeline = "poisson";
+      r.arrival_seed = options.arrival.seed;
+    } else if (options.arrival.kind == ArrivalPattern::Kind::kBurst) {
+      r.timeline = "burst";
+      r.burst = options.arrival.burst;
+    }
   }
-  if (!(r.rate_hz > 0) || !std::isfinite(r.rate_hz))
-    throw std::invalid_argument("--rate must be a positive number");
   if (options.count) {
     r.count = *options.count;
   } else if (options.duration_s) {
-    if (!(*options.duration_s > 0)) throw std::invalid_argument("--duration must be positive");
-    r.count = static_cast<std::size_t>(std::llround(*options.duration_s * r.rate_hz));
+    const double count = std::round(*options.duration_s * r.rate_hz);
+    if (count > kMaxSpanS / kMinPeriodS)
+      throw std::invalid_argument("--duration " + number_text(*options.duration_s) + " s at " +
+                                  number_text(r.rate_hz) + " Hz is too many messages");
+    r.count = static_cast<std::size_t>(count);
   } else {
     r.count = spec.count ? spec.count : dataset.frames;
   }
@@ -236,9 +336,10 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
                                 ") must be smaller than the message count (" +
                                 std::to_string(r.count) + derived + ")");
   }
+  check_run_size(r);
   r.drain_s = options.drain_s.value_or(spec.drain_s);
-  if (!(options.callback_timeout_s > 0) || !std::isfinite(options.callback_timeout_s))
-    throw std::invalid_argument("--callback-timeout must be a positive number of seconds");
+  check_seconds(r.drain_s, options.drain_s ? "--drain" : "the benchmark's drain_s", true,
+                kMaxWaitS);
   r.domain_id = options.domain_id;
   r.scheduling = options.scheduling;
 
@@ -251,12 +352,14 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
 
   // On the heap: a callback that never returns keeps using the context and the graph's executor,
   // which are then left alive (see abandon below).
-  auto context = std::make_unique<graph::Context>(transport_for(options));
   const auto period_ns = static_cast<int64_t>(std::llround(1e9 / r.rate_hz));
-  const auto wall_now = std::chrono::duration_cast<std::chrono::milliseconds>(
-      std::chrono::system_clock::now().time_since_epoch());
-  r.started_unix_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(wall_now).count();
-  const MessageIds ids{r.started_unix_ns, period_ns, r.count};
+  r.started_unix_ns = rmw::wall_now_ns();
+  const MessageIds ids = make_message_ids(period_ns, r.count);
+  r.id_base_ns = ids.base_ns;
+  r.run_token = make_run_token();
+  const std::string user_data = run_user_data(r.run_token, &ids);
+  auto context = std::make_unique<graph::Context>(transport_for(options, user_data));
+  RunIsolation isolation(context->transport(), r.run_token);
 
   // Bag payloads go on the wire as recorded. They need a participant of their
   // own: a DDS participant knows one TopicDataType per type name, and the
@@ -264,12 +367,13 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   const bool publish_serialized = options.bag.has_value() && options.rmw != "intra";
   std::unique_ptr<graph::Context> playback_context;
   if (publish_serialized)
-    playback_context = std::make_unique<graph::Context>(transport_for(options));
+    playback_context = std::make_unique<graph::Context>(transport_for(options, user_data));
   Playback playback(
       publish_serialized ? *playback_context : *context, spec, dataset, ids, publish_serialized,
       options.bag_timeline ? timeline_schedule(dataset.frame_times_ns, options.rate_scale, r.count)
-                           : std::vector<int64_t>{});
-  Monitor monitor(*context, spec.output, ids, r.warmup);
+      : r.timeline == "fixed" ? std::vector<int64_t>{}
+                              : arrival_schedule(options.arrival, period_ns, r.count));
+  Monitor monitor(*context, spec.output, ids, r.warmup, &isolation);
   std::vector<uint64_t> functional_ids;
   // A bag brings no ground truth to check the outputs against.
   const bool evaluate_outputs = spec.functional && !options.bag;
@@ -312,7 +416,8 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
       node_arguments.insert(node_arguments.end(), {"--update-rate", hz.str()});
     }
     node_arguments.insert(node_arguments.end(),
-                          {"--callback-timeout", seconds_text(options.callback_timeout_s)});
+                          {"--callback-timeout", seconds_text(options.callback_timeout_s),
+                           "--run-token", r.run_token});
     children = std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw,
                                                options.domain_id, node_arguments);
   }
@@ -337,6 +442,16 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   }
 
   r.warnings = check_run_rules_for(r, measurement.probe_other_load());
+  // Discovery has run at least as long as the graph took to connect.
+  add_peers(r.domain_peers, isolation.others());
+  if (!r.domain_peers.empty()) {
+    r.warnings.push_back(
+        {"other_participants",
+         std::to_string(r.domain_peers.size()) + " other DDS participant(s) on domain " +
+             std::to_string(r.domain_id) + ": " + describe_peers(r.domain_peers, 3) +
+             "; their messages are told apart, but they share the machine and the network "
+             "(--domain auto picks an empty domain)"});
+  }
   if (options.strict && !r.warnings.empty()) {
     std::string broken;
     for (const auto& w : r.warnings) broken += "\n  " + w.rule + ": " + w.message;
@@ -462,6 +577,19 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   r.repeats = tally.repeats;
   // Grey-box: counts, latencies and validity come from the trace.
   if (grey) grey->finish(r);
+  r.foreign = tally.foreign;
+  add_peers(r.domain_peers, isolation.others());
+  if (r.foreign > 0) {
+    r.warnings.push_back({"foreign_traffic",
+                          std::to_string(r.foreign) + " receptions on " + spec.output.topic +
+                              " belonged to another run on domain " + std::to_string(r.domain_id) +
+                              " (" + describe_peers(r.domain_peers, 3) +
+                              "); they were not counted, but the graph may have worked for them"});
+    if (options.strict) {
+      r.invalid_reasons.push_back("foreign traffic on the run's topics (--strict)");
+      r.valid = false;
+    }
+  }
   if (r.resources.other_cpu_percent &&
       *r.resources.other_cpu_percent > sysinfo::kBusyThresholdPercent) {
     char message[200];
@@ -485,7 +613,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
 
 int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
                      const std::string& rmw, int domain_id, const SchedulingOptions& scheduling,
-                     double callback_timeout_s) {
+                     double callback_timeout_s, const std::string& run_token) {
   // Ctrl-C in a terminal reaches the whole process group: the runner stops us when it is done.
   signal(SIGINT, SIG_IGN);
   const NodeSpec* node_spec = spec.find_node(node_name);
@@ -503,6 +631,7 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   }
   rmw::TransportOptions t;
   t.domain_id = domain_id;
+  if (!run_token.empty()) t.user_data = run_user_data(run_token);
   graph::Context context(rmw::make_transport(rmw, t));
   trace_run_join();
   auto node = make_kernel_node(*node_spec, context, spec.workload);

@@ -45,11 +45,22 @@ constexpr MetricInfo kRadarMetrics[] = {
 
 std::vector<Observation> observations(const ReportInput& in) {
   std::vector<Observation> out;
+  // A graph's throughput is its peak where a search found one; a run at a rate it kept up with
+  // only says it can do at least that. The two are never pooled, and the series says which.
+  std::set<std::pair<std::string, std::string>> with_peak;
+  for (const auto& r : in.runs) {
+    if (r.valid && r.throughput_kind == "peak")
+      with_peak.emplace(r.benchmark_id, detail::local_series(r));
+  }
   for (const auto& r : in.runs) {
     if (!r.valid) continue;  // invalid runs are shown in the tables, never plotted
     const std::string series = detail::local_series(r);
     out.push_back({r.benchmark_id, r.category, series, "latency", true, r.latency.max, &r});
-    out.push_back({r.benchmark_id, r.category, series, "throughput", true, r.throughput_hz, &r});
+    const bool peak = r.throughput_kind == "peak";
+    if (peak || !with_peak.contains({r.benchmark_id, series})) {
+      out.push_back({r.benchmark_id, r.category, series + (peak ? " (peak)" : " (offered)"),
+                     "throughput", true, r.throughput_hz, &r});
+    }
     if (r.power_w)
       out.push_back({r.benchmark_id, r.category, series, "power", true, *r.power_w, &r});
   }

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <sstream>
+#include <tuple>
 
 #include "robotperf/build_info.hpp"
 #include "robotperf/report/histogram.hpp"
@@ -189,6 +190,14 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
     if (!rec.warmup && rec.received_ns >= 0)
       latencies_ms.push_back(static_cast<double>(rec.received_ns - rec.scheduled_ns) / kNsPerMs);
   }
+  json peers = json::array();
+  for (const auto& p : r.domain_peers) {
+    peers.push_back({{"id", rmw::to_hex(p.id)},
+                     {"name", p.name},
+                     {"user_data", p.user_data},
+                     {"addresses", p.addresses},
+                     {"topics", p.topics}});
+  }
   json warnings = json::array();
   for (const auto& w : r.warnings) warnings.push_back({{"rule", w.rule}, {"message", w.message}});
   json software = software_json();
@@ -207,6 +216,8 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
        {{"rate_hz", r.rate_hz},
         {"timeline", r.timeline},
         {"rate_scale", r.timeline == "bag" ? json(r.rate_scale) : json(nullptr)},
+        {"burst", r.timeline == "burst" ? json(r.burst) : json(nullptr)},
+        {"arrival_seed", r.timeline == "poisson" ? json(r.arrival_seed) : json(nullptr)},
         {"count", r.count},
         {"warmup", r.warmup},
         {"drain_s", r.drain_s},
@@ -215,12 +226,15 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"executor_threads", r.executor_threads},
         {"output_topic", r.output_topic},
         {"domain_id", r.domain_id},
+        {"id_base_ns", r.id_base_ns},
+        {"run_token", r.run_token},
         {"update_rate_hz", r.update_rate_hz ? json(*r.update_rate_hz) : json(nullptr)},
         {"scheduling", scheduling}}},
       {"dataset", dataset_json(r)},
       {"machine", sysinfo::to_json(machine)},
       {"software", software},
       {"warnings", warnings},
+      {"domain_peers", peers},
       {"counts",
        {{"sent", r.sent},
         {"measured", r.measured},
@@ -230,6 +244,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"loss_percent", r.loss_percent},
         {"duplicates", r.duplicates},
         {"unknown", r.unknown},
+        {"foreign", r.foreign},
         {"repeats", r.repeats}}},
       {"latency_ms",
        {{"from_scheduled", from_scheduled},
@@ -239,6 +254,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"headline", {{"latency_ms", from_scheduled["max"]}, {"throughput_hz", r.throughput_hz}}},
       {"throughput",
        {{"output_hz", r.throughput_hz},
+        {"kind", r.throughput_kind},
         {"offered_hz", r.offered_rate_hz},
         {"window_s", r.window_s}}},
       {"power", metrics::to_json(r.power, r.matched, r.throughput_hz)},
@@ -270,6 +286,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
     }
     out["control_loops"] = loops;
   }
+  if (r.peak_search) out["peak_search"] = peak_search_json(*r.peak_search);
   if (r.grey) {
     // Grey-box: where the trace is and what it says beyond end-to-end latency.
     out["grey"] = tracing::to_json(*r.grey);
@@ -296,6 +313,74 @@ std::string latencies_csv(const harness::RunResult& r) {
   return out.str();
 }
 
+std::string peak_search_table(const harness::PeakSearchRecord& p) {
+  std::ostringstream out;
+  out << "peak search: loss <= " << p.loss_bound_percent << " %";
+  if (p.latency_bound_ms)
+    out << ", p" << p.latency_percentile << " latency <= " << *p.latency_bound_ms << " ms";
+  out << ", rates " << p.rate_low_hz << ".." << p.rate_high_hz << " Hz, resolution "
+      << p.resolution_percent << " %, " << p.step_duration_s << " s per step\n";
+  char line[160];
+  std::snprintf(line, sizeof line, "  %4s %12s %12s %12s %8s %12s  %s\n", "step", "rate Hz",
+                "offered Hz", "output Hz", "loss %", "latency ms", "verdict");
+  out << line;
+  for (std::size_t i = 0; i < p.steps.size(); ++i) {
+    const auto& s = p.steps[i];
+    std::snprintf(line, sizeof line, "  %4zu %12s %12s %12s %8s %12s  ", i + 1,
+                  fixed(s.rate_hz, 1).c_str(), fixed(s.offered_hz, 1).c_str(),
+                  fixed(s.output_hz, 1).c_str(), fixed(s.loss_percent, 2).c_str(),
+                  fixed(s.latency_ms, 3).c_str());
+    out << line << (s.passed ? "sustained" : "failed: " + s.reason) << "\n";
+  }
+  out << "  " << p.stop_reason << "\n";
+  return out.str();
+}
+
+nlohmann::json peak_search_json(const harness::PeakSearchRecord& p) {
+  nlohmann::json steps = nlohmann::json::array();
+  for (const auto& s : p.steps) {
+    steps.push_back({{"rate_hz", s.rate_hz},
+                     {"offered_hz", s.offered_hz},
+                     {"output_hz", s.output_hz},
+                     {"loss_percent", s.loss_percent},
+                     {"latency_ms", std::isnan(s.latency_ms) ? nlohmann::json(nullptr)
+                                                             : nlohmann::json(s.latency_ms)},
+                     {"passed", s.passed},
+                     {"reason", s.reason}});
+  }
+  return {{"loss_bound_percent", p.loss_bound_percent},
+          {"latency_bound_ms",
+           p.latency_bound_ms ? nlohmann::json(*p.latency_bound_ms) : nlohmann::json(nullptr)},
+          {"latency_percentile", p.latency_percentile},
+          {"rate_low_hz", p.rate_low_hz},
+          {"rate_high_hz", p.rate_high_hz},
+          {"resolution_percent", p.resolution_percent},
+          {"step_duration_s", p.step_duration_s},
+          {"steps", steps},
+          {"stop_reason", p.stop_reason}};
+}
+
+std::string percentile_intervals_line(const metrics::SampleStats& s, double scale,
+                                      const std::string& unit, const std::string& of) {
+  if (s.count == 0) return {};
+  std::string out = "95 % intervals (" + of + ", " + unit + "):";
+  const char* separator = " ";
+  for (const auto& [name, q, ci] : {std::tuple{"p50", 0.50, s.p50_ci},
+                                    {"p90", 0.90, s.p90_ci},
+                                    {"p99", 0.99, s.p99_ci},
+                                    {"p99.9", 0.999, s.p999_ci}}) {
+    out += separator;
+    separator = ", ";
+    out += std::string(name) + " ";
+    out += std::isnan(ci.lower) ? "?" : fixed(ci.lower * scale, 3);
+    out += "..";
+    out += std::isnan(ci.upper)
+               ? "? (needs " + std::to_string(metrics::samples_for_upper_bound(q)) + " samples)"
+               : fixed(ci.upper * scale, 3);
+  }
+  return out + "\n";
+}
+
 std::string summary_table(const harness::RunResult& r) {
   std::ostringstream out;
   out << r.benchmark_id << " (" << r.benchmark_name << ") · " << (r.grey ? "grey-box · " : "")
@@ -305,6 +390,10 @@ std::string summary_table(const harness::RunResult& r) {
     out << " (the bag's timeline";
     if (r.rate_scale != 1.0) out << " x" << r.rate_scale;
     out << ")";
+  } else if (r.timeline == "poisson") {
+    out << " (Poisson arrivals, seed " << r.arrival_seed << ")";
+  } else if (r.timeline == "burst") {
+    out << " (bursts of " << r.burst << ")";
   }
   out << " · dataset " << r.dataset;
   if (!r.dataset_parameters.empty()) {
@@ -319,6 +408,7 @@ std::string summary_table(const harness::RunResult& r) {
       << " %)";
   if (r.duplicates) out << ", duplicates " << r.duplicates;
   if (r.unknown) out << ", unknown " << r.unknown;
+  if (r.foreign) out << ", another run's " << r.foreign << " (not counted)";
   if (r.unobserved) out << ", unobserved " << r.unobserved << " (trace events discarded)";
   if (r.repeats) out << ", state repeats " << r.repeats;
   out << "\n\n";
@@ -336,11 +426,16 @@ std::string summary_table(const harness::RunResult& r) {
   row("from scheduled send", r.latency_from_scheduled);
   row("from actual send", r.latency_from_sent);
   row("send lateness", r.send_lateness);
+  out << percentile_intervals_line(r.latency_from_scheduled, 1.0 / kNsPerMs, "ms",
+                                   "from scheduled send");
   for (const auto& c : r.control_loops) {
     row("command -> hw write", c.command_to_write);
   }
   out << "\nthroughput: " << fixed(r.throughput_hz, 3) << " Hz out, " << fixed(r.offered_rate_hz, 3)
-      << " Hz offered\n";
+      << " Hz offered"
+      << (r.throughput_kind == "peak" ? " (peak: the highest rate the search found sustained)" : "")
+      << "\n";
+  if (r.peak_search) out << peak_search_table(*r.peak_search);
   if (r.grey) out << "\n" << tracing::breakdown_table(*r.grey) << "\n";
   out << "headline (RobotPerf): latency " << fixed(r.latency_from_scheduled.max / kNsPerMs, 3)
       << " ms (max), throughput " << fixed(r.throughput_hz, 3) << " Hz\n";

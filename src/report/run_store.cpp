@@ -224,6 +224,8 @@ StoredRun load_run(const fs::path& path) {
   const json& throughput = member(j, "throughput");
   run.throughput_hz = number_or_nan(throughput, "output_hz");
   run.offered_hz = number_or_nan(throughput, "offered_hz");
+  if (throughput.is_object() && throughput.contains("kind") && throughput["kind"] == "peak")
+    run.throughput_kind = "peak";
   read_power(member(j, "power"), run);
   const json& validity = member(j, "validity");
   run.valid = member(validity, "valid").is_boolean() && validity["valid"].get<bool>();
@@ -250,7 +252,10 @@ RunScan scan_results(const fs::path& dir) {
   RunScan scan;
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(dir)) {
-    if (e.is_regular_file() && e.path().extension() == ".json") files.push_back(e.path());
+    // A --repeat series summary sits beside its runs: it is not a run.
+    if (e.is_regular_file() && e.path().extension() == ".json" &&
+        !e.path().filename().string().ends_with(".series.json"))
+      files.push_back(e.path());
   }
   std::ranges::sort(files);
   for (const auto& f : files) {

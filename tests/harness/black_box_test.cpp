@@ -1,7 +1,10 @@
 // The harness against graphs whose behaviour is known exactly.
 #include <gtest/gtest.h>
 
+#include <functional>
+#include <limits>
 #include <set>
+#include <vector>
 
 #include "robotperf/harness/run.hpp"
 #include "test_package.hpp"
@@ -139,6 +142,76 @@ TEST(BlackBox, BadOptionsAreRejectedBeforeTiming) {
   o = with_count(10, 100);
   o.processes = ProcessLayout::kPerNode;
   EXPECT_THROW(run_package("layout", relay_graph(""), o), std::invalid_argument);
+}
+
+// Every rate, count, duration and wait is checked before anything runs: values that used to
+// crash (SIGFPE), overflow the schedule or wrap are one clear error each.
+TEST(BlackBox, OutOfRangeValuesAreRejectedWithTheOptionNamed) {
+  struct Case {
+    const char* option;
+    std::function<void(RunOptions&)> set;
+  };
+  const std::vector<Case> cases = {
+      {"--rate", [](RunOptions& o) { o.rate_hz = 3e9; }},
+      {"--rate", [](RunOptions& o) { o.rate_hz = 1e-300; }},
+      {"--rate", [](RunOptions& o) { o.rate_hz = std::numeric_limits<double>::infinity(); }},
+      {"--rate", [](RunOptions& o) { o.rate_hz = -5; }},
+      {"--drain", [](RunOptions& o) { o.drain_s = 1e10; }},
+      {"--drain", [](RunOptions& o) { o.drain_s = -1; }},
+      {"--duration",
+       [](RunOptions& o) {
+         o.count.reset();
+         o.duration_s = std::numeric_limits<double>::quiet_NaN();
+       }},
+      {"--duration",
+       [](RunOptions& o) {
+         o.count.reset();
+         o.duration_s = 1e300;
+       }},
+      {"--count", [](RunOptions& o) { o.count = 0; }},
+      {"--callback-timeout", [](RunOptions& o) { o.callback_timeout_s = 0; }},
+      {"--connect-timeout", [](RunOptions& o) { o.connect_timeout_s = 1e12; }},
+      {"messages need",
+       [](RunOptions& o) {
+         o.rate_hz = 1e6;
+         o.count = 100'000'000'000;
+       }},
+      {"longer than a week",
+       [](RunOptions& o) {
+         o.rate_hz = 0.01;
+         o.count = 10'000;
+       }},
+  };
+  for (const auto& c : cases) {
+    RunOptions o = with_count(10, 100);
+    c.set(o);
+    try {
+      run_package("bad", relay_graph(""), o);
+      ADD_FAILURE() << c.option << ": accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(c.option), std::string::npos)
+          << c.option << ": " << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(BlackBox, BurstsAreSentBackToBackAtTheirDeadline) {
+  RunOptions o = with_count(40, 100);
+  o.arrival = ArrivalPattern::parse("burst:4");
+  const RunResult r = run_package("burst", relay_graph(""), o);
+  expect_sane(r);
+  EXPECT_EQ(r.matched, 40u);
+  EXPECT_EQ(r.timeline, "burst");
+  EXPECT_EQ(r.burst, 4u);
+  ASSERT_EQ(r.records.size(), 40u);
+  for (std::size_t k = 0; k < 40; ++k) {
+    EXPECT_EQ(r.records[k].scheduled_ns, r.records[k / 4 * 4].scheduled_ns) << k;
+    if (k >= 4 && k % 4 == 0) {
+      // 4 messages at 100 Hz: a burst every 40 ms.
+      EXPECT_EQ(r.records[k].scheduled_ns - r.records[k - 4].scheduled_ns, 40'000'000) << k;
+    }
+  }
 }
 
 }  // namespace

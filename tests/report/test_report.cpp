@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <fstream>
 #include <regex>
 
@@ -189,6 +190,30 @@ TEST_F(Report, InvalidRunsAreWarnedAboutAndNotPlotted) {
   // Only the valid run's series is in the radar's legend.
   EXPECT_NE(html.find("AMD Ryzen 7 5800X · intra<title>"), std::string::npos);
   EXPECT_EQ(html.find("Lossy CPU · intra<title>"), std::string::npos);
+}
+
+// A 30 Hz run says only that the graph kept up with 30 Hz: where a peak search found its limit,
+// the throughput radar shows the peak, labelled so, and never pools the two.
+TEST_F(Report, ThroughputRadarUsesPeaksWhereFoundAndSaysWhichIsWhich) {
+  testing::write_sample(dir_, {});
+  testing::SampleRun peak_run;
+  peak_run.start_unix_ns += 1'000'000'000;
+  const auto peak_path = testing::write_sample(dir_, peak_run);
+  auto j = nlohmann::json::parse(read_text(peak_path));
+  j["throughput"]["kind"] = "peak";
+  j["throughput"]["output_hz"] = 163.0;
+  std::ofstream(peak_path) << j.dump();
+  testing::SampleRun other;
+  other.cpu = "Intel Core i7-12700H";
+  other.start_unix_ns += 2'000'000'000;
+  testing::write_sample(dir_, other);
+
+  const auto input = load_report_inputs({dir_});
+  EXPECT_EQ(std::ranges::count(input.runs, std::string("peak"), &StoredRun::throughput_kind), 1);
+  const std::string html = render_html(input, {});
+  EXPECT_NE(html.find("AMD Ryzen 7 5800X · intra (peak)<title>"), std::string::npos);
+  EXPECT_EQ(html.find("AMD Ryzen 7 5800X · intra (offered)<title>"), std::string::npos);
+  EXPECT_NE(html.find("Intel Core i7-12700H · intra (offered)<title>"), std::string::npos);
 }
 
 TEST_F(Report, OldResultsWithoutHistogramUseTheStoredPercentiles) {

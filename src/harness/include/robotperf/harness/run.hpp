@@ -18,6 +18,7 @@
 #include "robotperf/metrics/latency_stats.hpp"
 #include "robotperf/metrics/power.hpp"
 #include "robotperf/metrics/resources.hpp"
+#include "robotperf/rmw/transport.hpp"
 #include "robotperf/sysinfo/run_rules.hpp"
 #include "robotperf/tracing/analysis.hpp"
 
@@ -28,6 +29,22 @@ enum class ProcessLayout { kSingle, kPerNode };
 // Black-box: Playback and Monitor measure around the graph. Grey-box: the run
 // is also recorded with LTTng and the results come from the trace (src/tracing).
 enum class RunMode { kBlack, kGrey };
+
+// When the Playback sends, beside a bag's recorded timeline (MLPerf LoadGen's scenarios).
+struct ArrivalPattern {
+  enum class Kind {
+    kFixed,    // every 1/rate
+    kPoisson,  // exponential intervals of mean 1/rate (a server's random clients)
+    kBurst     // `burst` messages back to back every burst/rate
+  };
+  Kind kind = Kind::kFixed;
+  std::size_t burst = 1;
+  uint64_t seed = 1;  // Poisson: the same seed gives the same schedule on every machine
+
+  // "fixed", "poisson" or "burst:N"; throws std::invalid_argument otherwise.
+  static ArrivalPattern parse(const std::string& text);
+  std::string name() const;  // as parse() reads it
+};
 
 struct RunOptions {
   std::optional<double> rate_hz;  // default: the benchmark's
@@ -67,6 +84,8 @@ struct RunOptions {
   // fast, instead of at a fixed rate.
   bool bag_timeline = false;
   double rate_scale = 1.0;
+  // Otherwise, when messages are sent at the rate.
+  ArrivalPattern arrival;
   // Called from the playback thread after each send.
   std::function<void(std::size_t sent, std::size_t total, std::size_t received)> progress;
 };
@@ -109,15 +128,41 @@ struct ControlLoopResult {
   metrics::SampleStats command_to_write;
 };
 
+// One rate a peak-throughput search tried (peak_search.hpp).
+struct PeakStep {
+  double rate_hz = 0;     // asked for
+  double offered_hz = 0;  // the Playback achieved
+  double output_hz = 0;
+  double loss_percent = 0;
+  double latency_ms = 0;  // the bounded percentile of latency from the scheduled send (NaN: none)
+  bool passed = false;
+  std::string reason;  // why it did not meet the bounds; empty when it did
+};
+
+// The search that found a run's rate, kept with the run at the peak.
+struct PeakSearchRecord {
+  double loss_bound_percent = 0;
+  std::optional<double> latency_bound_ms;
+  double latency_percentile = 99;
+  double rate_low_hz = 0, rate_high_hz = 0;
+  double resolution_percent = 0;
+  double step_duration_s = 0;
+  std::vector<PeakStep> steps;  // in the order tried
+  // Why the search ended where it did: the next rate's failure, the top of the range, ...
+  std::string stop_reason;
+};
+
 struct RunResult {
   std::string benchmark_id;
   std::string benchmark_name;
   std::string category;
   // Configuration as run.
   double rate_hz = 0;  // with the bag's timeline: its mean recorded rate times rate_scale
-  // When frames are sent: "fixed" (every 1/rate_hz) or "bag" (the bag's recorded intervals
-  // divided by rate_scale).
+  // When frames are sent: "fixed" (every 1/rate_hz), "poisson", "burst" (ArrivalPattern) or
+  // "bag" (the bag's recorded intervals divided by rate_scale).
   std::string timeline = "fixed";
+  std::size_t burst = 1;      // "burst": messages per burst
+  uint64_t arrival_seed = 0;  // "poisson": the generator's seed
   double rate_scale = 1.0;
   std::size_t count = 0;
   std::size_t warmup = 0;
@@ -142,13 +187,20 @@ struct RunResult {
   std::size_t duplicates = 0;
   std::size_t unknown = 0;
   std::size_t repeats = 0;  // state outputs: further receptions of an ID (not an error)
+  // Receptions that belong to another run on the same domain (written by its participants, or
+  // our graph's answers to its inputs): neither matched nor unknown.
+  std::size_t foreign = 0;
   double loss_percent = 0;
   // Nanoseconds, over matched measured messages.
   metrics::SampleStats latency_from_scheduled;
   metrics::SampleStats latency_from_sent;
   // Sending lateness: actual minus scheduled send time.
   metrics::SampleStats send_lateness;
-  double throughput_hz = 0;    // output rate: (matched - 1) / (last - first reception)
+  double throughput_hz = 0;  // output rate: (matched - 1) / (last - first reception)
+  // "offered": the graph was fed at a rate and kept up with it; "peak": the highest rate a
+  // peak-throughput search found it sustains (peak_search then says how).
+  std::string throughput_kind = "offered";
+  std::optional<PeakSearchRecord> peak_search;
   double offered_rate_hz = 0;  // input rate actually achieved by the Playback
   double window_s = 0;         // from the first measured send to the last reception
   int64_t started_unix_ns = 0;
@@ -163,6 +215,12 @@ struct RunResult {
   std::vector<NodeReport> nodes;
   std::vector<MessageRecord> records;
   int domain_id = 0;
+  // What tells this run's messages and participants from another's: the stamp of message k is
+  // id_base_ns + k * period (a random base), and its participants carry run_token.
+  int64_t id_base_ns = 0;
+  std::string run_token;
+  // The other participants seen on the domain, before and during the run.
+  std::vector<rmw::PeerParticipant> domain_peers;
   SchedulingOptions scheduling;
   // Run rules broken before or during the run (DESIGN.md §3).
   std::vector<sysinfo::RunWarning> warnings;
@@ -208,8 +266,10 @@ void kill_node_processes() noexcept;
 // stdout once its endpoints are matched, runs until stdin closes, then prints
 // a final "stats" line. Returns the process exit code. A callback stuck longer than
 // `callback_timeout_s` is reported on a "hung" line, and the process ends at once.
+// `run_token` marks its participant as one of the runner's run (RunResult::run_token).
 int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
                      const std::string& rmw, int domain_id,
-                     const SchedulingOptions& scheduling = {}, double callback_timeout_s = 30.0);
+                     const SchedulingOptions& scheduling = {}, double callback_timeout_s = 30.0,
+                     const std::string& run_token = {});
 
 }  // namespace robotperf::harness

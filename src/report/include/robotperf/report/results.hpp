@@ -26,6 +26,15 @@ nlohmann::json result_to_json(const harness::RunResult& result,
 // lost).
 std::string latencies_csv(const harness::RunResult& result);
 
+// The steps of a peak-throughput search, one line each, and why it stopped.
+std::string peak_search_table(const harness::PeakSearchRecord& search);
+nlohmann::json peak_search_json(const harness::PeakSearchRecord& search);
+
+// One line: the 95 % intervals of p50, p90, p99 and p99.9 of `stats` (of what: `of`), times
+// `scale` in `unit`; an end the samples cannot give is "?" with the samples it needs.
+std::string percentile_intervals_line(const metrics::SampleStats& stats, double scale,
+                                      const std::string& unit, const std::string& of);
+
 // A human-readable summary: configuration, counts, latency distribution, throughput, verdict.
 std::string summary_table(const harness::RunResult& result);
 

@@ -47,6 +47,8 @@ struct StoredRun {
   LatencySummary latency;  // from the scheduled send time: the RobotPerf-compatible latency
   double throughput_hz = kNoValue;
   double offered_hz = kNoValue;
+  // "offered" (the graph kept up with the rate it was fed) or "peak" (found by --find-peak).
+  std::string throughput_kind = "offered";
   std::optional<double> power_w;  // average over the measured window, when a real source was read
   std::optional<double> energy_j;
   std::string power_note;  // the source, or why power is unavailable

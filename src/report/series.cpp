@@ -1,0 +1,98 @@
+#include "robotperf/report/series.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace robotperf::report {
+namespace {
+
+constexpr double kNsPerMs = 1e6;
+
+nlohmann::json number_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
+
+std::string shown(double v) {
+  if (!std::isfinite(v)) return "?";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3f", v);
+  return text;
+}
+
+}  // namespace
+
+metrics::SampleStats SeriesFigure::stats() const {
+  return metrics::compute_stats(values);
+}
+
+double SeriesFigure::spread_percent() const {
+  const metrics::SampleStats s = stats();
+  if (s.count == 0 || s.p50 == 0) return metrics::SampleStats::kNoValue;
+  return 100.0 * (s.max - s.min) / std::fabs(s.p50);
+}
+
+Series::Series(std::string benchmark_id)
+    : benchmark_id_(std::move(benchmark_id)),
+      figures_{{"latency p50", "ms", {}},
+               {"latency p99", "ms", {}},
+               {"latency max", "ms", {}},
+               {"throughput", "Hz", {}},
+               {"loss", "%", {}}} {}
+
+void Series::add(const harness::RunResult& run, const std::optional<std::filesystem::path>& json) {
+  ++runs_;
+  if (json) files_.push_back(json->string());
+  // An invalid run's figures describe a broken measurement: listed, never summarised.
+  if (!run.valid) return;
+  ++valid_runs_;
+  const metrics::SampleStats& l = run.latency_from_scheduled;
+  const double values[] = {l.p50 / kNsPerMs, l.p99 / kNsPerMs, l.max / kNsPerMs, run.throughput_hz,
+                           run.loss_percent};
+  for (std::size_t i = 0; i < figures_.size(); ++i) {
+    if (std::isfinite(values[i])) figures_[i].values.push_back(values[i]);
+  }
+}
+
+std::string series_table(const Series& series) {
+  std::ostringstream out;
+  out << "series " << series.benchmark_id() << ": " << series.runs() << " runs, "
+      << series.valid_runs() << " valid (figures over the valid runs; the median's 95 % interval "
+      << "is distribution-free and needs at least 6 runs for both ends)\n";
+  char line[200];
+  std::snprintf(line, sizeof line, "  %-18s %10s %23s %10s %10s %9s\n", "figure", "median",
+                "95 % interval", "min", "max", "spread");
+  out << line;
+  for (const auto& f : series.figures()) {
+    const metrics::SampleStats s = f.stats();
+    const std::string interval = shown(s.p50_ci.lower) + " .. " + shown(s.p50_ci.upper);
+    const double spread = f.spread_percent();
+    std::snprintf(line, sizeof line, "  %-18s %10s %23s %10s %10s %8s%%\n",
+                  (f.name + " (" + f.unit + ")").c_str(), shown(s.p50).c_str(), interval.c_str(),
+                  shown(s.min).c_str(), shown(s.max).c_str(),
+                  std::isfinite(spread) ? shown(spread).c_str() : "?");
+    out << line;
+  }
+  return out.str();
+}
+
+nlohmann::json series_json(const Series& series) {
+  nlohmann::json figures = nlohmann::json::object();
+  for (const auto& f : series.figures()) {
+    const metrics::SampleStats s = f.stats();
+    figures[f.name] = {
+        {"unit", f.unit},
+        {"runs", s.count},
+        {"median", number_or_null(s.p50)},
+        {"median_ci95", {number_or_null(s.p50_ci.lower), number_or_null(s.p50_ci.upper)}},
+        {"min", number_or_null(s.min)},
+        {"max", number_or_null(s.max)},
+        {"spread_percent", number_or_null(f.spread_percent())},
+        {"values", f.values}};
+  }
+  return {{"schema", "robotperf.series/1"}, {"benchmark", series.benchmark_id()},
+          {"runs", series.runs()},          {"valid_runs", series.valid_runs()},
+          {"files", series.files()},        {"figures", figures}};
+}
+
+}  // namespace robotperf::report
