@@ -372,10 +372,28 @@ detail::Comparison compare(const std::string& a_sel, const std::string& b_sel,
       if (va.empty() || vb.empty()) continue;
       const double ma = median(va), mb = median(vb);
       const double ratio = mb / ma;
+      // With enough runs a side's median has a distribution-free 95 % interval (as --repeat
+      // prints it): disjoint intervals are a difference beyond the run-to-run noise.
+      const metrics::PercentileInterval ia = metrics::compute_stats(va).p50_ci;
+      const metrics::PercentileInterval ib = metrics::compute_stats(vb).p50_ci;
+      auto closed = [](const metrics::PercentileInterval& i) {
+        return !std::isnan(i.lower) && !std::isnan(i.upper);
+      };
+      auto with_interval = [&](double m, const metrics::PercentileInterval& i) {
+        return detail::format_value(m) + (closed(i) ? " [" + detail::format_value(i.lower) + ", " +
+                                                          detail::format_value(i.upper) + "]"
+                                                    : "");
+      };
       std::string judgement;
       std::optional<double> p;
       std::string basis;
-      if (va.size() >= 2 && vb.size() >= 2) {
+      if (closed(ia) && closed(ib)) {
+        const bool better = m.smaller_is_better ? mb < ma : mb > ma;
+        judgement = ia.upper < ib.lower || ib.upper < ia.lower
+                        ? std::string("significant: B ") + (better ? "better" : "worse") +
+                              " (the medians' 95 % intervals do not overlap)"
+                        : "within run-to-run noise (the medians' 95 % intervals overlap)";
+      } else if (va.size() >= 2 && vb.size() >= 2) {
         p = welch_test(va, vb).p_value;
         basis = "run-to-run spread";
       } else if (std::string(m.name) == "latency mean" && runs_a.size() == 1 &&
@@ -393,13 +411,12 @@ detail::Comparison compare(const std::string& a_sel, const std::string& b_sel,
         judgement = (*p < 0.05 ? std::string("significant: B ") + (better ? "better" : "worse")
                                : std::string("not significant")) +
                     " (" + buf + ", " + basis + ")";
-      } else {
+      } else if (judgement.empty()) {
         judgement = "not judged: needs 2 or more runs per side";
       }
-      c.table.rows.push_back({id, std::string(m.name) + " (" + m.unit + ")",
-                              detail::format_value(ma), std::to_string(va.size()),
-                              detail::format_value(mb), std::to_string(vb.size()),
-                              format_fixed(ratio, 3), judgement});
+      c.table.rows.push_back({id, std::string(m.name) + " (" + m.unit + ")", with_interval(ma, ia),
+                              std::to_string(va.size()), with_interval(mb, ib),
+                              std::to_string(vb.size()), format_fixed(ratio, 3), judgement});
       c.table.row_warning.push_back(false);
     }
   }

@@ -176,6 +176,37 @@ TEST_F(Report, OverlappingRunsAreNotSignificant) {
   }
 }
 
+// Six or more runs a side (a --repeat series each): the medians' 95 % intervals decide, and the
+// table shows them.
+TEST_F(Report, RepeatedSeriesAreJudgedByTheMediansIntervals) {
+  int64_t t = 1'790'000'000'000'000'000;
+  auto series = [&](const std::string& cpu, double base, double step) {
+    for (int k = 0; k < 6; ++k) {
+      testing::SampleRun s;
+      s.cpu = cpu;
+      s.base_latency_ms = base + step * k;
+      s.start_unix_ns = (t += 60'000'000'000);
+      testing::write_sample(dir_, s);
+    }
+  };
+  series("AMD Ryzen 7 5800X 8-Core Processor", 5.0, 0.1);         // 5.0 .. 5.5
+  series("Intel(R) Core(TM) i7-12700H CPU @ 2.30GHz", 7.0, 0.1);  // 7.0 .. 7.5
+  series("Intel(R) Xeon(R) CPU E5-2680 v4 @ 2.40GHz", 5.2, 0.1);  // 5.2 .. 5.7
+  const auto input = load_report_inputs({dir_});
+  ReportOptions options;
+  options.compare = std::pair{"AMD Ryzen 7 5800X", "Intel Core i7-12700H"};
+  std::string md = render_markdown(input, options);
+  EXPECT_TRUE(std::regex_search(
+      md, std::regex("\\| a1 \\| latency p50 \\(ms\\) \\| [0-9.]+ \\[[0-9.]+, [0-9.]+\\] \\|[^\\n]*"
+                     "significant: B worse \\(the medians' 95 % intervals do not overlap\\)")))
+      << md;
+  options.compare = std::pair{"AMD Ryzen 7 5800X", "Intel Xeon CPU E5-2680 v4"};
+  md = render_markdown(input, options);
+  EXPECT_TRUE(std::regex_search(md, std::regex("\\| a1 \\| latency p50 \\(ms\\) \\|[^\\n]*"
+                                               "within run-to-run noise")))
+      << md;
+}
+
 TEST_F(Report, InvalidRunsAreWarnedAboutAndNotPlotted) {
   testing::SampleRun bad;
   bad.lost = 10;
