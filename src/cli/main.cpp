@@ -603,7 +603,9 @@ int run(const Roots& roots, const RunArgs& a) {
       std::cout << "result: no rate met the bounds; nothing written\n";
       return g_interrupted.load() ? 128 + g_interrupted.load() : kExitInvalidResult;
     }
-    return write_run(spec, a, *found.peak).code;
+    const int code = write_run(spec, a, *found.peak).code;
+    // An interrupted search still writes the peak it had found; the exit status says it stopped.
+    return g_interrupted.load() != 0 ? 128 + g_interrupted.load() : code;
   }
   if (a.repeat > 1) return run_series(spec, a, o);
   harness::RunResult result = measure(spec, o);

@@ -106,7 +106,14 @@ PeakSearchResult find_peak(const BenchmarkSpec& spec, const RunOptions& options,
     o.rate_hz = rate;
     o.duration_s =
         search.step_duration_s + static_cast<double>(o.warmup.value_or(spec.warmup)) / rate;
-    RunResult r = run_benchmark(spec, o);
+    RunResult r;
+    try {
+      r = run_benchmark(spec, o);
+    } catch (const RunInterrupted&) {
+      // Before this step's timing began: the steps already measured stand.
+      rec.stop_reason = "interrupted before the step at " + text(rate) + " Hz";
+      return false;
+    }
     PeakStep s;
     s.rate_hz = rate;
     s.offered_hz = r.offered_rate_hz;

@@ -38,7 +38,7 @@ constexpr int64_t kStopGraceNs = 2'000'000'000;
 // The exit status of a node process whose watchdog found a callback stuck.
 constexpr int kNodeHungExit = 5;
 
-std::string seconds_text(double s) {
+std::string number_text(double s) {
   std::ostringstream text;
   text.precision(6);
   text << s;
@@ -106,13 +106,6 @@ constexpr double kMaxWaitS = 24 * 3600.0;
 // the schedule (bag timelines).
 constexpr double kBytesPerMessage =
     sizeof(MessageRecord) + sizeof(int64_t) + sizeof(int64_t) + sizeof(bool);
-
-std::string number_text(double v) {
-  std::ostringstream text;
-  text.precision(6);
-  text << v;
-  return text.str();
-}
 
 // A rate in Hz that gives a period the Playback can keep: one line naming `what` otherwise.
 void check_rate(double hz, const std::string& what) {
@@ -416,7 +409,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
       node_arguments.insert(node_arguments.end(), {"--update-rate", hz.str()});
     }
     node_arguments.insert(node_arguments.end(),
-                          {"--callback-timeout", seconds_text(options.callback_timeout_s),
+                          {"--callback-timeout", number_text(options.callback_timeout_s),
                            "--run-token", r.run_token});
     children = std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw,
                                                options.domain_id, node_arguments);
@@ -475,9 +468,9 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
       } else if (auto stuck =
                      graph_executor->running_longer_than(callback_limit_ns, rmw::steady_now_ns())) {
         stop_now = "node '" + stuck->node + "' hung: its callback has run for " +
-                   seconds_text(static_cast<double>(stuck->running_ns) * 1e-9) +
+                   number_text(static_cast<double>(stuck->running_ns) * 1e-9) +
                    " s, longer than the callback timeout (" +
-                   seconds_text(options.callback_timeout_s) + " s, --callback-timeout)";
+                   number_text(options.callback_timeout_s) + " s, --callback-timeout)";
       }
     }
     return stop_now;
@@ -656,8 +649,8 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
       std::this_thread::sleep_for(std::chrono::nanoseconds(kWatchPeriodNs));
       if (auto stuck = executor.running_longer_than(limit_ns, rmw::steady_now_ns())) {
         std::cout << "hung its callback has run for "
-                  << seconds_text(static_cast<double>(stuck->running_ns) * 1e-9)
-                  << " s, longer than the callback timeout (" << seconds_text(callback_timeout_s)
+                  << number_text(static_cast<double>(stuck->running_ns) * 1e-9)
+                  << " s, longer than the callback timeout (" << number_text(callback_timeout_s)
                   << " s, --callback-timeout)" << std::endl;
         std::_Exit(kNodeHungExit);
       }
