@@ -67,10 +67,10 @@ std::string series_table(const Series& series) {
     const metrics::SampleStats s = f.stats();
     const std::string interval = shown(s.p50_ci.lower) + " .. " + shown(s.p50_ci.upper);
     const double spread = f.spread_percent();
-    std::snprintf(line, sizeof line, "  %-18s %10s %23s %10s %10s %8s%%\n",
+    std::snprintf(line, sizeof line, "  %-18s %10s %23s %10s %10s %9s\n",
                   (f.name + " (" + f.unit + ")").c_str(), shown(s.p50).c_str(), interval.c_str(),
                   shown(s.min).c_str(), shown(s.max).c_str(),
-                  std::isfinite(spread) ? shown(spread).c_str() : "?");
+                  std::isfinite(spread) ? (shown(spread) + "%").c_str() : "?");
     out << line;
   }
   return out.str();
