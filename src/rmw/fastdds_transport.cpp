@@ -11,6 +11,7 @@
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdint>
@@ -198,11 +199,22 @@ class PeerListener final : public dds::DomainParticipantListener {
     peer.name = data.m_participantName.to_string();
     const auto& bytes = data.m_userData.data_vec();
     peer.user_data.assign(bytes.begin(), bytes.end());
+    // Where it runs: the IP addresses of its user and discovery traffic, or this host when Fast
+    // DDS reaches it through shared memory (it then keeps no UDP locator for it).
     peer.addresses.clear();
-    for (const auto& locator : data.default_locators.unicast) {
-      if (locator.kind == LOCATOR_KIND_UDPv4 || locator.kind == LOCATOR_KIND_UDPv6) {
-        peer.addresses.push_back(eprosima::fastrtps::rtps::IPLocator::ip_to_string(locator) + ":" +
-                                 std::to_string(locator.port));
+    for (const auto* locators :
+         {&data.default_locators.unicast, &data.metatraffic_locators.unicast}) {
+      for (const auto& locator : *locators) {
+        std::string address;
+        if (locator.kind == LOCATOR_KIND_SHM) {
+          address = "this host (shared memory)";
+        } else if (locator.kind == LOCATOR_KIND_UDPv4 || locator.kind == LOCATOR_KIND_UDPv6) {
+          address = eprosima::fastrtps::rtps::IPLocator::ip_to_string(locator);
+        } else {
+          continue;
+        }
+        if (std::ranges::find(peer.addresses, address) == peer.addresses.end())
+          peer.addresses.push_back(std::move(address));
       }
     }
   }

@@ -282,6 +282,7 @@ TEST(FastddsTransport, DiscoversPeersAndTheSenderOfEachSample) {
   EXPECT_EQ(peers[0].user_data, "robotperf_run=bbbb;");
   EXPECT_EQ(peers[0].name, "robotperf");
   EXPECT_EQ(to_hex(peers[0].id).size(), 24u);
+  EXPECT_FALSE(peers[0].addresses.empty());  // an IP address, or this host's shared memory
 
   pub->publish(std::make_shared<Image>(make_image(4, 2, 1)));
   MessageInfo info;

@@ -52,9 +52,10 @@ using ParticipantId = std::array<uint8_t, 12>;
 struct PeerParticipant {
   ParticipantId id{};
   std::string name;
-  std::string user_data;               // its USER_DATA QoS, as text
-  std::vector<std::string> addresses;  // its unicast locators ("192.168.1.5:7411")
-  std::set<std::string> topics;        // the ROS names of its endpoints seen so far
+  std::string user_data;  // its USER_DATA QoS, as text
+  // Where it runs: its unicast IP addresses, or "this host (shared memory)".
+  std::vector<std::string> addresses;
+  std::set<std::string> topics;  // the ROS names of its endpoints seen so far
 };
 
 // "0f1e...": the 24 hex digits of a participant id.
