@@ -642,6 +642,7 @@ StreamStats Trace::read_stream(std::size_t index,
     while (true) {
       // Events end where the next header would not fit (trailing padding).
       if (d.pos() >= content_end) break;
+      const uint64_t event_start = d.pos();
       uint64_t id = 0;
       if (shape != HeaderShape::kGeneral) {
         id = d.decode_lttng_header(shape);
@@ -665,6 +666,11 @@ StreamStats Trace::read_stream(std::size_t index,
         payload.clear();
         if (ec->fields) d.decode_struct(*ec->fields, &payload, nullptr);
       }
+      // Metadata whose events have no header and no fields would make a packet of endless
+      // events (found by fuzz_ctf_trace).
+      if (d.pos() == event_start)
+        d.fail("event '" + ec->name +
+               "' takes no bits: its metadata gives it no header and no fields");
       Event ev;
       ev.cls = ec;
       ev.timestamp = d.clock();
