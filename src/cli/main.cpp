@@ -358,6 +358,19 @@ std::optional<fs::path> write_result_files(const fs::path& base,
 }
 
 // "--remap from:=to" and "--window START:END" (seconds, either may be empty).
+// The number `text` is, all of it (std::stod's syntax), or nothing.
+std::optional<double> whole_number(const std::string& text) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  if (used == 0 || used != text.size()) return std::nullopt;
+  return v;
+}
+
 harness::BagSelection bag_selection(const RunArgs& a) {
   harness::BagSelection bag;
   bag.path = *a.dataset;
@@ -371,13 +384,8 @@ harness::BagSelection bag_selection(const RunArgs& a) {
     const auto sep = a.window->find(':');
     auto seconds = [&](const std::string& text) -> std::optional<double> {
       if (text.empty()) return std::nullopt;
-      std::size_t used = 0;
-      double v = 0;
-      try {
-        v = std::stod(text, &used);
-      } catch (const std::exception&) {
-      }
-      if (used != text.size() || !(v >= 0))
+      const std::optional<double> v = whole_number(text);
+      if (!v || !(*v >= 0))
         throw std::invalid_argument("--window " + *a.window + ": expected START:END in seconds");
       return v;
     };
@@ -500,19 +508,12 @@ harness::PeakSearchOptions peak_search_options(const RunArgs& a) {
   if (a.duration) search.step_duration_s = *a.duration;
   if (a.rate_range) {
     const auto colon = a.rate_range->find(':');
-    std::size_t used_low = 0, used_high = 0;
-    double low = 0, high = 0;
-    try {
-      if (colon != std::string::npos) {
-        low = std::stod(a.rate_range->substr(0, colon), &used_low);
-        high = std::stod(a.rate_range->substr(colon + 1), &used_high);
-      }
-    } catch (const std::exception&) {
-      used_low = 0;
+    std::optional<double> low, high;
+    if (colon != std::string::npos) {
+      low = whole_number(a.rate_range->substr(0, colon));
+      high = whole_number(a.rate_range->substr(colon + 1));
     }
-    if (colon == std::string::npos || used_low != colon ||
-        used_high != a.rate_range->size() - colon - 1 || !(low > 0) || !(high >= low) ||
-        !std::isfinite(high))
+    if (!low || !high || !(*low > 0) || !(*high >= *low) || !std::isfinite(*high))
       throw std::invalid_argument("--rate-range " + *a.rate_range +
                                   ": expected LO:HI in Hz with 0 < LO <= HI");
     search.rate_low_hz = low;
@@ -531,12 +532,8 @@ int run(const Roots& roots, const RunArgs& a) {
     o.bag_timeline = true;
     o.rate_scale = a.rate_scale;
   } else if (a.rate) {
-    std::size_t used = 0;
-    try {
-      o.rate_hz = std::stod(*a.rate, &used);
-    } catch (const std::exception&) {
-    }
-    if (used == 0 || used != a.rate->size())
+    o.rate_hz = whole_number(*a.rate);
+    if (!o.rate_hz)
       throw std::invalid_argument("--rate " + *a.rate + ": expected a rate in Hz or 'bag'");
   }
   o.arrival = harness::ArrivalPattern::parse(a.arrival);

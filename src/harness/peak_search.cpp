@@ -27,11 +27,7 @@ std::string text(double v, int precision = 4) {
 
 // The q-th percentile (0-100) of the latency from the scheduled send, in ms; NaN without samples.
 double latency_percentile_ms(const RunResult& r, double percentile) {
-  std::vector<double> latencies;
-  for (const auto& rec : r.records) {
-    if (!rec.warmup && rec.received_ns >= 0)
-      latencies.push_back(static_cast<double>(rec.received_ns - rec.scheduled_ns) * 1e-6);
-  }
+  std::vector<double> latencies = scheduled_latencies_ms(r);
   std::ranges::sort(latencies);
   return metrics::quantile_of_sorted(latencies, percentile / 100.0);
 }

@@ -250,6 +250,16 @@ void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& ta
 
 }  // namespace
 
+std::vector<double> scheduled_latencies_ms(const RunResult& r) {
+  std::vector<double> out;
+  out.reserve(r.records.size());
+  for (const auto& rec : r.records) {
+    if (!rec.warmup && rec.received_ns >= 0)
+      out.push_back(static_cast<double>(rec.received_ns - rec.scheduled_ns) / 1e6);
+  }
+  return out;
+}
+
 RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& options) {
   check_run_options(options);
   std::optional<BenchmarkSpec> overridden;

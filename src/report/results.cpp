@@ -11,6 +11,7 @@
 
 #include "robotperf/build_info.hpp"
 #include "robotperf/report/histogram.hpp"
+#include "robotperf/report/run_store.hpp"
 
 namespace robotperf::report {
 namespace {
@@ -26,29 +27,23 @@ std::string utc_time(int64_t unix_ns, const char* format) {
   return buf;
 }
 
-std::string fixed(double v, int decimals) {
-  if (!std::isfinite(v)) return "-";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
-
 std::string power_line(const harness::RunResult& r) {
   const auto& p = r.power;
   if (!p.available) return "power: unavailable — " + p.unavailable_reason + "\n";
   std::ostringstream out;
-  out << "power: " << fixed(p.total_average_w, 2) << " W";
+  out << "power: " << format_fixed(p.total_average_w, 2) << " W";
   std::string parts;
   for (const auto& s : p.sources) {
     if (!s.available || !s.info.in_total) continue;
-    parts += (parts.empty() ? "" : ", ") + s.info.name + " " + fixed(s.average_w, 2) + " W";
+    parts += (parts.empty() ? "" : ", ") + s.info.name + " " + format_fixed(s.average_w, 2) + " W";
   }
-  out << " (" << parts << "), " << fixed(p.total_energy_j, 3) << " J";
+  out << " (" << parts << "), " << format_fixed(p.total_energy_j, 3) << " J";
   if (r.matched > 0) {
-    out << ", " << fixed(p.total_energy_j * 1e3 / static_cast<double>(r.matched), 3) << " mJ/msg";
+    out << ", " << format_fixed(p.total_energy_j * 1e3 / static_cast<double>(r.matched), 3)
+        << " mJ/msg";
   }
   if (r.throughput_hz > 0 && p.total_average_w > 0) {
-    out << ", " << fixed(r.throughput_hz / p.total_average_w, 3) << " msg/s per W";
+    out << ", " << format_fixed(r.throughput_hz / p.total_average_w, 3) << " msg/s per W";
   }
   for (const auto& s : p.sources) {
     if (!s.available) out << "; " << s.info.name << " unavailable: " << s.unavailable_reason;
@@ -61,16 +56,16 @@ std::string resources_line(const harness::RunResult& r) {
   const auto& u = r.resources;
   if (!u.measured) return "resources: not measured (the measured window never started)\n";
   std::ostringstream out;
-  out << "resources over " << fixed(u.window_s, 2) << " s:\n";
+  out << "resources over " << format_fixed(u.window_s, 2) << " s:\n";
   for (const auto& p : u.processes) {
     out << "  " << p.label << " (pid " << p.pid << "): ";
     if (!p.measured) {
       out << p.error << "\n";
       continue;
     }
-    out << fixed(p.cpu_percent, 1) << " % CPU";
+    out << format_fixed(p.cpu_percent, 1) << " % CPU";
     if (p.peak_rss_bytes) {
-      out << ", peak RSS " << fixed(static_cast<double>(*p.peak_rss_bytes) / (1 << 20), 1)
+      out << ", peak RSS " << format_fixed(static_cast<double>(*p.peak_rss_bytes) / (1 << 20), 1)
           << " MiB";
     }
     out << ", context switches " << p.voluntary_switches << " voluntary / "
@@ -78,13 +73,13 @@ std::string resources_line(const harness::RunResult& r) {
         << p.major_faults << " major\n";
   }
   if (u.system_busy_percent) {
-    out << "  system: " << fixed(*u.system_busy_percent, 1) << " % busy";
+    out << "  system: " << format_fixed(*u.system_busy_percent, 1) << " % busy";
     if (u.other_cpu_percent) {
-      out << ", other processes " << fixed(*u.other_cpu_percent, 1) << " % of a core";
+      out << ", other processes " << format_fixed(*u.other_cpu_percent, 1) << " % of a core";
     }
     out << "; per CPU";
     for (std::size_t i = 0; i < u.per_cpu_busy_percent.size(); ++i) {
-      out << " " << u.cpu_ids[i] << ":" << fixed(u.per_cpu_busy_percent[i], 0) << "%";
+      out << " " << u.cpu_ids[i] << ":" << format_fixed(u.per_cpu_busy_percent[i], 0) << "%";
     }
     out << "\n";
   }
@@ -101,10 +96,6 @@ std::string general(double v) {
 
 nlohmann::json optional_number(const std::optional<double>& v) {
   return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
-}
-
-nlohmann::json finite_or_null(double v) {
-  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
 }
 
 nlohmann::json functional_json(const std::optional<harness::FunctionalResult>& f) {
@@ -132,6 +123,10 @@ nlohmann::json dataset_json(const harness::RunResult& r) {
 }
 
 }  // namespace
+
+nlohmann::json finite_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
 
 nlohmann::json software_json() {
   return {{"robotperf_version", build_info::kVersion},
@@ -184,12 +179,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
   // exactly.
   const json from_scheduled = metrics::to_json(r.latency_from_scheduled, 1.0 / kNsPerMs, "ms");
   // The distribution itself, compactly, so that a report can draw it without the CSV.
-  std::vector<double> latencies_ms;
-  latencies_ms.reserve(r.records.size());
-  for (const auto& rec : r.records) {
-    if (!rec.warmup && rec.received_ns >= 0)
-      latencies_ms.push_back(static_cast<double>(rec.received_ns - rec.scheduled_ns) / kNsPerMs);
-  }
+  const std::vector<double> latencies_ms = harness::scheduled_latencies_ms(r);
   json peers = json::array();
   for (const auto& p : r.domain_peers) {
     peers.push_back({{"id", rmw::to_hex(p.id)},
@@ -327,9 +317,9 @@ std::string peak_search_table(const harness::PeakSearchRecord& p) {
   for (std::size_t i = 0; i < p.steps.size(); ++i) {
     const auto& s = p.steps[i];
     std::snprintf(line, sizeof line, "  %4zu %12s %12s %12s %8s %12s  ", i + 1,
-                  fixed(s.rate_hz, 1).c_str(), fixed(s.offered_hz, 1).c_str(),
-                  fixed(s.output_hz, 1).c_str(), fixed(s.loss_percent, 2).c_str(),
-                  fixed(s.latency_ms, 3).c_str());
+                  format_fixed(s.rate_hz, 1).c_str(), format_fixed(s.offered_hz, 1).c_str(),
+                  format_fixed(s.output_hz, 1).c_str(), format_fixed(s.loss_percent, 2).c_str(),
+                  format_fixed(s.latency_ms, 3).c_str());
     out << line << (s.passed ? "sustained" : "failed: " + s.reason) << "\n";
   }
   out << "  " << p.stop_reason << "\n";
@@ -343,8 +333,7 @@ nlohmann::json peak_search_json(const harness::PeakSearchRecord& p) {
                      {"offered_hz", s.offered_hz},
                      {"output_hz", s.output_hz},
                      {"loss_percent", s.loss_percent},
-                     {"latency_ms", std::isnan(s.latency_ms) ? nlohmann::json(nullptr)
-                                                             : nlohmann::json(s.latency_ms)},
+                     {"latency_ms", finite_or_null(s.latency_ms)},
                      {"passed", s.passed},
                      {"reason", s.reason}});
   }
@@ -372,11 +361,11 @@ std::string percentile_intervals_line(const metrics::SampleStats& s, double scal
     out += separator;
     separator = ", ";
     out += std::string(name) + " ";
-    out += std::isnan(ci.lower) ? "?" : fixed(ci.lower * scale, 3);
+    out += std::isnan(ci.lower) ? "?" : format_fixed(ci.lower * scale, 3);
     out += "..";
     out += std::isnan(ci.upper)
                ? "? (needs " + std::to_string(metrics::samples_for_upper_bound(q)) + " samples)"
-               : fixed(ci.upper * scale, 3);
+               : format_fixed(ci.upper * scale, 3);
   }
   return out + "\n";
 }
@@ -385,7 +374,7 @@ std::string summary_table(const harness::RunResult& r) {
   std::ostringstream out;
   out << r.benchmark_id << " (" << r.benchmark_name << ") · " << (r.grey ? "grey-box · " : "")
       << r.rmw << " · " << r.processes << " process" << (r.processes == "single" ? "" : "es")
-      << " · " << fixed(r.rate_hz, 1) << " Hz";
+      << " · " << format_fixed(r.rate_hz, 1) << " Hz";
   if (r.timeline == "bag") {
     out << " (the bag's timeline";
     if (r.rate_scale != 1.0) out << " x" << r.rate_scale;
@@ -404,7 +393,7 @@ std::string summary_table(const harness::RunResult& r) {
   }
   out << "\n";
   out << "messages: sent " << r.sent << " (warm-up " << r.warmup << "), measured " << r.measured
-      << ", matched " << r.matched << ", lost " << r.lost << " (" << fixed(r.loss_percent, 2)
+      << ", matched " << r.matched << ", lost " << r.lost << " (" << format_fixed(r.loss_percent, 2)
       << " %)";
   if (r.duplicates) out << ", duplicates " << r.duplicates;
   if (r.unknown) out << ", unknown " << r.unknown;
@@ -417,7 +406,7 @@ std::string summary_table(const harness::RunResult& r) {
                 "mean", "rms", "p50", "p90", "p99", "p99.9", "max");
   out << line;
   auto row = [&](const char* name, const metrics::SampleStats& s) {
-    auto v = [](double ns) { return fixed(ns / kNsPerMs, 3); };
+    auto v = [](double ns) { return format_fixed(ns / kNsPerMs, 3); };
     std::snprintf(line, sizeof line, "%-24s %9s %9s %9s %9s %9s %9s %9s %9s\n", name,
                   v(s.min).c_str(), v(s.mean).c_str(), v(s.rms).c_str(), v(s.p50).c_str(),
                   v(s.p90).c_str(), v(s.p99).c_str(), v(s.p999).c_str(), v(s.max).c_str());
@@ -431,16 +420,17 @@ std::string summary_table(const harness::RunResult& r) {
   for (const auto& c : r.control_loops) {
     row("command -> hw write", c.command_to_write);
   }
-  out << "\nthroughput: " << fixed(r.throughput_hz, 3) << " Hz out, " << fixed(r.offered_rate_hz, 3)
-      << " Hz offered"
+  out << "\nthroughput: " << format_fixed(r.throughput_hz, 3) << " Hz out, "
+      << format_fixed(r.offered_rate_hz, 3) << " Hz offered"
       << (r.throughput_kind == "peak" ? " (peak: the highest rate the search found sustained)" : "")
       << "\n";
   if (r.peak_search) out << peak_search_table(*r.peak_search);
   if (r.grey) out << "\n" << tracing::breakdown_table(*r.grey) << "\n";
-  out << "headline (RobotPerf): latency " << fixed(r.latency_from_scheduled.max / kNsPerMs, 3)
-      << " ms (max), throughput " << fixed(r.throughput_hz, 3) << " Hz\n";
+  out << "headline (RobotPerf): latency "
+      << format_fixed(r.latency_from_scheduled.max / kNsPerMs, 3) << " ms (max), throughput "
+      << format_fixed(r.throughput_hz, 3) << " Hz\n";
   for (const auto& c : r.control_loops) {
-    out << "\ncontrol loop " << c.node << " at " << fixed(c.update_rate_hz, 1) << " Hz"
+    out << "\ncontrol loop " << c.node << " at " << format_fixed(c.update_rate_hz, 1) << " Hz"
         << (c.cpu >= 0 ? ", CPU " + std::to_string(c.cpu) : std::string())
         << (c.rt_priority ? ", SCHED_FIFO " + std::to_string(c.rt_priority) : std::string()) << ": "
         << c.cycles << " cycles, deadline misses " << c.deadline_misses << "\n";
@@ -448,7 +438,7 @@ std::string summary_table(const harness::RunResult& r) {
                   "p99", "max", "min");
     out << line;
     auto loop_row = [&](const char* name, const metrics::SampleStats& s) {
-      auto v = [](double ns) { return fixed(ns / 1e3, 1); };
+      auto v = [](double ns) { return format_fixed(ns / 1e3, 1); };
       std::snprintf(line, sizeof line, "  %-22s %9s %9s %9s %9s %9s\n", name, v(s.mean).c_str(),
                     v(s.p50).c_str(), v(s.p99).c_str(), v(s.max).c_str(), v(s.min).c_str());
       out << line;

@@ -4,20 +4,21 @@
 #include <cstdio>
 #include <sstream>
 
+#include "robotperf/report/results.hpp"
+#include "robotperf/report/run_store.hpp"
+
 namespace robotperf::report {
 namespace {
 
 constexpr double kNsPerMs = 1e6;
 
-nlohmann::json number_or_null(double v) {
-  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+std::string shown(double v) {
+  return std::isfinite(v) ? format_fixed(v, 3) : "?";
 }
 
-std::string shown(double v) {
-  if (!std::isfinite(v)) return "?";
-  char text[32];
-  std::snprintf(text, sizeof text, "%.3f", v);
-  return text;
+double spread_of(const metrics::SampleStats& s) {
+  if (s.count == 0 || s.p50 == 0) return metrics::SampleStats::kNoValue;
+  return 100.0 * (s.max - s.min) / std::fabs(s.p50);
 }
 
 }  // namespace
@@ -27,9 +28,7 @@ metrics::SampleStats SeriesFigure::stats() const {
 }
 
 double SeriesFigure::spread_percent() const {
-  const metrics::SampleStats s = stats();
-  if (s.count == 0 || s.p50 == 0) return metrics::SampleStats::kNoValue;
-  return 100.0 * (s.max - s.min) / std::fabs(s.p50);
+  return spread_of(stats());
 }
 
 Series::Series(std::string benchmark_id)
@@ -66,7 +65,7 @@ std::string series_table(const Series& series) {
   for (const auto& f : series.figures()) {
     const metrics::SampleStats s = f.stats();
     const std::string interval = shown(s.p50_ci.lower) + " .. " + shown(s.p50_ci.upper);
-    const double spread = f.spread_percent();
+    const double spread = spread_of(s);
     std::snprintf(line, sizeof line, "  %-18s %10s %23s %10s %10s %9s\n",
                   (f.name + " (" + f.unit + ")").c_str(), shown(s.p50).c_str(), interval.c_str(),
                   shown(s.min).c_str(), shown(s.max).c_str(),
@@ -83,11 +82,11 @@ nlohmann::json series_json(const Series& series) {
     figures[f.name] = {
         {"unit", f.unit},
         {"runs", s.count},
-        {"median", number_or_null(s.p50)},
-        {"median_ci95", {number_or_null(s.p50_ci.lower), number_or_null(s.p50_ci.upper)}},
-        {"min", number_or_null(s.min)},
-        {"max", number_or_null(s.max)},
-        {"spread_percent", number_or_null(f.spread_percent())},
+        {"median", finite_or_null(s.p50)},
+        {"median_ci95", {finite_or_null(s.p50_ci.lower), finite_or_null(s.p50_ci.upper)}},
+        {"min", finite_or_null(s.min)},
+        {"max", finite_or_null(s.max)},
+        {"spread_percent", finite_or_null(spread_of(s))},
         {"values", f.values}};
   }
   return {{"schema", "robotperf.series/1"}, {"benchmark", series.benchmark_id()},

@@ -240,6 +240,9 @@ struct RunResult {
   std::size_t trace_subbuf_bytes = 0;
 };
 
+// The latency from the scheduled send of every matched measured message, in ms, in message order.
+std::vector<double> scheduled_latencies_ms(const RunResult& result);
+
 // Thrown by run_benchmark with --strict when a run rule is broken; what() lists them.
 class RunRefused : public std::runtime_error {
  public:

@@ -26,6 +26,9 @@ nlohmann::json result_to_json(const harness::RunResult& result,
 // lost).
 std::string latencies_csv(const harness::RunResult& result);
 
+// A number as JSON, or null where it is NaN or infinite.
+nlohmann::json finite_or_null(double value);
+
 // The steps of a peak-throughput search, one line each, and why it stopped.
 std::string peak_search_table(const harness::PeakSearchRecord& search);
 nlohmann::json peak_search_json(const harness::PeakSearchRecord& search);
