@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   g++ cmake make pkg-config git
-  libfastrtps-dev libfastcdr-dev
+  libfastrtps-dev libfastcdr-dev cyclonedds-dev
   libopencv-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   libsqlite3-dev ros2-test-interface-files

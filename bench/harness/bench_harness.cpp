@@ -14,6 +14,7 @@
 
 #include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/run.hpp"
+#include "robotperf/rmw/transport.hpp"
 
 namespace fs = std::filesystem;
 using namespace robotperf;
@@ -56,7 +57,7 @@ int main() {
   robotperf::categories::register_builtin_categories();
   const fs::path root =
       fs::temp_directory_path() / ("robotperf-bench-harness-" + std::to_string(getpid()));
-  const int domain = 200 + getpid() % 30;
+  const int domain = rmw::reserved_domain();
   std::printf(
       "Harness overhead, null graph, sensor_msgs/CameraInfo payload, 1000 messages at 500 Hz\n");
   std::printf("%-34s %13s %10s %10s\n", "path", "matched", "p50 (us)", "p99 (us)");

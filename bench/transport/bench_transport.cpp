@@ -472,7 +472,7 @@ std::string size_label(std::size_t bytes) {
 int run_parent(const RunConfig& config) {
   const std::size_t sizes[] = {1u << 10, 1u << 20, 4u << 20};
   // A domain of its own, so concurrent runs and tests do not meet.
-  const int domain_id = 150 + static_cast<int>(getpid() % 80);
+  const int domain_id = robotperf::rmw::reserved_domain();
   std::printf(
       "bench_transport: one-way latency in microseconds, %d messages per cell after %d warm-up, "
       "%.0f Hz,\nRELIABLE KEEP_LAST 10 VOLATILE, domain %d. plain = Fast DDS raw bytes, "

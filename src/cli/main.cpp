@@ -914,8 +914,8 @@ int main(int argc, char** argv) {
       ->add_option("--warmup", ra.warmup, "first messages not counted (default: the benchmark's)")
       ->check(CLI::NonNegativeNumber);
   run_cmd->add_option("--drain", ra.drain, "seconds to wait for outputs after the last send");
-  run_cmd->add_option("--rmw", ra.rmw, "transport: intra or fastdds")
-      ->check(CLI::IsMember({"intra", "fastdds"}));
+  run_cmd->add_option("--rmw", ra.rmw, "transport: intra, fastdds or cyclonedds")
+      ->check(CLI::IsMember({"intra", "fastdds", "cyclonedds"}));
   run_cmd->add_option("--processes", ra.processes, "single (all nodes in one process) or per-node")
       ->check(CLI::IsMember({"single", "per-node"}));
   run_cmd

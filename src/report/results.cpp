@@ -137,6 +137,7 @@ nlohmann::json software_json() {
           {"sanitized", build_info::kSanitized},
           {"libraries",
            {{"fastdds", build_info::kFastDdsVersion},
+            {"cyclonedds", build_info::kCycloneDdsVersion},
             {"fastcdr", build_info::kFastCdrVersion},
             {"opencv", build_info::kOpenCvVersion},
             {"yaml-cpp", build_info::kYamlCppVersion},
@@ -152,6 +153,16 @@ nlohmann::json transport_json(const std::string& rmw, int domain_id, const std::
     return t;
   }
   t["domain_id"] = domain_id;
+  if (rmw == "cyclonedds") {
+    // Cyclone DDS reads its configuration (interfaces, buffers, shared memory) from this variable.
+    const char* uri = std::getenv("CYCLONEDDS_URI");
+    t["config_uri"] = uri && *uri ? nlohmann::json(uri) : nlohmann::json(nullptr);
+    t["settings"] = t["config_uri"].is_null()
+                        ? "Cyclone DDS defaults (UDPv4, XCDR1) but socket receive buffers up "
+                          "to 8 MiB, QoS per topic as in graph.yaml"
+                        : "Cyclone DDS with the configuration in config_uri";
+    return t;
+  }
   // Fast DDS reads an XML profile from these variables; it changes the transports and QoS used.
   nlohmann::json profiles = nullptr;
   for (const char* variable : {"FASTDDS_DEFAULT_PROFILES_FILE", "FASTRTPS_DEFAULT_PROFILES_FILE"}) {

@@ -46,6 +46,7 @@
 #include <utility>
 
 #include "fastdds_participant_qos.hpp"
+#include "participant_transport.hpp"
 #include "robotperf/msgs/cdr.hpp"
 #include "robotperf/tracing/tracepoints.hpp"
 
@@ -64,6 +65,9 @@ constexpr uint32_t kInitialPayloadSize = 4096;
 // Shared memory per participant: room for the fragments of a couple of 1080p
 // RGB images (6 MiB each) in flight. tmpfs pages are only used once touched.
 constexpr uint32_t kSharedMemorySegmentSize = 16u << 20;
+
+// As the Cyclone DDS transport asks for its sockets.
+constexpr uint32_t kUdpReceiveBufferSize = 8u << 20;
 
 // A message type as Fast DDS sees it: keyless, plain CDR, no TypeObject.
 class MessageDataType final : public dds::TopicDataType {
@@ -464,33 +468,6 @@ class FastddsSubscription final : public SubscriptionHandle {
   dds::DataReader* reader_ = nullptr;
 };
 
-class FastddsTransport final : public Transport {
- public:
-  explicit FastddsTransport(const TransportOptions& options)
-      : participant_(std::make_shared<Participant>(options)) {}
-
-  std::string name() const override { return "fastdds"; }
-
-  std::unique_ptr<PublisherHandle> create_publisher(const std::string& topic,
-                                                    const msgs::TypeSupport& type,
-                                                    const QoS& qos) override {
-    return std::make_unique<FastddsPublisher>(participant_, topic, type, qos);
-  }
-
-  std::unique_ptr<SubscriptionHandle> create_subscription(const std::string& topic,
-                                                          const msgs::TypeSupport& type,
-                                                          const QoS& qos,
-                                                          std::function<void()> on_ready) override {
-    return std::make_unique<FastddsSubscription>(participant_, topic, type, qos,
-                                                 std::move(on_ready));
-  }
-  std::vector<PeerParticipant> peers() const override { return participant_->peers(); }
-  ParticipantId participant() const override { return participant_->id(); }
-
- private:
-  std::shared_ptr<Participant> participant_;
-};
-
 }  // namespace
 
 dds::DomainParticipantQos fastdds_participant_qos() {
@@ -506,15 +483,20 @@ dds::DomainParticipantQos fastdds_participant_qos() {
     // wait for reliable repair (tens of milliseconds, and losses under KEEP_LAST).
     auto shm = std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>();
     shm->segment_size(kSharedMemorySegmentSize);
+    // And UDP sockets that can hold a large sample's burst of fragments (up to net.core.rmem_max):
+    // other vendors' writers (Cyclone DDS) send one without pause, and the system's default buffer
+    // (208 KiB) drops most of a VGA colour image.
+    auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
+    udp->receiveBufferSize = kUdpReceiveBufferSize;
     qos.transport().use_builtin_transports = false;
-    qos.transport().user_transports = {
-        shm, std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>()};
+    qos.transport().user_transports = {shm, udp};
   }
   return qos;
 }
 
 std::unique_ptr<Transport> make_fastdds_transport(const TransportOptions& options) {
-  return std::make_unique<FastddsTransport>(options);
+  return std::make_unique<ParticipantTransport<Participant, FastddsPublisher, FastddsSubscription>>(
+      "fastdds", options);
 }
 
 }  // namespace robotperf::rmw

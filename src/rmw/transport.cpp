@@ -1,6 +1,9 @@
 #include "robotperf/rmw/transport.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <cctype>
 #include <chrono>
@@ -9,6 +12,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "cyclonedds_transport.hpp"
 #include "fastdds_transport.hpp"
 #include "intra_transport.hpp"
 
@@ -24,7 +28,9 @@ std::unique_ptr<Transport> make_transport(const std::string& name,
                                           const TransportOptions& options) {
   if (name == "intra") return make_intra_transport();
   if (name == "fastdds") return make_fastdds_transport(options);
-  throw std::invalid_argument("unknown transport '" + name + "' (choose intra or fastdds)");
+  if (name == "cyclonedds") return make_cyclonedds_transport(options);
+  throw std::invalid_argument("unknown transport '" + name +
+                              "' (choose intra, fastdds or cyclonedds)");
 }
 
 std::string to_hex(const ParticipantId& id) {
@@ -50,6 +56,40 @@ int domain_id_from_environment() {
   return static_cast<int>(id);
 }
 
+namespace {
+
+// A lock on /tmp/robotperf-domain-<N>.lock, held while the descriptor is open; -1 when another
+// process holds it (or the file cannot be made). The kernel drops it when the process ends.
+int lock_domain(int domain) {
+  const std::string path = "/tmp/robotperf-domain-" + std::to_string(domain) + ".lock";
+  // Read-only: any user may lock a file another user created.
+  const int fd = open(path.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC, 0666);
+  if (fd < 0) return -1;
+  if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+}  // namespace
+
+bool reserve_domain(int domain) {
+  return lock_domain(domain) >= 0;
+}
+
+int reserved_domain() {
+  static const int domain = [] {
+    const int start = static_cast<int>(getpid() % 232);
+    for (int i = 0; i < 232; ++i) {
+      const int candidate = 1 + (start + i) % 232;
+      if (reserve_domain(candidate)) return candidate;
+    }
+    throw TransportError("no DDS domain left to reserve: 232 robotperf processes hold one each");
+  }();
+  return domain;
+}
+
 int find_quiet_domain(const std::string& transport, double listen_s) {
   if (transport == "intra") return 0;
   constexpr int kTries = 16;
@@ -57,6 +97,8 @@ int find_quiet_domain(const std::string& transport, double listen_s) {
   std::uniform_int_distribution<int> domain(1, 232);
   for (int t = 0; t < kTries; ++t) {
     const int candidate = domain(entropy);
+    const int lock = lock_domain(candidate);
+    if (lock < 0) continue;  // another robotperf process is on it, or looking at it
     TransportOptions options;
     options.domain_id = candidate;
     const auto probe = make_transport(transport, options);
@@ -68,7 +110,8 @@ int find_quiet_domain(const std::string& transport, double listen_s) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       quiet = probe->peers().empty();
     }
-    if (quiet) return candidate;
+    if (quiet) return candidate;  // the lock stays held until this process ends
+    close(lock);
   }
   throw TransportError("--domain auto: " + std::to_string(kTries) +
                        " domains tried, all have participants; give a --domain");

@@ -12,6 +12,7 @@
 #include <tuple>
 
 #include "../command_line.hpp"
+#include "robotperf/rmw/transport.hpp"
 
 namespace {
 
@@ -45,7 +46,7 @@ class Cli : public ::testing::Test {
     std::ifstream in(path);
     return nlohmann::json::parse(in);
   }
-  std::string domain() const { return std::to_string(150 + getpid() % 80); }
+  std::string domain() const { return std::to_string(robotperf::rmw::reserved_domain()); }
 
   fs::path out_;
 };
@@ -103,15 +104,17 @@ TEST_F(Cli, RunA1OnFastDds) {
   expect_clean_a1_result(result_json(), "fastdds");
 }
 
-TEST_F(Cli, RunA1OneProcessPerNode) {
-  // At 5 Hz even a loaded 2-core machine moves 1.2 MB frames between processes in time.
-  const Outcome o = robotperf_cli(
-      "run a1 --count 60 --rate 10 --rmw fastdds --processes per-node --cpus 0 "
-      "--domain " +
-      domain() + " --output " + out_.string());
+class CliPerNode : public Cli, public ::testing::WithParamInterface<std::string> {};
+
+TEST_P(CliPerNode, RunA1OneProcessPerNode) {
+  const std::string rmw = GetParam();
+  // At 10 Hz even a loaded 2-core machine moves 1.2 MB frames between processes in time.
+  const Outcome o = robotperf_cli("run a1 --count 60 --rate 10 --rmw " + rmw +
+                                  " --processes per-node --cpus 0 --domain " + domain() +
+                                  " --output " + out_.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   const auto j = result_json();
-  expect_clean_a1_result(j, "fastdds");
+  expect_clean_a1_result(j, rmw);
   EXPECT_EQ(j["configuration"]["processes"], "per-node");
   ASSERT_EQ(j["nodes"].size(), 2u);
   for (const auto& n : j["nodes"]) {
@@ -125,9 +128,19 @@ TEST_F(Cli, RunA1OneProcessPerNode) {
   EXPECT_EQ(j["resources"]["processes"][1]["measured"], true);
   EXPECT_GT(j["resources"]["processes"][1]["cpu_percent"].get<double>(), 0.0);
   EXPECT_EQ(j["configuration"]["scheduling"]["cpus"], "0");
+  const auto& transport = j["software"]["transport"];
+  EXPECT_EQ(transport["rmw"], rmw);
+  EXPECT_NE(
+      transport["settings"].get<std::string>().find(rmw == "fastdds" ? "Fast DDS" : "Cyclone DDS"),
+      std::string::npos)
+      << transport.dump();
+  EXPECT_FALSE(j["software"]["libraries"][rmw].get<std::string>().empty());
 }
 
-// a3 and a4 on both transports: valid, with a functional section that passed.
+INSTANTIATE_TEST_SUITE_P(Dds, CliPerNode, ::testing::Values("fastdds", "cyclonedds"),
+                         [](const auto& info) { return info.param; });
+
+// a3 and a4 on every transport: valid, with a functional section that passed.
 void expect_functional_result(const nlohmann::json& j, const std::string& id,
                               const std::string& rmw, const std::string& evaluator) {
   EXPECT_EQ(j["benchmark"]["id"], id);
@@ -144,13 +157,13 @@ void expect_functional_result(const nlohmann::json& j, const std::string& id,
   }
 }
 
-TEST_F(Cli, RunA3AndA4OnBothTransports) {
+TEST_F(Cli, RunA3AndA4OnEveryTransport) {
   const std::pair<const char*, const char*> benchmarks[] = {{"a3", "stereo_disparity"},
                                                             {"a4", "depth_point_cloud"}};
   for (const auto& [id, evaluator] : benchmarks) {
-    for (const std::string rmw : {"intra", "fastdds"}) {
+    for (const std::string rmw : {"intra", "fastdds", "cyclonedds"}) {
       fs::remove_all(out_);
-      // 10 Hz leaves a loaded 2-core machine room for 10 MB point clouds through Fast DDS.
+      // 10 Hz leaves a loaded 2-core machine room for 10 MB point clouds through DDS.
       const Outcome o = robotperf_cli(std::string("run ") + id + " --count 40 --rate 10 --rmw " +
                                       rmw + " --domain " + domain() + " --output " + out_.string());
       ASSERT_EQ(o.exit_code, 0) << id << " " << rmw << "\n" << o.out;

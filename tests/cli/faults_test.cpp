@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "../command_line.hpp"
+#include "robotperf/rmw/transport.hpp"
 
 namespace {
 
@@ -50,7 +51,7 @@ class Faults : public ::testing::Test {
     return "--benchmarks " + (dir_ / "benchmarks").string() +
            (kernel == "util/relay" ? "" : " --plugin " FAULTY_PLUGIN);
   }
-  std::string domain() const { return std::to_string(10 + getpid() % 20); }
+  std::string domain() const { return std::to_string(robotperf::rmw::reserved_domain()); }
 
   nlohmann::json result() {
     for (const auto& e : fs::directory_iterator(dir_ / "results")) {

@@ -11,6 +11,7 @@
 #include "robotperf/harness/run.hpp"
 #include "robotperf/msgs/definitions.hpp"
 #include "robotperf/msgs/serialized_message.hpp"
+#include "robotperf/rmw/transport.hpp"
 #include "test_package.hpp"
 
 namespace robotperf::harness {
@@ -156,7 +157,7 @@ TEST(BagPlayback, A1OnFastddsPublishesRecordedBytesWithRemapping) {
   // A sanitized Debug build on a busy 2-core machine does not rectify and upscale 30 frames a
   // second through Fast DDS: frames would queue and drop, which is not what this test is about.
   o.rate_hz = 15;
-  o.domain_id = 40 + getpid() % 100;
+  o.domain_id = rmw::reserved_domain();
   // Without remapping, the bag has nothing for a1's inputs.
   try {
     run_benchmark(a1(), o);

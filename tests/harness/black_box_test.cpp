@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "robotperf/harness/run.hpp"
+#include "robotperf/rmw/transport.hpp"
 #include "test_package.hpp"
 
 namespace robotperf::harness {
@@ -124,7 +125,7 @@ TEST(BlackBox, FailingNodeEndsTheRunEarlyAndKeepsWhatWasMeasured) {
 TEST(BlackBox, FastDdsInOneProcessLosesNothing) {
   RunOptions o = with_count(40, 100);
   o.rmw = "fastdds";
-  o.domain_id = 100 + getpid() % 100;
+  o.domain_id = rmw::reserved_domain();
   const RunResult r = run_package("fastdds", relay_graph(""), o);
   expect_sane(r);
   EXPECT_EQ(r.matched, 40u);

@@ -13,6 +13,7 @@
 
 #include "robotperf/harness/run.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/rmw/transport.hpp"
 #include "test_package.hpp"
 
 namespace robotperf::harness {
@@ -63,7 +64,7 @@ RunOptions quick(std::size_t count, double rate_hz, const std::string& rmw = "in
   o.rate_hz = rate_hz;
   o.warmup = 2;
   o.rmw = rmw;
-  o.domain_id = 120 + getpid() % 80;
+  o.domain_id = rmw::reserved_domain();
   return o;
 }
 

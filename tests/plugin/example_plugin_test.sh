@@ -2,7 +2,7 @@
 # The example plug-in as a user builds it: install robotperf into a fresh prefix, build
 # examples/plugin against the installed package (find_package(robotperf)), load it with
 # --plugin into the installed robotperf and run its benchmark end to end, functional check
-# included. Usage: example_plugin_test.sh <robotperf build dir> <source dir> <domain>
+# included. Usage: example_plugin_test.sh <robotperf build dir> <source dir> <domain, or auto>
 set -euo pipefail
 build=$1 source=$2 domain=$3
 work=$(mktemp -d "${TMPDIR:-/tmp}/robotperf-example-plugin-XXXXXX")

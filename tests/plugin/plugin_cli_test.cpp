@@ -10,6 +10,7 @@
 #include <string>
 
 #include "../command_line.hpp"
+#include "robotperf/rmw/transport.hpp"
 
 namespace {
 
@@ -54,7 +55,7 @@ class PluginCli : public ::testing::Test {
            "functional:\n  evaluator: test_plugin/scaled\n  truth: {scaled: scaled}\n";
     return dir_ / "benchmarks";
   }
-  std::string domain() const { return std::to_string(30 + getpid() % 30); }
+  std::string domain() const { return std::to_string(robotperf::rmw::reserved_domain()); }
 
   fs::path dir_;
 };

@@ -14,6 +14,7 @@
 
 #include "../command_line.hpp"
 #include "robotperf/harness/run.hpp"
+#include "robotperf/rmw/transport.hpp"
 #include "robotperf/tracing/ctf.hpp"
 #include "robotperf/tracing/session.hpp"
 
@@ -278,15 +279,17 @@ TEST_F(GreyRun, LoopedDatasetHasNoKeyCollisions) {
   EXPECT_TRUE(r.valid) << reasons(r);
 }
 
-TEST_F(GreyRun, PerNodeProcessesAreTracedAsPartOfTheRun) {
+class GreyRunPerNode : public GreyRun, public ::testing::WithParamInterface<std::string> {};
+
+TEST_P(GreyRunPerNode, ProcessesAreTracedAsPartOfTheRun) {
   RunOptions o;
   o.count = 45;
   o.rate_hz = 15;
-  o.rmw = "fastdds";
+  o.rmw = GetParam();
   o.processes = ProcessLayout::kPerNode;
-  o.domain_id = 150 + getpid() % 50;
+  o.domain_id = rmw::reserved_domain();
   o.node_command = {ROBOTPERF_EXECUTABLE, "node"};
-  const RunResult r = run_benchmark(benchmark("a1"), grey(o, "per-node.trace"));
+  const RunResult r = run_benchmark(benchmark("a1"), grey(o, GetParam() + "-per-node.trace"));
   ASSERT_TRUE(r.grey.has_value());
   EXPECT_TRUE(r.valid) << reasons(r);
   ASSERT_TRUE(r.grey->run.has_value());
@@ -295,12 +298,15 @@ TEST_F(GreyRun, PerNodeProcessesAreTracedAsPartOfTheRun) {
   for (const auto& h : r.grey->hops) labels.insert(h.label());
   EXPECT_TRUE(labels.contains("rectify: image_proc/rectify"));
   EXPECT_TRUE(labels.contains("/rectify/image_rect: rectify -> resize"));
-  // Across processes, rmw_publish and rmw_take meet on Fast DDS's source timestamp.
+  // Across processes, rmw_publish and rmw_take meet on DDS's source timestamp.
   bool cross_process_topic = false;
   for (const auto& t : r.grey->topics)
     cross_process_topic |= t.topic == "/rectify/image_rect" && t.latency.count > 0;
   EXPECT_TRUE(cross_process_topic);
 }
+
+INSTANTIATE_TEST_SUITE_P(Dds, GreyRunPerNode, ::testing::Values("fastdds", "cyclonedds"),
+                         [](const auto& info) { return info.param; });
 
 // A plug-in's kernel emits its kernel events through the plug-in API, from its own shared
 // library: the trace shows the kernel hop of every measured message as for a built-in kernel.

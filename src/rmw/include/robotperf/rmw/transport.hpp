@@ -124,7 +124,7 @@ struct TransportOptions {
   std::string user_data;
 };
 
-// "intra" or "fastdds"; throws std::invalid_argument naming the valid choices.
+// "intra", "fastdds" or "cyclonedds"; throws std::invalid_argument naming the valid choices.
 std::unique_ptr<Transport> make_transport(const std::string& name,
                                           const TransportOptions& options = {});
 
@@ -132,9 +132,20 @@ std::unique_ptr<Transport> make_transport(const std::string& name,
 int domain_id_from_environment();
 
 // A DDS domain on which `transport` discovers no other participant within `listen_s`: domains
-// 1 to 232 tried in a random order (0, ROS 2's default, is left to robots). Transports without
-// discovery (intra) get 0. Throws TransportError when none of the tries is quiet.
+// 1 to 232 tried in a random order (0, ROS 2's default, is left to robots), each reserved first
+// (see reserve_domain), so that robotperf processes looking at the same time never pick the same
+// one; the reservation lasts until this process ends. Transports without discovery (intra) get 0.
+// Throws TransportError when none of the tries is quiet.
 int find_quiet_domain(const std::string& transport, double listen_s = 3.5);
+
+// Reserves `domain` among the robotperf processes of this machine (a lock on a file in /tmp) for
+// the rest of this process; false when another process holds it. Tests and benchmarks take their
+// domain this way, so that no two of them, running at once, share one.
+bool reserve_domain(int domain);
+// The domain this process reserved for its tests or benchmarks: the first call reserves one of
+// 1 to 232 (starting from a place given by the process id), later calls return the same.
+// Throws TransportError when all are held.
+int reserved_domain();
 
 // Monotonic time (CLOCK_MONOTONIC) in nanoseconds: the one clock of DESIGN.md §3.2.
 int64_t steady_now_ns();

@@ -1,7 +1,7 @@
 // The other process of the cross-process tests: republishes every Image it
 // receives on <in_topic> unchanged on <out_topic>, until its stdin closes.
 //
-// usage: fastdds_echo_peer <domain_id> <in_topic> <out_topic>
+// usage: echo_peer <transport> <domain_id> <in_topic> <out_topic>
 #include <unistd.h>
 
 #include <atomic>
@@ -12,9 +12,9 @@
 #include <string>
 #include <thread>
 
-#include "fastdds_transport.hpp"
 #include "inbox.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/rmw/transport.hpp"
 
 namespace rmw = robotperf::rmw;
 namespace msgs = robotperf::msgs;
@@ -30,8 +30,9 @@ void wait_for_stdin_eof() {
   }
 }
 
-int run(int domain_id, const std::string& in_topic, const std::string& out_topic) {
-  auto transport = rmw::make_fastdds_transport({domain_id});
+int run(const std::string& transport_name, int domain_id, const std::string& in_topic,
+        const std::string& out_topic) {
+  auto transport = rmw::make_transport(transport_name, {domain_id});
   rmw::testing::Inbox inbox;
   const auto& type = msgs::type_support<msgs::Image>();
   auto publisher = transport->create_publisher(out_topic, type, rmw::QoS::ros_default());
@@ -48,7 +49,7 @@ int run(int domain_id, const std::string& in_topic, const std::string& out_topic
     if (!msg) continue;
     // A volatile sample written before the parent's reader matched would be lost.
     if (!rmw::testing::wait_until([&] { return publisher->matched_subscriptions() > 0; })) {
-      std::fprintf(stderr, "fastdds_echo_peer: nobody subscribes to %s\n", out_topic.c_str());
+      std::fprintf(stderr, "echo_peer: nobody subscribes to %s\n", out_topic.c_str());
       return 1;
     }
     publisher->publish(msg);
@@ -59,14 +60,14 @@ int run(int domain_id, const std::string& in_topic, const std::string& out_topic
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 4) {
-    std::fprintf(stderr, "usage: %s <domain_id> <in_topic> <out_topic>\n", argv[0]);
+  if (argc != 5) {
+    std::fprintf(stderr, "usage: %s <transport> <domain_id> <in_topic> <out_topic>\n", argv[0]);
     return 2;
   }
   try {
-    return run(std::atoi(argv[1]), argv[2], argv[3]);
+    return run(argv[1], std::atoi(argv[2]), argv[3], argv[4]);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "fastdds_echo_peer: %s\n", e.what());
+    std::fprintf(stderr, "echo_peer: %s\n", e.what());
     return 1;
   }
 }

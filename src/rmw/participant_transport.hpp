@@ -1,0 +1,45 @@
+// Private to the rmw library: a DDS transport is a participant shared by its endpoints. This is
+// the Transport around one, whatever the vendor: `Participant` has peers() and id(); `Publisher`
+// and `Subscription` are constructed from the participant and the endpoint's arguments, and keep
+// the participant alive, so that handles may outlive their Transport.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "robotperf/rmw/transport.hpp"
+
+namespace robotperf::rmw {
+
+template <class Participant, class Publisher, class Subscription>
+class ParticipantTransport final : public Transport {
+ public:
+  ParticipantTransport(std::string name, const TransportOptions& options)
+      : name_(std::move(name)), participant_(std::make_shared<Participant>(options)) {}
+
+  std::string name() const override { return name_; }
+
+  std::unique_ptr<PublisherHandle> create_publisher(const std::string& topic,
+                                                    const msgs::TypeSupport& type,
+                                                    const QoS& qos) override {
+    return std::make_unique<Publisher>(participant_, topic, type, qos);
+  }
+
+  std::unique_ptr<SubscriptionHandle> create_subscription(const std::string& topic,
+                                                          const msgs::TypeSupport& type,
+                                                          const QoS& qos,
+                                                          std::function<void()> on_ready) override {
+    return std::make_unique<Subscription>(participant_, topic, type, qos, std::move(on_ready));
+  }
+  std::vector<PeerParticipant> peers() const override { return participant_->peers(); }
+  ParticipantId participant() const override { return participant_->id(); }
+
+ private:
+  std::string name_;
+  std::shared_ptr<Participant> participant_;
+};
+
+}  // namespace robotperf::rmw

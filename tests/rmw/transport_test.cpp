@@ -1,0 +1,267 @@
+// Every DDS transport (fastdds, cyclonedds) against the same expectations: round trips in one
+// process and across two, large messages, QoS, type clashes, discovery, and handle lifetimes.
+#include "robotperf/rmw/transport.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "robotperf/msgs/sensor_msgs.hpp"
+#include "transport_test_util.hpp"
+
+namespace robotperf::rmw {
+namespace {
+
+using msgs::CameraInfo;
+using msgs::Image;
+using namespace testing;
+
+class DdsTransport : public ::testing::TestWithParam<std::string> {
+ protected:
+  std::unique_ptr<Transport> make(std::string user_data = {}) {
+    return make_transport(GetParam(), test_options(std::move(user_data)));
+  }
+};
+
+TEST_P(DdsTransport, IsNamedAsChosen) {
+  EXPECT_EQ(make()->name(), GetParam());
+}
+
+TEST_P(DdsTransport, ImageAndCameraInfoRoundTripInOneProcess) {
+  auto transport = make();
+  Pair<Image> images(*transport, test_topic("image"), QoS::ros_default());
+  Pair<CameraInfo> infos(*transport, test_topic("camera_info"), QoS::ros_default());
+  ASSERT_TRUE(images.matched());
+  ASSERT_TRUE(infos.matched());
+
+  const Image image = make_image(64, 48, 7);
+  const CameraInfo camera_info = make_camera_info();
+  images.pub->publish(share(image));
+  infos.pub->publish(share(camera_info));
+
+  MessageInfo image_info;
+  MessagePtr got_image = images.inbox.take(*images.sub, &image_info);
+  ASSERT_NE(got_image, nullptr);
+  EXPECT_EQ(as<Image>(got_image), image);
+  MessagePtr got_info = infos.inbox.take(*infos.sub);
+  ASSERT_NE(got_info, nullptr);
+  EXPECT_EQ(as<CameraInfo>(got_info), camera_info);
+
+  // DDS stamps samples with the system clock, so compare with it, not steady_now_ns().
+  const int64_t wall_now_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                  std::chrono::system_clock::now().time_since_epoch())
+                                  .count();
+  EXPECT_GT(image_info.source_timestamp_ns, wall_now_ns - 60'000'000'000);
+  EXPECT_LE(image_info.source_timestamp_ns, image_info.reception_timestamp_ns);
+  EXPECT_LE(image_info.reception_timestamp_ns, wall_now_ns);
+  EXPECT_FALSE(image_info.from_intra_process);
+
+  EXPECT_EQ(images.sub->take(nullptr), nullptr) << "exactly one message was published";
+}
+
+TEST_P(DdsTransport, FourMebibyteImageInOneProcess) {
+  auto transport = make();
+  Pair<Image> images(*transport, test_topic("big_image"), QoS::ros_default());
+  ASSERT_TRUE(images.matched());
+  for (uint8_t seed = 0; seed < 3; ++seed) {
+    const Image image = make_image(2048, 2048, seed);
+    ASSERT_EQ(image.data.size(), 4u << 20);
+    images.pub->publish(share(image));
+    MessagePtr got = images.inbox.take(*images.sub);
+    ASSERT_NE(got, nullptr) << "message " << int{seed};
+    EXPECT_TRUE(as<Image>(got) == image) << "message " << int{seed} << " differs";
+  }
+}
+
+TEST_P(DdsTransport, AcceptsEveryQosCombination) {
+  auto transport = make();
+  const QoS profiles[] = {
+      QoS::ros_default(),
+      QoS::sensor_data(),
+      QoS{History::kKeepLast, 1, Reliability::kReliable, Durability::kTransientLocal},
+      QoS{History::kKeepAll, 0, Reliability::kReliable, Durability::kVolatile},
+      QoS{History::kKeepAll, 0, Reliability::kBestEffort, Durability::kVolatile},
+      QoS{History::kKeepLast, 0, Reliability::kBestEffort, Durability::kVolatile},
+  };
+  int index = 0;
+  for (const QoS& qos : profiles) {
+    SCOPED_TRACE("QoS #" + std::to_string(index));
+    Pair<Image> images(*transport, test_topic("qos" + std::to_string(index++)), qos);
+    ASSERT_TRUE(images.matched());
+    const Image image = make_image(320, 240, static_cast<uint8_t>(index));
+    images.pub->publish(share(image));
+    MessagePtr got = images.inbox.take(*images.sub);
+    ASSERT_NE(got, nullptr);
+    EXPECT_EQ(as<Image>(got), image);
+  }
+}
+
+TEST_P(DdsTransport, TransientLocalDeliversToLateSubscriber) {
+  auto transport = make();
+  const QoS latched{History::kKeepLast, 1, Reliability::kReliable, Durability::kTransientLocal};
+  const std::string topic = test_topic("latched");
+  auto pub = transport->create_publisher(topic, msgs::type_support<CameraInfo>(), latched);
+  CameraInfo old_info = make_camera_info();
+  old_info.width = 1;
+  pub->publish(share(old_info));
+  const CameraInfo last_info = make_camera_info();
+  pub->publish(share(last_info));
+
+  Inbox inbox;
+  auto sub = transport->create_subscription(topic, msgs::type_support<CameraInfo>(), latched,
+                                            inbox.on_ready());
+  MessagePtr got = inbox.take(*sub);
+  ASSERT_NE(got, nullptr);
+  EXPECT_EQ(as<CameraInfo>(got), last_info) << "depth 1 keeps only the last message";
+}
+
+TEST_P(DdsTransport, SecondTypeOnATopicIsATransportError) {
+  auto transport = make();
+  const std::string topic = test_topic("clash");
+  auto pub = transport->create_publisher(topic, msgs::type_support<Image>(), QoS{});
+  // The same type again, on this and on another topic, is fine.
+  auto pub2 = transport->create_publisher(topic, msgs::type_support<Image>(), QoS{});
+  Inbox inbox;
+  auto sub = transport->create_subscription(test_topic("other"), msgs::type_support<Image>(), QoS{},
+                                            inbox.on_ready());
+  try {
+    transport->create_subscription(topic, msgs::type_support<CameraInfo>(), QoS{},
+                                   inbox.on_ready());
+    FAIL() << "expected a TransportError";
+  } catch (const TransportError& e) {
+    EXPECT_NE(std::string(e.what()).find("sensor_msgs::msg::dds_::Image_"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(
+      transport->create_publisher(topic, msgs::type_support<CameraInfo>(), QoS::sensor_data()),
+      TransportError);
+}
+
+TEST_P(DdsTransport, InvalidTopicNameIsATransportError) {
+  auto transport = make();
+  EXPECT_THROW(transport->create_publisher("no_slash", msgs::type_support<Image>(), QoS{}),
+               TransportError);
+  EXPECT_THROW(
+      transport->create_subscription("/bad//name", msgs::type_support<Image>(), QoS{}, [] {}),
+      TransportError);
+}
+
+TEST_P(DdsTransport, CountsMatchedEndpoints) {
+  auto transport = make();
+  auto other_transport = make();
+  const std::string topic = test_topic("matched");
+  const auto& type = msgs::type_support<Image>();
+  auto pub = transport->create_publisher(topic, type, QoS{});
+  EXPECT_EQ(pub->matched_subscriptions(), 0u);
+
+  Inbox inbox;
+  auto local_sub = transport->create_subscription(topic, type, QoS{}, inbox.on_ready());
+  auto remote_sub = other_transport->create_subscription(topic, type, QoS{}, inbox.on_ready());
+  EXPECT_TRUE(wait_until([&] { return pub->matched_subscriptions() == 2; }))
+      << pub->matched_subscriptions();
+  EXPECT_TRUE(wait_until([&] { return remote_sub->matched_publishers() == 1; }));
+
+  auto remote_pub = other_transport->create_publisher(topic, type, QoS{});
+  EXPECT_TRUE(wait_until([&] { return local_sub->matched_publishers() == 2; }));
+
+  remote_sub.reset();
+  EXPECT_TRUE(wait_until([&] { return pub->matched_subscriptions() == 1; }))
+      << pub->matched_subscriptions();
+  remote_pub.reset();
+  EXPECT_TRUE(wait_until([&] { return local_sub->matched_publishers() == 1; }));
+}
+
+// What robotperf tells runs apart by: the other participants, with their USER_DATA and topics,
+// and the participant each sample came from.
+TEST_P(DdsTransport, DiscoversPeersAndTheSenderOfEachSample) {
+  auto transport = make("robotperf_run=aaaa;");
+  auto other = make("robotperf_run=bbbb;");
+  const std::string topic = test_topic("peers");
+  const auto& type = msgs::type_support<Image>();
+  Inbox inbox;
+  auto sub = transport->create_subscription(topic, type, QoS{}, inbox.on_ready());
+  auto pub = other->create_publisher(topic, type, QoS{});
+  ASSERT_TRUE(wait_until([&] { return pub->matched_subscriptions() == 1; }));
+  std::vector<PeerParticipant> peers;
+  ASSERT_TRUE(wait_until([&] {
+    peers = transport->peers();
+    return peers.size() == 1 && peers[0].topics.contains(topic);
+  })) << peers.size();
+  EXPECT_EQ(peers[0].user_data, "robotperf_run=bbbb;");
+  EXPECT_EQ(peers[0].name, "robotperf");
+  EXPECT_EQ(to_hex(peers[0].id).size(), 24u);
+  // Fast DDS tells where a participant runs (an IP address, or this host's shared memory);
+  // Cyclone DDS's discovery data does not.
+  if (GetParam() == "fastdds") {
+    EXPECT_FALSE(peers[0].addresses.empty());
+  }
+
+  pub->publish(std::make_shared<Image>(make_image(4, 2, 1)));
+  MessageInfo info;
+  ASSERT_NE(inbox.take(*sub, &info), nullptr);
+  EXPECT_EQ(info.sender, peers[0].id);
+}
+
+// A newcomer sees a participant that was already there within the time --domain auto listens
+// (usually at once: the existing one answers the newcomer's first announcements; at the latest
+// at its next periodic announcement, every 3 s by default).
+TEST_P(DdsTransport, ANewcomerDiscoversAnExistingParticipantWhileDomainAutoListens) {
+  auto existing = make("robotperf_run=cccc;");
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // its first announcements are over
+  const auto start = std::chrono::steady_clock::now();
+  auto newcomer = make();
+  ASSERT_TRUE(wait_until([&] { return !newcomer->peers().empty(); }));
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::milliseconds(3500));
+}
+
+TEST_P(DdsTransport, HandlesMayOutliveTheirTransport) {
+  auto transport = make();
+  Pair<Image> images(*transport, test_topic("outlive"), QoS{});
+  transport.reset();
+  ASSERT_TRUE(images.matched());
+  const Image image = make_image(8, 8, 1);
+  images.pub->publish(share(image));
+  MessagePtr got = images.inbox.take(*images.sub);
+  ASSERT_NE(got, nullptr);
+  EXPECT_EQ(as<Image>(got), image);
+}
+
+TEST_P(DdsTransport, RoundTripAcrossProcesses) {
+  const int domain = reserved_domain();
+  const std::string ping = test_topic("ping");
+  const std::string pong = test_topic("pong");
+  auto transport = make_transport(GetParam(), {domain});
+  auto pub = transport->create_publisher(ping, msgs::type_support<Image>(), QoS{});
+  Inbox inbox;
+  auto sub =
+      transport->create_subscription(pong, msgs::type_support<Image>(), QoS{}, inbox.on_ready());
+  EchoPeer peer(GetParam(), domain, ping, pong);
+  ASSERT_TRUE(wait_until([&] {
+    return pub->matched_subscriptions() == 1 && sub->matched_publishers() == 1;
+  })) << "the peer process was not discovered";
+
+  // Small, one fragment, and 4 MiB (many fragments), twice each.
+  const std::pair<uint32_t, uint32_t> shapes[] = {{16, 2}, {2048, 2048}, {640, 3}, {2048, 2048}};
+  uint8_t seed = 0;
+  for (const auto& [width, height] : shapes) {
+    const Image image = make_image(width, height, ++seed);
+    pub->publish(share(image));
+    MessageInfo info;
+    MessagePtr echo = inbox.take(*sub, &info);
+    ASSERT_NE(echo, nullptr) << width << "x" << height << " did not come back";
+    EXPECT_TRUE(as<Image>(echo) == image) << width << "x" << height << " came back changed";
+    EXPECT_FALSE(info.from_intra_process);
+  }
+  EXPECT_EQ(peer.finish(), 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Dds, DdsTransport, ::testing::Values("fastdds", "cyclonedds"),
+                         [](const auto& info) { return info.param; });
+
+}  // namespace
+}  // namespace robotperf::rmw
