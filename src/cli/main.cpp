@@ -35,6 +35,7 @@
 #include "robotperf/report/results.hpp"
 #include "robotperf/report/run_store.hpp"
 #include "robotperf/report/series.hpp"
+#include "robotperf/report/sweep.hpp"
 #include "robotperf/sysinfo/machine.hpp"
 #include "robotperf/tracing/analysis.hpp"
 #include "robotperf/tracing/ctf.hpp"
@@ -259,8 +260,11 @@ struct RunArgs {
   std::size_t repeat = 1;
   double repeat_pause = 0;
   std::optional<std::size_t> count, warmup;
-  std::string rmw = "intra";
-  std::string processes = "single";
+  // Default: the benchmark's process layout; fastdds for per-node, else intra.
+  std::optional<std::string> rmw, processes;
+  // --workload KEY=VALUE (over benchmark.yaml's workload), --sweep KEY=V1,V2,...
+  std::vector<std::string> workload;
+  std::optional<std::string> sweep;
   std::string output = "results";
   bool csv = false;
   bool quiet = false;
@@ -497,6 +501,34 @@ int run_series(const harness::BenchmarkSpec& spec, const RunArgs& a, harness::Ru
   return code;
 }
 
+// --sweep KEY=V1,V2,...: one run per value of a workload parameter, each written as usual; then
+// the values side by side (report::sweep_table), printed and written beside the first run.
+int run_sweep(harness::BenchmarkSpec spec, const RunArgs& a, const harness::RunOptions& o) {
+  const auto [parameter, values] = report::parse_sweep(*a.sweep);
+  const InterruptHandling interrupts;
+  report::Sweep sweep(spec.id, parameter);
+  int code = kExitOk;
+  for (const std::string& value : values) {
+    if (g_interrupted.load() != 0) break;
+    if (!a.quiet)
+      std::fprintf(stderr, "[%s] %s = %s\n", spec.id.c_str(), parameter.c_str(), value.c_str());
+    spec.workload[parameter] = value;
+    harness::RunResult result = measure(spec, o);
+    const WrittenRun written = write_run(spec, a, result);
+    sweep.add(value, result, written.json);
+    if (written.code != kExitOk && code == kExitOk) code = written.code;
+    if (result.interrupted || written.code == kExitError) break;
+  }
+  std::cout << "\n" << report::sweep_table(sweep);
+  if (!sweep.rows().empty() && !sweep.rows().front().file.empty()) {
+    const fs::path path = fs::path(sweep.rows().front().file).replace_extension(".sweep.json");
+    report::write_file_atomically(path, json_text(report::sweep_json(sweep), 2) + "\n");
+    std::cout << "sweep: " << path.string() << "\n";
+  }
+  if (g_interrupted.load() != 0 && code == kExitOk) code = 128 + g_interrupted.load();
+  return code;
+}
+
 // --find-peak's bounds from the command line; the step length is --duration (default 5 s), the
 // start --rate-range's low end, else --rate, else the benchmark's rate.
 harness::PeakSearchOptions peak_search_options(const RunArgs& a) {
@@ -523,7 +555,13 @@ harness::PeakSearchOptions peak_search_options(const RunArgs& a) {
 }
 
 int run(const Roots& roots, const RunArgs& a) {
-  const auto spec = harness::find_benchmark(roots, a.id);
+  auto spec = harness::find_benchmark(roots, a.id);
+  for (const std::string& assignment : a.workload) {
+    const auto equals = assignment.find('=');
+    if (equals == std::string::npos || equals == 0)
+      throw std::invalid_argument("--workload " + assignment + ": expected KEY=VALUE");
+    spec.workload[assignment.substr(0, equals)] = assignment.substr(equals + 1);
+  }
   harness::RunOptions o;
   if (a.dataset) o.bag = bag_selection(a);
   if (a.rate_scale != 1.0 && a.rate != "bag")
@@ -543,17 +581,18 @@ int run(const Roots& roots, const RunArgs& a) {
   o.duration_s = a.duration;
   o.warmup = a.warmup;
   o.drain_s = a.drain;
-  o.rmw = a.rmw;
+  const std::string processes = a.processes.value_or(spec.processes);
+  o.rmw = a.rmw.value_or(processes == "per-node" ? "fastdds" : "intra");
   if (!a.domain) {
     o.domain_id = rmw::domain_id_from_environment();
   } else if (*a.domain == "auto") {
-    o.domain_id = rmw::find_quiet_domain(a.rmw);
+    o.domain_id = rmw::find_quiet_domain(o.rmw);
     if (!a.quiet) std::fprintf(stderr, "robotperf: --domain auto: domain %d\n", o.domain_id);
   } else {
     o.domain_id = std::stoi(*a.domain);
   }
-  o.processes = a.processes == "per-node" ? harness::ProcessLayout::kPerNode
-                                          : harness::ProcessLayout::kSingle;
+  o.processes =
+      processes == "per-node" ? harness::ProcessLayout::kPerNode : harness::ProcessLayout::kSingle;
   // Every child loads the plug-ins this process was given (the package's own `plugins:` it
   // loads with the package, ROBOTPERF_PLUGIN_PATH it inherits).
   o.node_command = {self_executable().string()};
@@ -603,6 +642,10 @@ int run(const Roots& roots, const RunArgs& a) {
     const int code = write_run(spec, a, *found.peak).code;
     // An interrupted search still writes the peak it had found; the exit status says it stopped.
     return g_interrupted.load() != 0 ? 128 + g_interrupted.load() : code;
+  }
+  if (a.sweep) {
+    if (a.repeat > 1) throw std::invalid_argument("--sweep runs once per value: not with --repeat");
+    return run_sweep(spec, a, o);
   }
   if (a.repeat > 1) return run_series(spec, a, o);
   harness::RunResult result = measure(spec, o);
@@ -900,6 +943,14 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(std::size_t{1}, std::size_t{10000}));
   run_cmd->add_option("--repeat-pause", ra.repeat_pause, "with --repeat: seconds between runs")
       ->check(CLI::Range(0.0, 3600.0));
+  run_cmd->add_option("--workload", ra.workload,
+                      "KEY=VALUE: a workload parameter of the benchmark's dataset, over "
+                      "benchmark.yaml's (repeatable; `list datasets` names them)");
+  auto* sweep_opt = run_cmd->add_option(
+      "--sweep", ra.sweep,
+      "KEY=V1,V2,...: one run per value of a workload parameter, then the values side by side "
+      "(e.g. payload_bytes=64,1024,65536,1048576,4194304 for n1 and n2)");
+  find_peak_flag->excludes(sweep_opt);
   run_cmd->add_option("--arrival", ra.arrival,
                       "when messages are sent at the rate: fixed (default), poisson (random "
                       "intervals of mean 1/rate) or burst:N (N back to back every N/rate)");
@@ -914,9 +965,14 @@ int main(int argc, char** argv) {
       ->add_option("--warmup", ra.warmup, "first messages not counted (default: the benchmark's)")
       ->check(CLI::NonNegativeNumber);
   run_cmd->add_option("--drain", ra.drain, "seconds to wait for outputs after the last send");
-  run_cmd->add_option("--rmw", ra.rmw, "transport: intra, fastdds or cyclonedds")
+  run_cmd
+      ->add_option("--rmw", ra.rmw,
+                   "transport: intra, fastdds or cyclonedds (default: intra; fastdds for a "
+                   "per-node layout)")
       ->check(CLI::IsMember({"intra", "fastdds", "cyclonedds"}));
-  run_cmd->add_option("--processes", ra.processes, "single (all nodes in one process) or per-node")
+  run_cmd
+      ->add_option("--processes", ra.processes,
+                   "single (all nodes in one process) or per-node (default: the benchmark's)")
       ->check(CLI::IsMember({"single", "per-node"}));
   run_cmd
       ->add_option("--domain", ra.domain,

@@ -121,7 +121,7 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   const YAML::Node& root = file.root();
   file.allow_keys(
       root, {"plugins", "dataset", "rate_hz", "count", "warmup", "drain_s", "executor_threads",
-             "validity", "inputs", "output", "nodes", "functional"});
+             "processes", "validity", "inputs", "output", "nodes", "functional"});
   // Plug-ins first: they may register the kernels, dataset and evaluator named below.
   if (const YAML::Node plugins = root["plugins"]; plugins.IsDefined()) {
     if (!plugins.IsSequence()) file.fail(plugins, "'plugins' must be a list of files");
@@ -142,6 +142,9 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   spec.count = file.get<std::size_t>(root, "count", 0);
   spec.warmup = file.get<std::size_t>(root, "warmup", 0);
   spec.drain_s = file.get<double>(root, "drain_s", 2.0);
+  spec.processes = file.get<std::string>(root, "processes", "single");
+  if (spec.processes != "single" && spec.processes != "per-node")
+    file.fail(root["processes"], "processes must be 'single' or 'per-node'");
   if (!(spec.drain_s >= 0)) file.fail(root["drain_s"], "drain_s must be >= 0");
   spec.executor_threads = file.get<std::size_t>(root, "executor_threads", 1);
   // More threads than that only contend: the graph's nodes run one callback at a time each.

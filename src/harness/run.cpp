@@ -279,7 +279,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   r.output_topic = spec.output.topic;
   if (options.processes == ProcessLayout::kPerNode && options.rmw == "intra") {
     throw std::invalid_argument(
-        "--processes per-node needs an inter-process transport (--rmw fastdds)");
+        "--processes per-node needs an inter-process transport (--rmw fastdds or cyclonedds)");
   }
 
   // Everything is loaded before timing starts (DESIGN.md §3.4).
@@ -427,6 +427,8 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   std::vector<metrics::ResourceMonitor::Process> graph_processes;
   if (children) {
     for (const auto& [pid, name] : children->processes()) graph_processes.push_back({pid, name});
+    // The Playback and Monitor are part of what is measured, not interference.
+    graph_processes.push_back({getpid(), "robotperf (Playback, Monitor)"});
   } else {
     graph_processes.push_back({getpid(), "robotperf (graph, Playback, Monitor)"});
   }

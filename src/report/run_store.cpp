@@ -252,9 +252,10 @@ RunScan scan_results(const fs::path& dir) {
   RunScan scan;
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(dir)) {
-    // A --repeat series summary sits beside its runs: it is not a run.
-    if (e.is_regular_file() && e.path().extension() == ".json" &&
-        !e.path().filename().string().ends_with(".series.json"))
+    // A --repeat series or --sweep summary sits beside its runs: it is not a run.
+    const std::string name = e.path().filename().string();
+    if (e.is_regular_file() && e.path().extension() == ".json" && !name.ends_with(".series.json") &&
+        !name.ends_with(".sweep.json"))
       files.push_back(e.path());
   }
   std::ranges::sort(files);

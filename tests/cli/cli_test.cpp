@@ -122,8 +122,10 @@ TEST_P(CliPerNode, RunA1OneProcessPerNode) {
     EXPECT_GT(n["pid"].get<int>(), 0);
   }
   // Resources are those of the node processes, by node name.
-  ASSERT_EQ(j["resources"]["processes"].size(), 2u);
+  // ... and of robotperf's own, with the Playback and Monitor (not counted as interference).
+  ASSERT_EQ(j["resources"]["processes"].size(), 3u);
   EXPECT_EQ(j["resources"]["processes"][0]["label"], "rectify");
+  EXPECT_EQ(j["resources"]["processes"][2]["label"], "robotperf (Playback, Monitor)");
   EXPECT_EQ(j["resources"]["processes"][0]["pid"], j["nodes"][0]["pid"]);
   EXPECT_EQ(j["resources"]["processes"][1]["measured"], true);
   EXPECT_GT(j["resources"]["processes"][1]["cpu_percent"].get<double>(), 0.0);
@@ -139,6 +141,59 @@ TEST_P(CliPerNode, RunA1OneProcessPerNode) {
 
 INSTANTIATE_TEST_SUITE_P(Dds, CliPerNode, ::testing::Values("fastdds", "cyclonedds"),
                          [](const auto& info) { return info.param; });
+
+// n1 over two payload sizes in one command: a run each, both valid with every sampled echo
+// identical, and the sweep summary beside them.
+TEST_F(Cli, N1SweepsPayloadSizes) {
+  const Outcome o = robotperf_cli(
+      "run n1 --count 130 --rate 100 --quiet --sweep payload_bytes=64,1048576 --output " +
+      out_.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("sweep n1 over payload_bytes: 2 runs"), std::string::npos) << o.out;
+  std::vector<fs::path> runs, sweeps;
+  for (const auto& e : fs::directory_iterator(out_)) {
+    const std::string name = e.path().filename().string();
+    if (name.ends_with(".sweep.json"))
+      sweeps.push_back(e.path());
+    else if (name.ends_with(".json"))
+      runs.push_back(e.path());
+  }
+  ASSERT_EQ(runs.size(), 2u);
+  ASSERT_EQ(sweeps.size(), 1u);
+  const auto sweep = nlohmann::json::parse(std::ifstream(sweeps[0]));
+  EXPECT_EQ(sweep["parameter"], "payload_bytes");
+  ASSERT_EQ(sweep["runs"].size(), 2u);
+  EXPECT_EQ(sweep["runs"][1]["value"], "1048576");
+  EXPECT_EQ(sweep["runs"][1]["valid"], true);
+  EXPECT_GT(sweep["runs"][1]["latency_ms"]["p50"].get<double>(), 0.0);
+  for (const auto& run : runs) {
+    const auto j = nlohmann::json::parse(std::ifstream(run));
+    EXPECT_EQ(j["validity"]["valid"], true) << j["validity"].dump();
+    EXPECT_EQ(j["functional"]["metrics"]["identical_fraction"]["value"], 1.0);
+  }
+  // The results folder lists the two runs, not the sweep summary.
+  const Outcome list = robotperf_cli("results list " + out_.string());
+  EXPECT_EQ(list.exit_code, 0) << list.out;
+  EXPECT_EQ(list.out.find(".sweep"), std::string::npos) << list.out;
+}
+
+// n2 is per-node by definition: the pong runs in its own process, over Cyclone DDS here.
+TEST_F(Cli, N2PongRunsInAProcessOfItsOwn) {
+  const Outcome o =
+      robotperf_cli("run n2 --rmw cyclonedds --count 130 --rate 50 --quiet --domain " + domain() +
+                    " --output " + out_.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  const auto j = result_json();
+  EXPECT_EQ(j["configuration"]["processes"], "per-node");
+  EXPECT_EQ(j["configuration"]["rmw"], "cyclonedds");
+  ASSERT_EQ(j["resources"]["processes"].size(), 2u);
+  EXPECT_EQ(j["resources"]["processes"][0]["label"], "pong");
+  EXPECT_EQ(j["functional"]["metrics"]["identical_fraction"]["value"], 1.0);
+  const Outcome intra =
+      robotperf_cli("run n2 --rmw intra --count 130 --quiet --output " + out_.string());
+  EXPECT_EQ(intra.exit_code, 2) << intra.out;
+  EXPECT_NE(intra.out.find("needs an inter-process transport"), std::string::npos) << intra.out;
+}
 
 // a3 and a4 on every transport: valid, with a functional section that passed.
 void expect_functional_result(const nlohmann::json& j, const std::string& id,

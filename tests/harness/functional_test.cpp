@@ -216,6 +216,38 @@ TEST(Functional, PointCloudEvaluatorCatchesWrongPoints) {
   EXPECT_NE(none.reasons[0].find("no output could be evaluated"), std::string::npos);
 }
 
+// n1/n2: the payload dataset is what the workload asks for, and the echo evaluator finds a single
+// changed byte, whatever the stamp (which carries the message ID) says.
+TEST(Functional, EchoEvaluatorFindsAChangedPayloadByte) {
+  const BenchmarkSpec spec =
+      load_benchmark(kBenchmarks.parent_path() / "middleware" / "n1_intra_process");
+  const Dataset dataset = load_dataset("middleware/payload", {{"payload_bytes", "1000"}});
+  ASSERT_EQ(dataset.frames, 100u);
+  const auto& sent = *static_cast<const msgs::Image*>(dataset.stream("payload").messages[7].get());
+  EXPECT_EQ(sent.data.size(), 1000u);
+  EXPECT_EQ(sent.encoding, "8UC1");
+  const auto& other = *static_cast<const msgs::Image*>(dataset.stream("payload").messages[8].get());
+  EXPECT_NE(sent.data, other.data) << "every frame has its own payload";
+
+  msgs::Image echo = sent;
+  echo.header.stamp = msgs::Time{1795000000, 42};  // an ID, as the Playback stamps it
+  msgs::Image changed = echo;
+  changed.data[999] ^= 1;
+  const FunctionalResult good = evaluate_functional(
+      *spec.functional, dataset, {{7, std::make_shared<const msgs::Image>(echo)}}, 1);
+  EXPECT_TRUE(good.valid) << reasons(good);
+  EXPECT_EQ(metric(good, "identical_fraction").value, 1.0);
+  const FunctionalResult bad = evaluate_functional(
+      *spec.functional, dataset,
+      {{7, std::make_shared<const msgs::Image>(echo)},
+       {107, std::make_shared<const msgs::Image>(changed)}},  // 107: frame 7 again (the run loops)
+      2);
+  EXPECT_FALSE(bad.valid);
+  EXPECT_EQ(metric(bad, "identical_fraction").value, 0.5);
+
+  EXPECT_THROW(load_dataset("middleware/payload", {{"payload_bytes", "0"}}), std::invalid_argument);
+}
+
 TEST(Functional, SampleIdsAreSpreadOverTheMeasuredMessages) {
   EXPECT_EQ(functional_sample_ids(10, 2, 4), (std::vector<uint64_t>{2, 4, 6, 8}));
   EXPECT_EQ(functional_sample_ids(5, 2, 0), (std::vector<uint64_t>{2, 3, 4}));

@@ -62,6 +62,9 @@ struct BenchmarkSpec {
   std::size_t count = 0;  // messages to send; 0: as many as the dataset has frames
   std::size_t warmup = 0;
   double drain_s = 2.0;
+  // The process layout the benchmark is defined with ("single" or "per-node"); --processes
+  // overrides it (e.g. n2, a ping-pong between two processes, says per-node).
+  std::string processes = "single";
   std::size_t executor_threads = 1;
   std::size_t min_samples = 30;
   double max_loss_percent = 0.0;
