@@ -729,6 +729,10 @@ ListenerPtr data_available_listener(CycloneddsSubscription* subscription) {
 
 }  // namespace
 
+std::shared_ptr<void> use_cyclonedds_domain(int domain_id) {
+  return std::make_shared<DomainUse>(domain_id);
+}
+
 std::unique_ptr<Transport> make_cyclonedds_transport(const TransportOptions& options) {
   return std::make_unique<
       ParticipantTransport<Participant, CycloneddsPublisher, CycloneddsSubscription>>("cyclonedds",
