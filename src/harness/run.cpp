@@ -277,6 +277,11 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   r.processes = options.processes == ProcessLayout::kSingle ? "single" : "per-node";
   r.executor_threads = spec.executor_threads;
   r.output_topic = spec.output.topic;
+  for (const auto& in : spec.inputs) r.qos.push_back({"playback", in.topic, in.qos});
+  r.qos.push_back({"monitor", spec.output.topic, spec.output.qos});
+  for (const auto& node : spec.nodes) {
+    for (const auto& [port, topic] : node.topics) r.qos.push_back({node.name, topic, node.qos});
+  }
   if (options.processes == ProcessLayout::kPerNode && options.rmw == "intra") {
     throw std::invalid_argument(
         "--processes per-node needs an inter-process transport (--rmw fastdds or cyclonedds)");

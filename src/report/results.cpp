@@ -203,6 +203,19 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
   for (const auto& w : r.warnings) warnings.push_back({{"rule", w.rule}, {"message", w.message}});
   json software = software_json();
   software["transport"] = transport_json(r.rmw, r.domain_id, r.processes);
+  json qos = json::array();
+  for (const auto& e : r.qos) {
+    qos.push_back(
+        {{"owner", e.owner},
+         {"topic", e.topic},
+         {"history", e.qos.history == rmw::History::kKeepLast ? "keep_last" : "keep_all"},
+         {"depth", e.qos.depth},
+         {"reliability",
+          e.qos.reliability == rmw::Reliability::kReliable ? "reliable" : "best_effort"},
+         {"durability",
+          e.qos.durability == rmw::Durability::kTransientLocal ? "transient_local" : "volatile"}});
+  }
+  software["transport"]["qos"] = qos;
   const auto& sched = r.scheduling;
   const json scheduling = {
       {"cpus", sched.cpus.empty() ? json(nullptr) : json(harness::format_cpu_list(sched.cpus))},

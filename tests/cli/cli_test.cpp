@@ -137,6 +137,14 @@ TEST_P(CliPerNode, RunA1OneProcessPerNode) {
       std::string::npos)
       << transport.dump();
   EXPECT_FALSE(j["software"]["libraries"][rmw].get<std::string>().empty());
+  // The QoS of every endpoint robotperf made.
+  bool monitor_qos = false, node_qos = false;
+  for (const auto& e : transport["qos"]) {
+    monitor_qos |= e["owner"] == "monitor" && e["topic"] == "/resize/image" &&
+                   e["reliability"] == "reliable" && e["depth"].get<int>() > 0;
+    node_qos |= e["owner"] == "rectify";
+  }
+  EXPECT_TRUE(monitor_qos && node_qos) << transport["qos"].dump();
 }
 
 INSTANTIATE_TEST_SUITE_P(Dds, CliPerNode, ::testing::Values("fastdds", "cyclonedds"),

@@ -171,6 +171,14 @@ struct RunResult {
   std::string processes;  // "single" or "per-node"
   std::size_t executor_threads = 1;
   std::string output_topic;
+  // The QoS of every endpoint robotperf made: the Playback's inputs, the Monitor's output and
+  // each node's topics ("playback", "monitor" or the node name).
+  struct EndpointQos {
+    std::string owner;
+    std::string topic;
+    rmw::QoS qos;
+  };
+  std::vector<EndpointQos> qos;
   // Dataset.
   std::string dataset;
   std::string dataset_hash;
