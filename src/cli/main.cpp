@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <optional>
@@ -469,64 +470,86 @@ WrittenRun write_run(const harness::BenchmarkSpec& spec, const RunArgs& a,
   return out;
 }
 
-// --repeat N: N runs, each with a fresh graph, each written as usual; then the run-to-run view of
-// the headline figures (report::series_summary), printed and written beside the first run.
-int run_series(const harness::BenchmarkSpec& spec, const RunArgs& a, harness::RunOptions o) {
-  const InterruptHandling interrupts;  // also over the pauses
-  report::Series series(spec.id);
+// Several runs of one benchmark (--repeat, --sweep), each with a fresh graph and written as usual.
+// Before run i, `prepare(i)` sets it up (it may change `spec`, which run i then measures) and
+// names it for the progress line; after it, `record` keeps its figures. Ends early on an interrupt
+// (during a run or a preparation) or when a result cannot be written. The exit status is the
+// first failing run's, or 128 + the signal when interrupted; `first` is the first results file
+// written.
+struct SeveralRuns {
   int code = kExitOk;
-  for (std::size_t i = 0; i < a.repeat; ++i) {
-    if (i > 0 && a.repeat_pause > 0) {
-      // Interruptible: a Ctrl-C during the pause ends the series like one during a run.
-      const auto until =
-          std::chrono::steady_clock::now() + std::chrono::duration<double>(a.repeat_pause);
-      while (std::chrono::steady_clock::now() < until && g_interrupted.load() == 0)
-        std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
+  std::optional<fs::path> first;
+};
+SeveralRuns run_several(
+    const harness::BenchmarkSpec& spec, const RunArgs& a, const harness::RunOptions& o,
+    std::size_t runs, const std::function<std::string(std::size_t)>& prepare,
+    const std::function<void(const harness::RunResult&, const WrittenRun&)>& record) {
+  const InterruptHandling interrupts;  // also over the preparations (--repeat-pause)
+  SeveralRuns out;
+  for (std::size_t i = 0; i < runs; ++i) {
+    const std::string label = prepare(i);
     if (g_interrupted.load() != 0) break;
-    if (!a.quiet) std::fprintf(stderr, "[%s] run %zu of %zu\n", spec.id.c_str(), i + 1, a.repeat);
+    if (!a.quiet) std::fprintf(stderr, "[%s] %s\n", spec.id.c_str(), label.c_str());
     harness::RunResult result = measure(spec, o);
     const WrittenRun written = write_run(spec, a, result);
-    series.add(result, written.json);
-    if (written.code != kExitOk && code == kExitOk) code = written.code;
+    record(result, written);
+    if (!out.first) out.first = written.json;
+    if (written.code != kExitOk && out.code == kExitOk) out.code = written.code;
     if (result.interrupted || written.code == kExitError) break;
   }
-  std::cout << "\n" << report::series_table(series);
-  if (!series.files().empty()) {
-    const fs::path path = fs::path(series.files().front()).replace_extension(".series.json");
-    report::write_file_atomically(path, json_text(report::series_json(series), 2) + "\n");
-    std::cout << "series: " << path.string() << "\n";
-  }
-  if (g_interrupted.load() != 0 && code == kExitOk) code = 128 + g_interrupted.load();
-  return code;
+  if (g_interrupted.load() != 0 && out.code == kExitOk) out.code = 128 + g_interrupted.load();
+  return out;
 }
 
-// --sweep KEY=V1,V2,...: one run per value of a workload parameter, each written as usual; then
-// the values side by side (report::sweep_table), printed and written beside the first run.
+// The summary of several runs: printed, and written beside the first of them as
+// <first>.<kind>.json ("series", "sweep").
+void write_summary(const SeveralRuns& runs, const std::string& kind, const std::string& table,
+                   const nlohmann::json& summary) {
+  std::cout << "\n" << table;
+  if (!runs.first) return;
+  const fs::path path = fs::path(*runs.first).replace_extension("." + kind + ".json");
+  report::write_file_atomically(path, json_text(summary, 2) + "\n");
+  std::cout << kind << ": " << path.string() << "\n";
+}
+
+// --repeat N: N runs; then the run-to-run view of the headline figures (report::series_summary).
+int run_series(const harness::BenchmarkSpec& spec, const RunArgs& a, const harness::RunOptions& o) {
+  report::Series series(spec.id);
+  const SeveralRuns runs = run_several(
+      spec, a, o, a.repeat,
+      [&](std::size_t i) {
+        if (i > 0 && a.repeat_pause > 0) {
+          // Interruptible: a Ctrl-C during the pause ends the series like one during a run.
+          const auto until =
+              std::chrono::steady_clock::now() + std::chrono::duration<double>(a.repeat_pause);
+          while (std::chrono::steady_clock::now() < until && g_interrupted.load() == 0)
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        }
+        return "run " + std::to_string(i + 1) + " of " + std::to_string(a.repeat);
+      },
+      [&](const harness::RunResult& result, const WrittenRun& written) {
+        series.add(result, written.json);
+      });
+  write_summary(runs, "series", report::series_table(series), report::series_json(series));
+  return runs.code;
+}
+
+// --sweep KEY=V1,V2,...: one run per value of a workload parameter; then the values side by side
+// (report::sweep_table).
 int run_sweep(harness::BenchmarkSpec spec, const RunArgs& a, const harness::RunOptions& o) {
   const auto [parameter, values] = report::parse_sweep(*a.sweep);
-  const InterruptHandling interrupts;
   report::Sweep sweep(spec.id, parameter);
-  int code = kExitOk;
-  for (const std::string& value : values) {
-    if (g_interrupted.load() != 0) break;
-    if (!a.quiet)
-      std::fprintf(stderr, "[%s] %s = %s\n", spec.id.c_str(), parameter.c_str(), value.c_str());
-    spec.workload[parameter] = value;
-    harness::RunResult result = measure(spec, o);
-    const WrittenRun written = write_run(spec, a, result);
-    sweep.add(value, result, written.json);
-    if (written.code != kExitOk && code == kExitOk) code = written.code;
-    if (result.interrupted || written.code == kExitError) break;
-  }
-  std::cout << "\n" << report::sweep_table(sweep);
-  if (!sweep.rows().empty() && !sweep.rows().front().file.empty()) {
-    const fs::path path = fs::path(sweep.rows().front().file).replace_extension(".sweep.json");
-    report::write_file_atomically(path, json_text(report::sweep_json(sweep), 2) + "\n");
-    std::cout << "sweep: " << path.string() << "\n";
-  }
-  if (g_interrupted.load() != 0 && code == kExitOk) code = 128 + g_interrupted.load();
-  return code;
+  const SeveralRuns runs = run_several(
+      spec, a, o, values.size(),
+      [&](std::size_t i) {
+        spec.workload[parameter] = values[i];
+        return parameter + " = " + values[i];
+      },
+      [&](const harness::RunResult& result, const WrittenRun& written) {
+        sweep.add(spec.workload[parameter], result, written.json);
+      });
+  write_summary(runs, "sweep", report::sweep_table(sweep), report::sweep_json(sweep));
+  return runs.code;
 }
 
 // --find-peak's bounds from the command line; the step length is --duration (default 5 s), the

@@ -1,10 +1,12 @@
 #include "robotperf/report/sweep.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
 
+#include "robotperf/metrics/latency_stats.hpp"
 #include "robotperf/report/results.hpp"
 #include "robotperf/report/run_store.hpp"
 
@@ -85,17 +87,14 @@ nlohmann::json sweep_json(const Sweep& sweep) {
     nlohmann::json cpu = nlohmann::json::object();
     for (const auto& [label, percent] : r.cpu_percent) cpu[label] = finite_or_null(percent);
     const metrics::SampleStats& l = r.latency_ns;
+    // As a results file writes its latency (metrics::to_json), plus half the median: the one-way
+    // figure of a ping-pong.
+    nlohmann::json latency = metrics::to_json(l, 1.0 / kNsPerMs, "ms");
+    latency["half_p50"] = finite_or_null(l.p50 / kNsPerMs / 2);
     rows.push_back({{"value", r.value},
                     {"valid", r.valid},
                     {"file", r.file.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.file)},
-                    {"latency_ms",
-                     {{"samples", l.count},
-                      {"p50", finite_or_null(l.p50 / kNsPerMs)},
-                      {"p90", finite_or_null(l.p90 / kNsPerMs)},
-                      {"p99", finite_or_null(l.p99 / kNsPerMs)},
-                      {"p999", finite_or_null(l.p999 / kNsPerMs)},
-                      {"max", finite_or_null(l.max / kNsPerMs)},
-                      {"half_p50", finite_or_null(l.p50 / kNsPerMs / 2)}}},
+                    {"latency_ms", latency},
                     {"loss_percent", finite_or_null(r.loss_percent)},
                     {"throughput_hz", finite_or_null(r.throughput_hz)},
                     {"cpu_percent", cpu}});

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "participant_transport.hpp"
+#include "peer_table.hpp"
 #include "robotperf/tracing/tracepoints.hpp"
 
 namespace robotperf::rmw {
@@ -70,22 +71,20 @@ const CdrSample* as_sample(const ddsi_serdata* d) {
   return reinterpret_cast<const CdrSample*>(d);
 }
 
-extern const ddsi_serdata_ops kSerdataOps;
-
 // A sample with room for `size` bytes; null when out of memory (Cyclone's convention).
 CdrSample* new_sample(const ddsi_sertype* sertype, ddsi_serdata_kind kind, std::size_t size) {
   if (size > std::numeric_limits<uint32_t>::max() - 3) return nullptr;
   auto* sample = new (std::nothrow) CdrSample{};
   if (sample == nullptr) return nullptr;
-  const std::size_t padded = (size + 3) & ~std::size_t{3};
+  const std::size_t capacity = std::max<std::size_t>(4, (size + 3) & ~std::size_t{3});
   // Not calloc: the bytes are written at once (serialized or received), and zeroing megabytes
   // first would cost a pass over them; only the padding must be zero.
-  sample->bytes = static_cast<uint8_t*>(std::malloc(padded == 0 ? 4 : padded));
+  sample->bytes = static_cast<uint8_t*>(std::malloc(capacity));
   if (sample->bytes == nullptr) {
     delete sample;
     return nullptr;
   }
-  std::memset(sample->bytes + size, 0, (padded == 0 ? 4 : padded) - size);
+  std::memset(sample->bytes + size, 0, capacity - size);
   sample->size = static_cast<uint32_t>(size);
   sample->reception_ns = wall_now_ns();
   ddsi_serdata_init(&sample->base, sertype, kind);
@@ -149,18 +148,25 @@ ddsi_serdata* serdata_from_keyhash(const ddsi_sertype* sertype, const ddsi_keyha
   return header_only_sample(sertype);
 }
 
+// Exceptions must not unwind through Cyclone: a message that cannot be written fails the write.
+bool sertype_serialize_into(const ddsi_sertype* sertype, const void* message, void* out,
+                            std::size_t size) {
+  try {
+    type_of(sertype).serialize(message, std::span<uint8_t>(static_cast<uint8_t*>(out), size));
+    return true;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
 // A write: the message is serialized once, into the buffer Cyclone sends from.
 ddsi_serdata* serdata_from_sample(const ddsi_sertype* sertype, ddsi_serdata_kind kind,
                                   const void* message) {
   if (kind != SDK_DATA) return header_only_sample(sertype);
-  const msgs::TypeSupport& type = type_of(sertype);
-  const std::size_t size = type.serialized_size(message);
+  const std::size_t size = type_of(sertype).serialized_size(message);
   CdrSample* sample = new_sample(sertype, kind, size);
   if (sample == nullptr) return nullptr;
-  // Exceptions must not unwind through Cyclone: a message that cannot be written fails the write.
-  try {
-    type.serialize(message, std::span<uint8_t>(sample->bytes, size));
-  } catch (const std::exception&) {
+  if (!sertype_serialize_into(sertype, message, sample->bytes, size)) {
     serdata_free(&sample->base);
     return nullptr;
   }
@@ -187,6 +193,7 @@ void serdata_to_ser_unref(ddsi_serdata* d, const ddsrt_iovec_t*) {
   ddsi_serdata_unref(d);
 }
 
+// Decodes into a robotperf message; false (never an exception) when the payload is malformed.
 bool serdata_to_sample(const ddsi_serdata* d, void* message, void**, void*) {
   const CdrSample* sample = as_sample(d);
   if (d->kind != SDK_DATA) return true;  // keyless: there are no key fields to fill in
@@ -265,16 +272,6 @@ uint32_t sertype_hash(const ddsi_sertype* sertype) {
 std::size_t sertype_serialized_size(const ddsi_sertype* sertype, const void* message) {
   return type_of(sertype).serialized_size(message);
 }
-bool sertype_serialize_into(const ddsi_sertype* sertype, const void* message, void* out,
-                            std::size_t size) {
-  try {
-    type_of(sertype).serialize(message, std::span<uint8_t>(static_cast<uint8_t*>(out), size));
-    return true;
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
 const ddsi_sertype_ops kSertypeOps = {
     .version = ddsi_sertype_v0,
     .arg = nullptr,
@@ -383,36 +380,30 @@ class PeerDirectory {
 
   // Those announced so far but `self`, including those that have left since.
   std::vector<PeerParticipant> peers(const ParticipantId& self) {
-    std::lock_guard lock(mutex_);
     take_all<dds_builtintopic_participant_t>(participants_.get(), [&](const auto& p, bool valid) {
-      const ParticipantId id = participant_id(p.key);
-      announced_.insert(id);
-      if (!valid) return;  // it left: only its key is known
-      PeerParticipant& peer = peer_locked(id);
-      void* bytes = nullptr;
-      std::size_t size = 0;
-      if (dds_qget_userdata(p.qos, &bytes, &size) && bytes != nullptr) {
-        peer.user_data.assign(static_cast<const char*>(bytes), size);
+      if (!valid) {  // it left: only its key is known
+        table_.announce(participant_id(p.key));
+        return;
       }
-      dds_free(bytes);
-      char* name = nullptr;
-      if (dds_qget_entity_name(p.qos, &name) && name != nullptr) peer.name = name;
-      dds_free(name);
+      table_.announce(participant_id(p.key), [&](PeerParticipant& peer) {
+        void* bytes = nullptr;
+        std::size_t size = 0;
+        if (dds_qget_userdata(p.qos, &bytes, &size) && bytes != nullptr) {
+          peer.user_data.assign(static_cast<const char*>(bytes), size);
+        }
+        dds_free(bytes);
+        char* name = nullptr;
+        if (dds_qget_entity_name(p.qos, &name) && name != nullptr) peer.name = name;
+        dds_free(name);
+      });
     });
     for (dds_entity_t reader : {publications_.get(), subscriptions_.get()}) {
       take_all<dds_builtintopic_endpoint_t>(reader, [&](const auto& e, bool valid) {
-        if (!valid || e.topic_name == nullptr) return;
-        std::string topic = e.topic_name;
-        // ROS topics travel as "rt/<name>"; others (DDS-only) are listed as DDS names them.
-        if (topic.starts_with("rt/")) topic.erase(0, 2);
-        peer_locked(participant_id(e.participant_key)).topics.insert(std::move(topic));
+        if (valid && e.topic_name != nullptr)
+          table_.add_topic(participant_id(e.participant_key), e.topic_name);
       });
     }
-    std::vector<PeerParticipant> out;
-    for (const auto& [id, peer] : peers_) {
-      if (id != self && announced_.contains(id)) out.push_back(peer);
-    }
-    return out;
+    return table_.peers(self);
   }
 
  private:
@@ -431,17 +422,8 @@ class PeerDirectory {
     }
   }
 
-  PeerParticipant& peer_locked(const ParticipantId& id) {
-    PeerParticipant& peer = peers_[id];
-    peer.id = id;
-    return peer;
-  }
-
   Entity participants_, publications_, subscriptions_;
-  std::mutex mutex_;
-  // Endpoints may be seen before their participant: only announced participants are peers.
-  std::map<ParticipantId, PeerParticipant> peers_;
-  std::set<ParticipantId> announced_;
+  PeerTable table_;
 };
 
 // Cyclone's defaults, but for the sockets' receive buffers: up to 8 MiB where the system allows
@@ -472,7 +454,7 @@ class DomainRegistry {
       const dds_entity_t rc = domain.handle;
       domains_.erase(id);
       throw TransportError("cyclonedds: cannot create domain " + std::to_string(id) + ": " +
-                           dds_strretcode(rc));
+                           error_text(rc));
     }
   }
   void release(dds_domainid_t id) {
@@ -527,12 +509,7 @@ class Participant {
 
   // The topic for `ros_topic`, created on first use; a second type is an error.
   dds_entity_t topic(const std::string& ros_topic, const msgs::TypeSupport& type) {
-    std::string dds_name;
-    try {
-      dds_name = dds_topic_name(ros_topic);
-    } catch (const std::invalid_argument& e) {
-      throw TransportError(std::string("cyclonedds: ") + e.what());
-    }
+    const std::string dds_name = checked_dds_topic_name("cyclonedds", ros_topic);
     std::lock_guard lock(mutex_);
     if (auto it = topics_.find(dds_name); it != topics_.end()) {
       if (it->second.dds_type != type.dds_type) {
@@ -676,17 +653,13 @@ class CycloneddsSubscription final : public SubscriptionHandle {
       std::unique_ptr<ddsi_serdata, decltype(&ddsi_serdata_unref)> hold(data, &ddsi_serdata_unref);
       // Samples without data only announce writer/instance state changes.
       if (!sample_info.valid_data) continue;
-      const CdrSample* sample = as_sample(data);
       std::shared_ptr<void> msg = type_.create();
-      try {
-        type_.deserialize(std::span<const uint8_t>(sample->bytes, sample->size), msg.get());
-      } catch (const std::exception&) {
-        continue;  // a malformed payload is dropped, as a DDS reader drops it
-      }
+      // A malformed payload is dropped, as a DDS reader drops it.
+      if (!serdata_to_sample(data, msg.get(), nullptr, nullptr)) continue;
       lttng_ust_tracepoint(ros2, rmw_take, this, msg.get(), sample_info.source_timestamp, 1);
       if (info != nullptr) {
         info->source_timestamp_ns = sample_info.source_timestamp;
-        info->reception_timestamp_ns = sample->reception_ns;
+        info->reception_timestamp_ns = as_sample(data)->reception_ns;
         info->from_intra_process = false;
         info->sender = sender_of(sample_info.publication_handle);
       }

@@ -47,6 +47,7 @@
 
 #include "fastdds_participant_qos.hpp"
 #include "participant_transport.hpp"
+#include "peer_table.hpp"
 #include "robotperf/msgs/cdr.hpp"
 #include "robotperf/tracing/tracepoints.hpp"
 
@@ -196,68 +197,45 @@ class PeerListener final : public dds::DomainParticipantListener {
     if (info.status != Info::DISCOVERED_PARTICIPANT && info.status != Info::CHANGED_QOS_PARTICIPANT)
       return;
     const auto& data = info.info;
-    std::lock_guard lock(mutex_);
-    const ParticipantId id = participant_id(data.m_guid.guidPrefix);
-    announced_.insert(id);
-    PeerParticipant& peer = peer_locked(id);
-    peer.name = data.m_participantName.to_string();
-    const auto& bytes = data.m_userData.data_vec();
-    peer.user_data.assign(bytes.begin(), bytes.end());
-    // Where it runs: the IP addresses of its user and discovery traffic, or this host when Fast
-    // DDS reaches it through shared memory (it then keeps no UDP locator for it).
-    peer.addresses.clear();
-    for (const auto* locators :
-         {&data.default_locators.unicast, &data.metatraffic_locators.unicast}) {
-      for (const auto& locator : *locators) {
-        std::string address;
-        if (locator.kind == LOCATOR_KIND_SHM) {
-          address = "this host (shared memory)";
-        } else if (locator.kind == LOCATOR_KIND_UDPv4 || locator.kind == LOCATOR_KIND_UDPv6) {
-          address = eprosima::fastrtps::rtps::IPLocator::ip_to_string(locator);
-        } else {
-          continue;
+    table_.announce(participant_id(data.m_guid.guidPrefix), [&](PeerParticipant& peer) {
+      peer.name = data.m_participantName.to_string();
+      const auto& bytes = data.m_userData.data_vec();
+      peer.user_data.assign(bytes.begin(), bytes.end());
+      // Where it runs: the IP addresses of its user and discovery traffic, or this host when Fast
+      // DDS reaches it through shared memory (it then keeps no UDP locator for it).
+      peer.addresses.clear();
+      for (const auto* locators :
+           {&data.default_locators.unicast, &data.metatraffic_locators.unicast}) {
+        for (const auto& locator : *locators) {
+          std::string address;
+          if (locator.kind == LOCATOR_KIND_SHM) {
+            address = "this host (shared memory)";
+          } else if (locator.kind == LOCATOR_KIND_UDPv4 || locator.kind == LOCATOR_KIND_UDPv6) {
+            address = eprosima::fastrtps::rtps::IPLocator::ip_to_string(locator);
+          } else {
+            continue;
+          }
+          if (std::ranges::find(peer.addresses, address) == peer.addresses.end())
+            peer.addresses.push_back(std::move(address));
         }
-        if (std::ranges::find(peer.addresses, address) == peer.addresses.end())
-          peer.addresses.push_back(std::move(address));
       }
-    }
+    });
   }
   void on_subscriber_discovery(dds::DomainParticipant*,
                                eprosima::fastrtps::rtps::ReaderDiscoveryInfo&& info) override {
-    add_topic(info.info.guid().guidPrefix, info.info.topicName().to_string());
+    table_.add_topic(participant_id(info.info.guid().guidPrefix),
+                     info.info.topicName().to_string());
   }
   void on_publisher_discovery(dds::DomainParticipant*,
                               eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override {
-    add_topic(info.info.guid().guidPrefix, info.info.topicName().to_string());
+    table_.add_topic(participant_id(info.info.guid().guidPrefix),
+                     info.info.topicName().to_string());
   }
 
-  // Those announced so far, but `self`: Fast DDS reports a participant's own endpoints too.
-  std::vector<PeerParticipant> peers(const ParticipantId& self) const {
-    std::lock_guard lock(mutex_);
-    std::vector<PeerParticipant> out;
-    for (const auto& [id, peer] : peers_) {
-      if (id != self && announced_.contains(id)) out.push_back(peer);
-    }
-    return out;
-  }
+  std::vector<PeerParticipant> peers(const ParticipantId& self) const { return table_.peers(self); }
 
  private:
-  PeerParticipant& peer_locked(const ParticipantId& id) {
-    PeerParticipant& peer = peers_[id];
-    peer.id = id;
-    return peer;
-  }
-  void add_topic(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix, std::string dds_topic) {
-    // ROS topics travel as "rt/<name>"; others (DDS-only) are listed as DDS names them.
-    if (dds_topic.starts_with("rt/")) dds_topic.erase(0, 2);
-    std::lock_guard lock(mutex_);
-    peer_locked(participant_id(prefix)).topics.insert(std::move(dds_topic));
-  }
-
-  mutable std::mutex mutex_;
-  // Endpoints may be reported before their participant: only announced participants are peers.
-  std::map<ParticipantId, PeerParticipant> peers_;
-  std::set<ParticipantId> announced_;
+  PeerTable table_;
 };
 
 // The participant and the entities every endpoint shares. Publisher and
@@ -293,12 +271,7 @@ class Participant {
 
   // The topic for `ros_topic`, created on first use; a second type is an error.
   dds::Topic& topic(const std::string& ros_topic, const msgs::TypeSupport& type) {
-    std::string dds_name;
-    try {
-      dds_name = dds_topic_name(ros_topic);
-    } catch (const std::invalid_argument& e) {
-      throw TransportError(std::string("fastdds: ") + e.what());
-    }
+    const std::string dds_name = checked_dds_topic_name("fastdds", ros_topic);
     std::lock_guard lock(mutex_);
     if (auto it = topics_.find(dds_name); it != topics_.end()) {
       if (it->second->get_type_name() != type.dds_type) {

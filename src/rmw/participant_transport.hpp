@@ -1,11 +1,13 @@
-// Private to the rmw library: a DDS transport is a participant shared by its endpoints. This is
-// the Transport around one, whatever the vendor: `Participant` has peers() and id(); `Publisher`
-// and `Subscription` are constructed from the participant and the endpoint's arguments, and keep
-// the participant alive, so that handles may outlive their Transport.
+// Private to the rmw library: what the DDS transports share. A DDS transport is a participant
+// shared by its endpoints; ParticipantTransport is the Transport around one, whatever the vendor:
+// `Participant` has peers() and id(); `Publisher` and `Subscription` are constructed from the
+// participant and the endpoint's arguments, and keep the participant alive, so that handles may
+// outlive their Transport.
 #pragma once
 
 #include <functional>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -13,6 +15,15 @@
 #include "robotperf/rmw/transport.hpp"
 
 namespace robotperf::rmw {
+
+// dds_topic_name(ros_topic), or a TransportError naming the vendor when the name is invalid.
+inline std::string checked_dds_topic_name(const std::string& vendor, const std::string& ros_topic) {
+  try {
+    return dds_topic_name(ros_topic);
+  } catch (const std::invalid_argument& e) {
+    throw TransportError(vendor + ": " + e.what());
+  }
+}
 
 template <class Participant, class Publisher, class Subscription>
 class ParticipantTransport final : public Transport {

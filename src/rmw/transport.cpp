@@ -74,16 +74,12 @@ int lock_domain(int domain) {
 
 }  // namespace
 
-bool reserve_domain(int domain) {
-  return lock_domain(domain) >= 0;
-}
-
 int reserved_domain() {
   static const int domain = [] {
     const int start = static_cast<int>(getpid() % 232);
     for (int i = 0; i < 232; ++i) {
       const int candidate = 1 + (start + i) % 232;
-      if (reserve_domain(candidate)) return candidate;
+      if (lock_domain(candidate) >= 0) return candidate;  // held until this process ends
     }
     throw TransportError("no DDS domain left to reserve: 232 robotperf processes hold one each");
   }();

@@ -19,6 +19,25 @@ namespace {
 using msgs::Image;
 using namespace testing;
 
+// Image `index` of a stream: rgb8 content of its own, its index in the stamp's seconds.
+Image numbered_image(uint32_t width, uint32_t height, int index) {
+  Image image = make_image(width, height, static_cast<uint8_t>(index), "rgb8");
+  image.header.stamp.sec = index;
+  return image;
+}
+
+// Publishes images 0 to count - 1 at `rate_hz`, paced to absolute deadlines.
+void send_numbered_images(PublisherHandle& pub, uint32_t width, uint32_t height, int count,
+                          double rate_hz) {
+  const auto period = std::chrono::duration<double>(1.0 / rate_hz);
+  const auto start = std::chrono::steady_clock::now();
+  for (int i = 0; i < count; ++i) {
+    pub.publish(share(numbered_image(width, height, i)));
+    std::this_thread::sleep_until(
+        start + std::chrono::duration_cast<std::chrono::nanoseconds>((i + 1) * period));
+  }
+}
+
 // (publishing transport, subscribing transport)
 class Interop : public ::testing::TestWithParam<std::pair<std::string, std::string>> {
  protected:
@@ -45,21 +64,9 @@ class Interop : public ::testing::TestWithParam<std::pair<std::string, std::stri
         ++received;
       }
     });
-    const auto period = std::chrono::duration<double>(1.0 / rate_hz);
-    const auto start = std::chrono::steady_clock::now();
-    for (int i = 0; i < count; ++i) {
-      images.pub->publish(share(numbered_image(width, height, i)));
-      std::this_thread::sleep_until(
-          start + std::chrono::duration_cast<std::chrono::nanoseconds>((i + 1) * period));
-    }
+    send_numbered_images(*images.pub, width, height, count, rate_hz);
     receiver.join();
     return received;
-  }
-
-  static Image numbered_image(uint32_t width, uint32_t height, int index) {
-    Image image = make_image(width, height, static_cast<uint8_t>(index), "rgb8");
-    image.header.stamp.sec = index;
-    return image;
   }
 };
 
@@ -118,29 +125,14 @@ TEST(CycloneddsAcrossProcesses, VgaColourStreamAt30HzLosesNothing) {
   })) << "the peer process was not discovered";
 
   constexpr int kFrames = 90;  // three seconds
-  constexpr auto kPeriod = std::chrono::microseconds(1'000'000 / 30);
-  std::thread sender([&] {
-    auto next = std::chrono::steady_clock::now();
-    for (int i = 0; i < kFrames; ++i) {
-      Image frame = make_image(640, 480, static_cast<uint8_t>(i), "rgb8");
-      frame.header.stamp.sec = i;
-      pub->publish(share(std::move(frame)));
-      next += kPeriod;
-      std::this_thread::sleep_until(next);
-    }
-  });
+  std::thread sender([&] { send_numbered_images(*pub, 640, 480, kFrames, 30.0); });
   int received = 0;
   for (; received < kFrames; ++received) {
     MessagePtr echo = inbox.take(*sub);
     if (echo == nullptr) break;
     const Image& image = as<Image>(echo);
     ASSERT_EQ(image.header.stamp.sec, received) << "a frame was lost or reordered";
-    ASSERT_TRUE(image ==
-                [&] {
-                  Image expected = make_image(640, 480, static_cast<uint8_t>(received), "rgb8");
-                  expected.header.stamp.sec = received;
-                  return expected;
-                }())
+    ASSERT_TRUE(image == numbered_image(640, 480, received))
         << "frame " << received << " came back changed";
   }
   sender.join();

@@ -133,17 +133,15 @@ int domain_id_from_environment();
 
 // A DDS domain on which `transport` discovers no other participant within `listen_s`: domains
 // 1 to 232 tried in a random order (0, ROS 2's default, is left to robots), each reserved first
-// (see reserve_domain), so that robotperf processes looking at the same time never pick the same
-// one; the reservation lasts until this process ends. Transports without discovery (intra) get 0.
-// Throws TransportError when none of the tries is quiet.
+// among the robotperf processes of this machine (a lock on a file in /tmp), so that those looking
+// at the same time never pick the same one; the reservation lasts until this process ends.
+// Transports without discovery (intra) get 0. Throws TransportError when none of the tries is
+// quiet.
 int find_quiet_domain(const std::string& transport, double listen_s = 3.5);
 
-// Reserves `domain` among the robotperf processes of this machine (a lock on a file in /tmp) for
-// the rest of this process; false when another process holds it. Tests and benchmarks take their
-// domain this way, so that no two of them, running at once, share one.
-bool reserve_domain(int domain);
-// The domain this process reserved for its tests or benchmarks: the first call reserves one of
-// 1 to 232 (starting from a place given by the process id), later calls return the same.
+// The domain this process reserved for its tests or benchmarks, as find_quiet_domain reserves
+// one: the first call reserves one of 1 to 232 (starting from a place given by the process id),
+// later calls return the same, so that no two tests or benchmarks running at once share one.
 // Throws TransportError when all are held.
 int reserved_domain();
 
