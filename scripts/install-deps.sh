@@ -5,6 +5,7 @@ set -euo pipefail
 
 packages=(
   g++ cmake make pkg-config git
+  iproute2  # ip and tc: --netns (n3, n4)
   libfastrtps-dev libfastcdr-dev cyclonedds-dev cyclonedds-tools  # cyclonedds-tools: idlc, for bench_transport
   libopencv-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev

@@ -278,6 +278,11 @@ struct RunArgs {
   std::size_t trace_subbuf = 0;
   std::vector<std::string> plugins;  // --plugin: loaded by per-node children too
   double callback_timeout_s = 30.0;
+  // Several hosts: --host NAME=COMMAND (a launcher), or --netns with its link's shaping.
+  std::vector<std::string> hosts;
+  bool netns = false;
+  std::string link_rate = "1gbit";
+  std::string netem;
 };
 
 // JSON as text for a file or the terminal: bytes that are not UTF-8 (names from a trace or a bag)
@@ -577,6 +582,40 @@ harness::PeakSearchOptions peak_search_options(const RunArgs& a) {
   return search;
 }
 
+// --host NAME=COMMAND for the hosts the graph names, checked; --netns replaces them.
+std::map<std::string, std::vector<std::string>> host_launchers(const harness::BenchmarkSpec& spec,
+                                                               const RunArgs& a) {
+  const auto hosts = spec.hosts();
+  if (a.netns && hosts.empty()) {
+    throw std::invalid_argument("--netns puts the graph's hosts in network namespaces, but " +
+                                spec.id + " places no node on a host (graph.yaml host:)");
+  }
+  if (a.netns && !a.hosts.empty())
+    throw std::invalid_argument("--netns makes the hosts' launchers itself: not with --host");
+  if (a.netns && hosts.size() > 1) {
+    throw std::invalid_argument("--netns makes one other host, and " + spec.id + " names " +
+                                std::to_string(hosts.size()) + "; give each a --host launcher");
+  }
+  if (!a.netns && (a.link_rate != "1gbit" || !a.netem.empty()))
+    throw std::invalid_argument(
+        "--link-rate and --netem shape the link --netns makes: add --netns");
+  std::map<std::string, std::vector<std::string>> out;
+  for (const auto& entry : a.hosts) {
+    const auto equals = entry.find('=');
+    const std::string name = entry.substr(0, equals);
+    if (equals == std::string::npos || !harness::valid_host_name(name))
+      throw std::invalid_argument("--host " + entry + ": expected NAME=COMMAND");
+    if (std::ranges::find(hosts, name) == hosts.end()) {
+      throw std::invalid_argument("--host " + name + ": " + spec.id +
+                                  " places no node on that host (graph.yaml host:)");
+    }
+    std::istringstream words(entry.substr(equals + 1));
+    for (std::string w; words >> w;) out[name].push_back(w);
+    if (out[name].empty()) throw std::invalid_argument("--host " + entry + ": no command");
+  }
+  return out;
+}
+
 int run(const Roots& roots, const RunArgs& a) {
   auto spec = harness::find_benchmark(roots, a.id);
   for (const std::string& assignment : a.workload) {
@@ -606,6 +645,15 @@ int run(const Roots& roots, const RunArgs& a) {
   o.drain_s = a.drain;
   const std::string processes = a.processes.value_or(spec.processes);
   o.rmw = a.rmw.value_or(processes == "per-node" ? "fastdds" : "intra");
+  o.host_launchers = host_launchers(spec, a);
+  // Made before any participant, so that all of this process's sockets are on the runner's side.
+  std::optional<harness::NetworkLink> link;
+  if (a.netns) {
+    link.emplace(harness::LinkShaping{a.link_rate == "none" ? "" : a.link_rate, a.netem});
+    link->enter_runner_side();
+    for (const auto& host : spec.hosts()) o.host_launchers[host] = link->launcher();
+    o.network_link = &*link;
+  }
   if (!a.domain) {
     o.domain_id = rmw::domain_id_from_environment();
   } else if (*a.domain == "auto") {
@@ -1002,6 +1050,20 @@ int main(int argc, char** argv) {
                    "DDS domain id, or 'auto': one no other participant uses (default: "
                    "ROS_DOMAIN_ID or 0)")
       ->check(CLI::Range(0, 232) | CLI::IsMember({"auto"}));
+  run_cmd
+      ->add_option("--host", ra.hosts,
+                   "NAME=COMMAND: how to start a process on a host graph.yaml names (default: "
+                   "ssh NAME --); repeatable")
+      ->type_name("NAME=COMMAND");
+  run_cmd->add_flag("--netns", ra.netns,
+                    "run the graph's other host in a network namespace of its own, joined to "
+                    "the runner's by a veth pair (needs root)");
+  run_cmd->add_option("--link-rate", ra.link_rate,
+                      "--netns: the link's rate limit, as tc writes it (default: 1gbit; none: "
+                      "unshaped)");
+  run_cmd->add_option("--netem", ra.netem,
+                      "--netns: netem's delay, jitter and loss on the link, e.g. "
+                      "\"delay 1ms 0.1ms loss 0.1%\"");
   run_cmd->add_option("--output", ra.output, "folder for the results files (default: ./results)");
   run_cmd->add_flag("--csv", ra.csv, "also write the per-message latencies as CSV");
   run_cmd->add_flag("--quiet", ra.quiet, "no progress line");
@@ -1245,6 +1307,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "robotperf: unreadable trace: %s\n", e.what());
     return kExitUsage;
   } catch (const harness::BenchmarkError& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitUsage;
+  } catch (const harness::NetworkSetupError& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
     return kExitUsage;
   } catch (const report::ReportError& e) {

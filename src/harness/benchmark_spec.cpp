@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <set>
@@ -175,7 +176,7 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   if (!nodes.IsDefined() || !nodes.IsSequence()) file.fail(root, "'nodes' must be a list");
   std::set<std::string> names;
   for (const auto& n : nodes) {
-    file.allow_keys(n, {"name", "kernel", "backend", "parameters", "topics", "qos"});
+    file.allow_keys(n, {"name", "kernel", "backend", "host", "parameters", "topics", "qos"});
     NodeSpec node;
     node.name = file.require_string(n, "name");
     if (!names.insert(node.name).second) file.fail(n, "duplicate node name '" + node.name + "'");
@@ -188,6 +189,11 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
     }
     const plugin::KernelInfo& info = entry->info;
     node.backend = file.get<std::string>(n, "backend", "cpu");
+    node.host = file.get<std::string>(n, "host", "");
+    if (n["host"].IsDefined() && !valid_host_name(node.host)) {
+      file.fail(n["host"],
+                "host '" + node.host + "' is not a host name (letters, digits, '.', '-' and '_')");
+    }
     if (std::ranges::count(info.backends, node.backend) == 0) {
       std::string backends;
       for (const auto& b : info.backends) backends += (backends.empty() ? "" : ", ") + b;
@@ -301,6 +307,20 @@ const NodeSpec* BenchmarkSpec::find_node(const std::string& node_name) const {
     if (n.name == node_name) return &n;
   }
   return nullptr;
+}
+
+std::vector<std::string> BenchmarkSpec::hosts() const {
+  std::set<std::string> out;
+  for (const auto& n : nodes) {
+    if (!n.host.empty()) out.insert(n.host);
+  }
+  return {out.begin(), out.end()};
+}
+
+bool valid_host_name(const std::string& name) {
+  return !name.empty() && std::ranges::all_of(name, [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_';
+  });
 }
 
 BenchmarkSpec load_benchmark(const fs::path& dir) {

@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <cstring>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -44,9 +45,24 @@ void kill_node_processes() noexcept {
   if (const pid_t group = g_children_group.load(); group > 0) kill(-group, SIGKILL);
 }
 
-NodeProcesses::NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::string>& command,
-                             const std::string& rmw, int domain_id,
-                             const std::vector<std::string>& extra) {
+nlohmann::json this_host_identity() {
+  char name[256] = {};
+  gethostname(name, sizeof name - 1);
+  std::string boot_id;
+  std::ifstream("/proc/sys/kernel/random/boot_id") >> boot_id;
+  return {{"hostname", name}, {"boot_id", boot_id}, {"pid", getpid()}};
+}
+
+std::vector<std::string> host_launcher(
+    const std::string& host, const std::map<std::string, std::vector<std::string>>& launchers) {
+  if (auto it = launchers.find(host); it != launchers.end()) return it->second;
+  return {"ssh", host, "--"};
+}
+
+NodeProcesses::NodeProcesses(
+    const BenchmarkSpec& spec, const std::vector<std::string>& command, const std::string& rmw,
+    int domain_id, const std::vector<std::string>& extra,
+    const std::map<std::string, std::vector<std::string>>& host_launchers) {
   if (command.empty()) throw std::invalid_argument("per-node runs need the robotperf node command");
   make_pipe(wake_pipe_);
   // A child that dies must not kill the runner with SIGPIPE when we write to it.
@@ -55,11 +71,16 @@ NodeProcesses::NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::s
     Child c;
     c.name = node.name;
     c.kernel = node.kernel;
-    c.report = {node.name, node.kernel, 0, "running", -1, -1, {}};
+    c.report = {node.name, node.kernel, 0, "running", -1, -1, {}, node.host, "", true};
     int in[2], out[2];
     make_pipe(in);
     make_pipe(out);
-    std::vector<std::string> args = command;
+    std::vector<std::string> args;
+    if (!node.host.empty()) {
+      args = host_launcher(node.host, host_launchers);
+      for (const auto& word : args) c.launcher += (c.launcher.empty() ? "" : " ") + word;
+    }
+    args.insert(args.end(), command.begin(), command.end());
     args.push_back(spec.dir.string());
     args.insert(args.end(),
                 {"--node", node.name, "--rmw", rmw, "--domain", std::to_string(domain_id)});
@@ -77,7 +98,8 @@ NodeProcesses::NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::s
     posix_spawnattr_init(&attributes);
     posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
     posix_spawnattr_setpgroup(&attributes, group_);
-    const int rc = posix_spawn(&c.pid, argv[0], &actions, &attributes, argv.data(), environ);
+    // A launcher (ssh, ip) is looked up on PATH.
+    const int rc = posix_spawnp(&c.pid, argv[0], &actions, &attributes, argv.data(), environ);
     posix_spawnattr_destroy(&attributes);
     posix_spawn_file_actions_destroy(&actions);
     close(in[0]);
@@ -149,6 +171,10 @@ void NodeProcesses::supervise() {
               "node '" + c.name + "' (pid " + std::to_string(c.report.pid) + ")";
           failure_ = c.error.empty() ? who + " " + c.report.exit_status + " during the run"
                                      : who + ": " + c.error + " (" + c.report.exit_status + ")";
+          if (!c.report.host.empty() && !c.ready) {
+            failure_ += "; it was started on host " + c.report.host + " with '" + c.launcher +
+                        "' (--host " + c.report.host + "=COMMAND, or --netns)";
+          }
         }
       }
       cv_.notify_all();
@@ -157,7 +183,17 @@ void NodeProcesses::supervise() {
 }
 
 void NodeProcesses::on_line(Child& child, const std::string& line) {
-  if (line == "ready") {
+  if (line.rfind("host ", 0) == 0) {
+    const auto j = nlohmann::json::parse(line.substr(5), nullptr, false);
+    if (j.is_object()) {
+      child.report.hostname = j.value("hostname", "");
+      child.boot_id = j.value("boot_id", "");
+      static const std::string ours = this_host_identity().value("boot_id", "");
+      child.report.same_machine = !child.boot_id.empty() && child.boot_id == ours;
+      // Behind a launcher, the node is not the process we started.
+      if (child.report.same_machine) child.report.pid = j.value("pid", child.report.pid);
+    }
+  } else if (line == "ready") {
     child.ready = true;
   } else if (line.rfind("hung ", 0) == 0) {
     // The child's watchdog: one of its callbacks ran past the callback timeout.
@@ -234,7 +270,9 @@ std::string NodeProcesses::failure() const {
 std::vector<std::pair<int, std::string>> NodeProcesses::processes() const {
   std::lock_guard lock(mutex_);
   std::vector<std::pair<int, std::string>> out;
-  for (const auto& c : children_) out.emplace_back(c.report.pid, c.name);
+  for (const auto& c : children_) {
+    if (c.report.same_machine) out.emplace_back(c.report.pid, c.name);
+  }
   return out;
 }
 

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <functional>
+#include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -17,12 +18,22 @@
 
 namespace robotperf::harness {
 
+// Where a node process runs, as it reports itself on its first line ("host {json}"): the
+// machine's host name and boot id, and its own pid there.
+nlohmann::json this_host_identity();
+
+// The command prefix that starts a process on `host` (graph.yaml `host:`): `launchers`' entry
+// for it, else `ssh HOST --`.
+std::vector<std::string> host_launcher(
+    const std::string& host, const std::map<std::string, std::vector<std::string>>& launchers);
+
 class NodeProcesses {
  public:
   // Starts `command` + [<package dir>, --node, NAME, --rmw, RMW, --domain, D] + `extra` for
-  // every node.
+  // every node, behind its host's launcher (host_launcher) for a node placed on a host.
   NodeProcesses(const BenchmarkSpec& spec, const std::vector<std::string>& command,
-                const std::string& rmw, int domain_id, const std::vector<std::string>& extra = {});
+                const std::string& rmw, int domain_id, const std::vector<std::string>& extra = {},
+                const std::map<std::string, std::vector<std::string>>& host_launchers = {});
   ~NodeProcesses();
   NodeProcesses(const NodeProcesses&) = delete;
   NodeProcesses& operator=(const NodeProcesses&) = delete;
@@ -33,7 +44,8 @@ class NodeProcesses {
   bool wait_ready(int64_t deadline_ns, const std::function<bool()>& abandon);
   // A child that ended before shutdown() was asked: its description, else empty.
   std::string failure() const;
-  // Pid and node name of every child.
+  // Pid and node name of every child that runs on this machine (after wait_ready(): as each
+  // reported itself, so that a launcher in between does not count instead of the node).
   std::vector<std::pair<int, std::string>> processes() const;
   // Asks every child to finish (closes its stdin), collects its report, and
   // kills those that do not exit within `grace_s`.
@@ -57,6 +69,8 @@ class NodeProcesses {
     std::string error;    // what it reported before failing on its own (a callback threw)
     NodeReport report;
     nlohmann::json control_loop;  // null unless its kernel runs a control loop
+    std::string boot_id;          // of the machine it runs on, as it reported
+    std::string launcher;         // what started it on its host; empty: started here
   };
   void supervise();
   void on_line(Child& child, const std::string& line);

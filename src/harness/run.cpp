@@ -286,6 +286,24 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     throw std::invalid_argument(
         "--processes per-node needs an inter-process transport (--rmw fastdds or cyclonedds)");
   }
+  if (const auto hosts = spec.hosts(); !hosts.empty()) {
+    if (options.processes != ProcessLayout::kPerNode) {
+      throw std::invalid_argument("nodes placed on hosts (graph.yaml host: " + hosts.front() +
+                                  ") run in processes of their own: use --processes per-node");
+    }
+    if (options.mode == RunMode::kGrey) {
+      // Each host has its own clock and its own LTTng session: one trace cannot hold them.
+      throw std::invalid_argument(
+          "grey-box runs trace one host, and this graph places nodes on " + hosts.front() +
+          ": run it black-box (ping-pong timing stays on the runner's clock)");
+    }
+    for (const auto& host : hosts) {
+      std::string launcher;
+      for (const auto& word : host_launcher(host, options.host_launchers))
+        launcher += (launcher.empty() ? "" : " ") + word;
+      r.host_launchers[host] = launcher;
+    }
+  }
 
   // Everything is loaded before timing starts (DESIGN.md §3.4).
   std::vector<std::string> corrupt_messages;
@@ -412,7 +430,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
       graph_executor->add_node(node);
       local_nodes.push_back(node);
       kernel_nodes.push_back(node);
-      r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1, {}});
+      r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1, {}, "", "", true});
     }
   } else {
     std::vector<std::string> node_arguments = options.scheduling.node_arguments();
@@ -426,18 +444,10 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     node_arguments.insert(node_arguments.end(),
                           {"--callback-timeout", number_text(options.callback_timeout_s),
                            "--run-token", r.run_token});
-    children = std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw,
-                                               options.domain_id, node_arguments);
+    children =
+        std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw, options.domain_id,
+                                        node_arguments, options.host_launchers);
   }
-  std::vector<metrics::ResourceMonitor::Process> graph_processes;
-  if (children) {
-    for (const auto& [pid, name] : children->processes()) graph_processes.push_back({pid, name});
-    // The Playback and Monitor are part of what is measured, not interference.
-    graph_processes.push_back({getpid(), "robotperf (Playback, Monitor)"});
-  } else {
-    graph_processes.push_back({getpid(), "robotperf (graph, Playback, Monitor)"});
-  }
-  WindowMeasurement measurement(options, graph_processes);
 
   const int64_t connect_deadline =
       rmw::steady_now_ns() + static_cast<int64_t>(options.connect_timeout_s * 1e9);
@@ -450,6 +460,18 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
                          sigabbrev_np(options.interrupted->load()) +
                          " before the run started: nothing was measured");
   }
+  // Once ready, each child has said where it runs: its resources are sampled when that is here.
+  std::vector<metrics::ResourceMonitor::Process> graph_processes;
+  if (children) {
+    for (const auto& [pid, name] : children->processes()) graph_processes.push_back({pid, name});
+    // The Playback and Monitor are part of what is measured, not interference.
+    graph_processes.push_back({getpid(), "robotperf (Playback, Monitor)"});
+  } else {
+    graph_processes.push_back({getpid(), "robotperf (graph, Playback, Monitor)"});
+  }
+  WindowMeasurement measurement(options, graph_processes);
+  std::optional<NetworkLink::Counters> link_before;
+  if (options.network_link) link_before = options.network_link->counters();
 
   r.warnings = check_run_rules_for(r, measurement.probe_other_load());
   // Discovery has run at least as long as the graph took to connect.
@@ -520,6 +542,14 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     if (rmw::steady_now_ns() >= drain_end || !must_stop().empty()) break;
   }
   measurement.end(r);
+  if (link_before) {
+    const NetworkLink::Counters after = options.network_link->counters();
+    r.network_link = RunResult::LinkUse{
+        options.network_link->description(),
+        {after.bytes_out - link_before->bytes_out, after.bytes_in - link_before->bytes_in,
+         after.packets_out - link_before->packets_out, after.packets_in - link_before->packets_in,
+         after.dropped - link_before->dropped}};
+  }
   const Monitor::Tally tally = monitor.tally();
 
   if (std::string f = failure(); !f.empty()) r.errors.push_back(f);
@@ -639,6 +669,8 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
     std::cerr << "robotperf node " << node_name << ": " << e.what() << "\n";
     return 2;
   }
+  // First, so that the runner knows where we run even if we fail to start.
+  std::cout << "host " << this_host_identity().dump() << std::endl;
   rmw::TransportOptions t;
   t.domain_id = domain_id;
   if (!run_token.empty()) t.user_data = run_user_data(run_token);

@@ -100,6 +100,16 @@ std::string render_package_readme(const fs::path& package_dir) {
           << markdown_cell(topics) << " | " << markdown_cell(params.empty() ? "-" : params)
           << " |\n";
     }
+    for (const auto& host : spec.hosts()) {
+      std::string nodes;
+      for (const auto& n : spec.nodes) {
+        if (n.host == host) nodes += (nodes.empty() ? "`" : ", `") + n.name + "`";
+      }
+      out << "\nOn host `" << host << "`: " << nodes << " (started with `--host " << host
+          << "=COMMAND`, by default `ssh " << host
+          << " --`; `--netns` makes it a network "
+             "namespace of this machine).\n";
+    }
     out << "\nThe Monitor measures `" << spec.output.topic << "` (`" << spec.output.type
         << "`). A result is valid with at least " << spec.min_samples
         << " matched samples and at most " << spec.max_loss_percent << " % loss.\n\n";

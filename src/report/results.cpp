@@ -175,6 +175,46 @@ nlohmann::json transport_json(const std::string& rmw, int domain_id, const std::
   return t;
 }
 
+namespace {
+
+// Where a multi-host run's nodes ran, and the link robotperf made between the hosts (--netns).
+nlohmann::json network_json(const harness::RunResult& r) {
+  using nlohmann::json;
+  json hosts = json::array();
+  for (const auto& [host, launcher] : r.host_launchers) {
+    json h = {{"name", host}, {"launcher", launcher}, {"nodes", json::array()}};
+    for (const auto& n : r.nodes) {
+      if (n.host != host) continue;
+      h["nodes"].push_back(n.name);
+      if (!n.hostname.empty()) h["hostname"] = n.hostname;
+      h["same_machine"] = n.same_machine;
+    }
+    hosts.push_back(std::move(h));
+  }
+  json out = {{"hosts", hosts}, {"link", nullptr}};
+  if (const auto& use = r.network_link) {
+    const auto& d = use->link;
+    const auto& t = use->traffic;
+    out["link"] = {{"kind", "veth pair between network namespaces on this machine (--netns)"},
+                   {"runner_namespace", d.runner_namespace},
+                   {"remote_namespace", d.remote_namespace},
+                   {"runner_address", d.runner_address},
+                   {"remote_address", d.remote_address},
+                   {"mtu", d.mtu},
+                   {"rate", d.shaping.rate.empty() ? json(nullptr) : json(d.shaping.rate)},
+                   {"netem", d.shaping.netem.empty() ? json(nullptr) : json(d.shaping.netem)},
+                   {"traffic",
+                    {{"bytes_out", t.bytes_out},
+                     {"bytes_in", t.bytes_in},
+                     {"packets_out", t.packets_out},
+                     {"packets_in", t.packets_in},
+                     {"dropped", t.dropped}}}};
+  }
+  return out;
+}
+
+}  // namespace
+
 nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::MachineInfo& machine) {
   using nlohmann::json;
   json nodes = json::array();
@@ -184,6 +224,11 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
     node["cpu_user_s"] = n.cpu_user_s >= 0 ? json(n.cpu_user_s) : json(nullptr);
     node["cpu_system_s"] = n.cpu_system_s >= 0 ? json(n.cpu_system_s) : json(nullptr);
     if (!n.counters.empty()) node["counters"] = n.counters;
+    if (!n.hostname.empty()) node["hostname"] = n.hostname;
+    if (!n.host.empty()) {
+      node["host"] = n.host;
+      node["same_machine"] = n.same_machine;
+    }
     nodes.push_back(std::move(node));
   }
   // The RobotPerf headline is the maximum latency, taken from the same block so the two agree
@@ -280,6 +325,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"validity", {{"valid", r.valid}, {"reasons", r.invalid_reasons}}},
       {"functional", functional_json(r.functional)},
   };
+  if (!r.host_launchers.empty()) out["network"] = network_json(r);
   if (!r.control_loops.empty()) {
     json loops = json::array();
     const double us = 1e-3;
@@ -416,6 +462,26 @@ std::string summary_table(const harness::RunResult& r) {
     out << " (" << parameters << ")";
   }
   out << "\n";
+  for (const auto& [host, launcher] : r.host_launchers) {
+    std::string nodes, hostname;
+    for (const auto& n : r.nodes) {
+      if (n.host != host) continue;
+      nodes += (nodes.empty() ? "" : ", ") + n.name;
+      if (!n.hostname.empty()) hostname = n.hostname + (n.same_machine ? ", this machine" : "");
+    }
+    out << "host " << host << ": " << nodes << " (started with '" << launcher << "'"
+        << (hostname.empty() ? "" : "; ran on " + hostname) << ")\n";
+  }
+  if (const auto& use = r.network_link) {
+    const auto& d = use->link;
+    const auto& t = use->traffic;
+    out << "link: veth " << d.runner_address << " <-> " << d.remote_address << ", MTU " << d.mtu
+        << ", " << (d.shaping.rate.empty() ? "unshaped" : d.shaping.rate)
+        << (d.shaping.netem.empty() ? "" : ", netem " + d.shaping.netem) << "; during the run "
+        << format_fixed(static_cast<double>(t.bytes_out) / (1 << 20), 2) << " MiB out, "
+        << format_fixed(static_cast<double>(t.bytes_in) / (1 << 20), 2) << " MiB in, " << t.dropped
+        << " packets dropped by the shaping\n";
+  }
   out << "messages: sent " << r.sent << " (warm-up " << r.warmup << "), measured " << r.measured
       << ", matched " << r.matched << ", lost " << r.lost << " (" << format_fixed(r.loss_percent, 2)
       << " %)";

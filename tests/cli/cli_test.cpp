@@ -1,5 +1,6 @@
 // robotperf end to end, as a user runs it.
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -201,6 +202,95 @@ TEST_F(Cli, N2PongRunsInAProcessOfItsOwn) {
       robotperf_cli("run n2 --rmw intra --count 130 --quiet --output " + out_.string());
   EXPECT_EQ(intra.exit_code, 2) << intra.out;
   EXPECT_NE(intra.out.find("needs an inter-process transport"), std::string::npos) << intra.out;
+}
+
+// n3 with a launcher of the user's: `env` starts the pong here, as ssh would there.
+TEST_F(Cli, N3StartsThePongWithTheHostsLauncher) {
+  const Outcome o =
+      robotperf_cli("run n3 --host remote=env --count 130 --rate 50 --quiet --domain " + domain() +
+                    " --output " + out_.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("host remote: pong (started with 'env'"), std::string::npos) << o.out;
+  const auto j = result_json();
+  ASSERT_EQ(j["network"]["hosts"].size(), 1u) << j["network"].dump();
+  EXPECT_EQ(j["network"]["hosts"][0]["launcher"], "env");
+  EXPECT_EQ(j["network"]["hosts"][0]["nodes"][0], "pong");
+  EXPECT_EQ(j["network"]["hosts"][0]["same_machine"], true);
+  EXPECT_TRUE(j["network"]["link"].is_null());
+  EXPECT_EQ(j["nodes"][0]["host"], "remote");
+  // Behind a launcher, the node's own process is the one measured.
+  ASSERT_EQ(j["resources"]["processes"].size(), 2u);
+  EXPECT_EQ(j["resources"]["processes"][0]["pid"], j["nodes"][0]["pid"]);
+
+  const Outcome single =
+      robotperf_cli("run n3 --processes single --rmw fastdds --quiet --output " + out_.string());
+  EXPECT_EQ(single.exit_code, 2) << single.out;
+  EXPECT_NE(single.out.find("run in processes of their own"), std::string::npos) << single.out;
+  const Outcome unknown =
+      robotperf_cli("run n3 --host robot7=env --quiet --output " + out_.string());
+  EXPECT_EQ(unknown.exit_code, 2) << unknown.out;
+  EXPECT_NE(unknown.out.find("places no node on that host"), std::string::npos) << unknown.out;
+}
+
+// Why this process cannot make network namespaces (--netns), or empty when it can.
+std::string netns_missing() {
+  if (geteuid() != 0) return "--netns needs root to make network namespaces";
+  const pid_t child = fork();
+  if (child == 0) _exit(unshare(CLONE_NEWNET) == 0 ? 0 : 1);
+  int status = 0;
+  waitpid(child, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    return "root without CAP_SYS_ADMIN here: unshare(CLONE_NEWNET) is refused";
+  return {};
+}
+
+// n3 across two network namespaces robotperf makes: the messages cross the veth pair.
+TEST_F(Cli, N3CrossesTheLinkBetweenNetworkNamespaces) {
+  if (const auto why = netns_missing(); !why.empty()) GTEST_SKIP() << why;
+  for (const std::string rmw : {"fastdds", "cyclonedds"}) {
+    fs::remove_all(out_);
+    const Outcome o = robotperf_cli("run n3 --netns --rmw " + rmw +
+                                    " --workload payload_bytes=16384 --count 130 --rate 50 "
+                                    "--quiet --domain " +
+                                    domain() + " --output " + out_.string());
+    ASSERT_EQ(o.exit_code, 0) << rmw << "\n" << o.out;
+    const auto j = result_json();
+    const auto& link = j["network"]["link"];
+    ASSERT_TRUE(link.is_object()) << j["network"].dump();
+    EXPECT_EQ(link["rate"], "1gbit");
+    // Every ping went out over the link and every echo came back over it (not shared memory).
+    const uint64_t payloads = 130ull * 16384;
+    EXPECT_GE(link["traffic"]["bytes_out"].get<uint64_t>(), payloads) << link.dump();
+    EXPECT_GE(link["traffic"]["bytes_in"].get<uint64_t>(), payloads) << link.dump();
+    const std::string launcher = j["network"]["hosts"][0]["launcher"];
+    EXPECT_EQ(launcher, "ip netns exec " + link["remote_namespace"].get<std::string>());
+    EXPECT_EQ(j["functional"]["metrics"]["identical_fraction"]["value"], 1.0);
+    // Both namespaces are gone with the run.
+    EXPECT_FALSE(fs::exists("/run/netns/" + link["runner_namespace"].get<std::string>()));
+    EXPECT_FALSE(fs::exists("/run/netns/" + link["remote_namespace"].get<std::string>()));
+  }
+  const Outcome no_hosts = robotperf_cli("run n2 --netns --quiet --output " + out_.string());
+  EXPECT_EQ(no_hosts.exit_code, 2) << no_hosts.out;
+  EXPECT_NE(no_hosts.out.find("places no node on a host"), std::string::npos) << no_hosts.out;
+}
+
+// netem's delay shows in the round trip, or, on a kernel without sch_netem, one line says so.
+TEST_F(Cli, N3NetemDelaysTheLinkOrSaysItCannot) {
+  if (const auto why = netns_missing(); !why.empty()) GTEST_SKIP() << why;
+  const Outcome o = robotperf_cli(
+      "run n3 --netns --netem \"delay 2ms\" --count 130 --rate 50 "
+      "--quiet --domain " +
+      domain() + " --output " + out_.string());
+  if (o.exit_code == 2) {
+    EXPECT_NE(o.out.find("this kernel has no netem qdisc"), std::string::npos) << o.out;
+    EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << o.out;
+    return;
+  }
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  const auto j = result_json();
+  // 2 ms each way.
+  EXPECT_GE(j["latency_ms"]["from_sent"]["p50"].get<double>(), 4.0) << j["latency_ms"].dump();
+  EXPECT_EQ(j["network"]["link"]["netem"], "delay 2ms");
 }
 
 // a3 and a4 on every transport: valid, with a functional section that passed.

@@ -39,6 +39,9 @@ struct NodeSpec {
   std::string name;
   std::string kernel;
   std::string backend = "cpu";
+  // The host it runs on (graph.yaml `host:`, a name the run maps to a launcher); empty: the
+  // runner's. A node on a host runs in a process of its own there.
+  std::string host;
   std::map<std::string, std::string> parameters;
   std::map<std::string, std::string> topics;  // port -> topic
   rmw::QoS qos;
@@ -76,7 +79,12 @@ struct BenchmarkSpec {
   std::optional<FunctionalSpec> functional;
 
   const NodeSpec* find_node(const std::string& name) const;
+  // The hosts the nodes are placed on (graph.yaml `host:`), sorted, without the runner's.
+  std::vector<std::string> hosts() const;
 };
+
+// A name graph.yaml's `host:` and --host accept: letters, digits, '.', '-' and '_'.
+bool valid_host_name(const std::string& name);
 
 // Reads and checks <dir>/benchmark.yaml and <dir>/graph.yaml, loading the plug-ins graph.yaml
 // names first; throws BenchmarkError.

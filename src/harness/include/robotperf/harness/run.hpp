@@ -14,6 +14,7 @@
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/functional.hpp"
+#include "robotperf/harness/network_link.hpp"
 #include "robotperf/harness/scheduling.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
 #include "robotperf/metrics/power.hpp"
@@ -66,6 +67,11 @@ struct RunOptions {
   // For per-node runs: the robotperf executable and the arguments that make it
   // run one node ("node" subcommand); the runner appends its own.
   std::vector<std::string> node_command;
+  // The command prefix that runs a command on each host nodes are placed on (graph.yaml
+  // `host:`), e.g. {"ssh", "robot-b", "--"} (the default) or {"ip", "netns", "exec", "ns"}.
+  std::map<std::string, std::vector<std::string>> host_launchers;
+  // The link between the runner's host and the others, when robotperf made it (--netns).
+  const NetworkLink* network_link = nullptr;
   // Power sources and their sampling period; sampled during the measured window only.
   metrics::PowerOptions power;
   // Where the graph runs: pinned CPUs, real-time priority, locked memory. In a single-process
@@ -108,6 +114,9 @@ struct NodeReport {
   double cpu_system_s = -1;
   // What the kernel counted (plugin::NodeCounters), e.g. inputs that never paired.
   std::map<std::string, uint64_t> counters;
+  std::string host;          // graph.yaml `host:`; empty: the runner's
+  std::string hostname;      // of the machine it ran on, as it reported (per-node runs)
+  bool same_machine = true;  // as the runner's (same boot id): its pid's resources were sampled
 };
 
 // The control loop of a kernel that runs one (plugin::ControlLoopSource), over the whole run:
@@ -221,6 +230,15 @@ struct RunResult {
   bool valid = false;
   std::vector<std::string> invalid_reasons;
   std::vector<NodeReport> nodes;
+  // The launcher of each host the graph placed nodes on (graph.yaml `host:`), as run.
+  std::map<std::string, std::string> host_launchers;
+  // The link robotperf made between the hosts (--netns), and what crossed it during the run
+  // (discovery and warm-up included; bytes on the wire, headers and repairs included).
+  struct LinkUse {
+    NetworkLink::Description link;
+    NetworkLink::Counters traffic;
+  };
+  std::optional<LinkUse> network_link;
   std::vector<MessageRecord> records;
   int domain_id = 0;
   // What tells this run's messages and participants from another's: the stamp of message k is
