@@ -715,7 +715,7 @@ ReportInput load_report_inputs(const std::vector<fs::path>& paths) {
       for (const auto& e : fs::recursive_directory_iterator(p)) {
         if (!e.is_regular_file()) continue;
         const auto name = e.path().filename().string();
-        if (e.path().extension() == ".json" || name == "benchmark.yaml") files.push_back(e.path());
+        if (may_be_run_file(e.path()) || name == "benchmark.yaml") files.push_back(e.path());
       }
       std::ranges::sort(files);
       for (const auto& f : files) load_file(f, false);

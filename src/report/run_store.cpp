@@ -244,6 +244,12 @@ StoredRun load_run(const fs::path& path) {
   return run;
 }
 
+bool may_be_run_file(const fs::path& path) {
+  const std::string name = path.filename().string();
+  return path.extension() == ".json" && !name.ends_with(".series.json") &&
+         !name.ends_with(".sweep.json");
+}
+
 RunScan scan_results(const fs::path& dir) {
   if (!fs::is_directory(dir))
     throw ReportError(dir.string() +
@@ -252,11 +258,7 @@ RunScan scan_results(const fs::path& dir) {
   RunScan scan;
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(dir)) {
-    // A --repeat series or --sweep summary sits beside its runs: it is not a run.
-    const std::string name = e.path().filename().string();
-    if (e.is_regular_file() && e.path().extension() == ".json" && !name.ends_with(".series.json") &&
-        !name.ends_with(".sweep.json"))
-      files.push_back(e.path());
+    if (e.is_regular_file() && may_be_run_file(e.path())) files.push_back(e.path());
   }
   std::ranges::sort(files);
   for (const auto& f : files) {

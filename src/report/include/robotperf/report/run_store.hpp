@@ -80,6 +80,10 @@ struct RunScan {
 // exist.
 RunScan scan_results(const std::filesystem::path& dir);
 
+// A .json file that may be a run: not the summary of a --repeat series or --sweep written
+// beside its runs (.series.json, .sweep.json).
+bool may_be_run_file(const std::filesystem::path& path);
+
 // A short platform name from a machine description (robotperf sysinfo JSON):
 // "AMD Ryzen 7 5800X", "Intel Core i7-12700H + NVIDIA GeForce RTX 3060", "NVIDIA Jetson AGX Orin".
 std::string hardware_label(const nlohmann::json& machine);
