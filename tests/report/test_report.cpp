@@ -309,6 +309,9 @@ TEST_F(Report, BadInputsGiveOneClearLine) {
   // parse error, and it escaped load_run.
   std::ofstream(dir_ / "huge.json")
       << R"({"schema": "robotperf.result/1", "x": 37.14e228590092565})";
+  // The summaries --sweep and --repeat write beside their runs are not runs, and not bad input.
+  std::ofstream(dir_ / "n3-x.sweep.json") << R"({"schema": "robotperf.sweep/1"})";
+  std::ofstream(dir_ / "a1-x.series.json") << R"({"schema": "robotperf.series/1"})";
   const auto input = load_report_inputs({dir_});  // skipped inside a folder
   ASSERT_EQ(input.skipped.size(), 2u);
   EXPECT_NE(input.skipped[0].find("garbage.json"), std::string::npos);
