@@ -225,8 +225,8 @@ int describe_benchmark(const Roots& roots, const std::string& id) {
   if (s.functional) {
     const auto& f = *s.functional;
     std::cout << "functional: evaluator " << f.evaluator << ", "
-              << (f.sample ? std::to_string(f.sample) : std::string("every"))
-              << " sampled outputs\n";
+              << (f.sample ? std::to_string(f.sample) + " sampled outputs\n"
+                           : std::string("every measured output\n"));
     for (const auto& [role, stream] : f.truth)
       std::cout << "  truth " << role << " <- stream " << stream << "\n";
     for (const auto& [name, value] : f.parameters)

@@ -286,8 +286,10 @@ void Monitor::on_message(const rmw::MessagePtr& msg, const graph::MessageInfo& i
   // for the next frame, a cost the measurement would add to the graph.
   // keep_ is written only before the run starts.
   rmw::MessagePtr kept;
-  if (id && !keep_.empty() && keep_[*id])
+  const bool chosen = id && !keep_.empty() && keep_[*id];
+  if (chosen && on_arrival_ == nullptr)
     kept = shared_with_graph ? type_->copy_with_stamp_ns(msg.get(), stamp) : msg;
+  bool evaluate = false;
   {
     std::lock_guard lock(mutex_);
     ++received_;
@@ -308,9 +310,30 @@ void Monitor::on_message(const rmw::MessagePtr& msg, const graph::MessageInfo& i
         kept_index_[*id] = tally_.kept.size();
         tally_.kept.emplace_back(*id, std::move(kept));
       }
+      evaluate = chosen && on_arrival_ != nullptr;
+      if (evaluate) ++evaluations_pending_;
     }
   }
   cv_.notify_all();
+  if (evaluate) {
+    // After the reception time was taken: the check is not part of the latency.
+    {
+      std::lock_guard lock(evaluate_mutex_);
+      on_arrival_->add(msg.get(), static_cast<std::size_t>(*id % on_arrival_frames_));
+    }
+    {
+      std::lock_guard lock(mutex_);
+      --evaluations_pending_;
+      ++tally_.evaluated_on_arrival;
+    }
+    cv_.notify_all();
+  }
+}
+
+void Monitor::evaluate_on_arrival(plugin::FunctionalEvaluator& evaluator, std::size_t frames) {
+  std::lock_guard lock(mutex_);
+  on_arrival_ = &evaluator;
+  on_arrival_frames_ = std::max<std::size_t>(frames, 1);
 }
 
 void Monitor::keep_outputs(const std::vector<uint64_t>& ids) {
@@ -345,7 +368,9 @@ bool Monitor::wait_for(std::size_t expected, int64_t deadline_ns) {
 }
 
 Monitor::Tally Monitor::tally() const {
-  std::lock_guard lock(mutex_);
+  std::unique_lock lock(mutex_);
+  // An output being checked on arrival counts once its check returns.
+  cv_.wait(lock, [&] { return evaluations_pending_ == 0; });
   return tally_;
 }
 

@@ -80,6 +80,10 @@ class Monitor {
   // Also subscribes `topic` (messages of `type` stamped with IDs) and keeps, for the IDs given to
   // keep_outputs, the last message of each: the truth observed during the run. Before the run.
   void keep_observed_truth(const std::string& topic, const msgs::TypeSupport& type);
+  // Instead of keeping them, gives the outputs chosen by keep_outputs to `evaluator` as they
+  // arrive (the first reception of each; plugin::EvaluatorInfo::on_arrival), output ID k as
+  // frame k mod `frames`. Before the run; the evaluator outlives it.
+  void evaluate_on_arrival(plugin::FunctionalEvaluator& evaluator, std::size_t frames);
 
   // Waits until `expected` measured messages arrived or `deadline_ns` passes.
   bool wait_for(std::size_t expected, int64_t deadline_ns);
@@ -94,6 +98,7 @@ class Monitor {
     // State outputs: receptions of an ID already received (not duplicates).
     std::size_t repeats = 0;
     std::map<uint64_t, rmw::MessagePtr> observed_truth;  // by keep_observed_truth
+    std::size_t evaluated_on_arrival = 0;                // by evaluate_on_arrival
   };
   Tally tally() const;
   std::size_t received() const;
@@ -110,8 +115,12 @@ class Monitor {
   bool state_;
   std::vector<bool> keep_;               // per id
   std::vector<std::size_t> kept_index_;  // per id: where in tally_.kept, or SIZE_MAX
+  plugin::FunctionalEvaluator* on_arrival_ = nullptr;
+  std::size_t on_arrival_frames_ = 1;
+  std::size_t evaluations_pending_ = 0;  // outputs received whose add() has not returned yet
   mutable std::mutex mutex_;
-  std::condition_variable cv_;
+  std::mutex evaluate_mutex_;  // one add() at a time, outside mutex_
+  mutable std::condition_variable cv_;
   Tally tally_;
   std::size_t received_ = 0;
 };

@@ -62,16 +62,18 @@ std::vector<uint64_t> functional_sample_ids(std::size_t count, std::size_t warmu
   return ids;
 }
 
+std::size_t truth_frames(const FunctionalSpec& spec, const Dataset& dataset) {
+  const plugin::EvaluatorInfo& info = evaluator_entry(spec.evaluator).info;
+  return truth_streams(spec, dataset)[info.truth_roles.front()].messages.size();
+}
+
 FunctionalResult evaluate_functional(const FunctionalSpec& spec, const Dataset& dataset,
                                      const std::vector<std::pair<uint64_t, rmw::MessagePtr>>& kept,
                                      std::size_t requested,
                                      const std::map<uint64_t, rmw::MessagePtr>& observed_truth) {
-  FunctionalResult r;
-  r.evaluator = spec.evaluator;
-  r.requested = requested;
   const auto evaluator = make_evaluator(spec, dataset);
   const plugin::EvaluatorInfo& info = evaluator_entry(spec.evaluator).info;
-  const std::size_t frames = truth_streams(spec, dataset)[info.truth_roles.front()].messages.size();
+  const std::size_t frames = truth_frames(spec, dataset);
   for (const auto& [id, msg] : kept) {
     if (info.observed_truth_type.empty()) {
       evaluator->add(msg.get(), static_cast<std::size_t>(id % frames));
@@ -81,9 +83,20 @@ FunctionalResult evaluate_functional(const FunctionalSpec& spec, const Dataset& 
                               truth == observed_truth.end() ? nullptr : truth->second.get(),
                               static_cast<std::size_t>(id % frames));
     }
-    ++r.evaluated;
   }
-  const auto values = evaluator->metrics();
+  return judge_functional(spec, *evaluator, kept.size(), requested);
+}
+
+FunctionalResult judge_functional(const FunctionalSpec& spec,
+                                  const plugin::FunctionalEvaluator& evaluator,
+                                  std::size_t evaluated, std::size_t requested) {
+  FunctionalResult r;
+  r.evaluator = spec.evaluator;
+  r.requested = requested;
+  r.evaluated = evaluated;
+  const plugin::EvaluatorInfo& info = evaluator_entry(spec.evaluator).info;
+  r.on_arrival = info.on_arrival;
+  const auto values = evaluator.metrics();
   for (const auto& m : info.metrics) {
     FunctionalMetric metric{m.name, m.unit, std::nan(""), {}, true};
     if (auto it = values.find(m.name); it != values.end()) metric.value = it->second;
@@ -106,11 +119,10 @@ FunctionalResult evaluate_functional(const FunctionalSpec& spec, const Dataset& 
     }
     r.metrics.push_back(std::move(metric));
   }
-  for (const auto& p : evaluator->problems()) r.reasons.push_back(p);
+  for (const auto& p : evaluator.problems()) r.reasons.push_back(p);
   if (r.evaluated == 0) {
     r.reasons.insert(r.reasons.begin(), "no output could be evaluated (none of the " +
-                                            std::to_string(requested) +
-                                            " sampled outputs arrived)");
+                                            std::to_string(requested) + " chosen outputs arrived)");
   }
   r.valid = r.reasons.empty();
   return r;

@@ -403,10 +403,19 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   std::vector<uint64_t> functional_ids;
   // A bag brings no ground truth to check the outputs against.
   const bool evaluate_outputs = spec.functional && !options.bag;
+  // An evaluator that checks each output as it arrives (a state output's later receptions, or a
+  // truth observed during the run, need the outputs kept to the end instead).
+  std::unique_ptr<plugin::FunctionalEvaluator> on_arrival;
   if (evaluate_outputs) {
-    make_evaluator(*spec.functional, dataset);  // a missing truth stream fails before timing
+    // A missing truth stream fails before timing.
+    auto evaluator = make_evaluator(*spec.functional, dataset);
     functional_ids = functional_sample_ids(r.count, r.warmup, spec.functional->sample);
     monitor.keep_outputs(functional_ids);
+    const auto& info = plugin::registry().find_evaluator(spec.functional->evaluator)->info;
+    if (info.on_arrival && !spec.output.state && spec.functional->observed_truth_topic.empty()) {
+      on_arrival = std::move(evaluator);
+      monitor.evaluate_on_arrival(*on_arrival, truth_frames(*spec.functional, dataset));
+    }
     if (const auto& topic = spec.functional->observed_truth_topic; !topic.empty()) {
       const std::string& type =
           plugin::registry().find_evaluator(spec.functional->evaluator)->info.observed_truth_type;
@@ -644,7 +653,10 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     }
   }
   // After timing: the evaluation costs nothing the run measured.
-  if (evaluate_outputs) {
+  if (on_arrival) {
+    r.functional = judge_functional(*spec.functional, *on_arrival, tally.evaluated_on_arrival,
+                                    functional_ids.size());
+  } else if (evaluate_outputs) {
     r.functional = evaluate_functional(*spec.functional, dataset, tally.kept, functional_ids.size(),
                                        tally.observed_truth);
   }

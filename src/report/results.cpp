@@ -110,6 +110,7 @@ nlohmann::json functional_json(const std::optional<harness::FunctionalResult>& f
   }
   return {{"evaluator", f->evaluator},
           {"samples", {{"requested", f->requested}, {"evaluated", f->evaluated}}},
+          {"checked_on_arrival", f->on_arrival},
           {"metrics", metrics},
           {"valid", f->valid},
           {"reasons", f->reasons}};
@@ -555,7 +556,7 @@ std::string summary_table(const harness::RunResult& r) {
   if (r.functional) {
     const auto& f = *r.functional;
     out << "\nfunctional (" << f.evaluator << ", " << f.evaluated << " of " << f.requested
-        << " sampled outputs):\n";
+        << (f.on_arrival ? " chosen outputs, each checked on arrival):\n" : " sampled outputs):\n");
     for (const auto& m : f.metrics) {
       std::snprintf(line, sizeof line, "  %-20s %12s %-9s", m.name.c_str(),
                     general(m.value).c_str(), m.unit.c_str());

@@ -4,6 +4,7 @@
 #include "black_box.hpp"
 #include "robotperf/graph/executor.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/plugin/evaluator.hpp"
 
 namespace robotperf::harness {
 namespace {
@@ -39,6 +40,49 @@ TEST(Monitor, KeepsACopyOfAnOutputSharedWithTheGraphOverIntra) {
   EXPECT_EQ(kept->header.stamp.to_ns(), ids.stamp_ns(1));
   EXPECT_EQ(kept->data, published->data);
   EXPECT_EQ(published.use_count(), 1) << "the Monitor still holds the graph's message";
+}
+
+// An evaluator that records what it was given.
+class RecordingEvaluator final : public plugin::FunctionalEvaluator {
+ public:
+  void add(const void* output, std::size_t frame) override {
+    frames.push_back(frame);
+    bytes.push_back(static_cast<const msgs::Image*>(output)->data.at(0));
+  }
+  std::map<std::string, double> metrics() const override { return {}; }
+  std::vector<std::size_t> frames;
+  std::vector<uint8_t> bytes;
+};
+
+// Checked on arrival: each chosen output once, as its frame, and nothing held.
+TEST(Monitor, GivesChosenOutputsToAnOnArrivalEvaluatorOnceEach) {
+  graph::Context context(rmw::make_transport("intra", {}));
+  const BoundaryTopic output{"/out", "sensor_msgs/msg/Image", "", rmw::QoS{}};
+  const MessageIds ids{1'000'000'000, 100'000'000, 5};
+  Monitor monitor(context, output, ids, 1);
+  monitor.keep_outputs({1, 2, 4});
+  RecordingEvaluator evaluator;
+  monitor.evaluate_on_arrival(evaluator, 3);
+  graph::Executor executor(1);
+  executor.add_node(monitor.node());
+  graph::Node graph_node(context, "graph");
+  auto publisher = graph_node.create_publisher<msgs::Image>("/out");
+  executor.start();
+  for (uint64_t id : {0, 1, 2, 2, 3, 4}) {  // 2 twice: a duplicate is not checked again
+    auto m = std::make_shared<msgs::Image>();
+    m->header.stamp = msgs::Time::from_ns(ids.stamp_ns(id));
+    m->data.assign(4, static_cast<uint8_t>(id));
+    publisher->publish(std::shared_ptr<const msgs::Image>(m));
+  }
+  ASSERT_TRUE(monitor.wait_for(4, rmw::steady_now_ns() + 10'000'000'000));
+  // Read while the Monitor still runs: an output whose check is under way is waited for.
+  const Monitor::Tally tally = monitor.tally();
+  executor.stop();
+  EXPECT_TRUE(tally.kept.empty());
+  EXPECT_EQ(tally.evaluated_on_arrival, 3u);
+  EXPECT_EQ(tally.duplicates, 1u);
+  EXPECT_EQ(evaluator.frames, (std::vector<std::size_t>{1, 2, 1}));  // id 4 is frame 4 mod 3
+  EXPECT_EQ(evaluator.bytes, (std::vector<uint8_t>{1, 2, 4}));
 }
 
 }  // namespace

@@ -104,7 +104,8 @@ void register_category(plugin::Registrar& registrar) {
        .output_type = "sensor_msgs/msg/Image",
        .truth_roles = {"sent"},
        .metrics = {{"identical_fraction", "fraction", "echoes equal to what was sent"},
-                   {"echoes_checked", "echoes", "echoes compared"}}},
+                   {"echoes_checked", "echoes", "echoes compared"}},
+       .on_arrival = true},
       [](const plugin::TruthStreams& t, const plugin::Parameters&) {
         return std::make_unique<EchoEvaluator>(t["sent"]);
       });

@@ -63,6 +63,7 @@ struct FunctionalMetric {
 
 struct FunctionalResult {
   std::string evaluator;
+  bool on_arrival = false;    // checked as each output arrived (plugin::EvaluatorInfo)
   std::size_t requested = 0;  // outputs chosen for evaluation
   std::size_t evaluated = 0;  // of which the Monitor received and the evaluator read
   std::vector<FunctionalMetric> metrics;
@@ -70,8 +71,16 @@ struct FunctionalResult {
   std::vector<std::string> reasons;  // why not, one line each
 };
 
-// Evaluates the kept outputs (message ID, output) against the dataset: output ID k is frame
-// k mod (frames of the truth streams).
+// Output ID k is frame k mod truth_frames() of the truth streams.
+std::size_t truth_frames(const FunctionalSpec& spec, const Dataset& dataset);
+
+// The evaluator's metrics judged against the thresholds, after it was given `evaluated` of the
+// `requested` outputs.
+FunctionalResult judge_functional(const FunctionalSpec& spec,
+                                  const plugin::FunctionalEvaluator& evaluator,
+                                  std::size_t evaluated, std::size_t requested);
+
+// Evaluates the kept outputs (message ID, output) against the dataset.
 FunctionalResult evaluate_functional(
     const FunctionalSpec& spec, const Dataset& dataset,
     const std::vector<std::pair<uint64_t, rmw::MessagePtr>>& kept, std::size_t requested,

@@ -35,6 +35,11 @@ struct EvaluatorInfo {
   std::string observed_truth_type{};
   // graph.yaml `functional: parameters:`.
   std::vector<ParameterInfo> parameters{};
+  // add() is cheap (a comparison, no accumulation of outputs): the Monitor calls it as each
+  // chosen output arrives, one call at a time, instead of holding the outputs until the run ends.
+  // Lets a benchmark check every output of a long run or of large messages (graph.yaml
+  // `sample: 0`) in bounded memory. Not for evaluators with an observed_truth_type.
+  bool on_arrival = false;
 };
 
 // The dataset streams an evaluator was given for its truth roles.

@@ -4,4 +4,4 @@
 #pragma once
 
 // Raised whenever a type or function a plug-in sees changes incompatibly.
-#define ROBOTPERF_PLUGIN_API_VERSION 1
+#define ROBOTPERF_PLUGIN_API_VERSION 2  // 2: EvaluatorInfo::on_arrival
