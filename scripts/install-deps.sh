@@ -7,6 +7,7 @@ packages=(
   g++ cmake make pkg-config git
   iproute2  # ip and tc: --netns (n3, n4)
   libfastrtps-dev libfastcdr-dev cyclonedds-dev cyclonedds-tools  # cyclonedds-tools: idlc, for bench_transport
+  libssl-dev  # DDS Security keystores (security init)
   libopencv-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   libsqlite3-dev ros2-test-interface-files

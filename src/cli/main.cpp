@@ -37,6 +37,7 @@
 #include "robotperf/report/run_store.hpp"
 #include "robotperf/report/series.hpp"
 #include "robotperf/report/sweep.hpp"
+#include "robotperf/rmw/security.hpp"
 #include "robotperf/sysinfo/machine.hpp"
 #include "robotperf/tracing/analysis.hpp"
 #include "robotperf/tracing/ctf.hpp"
@@ -283,6 +284,7 @@ struct RunArgs {
   bool netns = false;
   std::string link_rate = "1gbit";
   std::string netem;
+  std::string security;  // a keystore: DDS Security for every participant of the run
 };
 
 // JSON as text for a file or the terminal: bytes that are not UTF-8 (names from a trace or a bag)
@@ -646,6 +648,7 @@ int run(const Roots& roots, const RunArgs& a) {
   const std::string processes = a.processes.value_or(spec.processes);
   o.rmw = a.rmw.value_or(processes == "per-node" ? "fastdds" : "intra");
   o.host_launchers = host_launchers(spec, a);
+  o.keystore = a.security;
   // Made before any participant, so that all of this process's sockets are on the runner's side.
   std::optional<harness::NetworkLink> link;
   if (a.netns) {
@@ -1064,6 +1067,11 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--netem", ra.netem,
                       "--netns: netem's delay, jitter and loss on the link, e.g. "
                       "\"delay 1ms 0.1ms loss 0.1%\"");
+  run_cmd
+      ->add_option("--security", ra.security,
+                   "DDS Security: every participant presents the /robotperf enclave of this "
+                   "keystore (robotperf security init DIR makes one)")
+      ->type_name("DIR");
   run_cmd->add_option("--output", ra.output, "folder for the results files (default: ./results)");
   run_cmd->add_flag("--csv", ra.csv, "also write the per-message latencies as CSV");
   run_cmd->add_flag("--quiet", ra.quiet, "no progress line");
@@ -1217,6 +1225,22 @@ int main(int argc, char** argv) {
   node_cmd->add_option("--callback-timeout", node_callback_timeout_s);
   std::string node_run_token;
   node_cmd->add_option("--run-token", node_run_token);
+  std::string node_keystore;
+  node_cmd->add_option("--security", node_keystore);
+
+  std::string keystore_dir;
+  std::vector<std::string> keystore_enclaves;
+  auto* security_cmd = app.add_subcommand("security", "DDS Security keystores (SROS2 layout)");
+  security_cmd->require_subcommand(1);
+  auto* security_init_cmd = security_cmd->add_subcommand(
+      "init",
+      "make a keystore: a CA, and per enclave a certificate, key, and signed governance and "
+      "permissions (adds missing enclaves to an existing keystore)");
+  security_init_cmd->add_option("dir", keystore_dir, "the keystore folder")->required();
+  security_init_cmd
+      ->add_option("--enclave", keystore_enclaves,
+                   "an enclave to make, e.g. /my_robot/camera (default: /robotperf); repeatable")
+      ->type_name("NAME");
   SchedulingArgs node_scheduling;
   add_scheduling_options(node_cmd, node_scheduling);
 
@@ -1283,7 +1307,18 @@ int main(int argc, char** argv) {
       if (node_update_rate) harness::override_update_rate(spec, *node_update_rate);
       return harness::run_node_process(spec, node_name, node_rmw, node_domain,
                                        node_scheduling.options(), node_callback_timeout_s,
-                                       node_run_token);
+                                       node_run_token, node_keystore);
+    }
+    if (*security_init_cmd) {
+      if (keystore_enclaves.empty()) keystore_enclaves.push_back(rmw::kDefaultEnclave);
+      rmw::create_keystore(keystore_dir, keystore_enclaves);
+      std::cout << "keystore: " << fs::absolute(keystore_dir).string() << "\n";
+      for (const auto& enclave : keystore_enclaves) {
+        std::cout << "  enclave " << enclave << ": "
+                  << rmw::describe(rmw::enclave_files(keystore_dir, enclave)) << "\n";
+      }
+      std::cout << "use it with: robotperf run n4 --netns --security " << keystore_dir << "\n";
+      return kExitOk;
     }
   } catch (const plugin::PluginError& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
@@ -1307,6 +1342,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "robotperf: unreadable trace: %s\n", e.what());
     return kExitUsage;
   } catch (const harness::BenchmarkError& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitUsage;
+  } catch (const rmw::SecurityError& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
     return kExitUsage;
   } catch (const harness::NetworkSetupError& e) {

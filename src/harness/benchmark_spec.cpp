@@ -122,7 +122,7 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   const YAML::Node& root = file.root();
   file.allow_keys(
       root, {"plugins", "dataset", "rate_hz", "count", "warmup", "drain_s", "executor_threads",
-             "processes", "validity", "inputs", "output", "nodes", "functional"});
+             "processes", "security", "validity", "inputs", "output", "nodes", "functional"});
   // Plug-ins first: they may register the kernels, dataset and evaluator named below.
   if (const YAML::Node plugins = root["plugins"]; plugins.IsDefined()) {
     if (!plugins.IsSequence()) file.fail(plugins, "'plugins' must be a list of files");
@@ -146,6 +146,11 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   spec.processes = file.get<std::string>(root, "processes", "single");
   if (spec.processes != "single" && spec.processes != "per-node")
     file.fail(root["processes"], "processes must be 'single' or 'per-node'");
+  if (const YAML::Node security = root["security"]; security.IsDefined()) {
+    if (!security.IsScalar() || (security.Scalar() != "required" && security.Scalar() != "none"))
+      file.fail(security, "security must be 'required' (DDS Security, --security) or 'none'");
+    spec.security_required = security.Scalar() == "required";
+  }
   if (!(spec.drain_s >= 0)) file.fail(root["drain_s"], "drain_s must be >= 0");
   spec.executor_threads = file.get<std::size_t>(root, "executor_threads", 1);
   // More threads than that only contend: the graph's nodes run one callback at a time each.

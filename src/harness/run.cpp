@@ -181,6 +181,7 @@ std::unique_ptr<rmw::Transport> transport_for(const RunOptions& options,
   rmw::TransportOptions t;
   t.domain_id = options.domain_id;
   t.user_data = user_data;
+  if (!options.keystore.empty()) t.security = rmw::enclave_files(options.keystore);
   return rmw::make_transport(options.rmw, t);
 }
 
@@ -285,6 +286,23 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   if (options.processes == ProcessLayout::kPerNode && options.rmw == "intra") {
     throw std::invalid_argument(
         "--processes per-node needs an inter-process transport (--rmw fastdds or cyclonedds)");
+  }
+  if (spec.security_required && options.keystore.empty()) {
+    throw std::invalid_argument(spec.id +
+                                " runs with DDS Security: give --security DIR (a keystore; "
+                                "robotperf security init DIR makes one)");
+  }
+  if (!options.keystore.empty()) {
+    if (options.rmw == "intra")
+      throw std::invalid_argument("--security secures DDS: use --rmw fastdds or cyclonedds");
+    if (options.domain_id > rmw::kLastSecuredDomain) {
+      throw std::invalid_argument("--security: domain " + std::to_string(options.domain_id) +
+                                  " is beyond the keystore's permissions (domains 0 to " +
+                                  std::to_string(rmw::kLastSecuredDomain) + ")");
+    }
+    // Checked here, before anything starts: a missing file is one line.
+    r.security = rmw::describe(rmw::enclave_files(options.keystore));
+    r.keystore = std::filesystem::absolute(options.keystore);
   }
   if (const auto hosts = spec.hosts(); !hosts.empty()) {
     if (options.processes != ProcessLayout::kPerNode) {
@@ -453,6 +471,8 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     node_arguments.insert(node_arguments.end(),
                           {"--callback-timeout", number_text(options.callback_timeout_s),
                            "--run-token", r.run_token});
+    if (!r.keystore.empty())
+      node_arguments.insert(node_arguments.end(), {"--security", r.keystore.string()});
     children =
         std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw, options.domain_id,
                                         node_arguments, options.host_launchers);
@@ -665,7 +685,8 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
 
 int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
                      const std::string& rmw, int domain_id, const SchedulingOptions& scheduling,
-                     double callback_timeout_s, const std::string& run_token) {
+                     double callback_timeout_s, const std::string& run_token,
+                     const std::filesystem::path& keystore) {
   // Ctrl-C in a terminal reaches the whole process group: the runner stops us when it is done.
   signal(SIGINT, SIG_IGN);
   const NodeSpec* node_spec = spec.find_node(node_name);
@@ -686,6 +707,7 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   rmw::TransportOptions t;
   t.domain_id = domain_id;
   if (!run_token.empty()) t.user_data = run_user_data(run_token);
+  if (!keystore.empty()) t.security = rmw::enclave_files(keystore);
   graph::Context context(rmw::make_transport(rmw, t));
   trace_run_join();
   auto node = make_kernel_node(*node_spec, context, spec.workload);

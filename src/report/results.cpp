@@ -12,6 +12,7 @@
 #include "robotperf/build_info.hpp"
 #include "robotperf/report/histogram.hpp"
 #include "robotperf/report/run_store.hpp"
+#include "robotperf/rmw/security.hpp"
 
 namespace robotperf::report {
 namespace {
@@ -262,6 +263,10 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
           e.qos.durability == rmw::Durability::kTransientLocal ? "transient_local" : "volatile"}});
   }
   software["transport"]["qos"] = qos;
+  software["transport"]["security"] = r.security.empty() ? json(nullptr)
+                                                         : json{{"keystore", r.keystore.string()},
+                                                                {"enclave", rmw::kDefaultEnclave},
+                                                                {"plugins", r.security}};
   const auto& sched = r.scheduling;
   const json scheduling = {
       {"cpus", sched.cpus.empty() ? json(nullptr) : json(harness::format_cpu_list(sched.cpus))},
@@ -483,6 +488,8 @@ std::string summary_table(const harness::RunResult& r) {
         << format_fixed(static_cast<double>(t.bytes_in) / (1 << 20), 2) << " MiB in, " << t.dropped
         << " packets dropped by the shaping\n";
   }
+  if (!r.security.empty())
+    out << "security: " << r.security << " (keystore " << r.keystore.string() << ")\n";
   out << "messages: sent " << r.sent << " (warm-up " << r.warmup << "), measured " << r.measured
       << ", matched " << r.matched << ", lost " << r.lost << " (" << format_fixed(r.loss_percent, 2)
       << " %)";

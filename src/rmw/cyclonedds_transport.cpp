@@ -11,6 +11,7 @@
 #include <dds/ddsi/ddsi_serdata.h>
 #include <dds/ddsi/ddsi_sertype.h>
 #include <dds/ddsi/q_radmin.h>
+#include <dlfcn.h>
 
 #include <algorithm>
 #include <array>
@@ -19,15 +20,19 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <functional>
 #include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <new>
+#include <optional>
 #include <set>
 #include <span>
 #include <string>
+#include <system_error>
+#include <tuple>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -437,39 +442,65 @@ constexpr const char* kDomainConfig =
 // The domains this process created with kDomainConfig, shared by its participants: Cyclone deletes
 // an explicitly created domain (and everything in it) only when told to, so the last participant
 // on it does. Without CYCLONEDDS_URI only: the user's configuration otherwise applies as is.
+//
+// It also keeps the participants of one domain alike in DDS Security. Cyclone DDS 0.10 delivers
+// between the participants of one process directly, without authentication or access control, and
+// a domain that has both secured and unsecured participants crashes it (creating a topic after a
+// secured participant joined unsecured ones dereferences null) or refuses the unsecured one.
 class DomainRegistry {
  public:
   static DomainRegistry& instance() {
     static DomainRegistry registry;
     return registry;
   }
-  void acquire(dds_domainid_t id) {
-    const char* uri = std::getenv("CYCLONEDDS_URI");
-    if (uri != nullptr && *uri != '\0') return;
+  // `security`: the DDS Security of the participant about to join (nullopt: none).
+  void acquire(dds_domainid_t id, const std::optional<SecurityFiles>& security) {
     std::lock_guard lock(mutex_);
-    Domain& domain = domains_[id];
-    if (domain.users++ > 0) return;
-    domain.handle = dds_create_domain(id, kDomainConfig);
-    if (domain.handle < 0) {
-      const dds_entity_t rc = domain.handle;
-      domains_.erase(id);
-      throw TransportError("cyclonedds: cannot create domain " + std::to_string(id) + ": " +
-                           error_text(rc));
+    if (auto it = domains_.find(id); it != domains_.end()) {
+      if (it->second.security != security) throw mixed_security(id, it->second.security, security);
+      ++it->second.users;
+      return;
     }
+    Domain domain{.security = security};
+    const char* uri = std::getenv("CYCLONEDDS_URI");
+    if (uri == nullptr || *uri == '\0') {
+      domain.handle = dds_create_domain(id, kDomainConfig);
+      if (domain.handle < 0) {
+        throw TransportError("cyclonedds: cannot create domain " + std::to_string(id) + ": " +
+                             error_text(domain.handle));
+      }
+    }
+    domains_.emplace(id, std::move(domain));
   }
   void release(dds_domainid_t id) {
     std::lock_guard lock(mutex_);
     auto it = domains_.find(id);
     if (it == domains_.end() || --it->second.users > 0) return;
-    dds_delete(it->second.handle);
+    if (it->second.handle > 0) dds_delete(it->second.handle);
     domains_.erase(it);
   }
 
  private:
   struct Domain {
-    dds_entity_t handle = 0;
-    int users = 0;
+    std::optional<SecurityFiles> security;
+    dds_entity_t handle = 0;  // 0: Cyclone's own, configured by CYCLONEDDS_URI
+    int users = 1;
   };
+
+  static std::string security_text(const std::optional<SecurityFiles>& security) {
+    return security ? "DDS Security (enclave " + security->enclave + " of " +
+                          security->certificate.parent_path().string() + ")"
+                    : "no DDS Security";
+  }
+  static TransportError mixed_security(dds_domainid_t id,
+                                       const std::optional<SecurityFiles>& present,
+                                       const std::optional<SecurityFiles>& joining) {
+    return TransportError("cyclonedds: the participants of this process on domain " +
+                          std::to_string(id) + " have " + security_text(present) +
+                          "; Cyclone DDS 0.10 cannot add one with " + security_text(joining) +
+                          " to them (use another domain or process)");
+  }
+
   std::mutex mutex_;
   std::map<dds_domainid_t, Domain> domains_;
 };
@@ -477,8 +508,9 @@ class DomainRegistry {
 // Holds this participant's use of its domain.
 class DomainUse {
  public:
-  explicit DomainUse(int id) : id_(static_cast<dds_domainid_t>(id)) {
-    DomainRegistry::instance().acquire(id_);
+  DomainUse(int id, const std::optional<SecurityFiles>& security)
+      : id_(static_cast<dds_domainid_t>(id)) {
+    DomainRegistry::instance().acquire(id_, security);
   }
   DomainUse(const DomainUse&) = delete;
   DomainUse& operator=(const DomainUse&) = delete;
@@ -488,12 +520,56 @@ class DomainUse {
   dds_domainid_t id_;
 };
 
+// A DDS Security plug-in of Cyclone DDS (libdds_security_<name>.so), by full path: the one beside
+// the libddsc this process runs. Debian installs them in a folder of their own (libddsc0debian/),
+// off the loader's path; its libddsc falls back to that folder for a bare name
+// ("dds_security_auth", as rmw_cyclonedds gives it), other builds need not, and a copy on the
+// loader's path would win.
+std::string security_plugin(const std::string& name) {
+  const std::string file = "libdds_security_" + name + ".so";
+  Dl_info loaded{};
+  if (dladdr(reinterpret_cast<void*>(&dds_create_participant), &loaded) == 0 ||
+      loaded.dli_fname == nullptr) {
+    throw TransportError("cyclonedds: cannot find where libddsc is loaded from, to load " + file);
+  }
+  const std::filesystem::path folder = std::filesystem::path(loaded.dli_fname).parent_path();
+  for (const auto& candidate : {folder / "libddsc0debian" / file, folder / file}) {
+    std::error_code ignored;
+    if (std::filesystem::is_regular_file(candidate, ignored)) return candidate.string();
+  }
+  throw TransportError("cyclonedds: DDS Security plug-in " + file + " not found in " +
+                       (folder / "libddsc0debian").string() + " nor " + folder.string() +
+                       " (Debian package libddsc0debian)");
+}
+
+// DDS Security with Cyclone's built-in plug-ins (PKI-DH authentication, Access-Permissions
+// access control, AES-GCM-GMAC encryption), configured through participant properties as
+// rmw_cyclonedds configures them. Property names: dds/security/dds_security_api_defs.h.
+void add_security(const SecurityFiles& files, dds_qos_t* qos) {
+  auto uri = [](const std::filesystem::path& file) { return "file:" + file.string(); };
+  // The plug-in libraries and their entry points (plug-in name, library suffix, entry suffix).
+  for (const auto& [plugin, library, entry] :
+       {std::tuple{"auth", "auth", "authentication"}, std::tuple{"access", "ac", "access_control"},
+        std::tuple{"crypto", "crypto", "crypto"}}) {
+    const std::string prefix = std::string("dds.sec.") + plugin + ".library.";
+    dds_qset_prop(qos, (prefix + "path").c_str(), security_plugin(library).c_str());
+    dds_qset_prop(qos, (prefix + "init").c_str(), (std::string("init_") + entry).c_str());
+    dds_qset_prop(qos, (prefix + "finalize").c_str(), (std::string("finalize_") + entry).c_str());
+  }
+  dds_qset_prop(qos, "dds.sec.auth.identity_ca", uri(files.identity_ca).c_str());
+  dds_qset_prop(qos, "dds.sec.auth.identity_certificate", uri(files.certificate).c_str());
+  dds_qset_prop(qos, "dds.sec.auth.private_key", uri(files.private_key).c_str());
+  dds_qset_prop(qos, "dds.sec.access.permissions_ca", uri(files.permissions_ca).c_str());
+  dds_qset_prop(qos, "dds.sec.access.governance", uri(files.governance).c_str());
+  dds_qset_prop(qos, "dds.sec.access.permissions", uri(files.permissions).c_str());
+}
+
 // The participant and its topics. Publisher and subscription handles keep it alive, so they may
 // outlive their Transport.
 class Participant {
  public:
   explicit Participant(const TransportOptions& options)
-      : domain_(options.domain_id),
+      : domain_(options.domain_id, options.security),
         participant_(create_participant(options)),
         peers_(participant_.get()) {
     dds_guid_t guid;
@@ -534,16 +610,22 @@ class Participant {
 
  private:
   static dds_entity_t create_participant(const TransportOptions& options) {
+    check_secured_domain("cyclonedds", options);
     QosPtr qos = new_qos();
     dds_qset_userdata(qos.get(), options.user_data.data(), options.user_data.size());
     dds_qset_entity_name(qos.get(), "robotperf");
+    if (options.security) add_security(*options.security, qos.get());
     // The domain's configuration comes from CYCLONEDDS_URI when set, as with rmw_cyclonedds.
     const dds_entity_t participant =
         dds_create_participant(static_cast<dds_domainid_t>(options.domain_id), qos.get(), nullptr);
     if (participant < 0) {
-      throw TransportError("cyclonedds: cannot create a participant on domain " +
-                           std::to_string(options.domain_id) + ": " + error_text(participant) +
-                           " (check CYCLONEDDS_URI, if set)");
+      throw TransportError(
+          "cyclonedds: cannot create a participant on domain " + std::to_string(options.domain_id) +
+          ": " + error_text(participant) +
+          (options.security
+               ? " (DDS Security, enclave " + options.security->enclave +
+                     ": are its keystore files valid, its permissions for this domain?)"
+               : " (check CYCLONEDDS_URI, if set)"));
     }
     return participant;
   }
@@ -706,7 +788,7 @@ ListenerPtr data_available_listener(CycloneddsSubscription* subscription) {
 }  // namespace
 
 std::shared_ptr<void> use_cyclonedds_domain(int domain_id) {
-  return std::make_shared<DomainUse>(domain_id);
+  return std::make_shared<DomainUse>(domain_id, std::nullopt);
 }
 
 std::unique_ptr<Transport> make_cyclonedds_transport(const TransportOptions& options) {

@@ -34,6 +34,7 @@
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TopicDataType.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
+#include <filesystem>
 #include <functional>
 #include <limits>
 #include <map>
@@ -238,20 +239,47 @@ class PeerListener final : public dds::DomainParticipantListener {
   PeerTable table_;
 };
 
+// DDS Security with Fast DDS's built-in plug-ins (PKI-DH authentication, Access-Permissions
+// access control, AES-GCM-GMAC encryption), configured through participant properties as
+// rmw_fastrtps configures them.
+void add_security(const SecurityFiles& files, dds::DomainParticipantQos& qos) {
+  // Fast DDS takes "file://" and an absolute path (a bare "file:" it refuses).
+  auto uri = [](const std::filesystem::path& file) { return "file://" + file.string(); };
+  const std::string auth = "dds.sec.auth.builtin.PKI-DH.";
+  const std::string access = "dds.sec.access.builtin.Access-Permissions.";
+  auto& properties = qos.properties().properties();
+  properties.emplace_back("dds.sec.auth.plugin", "builtin.PKI-DH");
+  properties.emplace_back(auth + "identity_ca", uri(files.identity_ca));
+  properties.emplace_back(auth + "identity_certificate", uri(files.certificate));
+  properties.emplace_back(auth + "private_key", uri(files.private_key));
+  properties.emplace_back("dds.sec.access.plugin", "builtin.Access-Permissions");
+  properties.emplace_back(access + "permissions_ca", uri(files.permissions_ca));
+  properties.emplace_back(access + "governance", uri(files.governance));
+  properties.emplace_back(access + "permissions", uri(files.permissions));
+  properties.emplace_back("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
+}
+
 // The participant and the entities every endpoint shares. Publisher and
 // subscription handles keep it alive, so they may outlive their Transport.
 class Participant {
  public:
   explicit Participant(const TransportOptions& options) {
+    check_secured_domain("fastdds", options);
     auto* factory = dds::DomainParticipantFactory::get_instance();
     dds::DomainParticipantQos qos = fastdds_participant_qos();
     qos.user_data().data_vec().assign(options.user_data.begin(), options.user_data.end());
+    if (options.security) add_security(*options.security, qos);
     // Only the discovery callbacks, which no status mask filters.
     participant_ = factory->create_participant(options.domain_id, qos, &peer_listener_,
                                                dds::StatusMask::none());
     if (participant_ == nullptr) {
-      throw TransportError("fastdds: cannot create a DomainParticipant on domain " +
-                           std::to_string(options.domain_id));
+      throw TransportError(
+          "fastdds: cannot create a DomainParticipant on domain " +
+          std::to_string(options.domain_id) +
+          (options.security
+               ? " with DDS Security (enclave " + options.security->enclave +
+                     ": are its keystore files valid, its permissions for this domain?)"
+               : ""));
     }
     publisher_ = participant_->create_publisher(participant_->get_default_publisher_qos());
     subscriber_ = participant_->create_subscriber(participant_->get_default_subscriber_qos());

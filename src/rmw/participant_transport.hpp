@@ -25,6 +25,16 @@ inline std::string checked_dds_topic_name(const std::string& vendor, const std::
   }
 }
 
+// Throws TransportError when `options` asks for DDS Security on a domain that no keystore's
+// governance can name, before the DDS implementation fails with a less telling message.
+inline void check_secured_domain(const std::string& vendor, const TransportOptions& options) {
+  if (options.security && (options.domain_id < 0 || options.domain_id > kLastSecuredDomain)) {
+    throw TransportError(vendor + ": DDS Security covers domains 0 to " +
+                         std::to_string(kLastSecuredDomain) + ", not " +
+                         std::to_string(options.domain_id) + "; choose another domain");
+  }
+}
+
 template <class Participant, class Publisher, class Subscription>
 class ParticipantTransport final : public Transport {
  public:

@@ -76,12 +76,13 @@ int lock_domain(int domain) {
 
 int reserved_domain() {
   static const int domain = [] {
-    const int start = static_cast<int>(getpid() % 232);
-    for (int i = 0; i < 232; ++i) {
-      const int candidate = 1 + (start + i) % 232;
+    const int start = static_cast<int>(getpid() % kLastSecuredDomain);
+    for (int i = 0; i < kLastSecuredDomain; ++i) {
+      const int candidate = 1 + (start + i) % kLastSecuredDomain;
       if (lock_domain(candidate) >= 0) return candidate;  // held until this process ends
     }
-    throw TransportError("no DDS domain left to reserve: 232 robotperf processes hold one each");
+    throw TransportError("no DDS domain left to reserve: " + std::to_string(kLastSecuredDomain) +
+                         " robotperf processes hold one each");
   }();
   return domain;
 }
@@ -90,7 +91,7 @@ int find_quiet_domain(const std::string& transport, double listen_s) {
   if (transport == "intra") return 0;
   constexpr int kTries = 16;
   std::random_device entropy;
-  std::uniform_int_distribution<int> domain(1, 232);
+  std::uniform_int_distribution<int> domain(1, kLastSecuredDomain);
   for (int t = 0; t < kTries; ++t) {
     const int candidate = domain(entropy);
     const int lock = lock_domain(candidate);

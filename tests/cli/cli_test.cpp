@@ -293,6 +293,55 @@ TEST_F(Cli, N3NetemDelaysTheLinkOrSaysItCannot) {
   EXPECT_EQ(j["network"]["link"]["netem"], "delay 2ms");
 }
 
+// n4: a keystore made by `security init`, then the secured ping-pong between namespaces.
+TEST_F(Cli, N4SecuredPingPongBetweenNetworkNamespaces) {
+  const fs::path keystore = out_ / "keystore";
+  const Outcome init = robotperf_cli("security init " + keystore.string());
+  ASSERT_EQ(init.exit_code, 0) << init.out;
+  EXPECT_NE(init.out.find("crypto AES-GCM-GMAC"), std::string::npos) << init.out;
+  const Outcome again = robotperf_cli("security init " + keystore.string());
+  EXPECT_EQ(again.exit_code, 2) << again.out;
+  EXPECT_NE(again.out.find("nothing to add"), std::string::npos) << again.out;
+
+  const Outcome unsecured =
+      robotperf_cli("run n4 --host remote=env --quiet --output " + out_.string());
+  EXPECT_EQ(unsecured.exit_code, 2) << unsecured.out;
+  EXPECT_NE(unsecured.out.find("give --security DIR"), std::string::npos) << unsecured.out;
+  const Outcome intra = robotperf_cli("run n1 --rmw intra --security " + keystore.string() +
+                                      " --quiet --output " + out_.string());
+  EXPECT_EQ(intra.exit_code, 2) << intra.out;
+  EXPECT_NE(intra.out.find("--security secures DDS"), std::string::npos) << intra.out;
+
+  if (const auto why = netns_missing(); !why.empty()) GTEST_SKIP() << why;
+  for (const std::string rmw : {"fastdds", "cyclonedds"}) {
+    fs::remove_all(out_ / "runs");
+    const Outcome o =
+        robotperf_cli("run n4 --netns --rmw " + rmw + " --security " + keystore.string() +
+                      " --count 130 --rate 50 --quiet " + "--domain " + domain() + " --output " +
+                      (out_ / "runs").string());
+    ASSERT_EQ(o.exit_code, 0) << rmw << "\n" << o.out;
+    EXPECT_NE(o.out.find("security: authentication PKI-DH"), std::string::npos) << o.out;
+    nlohmann::json j;
+    for (const auto& e : fs::directory_iterator(out_ / "runs")) {
+      if (e.path().extension() == ".json") j = nlohmann::json::parse(std::ifstream(e.path()));
+    }
+    const auto& security = j["software"]["transport"]["security"];
+    ASSERT_TRUE(security.is_object()) << j["software"].dump();
+    EXPECT_EQ(security["enclave"], "/robotperf");
+    EXPECT_EQ(security["keystore"], fs::absolute(keystore).string());
+    EXPECT_EQ(j["functional"]["metrics"]["identical_fraction"]["value"], 1.0);
+    EXPECT_GT(j["network"]["link"]["traffic"]["bytes_out"].get<uint64_t>(), 0u);
+  }
+
+  // A keystore missing a file: one line naming it, before anything starts.
+  fs::remove(keystore / "enclaves" / "robotperf" / "permissions.p7s");
+  const Outcome broken = robotperf_cli("run n4 --netns --security " + keystore.string() +
+                                       " --quiet --output " + out_.string());
+  EXPECT_EQ(broken.exit_code, 2) << broken.out;
+  EXPECT_NE(broken.out.find("permissions.p7s"), std::string::npos) << broken.out;
+  EXPECT_EQ(std::count(broken.out.begin(), broken.out.end(), '\n'), 1) << broken.out;
+}
+
 // a3 and a4 on every transport: valid, with a functional section that passed.
 void expect_functional_result(const nlohmann::json& j, const std::string& id,
                               const std::string& rmw, const std::string& evaluator) {

@@ -3,15 +3,18 @@
 #pragma once
 
 #include <fcntl.h>
+#include <poll.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -95,45 +98,63 @@ struct Pair {
   std::unique_ptr<SubscriptionHandle> sub;
 };
 
-// The echo peer (echo_peer.cpp) in its own process, fed through a pipe on its stdin.
-class EchoPeer {
+// A peer program (echo_peer.cpp, security_peer.cpp) in its own process: `args` with argv[0] the
+// program, its stdin a pipe from us (closing it ends the peer) and its stdout a pipe to us.
+class PeerProcess {
  public:
-  EchoPeer(const std::string& transport, int domain_id, const std::string& in_topic,
-           const std::string& out_topic) {
-    int fds[2];
-    if (pipe2(fds, O_CLOEXEC) != 0) throw std::runtime_error("pipe2 failed");
+  explicit PeerProcess(std::vector<std::string> args) {
+    int in[2], out[2];
+    if (pipe2(in, O_CLOEXEC) != 0) throw std::runtime_error("pipe2 failed");
+    if (pipe2(out, O_CLOEXEC) != 0) {
+      close(in[0]);
+      close(in[1]);
+      throw std::runtime_error("pipe2 failed");
+    }
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, fds[0], STDIN_FILENO);
-    std::vector<std::string> args = {ROBOTPERF_ECHO_PEER, transport, std::to_string(domain_id),
-                                     in_topic, out_topic};
+    posix_spawn_file_actions_adddup2(&actions, in[0], STDIN_FILENO);
+    posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
     std::vector<char*> argv;
     for (auto& arg : args) argv.push_back(arg.data());
     argv.push_back(nullptr);
     const int rc = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
     posix_spawn_file_actions_destroy(&actions);
-    close(fds[0]);
-    stdin_ = fds[1];
+    close(in[0]);
+    close(out[1]);
+    stdin_ = in[1];
+    stdout_ = out[0];
     if (rc != 0) {
       close(stdin_);
+      close(stdout_);
       throw std::runtime_error("cannot start " + args[0]);
     }
   }
-  EchoPeer(const EchoPeer&) = delete;
-  EchoPeer& operator=(const EchoPeer&) = delete;
-  ~EchoPeer() {
+  PeerProcess(const PeerProcess&) = delete;
+  PeerProcess& operator=(const PeerProcess&) = delete;
+  ~PeerProcess() {
     if (pid_ > 0) {
       kill(pid_, SIGKILL);
       finish();
     }
   }
 
-  // Closes the peer's stdin and returns its exit status (-1 if it had to be killed).
-  int finish() {
+  // Whether the peer printed a line starting with "ready" within `timeout`.
+  bool ready(std::chrono::milliseconds timeout) {
+    pollfd said{.fd = stdout_, .events = POLLIN, .revents = 0};
+    char line[8] = {};
+    return poll(&said, 1, static_cast<int>(timeout.count())) == 1 &&
+           read(stdout_, line, sizeof line) > 0 && std::string_view(line).starts_with("ready");
+  }
+
+  // Closes the peer's stdin and returns its exit status (-1 if it had to be killed after
+  // `timeout`).
+  int finish(std::chrono::milliseconds timeout = std::chrono::seconds(5)) {
     if (stdin_ >= 0) close(stdin_);
-    stdin_ = -1;
+    if (stdout_ >= 0) close(stdout_);
+    stdin_ = stdout_ = -1;
     int status = 0;
-    const bool exited = wait_until([&] { return waitpid(pid_, &status, WNOHANG) == pid_; });
+    const bool exited =
+        wait_until([&] { return waitpid(pid_, &status, WNOHANG) == pid_; }, timeout);
     if (!exited) {
       kill(pid_, SIGKILL);
       waitpid(pid_, &status, 0);
@@ -145,6 +166,18 @@ class EchoPeer {
  private:
   pid_t pid_ = -1;
   int stdin_ = -1;
+  int stdout_ = -1;
 };
+
+#ifdef ROBOTPERF_ECHO_PEER
+// The echo peer (echo_peer.cpp): republishes what it receives on `in_topic` on `out_topic`.
+class EchoPeer : public PeerProcess {
+ public:
+  EchoPeer(const std::string& transport, int domain_id, const std::string& in_topic,
+           const std::string& out_topic)
+      : PeerProcess(
+            {ROBOTPERF_ECHO_PEER, transport, std::to_string(domain_id), in_topic, out_topic}) {}
+};
+#endif
 
 }  // namespace robotperf::rmw::testing

@@ -68,6 +68,8 @@ struct BenchmarkSpec {
   // The process layout the benchmark is defined with ("single" or "per-node"); --processes
   // overrides it (e.g. n2, a ping-pong between two processes, says per-node).
   std::string processes = "single";
+  // graph.yaml `security: required`: runs only with DDS Security (--security), e.g. n4.
+  bool security_required = false;
   std::size_t executor_threads = 1;
   std::size_t min_samples = 30;
   double max_loss_percent = 0.0;

@@ -72,6 +72,9 @@ struct RunOptions {
   std::map<std::string, std::vector<std::string>> host_launchers;
   // The link between the runner's host and the others, when robotperf made it (--netns).
   const NetworkLink* network_link = nullptr;
+  // DDS Security: the keystore whose enclave rmw::kDefaultEnclave every participant of the run
+  // (Playback, Monitor, nodes, children) presents; empty: unsecured.
+  std::filesystem::path keystore;
   // Power sources and their sampling period; sampled during the measured window only.
   metrics::PowerOptions power;
   // Where the graph runs: pinned CPUs, real-time priority, locked memory. In a single-process
@@ -178,6 +181,10 @@ struct RunResult {
   double drain_s = 0;
   std::string rmw;
   std::string processes;  // "single" or "per-node"
+  // DDS Security as run: the keystore (absolute) and rmw::describe() of its enclave; empty when
+  // unsecured.
+  std::filesystem::path keystore;
+  std::string security;
   std::size_t executor_threads = 1;
   std::string output_topic;
   // The QoS of every endpoint robotperf made: the Playback's inputs, the Monitor's output and
@@ -296,9 +303,11 @@ void kill_node_processes() noexcept;
 // a final "stats" line. Returns the process exit code. A callback stuck longer than
 // `callback_timeout_s` is reported on a "hung" line, and the process ends at once.
 // `run_token` marks its participant as one of the runner's run (RunResult::run_token).
+// `keystore`: DDS Security as RunOptions::keystore.
 int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
                      const std::string& rmw, int domain_id,
                      const SchedulingOptions& scheduling = {}, double callback_timeout_s = 30.0,
-                     const std::string& run_token = {});
+                     const std::string& run_token = {},
+                     const std::filesystem::path& keystore = {});
 
 }  // namespace robotperf::harness

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "robotperf/msgs/type_support.hpp"
+#include "robotperf/rmw/security.hpp"
 
 namespace robotperf::rmw {
 
@@ -122,6 +124,9 @@ struct TransportOptions {
   // The participant's USER_DATA, which every other participant on the domain sees: "key=value;"
   // pairs as ROS 2 uses it. robotperf marks the participants of one run with it.
   std::string user_data;
+  // DDS Security for the DDS transports' participant (authentication, access control,
+  // encryption), from one enclave of a keystore; empty: unsecured. Ignored by intra.
+  std::optional<SecurityFiles> security;
 };
 
 // "intra", "fastdds" or "cyclonedds"; throws std::invalid_argument naming the valid choices.
@@ -132,7 +137,8 @@ std::unique_ptr<Transport> make_transport(const std::string& name,
 int domain_id_from_environment();
 
 // A DDS domain on which `transport` discovers no other participant within `listen_s`: domains
-// 1 to 232 tried in a random order (0, ROS 2's default, is left to robots), each reserved first
+// 1 to 230 tried in a random order (0, ROS 2's default, is left to robots; 231 and 232 to no one,
+// as DDS Security cannot name them), each reserved first
 // among the robotperf processes of this machine (a lock on a file in /tmp), so that those looking
 // at the same time never pick the same one; the reservation lasts until this process ends.
 // Transports without discovery (intra) get 0. Throws TransportError when none of the tries is
@@ -140,7 +146,7 @@ int domain_id_from_environment();
 int find_quiet_domain(const std::string& transport, double listen_s = 3.5);
 
 // The domain this process reserved for its tests or benchmarks, as find_quiet_domain reserves
-// one: the first call reserves one of 1 to 232 (starting from a place given by the process id),
+// one: the first call reserves one of 1 to 230 (starting from a place given by the process id),
 // later calls return the same, so that no two tests or benchmarks running at once share one.
 // Throws TransportError when all are held.
 int reserved_domain();
