@@ -285,6 +285,7 @@ struct RunArgs {
   std::string link_rate = "1gbit";
   std::string netem;
   std::string security;  // a keystore: DDS Security for every participant of the run
+  double connect_timeout_s = 15.0;
 };
 
 // JSON as text for a file or the terminal: bytes that are not UTF-8 (names from a trace or a bag)
@@ -646,7 +647,10 @@ int run(const Roots& roots, const RunArgs& a) {
   o.warmup = a.warmup;
   o.drain_s = a.drain;
   const std::string processes = a.processes.value_or(spec.processes);
-  o.rmw = a.rmw.value_or(processes == "per-node" ? "fastdds" : "intra");
+  // An external graph's nodes are reached through DDS, as per-node children are.
+  const bool external = spec.attach || !spec.launch.empty();
+  o.rmw = a.rmw.value_or(processes == "per-node" || external ? "fastdds" : "intra");
+  o.log_dir = a.output;
   o.host_launchers = host_launchers(spec, a);
   o.keystore = a.security;
   // Made before any participant, so that all of this process's sockets are on the runner's side.
@@ -676,6 +680,7 @@ int run(const Roots& roots, const RunArgs& a) {
   o.scheduling = a.scheduling.options();
   o.strict = a.strict;
   o.callback_timeout_s = a.callback_timeout_s;
+  o.connect_timeout_s = a.connect_timeout_s;
   o.interrupted = &g_interrupted;
   if (!a.quiet && isatty(STDERR_FILENO)) {
     o.progress = [&](std::size_t sent, std::size_t total, std::size_t received) {
@@ -1067,6 +1072,11 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--netem", ra.netem,
                       "--netns: netem's delay, jitter and loss on the link, e.g. "
                       "\"delay 1ms 0.1ms loss 0.1%\"");
+  run_cmd
+      ->add_option("--connect-timeout", ra.connect_timeout_s,
+                   "seconds the graph may take to start and connect before the run is refused "
+                   "(default 15)")
+      ->check(CLI::Range(0.1, 3600.0));
   run_cmd
       ->add_option("--security", ra.security,
                    "DDS Security: every participant presents the /robotperf enclave of this "

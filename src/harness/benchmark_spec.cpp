@@ -120,9 +120,9 @@ BoundaryTopic boundary_topic(const YamlFile& file, const YAML::Node& n, bool is_
 void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   const YamlFile file(path);
   const YAML::Node& root = file.root();
-  file.allow_keys(
-      root, {"plugins", "dataset", "rate_hz", "count", "warmup", "drain_s", "executor_threads",
-             "processes", "security", "validity", "inputs", "output", "nodes", "functional"});
+  file.allow_keys(root, {"plugins", "dataset", "rate_hz", "count", "warmup", "drain_s",
+                         "executor_threads", "processes", "security", "validity", "inputs",
+                         "output", "nodes", "launch", "attach", "functional"});
   // Plug-ins first: they may register the kernels, dataset and evaluator named below.
   if (const YAML::Node plugins = root["plugins"]; plugins.IsDefined()) {
     if (!plugins.IsSequence()) file.fail(plugins, "'plugins' must be a list of files");
@@ -177,9 +177,36 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
 
   std::vector<const BoundaryTopic*> boundary{&spec.output};
   for (const auto& in : spec.inputs) boundary.push_back(&in);
-  const YAML::Node nodes = root["nodes"];
-  if (!nodes.IsDefined() || !nodes.IsSequence()) file.fail(root, "'nodes' must be a list");
   std::set<std::string> names;
+  if (const YAML::Node launch = root["launch"]; launch.IsDefined()) {
+    if (!launch.IsSequence()) file.fail(launch, "'launch' must be a list of processes");
+    for (const auto& l : launch) {
+      file.allow_keys(l, {"name", "command", "cwd", "env"});
+      LaunchSpec process;
+      process.name = file.require_string(l, "name");
+      if (!valid_host_name(process.name))
+        file.fail(l["name"], "a launched process's name is letters, digits, '.', '-' and '_'");
+      if (!names.insert(process.name).second) file.fail(l, "duplicate name '" + process.name + "'");
+      const YAML::Node command = l["command"];
+      if (!command.IsSequence() || command.size() == 0)
+        file.fail(l, "'command' must be a non-empty list: the program and its arguments");
+      for (const auto& word : command) {
+        if (!word.IsScalar()) file.fail(word, "each word of a command is a string");
+        process.command.push_back(word.Scalar());
+      }
+      process.cwd = file.get<std::string>(l, "cwd", ".");
+      process.env = file.string_map(l, "env");
+      spec.launch.push_back(std::move(process));
+    }
+  }
+  spec.attach = file.get<bool>(root, "attach", false);
+  if (spec.attach && !spec.launch.empty())
+    file.fail(root["attach"], "attach: true is for a graph already running, not with launch:");
+  const YAML::Node nodes = root["nodes"];
+  const bool external = spec.attach || !spec.launch.empty();
+  if (nodes.IsDefined() ? !nodes.IsSequence() : !external) {
+    file.fail(root, "'nodes' must be a list (or the graph external: launch: or attach: true)");
+  }
   for (const auto& n : nodes) {
     file.allow_keys(n, {"name", "kernel", "backend", "host", "parameters", "topics", "qos"});
     NodeSpec node;

@@ -19,9 +19,9 @@
 extern char** environ;
 
 namespace robotperf::harness {
-namespace {
+namespace {}  // namespace
 
-std::string describe_status(int status) {
+std::string describe_exit_status(int status) {
   if (WIFEXITED(status)) {
     return WEXITSTATUS(status) == 0 ? "ok"
                                     : "exited with status " + std::to_string(WEXITSTATUS(status));
@@ -29,6 +29,8 @@ std::string describe_status(int status) {
   if (WIFSIGNALED(status)) return std::string("killed by signal ") + strsignal(WTERMSIG(status));
   return "ended (status " + std::to_string(status) + ")";
 }
+
+namespace {
 
 void make_pipe(int fds[2]) {
   if (pipe2(fds, O_CLOEXEC) != 0) throw std::runtime_error(std::string("pipe: ") + strerror(errno));
@@ -227,7 +229,7 @@ void NodeProcesses::reap(Child& child, bool wait) {
   if (r == child.pid) {
     child.report.exit_status = child.hung ? "hung: its watchdog ended it (a callback ran past the "
                                             "callback timeout)"
-                                          : describe_status(status);
+                                          : describe_exit_status(status);
     child.pid = -1;
   }
 }

@@ -18,6 +18,9 @@
 
 namespace robotperf::harness {
 
+// A waitpid() status as results say it: "ok", "exited with status N", "killed by signal ...".
+std::string describe_exit_status(int status);
+
 // Where a node process runs, as it reports itself on its first line ("host {json}"): the
 // machine's host name and boot id, and its own pid there.
 nlohmann::json this_host_identity();

@@ -20,6 +20,7 @@
 #include "black_box.hpp"
 #include "control_loop.hpp"
 #include "grey_box.hpp"
+#include "launched_processes.hpp"
 #include "measurement.hpp"
 #include "node_processes.hpp"
 #include "robotperf/graph/executor.hpp"
@@ -54,6 +55,11 @@ Wiring wiring_of(const BenchmarkSpec& spec) {
   Wiring w;
   for (const auto& in : spec.inputs) w.published.insert(in.topic);
   w.subscribed.insert(spec.output.topic);
+  if (spec.attach || !spec.launch.empty()) {
+    // An external graph's endpoints are not declared: it reads every input and writes the output.
+    for (const auto& in : spec.inputs) w.subscribed.insert(in.topic);
+    w.published.insert(spec.output.topic);
+  }
   for (const auto& node : spec.nodes) {
     const plugin::KernelInfo& info = kernel_of(node).info;
     for (const auto& [port, topic] : node.topics) {
@@ -283,6 +289,11 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   for (const auto& node : spec.nodes) {
     for (const auto& [port, topic] : node.topics) r.qos.push_back({node.name, topic, node.qos});
   }
+  if ((spec.attach || !spec.launch.empty()) && options.rmw == "intra") {
+    throw std::invalid_argument(
+        "an external graph (launch: or attach:) is reached through DDS: "
+        "use --rmw fastdds or cyclonedds, the RMW of its nodes");
+  }
   if (options.processes == ProcessLayout::kPerNode && options.rmw == "intra") {
     throw std::invalid_argument(
         "--processes per-node needs an inter-process transport (--rmw fastdds or cyclonedds)");
@@ -478,11 +489,24 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
                                         node_arguments, options.host_launchers);
   }
 
+  std::unique_ptr<LaunchedProcesses> launched;
+  if (!spec.launch.empty()) {
+    launched = std::make_unique<LaunchedProcesses>(
+        spec, options.rmw, options.domain_id, options.log_dir, spec.id + "-" + r.run_token + ".");
+  }
+
   const int64_t connect_deadline =
       rmw::steady_now_ns() + static_cast<int64_t>(options.connect_timeout_s * 1e9);
   monitor_executor.start();
   graph_executor->start();
-  auto interrupted = [&] { return options.interrupted && options.interrupted->load() != 0; };
+  auto interrupted = [&] {
+    // A launched process that ends before the graph is up ends the wait with what it said.
+    if (launched) {
+      if (std::string f = launched->failure(); !f.empty())
+        throw std::runtime_error(f + " (before the graph was connected)");
+    }
+    return options.interrupted && options.interrupted->load() != 0;
+  };
   if ((children && !children->wait_ready(connect_deadline, interrupted)) ||
       !wait_connected(local_nodes, wiring_of(spec), connect_deadline, interrupted)) {
     throw RunInterrupted(std::string("interrupted by SIG") +
@@ -496,7 +520,12 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     // The Playback and Monitor are part of what is measured, not interference.
     graph_processes.push_back({getpid(), "robotperf (Playback, Monitor)"});
   } else {
-    graph_processes.push_back({getpid(), "robotperf (graph, Playback, Monitor)"});
+    graph_processes.push_back({getpid(), spec.nodes.empty()
+                                             ? "robotperf (Playback, Monitor)"
+                                             : "robotperf (graph, Playback, Monitor)"});
+  }
+  if (launched) {
+    for (const auto& [pid, name] : launched->processes()) graph_processes.push_back({pid, name});
   }
   WindowMeasurement measurement(options, graph_processes);
   std::optional<NetworkLink::Counters> link_before;
@@ -511,7 +540,10 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
          std::to_string(r.domain_peers.size()) + " other DDS participant(s) on domain " +
              std::to_string(r.domain_id) + ": " + describe_peers(r.domain_peers, 3) +
              "; their messages are told apart, but they share the machine and the network "
-             "(--domain auto picks an empty domain)"});
+             "(--domain auto picks an empty domain)" +
+             (spec.attach || !spec.launch.empty()
+                  ? "; the external graph's own nodes are among them"
+                  : "")});
   }
   if (options.strict && !r.warnings.empty()) {
     std::string broken;
@@ -547,6 +579,9 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     if (const std::string& why = must_stop(); !why.empty()) return why;
     if (auto e = graph_executor->error()) return what_of(e);
     if (auto e = monitor_executor.error()) return what_of(e);
+    if (launched) {
+      if (std::string f = launched->failure(); !f.empty()) return f;
+    }
     if (children) return children->failure();
     return {};
   };
@@ -610,6 +645,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     } catch (...) {
     }
   }
+  if (launched) r.launched = launched->stop(2.0);
   if (children) {
     r.nodes = children->shutdown(5.0);
     for (const auto& n : r.nodes) {

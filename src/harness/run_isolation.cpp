@@ -76,7 +76,9 @@ void RunIsolation::refresh_locked() {
   other_ids_.clear();
   for (const auto& peer : transport_.peers()) {
     const PeerRun run = parse_run_user_data(peer.user_data);
-    const bool other = run.token != token_;
+    // Another robotperf run's participant. One without a token (a ROS 2 node of an external
+    // graph, or any other program) is judged by the stamps it writes instead.
+    const bool other = !run.token.empty() && run.token != token_;
     is_other_[peer.id] = other;
     if (other && run.ids) other_ids_.push_back(*run.ids);
   }

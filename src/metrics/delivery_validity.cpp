@@ -7,6 +7,14 @@ namespace robotperf::metrics {
 std::vector<std::string> delivery_invalid_reasons(const DeliveryCounts& c, std::size_t min_samples,
                                                   double max_loss_percent) {
   std::vector<std::string> out;
+  if (c.matched == 0 && c.unknown > 0) {
+    // Not loss: the graph answered, but with stamps that are none of the inputs'.
+    out.push_back("all " + std::to_string(c.unknown) +
+                  " outputs carry a header.stamp that no input had: the graph does not copy its "
+                  "input's header into its output, and robotperf's message IDs travel in the "
+                  "stamp (see the README, \"a node that does not copy the header\")");
+    return out;
+  }
   if (c.matched < min_samples) {
     out.push_back(std::to_string(c.matched) + " matched samples, fewer than the " +
                   std::to_string(min_samples) + " required");

@@ -332,6 +332,18 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"functional", functional_json(r.functional)},
   };
   if (!r.host_launchers.empty()) out["network"] = network_json(r);
+  if (!r.launched.empty()) {
+    json launched = json::array();
+    for (const auto& l : r.launched) {
+      launched.push_back({{"name", l.name},
+                          {"command", l.command},
+                          {"pid", l.pid},
+                          {"exit_status", l.exit_status},
+                          {"stopped_by", l.stopped_by},
+                          {"log", l.log}});
+    }
+    out["launched"] = launched;
+  }
   if (!r.control_loops.empty()) {
     json loops = json::array();
     const double us = 1e-3;
@@ -487,6 +499,10 @@ std::string summary_table(const harness::RunResult& r) {
         << format_fixed(static_cast<double>(t.bytes_out) / (1 << 20), 2) << " MiB out, "
         << format_fixed(static_cast<double>(t.bytes_in) / (1 << 20), 2) << " MiB in, " << t.dropped
         << " packets dropped by the shaping\n";
+  }
+  for (const auto& l : r.launched) {
+    out << "launched " << l.name << " (pid " << l.pid << "): " << l.stopped_by << ", "
+        << l.exit_status << "; log " << l.log << "\n";
   }
   if (!r.security.empty())
     out << "security: " << r.security << " (keystore " << r.keystore.string() << ")\n";

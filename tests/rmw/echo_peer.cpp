@@ -1,11 +1,18 @@
 // The other process of the cross-process tests: republishes every Image it
 // receives on <in_topic> unchanged on <out_topic>, until its stdin closes.
+// The external graph tests launch it as a ROS 2 node runs, until SIGINT or
+// SIGTERM, with a last argument:
+//   until-signal   echoes, as above
+//   exit-after=N   exits with status 7 after N echoes (a node that dies mid-run)
+//   restamp        echoes with header.stamp set to the time of the echo (a node
+//                  that does not copy its input's header)
 //
-// usage: echo_peer <transport> <domain_id> <in_topic> <out_topic>
+// usage: echo_peer <transport> <domain_id> <in_topic> <out_topic> [MODE]
 #include <unistd.h>
 
 #include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -21,7 +28,11 @@ namespace msgs = robotperf::msgs;
 
 namespace {
 
-std::atomic<bool> stdin_closed{false};
+std::atomic<bool> stdin_closed{false};  // or a signal came, with until-signal
+
+void on_signal(int) {
+  stdin_closed = true;
+}
 
 // The parent ends a run by closing our stdin; a parent that died does too.
 void wait_for_stdin_eof() {
@@ -30,8 +41,14 @@ void wait_for_stdin_eof() {
   }
 }
 
+struct Mode {
+  bool until_signal = false;
+  long exit_after = -1;  // echoes before exiting; -1: never
+  bool restamp = false;
+};
+
 int run(const std::string& transport_name, int domain_id, const std::string& in_topic,
-        const std::string& out_topic) {
+        const std::string& out_topic, const Mode& mode) {
   auto transport = rmw::make_transport(transport_name, {domain_id});
   rmw::testing::Inbox inbox;
   const auto& type = msgs::type_support<msgs::Image>();
@@ -39,11 +56,17 @@ int run(const std::string& transport_name, int domain_id, const std::string& in_
   auto subscription =
       transport->create_subscription(in_topic, type, rmw::QoS::ros_default(), inbox.on_ready());
 
-  std::thread([] {
-    wait_for_stdin_eof();
-    stdin_closed = true;
-  }).detach();
+  if (mode.until_signal) {
+    std::signal(SIGINT, on_signal);
+    std::signal(SIGTERM, on_signal);
+  } else {
+    std::thread([] {
+      wait_for_stdin_eof();
+      stdin_closed = true;
+    }).detach();
+  }
 
+  long remaining = mode.exit_after - 1;
   while (!stdin_closed) {
     rmw::MessagePtr msg = inbox.take(*subscription, nullptr, std::chrono::milliseconds(100));
     if (!msg) continue;
@@ -52,7 +75,16 @@ int run(const std::string& transport_name, int domain_id, const std::string& in_
       std::fprintf(stderr, "echo_peer: nobody subscribes to %s\n", out_topic.c_str());
       return 1;
     }
+    if (mode.restamp) {
+      auto copy = std::make_shared<msgs::Image>(*static_cast<const msgs::Image*>(msg.get()));
+      copy->header.stamp = msgs::Time::from_ns(rmw::wall_now_ns());
+      msg = copy;
+    }
     publisher->publish(msg);
+    if (mode.exit_after >= 0 && --remaining < 0) {
+      std::fprintf(stderr, "echo_peer: exiting after %ld echoes, as asked\n", mode.exit_after);
+      return 7;
+    }
   }
   return 0;
 }
@@ -60,12 +92,27 @@ int run(const std::string& transport_name, int domain_id, const std::string& in_
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 5) {
-    std::fprintf(stderr, "usage: %s <transport> <domain_id> <in_topic> <out_topic>\n", argv[0]);
+  Mode mode;
+  if (argc == 6) {
+    const std::string m = argv[5];
+    mode.until_signal = true;
+    if (m.rfind("exit-after=", 0) == 0) {
+      mode.exit_after = std::atol(m.c_str() + 11);
+    } else if (m == "restamp") {
+      mode.restamp = true;
+    } else if (m != "until-signal") {
+      argc = 0;  // a usage error
+    }
+  }
+  if (argc != 5 && argc != 6) {
+    std::fprintf(stderr,
+                 "usage: %s <transport> <domain_id> <in_topic> <out_topic> "
+                 "[until-signal|exit-after=N|restamp]\n",
+                 argv[0]);
     return 2;
   }
   try {
-    return run(argv[1], std::atoi(argv[2]), argv[3], argv[4]);
+    return run(argv[1], std::atoi(argv[2]), argv[3], argv[4], mode);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "echo_peer: %s\n", e.what());
     return 1;

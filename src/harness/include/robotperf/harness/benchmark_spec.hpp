@@ -47,6 +47,15 @@ struct NodeSpec {
   rmw::QoS qos;
 };
 
+// A process of an external graph (graph.yaml `launch:`): robotperf starts it before timing and
+// stops it after. ${domain}, ${rmw} and ${package} in its command and environment are replaced.
+struct LaunchSpec {
+  std::string name;
+  std::vector<std::string> command;  // argv; the program is looked up on PATH
+  std::filesystem::path cwd = ".";   // relative to the package folder
+  std::map<std::string, std::string> env;
+};
+
 struct BenchmarkSpec {
   std::filesystem::path dir;
   // graph.yaml `plugins:`, resolved against the package folder; loaded with the package.
@@ -76,6 +85,10 @@ struct BenchmarkSpec {
   std::vector<BoundaryTopic> inputs;
   BoundaryTopic output;
   std::vector<NodeSpec> nodes;
+  // An external graph: processes robotperf starts (launch:), or one already running (attach:
+  // true). Either may go with nodes of robotperf's own.
+  std::vector<LaunchSpec> launch;
+  bool attach = false;
   // graph.yaml `functional:` with benchmark.yaml's thresholds; absent when the benchmark does not
   // check accuracy.
   std::optional<FunctionalSpec> functional;

@@ -72,6 +72,9 @@ struct RunOptions {
   std::map<std::string, std::vector<std::string>> host_launchers;
   // The link between the runner's host and the others, when robotperf made it (--netns).
   const NetworkLink* network_link = nullptr;
+  // Where the logs of an external graph's processes go (graph.yaml `launch:`); default: the
+  // working folder.
+  std::filesystem::path log_dir = ".";
   // DDS Security: the keystore whose enclave rmw::kDefaultEnclave every participant of the run
   // (Playback, Monitor, nodes, children) presents; empty: unsecured.
   std::filesystem::path keystore;
@@ -120,6 +123,16 @@ struct NodeReport {
   std::string host;          // graph.yaml `host:`; empty: the runner's
   std::string hostname;      // of the machine it ran on, as it reported (per-node runs)
   bool same_machine = true;  // as the runner's (same boot id): its pid's resources were sampled
+};
+
+// A process of an external graph (graph.yaml `launch:`), as it ended.
+struct LaunchedReport {
+  std::string name;
+  std::string command;  // as run
+  int pid = 0;
+  std::string exit_status;  // as NodeReport's
+  std::string log;          // its stdout and stderr
+  std::string stopped_by;   // "stopped by SIGINT", ..., or "ended during the run"
 };
 
 // The control loop of a kernel that runs one (plugin::ControlLoopSource), over the whole run:
@@ -237,6 +250,7 @@ struct RunResult {
   bool valid = false;
   std::vector<std::string> invalid_reasons;
   std::vector<NodeReport> nodes;
+  std::vector<LaunchedReport> launched;  // graph.yaml `launch:`
   // The launcher of each host the graph placed nodes on (graph.yaml `host:`), as run.
   std::map<std::string, std::string> host_launchers;
   // The link robotperf made between the hosts (--netns), and what crossed it during the run
@@ -307,7 +321,6 @@ void kill_node_processes() noexcept;
 int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
                      const std::string& rmw, int domain_id,
                      const SchedulingOptions& scheduling = {}, double callback_timeout_s = 30.0,
-                     const std::string& run_token = {},
-                     const std::filesystem::path& keystore = {});
+                     const std::string& run_token = {}, const std::filesystem::path& keystore = {});
 
 }  // namespace robotperf::harness
