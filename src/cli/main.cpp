@@ -1354,6 +1354,9 @@ int main(int argc, char** argv) {
   } catch (const harness::BenchmarkError& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
     return kExitUsage;
+  } catch (const harness::GraphNotConnected& e) {
+    std::fprintf(stderr, "robotperf: %s\n", e.what());
+    return kExitUsage;
   } catch (const rmw::SecurityError& e) {
     std::fprintf(stderr, "robotperf: %s\n", e.what());
     return kExitUsage;

@@ -70,36 +70,52 @@ Wiring wiring_of(const BenchmarkSpec& spec) {
   return w;
 }
 
-// The first endpoint of `nodes` still waiting for a peer it will have once the
-// whole graph is up, or an empty string when all are connected.
-std::string unconnected_endpoint(const std::vector<std::shared_ptr<graph::Node>>& nodes,
-                                 const Wiring& w) {
+// The endpoints of `nodes` still waiting for a peer they will have once the whole graph is up, one
+// line each: who, the topic and its type, and what `about_topic` knows of others on it.
+std::vector<std::string> unconnected_endpoints(
+    const std::vector<std::shared_ptr<graph::Node>>& nodes, const Wiring& w,
+    const std::function<std::string(const std::string&)>& about_topic) {
+  std::vector<std::string> out;
   for (const auto& node : nodes) {
     for (const auto& e : node->endpoints()) {
       const bool expects_peer =
           e.is_publisher ? w.subscribed.contains(e.topic) : w.published.contains(e.topic);
       if (expects_peer && e.matched == 0) {
-        return node->name() + (e.is_publisher ? " publishing " : " subscribing ") + e.topic;
+        std::string line = node->name() + (e.is_publisher ? " publishing " : " subscribing ") +
+                           e.topic + " [" + e.type + "] has no peer";
+        if (about_topic) line += ": " + about_topic(e.topic);
+        out.push_back(std::move(line));
       }
     }
   }
-  return {};
+  return out;
 }
 
 // Polls matched counts: discovery offers no single event for "graph complete".
-// Returns false as soon as `abandon` returns true.
+// Returns false as soon as `abandon` returns true; throws GraphNotConnected at the deadline.
 bool wait_connected(
     const std::vector<std::shared_ptr<graph::Node>>& nodes, const Wiring& w, int64_t deadline_ns,
-    const std::function<bool()>& abandon = [] { return false; }) {
+    const std::function<bool()>& abandon = [] { return false; },
+    const std::function<std::string(const std::string&)>& about_topic = {}) {
   while (true) {
-    const std::string missing = unconnected_endpoint(nodes, w);
-    if (missing.empty()) return true;
+    if (unconnected_endpoints(nodes, w, {}).empty()) return true;
     if (abandon()) return false;
     if (rmw::steady_now_ns() > deadline_ns) {
-      throw std::runtime_error("graph did not connect in time: " + missing + " has no peer");
+      std::string lines;
+      for (const auto& line : unconnected_endpoints(nodes, w, about_topic)) lines += "\n  " + line;
+      throw GraphNotConnected("graph did not connect in time (--connect-timeout):" + lines);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
+}
+
+std::string qos_text(const rmw::QoS& q) {
+  return std::string(q.reliability == rmw::Reliability::kReliable ? "reliable" : "best_effort") +
+         ", " +
+         (q.durability == rmw::Durability::kTransientLocal ? "transient_local" : "volatile") +
+         ", " +
+         (q.history == rmw::History::kKeepLast ? "keep_last " + std::to_string(q.depth)
+                                               : std::string("keep_all"));
 }
 
 // Bounds on what a run may be asked for (DESIGN.md §3): the Playback's clock cannot pace
@@ -507,8 +523,28 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     }
     return options.interrupted && options.interrupted->load() != 0;
   };
+  // For a graph that does not connect: who else is on the topic, and the QoS we offer or ask.
+  auto about_topic = [&](const std::string& topic) {
+    std::string qos = "?";
+    for (const auto& e : r.qos) {
+      if (e.topic == topic) qos = qos_text(e.qos);
+    }
+    std::string others;
+    for (const auto& peer : isolation.others()) {
+      if (peer.topics.contains(topic))
+        others +=
+            (others.empty() ? "'" : ", '") + (peer.name.empty() ? "unnamed" : peer.name) + "'";
+    }
+    return others.empty() ? "no other participant on domain " + std::to_string(r.domain_id) +
+                                " has an endpoint on it (is the graph running, with this "
+                                "domain and RMW?)"
+                          : "participant(s) " + others +
+                                " have an endpoint on it that did not match: check its type and "
+                                "QoS (ours: " +
+                                qos + ")";
+  };
   if ((children && !children->wait_ready(connect_deadline, interrupted)) ||
-      !wait_connected(local_nodes, wiring_of(spec), connect_deadline, interrupted)) {
+      !wait_connected(local_nodes, wiring_of(spec), connect_deadline, interrupted, about_topic)) {
     throw RunInterrupted(std::string("interrupted by SIG") +
                          sigabbrev_np(options.interrupted->load()) +
                          " before the run started: nothing was measured");

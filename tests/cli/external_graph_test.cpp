@@ -31,7 +31,8 @@ class ExternalGraph : public ::testing::Test {
 
   // Runs x1: 130 payloads at 50 Hz through echo_peer in `mode` (see echo_peer.cpp).
   Outcome run_echo(const std::string& mode, const std::string& rmw = "fastdds",
-                   const std::string& echo_topic = "/pong", const std::string& extra = "") {
+                   const std::string& echo_topic = "/pong", const std::string& extra = "",
+                   const std::string& input_qos = "default") {
     const fs::path package = dir_ / "benchmarks" / "external" / "x1_echo";
     fs::create_directories(package);
     std::ofstream(package / "benchmark.yaml")
@@ -39,7 +40,9 @@ class ExternalGraph : public ::testing::Test {
     std::ofstream(package / "graph.yaml")
         << "dataset: middleware/payload\nrate_hz: 50\ncount: 130\nwarmup: 10\n"
            "validity: {min_samples: 100}\n"
-           "inputs:\n  - {topic: /ping, type: sensor_msgs/msg/Image, stream: payload}\n"
+           "inputs:\n  - {topic: /ping, type: sensor_msgs/msg/Image, stream: payload, qos: "
+        << input_qos
+        << "}\n"
            "output: {topic: /pong, type: sensor_msgs/msg/Image}\n"
            "launch:\n  - name: echo\n    command: [" ROBOTPERF_ECHO_PEER
            ", '${rmw}', '${domain}', /ping, "
@@ -106,11 +109,27 @@ TEST_F(ExternalGraph, NodeThatDoesNotCopyTheHeaderIsNamedNotLost) {
 TEST_F(ExternalGraph, GraphThatNeverConnectsIsRefusedAfterTheConnectTimeout) {
   const auto start = std::chrono::steady_clock::now();
   const Outcome o = run_echo("until-signal", "fastdds", "/elsewhere", " --connect-timeout 2");
-  EXPECT_NE(o.exit_code, 0) << o.out;
-  EXPECT_NE(o.out.find("did not connect in time: robotperf_monitor subscribing /pong has no peer"),
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  // One line per endpoint without its peer, saying who else is on its topic.
+  EXPECT_NE(o.out.find("\n  robotperf_monitor subscribing /pong [sensor_msgs/msg/Image] has no "
+                       "peer: no other participant on domain"),
             std::string::npos)
       << o.out;
+  EXPECT_EQ(o.out.find("publishing /ping"), std::string::npos) << "the echo reads /ping\n" << o.out;
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(12));
+}
+
+// A best-effort Playback cannot feed a node that asks for reliable delivery: the endpoint is named,
+// with the node's participant that is on its topic and the QoS we offer.
+TEST_F(ExternalGraph, QosIncompatibleEndpointIsNamedWithWhoIsOnItsTopic) {
+  const Outcome o =
+      run_echo("until-signal", "fastdds", "/pong", " --connect-timeout 3", "sensor_data");
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_NE(o.out.find("robotperf_playback publishing /ping [sensor_msgs/msg/Image] has no peer: "
+                       "participant(s) 'robotperf' have an endpoint on it that did not match: "
+                       "check its type and QoS (ours: best_effort, volatile, keep_last 5)"),
+            std::string::npos)
+      << o.out;
 }
 
 TEST_F(ExternalGraph, NeedsADdsTransport) {

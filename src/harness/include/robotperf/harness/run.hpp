@@ -296,6 +296,12 @@ class RunRefused : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The graph did not connect within the connect timeout: one line per endpoint without its peer.
+class GraphNotConnected : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 // An interrupt (RunOptions::interrupted) came before timing started: nothing was measured.
 class RunInterrupted : public std::runtime_error {
  public:
