@@ -220,8 +220,17 @@ int describe_benchmark(const Roots& roots, const std::string& id) {
   for (const auto& in : s.inputs)
     std::cout << "  " << in.topic << "  [" << in.type << "] <- stream " << in.stream << "\n";
   for (const auto& p : s.plugins) std::cout << "plug-in:   " << p.string() << "\n";
-  std::cout << "nodes:\n";
+  std::cout << "processes: " << s.processes
+            << (s.security_required ? ", DDS Security required" : "") << "\n";
+  if (!s.nodes.empty()) std::cout << "nodes:\n";
   for (const auto& n : s.nodes) cli::describe_node(std::cout, n);
+  if (!s.launch.empty()) std::cout << "launch (an external graph):\n";
+  for (const auto& l : s.launch) {
+    std::cout << "  " << l.name << ":";
+    for (const auto& word : l.command) std::cout << " " << word;
+    std::cout << "  (in " << l.cwd.string() << ")\n";
+  }
+  if (s.attach) std::cout << "attach: an external graph already running on the domain\n";
   std::cout << "output:\n  " << s.output.topic << "  [" << s.output.type << "] -> monitor\n";
   if (s.functional) {
     const auto& f = *s.functional;

@@ -104,7 +104,7 @@ int list_evaluators(std::ostream& out) {
 void describe_node(std::ostream& out, const harness::NodeSpec& node) {
   const plugin::KernelEntry& k = harness::kernel_of(node);
   out << "  " << node.name << ": " << node.kernel << " (" << node.backend << "; "
-      << origin(k.origin) << ")\n";
+      << origin(k.origin) << ")" << (node.host.empty() ? "" : " on host " + node.host) << "\n";
   for (const auto* list : {&k.info.inputs, &k.info.outputs}) {
     for (const auto& p : *list) {
       auto topic = node.topics.find(p.name);
