@@ -222,6 +222,11 @@ TEST_F(Cli, N3StartsThePongWithTheHostsLauncher) {
   ASSERT_EQ(j["resources"]["processes"].size(), 2u);
   EXPECT_EQ(j["resources"]["processes"][0]["pid"], j["nodes"][0]["pid"]);
 
+  const Outcome described = robotperf_cli("describe n3");
+  EXPECT_NE(described.out.find("pong: util/relay (cpu; from built-in util) on host remote"),
+            std::string::npos)
+      << described.out;
+
   const Outcome single =
       robotperf_cli("run n3 --processes single --rmw fastdds --quiet --output " + out_.string());
   EXPECT_EQ(single.exit_code, 2) << single.out;
