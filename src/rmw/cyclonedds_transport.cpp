@@ -612,7 +612,8 @@ class Participant {
   static dds_entity_t create_participant(const TransportOptions& options) {
     check_secured_domain("cyclonedds", options);
     QosPtr qos = new_qos();
-    dds_qset_userdata(qos.get(), options.user_data.data(), options.user_data.size());
+    const std::string user_data = participant_user_data(options);
+    dds_qset_userdata(qos.get(), user_data.data(), user_data.size());
     dds_qset_entity_name(qos.get(), "robotperf");
     if (options.security) add_security(*options.security, qos.get());
     // The domain's configuration comes from CYCLONEDDS_URI when set, as with rmw_cyclonedds.

@@ -267,7 +267,8 @@ class Participant {
     check_secured_domain("fastdds", options);
     auto* factory = dds::DomainParticipantFactory::get_instance();
     dds::DomainParticipantQos qos = fastdds_participant_qos();
-    qos.user_data().data_vec().assign(options.user_data.begin(), options.user_data.end());
+    const std::string user_data = participant_user_data(options);
+    qos.user_data().data_vec().assign(user_data.begin(), user_data.end());
     if (options.security) add_security(*options.security, qos);
     // Only the discovery callbacks, which no status mask filters.
     participant_ = factory->create_participant(options.domain_id, qos, &peer_listener_,

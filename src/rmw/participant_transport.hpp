@@ -25,6 +25,13 @@ inline std::string checked_dds_topic_name(const std::string& vendor, const std::
   }
 }
 
+// The participant's USER_DATA: ROS 2's "enclave=<enclave>;" (the security enclave, "/" without
+// security), as every rmw writes it, then the caller's pairs.
+inline std::string participant_user_data(const TransportOptions& options) {
+  return "enclave=" + (options.security ? options.security->enclave : std::string("/")) + ";" +
+         options.user_data;
+}
+
 // Throws TransportError when `options` asks for DDS Security on a domain that no keystore's
 // governance can name, before the DDS implementation fails with a less telling message.
 inline void check_secured_domain(const std::string& vendor, const TransportOptions& options) {

@@ -122,7 +122,8 @@ struct TransportOptions {
 
   int domain_id = 0;  // DDS domain; ROS_DOMAIN_ID when set
   // The participant's USER_DATA, which every other participant on the domain sees: "key=value;"
-  // pairs as ROS 2 uses it. robotperf marks the participants of one run with it.
+  // pairs as ROS 2 uses it. robotperf marks the participants of one run with it. The DDS
+  // transports put ROS 2's "enclave=...;" before it.
   std::string user_data;
   // DDS Security for the DDS transports' participant (authentication, access control,
   // encryption), from one enclave of a keystore; empty: unsecured. Ignored by intra.
