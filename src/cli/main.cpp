@@ -657,8 +657,7 @@ int run(const Roots& roots, const RunArgs& a) {
   o.drain_s = a.drain;
   const std::string processes = a.processes.value_or(spec.processes);
   // An external graph's nodes are reached through DDS, as per-node children are.
-  const bool external = spec.attach || !spec.launch.empty();
-  o.rmw = a.rmw.value_or(processes == "per-node" || external ? "fastdds" : "intra");
+  o.rmw = a.rmw.value_or(processes == "per-node" || spec.external() ? "fastdds" : "intra");
   o.log_dir = a.output;
   o.host_launchers = host_launchers(spec, a);
   o.keystore = a.security;

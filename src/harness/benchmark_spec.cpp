@@ -203,8 +203,7 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   if (spec.attach && !spec.launch.empty())
     file.fail(root["attach"], "attach: true is for a graph already running, not with launch:");
   const YAML::Node nodes = root["nodes"];
-  const bool external = spec.attach || !spec.launch.empty();
-  if (nodes.IsDefined() ? !nodes.IsSequence() : !external) {
+  if (nodes.IsDefined() ? !nodes.IsSequence() : !spec.external()) {
     file.fail(root, "'nodes' must be a list (or the graph external: launch: or attach: true)");
   }
   for (const auto& n : nodes) {

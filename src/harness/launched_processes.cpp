@@ -75,7 +75,7 @@ LaunchedProcesses::LaunchedProcesses(const BenchmarkSpec& spec, const std::strin
     p.name = launch.name;
     std::vector<std::string> args;
     for (const auto& word : launch.command) args.push_back(replaced(word, values));
-    for (const auto& a : args) p.command += (p.command.empty() ? "" : " ") + a;
+    p.command = command_text(args);
     std::map<std::string, std::string> env = {{"ROS_DOMAIN_ID", std::to_string(domain_id)},
                                               {"RMW_IMPLEMENTATION", ros_rmw_of(rmw)}};
     for (const auto& [key, value] : launch.env) env[key] = replaced(value, values);

@@ -14,6 +14,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "node_processes.hpp"
+
 extern char** environ;
 
 namespace robotperf::harness {
@@ -76,12 +78,6 @@ std::string first_line(const std::string& text) {
   return line.empty() ? "no message" : line;
 }
 
-std::string joined(const std::vector<std::string>& args) {
-  std::string out;
-  for (const auto& a : args) out += (out.empty() ? "" : " ") + a;
-  return out;
-}
-
 // Runs a setup step; a failure is one line naming the command and what it printed.
 void step(const std::vector<std::string>& args) {
   const ToolRun run = run_tool(args);
@@ -90,7 +86,8 @@ void step(const std::vector<std::string>& args) {
                             "); install iproute2 (scripts/install-deps.sh)");
   }
   if (run.status != 0) {
-    throw NetworkSetupError("--netns: '" + joined(args) + "' failed: " + first_line(run.output));
+    throw NetworkSetupError("--netns: '" + command_text(args) +
+                            "' failed: " + first_line(run.output));
   }
 }
 

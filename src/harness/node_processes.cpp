@@ -21,6 +21,12 @@ extern char** environ;
 namespace robotperf::harness {
 namespace {}  // namespace
 
+std::string command_text(const std::vector<std::string>& words) {
+  std::string out;
+  for (const auto& w : words) out += (out.empty() ? "" : " ") + w;
+  return out;
+}
+
 std::string describe_exit_status(int status) {
   if (WIFEXITED(status)) {
     return WEXITSTATUS(status) == 0 ? "ok"
@@ -80,7 +86,7 @@ NodeProcesses::NodeProcesses(
     std::vector<std::string> args;
     if (!node.host.empty()) {
       args = host_launcher(node.host, host_launchers);
-      for (const auto& word : args) c.launcher += (c.launcher.empty() ? "" : " ") + word;
+      c.launcher = command_text(args);
     }
     args.insert(args.end(), command.begin(), command.end());
     args.push_back(spec.dir.string());

@@ -21,6 +21,9 @@ namespace robotperf::harness {
 // A waitpid() status as results say it: "ok", "exited with status N", "killed by signal ...".
 std::string describe_exit_status(int status);
 
+// A command's words as one line, for messages and results.
+std::string command_text(const std::vector<std::string>& words);
+
 // Where a node process runs, as it reports itself on its first line ("host {json}"): the
 // machine's host name and boot id, and its own pid there.
 nlohmann::json this_host_identity();

@@ -55,7 +55,7 @@ Wiring wiring_of(const BenchmarkSpec& spec) {
   Wiring w;
   for (const auto& in : spec.inputs) w.published.insert(in.topic);
   w.subscribed.insert(spec.output.topic);
-  if (spec.attach || !spec.launch.empty()) {
+  if (spec.external()) {
     // An external graph's endpoints are not declared: it reads every input and writes the output.
     for (const auto& in : spec.inputs) w.subscribed.insert(in.topic);
     w.published.insert(spec.output.topic);
@@ -305,7 +305,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   for (const auto& node : spec.nodes) {
     for (const auto& [port, topic] : node.topics) r.qos.push_back({node.name, topic, node.qos});
   }
-  if ((spec.attach || !spec.launch.empty()) && options.rmw == "intra") {
+  if (spec.external() && options.rmw == "intra") {
     throw std::invalid_argument(
         "an external graph (launch: or attach:) is reached through DDS: "
         "use --rmw fastdds or cyclonedds, the RMW of its nodes");
@@ -342,12 +342,8 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
           "grey-box runs trace one host, and this graph places nodes on " + hosts.front() +
           ": run it black-box (ping-pong timing stays on the runner's clock)");
     }
-    for (const auto& host : hosts) {
-      std::string launcher;
-      for (const auto& word : host_launcher(host, options.host_launchers))
-        launcher += (launcher.empty() ? "" : " ") + word;
-      r.host_launchers[host] = launcher;
-    }
+    for (const auto& host : hosts)
+      r.host_launchers[host] = command_text(host_launcher(host, options.host_launchers));
   }
 
   // Everything is loaded before timing starts (DESIGN.md §3.4).
@@ -462,8 +458,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
       monitor.evaluate_on_arrival(*on_arrival, truth_frames(*spec.functional, dataset));
     }
     if (const auto& topic = spec.functional->observed_truth_topic; !topic.empty()) {
-      const std::string& type =
-          plugin::registry().find_evaluator(spec.functional->evaluator)->info.observed_truth_type;
+      const std::string& type = info.observed_truth_type;
       const msgs::TypeSupport* ts = nullptr;
       msgs::with_message_type(type, [&]<class T>() { ts = &msgs::type_support<T>(); });
       if (ts == nullptr || !ts->stamped())
@@ -577,9 +572,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
              std::to_string(r.domain_id) + ": " + describe_peers(r.domain_peers, 3) +
              "; their messages are told apart, but they share the machine and the network "
              "(--domain auto picks an empty domain)" +
-             (spec.attach || !spec.launch.empty()
-                  ? "; the external graph's own nodes are among them"
-                  : "")});
+             (spec.external() ? "; the external graph's own nodes are among them" : "")});
   }
   if (options.strict && !r.warnings.empty()) {
     std::string broken;
@@ -643,12 +636,8 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   }
   measurement.end(r);
   if (link_before) {
-    const NetworkLink::Counters after = options.network_link->counters();
-    r.network_link = RunResult::LinkUse{
-        options.network_link->description(),
-        {after.bytes_out - link_before->bytes_out, after.bytes_in - link_before->bytes_in,
-         after.packets_out - link_before->packets_out, after.packets_in - link_before->packets_in,
-         after.dropped - link_before->dropped}};
+    r.network_link = RunResult::LinkUse{options.network_link->description(),
+                                        options.network_link->counters() - *link_before};
   }
   const Monitor::Tally tally = monitor.tally();
 

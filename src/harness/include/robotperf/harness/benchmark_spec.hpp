@@ -89,6 +89,7 @@ struct BenchmarkSpec {
   // true). Either may go with nodes of robotperf's own.
   std::vector<LaunchSpec> launch;
   bool attach = false;
+  bool external() const { return attach || !launch.empty(); }
   // graph.yaml `functional:` with benchmark.yaml's thresholds; absent when the benchmark does not
   // check accuracy.
   std::optional<FunctionalSpec> functional;

@@ -43,6 +43,12 @@ class NetworkLink {
     uint64_t bytes_out = 0, bytes_in = 0;
     uint64_t packets_out = 0, packets_in = 0;
     uint64_t dropped = 0;  // by the qdiscs of both ends (tbf queue full, netem loss)
+    // What was counted between `before` and this reading.
+    friend Counters operator-(const Counters& after, const Counters& before) {
+      return {after.bytes_out - before.bytes_out, after.bytes_in - before.bytes_in,
+              after.packets_out - before.packets_out, after.packets_in - before.packets_in,
+              after.dropped - before.dropped};
+    }
   };
   Counters counters() const;
 
