@@ -94,9 +94,9 @@ FieldType parse_type(std::string_view token, const std::string& package,
     }
     token = token.substr(0, open);
   }
-  // Bounded strings (string<=N) encode as plain strings.
+  // Bounded strings (string<=N) encode as plain strings; the bound is part of the type's hash.
   if (const auto bound = token.find("<="); bound != std::string_view::npos) {
-    parse_size(token.substr(bound + 2), context);
+    t.string_bound = parse_size(token.substr(bound + 2), context);
     token = token.substr(0, bound);
     if (token != "string" && token != "wstring")
       throw DefinitionError(context + ": only strings can be bounded");
