@@ -191,7 +191,7 @@ std::shared_ptr<GenericPublisher> Node::create_generic_publisher(const std::stri
                                                                  const msgs::TypeSupport& type,
                                                                  const QoS& qos) {
   auto pub = std::make_shared<GenericPublisher>(
-      context_.transport().create_publisher(topic, type, qos), topic, type, name_);
+      context_.transport().create_publisher(topic, type, qos, ros_name()), topic, type, name_);
   add_publisher(pub, qos);
   return pub;
 }
@@ -201,7 +201,8 @@ std::shared_ptr<GenericSubscription> Node::create_generic_subscription(
     GenericSubscription::Callback callback, const std::type_info* callable) {
   const std::type_info& callable_or_held = callable ? *callable : callable_type(callback);
   auto sub = std::make_shared<GenericSubscription>(topic, type, name_, std::move(callback));
-  sub->attach(context_.transport().create_subscription(topic, type, qos, [this] { notify(); }));
+  sub->attach(context_.transport().create_subscription(
+      topic, type, qos, [this] { notify(); }, ros_name()));
   // One object stands for both of ROS 2's layers: rcl handle = rclcpp subscription.
   lttng_ust_tracepoint(ros2, rcl_subscription_init, sub.get(), this, sub->rmw_handle(),
                        topic.c_str(), qos.depth);

@@ -109,15 +109,6 @@ bool wait_connected(
   }
 }
 
-std::string qos_text(const rmw::QoS& q) {
-  return std::string(q.reliability == rmw::Reliability::kReliable ? "reliable" : "best_effort") +
-         ", " +
-         (q.durability == rmw::Durability::kTransientLocal ? "transient_local" : "volatile") +
-         ", " +
-         (q.history == rmw::History::kKeepLast ? "keep_last " + std::to_string(q.depth)
-                                               : std::string("keep_all"));
-}
-
 // Bounds on what a run may be asked for (DESIGN.md §3): the Playback's clock cannot pace
 // messages closer than a microsecond, a week is longer than any benchmark needs, and every
 // nanosecond figure derived from these must fit in 64 bits.
@@ -522,7 +513,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   auto about_topic = [&](const std::string& topic) {
     std::string qos = "?";
     for (const auto& e : r.qos) {
-      if (e.topic == topic) qos = qos_text(e.qos);
+      if (e.topic == topic) qos = rmw::to_string(e.qos);
     }
     std::string others;
     for (const auto& peer : isolation.others()) {

@@ -336,16 +336,29 @@ ParticipantId participant_id(const dds_guid_t& guid) {
   return id;
 }
 
-// rmw's gid of an endpoint: its 16-byte GUID, zero-padded to RMW_GID_STORAGE_SIZE.
-std::array<uint8_t, ROBOTPERF_ROS2_GID_STORAGE_SIZE> gid_of(dds_entity_t endpoint) {
-  std::array<uint8_t, ROBOTPERF_ROS2_GID_STORAGE_SIZE> gid{};
-  dds_guid_t guid;
-  if (dds_get_guid(endpoint, &guid) == DDS_RETCODE_OK) std::memcpy(gid.data(), guid.v, 16);
+// rmw's GID of an endpoint or participant: its 16-byte GUID.
+Gid gid_of(const dds_guid_t& guid) {
+  Gid gid{};
+  std::memcpy(gid.data(), guid.v, gid.size());
   return gid;
 }
+Gid gid_of(dds_entity_t entity) {
+  dds_guid_t guid{};
+  dds_get_guid(entity, &guid);
+  return gid_of(guid);
+}
 
-QosPtr endpoint_qos(const QoS& qos) {
+// The GID as ros2 tracepoints record it: zero-padded to RMW_GID_STORAGE_SIZE.
+std::array<uint8_t, ROBOTPERF_ROS2_GID_STORAGE_SIZE> traced_gid(dds_entity_t endpoint) {
+  std::array<uint8_t, ROBOTPERF_ROS2_GID_STORAGE_SIZE> out{};
+  const Gid gid = gid_of(endpoint);
+  std::memcpy(out.data(), gid.data(), gid.size());
+  return out;
+}
+
+QosPtr endpoint_qos(const QoS& qos, const std::string& user_data) {
   QosPtr out = new_qos();
+  if (!user_data.empty()) dds_qset_userdata(out.get(), user_data.data(), user_data.size());
   // A reliable writer whose readers do not keep up blocks at most this long, then fails the write.
   constexpr dds_duration_t kMaxBlocking = DDS_SECS(1);
   dds_qset_reliability(out.get(),
@@ -404,14 +417,47 @@ class PeerDirectory {
     });
     for (dds_entity_t reader : {publications_.get(), subscriptions_.get()}) {
       take_all<dds_builtintopic_endpoint_t>(reader, [&](const auto& e, bool valid) {
-        if (valid && e.topic_name != nullptr)
-          table_.add_topic(participant_id(e.participant_key), e.topic_name);
+        // An endpoint's GUID starts with its participant's prefix; one that left has only its key.
+        const ParticipantId participant = participant_id(e.key);
+        if (!valid) {
+          table_.remove_endpoint(participant, gid_of(e.key));
+        } else if (e.topic_name != nullptr) {
+          table_.add_endpoint(participant, describe(e, reader == publications_.get()));
+        }
       });
     }
     return table_.peers(self);
   }
+  PeerTable& table() { return table_; }
 
  private:
+  static PeerEndpoint describe(const dds_builtintopic_endpoint_t& e, bool writer) {
+    PeerEndpoint endpoint;
+    endpoint.gid = gid_of(e.key);
+    endpoint.writer = writer;
+    endpoint.topic = e.topic_name;
+    if (e.type_name != nullptr) endpoint.dds_type = e.type_name;
+    dds_reliability_kind_t reliability{};
+    dds_duration_t max_blocking = 0;
+    if (dds_qget_reliability(e.qos, &reliability, &max_blocking)) {
+      endpoint.qos.reliability = reliability == DDS_RELIABILITY_RELIABLE ? Reliability::kReliable
+                                                                         : Reliability::kBestEffort;
+    }
+    dds_durability_kind_t durability{};
+    if (dds_qget_durability(e.qos, &durability)) {
+      endpoint.qos.durability = durability == DDS_DURABILITY_VOLATILE ? Durability::kVolatile
+                                                                      : Durability::kTransientLocal;
+    }
+    void* bytes = nullptr;
+    std::size_t size = 0;
+    if (dds_qget_userdata(e.qos, &bytes, &size) && bytes != nullptr) {
+      endpoint.type_hash =
+          type_hash_from_user_data(std::string_view(static_cast<const char*>(bytes), size));
+    }
+    dds_free(bytes);
+    return endpoint;
+  }
+
   template <class Sample, class Visit>
   static void take_all(dds_entity_t reader, Visit visit) {
     constexpr std::size_t kBatch = 16;
@@ -577,19 +623,22 @@ class Participant {
       throw TransportError("cyclonedds: cannot read the participant's GUID");
     }
     id_ = participant_id(guid);
+    nodes_.emplace(gid_of(guid), options.ros_distro);
   }
 
   dds_entity_t handle() const { return participant_.get(); }
   ParticipantId id() const { return id_; }
   std::vector<PeerParticipant> peers() { return peers_.peers(id_); }
+  PeerTable& peer_table() { return peers_.table(); }
+  LocalNodes& nodes() { return *nodes_; }
 
-  // The topic for `ros_topic`, created on first use; a second type is an error.
-  dds_entity_t topic(const std::string& ros_topic, const msgs::TypeSupport& type) {
-    const std::string dds_name = checked_dds_topic_name("cyclonedds", ros_topic);
+  // The topic, created on first use; a second type is an error.
+  dds_entity_t topic(const EndpointTopic& endpoint_topic, const msgs::TypeSupport& type) {
+    const std::string& dds_name = endpoint_topic.dds_name;
     std::lock_guard lock(mutex_);
     if (auto it = topics_.find(dds_name); it != topics_.end()) {
       if (it->second.dds_type != type.dds_type) {
-        throw TransportError("cyclonedds: topic " + ros_topic + " already has type " +
+        throw TransportError("cyclonedds: topic " + endpoint_topic.name + " already has type " +
                              it->second.dds_type + ", not " + type.dds_type);
       }
       return it->second.entity->get();
@@ -640,6 +689,7 @@ class Participant {
   Entity participant_;
   PeerDirectory peers_;
   ParticipantId id_{};
+  std::optional<LocalNodes> nodes_;
   std::mutex mutex_;
   std::map<std::string, TopicEntry> topics_;
 };
@@ -655,22 +705,25 @@ void check_endpoint(dds_entity_t endpoint, const Handle* handle, const std::stri
   }
   if constexpr (kPublisher) {
     if (lttng_ust_tracepoint_enabled(ros2, rmw_publisher_init)) {
-      lttng_ust_do_tracepoint(ros2, rmw_publisher_init, handle, gid_of(endpoint).data());
+      lttng_ust_do_tracepoint(ros2, rmw_publisher_init, handle, traced_gid(endpoint).data());
     }
   } else if (lttng_ust_tracepoint_enabled(ros2, rmw_subscription_init)) {
-    lttng_ust_do_tracepoint(ros2, rmw_subscription_init, handle, gid_of(endpoint).data());
+    lttng_ust_do_tracepoint(ros2, rmw_subscription_init, handle, traced_gid(endpoint).data());
   }
 }
 
 class CycloneddsPublisher final : public PublisherHandle {
  public:
-  CycloneddsPublisher(std::shared_ptr<Participant> participant, const std::string& topic,
-                      const msgs::TypeSupport& type, const QoS& qos)
+  CycloneddsPublisher(std::shared_ptr<Participant> participant, const EndpointTopic& topic,
+                      const msgs::TypeSupport& type, const QoS& qos, const NodeName& node)
       : participant_(std::move(participant)),
-        topic_(topic),
-        writer_(dds_create_writer(participant_->handle(), participant_->topic(topic, type),
-                                  endpoint_qos(qos).get(), nullptr)) {
-    check_endpoint(writer_.get(), this, topic);
+        topic_(topic.name),
+        writer_(dds_create_writer(
+            participant_->handle(), participant_->topic(topic, type),
+            endpoint_qos(qos, endpoint_user_data(type, participant_->nodes().distro())).get(),
+            nullptr)) {
+    check_endpoint(writer_.get(), this, topic_);
+    node_.emplace(participant_->nodes(), node, gid_of(writer_.get()), true);
   }
 
   void publish(MessagePtr msg) override {
@@ -698,6 +751,7 @@ class CycloneddsPublisher final : public PublisherHandle {
   std::shared_ptr<Participant> participant_;
   std::string topic_;
   Entity writer_;
+  std::optional<NodeEndpoint> node_;  // last: withdrawn before the writer is deleted
 };
 
 class CycloneddsSubscription;
@@ -706,16 +760,19 @@ ListenerPtr data_available_listener(CycloneddsSubscription* subscription);
 
 class CycloneddsSubscription final : public SubscriptionHandle {
  public:
-  CycloneddsSubscription(std::shared_ptr<Participant> participant, const std::string& topic,
+  CycloneddsSubscription(std::shared_ptr<Participant> participant, const EndpointTopic& topic,
                          const msgs::TypeSupport& type, const QoS& qos,
-                         std::function<void()> on_ready)
+                         std::function<void()> on_ready, const NodeName& node)
       : participant_(std::move(participant)),
-        topic_(topic),
+        topic_(topic.name),
         type_(type),
         on_ready_(std::move(on_ready)),
-        reader_(dds_create_reader(participant_->handle(), participant_->topic(topic, type),
-                                  endpoint_qos(qos).get(), data_available_listener(this).get())) {
-    check_endpoint(reader_.get(), this, topic);
+        reader_(dds_create_reader(
+            participant_->handle(), participant_->topic(topic, type),
+            endpoint_qos(qos, endpoint_user_data(type, participant_->nodes().distro())).get(),
+            data_available_listener(this).get())) {
+    check_endpoint(reader_.get(), this, topic_);
+    node_.emplace(participant_->nodes(), node, gid_of(reader_.get()), false);
   }
   ~CycloneddsSubscription() override {
     // No listener call may reach a subscription being destroyed.
@@ -775,6 +832,7 @@ class CycloneddsSubscription final : public SubscriptionHandle {
   std::function<void()> on_ready_;
   Entity reader_;
   std::map<dds_instance_handle_t, ParticipantId> senders_;
+  std::optional<NodeEndpoint> node_;  // last: withdrawn before the reader is deleted
 };
 
 // Cyclone copies the listener into the reader, which calls `notify` from its receive threads.

@@ -40,6 +40,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <span>
 #include <stdexcept>
@@ -167,6 +168,11 @@ void apply_common_qos(const QoS& qos, EndpointQos& out) {
   out.data_sharing().off();
 }
 
+template <class EndpointQos>
+void set_user_data(const std::string& text, EndpointQos& qos) {
+  qos.user_data().data_vec().assign(text.begin(), text.end());
+}
+
 dds::DataWriterQos writer_qos(const dds::Publisher& publisher, const QoS& qos) {
   dds::DataWriterQos out = publisher.get_default_datawriter_qos();
   apply_common_qos(qos, out);
@@ -186,6 +192,23 @@ ParticipantId participant_id(const eprosima::fastrtps::rtps::GuidPrefix_t& prefi
   ParticipantId id;
   std::memcpy(id.data(), prefix.value, id.size());
   return id;
+}
+
+// rmw's GID of an endpoint or participant: its 16-byte GUID.
+Gid gid_of(const eprosima::fastrtps::rtps::GUID_t& guid) {
+  Gid gid{};
+  std::memcpy(gid.data(), guid.guidPrefix.value, guid.guidPrefix.size);
+  std::memcpy(gid.data() + guid.guidPrefix.size, guid.entityId.value, guid.entityId.size);
+  return gid;
+}
+
+// The GID as ros2 tracepoints record it: zero-padded to RMW_GID_STORAGE_SIZE.
+std::array<uint8_t, ROBOTPERF_ROS2_GID_STORAGE_SIZE> traced_gid(
+    const eprosima::fastrtps::rtps::GUID_t& guid) {
+  std::array<uint8_t, ROBOTPERF_ROS2_GID_STORAGE_SIZE> out{};
+  const Gid gid = gid_of(guid);
+  std::memcpy(out.data(), gid.data(), gid.size());
+  return out;
 }
 
 // What discovery tells about the other participants of the domain. Fast DDS calls it from its
@@ -224,18 +247,42 @@ class PeerListener final : public dds::DomainParticipantListener {
   }
   void on_subscriber_discovery(dds::DomainParticipant*,
                                eprosima::fastrtps::rtps::ReaderDiscoveryInfo&& info) override {
-    table_.add_topic(participant_id(info.info.guid().guidPrefix),
-                     info.info.topicName().to_string());
+    using Info = eprosima::fastrtps::rtps::ReaderDiscoveryInfo;
+    record(info.info, info.status == Info::REMOVED_READER, false);
   }
   void on_publisher_discovery(dds::DomainParticipant*,
                               eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override {
-    table_.add_topic(participant_id(info.info.guid().guidPrefix),
-                     info.info.topicName().to_string());
+    using Info = eprosima::fastrtps::rtps::WriterDiscoveryInfo;
+    record(info.info, info.status == Info::REMOVED_WRITER, true);
   }
 
   std::vector<PeerParticipant> peers(const ParticipantId& self) const { return table_.peers(self); }
+  PeerTable& table() { return table_; }
 
  private:
+  // A reader's or writer's proxy data.
+  template <class ProxyData>
+  void record(const ProxyData& data, bool removed, bool writer) {
+    const ParticipantId participant = participant_id(data.guid().guidPrefix);
+    if (removed) {
+      table_.remove_endpoint(participant, gid_of(data.guid()));
+      return;
+    }
+    PeerEndpoint endpoint;
+    endpoint.gid = gid_of(data.guid());
+    endpoint.writer = writer;
+    endpoint.topic = data.topicName().to_string();
+    endpoint.dds_type = data.typeName().to_string();
+    endpoint.qos.reliability = data.m_qos.m_reliability.kind == dds::RELIABLE_RELIABILITY_QOS
+                                   ? Reliability::kReliable
+                                   : Reliability::kBestEffort;
+    endpoint.qos.durability = data.m_qos.m_durability.kind == dds::VOLATILE_DURABILITY_QOS
+                                  ? Durability::kVolatile
+                                  : Durability::kTransientLocal;
+    const auto& bytes = data.m_qos.m_userData.data_vec();
+    endpoint.type_hash = type_hash_from_user_data(std::string(bytes.begin(), bytes.end()));
+    table_.add_endpoint(participant, std::move(endpoint));
+  }
   PeerTable table_;
 };
 
@@ -282,6 +329,7 @@ class Participant {
                      ": are its keystore files valid, its permissions for this domain?)"
                : ""));
     }
+    nodes_.emplace(gid_of(participant_->guid()), options.ros_distro);
     publisher_ = participant_->create_publisher(participant_->get_default_publisher_qos());
     subscriber_ = participant_->create_subscriber(participant_->get_default_subscriber_qos());
     if (publisher_ == nullptr || subscriber_ == nullptr) {
@@ -297,14 +345,16 @@ class Participant {
   dds::Subscriber& subscriber() { return *subscriber_; }
   ParticipantId id() const { return participant_id(participant_->guid().guidPrefix); }
   std::vector<PeerParticipant> peers() const { return peer_listener_.peers(id()); }
+  PeerTable& peer_table() { return peer_listener_.table(); }
+  LocalNodes& nodes() { return *nodes_; }
 
-  // The topic for `ros_topic`, created on first use; a second type is an error.
-  dds::Topic& topic(const std::string& ros_topic, const msgs::TypeSupport& type) {
-    const std::string dds_name = checked_dds_topic_name("fastdds", ros_topic);
+  // The topic, created on first use; a second type is an error.
+  dds::Topic& topic(const EndpointTopic& endpoint_topic, const msgs::TypeSupport& type) {
+    const std::string& dds_name = endpoint_topic.dds_name;
     std::lock_guard lock(mutex_);
     if (auto it = topics_.find(dds_name); it != topics_.end()) {
       if (it->second->get_type_name() != type.dds_type) {
-        throw TransportError("fastdds: topic " + ros_topic + " already has type " +
+        throw TransportError("fastdds: topic " + endpoint_topic.name + " already has type " +
                              it->second->get_type_name() + ", not " + type.dds_type);
       }
       return *it->second;
@@ -338,34 +388,31 @@ class Participant {
   dds::DomainParticipant* participant_ = nullptr;
   dds::Publisher* publisher_ = nullptr;
   dds::Subscriber* subscriber_ = nullptr;
+  std::optional<LocalNodes> nodes_;
   std::mutex mutex_;
   std::map<std::string, dds::Topic*> topics_;
 };
 
-// rmw's gid of an endpoint: its 16-byte GUID, zero-padded to RMW_GID_STORAGE_SIZE.
-std::array<uint8_t, ROBOTPERF_ROS2_GID_STORAGE_SIZE> gid_of(
-    const eprosima::fastrtps::rtps::GUID_t& guid) {
-  std::array<uint8_t, ROBOTPERF_ROS2_GID_STORAGE_SIZE> gid{};
-  std::memcpy(gid.data(), guid.guidPrefix.value, guid.guidPrefix.size);
-  std::memcpy(gid.data() + guid.guidPrefix.size, guid.entityId.value, guid.entityId.size);
-  return gid;
-}
-
 class FastddsPublisher final : public PublisherHandle {
  public:
-  FastddsPublisher(std::shared_ptr<Participant> participant, const std::string& topic,
-                   const msgs::TypeSupport& type, const QoS& qos)
-      : participant_(std::move(participant)), topic_(topic) {
+  FastddsPublisher(std::shared_ptr<Participant> participant, const EndpointTopic& topic,
+                   const msgs::TypeSupport& type, const QoS& qos, const NodeName& node)
+      : participant_(std::move(participant)), topic_(topic.name) {
     dds::Publisher& publisher = participant_->publisher();
-    writer_ =
-        publisher.create_datawriter(&participant_->topic(topic, type), writer_qos(publisher, qos));
-    if (writer_ == nullptr) throw TransportError("fastdds: cannot create a writer on " + topic);
+    dds::DataWriterQos dds_qos = writer_qos(publisher, qos);
+    set_user_data(endpoint_user_data(type, participant_->nodes().distro()), dds_qos);
+    writer_ = publisher.create_datawriter(&participant_->topic(topic, type), dds_qos);
+    if (writer_ == nullptr) throw TransportError("fastdds: cannot create a writer on " + topic_);
+    node_.emplace(participant_->nodes(), node, gid_of(writer_->guid()), true);
     if (lttng_ust_tracepoint_enabled(ros2, rmw_publisher_init)) {
-      const auto gid = gid_of(writer_->guid());
+      const auto gid = traced_gid(writer_->guid());
       lttng_ust_do_tracepoint(ros2, rmw_publisher_init, this, gid.data());
     }
   }
-  ~FastddsPublisher() override { participant_->publisher().delete_datawriter(writer_); }
+  ~FastddsPublisher() override {
+    node_.reset();
+    participant_->publisher().delete_datawriter(writer_);
+  }
 
   void publish(MessagePtr msg) override {
     if (!msg) throw TransportError("fastdds: cannot publish a null message on " + topic_);
@@ -398,6 +445,7 @@ class FastddsPublisher final : public PublisherHandle {
   std::shared_ptr<Participant> participant_;
   std::string topic_;
   dds::DataWriter* writer_ = nullptr;
+  std::optional<NodeEndpoint> node_;
 };
 
 class DataAvailableListener final : public dds::DataReaderListener {
@@ -411,23 +459,27 @@ class DataAvailableListener final : public dds::DataReaderListener {
 
 class FastddsSubscription final : public SubscriptionHandle {
  public:
-  FastddsSubscription(std::shared_ptr<Participant> participant, const std::string& topic,
-                      const msgs::TypeSupport& type, const QoS& qos, std::function<void()> on_ready)
+  FastddsSubscription(std::shared_ptr<Participant> participant, const EndpointTopic& topic,
+                      const msgs::TypeSupport& type, const QoS& qos, std::function<void()> on_ready,
+                      const NodeName& node)
       : participant_(std::move(participant)),
-        topic_(topic),
+        topic_(topic.name),
         type_(type),
         listener_(std::move(on_ready)) {
     dds::Subscriber& subscriber = participant_->subscriber();
-    reader_ =
-        subscriber.create_datareader(&participant_->topic(topic, type), reader_qos(subscriber, qos),
-                                     &listener_, dds::StatusMask::data_available());
-    if (reader_ == nullptr) throw TransportError("fastdds: cannot create a reader on " + topic);
+    dds::DataReaderQos dds_qos = reader_qos(subscriber, qos);
+    set_user_data(endpoint_user_data(type, participant_->nodes().distro()), dds_qos);
+    reader_ = subscriber.create_datareader(&participant_->topic(topic, type), dds_qos, &listener_,
+                                           dds::StatusMask::data_available());
+    if (reader_ == nullptr) throw TransportError("fastdds: cannot create a reader on " + topic_);
+    node_.emplace(participant_->nodes(), node, gid_of(reader_->guid()), false);
     if (lttng_ust_tracepoint_enabled(ros2, rmw_subscription_init)) {
-      const auto gid = gid_of(reader_->guid());
+      const auto gid = traced_gid(reader_->guid());
       lttng_ust_do_tracepoint(ros2, rmw_subscription_init, this, gid.data());
     }
   }
   ~FastddsSubscription() override {
+    node_.reset();
     reader_->set_listener(nullptr);
     participant_->subscriber().delete_datareader(reader_);
   }
@@ -468,6 +520,7 @@ class FastddsSubscription final : public SubscriptionHandle {
   const msgs::TypeSupport& type_;
   DataAvailableListener listener_;
   dds::DataReader* reader_ = nullptr;
+  std::optional<NodeEndpoint> node_;
 };
 
 }  // namespace

@@ -141,9 +141,12 @@ class IntraTransport final : public Transport {
  public:
   std::string name() const override { return "intra"; }
 
+  // Without DDS there is no ROS 2 graph to announce the nodes on.
+  using Transport::create_publisher;
+  using Transport::create_subscription;
   std::unique_ptr<PublisherHandle> create_publisher(const std::string& topic,
-                                                    const msgs::TypeSupport& type,
-                                                    const QoS&) override {
+                                                    const msgs::TypeSupport& type, const QoS&,
+                                                    const NodeName&) override {
     dds_topic_name(topic);  // validates the name as the DDS transport would
     std::lock_guard lock(registry_->mutex);
     ++registry_->topic(topic, type).publishers;
@@ -155,7 +158,8 @@ class IntraTransport final : public Transport {
   std::unique_ptr<SubscriptionHandle> create_subscription(const std::string& topic,
                                                           const msgs::TypeSupport& type,
                                                           const QoS& qos,
-                                                          std::function<void()> on_ready) override {
+                                                          std::function<void()> on_ready,
+                                                          const NodeName&) override {
     dds_topic_name(topic);
     auto sub = std::make_unique<IntraSubscription>(registry_, topic, qos, std::move(on_ready));
     std::lock_guard lock(registry_->mutex);

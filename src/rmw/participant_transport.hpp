@@ -12,18 +12,29 @@
 #include <utility>
 #include <vector>
 
+#include "robotperf/msgs/serialized_message.hpp"
 #include "robotperf/rmw/transport.hpp"
+#include "ros_graph.hpp"
 
 namespace robotperf::rmw {
 
-// dds_topic_name(ros_topic), or a TransportError naming the vendor when the name is invalid.
-inline std::string checked_dds_topic_name(const std::string& vendor, const std::string& ros_topic) {
-  try {
-    return dds_topic_name(ros_topic);
-  } catch (const std::invalid_argument& e) {
-    throw TransportError(vendor + ": " + e.what());
+// An endpoint's topic: the name messages give it and its DDS name.
+struct EndpointTopic {
+  std::string name;
+  std::string dds_name;
+
+  // A ROS topic ("/camera/image_raw" on DDS as "rt/camera/image_raw"); a TransportError naming
+  // the vendor when the name is invalid.
+  static EndpointTopic ros(const std::string& vendor, const std::string& ros_topic) {
+    try {
+      return {ros_topic, dds_topic_name(ros_topic)};
+    } catch (const std::invalid_argument& e) {
+      throw TransportError(vendor + ": " + e.what());
+    }
   }
-}
+  // A topic ROS 2 keeps to DDS (ros_discovery_info), named the same on both.
+  static EndpointTopic dds_only(const std::string& name) { return {name, name}; }
+};
 
 // The participant's USER_DATA: ROS 2's "enclave=<enclave>;" (the security enclave, "/" without
 // security), as every rmw writes it, then the caller's pairs.
@@ -42,32 +53,72 @@ inline void check_secured_domain(const std::string& vendor, const TransportOptio
   }
 }
 
+// `Participant` also has nodes() (its LocalNodes) and peer_table() (the PeerTable its discovery
+// fills); endpoints are constructed from (participant, EndpointTopic, type, qos, [on_ready,]
+// NodeName). The transport announces its nodes on ros_discovery_info and reads the others'.
 template <class Participant, class Publisher, class Subscription>
 class ParticipantTransport final : public Transport {
  public:
   ParticipantTransport(std::string name, const TransportOptions& options)
-      : name_(std::move(name)), participant_(std::make_shared<Participant>(options)) {}
+      : name_(std::move(name)),
+        participant_(std::make_shared<Participant>(options)),
+        discovery_writer_(
+            std::make_unique<Publisher>(participant_, EndpointTopic::dds_only(kRosDiscoveryTopic),
+                                        discovery_type(), ros_discovery_writer_qos(), NodeName{})),
+        discovery_reader_(std::make_unique<Subscription>(
+            participant_, EndpointTopic::dds_only(kRosDiscoveryTopic), discovery_type(),
+            ros_discovery_reader_qos(), [] {}, NodeName{})) {
+    participant_->nodes().set_publisher(
+        [writer = discovery_writer_.get()](std::shared_ptr<const msgs::SerializedMessage> sample) {
+          writer->publish(std::move(sample));
+        });
+  }
+  ~ParticipantTransport() override {
+    // Endpoints may outlive the transport; their removal is then no longer announced.
+    participant_->nodes().set_publisher(nullptr);
+  }
 
   std::string name() const override { return name_; }
 
+  using Transport::create_publisher;
+  using Transport::create_subscription;
   std::unique_ptr<PublisherHandle> create_publisher(const std::string& topic,
-                                                    const msgs::TypeSupport& type,
-                                                    const QoS& qos) override {
-    return std::make_unique<Publisher>(participant_, topic, type, qos);
+                                                    const msgs::TypeSupport& type, const QoS& qos,
+                                                    const NodeName& node) override {
+    return std::make_unique<Publisher>(participant_, EndpointTopic::ros(name_, topic), type, qos,
+                                       node);
   }
 
   std::unique_ptr<SubscriptionHandle> create_subscription(const std::string& topic,
                                                           const msgs::TypeSupport& type,
                                                           const QoS& qos,
-                                                          std::function<void()> on_ready) override {
-    return std::make_unique<Subscription>(participant_, topic, type, qos, std::move(on_ready));
+                                                          std::function<void()> on_ready,
+                                                          const NodeName& node) override {
+    return std::make_unique<Subscription>(participant_, EndpointTopic::ros(name_, topic), type, qos,
+                                          std::move(on_ready), node);
   }
-  std::vector<PeerParticipant> peers() const override { return participant_->peers(); }
+  std::vector<PeerParticipant> peers() const override {
+    // The nodes the others announced since last asked, each participant's latest kept.
+    MessageInfo info;
+    while (MessagePtr sample = discovery_reader_->take(&info)) {
+      const auto& cdr = static_cast<const msgs::SerializedMessage*>(sample.get())->cdr;
+      if (auto entities = decode_participant_entities(cdr)) {
+        participant_->peer_table().set_nodes(info.sender, std::move(entities->nodes));
+      }
+    }
+    return participant_->peers();
+  }
   ParticipantId participant() const override { return participant_->id(); }
 
  private:
+  static const msgs::TypeSupport& discovery_type() {
+    return msgs::serialized_type_support(kParticipantEntitiesInfoType);
+  }
+
   std::string name_;
   std::shared_ptr<Participant> participant_;
+  std::unique_ptr<Publisher> discovery_writer_;
+  std::unique_ptr<Subscription> discovery_reader_;
 };
 
 }  // namespace robotperf::rmw

@@ -12,10 +12,24 @@ void PeerTable::announce(const ParticipantId& id,
   if (describe) describe(peer);
 }
 
-void PeerTable::add_topic(const ParticipantId& id, std::string dds_topic) {
-  if (dds_topic.starts_with("rt/")) dds_topic.erase(0, 2);
+void PeerTable::add_endpoint(const ParticipantId& id, PeerEndpoint endpoint) {
+  if (endpoint.topic.starts_with("rt/")) endpoint.topic.erase(0, 2);
   std::lock_guard lock(mutex_);
-  peer_locked(id).topics.insert(std::move(dds_topic));
+  PeerParticipant& peer = peer_locked(id);
+  peer.topics.insert(endpoint.topic);
+  // A changed QoS is announced again under the same GID.
+  std::erase_if(peer.endpoints, [&](const PeerEndpoint& e) { return e.gid == endpoint.gid; });
+  peer.endpoints.push_back(std::move(endpoint));
+}
+
+void PeerTable::remove_endpoint(const ParticipantId& id, const Gid& gid) {
+  std::lock_guard lock(mutex_);
+  std::erase_if(peer_locked(id).endpoints, [&](const PeerEndpoint& e) { return e.gid == gid; });
+}
+
+void PeerTable::set_nodes(const ParticipantId& id, std::vector<PeerNode> nodes) {
+  std::lock_guard lock(mutex_);
+  peer_locked(id).nodes = std::move(nodes);
 }
 
 std::vector<PeerParticipant> PeerTable::peers(const ParticipantId& self) const {

@@ -20,9 +20,13 @@ class PeerTable {
   // (one that left before it was read) is announced without it.
   void announce(const ParticipantId& id,
                 const std::function<void(PeerParticipant&)>& describe = nullptr);
-  // One of its endpoints, on `dds_topic`: "rt/<name>" is listed as the ROS name, other (DDS-only)
-  // topics as DDS names them.
-  void add_topic(const ParticipantId& id, std::string dds_topic);
+  // One of its endpoints, named by its DDS topic in `endpoint.topic`: "rt/<name>" is listed as
+  // the ROS name, other (DDS-only) topics as DDS names them. Its topic stays listed in the peer's
+  // `topics` after remove_endpoint.
+  void add_endpoint(const ParticipantId& id, PeerEndpoint endpoint);
+  void remove_endpoint(const ParticipantId& id, const Gid& gid);
+  // Its ROS 2 nodes, from a ros_discovery_info sample it wrote.
+  void set_nodes(const ParticipantId& id, std::vector<PeerNode> nodes);
   // Those announced so far, including those that have left since, but `self` (vendors report a
   // participant's own endpoints too).
   std::vector<PeerParticipant> peers(const ParticipantId& self) const;

@@ -24,6 +24,34 @@ QoS QoS::from_profile_name(const std::string& name) {
   throw std::invalid_argument("unknown QoS profile '" + name + "' (choose default or sensor_data)");
 }
 
+std::string to_string(const QoS& qos) {
+  return std::string(qos.reliability == Reliability::kReliable ? "reliable" : "best_effort") +
+         ", " + (qos.durability == Durability::kTransientLocal ? "transient_local" : "volatile") +
+         ", " +
+         (qos.history == History::kKeepLast ? "keep_last " + std::to_string(qos.depth)
+                                            : std::string("keep_all"));
+}
+
+RosDistro ros_distro_from_name(const std::string& name) {
+  if (name == "humble") return RosDistro::kHumble;
+  if (name == "iron") return RosDistro::kIron;
+  if (name == "jazzy") return RosDistro::kJazzy;
+  throw std::invalid_argument("unknown ROS 2 distribution '" + name +
+                              "' (choose humble, iron or jazzy; later ones follow jazzy)");
+}
+
+std::string to_string(RosDistro distro) {
+  switch (distro) {
+    case RosDistro::kHumble:
+      return "humble";
+    case RosDistro::kIron:
+      return "iron";
+    case RosDistro::kJazzy:
+      return "jazzy";
+  }
+  return "?";
+}
+
 std::unique_ptr<Transport> make_transport(const std::string& name,
                                           const TransportOptions& options) {
   if (name == "intra") return make_intra_transport();
@@ -37,6 +65,17 @@ std::string to_hex(const ParticipantId& id) {
   static constexpr char kDigits[] = "0123456789abcdef";
   std::string out;
   for (uint8_t b : id) {
+    out += kDigits[b >> 4];
+    out += kDigits[b & 15];
+  }
+  return out;
+}
+
+std::string to_text(const Gid& gid) {
+  static constexpr char kDigits[] = "0123456789abcdef";
+  std::string out;
+  for (uint8_t b : gid) {
+    if (!out.empty()) out += '.';
     out += kDigits[b >> 4];
     out += kDigits[b & 15];
   }

@@ -181,8 +181,8 @@ class Node {
   template <class T>
   std::shared_ptr<Publisher<T>> create_publisher(const std::string& topic, const QoS& qos = QoS{}) {
     const auto& ts = msgs::type_support<T>();
-    auto pub = std::make_shared<Publisher<T>>(context_.transport().create_publisher(topic, ts, qos),
-                                              topic, ts, name_);
+    auto pub = std::make_shared<Publisher<T>>(
+        context_.transport().create_publisher(topic, ts, qos, ros_name()), topic, ts, name_);
     add_publisher(pub, qos);
     return pub;
   }
@@ -217,6 +217,10 @@ class Node {
 
   std::shared_ptr<Timer> create_timer(std::chrono::nanoseconds period,
                                       std::function<void()> callback);
+
+  // The name ROS 2 tools show this node under (ros_discovery_info): its name in the root
+  // namespace.
+  rmw::NodeName ros_name() const { return rmw::NodeName{name_, "/"}; }
 
   // Topics this node publishes and subscribes, with their matched counts.
   std::vector<EndpointStatus> endpoints() const;

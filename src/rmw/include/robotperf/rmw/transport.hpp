@@ -47,8 +47,48 @@ struct QoS {
   friend bool operator==(const QoS&, const QoS&) = default;
 };
 
+// "reliable, volatile, keep_last 10"
+std::string to_string(const QoS& qos);
+
+// The ROS 2 release whose graph conventions the DDS transports follow (DESIGN.md §2): Humble
+// announces 24-byte GIDs on ros_discovery_info and no type hashes; Iron and later 16-byte GIDs
+// and each endpoint's type hash ("typehash=RIHS01_...;" in its USER_DATA).
+enum class RosDistro { kHumble, kIron, kJazzy };
+// "humble", "iron" or "jazzy"; throws std::invalid_argument naming the choices.
+RosDistro ros_distro_from_name(const std::string& name);
+std::string to_string(RosDistro distro);
+
+// The ROS 2 node an endpoint belongs to, announced on ros_discovery_info as rmw does, so that
+// `ros2 node list` and `ros2 node info` show it. An empty name: an endpoint of no node.
+struct NodeName {
+  std::string name;
+  std::string namespace_ = "/";
+};
+
 // A DDS participant's GUID prefix.
 using ParticipantId = std::array<uint8_t, 12>;
+// An endpoint's (or participant's) GUID, which rmw uses as its GID.
+using Gid = std::array<uint8_t, 16>;
+
+// An endpoint another participant announced.
+struct PeerEndpoint {
+  Gid gid{};
+  bool writer = false;
+  std::string topic;     // the ROS name ("rt/" dropped), or the DDS name of a DDS-only topic
+  std::string dds_type;  // "sensor_msgs::msg::dds_::Image_"
+  // What discovery carries of its QoS: history and depth are not announced, so `qos.history`
+  // and `qos.depth` are left at their defaults.
+  QoS qos;
+  std::string type_hash;  // "RIHS01_..." from its USER_DATA; empty when it announces none
+};
+
+// A ROS 2 node of another participant, as that participant announces it on ros_discovery_info.
+struct PeerNode {
+  std::string namespace_;
+  std::string name;
+  std::vector<Gid> readers;
+  std::vector<Gid> writers;
+};
 
 // Another participant a transport discovered on its domain.
 struct PeerParticipant {
@@ -58,10 +98,16 @@ struct PeerParticipant {
   // Where it runs: its unicast IP addresses, or "this host (shared memory)".
   std::vector<std::string> addresses;
   std::set<std::string> topics;  // the ROS names of its endpoints seen so far
+  std::vector<PeerEndpoint> endpoints;
+  // Its ROS 2 nodes, from its latest ros_discovery_info sample (none for a participant that
+  // publishes none, as plain DDS applications).
+  std::vector<PeerNode> nodes;
 };
 
 // "0f1e...": the 24 hex digits of a participant id.
 std::string to_hex(const ParticipantId& id);
+// "01.0f.ba...": a GID as `ros2 topic info -v` prints it.
+std::string to_text(const Gid& gid);
 
 struct MessageInfo {
   // DDS's source timestamp on every transport: the publication time on the sender, wall clock
@@ -100,14 +146,28 @@ class Transport {
  public:
   virtual ~Transport() = default;
   virtual std::string name() const = 0;
-  // `topic` is the ROS name, e.g. "/camera/image_raw".
+  // `topic` is the ROS name, e.g. "/camera/image_raw"; the endpoint belongs to `node`.
   virtual std::unique_ptr<PublisherHandle> create_publisher(const std::string& topic,
                                                             const msgs::TypeSupport& type,
-                                                            const QoS& qos) = 0;
+                                                            const QoS& qos,
+                                                            const NodeName& node) = 0;
   // `on_ready` may be called from any thread, possibly once for several messages.
-  virtual std::unique_ptr<SubscriptionHandle> create_subscription(
-      const std::string& topic, const msgs::TypeSupport& type, const QoS& qos,
-      std::function<void()> on_ready) = 0;
+  virtual std::unique_ptr<SubscriptionHandle> create_subscription(const std::string& topic,
+                                                                  const msgs::TypeSupport& type,
+                                                                  const QoS& qos,
+                                                                  std::function<void()> on_ready,
+                                                                  const NodeName& node) = 0;
+  // Endpoints of no ROS 2 node.
+  std::unique_ptr<PublisherHandle> create_publisher(const std::string& topic,
+                                                    const msgs::TypeSupport& type, const QoS& qos) {
+    return create_publisher(topic, type, qos, NodeName{});
+  }
+  std::unique_ptr<SubscriptionHandle> create_subscription(const std::string& topic,
+                                                          const msgs::TypeSupport& type,
+                                                          const QoS& qos,
+                                                          std::function<void()> on_ready) {
+    return create_subscription(topic, type, qos, std::move(on_ready), NodeName{});
+  }
   // The other participants discovered on the domain since the transport started, including
   // those that have left since (none for transports without discovery).
   virtual std::vector<PeerParticipant> peers() const { return {}; }
@@ -128,6 +188,8 @@ struct TransportOptions {
   // DDS Security for the DDS transports' participant (authentication, access control,
   // encryption), from one enclave of a keystore; empty: unsecured. Ignored by intra.
   std::optional<SecurityFiles> security;
+  // Whose conventions the DDS transports' graph announcements follow. Ignored by intra.
+  RosDistro ros_distro = RosDistro::kJazzy;
 };
 
 // "intra", "fastdds" or "cyclonedds"; throws std::invalid_argument naming the valid choices.
