@@ -19,6 +19,7 @@
 #include <thread>
 
 #include "bag_commands.hpp"
+#include "graph_command.hpp"
 #include "registry_commands.hpp"
 #include "robotperf/bag/bag.hpp"
 #include "robotperf/build_info.hpp"
@@ -295,6 +296,7 @@ struct RunArgs {
   std::string netem;
   std::string security;  // a keystore: DDS Security for every participant of the run
   double connect_timeout_s = 15.0;
+  std::string ros_distro = "jazzy";
 };
 
 // JSON as text for a file or the terminal: bytes that are not UTF-8 (names from a trace or a bag)
@@ -661,6 +663,7 @@ int run(const Roots& roots, const RunArgs& a) {
   o.log_dir = a.output;
   o.host_launchers = host_launchers(spec, a);
   o.keystore = a.security;
+  o.ros_distro = rmw::ros_distro_from_name(a.ros_distro);
   // Made before any participant, so that all of this process's sockets are on the runner's side.
   std::optional<harness::NetworkLink> link;
   if (a.netns) {
@@ -1090,6 +1093,11 @@ int main(int argc, char** argv) {
                    "DDS Security: every participant presents the /robotperf enclave of this "
                    "keystore (robotperf security init DIR makes one)")
       ->type_name("DIR");
+  run_cmd
+      ->add_option("--ros-distro", ra.ros_distro,
+                   "ROS 2 release the DDS participants announce themselves as to the graph's "
+                   "nodes: humble (24-byte GIDs, no type hashes), iron or jazzy (default)")
+      ->check(CLI::IsMember({"humble", "iron", "jazzy"}));
   run_cmd->add_option("--output", ra.output, "folder for the results files (default: ./results)");
   run_cmd->add_flag("--csv", ra.csv, "also write the per-message latencies as CSV");
   run_cmd->add_flag("--quiet", ra.quiet, "no progress line");
@@ -1245,6 +1253,21 @@ int main(int argc, char** argv) {
   node_cmd->add_option("--run-token", node_run_token);
   std::string node_keystore;
   node_cmd->add_option("--security", node_keystore);
+  std::string node_ros_distro = "jazzy";
+  node_cmd->add_option("--ros-distro", node_ros_distro);
+
+  cli::GraphOptions graph_options;
+  auto* graph_cmd = app.add_subcommand(
+      "graph", "list the ROS 2 nodes, topics, types and QoS visible on a DDS domain");
+  graph_cmd->add_option("--rmw", graph_options.rmw, "fastdds (default) or cyclonedds")
+      ->check(CLI::IsMember({"fastdds", "cyclonedds"}));
+  graph_cmd->add_option("--domain", graph_options.domain, "DDS domain (default: ROS_DOMAIN_ID)")
+      ->check(CLI::Range(0, 232));
+  graph_cmd
+      ->add_option("--listen", graph_options.listen_s,
+                   "seconds to listen to discovery before listing (default 3)")
+      ->check(CLI::Range(0.1, 600.0));
+  graph_cmd->add_flag("--json", graph_options.json, "print JSON");
 
   std::string keystore_dir;
   std::vector<std::string> keystore_enclaves;
@@ -1311,6 +1334,7 @@ int main(int argc, char** argv) {
     if (*bag_reindex_cmd) return cli::bag_reindex(reindex_dir);
     if (*generate_cmd) return cli::dataset_generate(dataset_name, generate);
     if (*analyze_cmd) return analyze(ta);
+    if (*graph_cmd) return cli::ros_graph(graph_options, std::cout);
     if (*sysinfo_cmd) {
       const nlohmann::json description = {
           {"machine", sysinfo::to_json(sysinfo::collect_machine_info())},
@@ -1325,7 +1349,8 @@ int main(int argc, char** argv) {
       if (node_update_rate) harness::override_update_rate(spec, *node_update_rate);
       return harness::run_node_process(spec, node_name, node_rmw, node_domain,
                                        node_scheduling.options(), node_callback_timeout_s,
-                                       node_run_token, node_keystore);
+                                       node_run_token, node_keystore,
+                                       rmw::ros_distro_from_name(node_ros_distro));
     }
     if (*security_init_cmd) {
       if (keystore_enclaves.empty()) keystore_enclaves.push_back(rmw::kDefaultEnclave);

@@ -183,7 +183,8 @@ rmw::MessagePtr Playback::Input::copy_with_stamp(std::size_t frame, int64_t stam
 
 std::size_t Playback::run(std::vector<MessageRecord>& records,
                           const std::function<bool()>& should_stop,
-                          const std::function<void(std::size_t)>& after_send) {
+                          const std::function<void(std::size_t)>& after_send,
+                          const DeliveryGate* gate, int64_t* repeated_ns) {
   // The default 50 µs timer slack would show up as send lateness.
   prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
   records.assign(ids_.count, MessageRecord{});
@@ -191,14 +192,31 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
   std::vector<std::vector<rmw::MessagePtr>> next;
   // The first deadline leaves time to prepare the first message.
   const int64_t start_ns = rmw::steady_now_ns() + 10'000'000;
-  auto deadline = [&](uint64_t k) {
-    return start_ns +
-           (schedule_ns_.empty() ? static_cast<int64_t>(k) * ids_.period_ns : schedule_ns_[k]);
+  auto offset = [&](uint64_t k) {
+    return schedule_ns_.empty() ? static_cast<int64_t>(k) * ids_.period_ns : schedule_ns_[k];
   };
+  // Each repetition of the warm-up moves the rest of the schedule by the warm-up's span.
+  int64_t shift_ns = 0;
+  auto deadline = [&](uint64_t k) { return start_ns + shift_ns + offset(k); };
+  const bool gated = gate != nullptr && gate->warmup > 0 && gate->warmup < ids_.count;
+  bool repeating = false;  // sending the warm-up again: records and counts stay as they are
   int64_t longest_prepare_ns = 0;
   std::size_t sent = 0;
   for (uint64_t first = 0; first < ids_.count;) {
     if (should_stop()) break;
+    if (gated && first == gate->warmup) {
+      repeating = !gate->delivering();
+      if (repeating) {
+        if (rmw::steady_now_ns() > gate->deadline_ns) {
+          throw GraphNotConnected(
+              "the graph matched every endpoint but delivered no output to its warm-up messages "
+              "before --connect-timeout: is it running, and does it publish the output topic?");
+        }
+        shift_ns += offset(gate->warmup);
+        if (repeated_ns != nullptr) *repeated_ns += offset(gate->warmup);
+        first = 0;
+      }
+    }
     const int64_t due = deadline(first);
     uint64_t end = first + 1;
     while (end < ids_.count && deadline(end) == due) ++end;
@@ -227,6 +245,11 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
     longest_prepare_ns = std::max(longest_prepare_ns, rmw::steady_now_ns() - prepare_start);
     sleep_until_ns(due);
     for (uint64_t k = first; k < end; ++k) {
+      if (repeating) {
+        for (std::size_t i = 0; i < inputs_.size(); ++i)
+          inputs_[i].publisher->publish(std::move(next[k - first][i]));
+        continue;
+      }
       MessageRecord& r = records[k];
       r.id = k;
       r.scheduled_ns = due;
@@ -296,7 +319,9 @@ void Monitor::on_message(const rmw::MessagePtr& msg, const graph::MessageInfo& i
     if (!id) {
       ++tally_.unknown;
     } else if (tally_.received_ns[*id] >= 0) {
-      if (!state_) {
+      if (*id < warmup_) {
+        // A warm-up message again: the Playback repeats the warm-up until the graph delivers.
+      } else if (!state_) {
         ++tally_.duplicates;
       } else {
         ++tally_.repeats;

@@ -44,12 +44,25 @@ class Playback {
            MessageIds ids, bool publish_serialized = false, std::vector<int64_t> schedule_ns = {});
   std::shared_ptr<graph::Node> node() const { return node_; }
 
+  // Holding the first measured message back until the graph delivers: with `delivering` set,
+  // the warm-up messages (ids below `warmup`) are sent again, in their order and pace, until it
+  // returns true, and measuring starts after. A graph robotperf did not start may have matched
+  // our endpoints (what discovery shows us) before its own side has matched ours.
+  struct DeliveryGate {
+    std::size_t warmup = 0;
+    std::function<bool()> delivering;
+    int64_t deadline_ns = 0;  // steady clock; past it, GraphNotConnected
+  };
+
   // Sends ids.count messages, message k at start + k·period or start + schedule_ns[k] (absolute
   // deadlines: a late send does not delay the next ones); messages due at the same time (bursts)
-  // are all prepared before it and sent back to back. Fills `records`.
-  // Stops early when `should_stop` returns true; returns the number sent.
+  // are all prepared before it and sent back to back. Fills `records` (with the first send of a
+  // repeated warm-up message). Stops early when `should_stop` returns true; returns the number of
+  // distinct messages sent, which `after_send` is also given. Returns how long the warm-up was
+  // repeated in `repeated_ns`.
   std::size_t run(std::vector<MessageRecord>& records, const std::function<bool()>& should_stop,
-                  const std::function<void(std::size_t sent)>& after_send);
+                  const std::function<void(std::size_t sent)>& after_send,
+                  const DeliveryGate* gate = nullptr, int64_t* repeated_ns = nullptr);
 
  private:
   struct Input {

@@ -195,6 +195,7 @@ std::unique_ptr<rmw::Transport> transport_for(const RunOptions& options,
   t.domain_id = options.domain_id;
   t.user_data = user_data;
   if (!options.keystore.empty()) t.security = rmw::enclave_files(options.keystore);
+  t.ros_distro = options.ros_distro;
   return rmw::make_transport(options.rmw, t);
 }
 
@@ -322,6 +323,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     r.security = rmw::describe(rmw::enclave_files(options.keystore));
     r.keystore = std::filesystem::absolute(options.keystore);
   }
+  if (options.rmw != "intra") r.ros_distro = rmw::to_string(options.ros_distro);
   if (const auto hosts = spec.hosts(); !hosts.empty()) {
     if (options.processes != ProcessLayout::kPerNode) {
       throw std::invalid_argument("nodes placed on hosts (graph.yaml host: " + hosts.front() +
@@ -486,6 +488,8 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
                            "--run-token", r.run_token});
     if (!r.keystore.empty())
       node_arguments.insert(node_arguments.end(), {"--security", r.keystore.string()});
+    node_arguments.insert(node_arguments.end(),
+                          {"--ros-distro", rmw::to_string(options.ros_distro)});
     children =
         std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw, options.domain_id,
                                         node_arguments, options.host_launchers);
@@ -606,12 +610,23 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     return {};
   };
   trace_run_begin(spec, r, period_ns);
+  // Discovery shows only our side of an external graph's matches: its warm-up is repeated until
+  // an output comes back, so that timing starts once its side has matched too.
+  std::optional<Playback::DeliveryGate> gate;
+  if (spec.external()) {
+    gate = Playback::DeliveryGate{
+        r.warmup, [&] { return monitor.received() > 0; },
+        rmw::steady_now_ns() + static_cast<int64_t>(options.connect_timeout_s * 1e9)};
+  }
+  int64_t repeated_ns = 0;
   playback.run(
       r.records, [&] { return !failure().empty(); },
       [&](std::size_t sent) {
         if (sent == r.warmup + 1) measurement.begin();  // the first measured message is out
         if (options.progress) options.progress(sent, r.count, monitor.received());
-      });
+      },
+      gate ? &*gate : nullptr, &repeated_ns);
+  r.warmup_repeated_s = static_cast<double>(repeated_ns) * 1e-9;
   trace_run_end(r.records.size());
 
   // Drain: wait for the outstanding outputs, at most drain_s after the last send.
@@ -738,7 +753,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
 int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
                      const std::string& rmw, int domain_id, const SchedulingOptions& scheduling,
                      double callback_timeout_s, const std::string& run_token,
-                     const std::filesystem::path& keystore) {
+                     const std::filesystem::path& keystore, rmw::RosDistro ros_distro) {
   // Ctrl-C in a terminal reaches the whole process group: the runner stops us when it is done.
   signal(SIGINT, SIG_IGN);
   const NodeSpec* node_spec = spec.find_node(node_name);
@@ -760,6 +775,7 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   t.domain_id = domain_id;
   if (!run_token.empty()) t.user_data = run_user_data(run_token);
   if (!keystore.empty()) t.security = rmw::enclave_files(keystore);
+  t.ros_distro = ros_distro;
   graph::Context context(rmw::make_transport(rmw, t));
   trace_run_join();
   auto node = make_kernel_node(*node_spec, context, spec.workload);

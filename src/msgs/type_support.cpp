@@ -21,4 +21,20 @@ std::string dds_type_name(std::string_view ros_type) {
   return out;
 }
 
+std::string ros_type_name(std::string_view dds_type) {
+  // <pkg>::<kind>::dds_::<Type>_  ->  <pkg>/<kind>/<Type>
+  const auto dds = dds_type.find("::dds_::");
+  const auto first = dds_type.find("::");
+  if (dds == std::string_view::npos || first == dds || !dds_type.ends_with('_')) {
+    return std::string(dds_type);
+  }
+  std::string out(dds_type.substr(0, first));
+  out += '/';
+  out += dds_type.substr(first + 2, dds - first - 2);
+  out += '/';
+  const std::string_view type = dds_type.substr(dds + 8);
+  out += type.substr(0, type.size() - 1);
+  return out;
+}
+
 }  // namespace robotperf::msgs

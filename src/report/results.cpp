@@ -263,6 +263,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
           e.qos.durability == rmw::Durability::kTransientLocal ? "transient_local" : "volatile"}});
   }
   software["transport"]["qos"] = qos;
+  if (!r.ros_distro.empty()) software["transport"]["ros_distro"] = r.ros_distro;
   software["transport"]["security"] = r.security.empty() ? json(nullptr)
                                                          : json{{"keystore", r.keystore.string()},
                                                                 {"enclave", rmw::kDefaultEnclave},
@@ -285,6 +286,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"arrival_seed", r.timeline == "poisson" ? json(r.arrival_seed) : json(nullptr)},
         {"count", r.count},
         {"warmup", r.warmup},
+        {"warmup_repeated_s", r.warmup_repeated_s},
         {"drain_s", r.drain_s},
         {"rmw", r.rmw},
         {"processes", r.processes},
@@ -506,9 +508,13 @@ std::string summary_table(const harness::RunResult& r) {
   }
   if (!r.security.empty())
     out << "security: " << r.security << " (keystore " << r.keystore.string() << ")\n";
-  out << "messages: sent " << r.sent << " (warm-up " << r.warmup << "), measured " << r.measured
-      << ", matched " << r.matched << ", lost " << r.lost << " (" << format_fixed(r.loss_percent, 2)
-      << " %)";
+  out << "messages: sent " << r.sent << " (warm-up " << r.warmup;
+  if (r.warmup_repeated_s > 0) {
+    out << ", repeated for " << format_fixed(r.warmup_repeated_s, 2)
+        << " s until the graph delivered";
+  }
+  out << "), measured " << r.measured << ", matched " << r.matched << ", lost " << r.lost << " ("
+      << format_fixed(r.loss_percent, 2) << " %)";
   if (r.duplicates) out << ", duplicates " << r.duplicates;
   if (r.unknown) out << ", unknown " << r.unknown;
   if (r.foreign) out << ", another run's " << r.foreign << " (not counted)";

@@ -452,7 +452,7 @@ class PeerDirectory {
     std::size_t size = 0;
     if (dds_qget_userdata(e.qos, &bytes, &size) && bytes != nullptr) {
       endpoint.type_hash =
-          type_hash_from_user_data(std::string_view(static_cast<const char*>(bytes), size));
+          user_data_value(std::string_view(static_cast<const char*>(bytes), size), "typehash");
     }
     dds_free(bytes);
     return endpoint;

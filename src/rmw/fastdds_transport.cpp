@@ -280,7 +280,7 @@ class PeerListener final : public dds::DomainParticipantListener {
                                   ? Durability::kVolatile
                                   : Durability::kTransientLocal;
     const auto& bytes = data.m_qos.m_userData.data_vec();
-    endpoint.type_hash = type_hash_from_user_data(std::string(bytes.begin(), bytes.end()));
+    endpoint.type_hash = user_data_value(std::string(bytes.begin(), bytes.end()), "typehash");
     table_.add_endpoint(participant, std::move(endpoint));
   }
   PeerTable table_;

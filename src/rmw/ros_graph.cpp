@@ -77,18 +77,6 @@ std::string endpoint_user_data(const msgs::TypeSupport& type, RosDistro distro) 
   return hash ? "typehash=" + *hash + ";" : std::string();
 }
 
-std::string type_hash_from_user_data(std::string_view user_data) {
-  constexpr std::string_view kKey = "typehash=";
-  std::size_t at = 0;
-  while (at < user_data.size()) {
-    const std::size_t end = std::min(user_data.find(';', at), user_data.size());
-    const std::string_view pair = user_data.substr(at, end - at);
-    if (pair.starts_with(kKey)) return std::string(pair.substr(kKey.size()));
-    at = end + 1;
-  }
-  return {};
-}
-
 std::vector<uint8_t> encode_participant_entities(const Gid& participant,
                                                  const std::vector<PeerNode>& nodes,
                                                  RosDistro distro) {

@@ -34,9 +34,6 @@ QoS ros_discovery_reader_qos();
 // has the definition of; empty for Humble and for types it does not know.
 std::string endpoint_user_data(const msgs::TypeSupport& type, RosDistro distro);
 
-// The type hash in an endpoint's USER_DATA ("...typehash=RIHS01_...;..."); empty when none.
-std::string type_hash_from_user_data(std::string_view user_data);
-
 // A ParticipantEntitiesInfo sample as CDR (encapsulation header included), with the GIDs in the
 // distribution's layout: 16 bytes from Iron on, Humble's 24 (the GUID, then zeros).
 std::vector<uint8_t> encode_participant_entities(const Gid& participant,

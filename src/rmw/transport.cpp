@@ -71,6 +71,19 @@ std::string to_hex(const ParticipantId& id) {
   return out;
 }
 
+std::string user_data_value(std::string_view user_data, std::string_view key) {
+  std::size_t at = 0;
+  while (at < user_data.size()) {
+    const std::size_t end = std::min(user_data.find(';', at), user_data.size());
+    const std::string_view pair = user_data.substr(at, end - at);
+    if (pair.size() > key.size() && pair.starts_with(key) && pair[key.size()] == '=') {
+      return std::string(pair.substr(key.size() + 1));
+    }
+    at = end + 1;
+  }
+  return {};
+}
+
 std::string to_text(const Gid& gid) {
   static constexpr char kDigits[] = "0123456789abcdef";
   std::string out;

@@ -1,6 +1,7 @@
 // External graphs: processes robotperf did not build (graph.yaml `launch:`), measured by the
-// Playback and Monitor around them. The node is echo_peer, a separate program on robotperf's rmw
-// library, launched as a ROS 2 node runs: until SIGINT.
+// Playback and Monitor around them. The nodes are echo_peer, a separate program on robotperf's rmw
+// library, and foreign_image_node, a C program on Cyclone DDS's C API that shares no code with
+// robotperf; both are launched as a ROS 2 node runs: until SIGINT.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -50,6 +51,28 @@ class ExternalGraph : public ::testing::Test {
         << "]\n"
            "functional: {evaluator: payload_echo, truth: {sent: payload}, sample: 0}\n";
     return robotperf_cli("--benchmarks " + (dir_ / "benchmarks").string() + " run x1 --rmw " + rmw +
+                         " --quiet --domain " + std::to_string(robotperf::rmw::reserved_domain()) +
+                         " --output " + (dir_ / "results").string() + extra);
+  }
+  // Runs x2: the perception/image dataset (640x480 rgb8) at 30 Hz through foreign_image_node.
+  Outcome run_foreign(const std::string& mode, const std::string& rmw, int count,
+                      const std::string& extra = "") {
+    const fs::path package = dir_ / "benchmarks" / "external" / "x2_foreign";
+    fs::create_directories(package);
+    std::ofstream(package / "benchmark.yaml")
+        << "id: x2\nname: x2_foreign\nshort: test\ndescription: test\nresults: []\n";
+    std::ofstream(package / "graph.yaml")
+        << "dataset: perception/image\nrate_hz: 30\ncount: " << count
+        << "\nwarmup: 10\nvalidity: {min_samples: " << count - 10
+        << "}\n"
+           "inputs:\n  - {topic: /camera/image_raw, type: sensor_msgs/msg/Image, stream: image}\n"
+           "output: {topic: /foreign/image, type: sensor_msgs/msg/Image}\n"
+           "launch:\n  - name: foreign\n    command: [" ROBOTPERF_FOREIGN_IMAGE_NODE
+           ", '${domain}', /camera/image_raw, /foreign/image, "
+        << mode
+        << ", vga_echo]\n"
+           "functional: {evaluator: payload_echo, truth: {sent: image}, sample: 0}\n";
+    return robotperf_cli("--benchmarks " + (dir_ / "benchmarks").string() + " run x2 --rmw " + rmw +
                          " --quiet --domain " + std::to_string(robotperf::rmw::reserved_domain()) +
                          " --output " + (dir_ / "results").string() + extra);
   }
@@ -130,6 +153,76 @@ TEST_F(ExternalGraph, QosIncompatibleEndpointIsNamedWithWhoIsOnItsTopic) {
                        "check its type and QoS (ours: best_effort, volatile, keep_last 5)"),
             std::string::npos)
       << o.out;
+}
+
+// A node of another code base (Cyclone's C API and IDL compiler), fed VGA colour images at 30 Hz
+// on its own vendor and across vendors: every image comes back, byte for byte. Across vendors its
+// side of discovery may complete hundreds of milliseconds after ours; the warm-up is repeated
+// until it delivers, so that no measured message meets an unmatched reader.
+TEST_F(ExternalGraph, ForeignNodeAtVgaColour30HzLosesNothing) {
+  for (const std::string rmw : {"cyclonedds", "fastdds"}) {
+    fs::remove_all(dir_ / "results");
+    const Outcome o = run_foreign("copy", rmw, 100);
+    ASSERT_EQ(o.exit_code, 0) << rmw << "\n" << o.out;
+    const auto j = result();
+    EXPECT_EQ(j["counts"]["matched"], 90) << rmw;
+    EXPECT_EQ(j["counts"]["lost"], 0) << rmw;
+    EXPECT_EQ(j["functional"]["metrics"]["identical_fraction"]["value"], 1.0) << rmw;
+    EXPECT_EQ(j["launched"][0]["stopped_by"], "stopped by SIGINT") << j["launched"].dump();
+    EXPECT_GE(j["configuration"]["warmup_repeated_s"].get<double>(), 0.0);
+  }
+}
+
+// A node that matches every endpoint but never publishes: refused once --connect-timeout has
+// passed, however long the warm-up is repeated.
+TEST_F(ExternalGraph, ForeignNodeThatNeverDeliversIsRefused) {
+  const auto start = std::chrono::steady_clock::now();
+  const Outcome o = run_foreign("drop", "cyclonedds", 40, " --connect-timeout 2");
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_NE(o.out.find("delivered no output to its warm-up messages"), std::string::npos) << o.out;
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(20));
+}
+
+TEST_F(ExternalGraph, ForeignNodeThatRestampsIsNamedNotLost) {
+  const Outcome o = run_foreign("restamp", "cyclonedds", 40);
+  EXPECT_EQ(o.exit_code, 3) << o.out;
+  EXPECT_NE(o.out.find("does not copy its input's header"), std::string::npos) << o.out;
+}
+
+// `robotperf graph` lists a node it did not make, from that node's own ros_discovery_info and
+// discovery data, across vendors (the node is on Cyclone DDS, the listing on Fast DDS).
+TEST_F(ExternalGraph, GraphVerbListsAForeignNode) {
+  fs::create_directories(dir_);
+  const int domain = robotperf::rmw::reserved_domain();
+  robotperf::test_support::Background node(std::string(ROBOTPERF_FOREIGN_IMAGE_NODE) + " " +
+                                               std::to_string(domain) +
+                                               " /camera/image_raw /vga/image copy vga_echo",
+                                           dir_ / "node.log");
+  const std::string args = "graph --rmw fastdds --listen 2 --domain " + std::to_string(domain);
+  const Outcome json_out = robotperf_cli(args + " --json");
+  ASSERT_EQ(json_out.exit_code, 0) << json_out.out;
+  const auto graph = nlohmann::json::parse(json_out.out);
+  const nlohmann::json* found = nullptr;
+  for (const auto& p : graph["participants"]) {
+    for (const auto& n : p["nodes"]) {
+      if (n["name"] == "/vga_echo") found = &n;
+    }
+  }
+  ASSERT_NE(found, nullptr) << graph.dump(2) << "\n" << node.output();
+  ASSERT_EQ((*found)["endpoints"].size(), 2u);
+  for (const auto& e : (*found)["endpoints"]) {
+    EXPECT_EQ(e["type"], "sensor_msgs/msg/Image");
+    EXPECT_EQ(e["reliability"], "reliable");
+    EXPECT_EQ(e["type_hash"],
+              "RIHS01_d31d41a9a4c4bc8eae9be757b0beed306564f7526c88ea6a4588fb9582527d47");
+    EXPECT_EQ(e["topic"], e["kind"] == "publisher" ? "/vga/image" : "/camera/image_raw");
+  }
+  const Outcome text = robotperf_cli(args);
+  ASSERT_EQ(text.exit_code, 0) << text.out;
+  EXPECT_NE(text.out.find("\n  /vga_echo   (participant "), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("  /vga/image  [sensor_msgs/msg/Image]  1 publisher, 0 subscriptions"),
+            std::string::npos)
+      << text.out;
 }
 
 TEST_F(ExternalGraph, NeedsADdsTransport) {

@@ -416,6 +416,15 @@ TEST(TypeSupport, DdsTypeName) {
   EXPECT_THROW(dds_type_name(""), std::invalid_argument);
 }
 
+TEST(TypeSupport, RosTypeNameInvertsDdsTypeName) {
+  for (const char* type : {"sensor_msgs/msg/Image", "example_interfaces/srv/AddTwoInts_Request",
+                           "rmw_dds_common/msg/ParticipantEntitiesInfo"}) {
+    EXPECT_EQ(ros_type_name(dds_type_name(type)), type);
+  }
+  EXPECT_EQ(ros_type_name("HelloWorld"), "HelloWorld") << "plain DDS types stay as they are";
+  EXPECT_EQ(ros_type_name("a::dds_::B"), "a::dds_::B");
+}
+
 TEST(Time, NanosecondConversion) {
   EXPECT_EQ(Time::from_ns(1'500'000'000), (Time{1, 500'000'000}));
   EXPECT_EQ(Time::from_ns(1'500'000'000).to_ns(), 1'500'000'000);

@@ -285,11 +285,13 @@ TEST(ParticipantEntities, EitherLayoutDecodes) {
   EXPECT_FALSE(decode_participant_entities(std::vector<uint8_t>{0, 1, 0, 0, 1, 2, 3}).has_value());
 }
 
-TEST(ParticipantEntities, TypeHashIsReadFromUserData) {
-  EXPECT_EQ(type_hash_from_user_data("typehash=RIHS01_ab;"), "RIHS01_ab");
-  EXPECT_EQ(type_hash_from_user_data("enclave=/;typehash=RIHS01_cd;x=y;"), "RIHS01_cd");
-  EXPECT_EQ(type_hash_from_user_data("enclave=/;"), "");
-  EXPECT_EQ(type_hash_from_user_data(""), "");
+TEST(ParticipantEntities, UserDataValuesAreReadByKey) {
+  EXPECT_EQ(user_data_value("typehash=RIHS01_ab;", "typehash"), "RIHS01_ab");
+  EXPECT_EQ(user_data_value("enclave=/;typehash=RIHS01_cd;x=y;", "typehash"), "RIHS01_cd");
+  EXPECT_EQ(user_data_value("enclave=/;typehash=RIHS01_cd", "enclave"), "/");
+  EXPECT_EQ(user_data_value("enclave=/;", "typehash"), "");
+  EXPECT_EQ(user_data_value("typehashes=x;", "typehash"), "");
+  EXPECT_EQ(user_data_value("", "typehash"), "");
 }
 
 }  // namespace

@@ -78,6 +78,9 @@ struct RunOptions {
   // DDS Security: the keystore whose enclave rmw::kDefaultEnclave every participant of the run
   // (Playback, Monitor, nodes, children) presents; empty: unsecured.
   std::filesystem::path keystore;
+  // Whose ROS 2 graph conventions the DDS participants follow (GID layout on ros_discovery_info,
+  // endpoint type hashes): the release of the nodes they meet (--ros-distro).
+  rmw::RosDistro ros_distro = rmw::RosDistro::kJazzy;
   // Power sources and their sampling period; sampled during the measured window only.
   metrics::PowerOptions power;
   // Where the graph runs: pinned CPUs, real-time priority, locked memory. In a single-process
@@ -192,12 +195,16 @@ struct RunResult {
   std::size_t count = 0;
   std::size_t warmup = 0;
   double drain_s = 0;
+  // An external graph's warm-up sent again until the graph delivered (Playback::DeliveryGate):
+  // how long timing waited for it.
+  double warmup_repeated_s = 0;
   std::string rmw;
   std::string processes;  // "single" or "per-node"
   // DDS Security as run: the keystore (absolute) and rmw::describe() of its enclave; empty when
   // unsecured.
   std::filesystem::path keystore;
   std::string security;
+  std::string ros_distro;  // RunOptions::ros_distro, for DDS transports
   std::size_t executor_threads = 1;
   std::string output_topic;
   // The QoS of every endpoint robotperf made: the Playback's inputs, the Monitor's output and
@@ -323,10 +330,11 @@ void kill_node_processes() noexcept;
 // a final "stats" line. Returns the process exit code. A callback stuck longer than
 // `callback_timeout_s` is reported on a "hung" line, and the process ends at once.
 // `run_token` marks its participant as one of the runner's run (RunResult::run_token).
-// `keystore`: DDS Security as RunOptions::keystore.
+// `keystore`: DDS Security as RunOptions::keystore; `ros_distro` as RunOptions::ros_distro.
 int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
                      const std::string& rmw, int domain_id,
                      const SchedulingOptions& scheduling = {}, double callback_timeout_s = 30.0,
-                     const std::string& run_token = {}, const std::filesystem::path& keystore = {});
+                     const std::string& run_token = {}, const std::filesystem::path& keystore = {},
+                     rmw::RosDistro ros_distro = rmw::RosDistro::kJazzy);
 
 }  // namespace robotperf::harness

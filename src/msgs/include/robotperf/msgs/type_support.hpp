@@ -20,6 +20,9 @@ struct MessageTraits;
 
 // "sensor_msgs/msg/Image" -> "sensor_msgs::msg::dds_::Image_".
 std::string dds_type_name(std::string_view ros_type);
+// The inverse: "sensor_msgs::msg::dds_::Image_" -> "sensor_msgs/msg/Image"; a name not of that
+// form (a plain DDS type) is returned as it is.
+std::string ros_type_name(std::string_view dds_type);
 
 struct TypeSupport {
   std::string ros_type;  // "sensor_msgs/msg/Image"

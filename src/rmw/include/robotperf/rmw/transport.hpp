@@ -15,6 +15,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -103,6 +104,10 @@ struct PeerParticipant {
   // publishes none, as plain DDS applications).
   std::vector<PeerNode> nodes;
 };
+
+// The value of `key` in USER_DATA text of "key=value;" pairs ("enclave=/;typehash=...;");
+// empty when absent.
+std::string user_data_value(std::string_view user_data, std::string_view key);
 
 // "0f1e...": the 24 hex digits of a participant id.
 std::string to_hex(const ParticipantId& id);

@@ -1,0 +1,158 @@
+#include "graph_command.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "robotperf/msgs/type_support.hpp"
+#include "robotperf/rmw/transport.hpp"
+
+namespace robotperf::cli {
+namespace {
+
+using nlohmann::json;
+
+// ROS names are fully qualified; what is not (ros_discovery_info, services' rq/ and rr/ topics)
+// stays in the DDS namespace.
+bool is_ros_topic(const std::string& topic) {
+  return topic.starts_with('/');
+}
+
+std::string node_path(const rmw::PeerNode& node) {
+  return node.namespace_ == "/" ? "/" + node.name : node.namespace_ + "/" + node.name;
+}
+
+json endpoint_json(const rmw::PeerEndpoint& e) {
+  return {{"topic", e.topic},
+          {"type", msgs::ros_type_name(e.dds_type)},
+          {"kind", e.writer ? "publisher" : "subscription"},
+          {"reliability",
+           e.qos.reliability == rmw::Reliability::kReliable ? "reliable" : "best_effort"},
+          {"durability",
+           e.qos.durability == rmw::Durability::kTransientLocal ? "transient_local" : "volatile"},
+          {"type_hash", e.type_hash},
+          {"gid", rmw::to_text(e.gid)}};
+}
+
+// What every participant of the domain shows: its nodes with their endpoints, and the endpoints
+// no node claims (plain DDS applications, or ROS 2 participants whose announcement is not read).
+json graph_json(const std::vector<rmw::PeerParticipant>& peers) {
+  json participants = json::array();
+  std::map<std::string, std::pair<std::set<std::string>, std::array<int, 2>>> topics;
+  for (const auto& peer : peers) {
+    if (peer.endpoints.empty() && peer.nodes.empty()) continue;  // left, or only discovering
+    std::set<rmw::Gid> claimed;
+    json nodes = json::array();
+    for (const auto& node : peer.nodes) {
+      json endpoints = json::array();
+      for (const auto* gids : {&node.writers, &node.readers}) {
+        for (const auto& gid : *gids) {
+          claimed.insert(gid);
+          auto e = std::ranges::find(peer.endpoints, gid, &rmw::PeerEndpoint::gid);
+          if (e != peer.endpoints.end()) endpoints.push_back(endpoint_json(*e));
+        }
+      }
+      nodes.push_back({{"name", node_path(node)}, {"endpoints", endpoints}});
+    }
+    json unclaimed = json::array();
+    for (const auto& e : peer.endpoints) {
+      if (is_ros_topic(e.topic)) {
+        auto& [types, counts] = topics[e.topic];
+        types.insert(msgs::ros_type_name(e.dds_type));
+        ++counts[e.writer ? 0 : 1];
+      }
+      if (!claimed.contains(e.gid) && e.topic != "ros_discovery_info") {
+        unclaimed.push_back(endpoint_json(e));
+      }
+    }
+    participants.push_back({{"id", rmw::to_hex(peer.id)},
+                            {"name", peer.name},
+                            {"enclave", rmw::user_data_value(peer.user_data, "enclave")},
+                            {"addresses", peer.addresses},
+                            {"nodes", nodes},
+                            {"endpoints_of_no_node", unclaimed}});
+  }
+  json topic_list = json::array();
+  for (const auto& [name, entry] : topics) {
+    topic_list.push_back({{"name", name},
+                          {"types", entry.first},
+                          {"publishers", entry.second[0]},
+                          {"subscriptions", entry.second[1]}});
+  }
+  return {{"participants", participants}, {"topics", topic_list}};
+}
+
+std::string plural(int n, const std::string& word) {
+  return std::to_string(n) + " " + word + (n == 1 ? "" : "s");
+}
+
+void print_endpoint(std::ostream& out, const json& e, const std::string& indent) {
+  out << indent << (e["kind"] == "publisher" ? "publishes   " : "subscribes  ")
+      << e["topic"].get<std::string>() << "  [" << e["type"].get<std::string>() << "]  "
+      << e["reliability"].get<std::string>() << ", " << e["durability"].get<std::string>();
+  if (!e["type_hash"].get<std::string>().empty()) out << "  " << e["type_hash"].get<std::string>();
+  out << "\n";
+}
+
+}  // namespace
+
+int ros_graph(const GraphOptions& options, std::ostream& out) {
+  if (options.rmw == "intra") {
+    throw std::invalid_argument("graph reads a DDS domain: use --rmw fastdds or cyclonedds");
+  }
+  rmw::TransportOptions t;
+  t.domain_id = options.domain.value_or(rmw::domain_id_from_environment());
+  auto transport = rmw::make_transport(options.rmw, t);
+  // Discovery has no end: what is listed is what announced itself within the window.
+  std::this_thread::sleep_for(std::chrono::duration<double>(options.listen_s));
+  const json graph = graph_json(transport->peers());
+  if (options.json) {
+    json doc = graph;
+    doc["domain_id"] = t.domain_id;
+    doc["rmw"] = options.rmw;
+    doc["listened_s"] = options.listen_s;
+    out << doc.dump(2) << "\n";
+    return 0;
+  }
+  int node_count = 0;
+  for (const auto& p : graph["participants"]) node_count += static_cast<int>(p["nodes"].size());
+  out << "ROS 2 graph on domain " << t.domain_id << " (" << options.rmw << ", listened "
+      << options.listen_s
+      << " s): " << plural(static_cast<int>(graph["participants"].size()), "participant") << ", "
+      << plural(node_count, "node") << ", "
+      << plural(static_cast<int>(graph["topics"].size()), "topic") << "\n";
+  out << "\nnodes\n";
+  for (const auto& p : graph["participants"]) {
+    for (const auto& node : p["nodes"]) {
+      out << "  " << node["name"].get<std::string>() << "   (participant "
+          << p["id"].get<std::string>() << ", enclave " << p["enclave"].get<std::string>() << ")\n";
+      for (const auto& e : node["endpoints"]) print_endpoint(out, e, "    ");
+    }
+  }
+  out << "\ntopics\n";
+  for (const auto& topic : graph["topics"]) {
+    std::string types;
+    for (const auto& type : topic["types"])
+      types += (types.empty() ? "" : ", ") + type.get<std::string>();
+    out << "  " << topic["name"].get<std::string>() << "  [" << types << "]  "
+        << plural(topic["publishers"].get<int>(), "publisher") << ", "
+        << plural(topic["subscriptions"].get<int>(), "subscription") << "\n";
+  }
+  bool header = false;
+  for (const auto& p : graph["participants"]) {
+    if (p["endpoints_of_no_node"].empty()) continue;
+    if (!header) out << "\nDDS endpoints of no ROS 2 node\n";
+    header = true;
+    out << "  participant " << p["id"].get<std::string>() << " \"" << p["name"].get<std::string>()
+        << "\"\n";
+    for (const auto& e : p["endpoints_of_no_node"]) print_endpoint(out, e, "    ");
+  }
+  return 0;
+}
+
+}  // namespace robotperf::cli
