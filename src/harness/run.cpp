@@ -74,7 +74,7 @@ Wiring wiring_of(const BenchmarkSpec& spec) {
 // line each: who, the topic and its type, and what `about_topic` knows of others on it.
 std::vector<std::string> unconnected_endpoints(
     const std::vector<std::shared_ptr<graph::Node>>& nodes, const Wiring& w,
-    const std::function<std::string(const std::string&)>& about_topic) {
+    const std::function<std::string(const graph::EndpointStatus&)>& about_topic) {
   std::vector<std::string> out;
   for (const auto& node : nodes) {
     for (const auto& e : node->endpoints()) {
@@ -83,7 +83,7 @@ std::vector<std::string> unconnected_endpoints(
       if (expects_peer && e.matched == 0) {
         std::string line = node->name() + (e.is_publisher ? " publishing " : " subscribing ") +
                            e.topic + " [" + e.type + "] has no peer";
-        if (about_topic) line += ": " + about_topic(e.topic);
+        if (about_topic) line += ": " + about_topic(e);
         out.push_back(std::move(line));
       }
     }
@@ -91,12 +91,77 @@ std::vector<std::string> unconnected_endpoints(
   return out;
 }
 
+// The name of `peer`'s node that owns the endpoint `gid`, else the participant's name.
+std::string owner_of(const rmw::PeerParticipant& peer, const rmw::Gid& gid) {
+  for (const auto& node : peer.nodes) {
+    if (std::ranges::find(node.readers, gid) != node.readers.end() ||
+        std::ranges::find(node.writers, gid) != node.writers.end()) {
+      return "node " + (node.namespace_ == "/" ? "" : node.namespace_) + "/" + node.name;
+    }
+  }
+  return "participant '" + (peer.name.empty() ? std::string("unnamed") : peer.name) + "'";
+}
+
+// Why an endpoint of another participant does not match ours (`our_qos`) on `ours.topic`: its
+// type, or the QoS request a subscription makes of a publisher (DDS's requested/offered rules);
+// empty when neither.
+std::string mismatch(const rmw::PeerEndpoint& theirs, const graph::EndpointStatus& ours,
+                     const rmw::QoS& our_qos) {
+  const std::string their_type = msgs::ros_type_name(theirs.dds_type);
+  if (their_type != ours.type) return "its type is " + their_type;
+  const rmw::QoS& writer = ours.is_publisher ? our_qos : theirs.qos;
+  const rmw::QoS& reader = ours.is_publisher ? theirs.qos : our_qos;
+  if (reader.reliability == rmw::Reliability::kReliable &&
+      writer.reliability == rmw::Reliability::kBestEffort) {
+    return "a reliable subscription needs a reliable publisher";
+  }
+  if (reader.durability == rmw::Durability::kTransientLocal &&
+      writer.durability == rmw::Durability::kVolatile) {
+    return "a transient_local subscription needs a transient_local publisher";
+  }
+  return {};
+}
+
+// What the other participants of the domain have on `ours.topic`: each opposite endpoint with
+// its type, its QoS and why it does not match ours.
+std::string others_on_topic(const std::vector<rmw::PeerParticipant>& peers,
+                            const graph::EndpointStatus& ours, const rmw::QoS& our_qos,
+                            int domain_id) {
+  std::string seen;
+  for (const auto& peer : peers) {
+    for (const auto& e : peer.endpoints) {
+      if (e.topic != ours.topic || e.writer == ours.is_publisher) continue;
+      const std::string why = mismatch(e, ours, our_qos);
+      seen +=
+          std::string(seen.empty() ? "" : "; ") + owner_of(peer, e.gid) +
+          (e.writer ? " publishes it" : " subscribes it") + " as " +
+          msgs::ros_type_name(e.dds_type) + " (" +
+          (e.qos.reliability == rmw::Reliability::kReliable ? "reliable" : "best_effort") + ", " +
+          (e.qos.durability == rmw::Durability::kTransientLocal ? "transient_local" : "volatile") +
+          "): " + (why.empty() ? "compatible, not matched yet" : why);
+    }
+  }
+  if (seen.empty()) {
+    for (const auto& peer : peers) {
+      if (peer.topics.contains(ours.topic)) {
+        seen = "participant(s) on the domain have it, but no " +
+               std::string(ours.is_publisher ? "subscription" : "publisher");
+      }
+    }
+  }
+  if (seen.empty()) {
+    return "no other participant on domain " + std::to_string(domain_id) +
+           " has an endpoint on it (is the graph running, with this domain and RMW?)";
+  }
+  return seen + " (ours: " + rmw::to_string(our_qos) + ")";
+}
+
 // Polls matched counts: discovery offers no single event for "graph complete".
 // Returns false as soon as `abandon` returns true; throws GraphNotConnected at the deadline.
 bool wait_connected(
     const std::vector<std::shared_ptr<graph::Node>>& nodes, const Wiring& w, int64_t deadline_ns,
     const std::function<bool()>& abandon = [] { return false; },
-    const std::function<std::string(const std::string&)>& about_topic = {}) {
+    const std::function<std::string(const graph::EndpointStatus&)>& about_topic = {}) {
   while (true) {
     if (unconnected_endpoints(nodes, w, {}).empty()) return true;
     if (abandon()) return false;
@@ -513,25 +578,14 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     }
     return options.interrupted && options.interrupted->load() != 0;
   };
-  // For a graph that does not connect: who else is on the topic, and the QoS we offer or ask.
-  auto about_topic = [&](const std::string& topic) {
-    std::string qos = "?";
+  // For a graph that does not connect: who else is on the topic, as what, and why it does not
+  // match the QoS we offer or ask.
+  auto about_topic = [&](const graph::EndpointStatus& ours) {
+    rmw::QoS qos;
     for (const auto& e : r.qos) {
-      if (e.topic == topic) qos = rmw::to_string(e.qos);
+      if (e.topic == ours.topic) qos = e.qos;
     }
-    std::string others;
-    for (const auto& peer : isolation.others()) {
-      if (peer.topics.contains(topic))
-        others +=
-            (others.empty() ? "'" : ", '") + (peer.name.empty() ? "unnamed" : peer.name) + "'";
-    }
-    return others.empty() ? "no other participant on domain " + std::to_string(r.domain_id) +
-                                " has an endpoint on it (is the graph running, with this "
-                                "domain and RMW?)"
-                          : "participant(s) " + others +
-                                " have an endpoint on it that did not match: check its type and "
-                                "QoS (ours: " +
-                                qos + ")";
+    return others_on_topic(isolation.others(), ours, qos, r.domain_id);
   };
   if ((children && !children->wait_ready(connect_deadline, interrupted)) ||
       !wait_connected(local_nodes, wiring_of(spec), connect_deadline, interrupted, about_topic)) {

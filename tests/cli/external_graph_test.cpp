@@ -143,14 +143,39 @@ TEST_F(ExternalGraph, GraphThatNeverConnectsIsRefusedAfterTheConnectTimeout) {
 }
 
 // A best-effort Playback cannot feed a node that asks for reliable delivery: the endpoint is named,
-// with the node's participant that is on its topic and the QoS we offer.
+// with the node on its topic, what it asks for, why it does not match, and the QoS we offer.
 TEST_F(ExternalGraph, QosIncompatibleEndpointIsNamedWithWhoIsOnItsTopic) {
   const Outcome o =
       run_echo("until-signal", "fastdds", "/pong", " --connect-timeout 3", "sensor_data");
   EXPECT_EQ(o.exit_code, 2) << o.out;
   EXPECT_NE(o.out.find("robotperf_playback publishing /ping [sensor_msgs/msg/Image] has no peer: "
-                       "participant(s) 'robotperf' have an endpoint on it that did not match: "
-                       "check its type and QoS (ours: best_effort, volatile, keep_last 5)"),
+                       "node /echo_peer subscribes it as sensor_msgs/msg/Image (reliable, "
+                       "volatile): a reliable subscription needs a reliable publisher (ours: "
+                       "best_effort, volatile, keep_last 5)"),
+            std::string::npos)
+      << o.out;
+}
+
+// An output declared with another type than the node publishes: named with the node's type.
+TEST_F(ExternalGraph, TypeMismatchAtTheOutputIsNamed) {
+  const fs::path package = dir_ / "benchmarks" / "external" / "x3_type";
+  fs::create_directories(package);
+  std::ofstream(package / "benchmark.yaml")
+      << "id: x3\nname: x3_type\nshort: test\ndescription: test\nresults: []\n";
+  std::ofstream(package / "graph.yaml")
+      << "dataset: perception/image\nrate_hz: 30\ncount: 40\nwarmup: 10\n"
+         "inputs:\n  - {topic: /camera/image_raw, type: sensor_msgs/msg/Image, stream: image}\n"
+         "output: {topic: /foreign/image, type: sensor_msgs/msg/CameraInfo}\n"
+         "launch:\n  - name: foreign\n    command: [" ROBOTPERF_FOREIGN_IMAGE_NODE
+         ", '${domain}', /camera/image_raw, /foreign/image, copy, vga_echo]\n";
+  const Outcome o = robotperf_cli(
+      "--benchmarks " + (dir_ / "benchmarks").string() + " run x3 --rmw cyclonedds --quiet " +
+      "--connect-timeout 3 --domain " + std::to_string(robotperf::rmw::reserved_domain()) +
+      " --output " + (dir_ / "results").string());
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_NE(o.out.find("robotperf_monitor subscribing /foreign/image [sensor_msgs/msg/CameraInfo] "
+                       "has no peer: node /vga_echo publishes it as sensor_msgs/msg/Image "
+                       "(reliable, volatile): its type is sensor_msgs/msg/Image"),
             std::string::npos)
       << o.out;
 }

@@ -52,9 +52,11 @@ int run(const std::string& transport_name, int domain_id, const std::string& in_
   auto transport = rmw::make_transport(transport_name, {domain_id});
   rmw::testing::Inbox inbox;
   const auto& type = msgs::type_support<msgs::Image>();
-  auto publisher = transport->create_publisher(out_topic, type, rmw::QoS::ros_default());
-  auto subscription =
-      transport->create_subscription(in_topic, type, rmw::QoS::ros_default(), inbox.on_ready());
+  // A ROS 2 node as ROS 2 tools would see it.
+  const rmw::NodeName node{"echo_peer", "/"};
+  auto publisher = transport->create_publisher(out_topic, type, rmw::QoS::ros_default(), node);
+  auto subscription = transport->create_subscription(in_topic, type, rmw::QoS::ros_default(),
+                                                     inbox.on_ready(), node);
 
   if (mode.until_signal) {
     std::signal(SIGINT, on_signal);
