@@ -23,10 +23,6 @@ bool is_ros_topic(const std::string& topic) {
   return topic.starts_with('/');
 }
 
-std::string node_path(const rmw::PeerNode& node) {
-  return node.namespace_ == "/" ? "/" + node.name : node.namespace_ + "/" + node.name;
-}
-
 json endpoint_json(const rmw::PeerEndpoint& e) {
   return {{"topic", e.topic},
           {"type", msgs::ros_type_name(e.dds_type)},
@@ -57,7 +53,7 @@ json graph_json(const std::vector<rmw::PeerParticipant>& peers) {
           if (e != peer.endpoints.end()) endpoints.push_back(endpoint_json(*e));
         }
       }
-      nodes.push_back({{"name", node_path(node)}, {"endpoints", endpoints}});
+      nodes.push_back({{"name", node.path()}, {"endpoints", endpoints}});
     }
     json unclaimed = json::array();
     for (const auto& e : peer.endpoints) {

@@ -96,7 +96,7 @@ std::string owner_of(const rmw::PeerParticipant& peer, const rmw::Gid& gid) {
   for (const auto& node : peer.nodes) {
     if (std::ranges::find(node.readers, gid) != node.readers.end() ||
         std::ranges::find(node.writers, gid) != node.writers.end()) {
-      return "node " + (node.namespace_ == "/" ? "" : node.namespace_) + "/" + node.name;
+      return "node " + node.path();
     }
   }
   return "participant '" + (peer.name.empty() ? std::string("unnamed") : peer.name) + "'";
@@ -272,6 +272,8 @@ void add_peers(std::vector<rmw::PeerParticipant>& seen, std::vector<rmw::PeerPar
       seen.push_back(std::move(peer));
     } else {
       it->topics.insert(peer.topics.begin(), peer.topics.end());
+      // Its nodes as it announced them last.
+      if (!peer.nodes.empty()) it->nodes = std::move(peer.nodes);
     }
   }
 }

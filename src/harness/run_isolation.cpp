@@ -121,6 +121,13 @@ std::string describe_peers(const std::vector<rmw::PeerParticipant>& peers, std::
     const auto& peer = peers[i];
     if (i > 0) out += "; ";
     out += "'" + (peer.name.empty() ? std::string("unnamed") : peer.name) + "'";
+    if (!peer.nodes.empty()) {
+      out += " (node";
+      for (std::size_t n = 0; n < peer.nodes.size(); ++n) {
+        out += (n == 0 ? " " : ", ") + peer.nodes[n].path();
+      }
+      out += ")";
+    }
     if (!parse_run_user_data(peer.user_data).token.empty()) out += " (another robotperf run)";
     if (!peer.addresses.empty()) out += " at " + peer.addresses.front();
     if (!peer.topics.empty()) {

@@ -89,6 +89,9 @@ struct PeerNode {
   std::string name;
   std::vector<Gid> readers;
   std::vector<Gid> writers;
+
+  // "/ns/name", as `ros2 node list` prints it.
+  std::string path() const { return (namespace_ == "/" ? "" : namespace_) + "/" + name; }
 };
 
 // Another participant a transport discovered on its domain.
