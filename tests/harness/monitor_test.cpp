@@ -1,10 +1,18 @@
-// The Monitor around the graph: what it keeps for the functional evaluation.
+// The Monitor around the graph: what it keeps for the functional evaluation; and the Playback's
+// warm-up held until the graph delivers.
 #include <gtest/gtest.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
 
 #include "black_box.hpp"
 #include "robotperf/graph/executor.hpp"
+#include "robotperf/harness/dataset.hpp"
+#include "robotperf/harness/run.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/plugin/evaluator.hpp"
+#include "test_package.hpp"
 
 namespace robotperf::harness {
 namespace {
@@ -83,6 +91,70 @@ TEST(Monitor, GivesChosenOutputsToAnOnArrivalEvaluatorOnceEach) {
   EXPECT_EQ(tally.duplicates, 1u);
   EXPECT_EQ(evaluator.frames, (std::vector<std::size_t>{1, 2, 1}));  // id 4 is frame 4 mod 3
   EXPECT_EQ(evaluator.bytes, (std::vector<uint8_t>{1, 2, 4}));
+}
+
+// The warm-up is sent again while the gate says the graph does not deliver yet; measured messages
+// are sent once, after it, and the records and counts hold each message once.
+TEST(Playback, RepeatsTheWarmupUntilTheGraphDelivers) {
+  testing::TestPackage package("gate", testing::relay_graph("none"));
+  const BenchmarkSpec spec = load_benchmark(package.dir());
+  graph::Context context(rmw::make_transport("intra", {}));
+  const MessageIds ids{1'000'000'000, 1'000'000, 12};  // 12 messages at 1 kHz
+  Playback playback(context, spec, load_dataset(spec.dataset), ids);
+  std::mutex mutex;
+  std::condition_variable arrived;
+  int published = 0;
+  auto counter = std::make_shared<graph::Node>(context, "counter");
+  auto sub = counter->create_subscription<msgs::Image>(
+      "/in",
+      rmw::QoS{rmw::History::kKeepAll, 0, rmw::Reliability::kReliable, rmw::Durability::kVolatile},
+      [&](std::shared_ptr<const msgs::Image>) {
+        std::lock_guard lock(mutex);
+        ++published;
+        arrived.notify_all();
+      });
+  graph::Executor executor(1);
+  executor.add_node(counter);
+  executor.start();
+
+  int checks = 0;
+  const Playback::DeliveryGate gate{4, [&] { return ++checks == 3; },
+                                    rmw::steady_now_ns() + 10'000'000'000};
+  std::vector<MessageRecord> records;
+  std::vector<std::size_t> counted;
+  int64_t repeated_ns = 0;
+  const std::size_t sent = playback.run(
+      records, [] { return false; }, [&](std::size_t n) { counted.push_back(n); }, &gate,
+      &repeated_ns);
+  EXPECT_EQ(sent, 12u);
+  EXPECT_EQ(checks, 3);
+  EXPECT_EQ(repeated_ns, 2 * 4'000'000) << "two more passes over the 4 ms warm-up";
+  ASSERT_EQ(records.size(), 12u);
+  for (std::size_t k = 0; k < records.size(); ++k) EXPECT_EQ(records[k].id, k);
+  EXPECT_GE(records[4].scheduled_ns - records[3].scheduled_ns, 8'000'000)
+      << "the measured messages follow the repetitions";
+  EXPECT_EQ(counted.size(), 12u);
+  EXPECT_EQ(counted.back(), 12u);
+  {
+    // Each of the 12 once, and the 4 warm-up messages twice more.
+    std::unique_lock lock(mutex);
+    EXPECT_TRUE(arrived.wait_for(lock, std::chrono::seconds(10), [&] { return published >= 20; }));
+    EXPECT_EQ(published, 20);
+  }
+  executor.stop();
+}
+
+TEST(Playback, AGraphThatNeverDeliversIsRefusedAtTheDeadline) {
+  testing::TestPackage package("gate_never", testing::relay_graph("none"));
+  const BenchmarkSpec spec = load_benchmark(package.dir());
+  graph::Context context(rmw::make_transport("intra", {}));
+  const MessageIds ids{1'000'000'000, 1'000'000, 12};
+  Playback playback(context, spec, load_dataset(spec.dataset), ids);
+  const Playback::DeliveryGate gate{4, [] { return false; }, rmw::steady_now_ns() + 50'000'000};
+  std::vector<MessageRecord> records;
+  EXPECT_THROW(playback.run(
+                   records, [] { return false; }, nullptr, &gate),
+               GraphNotConnected);
 }
 
 }  // namespace
