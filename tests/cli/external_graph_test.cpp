@@ -30,51 +30,61 @@ class ExternalGraph : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
+  // Writes package `id` with `graph` as its graph.yaml and runs it on `rmw`.
+  Outcome run_package(const std::string& id, const std::string& graph, const std::string& rmw,
+                      const std::string& extra = "") {
+    const fs::path package = dir_ / "benchmarks" / "external" / id;
+    fs::create_directories(package);
+    std::ofstream(package / "benchmark.yaml")
+        << "id: " << id << "\nname: " << id << "\nshort: test\ndescription: test\nresults: []\n";
+    std::ofstream(package / "graph.yaml") << graph;
+    return robotperf_cli("--benchmarks " + (dir_ / "benchmarks").string() + " run " + id +
+                         " --rmw " + rmw + " --quiet --domain " +
+                         std::to_string(robotperf::rmw::reserved_domain()) + " --output " +
+                         (dir_ / "results").string() + extra);
+  }
+
   // Runs x1: 130 payloads at 50 Hz through echo_peer in `mode` (see echo_peer.cpp).
   Outcome run_echo(const std::string& mode, const std::string& rmw = "fastdds",
                    const std::string& echo_topic = "/pong", const std::string& extra = "",
                    const std::string& input_qos = "default") {
-    const fs::path package = dir_ / "benchmarks" / "external" / "x1_echo";
-    fs::create_directories(package);
-    std::ofstream(package / "benchmark.yaml")
-        << "id: x1\nname: x1_echo\nshort: test\ndescription: test\nresults: []\n";
-    std::ofstream(package / "graph.yaml")
-        << "dataset: middleware/payload\nrate_hz: 50\ncount: 130\nwarmup: 10\n"
-           "validity: {min_samples: 100}\n"
-           "inputs:\n  - {topic: /ping, type: sensor_msgs/msg/Image, stream: payload, qos: "
-        << input_qos
-        << "}\n"
-           "output: {topic: /pong, type: sensor_msgs/msg/Image}\n"
-           "launch:\n  - name: echo\n    command: [" ROBOTPERF_ECHO_PEER
-           ", '${rmw}', '${domain}', /ping, "
-        << echo_topic << ", " << mode
-        << "]\n"
-           "functional: {evaluator: payload_echo, truth: {sent: payload}, sample: 0}\n";
-    return robotperf_cli("--benchmarks " + (dir_ / "benchmarks").string() + " run x1 --rmw " + rmw +
-                         " --quiet --domain " + std::to_string(robotperf::rmw::reserved_domain()) +
-                         " --output " + (dir_ / "results").string() + extra);
+    return run_package(
+        "x1",
+        "dataset: middleware/payload\nrate_hz: 50\ncount: 130\nwarmup: 10\n"
+        "validity: {min_samples: 100}\n"
+        "inputs:\n  - {topic: /ping, type: sensor_msgs/msg/Image, stream: payload, qos: " +
+            input_qos +
+            "}\n"
+            "output: {topic: /pong, type: sensor_msgs/msg/Image}\n"
+            "launch:\n  - name: echo\n    command: [" ROBOTPERF_ECHO_PEER
+            ", '${rmw}', '${domain}', /ping, " +
+            echo_topic + ", " + mode +
+            "]\n"
+            "functional: {evaluator: payload_echo, truth: {sent: payload}, sample: 0}\n",
+        rmw, extra);
+  }
+  // A graph of foreign_image_node in `mode` between /camera/image_raw and /foreign/image, whose
+  // output is declared as `output_type` (and checked to echo the input when it is an Image).
+  static std::string foreign_graph(const std::string& mode, int count,
+                                   const std::string& output_type = "sensor_msgs/msg/Image") {
+    return "dataset: perception/image\nrate_hz: 30\ncount: " + std::to_string(count) +
+           "\nwarmup: 10\nvalidity: {min_samples: " + std::to_string(count - 10) +
+           "}\n"
+           "inputs:\n  - {topic: /camera/image_raw, type: sensor_msgs/msg/Image, stream: image}\n"
+           "output: {topic: /foreign/image, type: " +
+           output_type +
+           "}\n"
+           "launch:\n  - name: foreign\n    command: [" ROBOTPERF_FOREIGN_IMAGE_NODE
+           ", '${domain}', /camera/image_raw, /foreign/image, " +
+           mode + ", vga_echo]\n" +
+           (output_type == "sensor_msgs/msg/Image"
+                ? "functional: {evaluator: payload_echo, truth: {sent: image}, sample: 0}\n"
+                : "");
   }
   // Runs x2: the perception/image dataset (640x480 rgb8) at 30 Hz through foreign_image_node.
   Outcome run_foreign(const std::string& mode, const std::string& rmw, int count,
                       const std::string& extra = "") {
-    const fs::path package = dir_ / "benchmarks" / "external" / "x2_foreign";
-    fs::create_directories(package);
-    std::ofstream(package / "benchmark.yaml")
-        << "id: x2\nname: x2_foreign\nshort: test\ndescription: test\nresults: []\n";
-    std::ofstream(package / "graph.yaml")
-        << "dataset: perception/image\nrate_hz: 30\ncount: " << count
-        << "\nwarmup: 10\nvalidity: {min_samples: " << count - 10
-        << "}\n"
-           "inputs:\n  - {topic: /camera/image_raw, type: sensor_msgs/msg/Image, stream: image}\n"
-           "output: {topic: /foreign/image, type: sensor_msgs/msg/Image}\n"
-           "launch:\n  - name: foreign\n    command: [" ROBOTPERF_FOREIGN_IMAGE_NODE
-           ", '${domain}', /camera/image_raw, /foreign/image, "
-        << mode
-        << ", vga_echo]\n"
-           "functional: {evaluator: payload_echo, truth: {sent: image}, sample: 0}\n";
-    return robotperf_cli("--benchmarks " + (dir_ / "benchmarks").string() + " run x2 --rmw " + rmw +
-                         " --quiet --domain " + std::to_string(robotperf::rmw::reserved_domain()) +
-                         " --output " + (dir_ / "results").string() + extra);
+    return run_package("x2", foreign_graph(mode, count), rmw, extra);
   }
   nlohmann::json result() {
     for (const auto& e : fs::directory_iterator(dir_ / "results")) {
@@ -158,20 +168,8 @@ TEST_F(ExternalGraph, QosIncompatibleEndpointIsNamedWithWhoIsOnItsTopic) {
 
 // An output declared with another type than the node publishes: named with the node's type.
 TEST_F(ExternalGraph, TypeMismatchAtTheOutputIsNamed) {
-  const fs::path package = dir_ / "benchmarks" / "external" / "x3_type";
-  fs::create_directories(package);
-  std::ofstream(package / "benchmark.yaml")
-      << "id: x3\nname: x3_type\nshort: test\ndescription: test\nresults: []\n";
-  std::ofstream(package / "graph.yaml")
-      << "dataset: perception/image\nrate_hz: 30\ncount: 40\nwarmup: 10\n"
-         "inputs:\n  - {topic: /camera/image_raw, type: sensor_msgs/msg/Image, stream: image}\n"
-         "output: {topic: /foreign/image, type: sensor_msgs/msg/CameraInfo}\n"
-         "launch:\n  - name: foreign\n    command: [" ROBOTPERF_FOREIGN_IMAGE_NODE
-         ", '${domain}', /camera/image_raw, /foreign/image, copy, vga_echo]\n";
-  const Outcome o = robotperf_cli(
-      "--benchmarks " + (dir_ / "benchmarks").string() + " run x3 --rmw cyclonedds --quiet " +
-      "--connect-timeout 3 --domain " + std::to_string(robotperf::rmw::reserved_domain()) +
-      " --output " + (dir_ / "results").string());
+  const Outcome o = run_package("x3", foreign_graph("copy", 40, "sensor_msgs/msg/CameraInfo"),
+                                "cyclonedds", " --connect-timeout 3");
   EXPECT_EQ(o.exit_code, 2) << o.out;
   EXPECT_NE(o.out.find("robotperf_monitor subscribing /foreign/image [sensor_msgs/msg/CameraInfo] "
                        "has no peer: node /vga_echo publishes it as sensor_msgs/msg/Image "
