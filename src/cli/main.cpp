@@ -773,7 +773,7 @@ int analyze(const TraceArgs& a) {
             {"from_sent", metrics::to_json(analysis.latency_from_sent, 1e-6, "ms")}}},
           {"throughput_hz", analysis.throughput_hz}};
     }
-    report::write_file_atomically(a.json, json_text(j, 2) + "\n");
+    report::write_output(a.json, json_text(j, 2) + "\n");
   }
   return analysis.valid ? kExitOk : kExitInvalidResult;
 }
@@ -936,13 +936,21 @@ int make_report(const ReportArgs& a) {
   report::ReportOptions options;
   options.title = a.title;
   if (a.compare.size() == 2) options.compare = std::pair{a.compare[0], a.compare[1]};
+  if (!a.html.empty() && !a.md.empty() && report::is_standard_output(a.html) &&
+      report::is_standard_output(a.md)) {
+    throw std::invalid_argument("report: only one of --html and --md can be - (standard output)");
+  }
+  // Standard output carries the report alone; where a file went is said on stderr then.
+  std::ostream& said = report::is_standard_output(a.html) || report::is_standard_output(a.md)
+                           ? std::cerr
+                           : std::cout;
   if (!a.html.empty()) {
-    report::write_file_atomically(a.html, report::render_html(input, options));
-    std::cout << "report: " << a.html << "\n";
+    report::write_output(a.html, report::render_html(input, options));
+    if (!report::is_standard_output(a.html)) said << "report: " << a.html << "\n";
   }
   if (!a.md.empty()) {
-    report::write_file_atomically(a.md, report::render_markdown(input, options));
-    std::cout << "report: " << a.md << "\n";
+    report::write_output(a.md, report::render_markdown(input, options));
+    if (!report::is_standard_output(a.md)) said << "report: " << a.md << "\n";
   }
   return kExitOk;
 }
@@ -1149,8 +1157,8 @@ int main(int argc, char** argv) {
   report_cmd->add_option("results", rpa.inputs,
                          "results files, imported files, benchmark.yaml files or folders "
                          "(default: ./results)");
-  report_cmd->add_option("--html", rpa.html, "write the HTML report here");
-  report_cmd->add_option("--md", rpa.md, "write the Markdown report here");
+  report_cmd->add_option("--html", rpa.html, "write the HTML report here (- : standard output)");
+  report_cmd->add_option("--md", rpa.md, "write the Markdown report here (- : standard output)");
   report_cmd->add_option("--title", rpa.title, "report title");
   report_cmd->add_option("--compare", rpa.compare,
                          "compare two sides (give it twice): a results file or name prefix, "

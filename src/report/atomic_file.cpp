@@ -76,12 +76,14 @@ TemporaryFile create_temporary_file(const fs::path& path) {
   fail(path, "creating temporary file", EEXIST);
 }
 
-void write_all(const TemporaryFile& file, const fs::path& path, std::string_view content) {
+// Writes all of `content` to `descriptor`, which is `written_to` (a step of writing `path`).
+void write_all(int descriptor, const fs::path& path, const std::string& written_to,
+               std::string_view content) {
   while (!content.empty()) {
-    const ssize_t written = ::write(file.descriptor(), content.data(), content.size());
+    const ssize_t written = ::write(descriptor, content.data(), content.size());
     if (written < 0) {
       if (errno == EINTR) continue;
-      fail(path, "writing " + file.path().string(), errno);
+      fail(path, "writing " + written_to, errno);
     }
     content.remove_prefix(static_cast<std::size_t>(written));
   }
@@ -119,7 +121,7 @@ void write_file_atomically(const fs::path& path, std::string_view content) {
   if (existing_mode && ::fchmod(file.descriptor(), *existing_mode) != 0) {
     fail(path, "setting the mode of " + file.path().string(), errno);
   }
-  write_all(file, path, content);
+  write_all(file.descriptor(), path, file.path().string(), content);
   if (::fsync(file.descriptor()) != 0) fail(path, "syncing " + file.path().string(), errno);
   if (const int close_error = file.close(); close_error != 0) {
     fail(path, "closing " + file.path().string(), close_error);
@@ -129,6 +131,32 @@ void write_file_atomically(const fs::path& path, std::string_view content) {
   }
   file.keep();
   sync_directory(directory, path);
+}
+
+bool is_standard_output(const fs::path& path) {
+  return path == "-";
+}
+
+void write_output(const fs::path& path, std::string_view content) {
+  if (is_standard_output(path)) {
+    std::fwrite(content.data(), 1, content.size(), stdout);
+    if (std::fflush(stdout) != 0) fail("standard output", "writing to it", errno);
+    return;
+  }
+  struct stat target {};
+  if (::stat(path.c_str(), &target) == 0 && !S_ISREG(target.st_mode) && !S_ISDIR(target.st_mode)) {
+    const int descriptor = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+    if (descriptor < 0) fail(path, "opening it", errno);
+    try {
+      write_all(descriptor, path, "to it", content);
+    } catch (...) {
+      ::close(descriptor);
+      throw;
+    }
+    if (::close(descriptor) != 0) fail(path, "closing it", errno);
+    return;
+  }
+  write_file_atomically(path, content);
 }
 
 }  // namespace robotperf::report

@@ -112,6 +112,24 @@ TEST_F(ResultsCli, ReportNeedsAnOutputAndExistingInputs) {
   EXPECT_NE(o.out.find("no such file or folder"), std::string::npos) << o.out;
 }
 
+// `--md -` is standard output, and a device path (/dev/stdout, a pipe) is written through: the
+// report alone on stdout, no file named "-", no link replaced.
+TEST_F(ResultsCli, ReportGoesToStandardOutputOrThroughADevice) {
+  const std::string inputs = (dir_ / "results").string() + " " + kPublished.string();
+  const auto dash = shell(std::string("{ ") + ROBOTPERF_EXECUTABLE + " report " + inputs +
+                          " --md - 2>/dev/null; }");
+  ASSERT_EQ(dash.exit_code, 0) << dash.out;
+  EXPECT_TRUE(dash.out.starts_with("# ")) << dash.out.substr(0, 200);
+  EXPECT_EQ(dash.out.find("report: "), std::string::npos) << "stdout is the report alone";
+  const auto device = shell("cd " + dir_.string() + " && " + ROBOTPERF_EXECUTABLE + " report " +
+                            inputs + " --md - > /dev/null && " + ROBOTPERF_EXECUTABLE + " report " +
+                            inputs + " --md /dev/stdout | head -c 2");
+  EXPECT_FALSE(fs::exists(dir_ / "-"));
+  EXPECT_EQ(device.out.substr(0, 2), "# ") << device.out;
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status("/dev/stdout"))) << "/dev/stdout was replaced";
+  EXPECT_EQ(robotperf_cli("report " + inputs + " --md - --html -").exit_code, 2);
+}
+
 TEST_F(ResultsCli, ReportRendersInHeadlessChromium) {
   const auto which = shell("command -v chromium");
   ASSERT_EQ(which.exit_code, 0) << "chromium is not installed: run scripts/install-deps.sh";

@@ -10,6 +10,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "robotperf/report/atomic_file.hpp"
 
@@ -143,6 +144,40 @@ TEST_F(AtomicFileTest, FailedWriteLeavesOldFileIntactAndNoTemporaryFile) {
 TEST_F(AtomicFileTest, PathWithoutFileNameThrows) {
   const std::string message = error_message(directory_.string() + "/", "x");
   EXPECT_NE(message.find("names no file"), std::string::npos) << message;
+}
+
+// Output a user names may be a device or a pipe (`--md /dev/stdout`, `--md >(less)`): written
+// through, never replaced by a regular file, nor its link by one.
+TEST_F(AtomicFileTest, OutputToAPipeOrItsLinkIsWrittenThrough) {
+  const fs::path fifo = directory_ / "pipe";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const fs::path link = directory_ / "stdout";
+  fs::create_symlink(fifo, link);
+  for (const fs::path& target : {fifo, link}) {
+    std::string got;
+    std::thread reader([&] {
+      std::ifstream in(fifo, std::ios::binary);
+      got.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    });
+    write_output(target, "# report\n");
+    reader.join();
+    EXPECT_EQ(got, "# report\n") << target;
+  }
+  EXPECT_TRUE(fs::is_fifo(fs::symlink_status(fifo)));
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(link)));
+  EXPECT_EQ(entries(directory_), (std::set<std::string>{"pipe", "stdout"}));
+}
+
+TEST_F(AtomicFileTest, DashIsStandardOutputAndFilesAreStillAtomic) {
+  ::testing::internal::CaptureStdout();
+  write_output("-", "to stdout\n");
+  EXPECT_EQ(::testing::internal::GetCapturedStdout(), "to stdout\n");
+  EXPECT_TRUE(is_standard_output("-"));
+  EXPECT_FALSE(is_standard_output(directory_ / "-"));
+  const fs::path file = directory_ / "report.md";
+  write_output(file, "a file\n");
+  EXPECT_EQ(read(file), "a file\n");
+  EXPECT_TRUE(fs::is_regular_file(fs::symlink_status(file)));
 }
 
 }  // namespace

@@ -17,4 +17,13 @@ namespace robotperf::report {
 // at `path` is untouched and the temporary file is removed.
 void write_file_atomically(const std::filesystem::path& path, std::string_view content);
 
+// Writes output a user named: "-" is standard output; a path that is, or links to, something
+// other than a regular file or a directory (a terminal, a pipe, /dev/stdout) is written through
+// as it is, since replacing it would replace the device or its link; anything else is written
+// with write_file_atomically. Throws std::runtime_error as that does.
+void write_output(const std::filesystem::path& path, std::string_view content);
+
+// Whether write_output(path, ...) writes to standard output.
+bool is_standard_output(const std::filesystem::path& path);
+
 }  // namespace robotperf::report
