@@ -22,6 +22,8 @@ td.num { text-align: right; font-variant-numeric: tabular-nums; }
 tr.warn td { background: #fff1e6; }
 div.warnings { background: #fff6e0; border-left: 5px solid #e69500; padding: 8px 16px; }
 div.warnings li { margin: 3px 0; }
+div.warnings ul.invalid li { color: #a00000; font-weight: bold; }
+div.warnings details p { margin: 6px 0 0 0; }
 div.radars { display: flex; flex-wrap: wrap; gap: 12px; }
 figure { margin: 0; } figcaption { font-size: 12px; color: #555; max-width: 480px; }
 svg text { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; }
@@ -57,10 +59,27 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
     << "</title>\n<style>" << kStyle << "</style>\n</head>\n<body>\n";
   s << "<h1>" << html_escape(m.title) << "</h1>\n<p class=\"summary\">" << html_escape(m.summary)
     << "</p>\n";
-  if (!m.warnings.empty()) {
-    s << "<div class=\"warnings\" id=\"warnings\"><strong>Validity warnings</strong><ul>\n";
-    for (const auto& w : m.warnings) s << "<li>" << html_escape(w) << "</li>\n";
-    s << "</ul></div>\n";
+  if (const std::string summary = detail::warning_summary(m); !summary.empty()) {
+    // INVALID runs in view; the warnings behind one line, grouped by machine and by run.
+    s << "<div class=\"warnings\" id=\"warnings\"><strong>Validity:</strong> "
+      << html_escape(summary) << "\n";
+    if (!m.invalid_runs.empty()) {
+      s << "<ul class=\"invalid\">\n";
+      for (const auto& w : m.invalid_runs) s << "<li>" << html_escape(w) << "</li>\n";
+      s << "</ul>\n";
+    }
+    std::vector<detail::WarningGroup> groups = m.warning_groups;
+    if (!m.warnings.empty()) groups.push_back({"this report", m.warnings});
+    if (!groups.empty()) {
+      s << "<details><summary>the warnings, by machine and by run</summary>\n";
+      for (const auto& g : groups) {
+        s << "<p><strong>" << html_escape(g.heading) << "</strong></p><ul>\n";
+        for (const auto& w : g.items) s << "<li>" << html_escape(w) << "</li>\n";
+        s << "</ul>\n";
+      }
+      s << "</details>\n";
+    }
+    s << "</div>\n";
   }
   for (const auto& category : m.categories) {
     s << "<h2 id=\"category-" << html_escape(category) << "\">" << html_escape(category)
@@ -148,10 +167,17 @@ std::string render_markdown(const ReportInput& input, const ReportOptions& optio
     s << "\n";
   };
   s << "# " << m.title << "\n\n" << m.summary << "\n\n";
-  if (!m.warnings.empty()) {
-    s << "## Validity warnings\n\n";
-    for (const auto& w : m.warnings) s << "- " << markdown_cell(w) << "\n";
-    s << "\n";
+  if (const std::string summary = detail::warning_summary(m); !summary.empty()) {
+    s << "## Validity\n\n" << summary << "\n\n";
+    for (const auto& w : m.invalid_runs) s << "- " << markdown_cell(w) << "\n";
+    if (!m.invalid_runs.empty()) s << "\n";
+    std::vector<detail::WarningGroup> groups = m.warning_groups;
+    if (!m.warnings.empty()) groups.push_back({"this report", m.warnings});
+    for (const auto& g : groups) {
+      s << "### " << g.heading << "\n\n";
+      for (const auto& w : g.items) s << "- " << markdown_cell(w) << "\n";
+      s << "\n";
+    }
   }
   for (const auto& category : m.categories) {
     s << "## " << category << "\n\n";

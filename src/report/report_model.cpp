@@ -574,6 +574,41 @@ std::string html_escape(const std::string& text) {
   return out;
 }
 
+bool is_machine_warning(const std::string& warning) {
+  for (const char* rule :
+       {"build", "governor", "frequency", "turbo", "smt", "virtual_machine", "container"}) {
+    if (warning.starts_with(std::string(rule) + ": ")) return true;
+  }
+  return false;
+}
+
+std::string warning_summary(const Model& model) {
+  std::size_t machines = 0, machine_items = 0, run_items = 0;
+  for (const auto& g : model.warning_groups) {
+    if (g.heading.starts_with("machine ")) {
+      ++machines;
+      machine_items += g.items.size();
+    } else {
+      run_items += g.items.size();
+    }
+  }
+  auto counted = [](std::size_t n, const std::string& what) {
+    return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
+  };
+  std::vector<std::string> parts;
+  if (!model.invalid_runs.empty())
+    parts.push_back(counted(model.invalid_runs.size(), "INVALID run"));
+  if (machine_items > 0) {
+    parts.push_back(counted(machine_items, "machine warning") + " (" +
+                    counted(machines, "machine") + ")");
+  }
+  if (run_items > 0) parts.push_back(counted(run_items, "run warning"));
+  if (!model.warnings.empty()) parts.push_back(counted(model.warnings.size(), "other warning"));
+  std::string out;
+  for (const auto& p : parts) out += (out.empty() ? "" : " · ") + p;
+  return out;
+}
+
 Model build_model(const ReportInput& in, const ReportOptions& options) {
   Model model;
   model.title = options.title;
@@ -582,6 +617,9 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
   std::set<std::string> categories;
   std::map<std::string, std::set<std::string>> ids_by_category;
   std::map<std::string, std::string> names;
+  // Machine warnings by machine, each said once with the number of runs that recorded it.
+  std::map<std::string, std::map<std::string, std::size_t>> machine_warnings;
+  std::vector<WarningGroup> run_groups;
   for (const auto& r : in.runs) {
     categories.insert(r.category);
     ids_by_category[r.category].insert(r.benchmark_id);
@@ -589,11 +627,27 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
     if (!r.valid) {
       std::string why;
       for (const auto& reason : r.invalid_reasons) why += (why.empty() ? "" : "; ") + reason;
-      model.warnings.push_back("run " + r.stem() + " is INVALID: " + why +
-                               " (shown in its table, left out of the plots)");
+      model.invalid_runs.push_back("run " + r.stem() + " is INVALID: " + why +
+                                   " (shown in its table, left out of the plots)");
     }
-    for (const auto& w : r.warnings) model.warnings.push_back("run " + r.stem() + ": " + w);
+    WarningGroup own{"run " + r.stem(), {}};
+    for (const auto& w : r.warnings) {
+      if (is_machine_warning(w)) {
+        ++machine_warnings[r.hardware.empty() ? "unknown machine" : r.hardware][w];
+      } else {
+        own.items.push_back(w);
+      }
+    }
+    if (!own.items.empty()) run_groups.push_back(std::move(own));
   }
+  for (const auto& [machine, counted] : machine_warnings) {
+    WarningGroup group{"machine " + machine, {}};
+    for (const auto& [w, runs] : counted) {
+      group.items.push_back(w + " (" + std::to_string(runs) + (runs == 1 ? " run)" : " runs)"));
+    }
+    model.warning_groups.push_back(std::move(group));
+  }
+  for (auto& group : run_groups) model.warning_groups.push_back(std::move(group));
   std::size_t published_rows = 0, flagged_rows = 0;
   for (const auto& b : in.published) {
     categories.insert(b.category);

@@ -53,9 +53,19 @@ struct Comparison {
   std::vector<std::string> notes;
 };
 
+// Warnings under one heading: a machine's (said once for all its runs), a run's, or the report's.
+struct WarningGroup {
+  std::string heading;
+  std::vector<std::string> items;
+};
+
 struct Model {
   std::string title;
   std::string summary;
+  std::vector<std::string> invalid_runs;  // "run X is INVALID: why": shown first, never folded
+  // Machine-level warnings once per machine, then each run's own.
+  std::vector<WarningGroup> warning_groups;
+  // The report's own: skipped files, flagged published rows, distributions not drawn as stored.
   std::vector<std::string> warnings;
   std::vector<std::string> categories;
   std::map<std::string, std::vector<Radar>> radars;                 // by category
@@ -65,6 +75,14 @@ struct Model {
 };
 
 Model build_model(const ReportInput& input, const ReportOptions& options);
+
+// "2 INVALID runs · 5 machine warnings (1 machine) · 12 run warnings · 1 other": the line that
+// stands for all of them.
+std::string warning_summary(const Model& model);
+
+// Whether a run-rule warning ("rule: message") is about the machine (its CPU settings, its
+// virtualisation, robotperf's build) rather than the run.
+bool is_machine_warning(const std::string& warning);
 
 // Series label of a local run: "<hardware> · <rmw>".
 std::string local_series(const StoredRun& run);

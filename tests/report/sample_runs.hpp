@@ -4,6 +4,8 @@
 #include <cmath>
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "robotperf/report/atomic_file.hpp"
 #include "robotperf/report/results.hpp"
@@ -20,6 +22,7 @@ struct SampleRun {
   std::size_t messages = 100;
   std::size_t lost = 0;
   int64_t start_unix_ns = 1'790'000'000'000'000'000;
+  std::vector<std::pair<std::string, std::string>> warnings;  // run rules: (rule, message)
 };
 
 inline harness::RunResult make_run(const SampleRun& s) {
@@ -27,6 +30,7 @@ inline harness::RunResult make_run(const SampleRun& s) {
   r.benchmark_id = s.id;
   r.benchmark_name = s.name;
   r.category = "perception";
+  for (const auto& [rule, message] : s.warnings) r.warnings.push_back({rule, message});
   r.rate_hz = 30;
   r.count = s.messages + 5;
   r.warmup = 5;

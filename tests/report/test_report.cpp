@@ -223,6 +223,40 @@ TEST_F(Report, InvalidRunsAreWarnedAboutAndNotPlotted) {
   EXPECT_EQ(html.find("Lossy CPU · intra<title>"), std::string::npos);
 }
 
+// A machine's warnings are said once for all its runs, a run's own under that run, and INVALID
+// runs come first, in view; the rest is folded behind one summary line.
+TEST_F(Report, WarningsAreGroupedByMachineAndRunBehindOneLine) {
+  testing::SampleRun run;
+  run.warnings = {{"virtual_machine", "running in a virtual machine"},
+                  {"samples", "90 measured messages"}};
+  for (int i = 0; i < 3; ++i) {
+    run.start_unix_ns += 60'000'000'000;
+    testing::write_sample(dir_, run);
+  }
+  testing::SampleRun bad = run;
+  bad.lost = 10;
+  bad.start_unix_ns += 60'000'000'000;
+  testing::write_sample(dir_, bad);
+  const auto input = load_report_inputs({dir_});
+  const std::string html = render_html(input, {});
+  EXPECT_EQ(count(html, "virtual_machine: running in a virtual machine"), 1u) << html;
+  EXPECT_NE(html.find("virtual_machine: running in a virtual machine (4 runs)"), std::string::npos);
+  EXPECT_EQ(count(html, "samples: 90 measured messages"), 4u) << "a run's own, under each run";
+  EXPECT_NE(html.find("<strong>Validity:</strong> 1 INVALID run · 1 machine warning (1 machine) "
+                      "· 4 run warnings"),
+            std::string::npos)
+      << html.substr(0, 3000);
+  const auto invalid = html.find("<ul class=\"invalid\">");
+  const auto folded = html.find("<details>");
+  ASSERT_NE(invalid, std::string::npos);
+  ASSERT_NE(folded, std::string::npos);
+  EXPECT_LT(invalid, folded) << "INVALID runs before the folded warnings";
+  EXPECT_LT(html.find("is INVALID: lost messages"), folded);
+  const std::string md = render_markdown(input, {});
+  EXPECT_NE(md.find("## Validity\n\n1 INVALID run"), std::string::npos) << md.substr(0, 2000);
+  EXPECT_EQ(count(md, "virtual_machine: running in a virtual machine (4 runs)"), 1u);
+}
+
 // A 30 Hz run says only that the graph kept up with 30 Hz: where a peak search found its limit,
 // the throughput radar shows the peak, labelled so, and never pools the two.
 TEST_F(Report, ThroughputRadarUsesPeaksWhereFoundAndSaysWhichIsWhich) {
