@@ -142,7 +142,8 @@ std::vector<detail::Distribution> distributions(const std::vector<const StoredRu
   std::vector<detail::Distribution> out;
   for (const StoredRun* r : runs) {
     detail::Distribution d;
-    d.label = r->stem();
+    d.label = r->stem() + (r->valid ? "" : " (INVALID)");
+    d.valid = r->valid;
     d.p50 = r->latency.p50;
     d.p99 = r->latency.p99;
     if (!std::isfinite(d.p50)) continue;

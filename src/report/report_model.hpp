@@ -36,6 +36,7 @@ struct Distribution {
   std::string source;  // "per-message CSV", "stored histogram", "stored percentiles"
   std::vector<std::pair<double, double>> points;  // (latency ms, cumulative fraction)
   double p50 = 0, p99 = 0;
+  bool valid = true;  // an INVALID run's curve is drawn grey and dashed, and labelled so
 };
 
 struct BenchmarkSection {

@@ -178,11 +178,14 @@ std::string distribution_svg(const std::vector<Distribution>& curves, const std:
     << "\" text-anchor=\"middle\">latency (ms)</text>\n";
   s << "<rect x=\"" << kLeft << "\" y=\"" << kTop << "\" width=\"" << num(plot_width)
     << "\" height=\"" << kPlotHeight << "\" fill=\"none\" stroke=\"#666\"/>\n";
+  // INVALID runs: grey and dashed, never a colour a valid run could be read as.
+  auto colour_of = [&](std::size_t i) { return curves[i].valid ? kPalette[i % 12] : "#999999"; };
   for (std::size_t i = 0; i < curves.size(); ++i) {
     const auto& c = curves[i];
-    const char* colour = kPalette[i % 12];
-    s << "<polyline class=\"curve\" fill=\"none\" stroke=\"" << colour
-      << "\" stroke-width=\"2\" points=\"";
+    const char* colour = colour_of(i);
+    s << "<polyline class=\"curve" << (c.valid ? "" : " invalid") << "\" fill=\"none\" stroke=\""
+      << colour << "\" stroke-width=\"2\"" << (c.valid ? "" : " stroke-dasharray=\"6,4\"")
+      << " points=\"";
     // A CDF is a step function: draw each rise at its x.
     double last_y = 0;
     bool first = true;
@@ -210,7 +213,7 @@ std::string distribution_svg(const std::vector<Distribution>& curves, const std:
   double ly = kTop + kPlotHeight + 60;
   for (std::size_t i = 0; i < curves.size(); ++i) {
     s << "<rect x=\"" << kLeft << "\" y=\"" << num(ly - 10)
-      << "\" width=\"14\" height=\"10\" fill=\"" << kPalette[i % 12]
+      << "\" width=\"14\" height=\"10\" fill=\"" << colour_of(i)
       << "\"/><text class=\"legend\" x=\"" << num(kLeft + 20) << "\" y=\"" << num(ly) << "\">"
       << html_escape(curves[i].label + " — from the " + curves[i].source) << "</text>\n";
     ly += 18;

@@ -221,6 +221,9 @@ TEST_F(Report, InvalidRunsAreWarnedAboutAndNotPlotted) {
   // Only the valid run's series is in the radar's legend.
   EXPECT_NE(html.find("AMD Ryzen 7 5800X · intra<title>"), std::string::npos);
   EXPECT_EQ(html.find("Lossy CPU · intra<title>"), std::string::npos);
+  // Its latency curve is drawn apart: grey, dashed, labelled INVALID.
+  EXPECT_EQ(count(html, "<polyline class=\"curve invalid\" fill=\"none\" stroke=\"#999999\""), 1u);
+  EXPECT_NE(html.find(" (INVALID) — from the "), std::string::npos);
 }
 
 // A machine's warnings are said once for all its runs, a run's own under that run, and INVALID
