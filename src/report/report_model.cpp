@@ -47,19 +47,24 @@ std::vector<Observation> observations(const ReportInput& in) {
   std::vector<Observation> out;
   // A graph's throughput is its peak where a search found one; a run at a rate it kept up with
   // only says it can do at least that. The two are never pooled, and the series says which.
+  // A peak is a property of the configuration, whatever rate the search ended at; an offered
+  // throughput is a claim about its rate.
   std::set<std::pair<std::string, std::string>> with_peak;
   for (const auto& r : in.runs) {
     if (r.valid && r.throughput_kind == "peak")
-      with_peak.emplace(r.benchmark_id, detail::local_series(r));
+      with_peak.emplace(r.benchmark_id, detail::configuration_series(r));
   }
   for (const auto& r : in.runs) {
     if (!r.valid) continue;  // invalid runs are shown in the tables, never plotted
     const std::string series = detail::local_series(r);
     out.push_back({r.benchmark_id, r.category, series, "latency", true, r.latency.max, &r});
     const bool peak = r.throughput_kind == "peak";
-    if (peak || !with_peak.contains({r.benchmark_id, series})) {
-      out.push_back({r.benchmark_id, r.category, series + (peak ? " (peak)" : " (offered)"),
+    if (peak) {
+      out.push_back({r.benchmark_id, r.category, detail::configuration_series(r) + " (peak)",
                      "throughput", true, r.throughput_hz, &r});
+    } else if (!with_peak.contains({r.benchmark_id, detail::configuration_series(r)})) {
+      out.push_back({r.benchmark_id, r.category, series + " (offered)", "throughput", true,
+                     r.throughput_hz, &r});
     }
     if (r.power_w)
       out.push_back({r.benchmark_id, r.category, series, "power", true, *r.power_w, &r});
@@ -527,8 +532,21 @@ namespace detail {
 const char* const kPalette[12] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b",
                                   "#e377c2", "#17becf", "#7f7f7f", "#bcbd22", "#393b79", "#637939"};
 
+std::string configuration_series(const StoredRun& run) {
+  // What makes two runs comparable (DESIGN.md §3.9), the rate aside: the machine, the transport,
+  // the process layout, black- or grey-box and the arrivals. Defaults are left out of the label.
+  std::string label = run.hardware + " · " + run.rmw;
+  if (run.processes == "per-node") label += " · per-node";
+  if (run.type == "grey") label += " · grey";
+  if (!run.timeline.empty() && run.timeline != "fixed") label += " · " + run.timeline;
+  return label;
+}
+
 std::string local_series(const StoredRun& run) {
-  return run.hardware + " · " + run.rmw;
+  if (!std::isfinite(run.rate_hz)) return configuration_series(run);
+  char rate[32];
+  std::snprintf(rate, sizeof rate, "%.4g", run.rate_hz);  // 30, 29.97, 1000
+  return configuration_series(run) + " · " + rate + " Hz";
 }
 
 std::string published_series(const std::string& hardware) {

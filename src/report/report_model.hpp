@@ -85,8 +85,11 @@ std::string warning_summary(const Model& model);
 // virtualisation, robotperf's build) rather than the run.
 bool is_machine_warning(const std::string& warning);
 
-// Series label of a local run: "<hardware> · <rmw>".
+// Series label of a local run: "<hardware> · <rmw>[ · per-node][ · grey][ · <arrivals>] · <rate>
+// Hz": runs of one series are comparable (DESIGN.md §3.9).
 std::string local_series(const StoredRun& run);
+// The same without the rate: a peak throughput's series.
+std::string configuration_series(const StoredRun& run);
 // Series label of published rows: "<hardware> (RobotPerf)".
 std::string published_series(const std::string& hardware);
 

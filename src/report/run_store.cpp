@@ -204,6 +204,7 @@ StoredRun load_run(const fs::path& path) {
   run.rmw = string_or_empty(config, "rmw");
   run.processes = string_or_empty(config, "processes");
   run.rate_hz = number_or_nan(config, "rate_hz");
+  run.timeline = string_or_empty(config, "timeline");
   run.dataset = string_or_empty(member(j, "dataset"), "name");
   const json& machine = member(j, "machine");
   run.hardware = hardware_label(machine);

@@ -219,8 +219,8 @@ TEST_F(Report, InvalidRunsAreWarnedAboutAndNotPlotted) {
   EXPECT_NE(html.find("is INVALID: lost messages"), std::string::npos);
   EXPECT_NE(html.find("<tr class=\"warn\"><td>a1-intra"), std::string::npos);
   // Only the valid run's series is in the radar's legend.
-  EXPECT_NE(html.find("AMD Ryzen 7 5800X · intra<title>"), std::string::npos);
-  EXPECT_EQ(html.find("Lossy CPU · intra<title>"), std::string::npos);
+  EXPECT_NE(html.find("AMD Ryzen 7 5800X · intra · 30 Hz<title>"), std::string::npos);
+  EXPECT_EQ(html.find("Lossy CPU · intra · 30 Hz<title>"), std::string::npos);
   // Its latency curve is drawn apart: grey, dashed, labelled INVALID.
   EXPECT_EQ(count(html, "<polyline class=\"curve invalid\" fill=\"none\" stroke=\"#999999\""), 1u);
   EXPECT_NE(html.find(" (INVALID) — from the "), std::string::npos);
@@ -280,8 +280,32 @@ TEST_F(Report, ThroughputRadarUsesPeaksWhereFoundAndSaysWhichIsWhich) {
   EXPECT_EQ(std::ranges::count(input.runs, std::string("peak"), &StoredRun::throughput_kind), 1);
   const std::string html = render_html(input, {});
   EXPECT_NE(html.find("AMD Ryzen 7 5800X · intra (peak)<title>"), std::string::npos);
-  EXPECT_EQ(html.find("AMD Ryzen 7 5800X · intra (offered)<title>"), std::string::npos);
-  EXPECT_NE(html.find("Intel Core i7-12700H · intra (offered)<title>"), std::string::npos);
+  EXPECT_EQ(html.find("AMD Ryzen 7 5800X · intra · 30 Hz (offered)<title>"), std::string::npos);
+  EXPECT_NE(html.find("Intel Core i7-12700H · intra · 30 Hz (offered)<title>"), std::string::npos);
+}
+
+// Runs that differ in rate, process layout, black/grey or arrivals are separate series, never
+// pooled into one median.
+TEST_F(Report, RunsOfDifferentConfigurationsAreSeparateSeries) {
+  testing::SampleRun base;
+  const auto at_60 = testing::write_sample(dir_, base);
+  auto j = nlohmann::json::parse(read_text(at_60));
+  j["configuration"]["rate_hz"] = 60.0;
+  std::ofstream(at_60) << j.dump();
+  base.start_unix_ns += 1'000'000'000;
+  const auto per_node = testing::write_sample(dir_, base);
+  j = nlohmann::json::parse(read_text(per_node));
+  j["configuration"]["processes"] = "per-node";
+  j["type"] = "grey";
+  std::ofstream(per_node) << j.dump();
+  base.start_unix_ns += 1'000'000'000;
+  testing::write_sample(dir_, base);
+  const std::string html = render_html(load_report_inputs({dir_}), {});
+  for (const char* series : {"AMD Ryzen 7 5800X · intra · 60 Hz<title>",
+                             "AMD Ryzen 7 5800X · intra · per-node · grey · 30 Hz<title>",
+                             "AMD Ryzen 7 5800X · intra · 30 Hz<title>"}) {
+    EXPECT_NE(html.find(series), std::string::npos) << series;
+  }
 }
 
 TEST_F(Report, OldResultsWithoutHistogramUseTheStoredPercentiles) {

@@ -37,6 +37,7 @@ struct StoredRun {
   std::string type;         // "black" or "grey"
   std::string started_utc;  // "2026-11-22T07:42:22Z"
   std::string rmw, processes;
+  std::string timeline;  // arrivals: "fixed", "poisson", "burst", "bag" (empty: older files)
   double rate_hz = kNoValue;
   std::string dataset;
   std::string hardware;           // short platform name: CPU model, plus GPU models
