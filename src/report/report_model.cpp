@@ -110,6 +110,14 @@ std::vector<detail::Radar> radars_for(const std::string& category,
       if (is_local[a] != is_local[b]) return is_local[a];
       return by_series[a].size() > by_series[b].size();
     });
+    auto medians = [&](const std::string& name) {
+      std::vector<double> row;
+      for (const auto& axis : radar.axes) {
+        const auto it = by_series[name].find(axis);
+        row.push_back(it == by_series[name].end() ? kNoValue : median(it->second));
+      }
+      return row;
+    };
     for (std::size_t i = 0; i < names.size(); ++i) {
       if (i >= options.max_radar_series) {
         radar.omitted.push_back(names[i]);
@@ -117,12 +125,7 @@ std::vector<detail::Radar> radars_for(const std::string& category,
       }
       radar.series.push_back(names[i]);
       radar.series_local.push_back(is_local[names[i]]);
-      std::vector<double> row;
-      for (const auto& axis : radar.axes) {
-        const auto it = by_series[names[i]].find(axis);
-        row.push_back(it == by_series[names[i]].end() ? kNoValue : median(it->second));
-      }
-      radar.values.push_back(std::move(row));
+      radar.values.push_back(medians(names[i]));
     }
     radar.data.css_class = "radar-data";
     radar.data.header = {"hardware"};
@@ -131,9 +134,13 @@ std::vector<detail::Radar> radars_for(const std::string& category,
       radar.data.header.push_back(a + " (" + m.unit + ")");
       radar.data.numeric.push_back(true);
     }
-    for (std::size_t s = 0; s < radar.series.size(); ++s) {
-      std::vector<std::string> row = {radar.series[s]};
-      for (double v : radar.values[s]) row.push_back(detail::format_value(v));
+    // Every series, those left out of the plot too (the legend points here for them).
+    for (std::size_t s = 0; s < radar.series.size() + radar.omitted.size(); ++s) {
+      const bool plotted = s < radar.series.size();
+      const std::string& name = plotted ? radar.series[s] : radar.omitted[s - radar.series.size()];
+      std::vector<std::string> row = {plotted ? name : name + " (not plotted)"};
+      for (double v : plotted ? radar.values[s] : medians(name))
+        row.push_back(detail::format_value(v));
       radar.data.rows.push_back(std::move(row));
       radar.data.row_warning.push_back(false);
     }
@@ -684,8 +691,19 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
   model.categories.assign(categories.begin(), categories.end());
 
   const auto obs = observations(in);
+  std::map<std::string, std::size_t> colour_of;  // series -> palette index, in order of appearance
   for (const auto& category : model.categories) {
     model.radars[category] = radars_for(category, obs, options);
+    // One colour per series across the page: a platform's latency and offered throughput alike.
+    for (auto& radar : model.radars[category]) {
+      for (const auto& name : radar.series) {
+        std::string key = name;
+        for (const char* suffix : {" (peak)", " (offered)"}) {
+          if (key.ends_with(suffix)) key.resize(key.size() - std::string_view(suffix).size());
+        }
+        radar.colours.push_back(colour_of.try_emplace(key, colour_of.size()).first->second);
+      }
+    }
     for (const auto& id : ids_by_category[category]) {
       BenchmarkSection section;
       section.id = id;

@@ -25,6 +25,7 @@ struct Radar {
   std::vector<std::string> axes;
   std::vector<std::string> series;
   std::vector<bool> series_local;
+  std::vector<std::size_t> colours;  // per series: its index in kPalette, one per series page-wide
   std::vector<std::vector<double>> values;  // [series][axis], NaN where there is no value
   std::vector<std::string> omitted;         // series left out to keep the plot readable
   Table data;                               // the same numbers as a table

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include "report_model.hpp"
@@ -24,6 +25,21 @@ double nice_step(double range, int count) {
     if (raw <= m * magnitude) return m * magnitude;
   }
   return 10 * magnitude;
+}
+
+// A series name that fits the legend: long ones lose their middle, not their end, since what
+// tells two series of one machine apart (transport, layout, rate) is at the end. The full name is
+// the entry's title.
+std::string legend_label(const std::string& name) {
+  constexpr std::size_t kMax = 68, kHead = 38;
+  if (name.size() <= kMax) return name;
+  auto boundary = [&](std::size_t at) {  // not inside a UTF-8 sequence
+    while (at > 0 && (static_cast<unsigned char>(name[at]) & 0xC0) == 0x80) --at;
+    return at;
+  };
+  const std::size_t head = boundary(kHead);
+  const std::size_t tail = boundary(name.size() - (kMax - kHead - 1));
+  return name.substr(0, head) + "…" + name.substr(tail);
 }
 
 }  // namespace
@@ -102,21 +118,33 @@ std::string radar_svg(const Radar& r) {
       << (logarithmic ? format_value(axis_min[a]) + "–" : std::string("max "))
       << format_value(axis_max[a]) << (logarithmic ? " (log)" : "") << "</text>\n";
   }
-  // One polygon per series.
+  // One polygon per series; a series without a value on some axis is a gap there: lines join only
+  // neighbouring axes that both have one, so no line crosses an axis it has no value on.
   for (std::size_t si = 0; si < r.series.size(); ++si) {
-    const char* colour = kPalette[si % 12];
+    const char* colour = kPalette[r.colours[si] % 12];
+    std::vector<std::optional<std::pair<double, double>>> at(n);
     std::vector<std::pair<double, double>> pts;
     for (std::size_t a = 0; a < n; ++a) {
       const double v = r.values[si][a];
       if (!std::isfinite(v) || v <= 0 || axis_max[a] <= 0) continue;
-      pts.push_back(point(a, fraction(a, v)));
+      at[a] = point(a, fraction(a, v));
+      pts.push_back(*at[a]);
     }
-    const std::string dash = r.series_local[si] ? "" : " stroke-dasharray=\"5,3\"";
-    if (pts.size() >= 2) {
+    const std::string stroke = std::string("stroke=\"") + colour + "\" stroke-width=\"" +
+                               (r.series_local[si] ? "3" : "1.5") + "\"" +
+                               (r.series_local[si] ? "" : " stroke-dasharray=\"5,3\"");
+    if (pts.size() == n && n >= 2) {
       s << "<polygon class=\"series\" points=\"";
       for (const auto& [x, y] : pts) s << num(x) << "," << num(y) << " ";
-      s << "\" fill=\"" << colour << "\" fill-opacity=\"0.12\" stroke=\"" << colour
-        << "\" stroke-width=\"" << (r.series_local[si] ? 3 : 1.5) << "\"" << dash << "/>\n";
+      s << "\" fill=\"" << colour << "\" fill-opacity=\"0.12\" " << stroke << "/>\n";
+    } else if (pts.size() >= 2) {
+      for (std::size_t a = 0; a < n; ++a) {
+        const std::size_t b = (a + 1) % n;
+        if (!at[a] || !at[b] || (n == 2 && b == 0)) continue;
+        s << "<line class=\"series-part\" x1=\"" << num(at[a]->first) << "\" y1=\""
+          << num(at[a]->second) << "\" x2=\"" << num(at[b]->first) << "\" y2=\""
+          << num(at[b]->second) << "\" " << stroke << "/>\n";
+      }
     }
     for (const auto& [x, y] : pts) {
       s << "<circle cx=\"" << num(x) << "\" cy=\"" << num(y) << "\" r=\""
@@ -126,11 +154,11 @@ std::string radar_svg(const Radar& r) {
   // Legend.
   double ly = 400;
   for (std::size_t si = 0; si < r.series.size(); ++si) {
-    const char* colour = kPalette[si % 12];
+    const char* colour = kPalette[r.colours[si] % 12];
     s << "<rect x=\"20\" y=\"" << num(ly - 10) << "\" width=\"14\" height=\"10\" fill=\"" << colour
       << "\"/><text class=\"legend\" x=\"40\" y=\"" << num(ly) << "\">"
-      << html_escape(r.series[si].size() > 68 ? r.series[si].substr(0, 66) + "…" : r.series[si])
-      << "<title>" << html_escape(r.series[si]) << "</title></text>\n";
+      << html_escape(legend_label(r.series[si])) << "<title>" << html_escape(r.series[si])
+      << "</title></text>\n";
     ly += 18;
   }
   if (!r.omitted.empty()) {

@@ -284,6 +284,47 @@ TEST_F(Report, ThroughputRadarUsesPeaksWhereFoundAndSaysWhichIsWhich) {
   EXPECT_NE(html.find("Intel Core i7-12700H · intra · 30 Hz (offered)<title>"), std::string::npos);
 }
 
+// A series keeps its colour on every plot of the page, and series left out of a radar are in the
+// table below it, as its legend says.
+TEST_F(Report, SeriesKeepTheirColourAndOmittedOnesAreInTheTable) {
+  write_two_machines(9.0, 9.5);
+  ReportOptions options;
+  options.max_radar_series = 1;
+  const std::string html = render_html(load_report_inputs({dir_}), options);
+  EXPECT_NE(html.find("+ 1 more platforms (in the table below)"), std::string::npos);
+  EXPECT_NE(html.find("(not plotted)</td>"), std::string::npos);
+  // The first series is drawn in the palette's first colour in the latency and the throughput
+  // radar alike; no radar draws another series in it.
+  const std::regex polygon("<circle cx=\"[^\"]*\" cy=\"[^\"]*\" r=\"5\" fill=\"(#[0-9a-f]{6})");
+  std::set<std::string> colours;
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), polygon);
+       it != std::sregex_iterator(); ++it) {
+    colours.insert((*it)[1]);
+  }
+  EXPECT_EQ(colours, std::set<std::string>{"#1f77b4"}) << "one series, one colour";
+}
+
+// A series without a value on an axis has a gap there: no line joins the axes either side of it.
+TEST_F(Report, AMissingValueIsAGapNotALineAcrossIt) {
+  int64_t t = 1'790'000'000'000'000'000;
+  for (const char* id : {"a1", "a2", "a3"}) {
+    for (const char* cpu : {"Full CPU", "Gappy CPU"}) {
+      if (std::string(cpu) == "Gappy CPU" && std::string(id) == "a3") continue;
+      testing::SampleRun run;
+      run.id = id;
+      run.name = std::string(id) + "_bench";
+      run.cpu = cpu;
+      run.start_unix_ns = (t += 60'000'000'000);
+      testing::write_sample(dir_, run);
+    }
+  }
+  const std::string html = render_html(load_report_inputs({dir_}), {});
+  // Per radar: the full series a polygon, the gappy one a single line from a1 to a2.
+  const std::size_t polygons = count(html, "<polygon class=\"series\"");
+  EXPECT_GE(polygons, 2u);
+  EXPECT_EQ(count(html, "<line class=\"series-part\""), polygons) << html;
+}
+
 // Runs that differ in rate, process layout, black/grey or arrivals are separate series, never
 // pooled into one median.
 TEST_F(Report, RunsOfDifferentConfigurationsAreSeparateSeries) {
