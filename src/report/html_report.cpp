@@ -112,6 +112,10 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
         << html_escape(b.name) << "</h3>\n";
       if (!b.runs.rows.empty()) {
         s << table_html(b.runs);
+        if (!b.also_measured.rows.empty()) {
+          s << "<p class=\"note\">What the runs also measured:</p>\n"
+            << table_html(b.also_measured);
+        }
         if (!b.distribution.empty()) s << detail::distribution_svg(b.distribution, b.id);
       } else {
         s << "<p class=\"note\">No local runs of " << html_escape(b.id) << ".</p>\n";
@@ -191,6 +195,10 @@ std::string render_markdown(const ReportInput& input, const ReportOptions& optio
     for (const auto& b : m.benchmarks.at(category)) {
       s << "### " << b.id << " — " << b.name << "\n\n";
       if (!b.runs.rows.empty()) table(b.runs);
+      if (!b.also_measured.rows.empty()) {
+        s << "What the runs also measured:\n\n";
+        table(b.also_measured);
+      }
       if (!b.published.rows.empty()) {
         s << "Published RobotPerf results (" << b.published_rows
           << " rows; medians over the rows that pass the measurement rules):\n\n";

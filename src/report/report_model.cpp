@@ -236,6 +236,29 @@ Table runs_table_for(const std::vector<const StoredRun*>& runs) {
   return t;
 }
 
+// What else each run measured, as its terminal summary shows it; empty when no run has any of it.
+Table also_measured_table_for(const std::vector<const StoredRun*>& runs) {
+  Table t;
+  t.css_class = "also-measured";
+  t.header = {"run",          "functional check",  "CPU % (graph)",
+              "peak RSS MiB", "energy mJ/message", "control loop"};
+  t.numeric = {false, false, true, true, true, false};
+  bool any = false;
+  for (const StoredRun* r : runs) {
+    const bool energy = r->energy_j && r->matched > 0;
+    any = any || !r->functional.empty() || r->cpu_percent || energy || !r->control.empty();
+    t.rows.push_back(
+        {r->stem(), r->functional.empty() ? "not checked" : r->functional,
+         r->cpu_percent ? format_fixed(*r->cpu_percent, 1) : "-",
+         r->peak_rss_mib ? format_fixed(*r->peak_rss_mib, 1) : "-",
+         energy ? format_fixed(*r->energy_j * 1e3 / static_cast<double>(r->matched), 3) : "-",
+         r->control.empty() ? "-" : r->control});
+    t.row_warning.push_back(r->functional.starts_with("INVALID"));
+  }
+  if (!any) t.rows.clear();
+  return t;
+}
+
 void published_tables(const PublishedBenchmark& b, Table& summary, Table& flagged) {
   summary.css_class = "published";
   summary.header = {
@@ -714,6 +737,7 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
         if (r.benchmark_id == id) runs.push_back(&r);
       }
       section.runs = runs_table_for(runs);
+      section.also_measured = also_measured_table_for(runs);
       std::vector<const StoredRun*> recent(
           runs.end() -
               static_cast<std::ptrdiff_t>(std::min(runs.size(), options.max_distribution_runs)),

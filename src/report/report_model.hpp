@@ -42,7 +42,8 @@ struct Distribution {
 
 struct BenchmarkSection {
   std::string id, name, category;
-  Table runs;  // local runs
+  Table runs;           // local runs
+  Table also_measured;  // their functional check, resources, energy per message, control loops
   std::vector<Distribution> distribution;
   Table published;  // per published hardware: medians of unflagged rows
   Table flagged;    // published rows that break the measurement rules

@@ -46,6 +46,70 @@ std::vector<std::string> strings(const json& j) {
   return out;
 }
 
+std::string short_number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", v);
+  return text;
+}
+
+std::string count_text(const json& j, const char* key) {
+  const json& v = member(j, key);
+  return v.is_number_unsigned() ? std::to_string(v.get<uint64_t>()) : "?";
+}
+
+void read_also_measured(const json& j, StoredRun& run) {
+  const json& functional = member(j, "functional");
+  if (functional.is_object() && member(functional, "valid").is_boolean()) {
+    if (functional["valid"].get<bool>()) {
+      std::string metrics;
+      const json& m = member(functional, "metrics");
+      if (m.is_object()) {
+        for (const auto& [name, metric] : m.items()) {
+          const double v = number_or_nan(metric, "value");
+          if (!std::isfinite(v)) continue;
+          const std::string unit =
+              member(metric, "unit").is_string() ? metric["unit"].get<std::string>() : "";
+          metrics += (metrics.empty() ? "" : ", ") + name + " " + short_number(v) +
+                     (unit.empty() || unit == "fraction" ? "" : " " + unit);
+        }
+      }
+      run.functional = "VALID" + (metrics.empty() ? "" : ": " + metrics);
+    } else {
+      std::string why;
+      for (const auto& reason : strings(member(functional, "reasons")))
+        why += (why.empty() ? "" : "; ") + reason;
+      run.functional = "INVALID" + (why.empty() ? "" : ": " + why);
+    }
+  }
+  const json& processes = member(member(j, "resources"), "processes");
+  if (processes.is_array()) {
+    double cpu = 0, rss = 0;
+    bool any = false;
+    for (const auto& p : processes) {
+      const double c = number_or_nan(p, "cpu_percent");
+      const double r = number_or_nan(p, "peak_rss_bytes");
+      if (std::isfinite(c)) cpu += c;
+      if (std::isfinite(r)) rss += r;
+      any = any || std::isfinite(c);
+    }
+    if (any) {
+      run.cpu_percent = cpu;
+      run.peak_rss_mib = rss / (1024.0 * 1024.0);
+    }
+  }
+  const json& loops = member(j, "control_loops");
+  if (loops.is_array()) {
+    for (const auto& loop : loops) {
+      const double jitter = number_or_nan(member(loop, "period_jitter_us"), "p99");
+      run.control += (run.control.empty() ? "" : "; ") +
+                     (member(loop, "node").is_string() ? loop["node"].get<std::string>() : "loop") +
+                     ": period jitter p99 " + (std::isfinite(jitter) ? short_number(jitter) : "?") +
+                     " us, " + count_text(loop, "deadline_misses") + " deadline misses in " +
+                     count_text(loop, "cycles") + " cycles";
+    }
+  }
+}
+
 // A count of the results file: absent is 0; anything but a non-negative integer is a file that
 // cannot be trusted, named with the field.
 std::size_t count_of(const json& j, const char* key, const std::string& field) {
@@ -231,6 +295,7 @@ StoredRun load_run(const fs::path& path) {
   const json& validity = member(j, "validity");
   run.valid = member(validity, "valid").is_boolean() && validity["valid"].get<bool>();
   run.invalid_reasons = strings(member(validity, "reasons"));
+  read_also_measured(j, run);
   run.warnings = strings(member(j, "warnings"));
   if (run.warnings.empty()) run.warnings = strings(member(member(j, "run_rules"), "warnings"));
   // Figures no measurement can produce make the run invalid, as they make a published row flagged

@@ -325,6 +325,28 @@ TEST_F(Report, AMissingValueIsAGapNotALineAcrossIt) {
   EXPECT_EQ(count(html, "<line class=\"series-part\""), polygons) << html;
 }
 
+// What the terminal summary shows beside the latency is on the page too: the functional check,
+// the graph's CPU and memory, energy per message and the control loops.
+TEST_F(Report, RunsShowWhatElseTheyMeasured) {
+  const auto path = testing::write_sample(dir_, {});
+  auto j = nlohmann::json::parse(read_text(path));
+  j["functional"] = {{"valid", true},
+                     {"metrics", {{"mae_px", {{"value", 0.0861}, {"unit", "px"}}}}}};
+  j["resources"]["processes"] = {{{"cpu_percent", 40.0}, {"peak_rss_bytes", 100 << 20}},
+                                 {{"cpu_percent", 2.5}, {"peak_rss_bytes", 20 << 20}}};
+  j["control_loops"] = {{{"node", "controller_manager"},
+                         {"cycles", 60000},
+                         {"deadline_misses", 0},
+                         {"period_jitter_us", {{"p99", 12.34}}}}};
+  std::ofstream(path) << j.dump();
+  const std::string md = render_markdown(load_report_inputs({dir_}), {});
+  EXPECT_NE(md.find("| VALID: mae_px 0.0861 px | 42.5 | 120.0 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("controller_manager: period jitter p99 12.3 us, 0 deadline misses in 60000 "
+                    "cycles"),
+            std::string::npos)
+      << md;
+}
+
 // Runs that differ in rate, process layout, black/grey or arrivals are separate series, never
 // pooled into one median.
 TEST_F(Report, RunsOfDifferentConfigurationsAreSeparateSeries) {

@@ -56,6 +56,14 @@ struct StoredRun {
   bool valid = false;
   std::vector<std::string> invalid_reasons;
   std::vector<std::string> warnings;  // run-rule warnings recorded by the run, if any
+  // What else the run measured, as its summary shows it (empty / nullopt where it did not):
+  // the functional check ("VALID: bad1 0.00267, ..." or "INVALID: why"), the graph processes'
+  // CPU (% of one core, summed) and peak resident memory (MiB, summed), and the control loops
+  // ("c3_controller_manager: period jitter p99 12.3 us, 0 deadline misses in 60000 cycles").
+  std::string functional;
+  std::optional<double> cpu_percent;
+  std::optional<double> peak_rss_mib;
+  std::string control;
   std::optional<LogHistogram> histogram;
   std::optional<std::filesystem::path> csv_path;  // <stem>.latencies.csv beside the JSON
 
