@@ -2,8 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
+#include <map>
+#include <optional>
 #include <set>
+#include <sstream>
 
 #include "robotperf/build_info.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
@@ -310,11 +314,70 @@ struct Side {
   std::vector<std::pair<const PublishedBenchmark*, const PublishedResult*>> rows;
 };
 
+// A selector of fields, "rmw=fastdds,processes=per-node,rate=30": each field a run must have.
+// Published rows have only a hardware and a type (mode); a selector naming another field
+// selects no published row.
+struct FieldSelector {
+  std::map<std::string, std::string> fields;  // lower-case values
+
+  static std::optional<FieldSelector> parse(const std::string& selector) {
+    if (selector.find('=') == std::string::npos) return std::nullopt;
+    FieldSelector f;
+    std::stringstream parts(selector);
+    std::string part;
+    while (std::getline(parts, part, ',')) {
+      const auto eq = part.find('=');
+      const std::string key = lower(part.substr(0, eq));
+      if (eq == std::string::npos || !kKeys.contains(key)) {
+        throw ReportError("--compare '" + selector + "': '" + part +
+                          "' is not a field=value (fields: hardware, rmw, processes, mode, "
+                          "arrivals, rate)");
+      }
+      f.fields[key] = lower(part.substr(eq + 1));
+    }
+    return f;
+  }
+  bool matches(const StoredRun& r) const {
+    for (const auto& [key, want] : fields) {
+      if (key == "rate") {
+        char* end = nullptr;
+        const double hz = std::strtod(want.c_str(), &end);
+        if (*end != '\0' || !(std::fabs(r.rate_hz - hz) <= 1e-6 * std::max(1.0, hz))) return false;
+        continue;
+      }
+      const std::string have = key == "hardware"    ? r.hardware
+                               : key == "rmw"       ? r.rmw
+                               : key == "processes" ? r.processes
+                               : key == "mode"      ? r.type
+                                                    : (r.timeline.empty() ? "fixed" : r.timeline);
+      if (lower(have) != want) return false;
+    }
+    return true;
+  }
+  bool matches(const PublishedResult& row) const {
+    for (const auto& [key, want] : fields) {
+      if (key == "hardware" ? lower(row.hardware) != want
+                            : key != "mode" || lower(row.type) != want) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  static inline const std::set<std::string> kKeys = {"hardware", "rmw",      "processes",
+                                                     "mode",     "arrivals", "rate"};
+};
+
 Side select(const std::string& selector, const ReportInput& in) {
   Side side;
   side.label = selector;
   const std::string want = lower(selector);
+  const std::optional<FieldSelector> by_fields = FieldSelector::parse(selector);
   for (const auto& r : in.runs) {
+    if (by_fields) {
+      if (by_fields->matches(r)) side.runs.push_back(&r);
+      continue;
+    }
     const bool by_file = r.path.string() == selector || r.path.filename().string() == selector ||
                          r.stem().starts_with(selector);
     const bool by_name = lower(r.hardware) == want || lower(detail::local_series(r)) == want;
@@ -323,8 +386,10 @@ Side select(const std::string& selector, const ReportInput& in) {
   for (const auto& b : in.published) {
     for (const auto& row : b.results) {
       if (!row.flags.empty()) continue;
-      if (lower(row.hardware) == want || lower(detail::published_series(row.hardware)) == want)
-        side.rows.emplace_back(&b, &row);
+      const bool selected = by_fields ? by_fields->matches(row)
+                                      : lower(row.hardware) == want ||
+                                            lower(detail::published_series(row.hardware)) == want;
+      if (selected) side.rows.emplace_back(&b, &row);
     }
   }
   if (side.runs.empty() && side.rows.empty()) {
@@ -400,6 +465,25 @@ detail::Comparison compare(const std::string& a_sel, const std::string& b_sel,
   std::set<std::string> ids;
   for (const auto* r : a.runs) ids.insert(r->benchmark_id);
   for (const auto& [bench, row] : a.rows) ids.insert(bench->id);
+  // A side is one configuration per benchmark: a median over intra and fastdds runs, or 30 and
+  // 60 Hz, describes neither.
+  for (const auto& [side, selector] : {std::pair{&a, a_sel}, std::pair{&b, b_sel}}) {
+    for (const auto& id : ids) {
+      std::set<std::string> configurations;
+      for (const StoredRun* r : side->runs) {
+        if (r->benchmark_id == id && r->valid) configurations.insert(detail::local_series(*r));
+      }
+      if (configurations.size() > 1) {
+        std::string list;
+        for (const auto& s : configurations) list += (list.empty() ? "" : "; ") + s;
+        throw ReportError("--compare '" + selector + "' selects " +
+                          std::to_string(configurations.size()) + " configurations of " + id +
+                          " (" + list +
+                          "): name one series, or narrow it with fields, e.g. --compare "
+                          "'hardware=...,rmw=fastdds,processes=single,rate=30'");
+      }
+    }
+  }
   for (const auto& id : ids) {
     for (const auto& m : kCompareMetrics) {
       std::vector<const StoredRun*> runs_a, runs_b;

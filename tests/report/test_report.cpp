@@ -347,6 +347,41 @@ TEST_F(Report, RunsShowWhatElseTheyMeasured) {
       << md;
 }
 
+// A comparison compares one configuration with one: sides are chosen by fields, and a side that
+// would pool two configurations of a benchmark is refused, naming them.
+TEST_F(Report, CompareSelectsByFieldsAndRefusesToPoolConfigurations) {
+  for (const char* rmw : {"intra", "fastdds"}) {
+    for (int i = 0; i < 2; ++i) {
+      testing::SampleRun run;
+      run.rmw = rmw;
+      run.base_latency_ms = std::string(rmw) == "intra" ? 5.0 : 9.0;
+      run.start_unix_ns +=
+          (std::string(rmw) == "intra" ? 0 : 10) * 1'000'000'000LL + i * 1'000'000'000LL;
+      testing::write_sample(dir_, run);
+    }
+  }
+  const auto input = load_report_inputs({dir_});
+  ReportOptions options;
+  options.compare = std::pair{"rmw=intra", "hardware=AMD Ryzen 7 5800X,rmw=fastdds,rate=30"};
+  const std::string md = render_markdown(input, options);
+  EXPECT_NE(md.find("A = rmw=intra: 2 local runs"), std::string::npos) << md;
+  EXPECT_NE(md.find("B = hardware=AMD Ryzen 7 5800X,rmw=fastdds,rate=30: 2 local runs"),
+            std::string::npos)
+      << md;
+  options.compare = std::pair{"AMD Ryzen 7 5800X", "rmw=fastdds"};
+  try {
+    render_markdown(input, options);
+    ADD_FAILURE() << "a side of intra and fastdds runs was compared";
+  } catch (const ReportError& e) {
+    EXPECT_NE(std::string(e.what()).find("selects 2 configurations of a1 (AMD Ryzen 7 5800X · "
+                                         "fastdds · 30 Hz; AMD Ryzen 7 5800X · intra · 30 Hz)"),
+              std::string::npos)
+        << e.what();
+  }
+  options.compare = std::pair{"rmw=intra", "colour=blue"};
+  EXPECT_THROW(render_markdown(input, options), ReportError);
+}
+
 // Runs that differ in rate, process layout, black/grey or arrivals are separate series, never
 // pooled into one median.
 TEST_F(Report, RunsOfDifferentConfigurationsAreSeparateSeries) {
