@@ -23,6 +23,7 @@ tr.warn td { background: #fff1e6; }
 div.warnings { background: #fff6e0; border-left: 5px solid #e69500; padding: 8px 16px; }
 div.warnings li { margin: 3px 0; }
 div.warnings ul.invalid li { color: #a00000; font-weight: bold; }
+span.difference { color: #a05000; }
 div.warnings details p { margin: 6px 0 0 0; }
 div.radars { display: flex; flex-wrap: wrap; gap: 12px; }
 figure { margin: 0; } figcaption { font-size: 12px; color: #555; max-width: 480px; }
@@ -96,7 +97,11 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
         s << "<figcaption>Each axis is one benchmark with its own scale (written at its end; "
              "logarithmic when the values span more than 20x); one polygon per platform (solid: "
              "local runs, median of valid runs; dashed: published "
-             "RobotPerf rows, median of the rows that pass the measurement rules).</figcaption>\n";
+             "RobotPerf rows, median of the rows that pass the measurement rules).";
+        for (const auto& note : radar.notes) {
+          s << "<br><span class=\"difference\">Not alike: " << html_escape(note) << "</span>";
+        }
+        s << "</figcaption>\n";
       }
       s << "</figure>\n";
     }
@@ -190,6 +195,7 @@ std::string render_markdown(const ReportInput& input, const ReportOptions& optio
       s << "**" << radar.metric << " (" << radar.unit << "), "
         << (radar.smaller_is_better ? "smaller" : "larger")
         << " is better** — the values of the radar plot\n\n";
+      for (const auto& note : radar.notes) s << "Not alike: " << markdown_cell(note) << "\n\n";
       table(radar.data);
     }
     for (const auto& b : m.benchmarks.at(category)) {

@@ -1,6 +1,7 @@
 #include "report_model.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -37,6 +38,7 @@ struct Observation {
   bool local = false;
   double value = kNoValue;
   const StoredRun* run = nullptr;
+  std::string type;  // black | grey: how it was measured
 };
 
 struct MetricInfo {
@@ -61,26 +63,65 @@ std::vector<Observation> observations(const ReportInput& in) {
   for (const auto& r : in.runs) {
     if (!r.valid) continue;  // invalid runs are shown in the tables, never plotted
     const std::string series = detail::local_series(r);
-    out.push_back({r.benchmark_id, r.category, series, "latency", true, r.latency.max, &r});
+    out.push_back({r.benchmark_id, r.category, series, "latency", true, r.latency.max, &r, r.type});
     const bool peak = r.throughput_kind == "peak";
     if (peak) {
       out.push_back({r.benchmark_id, r.category, detail::configuration_series(r) + " (peak)",
-                     "throughput", true, r.throughput_hz, &r});
+                     "throughput", true, r.throughput_hz, &r, r.type});
     } else if (!with_peak.contains({r.benchmark_id, detail::configuration_series(r)})) {
       out.push_back({r.benchmark_id, r.category, series + " (offered)", "throughput", true,
-                     r.throughput_hz, &r});
+                     r.throughput_hz, &r, r.type});
     }
     if (r.power_w)
-      out.push_back({r.benchmark_id, r.category, series, "power", true, *r.power_w, &r});
+      out.push_back({r.benchmark_id, r.category, series, "power", true, *r.power_w, &r, r.type});
   }
   for (const auto& b : in.published) {
     for (const auto& row : b.results) {
       if (!row.flags.empty() || !std::isfinite(row.value)) continue;
       out.push_back({b.id, b.category, detail::published_series(row.hardware), row.metric, false,
-                     row.value, nullptr});
+                     row.value, nullptr, row.type});
     }
   }
   return out;
+}
+
+// Where local runs and published rows share an axis but not a measurement, said next to the plot:
+// another type (black- or grey-box), or medians so far apart (20x) that they cannot both measure
+// the same thing (a control benchmark's latency that includes its loop's period).
+std::vector<std::string> differences_on_axes(const std::string& category, const char* metric,
+                                             const char* unit,
+                                             const std::vector<Observation>& obs) {
+  std::map<std::string, std::array<std::vector<double>, 2>> values;  // id -> [published, local]
+  std::map<std::string, std::array<std::set<std::string>, 2>> types;
+  for (const auto& o : obs) {
+    if (o.category != category || o.metric != metric) continue;
+    values[o.benchmark_id][o.local].push_back(o.value);
+    if (!o.type.empty()) types[o.benchmark_id][o.local].insert(o.type);
+  }
+  auto listed = [](const std::set<std::string>& s) {
+    std::string out;
+    for (const auto& t : s) out += (out.empty() ? "" : "/") + t;
+    return out;
+  };
+  std::vector<std::string> notes;
+  for (const auto& [id, v] : values) {
+    if (v[0].empty() || v[1].empty()) continue;
+    const auto& [published_types, local_types] = types[id];
+    if (!published_types.empty() && !local_types.empty() && published_types != local_types) {
+      notes.push_back(id + ": the published rows are " + listed(published_types) +
+                      "-box measurements, the local runs " + listed(local_types) + "-box");
+    }
+    const double published = median(v[0]), local = median(v[1]);
+    if (published > 0 && local > 0 && (local / published > 20 || published / local > 20)) {
+      notes.push_back(id + ": local runs (median " + detail::format_value(local) + " " + unit +
+                      ") and published rows (median " + detail::format_value(published) + " " +
+                      unit + ") differ " +
+                      detail::format_value(std::max(local / published, published / local)) +
+                      "x: they are unlikely to measure the same thing (check what each includes, "
+                      "e.g. a control loop's period)");
+    }
+  }
+  return notes;
 }
 
 std::vector<detail::Radar> radars_for(const std::string& category,
@@ -107,6 +148,7 @@ std::vector<detail::Radar> radars_for(const std::string& category,
       continue;
     }
     radar.axes.assign(axes.begin(), axes.end());
+    radar.notes = differences_on_axes(category, m.metric, m.unit, obs);
     // Local series first, then the published ones that cover the most benchmarks.
     std::vector<std::string> names;
     for (const auto& [name, values] : by_series) names.push_back(name);

@@ -28,7 +28,9 @@ struct Radar {
   std::vector<std::size_t> colours;  // per series: its index in kPalette, one per series page-wide
   std::vector<std::vector<double>> values;  // [series][axis], NaN where there is no value
   std::vector<std::string> omitted;         // series left out to keep the plot readable
-  Table data;                               // the same numbers as a table
+  // Where local and published values on an axis are not the same measurement: said beside it.
+  std::vector<std::string> notes;
+  Table data;  // the same numbers as a table
 };
 
 // One latency distribution curve.

@@ -382,6 +382,21 @@ TEST_F(Report, CompareSelectsByFieldsAndRefusesToPoolConfigurations) {
   EXPECT_THROW(render_markdown(input, options), ReportError);
 }
 
+// Local runs and published rows on one axis that cannot be the same measurement are said to be
+// so beside the plot: another type, or medians orders of magnitude apart.
+TEST_F(Report, UnalikeLocalAndPublishedValuesAreNamedBesideThePlot) {
+  testing::SampleRun fast;
+  fast.base_latency_ms = 0.01;
+  testing::write_sample(dir_, fast);
+  const std::string md = render_markdown(load_report_inputs({dir_, kPublishedA1}), {});
+  EXPECT_NE(md.find("Not alike: a1: the published rows are black/grey-box measurements, the "
+                    "local runs black-box"),
+            std::string::npos)
+      << md.substr(0, 3000);
+  EXPECT_NE(md.find("Not alike: a1: local runs (median "), std::string::npos);
+  EXPECT_NE(md.find("they are unlikely to measure the same thing"), std::string::npos);
+}
+
 // Runs that differ in rate, process layout, black/grey or arrivals are separate series, never
 // pooled into one median.
 TEST_F(Report, RunsOfDifferentConfigurationsAreSeparateSeries) {
