@@ -94,10 +94,15 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
           << ".</p>\n";
       } else {
         s << detail::radar_svg(radar);
-        s << "<figcaption>Each axis is one benchmark with its own scale (written at its end; "
-             "logarithmic when the values span more than 20x); one polygon per platform (solid: "
-             "local runs, median of valid runs; dashed: published "
-             "RobotPerf rows, median of the rows that pass the measurement rules).";
+        s << (radar.axes.size() < 3
+                  ? "<figcaption>One group of bars per benchmark, each on its own scale from 0 "
+                    "(fewer than three benchmarks make no radar); one bar per series (solid: "
+                    "local runs, median of valid runs; pale and dashed: published RobotPerf rows, "
+                    "median of the rows that pass the measurement rules)."
+                  : "<figcaption>Each axis is one benchmark with its own scale (written at its "
+                    "end; logarithmic when the values span more than 20x); one polygon per series "
+                    "(solid: local runs, median of valid runs; dashed: published RobotPerf rows, "
+                    "median of the rows that pass the measurement rules).");
         for (const auto& note : radar.notes) {
           s << "<br><span class=\"difference\">Not alike: " << html_escape(note) << "</span>";
         }
@@ -109,7 +114,7 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
     for (const auto& radar : m.radars.at(category)) {
       if (radar.axes.empty()) continue;
       s << "<details><summary>" << html_escape(radar.metric)
-        << " values behind the radar plot</summary>\n"
+        << " values behind the plot</summary>\n"
         << table_html(radar.data) << "</details>\n";
     }
     for (const auto& b : m.benchmarks.at(category)) {

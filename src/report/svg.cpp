@@ -44,9 +44,82 @@ std::string legend_label(const std::string& name) {
 
 }  // namespace
 
+// The legend of a radar or bar chart, from `top`: one entry per series, then the omitted count.
+void legend(std::ostringstream& s, const Radar& r, double top) {
+  double ly = top;
+  for (std::size_t si = 0; si < r.series.size(); ++si) {
+    const char* colour = kPalette[r.colours[si] % 12];
+    s << "<rect x=\"20\" y=\"" << num(ly - 10) << "\" width=\"14\" height=\"10\" fill=\"" << colour
+      << "\"/><text class=\"legend\" x=\"40\" y=\"" << num(ly) << "\">"
+      << html_escape(legend_label(r.series[si])) << "<title>" << html_escape(r.series[si])
+      << "</title></text>\n";
+    ly += 18;
+  }
+  if (!r.omitted.empty()) {
+    s << "<text class=\"legend\" x=\"20\" y=\"" << num(ly) << "\">+ " << r.omitted.size()
+      << " more platforms (in the table below)</text>\n";
+  }
+}
+
+// Fewer than three benchmarks make no polygon: one group of bars per benchmark, one bar per
+// series, each group on its own linear scale from 0, the value written at the bar's end.
+std::string bars_svg(const Radar& r) {
+  constexpr double kWidth = 480, kLeft = 20, kBarsLeft = 20, kBarsWidth = 330, kBar = 14;
+  const std::size_t n = r.axes.size();
+  std::size_t drawn = 0;
+  double height = 40;
+  for (std::size_t a = 0; a < n; ++a) {
+    height += 24;
+    for (const auto& row : r.values) height += std::isfinite(row[a]) ? kBar + 4 : 0;
+  }
+  const double legend_top = height + 20;
+  const double total =
+      legend_top + 18.0 * static_cast<double>(r.series.size() + (r.omitted.empty() ? 0 : 1));
+  std::ostringstream s;
+  s << "<svg class=\"bars\" data-category=\"" << html_escape(r.category) << "\" data-metric=\""
+    << r.metric << "\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kWidth << "\" height=\""
+    << num(total) << "\" viewBox=\"0 0 " << kWidth << " " << num(total) << "\" role=\"img\">\n";
+  s << "<title>" << html_escape(r.category + ": " + r.metric + " (" + r.unit + ")") << "</title>\n";
+  s << "<text x=\"" << kWidth / 2 << "\" y=\"22\" text-anchor=\"middle\" class=\"plot-title\">"
+    << html_escape(r.metric + " (" + r.unit + ") — " +
+                   (r.smaller_is_better ? "smaller is better" : "larger is better"))
+    << "</text>\n";
+  double y = 40;
+  for (std::size_t a = 0; a < n; ++a) {
+    double axis_max = 0;
+    for (const auto& row : r.values) {
+      if (std::isfinite(row[a])) axis_max = std::max(axis_max, row[a]);
+    }
+    y += 16;
+    s << "<text class=\"axis-label\" x=\"" << kLeft << "\" y=\"" << num(y) << "\">"
+      << html_escape(r.axes[a]) << " (" << r.unit << ")</text>\n";
+    y += 8;
+    for (std::size_t si = 0; si < r.series.size(); ++si) {
+      const double v = r.values[si][a];
+      if (!std::isfinite(v)) continue;
+      const char* colour = kPalette[r.colours[si] % 12];
+      const double w = axis_max > 0 && v > 0 ? kBarsWidth * v / axis_max : 0;
+      s << "<rect class=\"bar\" x=\"" << kBarsLeft << "\" y=\"" << num(y) << "\" width=\""
+        << num(std::max(w, 1.0)) << "\" height=\"" << kBar << "\" fill=\"" << colour
+        << "\" fill-opacity=\"" << (r.series_local[si] ? "0.85" : "0.35") << "\" stroke=\""
+        << colour << "\"" << (r.series_local[si] ? "" : " stroke-dasharray=\"5,3\"") << "><title>"
+        << html_escape(r.series[si]) << ": " << format_value(v) << " " << r.unit
+        << "</title></rect>\n";
+      s << "<text class=\"tick\" x=\"" << num(kBarsLeft + w + 6) << "\" y=\"" << num(y + kBar - 3)
+        << "\">" << format_value(v) << "</text>\n";
+      y += kBar + 4;
+      ++drawn;
+    }
+  }
+  legend(s, r, legend_top);
+  s << "</svg>\n";
+  return drawn > 0 ? s.str() : std::string();
+}
+
 std::string radar_svg(const Radar& r) {
   constexpr double kSize = 480, kCx = 240, kCy = 200, kRadius = 120;
   const std::size_t n = r.axes.size();
+  if (n < 3) return bars_svg(r);
   const double legend_height =
       18.0 * static_cast<double>(r.series.size() + (r.omitted.empty() ? 0 : 1)) + 10;
   std::ostringstream s;
@@ -115,8 +188,10 @@ std::string radar_svg(const Radar& r) {
       << anchor << "\">" << html_escape(r.axes[a]) << " (" << r.unit << ")</text>\n";
     s << "<text class=\"axis-scale\" x=\"" << num(lx) << "\" y=\"" << num(ly + 13)
       << "\" text-anchor=\"" << anchor << "\">"
-      << (logarithmic ? format_value(axis_min[a]) + "–" : std::string("max "))
-      << format_value(axis_max[a]) << (logarithmic ? " (log)" : "") << "</text>\n";
+      << (logarithmic && axis_max[a] > axis_min[a]
+              ? format_value(axis_min[a]) + "–" + format_value(axis_max[a]) + " (log)"
+              : "max " + format_value(axis_max[a]))
+      << "</text>\n";
   }
   // One polygon per series; a series without a value on some axis is a gap there: lines join only
   // neighbouring axes that both have one, so no line crosses an axis it has no value on.
@@ -151,20 +226,7 @@ std::string radar_svg(const Radar& r) {
         << (r.series_local[si] ? 5 : 3.5) << "\" fill=\"" << colour << "\"/>\n";
     }
   }
-  // Legend.
-  double ly = 400;
-  for (std::size_t si = 0; si < r.series.size(); ++si) {
-    const char* colour = kPalette[r.colours[si] % 12];
-    s << "<rect x=\"20\" y=\"" << num(ly - 10) << "\" width=\"14\" height=\"10\" fill=\"" << colour
-      << "\"/><text class=\"legend\" x=\"40\" y=\"" << num(ly) << "\">"
-      << html_escape(legend_label(r.series[si])) << "<title>" << html_escape(r.series[si])
-      << "</title></text>\n";
-    ly += 18;
-  }
-  if (!r.omitted.empty()) {
-    s << "<text class=\"legend\" x=\"20\" y=\"" << num(ly) << "\">+ " << r.omitted.size()
-      << " more platforms (in the table below)</text>\n";
-  }
+  legend(s, r, 400);
   s << "</svg>\n";
   return s.str();
 }
@@ -204,6 +266,9 @@ std::string distribution_svg(const std::vector<Distribution>& curves, const std:
   }
   s << "<text class=\"tick\" x=\"" << num(kLeft + plot_width / 2) << "\" y=\"" << num(py(0) + 36)
     << "\" text-anchor=\"middle\">latency (ms)</text>\n";
+  s << "<text class=\"tick\" x=\"14\" y=\"" << num(kTop + kPlotHeight / 2)
+    << "\" text-anchor=\"middle\" transform=\"rotate(-90 14 " << num(kTop + kPlotHeight / 2)
+    << ")\">fraction of messages</text>\n";
   s << "<rect x=\"" << kLeft << "\" y=\"" << kTop << "\" width=\"" << num(plot_width)
     << "\" height=\"" << kPlotHeight << "\" fill=\"none\" stroke=\"#666\"/>\n";
   // INVALID runs: grey and dashed, never a colour a valid run could be read as.

@@ -128,7 +128,8 @@ TEST_F(Report, HtmlHasRadarsTablesDistributionsAndComparison) {
   ReportOptions options;
   options.compare = std::pair{"AMD Ryzen 7 5800X", "Intel Core i7-12700H"};
   const std::string html = render_html(input, options);
-  EXPECT_EQ(count(html, "<svg class=\"radar\""), 3u);  // latency, throughput, power
+  // One benchmark (a1) is no polygon: bars, for latency, throughput and power.
+  EXPECT_EQ(count(html, "<svg class=\"bars\""), 3u);
   for (const char* metric : {"latency", "throughput", "power"})
     EXPECT_NE(html.find("data-metric=\"" + std::string(metric) + "\""), std::string::npos);
   EXPECT_NE(html.find("a1 (ms)"), std::string::npos);  // axes labelled with id and unit
@@ -295,7 +296,7 @@ TEST_F(Report, SeriesKeepTheirColourAndOmittedOnesAreInTheTable) {
   EXPECT_NE(html.find("(not plotted)</td>"), std::string::npos);
   // The first series is drawn in the palette's first colour in the latency and the throughput
   // radar alike; no radar draws another series in it.
-  const std::regex polygon("<circle cx=\"[^\"]*\" cy=\"[^\"]*\" r=\"5\" fill=\"(#[0-9a-f]{6})");
+  const std::regex polygon("<rect class=\"bar\" [^>]* fill=\"(#[0-9a-f]{6})\" fill-opacity=\"0.85\"");
   std::set<std::string> colours;
   for (auto it = std::sregex_iterator(html.begin(), html.end(), polygon);
        it != std::sregex_iterator(); ++it) {
