@@ -102,6 +102,15 @@ std::string format_value(double value);  // 4 significant digits, "-" for NaN
 
 // SVG renderers.
 std::string radar_svg(const Radar& radar);
+
+// A text on a plot: its baseline's left end, and its colour.
+struct Label {
+  double x = 0, y = 0;
+  std::string text;
+  const char* colour = "#444";
+};
+// Moves labels down, in order, until no two of them overlap (each keeps its x).
+void place_labels(std::vector<Label>& labels);
 std::string distribution_svg(const std::vector<Distribution>& curves, const std::string& id);
 extern const char* const kPalette[12];
 

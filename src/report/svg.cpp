@@ -42,8 +42,6 @@ std::string legend_label(const std::string& name) {
   return name.substr(0, head) + "…" + name.substr(tail);
 }
 
-}  // namespace
-
 // The legend of a radar or bar chart, from `top`: one entry per series, then the omitted count.
 void legend(std::ostringstream& s, const Radar& r, double top) {
   double ly = top;
@@ -114,6 +112,30 @@ std::string bars_svg(const Radar& r) {
   legend(s, r, legend_top);
   s << "</svg>\n";
   return drawn > 0 ? s.str() : std::string();
+}
+
+}  // namespace
+
+void place_labels(std::vector<Label>& labels) {
+  // 11 px text: about 6.5 px per character, 12 px from one baseline to the next line's.
+  constexpr double kCharWidth = 6.5, kLineHeight = 12;
+  auto overlap = [&](const Label& a, const Label& b) {
+    const double aw = kCharWidth * static_cast<double>(a.text.size());
+    const double bw = kCharWidth * static_cast<double>(b.text.size());
+    return a.x < b.x + bw && b.x < a.x + aw && a.y - kLineHeight < b.y && b.y - kLineHeight < a.y;
+  };
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    // Lower, one line at a time, until clear of every label placed before it.
+    for (bool moved = true; moved;) {
+      moved = false;
+      for (std::size_t j = 0; j < i; ++j) {
+        if (overlap(labels[i], labels[j])) {
+          labels[i].y = labels[j].y + kLineHeight + 1;
+          moved = true;
+        }
+      }
+    }
+  }
 }
 
 std::string radar_svg(const Radar& r) {
@@ -271,6 +293,7 @@ std::string distribution_svg(const std::vector<Distribution>& curves, const std:
     << ")\">fraction of messages</text>\n";
   s << "<rect x=\"" << kLeft << "\" y=\"" << kTop << "\" width=\"" << num(plot_width)
     << "\" height=\"" << kPlotHeight << "\" fill=\"none\" stroke=\"#666\"/>\n";
+  std::vector<Label> labels;  // the p50 and p99 markers' values, placed once all are known
   // INVALID runs: grey and dashed, never a colour a valid run could be read as.
   auto colour_of = [&](std::size_t i) { return curves[i].valid ? kPalette[i % 12] : "#999999"; };
   for (std::size_t i = 0; i < curves.size(); ++i) {
@@ -298,10 +321,14 @@ std::string distribution_svg(const std::vector<Distribution>& curves, const std:
         << "\" stroke-dasharray=\"4,3\"/>\n";
       s << "<circle cx=\"" << num(px(v)) << "\" cy=\"" << num(py(q)) << "\" r=\"4\" fill=\""
         << colour << "\"/>\n";
-      s << "<text class=\"marker-label\" x=\"" << num(px(v) + 5) << "\" y=\""
-        << num(py(q) + (q > 0.9 ? 14 : -6) + 12.0 * static_cast<double>(i)) << "\" fill=\""
-        << colour << "\">" << (q == 0.5 ? "p50 " : "p99 ") << format_value(v) << "</text>\n";
+      labels.push_back({px(v) + 5, py(q) + (q > 0.9 ? 14 : -6),
+                        std::string(q == 0.5 ? "p50 " : "p99 ") + format_value(v), colour});
     }
+  }
+  place_labels(labels);
+  for (const auto& l : labels) {
+    s << "<text class=\"marker-label\" x=\"" << num(l.x) << "\" y=\"" << num(l.y) << "\" fill=\""
+      << l.colour << "\">" << html_escape(l.text) << "</text>\n";
   }
   double ly = kTop + kPlotHeight + 60;
   for (std::size_t i = 0; i < curves.size(); ++i) {

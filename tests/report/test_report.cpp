@@ -296,7 +296,8 @@ TEST_F(Report, SeriesKeepTheirColourAndOmittedOnesAreInTheTable) {
   EXPECT_NE(html.find("(not plotted)</td>"), std::string::npos);
   // The first series is drawn in the palette's first colour in the latency and the throughput
   // radar alike; no radar draws another series in it.
-  const std::regex polygon("<rect class=\"bar\" [^>]* fill=\"(#[0-9a-f]{6})\" fill-opacity=\"0.85\"");
+  const std::regex polygon(
+      "<rect class=\"bar\" [^>]* fill=\"(#[0-9a-f]{6})\" fill-opacity=\"0.85\"");
   std::set<std::string> colours;
   for (auto it = std::sregex_iterator(html.begin(), html.end(), polygon);
        it != std::sregex_iterator(); ++it) {
@@ -396,6 +397,36 @@ TEST_F(Report, UnalikeLocalAndPublishedValuesAreNamedBesideThePlot) {
       << md.substr(0, 3000);
   EXPECT_NE(md.find("Not alike: a1: local runs (median "), std::string::npos);
   EXPECT_NE(md.find("they are unlikely to measure the same thing"), std::string::npos);
+}
+
+// Four runs with the same percentiles mark them at the same spot: their labels still do not overlap
+// (11 px text, about 6.5 px per character and 12 px per line).
+TEST_F(Report, DistributionLabelsNeverOverlap) {
+  testing::SampleRun run;
+  for (int i = 0; i < 4; ++i) {
+    run.start_unix_ns += 1'000'000'000;
+    testing::write_sample(dir_, run);
+  }
+  const std::string html = render_html(load_report_inputs({dir_}), {});
+  const std::regex label(
+      "<text class=\"marker-label\" x=\"([0-9.]+)\" y=\"([0-9.]+)\"[^>]*>([^<]*)<");
+  struct Box {
+    double x, y, w;
+  };
+  std::vector<Box> boxes;
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), label);
+       it != std::sregex_iterator(); ++it) {
+    boxes.push_back({std::stod((*it)[1]), std::stod((*it)[2]), 6.5 * (*it)[3].length()});
+  }
+  ASSERT_EQ(boxes.size(), 8u);  // p50 and p99 of each run
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      const Box& a = boxes[i];
+      const Box& b = boxes[j];
+      const bool overlap = a.x < b.x + b.w && b.x < a.x + a.w && a.y - 12 < b.y && b.y - 12 < a.y;
+      EXPECT_FALSE(overlap) << "labels " << j << " and " << i << " overlap";
+    }
+  }
 }
 
 // Runs that differ in rate, process layout, black/grey or arrivals are separate series, never
