@@ -126,6 +126,10 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
           s << "<p class=\"note\">What the runs also measured:</p>\n"
             << table_html(b.also_measured);
         }
+        if (!b.hops.rows.empty()) {
+          s << "<p class=\"note\">Where the time goes (grey-box, per hop):</p>\n"
+            << table_html(b.hops);
+        }
         if (!b.distribution.empty()) s << detail::distribution_svg(b.distribution, b.id);
       } else {
         s << "<p class=\"note\">No local runs of " << html_escape(b.id) << ".</p>\n";
@@ -209,6 +213,10 @@ std::string render_markdown(const ReportInput& input, const ReportOptions& optio
       if (!b.also_measured.rows.empty()) {
         s << "What the runs also measured:\n\n";
         table(b.also_measured);
+      }
+      if (!b.hops.rows.empty()) {
+        s << "Where the time goes (grey-box, per hop):\n\n";
+        table(b.hops);
       }
       if (!b.published.rows.empty()) {
         s << "Published RobotPerf results (" << b.published_rows

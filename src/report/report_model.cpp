@@ -305,6 +305,24 @@ Table also_measured_table_for(const std::vector<const StoredRun*>& runs) {
   return t;
 }
 
+// The newest grey-box run's per-hop breakdown: where the time of a message goes.
+Table hops_table_for(const std::vector<const StoredRun*>& runs) {
+  Table t;
+  t.css_class = "hops";
+  for (auto it = runs.rbegin(); it != runs.rend(); ++it) {
+    if ((*it)->hops.empty()) continue;
+    t.header = {"hop (" + (*it)->stem() + ")", "kind", "mean ms", "p50 ms", "p99 ms"};
+    t.numeric = {false, false, true, true, true};
+    for (const auto& hop : (*it)->hops) {
+      t.rows.push_back({hop.label, hop.kind, format_fixed(hop.mean_ms, 3),
+                        format_fixed(hop.p50_ms, 3), format_fixed(hop.p99_ms, 3)});
+      t.row_warning.push_back(false);
+    }
+    break;
+  }
+  return t;
+}
+
 void published_tables(const PublishedBenchmark& b, Table& summary, Table& flagged) {
   summary.css_class = "published";
   summary.header = {
@@ -864,6 +882,7 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
       }
       section.runs = runs_table_for(runs);
       section.also_measured = also_measured_table_for(runs);
+      section.hops = hops_table_for(runs);
       std::vector<const StoredRun*> recent(
           runs.end() -
               static_cast<std::ptrdiff_t>(std::min(runs.size(), options.max_distribution_runs)),

@@ -46,6 +46,7 @@ struct BenchmarkSection {
   std::string id, name, category;
   Table runs;           // local runs
   Table also_measured;  // their functional check, resources, energy per message, control loops
+  Table hops;           // the newest grey-box run's per-hop breakdown
   std::vector<Distribution> distribution;
   Table published;  // per published hardware: medians of unflagged rows
   Table flagged;    // published rows that break the measurement rules

@@ -97,6 +97,16 @@ void read_also_measured(const json& j, StoredRun& run) {
       run.peak_rss_mib = rss / (1024.0 * 1024.0);
     }
   }
+  const json& hops = member(member(j, "grey"), "hops");
+  if (hops.is_array()) {
+    for (const auto& hop : hops) {
+      const json& d = member(hop, "duration_ms");
+      run.hops.push_back({member(hop, "label").is_string() ? hop["label"].get<std::string>() : "?",
+                          member(hop, "kind").is_string() ? hop["kind"].get<std::string>() : "",
+                          number_or_nan(d, "mean"), number_or_nan(d, "p50"),
+                          number_or_nan(d, "p99")});
+    }
+  }
   const json& loops = member(j, "control_loops");
   if (loops.is_array()) {
     for (const auto& loop : loops) {

@@ -328,7 +328,7 @@ TEST_F(Report, AMissingValueIsAGapNotALineAcrossIt) {
 }
 
 // What the terminal summary shows beside the latency is on the page too: the functional check,
-// the graph's CPU and memory, energy per message and the control loops.
+// the graph's CPU and memory, energy per message, the control loops and the grey-box hops.
 TEST_F(Report, RunsShowWhatElseTheyMeasured) {
   const auto path = testing::write_sample(dir_, {});
   auto j = nlohmann::json::parse(read_text(path));
@@ -340,9 +340,15 @@ TEST_F(Report, RunsShowWhatElseTheyMeasured) {
                          {"cycles", 60000},
                          {"deadline_misses", 0},
                          {"period_jitter_us", {{"p99", 12.34}}}}};
+  j["grey"]["hops"] = {{{"label", "rectify: image_proc/rectify"},
+                        {"kind", "kernel"},
+                        {"duration_ms", {{"mean", 2.25}, {"p50", 1.75}, {"p99", 5.5}}}}};
   std::ofstream(path) << j.dump();
   const std::string md = render_markdown(load_report_inputs({dir_}), {});
   EXPECT_NE(md.find("| VALID: mae_px 0.0861 px | 42.5 | 120.0 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| rectify: image_proc/rectify | kernel | 2.250 | 1.750 | 5.500 |"),
+            std::string::npos)
+      << md;
   EXPECT_NE(md.find("controller_manager: period jitter p99 12.3 us, 0 deadline misses in 60000 "
                     "cycles"),
             std::string::npos)

@@ -61,6 +61,12 @@ struct StoredRun {
   // CPU (% of one core, summed) and peak resident memory (MiB, summed), and the control loops
   // ("c3_controller_manager: period jitter p99 12.3 us, 0 deadline misses in 60000 cycles").
   std::string functional;
+  // Grey-box runs: the trace analysis' hops (transport and node), in the order it lists them.
+  struct Hop {
+    std::string label, kind;
+    double mean_ms = kNoValue, p50_ms = kNoValue, p99_ms = kNoValue;
+  };
+  std::vector<Hop> hops;
   std::optional<double> cpu_percent;
   std::optional<double> peak_rss_mib;
   std::string control;
