@@ -66,12 +66,6 @@ class ForeignNode {
   pid_t pid_ = -1;
 };
 
-int64_t now_ns() {
-  timespec t{};
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return int64_t{t.tv_sec} * 1'000'000'000 + t.tv_nsec;
-}
-
 void sleep_until(int64_t ns) {
   const timespec t{static_cast<time_t>(ns / 1'000'000'000), static_cast<long>(ns % 1'000'000'000)};
   while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &t, nullptr) == EINTR) {
@@ -119,7 +113,7 @@ std::vector<double> plain_round_trips(int domain, std::size_t count, std::size_t
 
   // As the harness, until the node delivers: one image per period until one comes back.
   const int64_t period = static_cast<int64_t>(1e9 / kRateHz);
-  for (int64_t deadline = now_ns();; deadline += period) {
+  for (int64_t deadline = rmw::steady_now_ns();; deadline += period) {
     sleep_until(deadline);
     image.header.stamp.sec = -1;
     dds_write(writer, &image);
@@ -130,11 +124,11 @@ std::vector<double> plain_round_trips(int domain, std::size_t count, std::size_t
   while (dds_take(reader, samples, &info, 1, 1) == 1) dds_return_loan(reader, samples, 1);
 
   std::vector<double> trips;
-  int64_t deadline = now_ns() + period;
+  int64_t deadline = rmw::steady_now_ns() + period;
   for (std::size_t k = 0; k < warmup + count; ++k, deadline += period) {
     sleep_until(deadline);
     image.header.stamp.sec = static_cast<int32_t>(k);
-    const int64_t sent = now_ns();
+    const int64_t sent = rmw::steady_now_ns();
     dds_write(writer, &image);
     bool back = false;
     while (!back && dds_waitset_wait(waitset, nullptr, 0, DDS_SECS(1)) > 0) {
@@ -143,7 +137,7 @@ std::vector<double> plain_round_trips(int domain, std::size_t count, std::size_t
         const auto* echo = static_cast<const sensor_msgs_msg_dds__Image_*>(samples[0]);
         if (info.valid_data && echo->header.stamp.sec == static_cast<int32_t>(k)) {
           back = true;
-          if (k >= warmup) trips.push_back(static_cast<double>(now_ns() - sent) / 1e3);
+          if (k >= warmup) trips.push_back(static_cast<double>(rmw::steady_now_ns() - sent) / 1e3);
         }
         dds_return_loan(reader, samples, 1);
         samples[0] = nullptr;

@@ -27,10 +27,8 @@ json endpoint_json(const rmw::PeerEndpoint& e) {
   return {{"topic", e.topic},
           {"type", msgs::ros_type_name(e.dds_type)},
           {"kind", e.writer ? "publisher" : "subscription"},
-          {"reliability",
-           e.qos.reliability == rmw::Reliability::kReliable ? "reliable" : "best_effort"},
-          {"durability",
-           e.qos.durability == rmw::Durability::kTransientLocal ? "transient_local" : "volatile"},
+          {"reliability", rmw::to_string(e.qos.reliability)},
+          {"durability", rmw::to_string(e.qos.durability)},
           {"type_hash", e.type_hash},
           {"gid", rmw::to_text(e.gid)}};
 }

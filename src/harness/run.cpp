@@ -132,13 +132,11 @@ std::string others_on_topic(const std::vector<rmw::PeerParticipant>& peers,
     for (const auto& e : peer.endpoints) {
       if (e.topic != ours.topic || e.writer == ours.is_publisher) continue;
       const std::string why = mismatch(e, ours, our_qos);
-      seen +=
-          std::string(seen.empty() ? "" : "; ") + owner_of(peer, e.gid) +
-          (e.writer ? " publishes it" : " subscribes it") + " as " +
-          msgs::ros_type_name(e.dds_type) + " (" +
-          (e.qos.reliability == rmw::Reliability::kReliable ? "reliable" : "best_effort") + ", " +
-          (e.qos.durability == rmw::Durability::kTransientLocal ? "transient_local" : "volatile") +
-          "): " + (why.empty() ? "compatible, not matched yet" : why);
+      seen += std::string(seen.empty() ? "" : "; ") + owner_of(peer, e.gid) +
+              (e.writer ? " publishes it" : " subscribes it") + " as " +
+              msgs::ros_type_name(e.dds_type) + " (" + rmw::to_string(e.qos.reliability) + ", " +
+              rmw::to_string(e.qos.durability) +
+              "): " + (why.empty() ? "compatible, not matched yet" : why);
     }
   }
   if (seen.empty()) {

@@ -5,7 +5,6 @@
 #include <cinttypes>
 #include <cstdio>
 #include <random>
-#include <sstream>
 
 namespace robotperf::harness {
 
@@ -46,25 +45,15 @@ std::string run_user_data(const std::string& token, const MessageIds* ids) {
 
 PeerRun parse_run_user_data(const std::string& user_data) {
   PeerRun run;
-  std::istringstream pairs(user_data);
-  std::string pair;
-  while (std::getline(pairs, pair, ';')) {
-    const auto eq = pair.find('=');
-    if (eq == std::string::npos) continue;
-    const std::string key = pair.substr(0, eq);
-    const std::string value = pair.substr(eq + 1);
-    if (key == "robotperf_run") {
-      run.token = value;
-    } else if (key == "robotperf_ids") {
-      long long base = 0, period = 0;
-      unsigned long long count = 0;
-      char end = 0;
-      // Another process's announcement: taken only when it is well formed.
-      if (std::sscanf(value.c_str(), "%lld,%lld,%llu%c", &base, &period, &count, &end) == 3 &&
-          period > 0) {
-        run.ids = MessageIds{base, period, static_cast<std::size_t>(count)};
-      }
-    }
+  run.token = rmw::user_data_value(user_data, "robotperf_run");
+  const std::string ids = rmw::user_data_value(user_data, "robotperf_ids");
+  long long base = 0, period = 0;
+  unsigned long long count = 0;
+  char end = 0;
+  // Another process's announcement: taken only when it is well formed.
+  if (std::sscanf(ids.c_str(), "%lld,%lld,%llu%c", &base, &period, &count, &end) == 3 &&
+      period > 0) {
+    run.ids = MessageIds{base, period, static_cast<std::size_t>(count)};
   }
   return run;
 }

@@ -252,15 +252,12 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
   software["transport"] = transport_json(r.rmw, r.domain_id, r.processes);
   json qos = json::array();
   for (const auto& e : r.qos) {
-    qos.push_back(
-        {{"owner", e.owner},
-         {"topic", e.topic},
-         {"history", e.qos.history == rmw::History::kKeepLast ? "keep_last" : "keep_all"},
-         {"depth", e.qos.depth},
-         {"reliability",
-          e.qos.reliability == rmw::Reliability::kReliable ? "reliable" : "best_effort"},
-         {"durability",
-          e.qos.durability == rmw::Durability::kTransientLocal ? "transient_local" : "volatile"}});
+    qos.push_back({{"owner", e.owner},
+                   {"topic", e.topic},
+                   {"history", e.qos.history == rmw::History::kKeepLast ? "keep_last" : "keep_all"},
+                   {"depth", e.qos.depth},
+                   {"reliability", rmw::to_string(e.qos.reliability)},
+                   {"durability", rmw::to_string(e.qos.durability)}});
   }
   software["transport"]["qos"] = qos;
   if (!r.ros_distro.empty()) software["transport"]["ros_distro"] = r.ros_distro;

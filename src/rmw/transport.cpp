@@ -24,10 +24,16 @@ QoS QoS::from_profile_name(const std::string& name) {
   throw std::invalid_argument("unknown QoS profile '" + name + "' (choose default or sensor_data)");
 }
 
+std::string to_string(Reliability reliability) {
+  return reliability == Reliability::kReliable ? "reliable" : "best_effort";
+}
+
+std::string to_string(Durability durability) {
+  return durability == Durability::kTransientLocal ? "transient_local" : "volatile";
+}
+
 std::string to_string(const QoS& qos) {
-  return std::string(qos.reliability == Reliability::kReliable ? "reliable" : "best_effort") +
-         ", " + (qos.durability == Durability::kTransientLocal ? "transient_local" : "volatile") +
-         ", " +
+  return to_string(qos.reliability) + ", " + to_string(qos.durability) + ", " +
          (qos.history == History::kKeepLast ? "keep_last " + std::to_string(qos.depth)
                                             : std::string("keep_all"));
 }

@@ -48,6 +48,9 @@ struct QoS {
   friend bool operator==(const QoS&, const QoS&) = default;
 };
 
+// "reliable" / "best_effort", "transient_local" / "volatile": as ROS 2 names them.
+std::string to_string(Reliability reliability);
+std::string to_string(Durability durability);
 // "reliable, volatile, keep_last 10"
 std::string to_string(const QoS& qos);
 
