@@ -796,7 +796,7 @@ std::vector<report::StoredRun> collect_runs(const std::vector<std::string>& path
 struct ExportArgs {
   std::vector<std::string> results;
   std::string format = "benchmark-yaml";
-  std::string merge;
+  std::string merge, output = "-";
   bool merge_package = false;
   bool include_invalid = false;
   std::string hardware, category;
@@ -814,10 +814,19 @@ int export_results(const Roots& roots, const ExportArgs& a) {
     return targets.emplace_back(file, std::vector<report::PublishedResult>{}).second;
   };
   std::size_t skipped_invalid = 0;
+  // Entries merged into one benchmark's file must be that benchmark's.
+  std::string merge_id;
+  if (!a.merge.empty()) merge_id = report::import_benchmark_yaml(a.merge).id;
   for (const auto& run : runs) {
     if (!run.valid && !a.include_invalid) {
       ++skipped_invalid;
       continue;
+    }
+    if (!a.merge.empty() && run.benchmark_id != merge_id) {
+      throw std::invalid_argument(run.path.string() + " is a run of " + run.benchmark_id +
+                                  ", not of " + merge_id + " (the id of " + a.merge +
+                                  "): nothing merged; give only " + merge_id +
+                                  " runs, or use --merge-package");
     }
     fs::path file = a.merge;
     if (a.merge_package)
@@ -835,7 +844,8 @@ int export_results(const Roots& roots, const ExportArgs& a) {
   }
   for (const auto& [file, entries] : targets) {
     if (file.empty()) {
-      std::cout << report::entries_yaml(entries);
+      report::write_output(a.output, report::entries_yaml(entries));
+      if (!report::is_standard_output(a.output)) std::cout << a.output << "\n";
       continue;
     }
     std::ifstream in(file, std::ios::binary);
@@ -952,6 +962,28 @@ int make_report(const ReportArgs& a) {
     report::write_output(a.md, report::render_markdown(input, options));
     if (!report::is_standard_output(a.md)) said << "report: " << a.md << "\n";
   }
+  return kExitOk;
+}
+
+// `compare A B`: the report's comparison in the terminal. A side that is a results file is read
+// even when it is not in the results folders.
+int compare_in_terminal(const std::string& a, const std::string& b,
+                        const std::vector<std::string>& results) {
+  std::vector<fs::path> paths;
+  for (const auto& p : results) paths.emplace_back(p);
+  if (results.empty()) {
+    std::error_code ec;
+    if (fs::is_directory("results", ec)) paths.emplace_back("results");
+    for (const auto& side : {a, b}) {
+      if (side.ends_with(".json") && fs::is_regular_file(side, ec)) paths.emplace_back(side);
+    }
+  }
+  if (paths.empty())
+    throw report::ReportError(
+        "compare: no ./results folder here; name the results with --results DIR");
+  const auto input = report::load_report_inputs(paths);
+  for (const auto& s : input.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
+  std::cout << report::render_comparison_text(input, a, b);
   return kExitOk;
 }
 
@@ -1117,19 +1149,30 @@ int main(int argc, char** argv) {
   std::string list_dir = "results";
   auto* results_list_cmd = results_cmd->add_subcommand("list", "show the runs of a results folder");
   results_list_cmd->add_option("dir", list_dir, "results folder (default: ./results)");
+  std::string list_format = "table";
+  results_list_cmd
+      ->add_option("--format", list_format,
+                   "table (default), json (an array of objects) or csv (a header line, then one "
+                   "line per run)")
+      ->check(CLI::IsMember({"table", "json", "csv"}));
   ExportArgs ea;
   auto* export_cmd = results_cmd->add_subcommand(
       "export", "turn runs into RobotPerf benchmark.yaml result entries");
   export_cmd->add_option("results", ea.results, "results files or folders (default: ./results)");
   export_cmd->add_option("--format", ea.format, "output format")
       ->check(CLI::IsMember({"benchmark-yaml"}));
+  auto* output_opt = export_cmd->add_option(
+      "--output,-o", ea.output, "write the entries to this file (default -: standard output)");
   auto* merge_opt = export_cmd->add_option(
       "--merge", ea.merge,
-      "append the entries to this benchmark.yaml (existing entries untouched)");
+      "append the entries to this benchmark.yaml (existing entries untouched; runs of another "
+      "benchmark are refused)");
+  merge_opt->excludes(output_opt);
   export_cmd
       ->add_flag("--merge-package", ea.merge_package,
                  "append each run's entries to its benchmark package's benchmark.yaml")
-      ->excludes(merge_opt);
+      ->excludes(merge_opt)
+      ->excludes(output_opt);
   export_cmd->add_option("--hardware", ea.hardware,
                          "hardware name to record (default: from the machine description)");
   export_cmd->add_option("--category", ea.category, "RobotPerf category (default: guessed)")
@@ -1174,6 +1217,21 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"black", "grey"}));
   run_cmd->add_option("--trace-subbuf-size", ra.trace_subbuf,
                       "grey: per-CPU LTTng sub-buffer bytes (default: sized for the workload)");
+
+  std::string compare_a, compare_b;
+  std::vector<std::string> compare_results;
+  auto* compare_cmd = app.add_subcommand(
+      "compare",
+      "compare two runs or configurations in the terminal: medians, ratio B/A, significance");
+  compare_cmd
+      ->add_option("A", compare_a,
+                   "a results file, a file-name prefix (a1-intra), a hardware or series name, or "
+                   "fields: hardware=,rmw=,processes=,mode=,arrivals=,rate=")
+      ->required();
+  compare_cmd->add_option("B", compare_b, "the other side, as A")->required();
+  compare_cmd->add_option("--results", compare_results,
+                          "results files or folders, imported published rows included (default: "
+                          "./results, and A and B where they are files)");
 
   TraceArgs ta;
   auto* trace_cmd = app.add_subcommand("trace", "work with LTTng traces");
@@ -1329,13 +1387,19 @@ int main(int argc, char** argv) {
       const auto scan = report::scan_results(list_dir);
       for (const auto& sk : scan.skipped)
         std::fprintf(stderr, "robotperf: skipped %s\n", sk.c_str());
-      std::cout << report::runs_table(scan.runs);
+      if (list_format == "json") {
+        std::cout << json_text(report::runs_json(scan.runs), 1) << "\n";
+      } else {
+        std::cout << (list_format == "csv" ? report::runs_csv(scan.runs)
+                                           : report::runs_table(scan.runs));
+      }
       return kExitOk;
     }
     if (*export_cmd) return export_results(roots, ea);
     if (*import_cmd) return import_published(import_paths, import_into);
     if (*readme_cmd) return readme(roots, readme_ids, readme_check);
     if (*report_cmd) return make_report(rpa);
+    if (*compare_cmd) return compare_in_terminal(compare_a, compare_b, compare_results);
     if (*bag_info_cmd) return cli::bag_info(bag_path);
     if (*bag_echo_cmd) return cli::bag_echo(bag_path, echo);
     if (*bag_convert_cmd) return cli::bag_convert(bag_path, convert_out, convert);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -40,6 +41,30 @@ std::string where(const fs::path& file, const YAML::Mark& mark) {
   return file.string() + (mark.line >= 0 ? ":" + std::to_string(mark.line + 1) : "");
 }
 
+// RobotPerf wrote some hardware names as plain YAML scalars holding a double-quoted string's
+// escape ("ROBOTCORE\\xAE Perception"), which YAML leaves as four characters: the same platform
+// would appear twice. Each "\\xHH" becomes the character U+00HH, in UTF-8.
+std::string without_escapes(const std::string& text) {
+  std::string out;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '\\' && i + 3 < text.size() && text[i + 1] == 'x' &&
+        std::isxdigit(static_cast<unsigned char>(text[i + 2])) &&
+        std::isxdigit(static_cast<unsigned char>(text[i + 3]))) {
+      const auto code = static_cast<unsigned>(std::stoul(text.substr(i + 2, 2), nullptr, 16));
+      if (code < 0x80) {
+        out += static_cast<char>(code);
+      } else {
+        out += static_cast<char>(0xC0 | (code >> 6));
+        out += static_cast<char>(0x80 | (code & 0x3F));
+      }
+      i += 3;
+      continue;
+    }
+    out += text[i];
+  }
+  return out;
+}
+
 PublishedResult read_entry(const YAML::Node& item) {
   PublishedResult r;
   r.line = item.Mark().line >= 0 ? item.Mark().line + 1 : 0;
@@ -53,7 +78,7 @@ PublishedResult read_entry(const YAML::Node& item) {
   r.type = scalar_text(fields, "type");
   r.metric = scalar_text(fields, "metric");
   r.metric_unit = scalar_text(fields, "metric_unit");
-  r.hardware = scalar_text(fields, "hardware");
+  r.hardware = without_escapes(scalar_text(fields, "hardware"));
   r.category = scalar_text(fields, "category");
   r.timestampt = scalar_text(fields, "timestampt");
   r.value_text = scalar_text(fields, "value");
@@ -123,6 +148,12 @@ std::string fmt(const char* format, double v) {
 }
 
 }  // namespace
+
+std::string PublishedResult::stated_rate() const {
+  if (!note_rate_hz) return "";
+  const auto [low, high] = *note_rate_hz;
+  return low == high ? fmt("%g Hz", low) : fmt("%g", low) + fmt("-%g Hz sweep", high);
+}
 
 bool PublishedResult::same_entry(const PublishedResult& o) const {
   const bool same_value =
@@ -211,7 +242,22 @@ void check_published(PublishedResult& r) {
                         " in the note (" + fmt("%g", v) + ")");
     }
   }
+  // A sweep first: its upper end would otherwise read as a stated rate ("... to 300 fps").
+  static const std::regex sweep(
+      "([0-9]+(?:\\.[0-9]+)?)\\s*(?:-|to)\\s*([0-9]+(?:\\.[0-9]+)?)\\s*(?:fps|hz)\\b",
+      std::regex::icase);
+  static const std::regex rate(
+      "(?:bounded to|fixed at|\\bat|\\brate)\\s+([0-9]+(?:\\.[0-9]+)?)\\s*(?:fps|hz)\\b",
+      std::regex::icase);
   std::smatch m;
+  r.note_rate_hz.reset();
+  if (std::regex_search(r.note, m, sweep)) {
+    const auto low = parse_number(m[1].str()), high = parse_number(m[2].str());
+    if (low && high && *low > 0 && *low <= *high) r.note_rate_hz = std::pair{*low, *high};
+  } else if (std::regex_search(r.note, m, rate)) {
+    if (const auto hz = parse_number(m[1].str()); hz && *hz > 0)
+      r.note_rate_hz = std::pair{*hz, *hz};
+  }
   if (std::regex_search(r.note, m, loss)) {
     r.note_loss_percent = parse_number(m[1].str());
     if (!r.note_loss_percent) {

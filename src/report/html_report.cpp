@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <sstream>
 
 #include "report_model.hpp"
@@ -50,7 +51,58 @@ std::string table_html(const Table& t) {
   return s.str();
 }
 
+// Characters as a terminal shows them: UTF-8 continuation bytes take no column.
+std::size_t columns(const std::string& text) {
+  return static_cast<std::size_t>(std::ranges::count_if(
+      text, [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+}
+
+// A table as aligned plain text: numeric columns to the right, the last column unpadded.
+std::string table_text(const Table& t) {
+  std::vector<std::size_t> width(t.header.size(), 0);
+  auto measure = [&](const std::vector<std::string>& row) {
+    for (std::size_t c = 0; c < row.size() && c < width.size(); ++c)
+      width[c] = std::max(width[c], columns(row[c]));
+  };
+  measure(t.header);
+  for (const auto& row : t.rows) measure(row);
+  std::ostringstream s;
+  auto line = [&](const std::vector<std::string>& row) {
+    for (std::size_t c = 0; c < row.size() && c < width.size(); ++c) {
+      const std::string pad(width[c] - columns(row[c]), ' ');
+      const bool last = c + 1 == row.size();
+      if (c > 0) s << "  ";
+      if (c < t.numeric.size() && t.numeric[c]) {
+        s << pad << row[c];
+      } else {
+        s << row[c] << (last ? "" : pad);
+      }
+    }
+    s << "\n";
+  };
+  line(t.header);
+  for (const auto& row : t.rows) line(row);
+  return s.str();
+}
+
+constexpr const char* kSignificanceNote =
+    "Significance: with six or more runs per side, the medians' distribution-free 95 % "
+    "intervals; with two to five, Welch's t-test at the 5 % level over the per-run values; with "
+    "one run per side only the mean latency is judged, from the spread within the runs.";
+
 }  // namespace
+
+std::string render_comparison_text(const ReportInput& input, const std::string& a,
+                                   const std::string& b) {
+  ReportOptions options;
+  options.compare = std::pair{a, b};
+  const detail::Model m = detail::build_model(input, options);
+  std::ostringstream s;
+  s << "A = " << a << "\nB = " << b << "\n\n" << table_text(m.comparison->table) << "\n";
+  for (const auto& n : m.comparison->notes) s << n << "\n";
+  s << kSignificanceNote << "\n";
+  return s.str();
+}
 
 std::string render_html(const ReportInput& input, const ReportOptions& options) {
   const detail::Model m = detail::build_model(input, options);
@@ -94,9 +146,10 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
           << ".</p>\n";
       } else {
         s << detail::radar_svg(radar);
-        s << (radar.axes.size() < 3
+        s << (detail::drawn_as_bars(radar)
                   ? "<figcaption>One group of bars per benchmark, each on its own scale from 0 "
-                    "(fewer than three benchmarks make no radar); one bar per series (solid: "
+                    "(fewer than three benchmarks, or one value per benchmark, make no radar); "
+                    "one bar per series (solid: "
                     "local runs, median of valid runs; pale and dashed: published RobotPerf rows, "
                     "median of the rows that pass the measurement rules)."
                   : "<figcaption>Each axis is one benchmark with its own scale (written at its "
@@ -151,8 +204,7 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
       << "</strong>, B = <strong>" << html_escape(m.comparison->b) << "</strong>.</p>\n"
       << table_html(m.comparison->table) << "<p class=\"note\">";
     for (const auto& n : m.comparison->notes) s << html_escape(n) << "<br>";
-    s << "Significance: Welch's t-test at the 5 % level over the per-run values; with one run "
-         "per side only the mean latency can be judged, from the spread within the runs.</p>\n";
+    s << html_escape(kSignificanceNote) << "</p>\n";
   }
   if (!m.machines.rows.empty()) {
     s << "<h2 id=\"machines\">Machines</h2>\n" << table_html(m.machines);
@@ -234,7 +286,7 @@ std::string render_markdown(const ReportInput& input, const ReportOptions& optio
       << markdown_cell(m.comparison->b) << "**\n\n";
     table(m.comparison->table);
     for (const auto& n : m.comparison->notes) s << "- " << markdown_cell(n) << "\n";
-    s << "\n";
+    s << "\n" << kSignificanceNote << "\n\n";
   }
   if (!m.machines.rows.empty()) {
     s << "## Machines\n\n";

@@ -39,7 +39,19 @@ struct Observation {
   double value = kNoValue;
   const StoredRun* run = nullptr;
   std::string type;  // black | grey: how it was measured
+  std::string rate;  // the rate it was measured at ("30 Hz", "peak search"), "" when unknown
 };
+
+// The rate a local run was measured at, as published rows state theirs: a control benchmark's is
+// its controller loop's.
+std::string rate_text(const StoredRun& r) {
+  if (r.throughput_kind == "peak") return "peak search";
+  const double hz = r.update_rate_hz.value_or(r.rate_hz);
+  if (!std::isfinite(hz)) return "";
+  char text[32];
+  std::snprintf(text, sizeof text, "%g Hz", hz);
+  return text;
+}
 
 struct MetricInfo {
   const char* metric;
@@ -63,44 +75,50 @@ std::vector<Observation> observations(const ReportInput& in) {
   for (const auto& r : in.runs) {
     if (!r.valid) continue;  // invalid runs are shown in the tables, never plotted
     const std::string series = detail::local_series(r);
-    out.push_back({r.benchmark_id, r.category, series, "latency", true, r.latency.max, &r, r.type});
+    const std::string rate = rate_text(r);
+    out.push_back(
+        {r.benchmark_id, r.category, series, "latency", true, r.latency.max, &r, r.type, rate});
     const bool peak = r.throughput_kind == "peak";
     if (peak) {
       out.push_back({r.benchmark_id, r.category, detail::configuration_series(r) + " (peak)",
-                     "throughput", true, r.throughput_hz, &r, r.type});
+                     "throughput", true, r.throughput_hz, &r, r.type, rate});
     } else if (!with_peak.contains({r.benchmark_id, detail::configuration_series(r)})) {
       out.push_back({r.benchmark_id, r.category, series + " (offered)", "throughput", true,
-                     r.throughput_hz, &r, r.type});
+                     r.throughput_hz, &r, r.type, rate});
     }
-    if (r.power_w)
-      out.push_back({r.benchmark_id, r.category, series, "power", true, *r.power_w, &r, r.type});
+    if (r.power_w) {
+      out.push_back(
+          {r.benchmark_id, r.category, series, "power", true, *r.power_w, &r, r.type, rate});
+    }
   }
   for (const auto& b : in.published) {
     for (const auto& row : b.results) {
       if (!row.flags.empty() || !std::isfinite(row.value)) continue;
       out.push_back({b.id, b.category, detail::published_series(row.hardware), row.metric, false,
-                     row.value, nullptr, row.type});
+                     row.value, nullptr, row.type, row.stated_rate()});
     }
   }
   return out;
 }
 
 // Where local runs and published rows share an axis but not a measurement, said next to the plot:
-// another type (black- or grey-box), or medians so far apart (20x) that they cannot both measure
-// the same thing (a control benchmark's latency that includes its loop's period).
+// another type (black- or grey-box), another stated rate, or medians so far apart (20x) that they
+// cannot both measure the same thing (a control benchmark's latency that includes its loop's
+// period).
 std::vector<std::string> differences_on_axes(const std::string& category, const char* metric,
                                              const char* unit,
                                              const std::vector<Observation>& obs) {
   std::map<std::string, std::array<std::vector<double>, 2>> values;  // id -> [published, local]
-  std::map<std::string, std::array<std::set<std::string>, 2>> types;
+  std::map<std::string, std::array<std::set<std::string>, 2>> types, rates;
   for (const auto& o : obs) {
     if (o.category != category || o.metric != metric) continue;
     values[o.benchmark_id][o.local].push_back(o.value);
     if (!o.type.empty()) types[o.benchmark_id][o.local].insert(o.type);
+    if (!o.rate.empty()) rates[o.benchmark_id][o.local].insert(o.rate);
   }
-  auto listed = [](const std::set<std::string>& s) {
+  auto listed = [](const std::set<std::string>& s, const char* separator = "/") {
     std::string out;
-    for (const auto& t : s) out += (out.empty() ? "" : "/") + t;
+    for (const auto& t : s) out += (out.empty() ? "" : separator) + t;
     return out;
   };
   std::vector<std::string> notes;
@@ -110,6 +128,12 @@ std::vector<std::string> differences_on_axes(const std::string& category, const 
     if (!published_types.empty() && !local_types.empty() && published_types != local_types) {
       notes.push_back(id + ": the published rows are " + listed(published_types) +
                       "-box measurements, the local runs " + listed(local_types) + "-box");
+    }
+    const auto& [published_rates, local_rates] = rates[id];
+    if (!published_rates.empty() && !local_rates.empty() && published_rates != local_rates) {
+      notes.push_back(id + ": the published rows state " + listed(published_rates, ", ") +
+                      ", the local runs ran at " + listed(local_rates, ", ") +
+                      " (--compare rate=HZ picks one)");
     }
     const double published = median(v[0]), local = median(v[1]);
     if (published > 0 && local > 0 && (local / published > 20 || published / local > 20)) {
@@ -325,18 +349,24 @@ Table hops_table_for(const std::vector<const StoredRun*>& runs) {
 
 void published_tables(const PublishedBenchmark& b, Table& summary, Table& flagged) {
   summary.css_class = "published";
-  summary.header = {
-      "hardware",         "category",    "rows", "latency ms (median)", "throughput fps (median)",
-      "power W (median)", "flagged rows"};
-  summary.numeric = {false, false, true, true, true, true, true};
+  summary.header = {"hardware",
+                    "category",
+                    "rows",
+                    "latency ms (median)",
+                    "throughput fps (median)",
+                    "power W (median)",
+                    "rates stated",
+                    "flagged rows"};
+  summary.numeric = {false, false, true, true, true, true, false, true};
   std::vector<std::string> order;
   std::map<std::string, std::map<std::string, std::vector<double>>> values;
   std::map<std::string, std::size_t> rows, flags;
-  std::map<std::string, std::set<std::string>> categories;
+  std::map<std::string, std::set<std::string>> categories, rates;
   for (const auto& r : b.results) {
     if (!rows.contains(r.hardware)) order.push_back(r.hardware);
     ++rows[r.hardware];
     categories[r.hardware].insert(r.category);
+    if (const auto rate = r.stated_rate(); !rate.empty()) rates[r.hardware].insert(rate);
     if (!r.flags.empty()) {
       ++flags[r.hardware];
     } else {
@@ -344,12 +374,14 @@ void published_tables(const PublishedBenchmark& b, Table& summary, Table& flagge
     }
   }
   for (const auto& h : order) {
-    std::string cats;
+    std::string cats, stated;
     for (const auto& c : categories[h]) cats += (cats.empty() ? "" : ", ") + c;
-    summary.rows.push_back(
-        {h, cats, std::to_string(rows[h]), detail::format_value(median(values[h]["latency"])),
-         detail::format_value(median(values[h]["throughput"])),
-         detail::format_value(median(values[h]["power"])), std::to_string(flags[h])});
+    for (const auto& r : rates[h]) stated += (stated.empty() ? "" : ", ") + r;
+    summary.rows.push_back({h, cats, std::to_string(rows[h]),
+                            detail::format_value(median(values[h]["latency"])),
+                            detail::format_value(median(values[h]["throughput"])),
+                            detail::format_value(median(values[h]["power"])),
+                            stated.empty() ? "-" : stated, std::to_string(flags[h])});
     summary.row_warning.push_back(false);
   }
   flagged.css_class = "flagged";
@@ -375,8 +407,8 @@ struct Side {
 };
 
 // A selector of fields, "rmw=fastdds,processes=per-node,rate=30": each field a run must have.
-// Published rows have only a hardware and a type (mode); a selector naming another field
-// selects no published row.
+// Published rows have only a hardware, a type (mode) and the rate their note states; a selector
+// naming another field selects no published row.
 struct FieldSelector {
   std::map<std::string, std::string> fields;  // lower-case values
 
@@ -389,7 +421,7 @@ struct FieldSelector {
       const auto eq = part.find('=');
       const std::string key = lower(part.substr(0, eq));
       if (eq == std::string::npos || !kKeys.contains(key)) {
-        throw ReportError("--compare '" + selector + "': '" + part +
+        throw ReportError("'" + selector + "': '" + part +
                           "' is not a field=value (fields: hardware, rmw, processes, mode, "
                           "arrivals, rate)");
       }
@@ -400,9 +432,7 @@ struct FieldSelector {
   bool matches(const StoredRun& r) const {
     for (const auto& [key, want] : fields) {
       if (key == "rate") {
-        char* end = nullptr;
-        const double hz = std::strtod(want.c_str(), &end);
-        if (*end != '\0' || !(std::fabs(r.rate_hz - hz) <= 1e-6 * std::max(1.0, hz))) return false;
+        if (!same_rate(r.rate_hz, want)) return false;
         continue;
       }
       const std::string have = key == "hardware"    ? r.hardware
@@ -416,12 +446,23 @@ struct FieldSelector {
   }
   bool matches(const PublishedResult& row) const {
     for (const auto& [key, want] : fields) {
+      if (key == "rate") {
+        if (!row.note_rate_hz || row.note_rate_hz->first != row.note_rate_hz->second ||
+            !same_rate(row.note_rate_hz->first, want))
+          return false;
+        continue;
+      }
       if (key == "hardware" ? lower(row.hardware) != want
                             : key != "mode" || lower(row.type) != want) {
         return false;
       }
     }
     return true;
+  }
+  static bool same_rate(double hz, const std::string& want) {
+    char* end = nullptr;
+    const double wanted = std::strtod(want.c_str(), &end);
+    return *end == '\0' && std::fabs(hz - wanted) <= 1e-6 * std::max(1.0, wanted);
   }
 
   static inline const std::set<std::string> kKeys = {"hardware", "rmw",      "processes",
@@ -466,8 +507,8 @@ Side select(const std::string& selector, const ReportInput& in) {
       }
       list += (list.empty() ? "" : ", ") + k;
     }
-    throw ReportError("--compare '" + selector +
-                      "' matches no results file and no hardware (known: " + list + ")");
+    throw ReportError("'" + selector + "' matches no results file and no hardware (known: " + list +
+                      ")");
   }
   return side;
 }
@@ -525,22 +566,28 @@ detail::Comparison compare(const std::string& a_sel, const std::string& b_sel,
   std::set<std::string> ids;
   for (const auto* r : a.runs) ids.insert(r->benchmark_id);
   for (const auto& [bench, row] : a.rows) ids.insert(bench->id);
-  // A side is one configuration per benchmark: a median over intra and fastdds runs, or 30 and
-  // 60 Hz, describes neither.
+  // A side is one configuration per benchmark: a median over intra and fastdds runs, 30 and
+  // 60 Hz, two machines, or local runs and published rows describes none of them. A published
+  // row's configuration is its hardware, type and stated rate.
   for (const auto& [side, selector] : {std::pair{&a, a_sel}, std::pair{&b, b_sel}}) {
     for (const auto& id : ids) {
       std::set<std::string> configurations;
       for (const StoredRun* r : side->runs) {
         if (r->benchmark_id == id && r->valid) configurations.insert(detail::local_series(*r));
       }
+      for (const auto& [bench, row] : side->rows) {
+        if (bench->id != id) continue;
+        const std::string rate = row->stated_rate();
+        configurations.insert(detail::published_series(row->hardware) + " · " + row->type +
+                              (rate.empty() ? "" : " · " + rate));
+      }
       if (configurations.size() > 1) {
         std::string list;
         for (const auto& s : configurations) list += (list.empty() ? "" : "; ") + s;
-        throw ReportError("--compare '" + selector + "' selects " +
-                          std::to_string(configurations.size()) + " configurations of " + id +
-                          " (" + list +
+        throw ReportError("'" + selector + "' selects " + std::to_string(configurations.size()) +
+                          " configurations of " + id + " (" + list +
                           "): name one series, or narrow it with fields, e.g. --compare "
-                          "'hardware=...,rmw=fastdds,processes=single,rate=30'");
+                          "'hardware=...,rmw=fastdds,processes=single,mode=black,rate=30'");
       }
     }
   }
@@ -975,7 +1022,8 @@ ReportInput load_report_inputs(const std::vector<fs::path>& paths) {
       for (const auto& e : fs::recursive_directory_iterator(p)) {
         if (!e.is_regular_file()) continue;
         const auto name = e.path().filename().string();
-        if (may_be_run_file(e.path()) || name == "benchmark.yaml") files.push_back(e.path());
+        if (may_be_run_file(e.path()) || may_be_imported_file(e.path()) || name == "benchmark.yaml")
+          files.push_back(e.path());
       }
       std::ranges::sort(files);
       for (const auto& f : files) load_file(f, false);

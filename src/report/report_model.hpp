@@ -103,6 +103,8 @@ std::string format_value(double value);  // 4 significant digits, "-" for NaN
 
 // SVG renderers.
 std::string radar_svg(const Radar& radar);
+// Whether radar_svg draws bars instead: fewer than three axes, or no axis with two values.
+bool drawn_as_bars(const Radar& radar);
 
 // A text on a plot: its baseline's left end, and its colour.
 struct Label {

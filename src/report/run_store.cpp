@@ -110,6 +110,9 @@ void read_also_measured(const json& j, StoredRun& run) {
   const json& loops = member(j, "control_loops");
   if (loops.is_array()) {
     for (const auto& loop : loops) {
+      if (const double hz = number_or_nan(loop, "update_rate_hz");
+          !run.update_rate_hz && std::isfinite(hz))
+        run.update_rate_hz = hz;
       const double jitter = number_or_nan(member(loop, "period_jitter_us"), "p99");
       run.control += (run.control.empty() ? "" : "; ") +
                      (member(loop, "node").is_string() ? loop["node"].get<std::string>() : "loop") +
@@ -320,10 +323,16 @@ StoredRun load_run(const fs::path& path) {
   return run;
 }
 
+// Results folders also hold series and sweep summaries, and published rows imported with
+// `results import --into` (published-<category>-<name>.json): none of them is a run.
 bool may_be_run_file(const fs::path& path) {
   const std::string name = path.filename().string();
   return path.extension() == ".json" && !name.ends_with(".series.json") &&
-         !name.ends_with(".sweep.json");
+         !name.ends_with(".sweep.json") && !may_be_imported_file(path);
+}
+
+bool may_be_imported_file(const fs::path& path) {
+  return path.extension() == ".json" && path.filename().string().starts_with("published-");
 }
 
 RunScan scan_results(const fs::path& dir) {
@@ -446,6 +455,82 @@ std::string runs_table(const std::vector<StoredRun>& runs) {
     out << line;
   }
   return out.str();
+}
+
+namespace {
+
+// One row of `results list --format json|csv`: (field, value) in column order.
+std::vector<std::pair<const char*, json>> run_fields(const StoredRun& r) {
+  auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  auto optional = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
+  std::string reasons;
+  for (const auto& why : r.invalid_reasons) reasons += (reasons.empty() ? "" : "; ") + why;
+  return {{"file", r.path.string()},
+          {"benchmark", r.benchmark_id},
+          {"name", r.benchmark_name},
+          {"category", r.category},
+          {"mode", r.type},
+          {"hardware", r.hardware},
+          {"rmw", r.rmw},
+          {"processes", r.processes},
+          {"arrivals", r.timeline.empty() ? "fixed" : r.timeline},
+          {"rate_hz", number(r.rate_hz)},
+          {"update_rate_hz", optional(r.update_rate_hz)},
+          {"started_utc", r.started_utc},
+          {"measured", r.measured},
+          {"lost", r.lost},
+          {"loss_percent", number(r.loss_percent)},
+          {"latency_mean_ms", number(r.latency.mean)},
+          {"latency_p50_ms", number(r.latency.p50)},
+          {"latency_p99_ms", number(r.latency.p99)},
+          {"latency_max_ms", number(r.latency.max)},
+          {"throughput_hz", number(r.throughput_hz)},
+          {"throughput_kind", r.throughput_kind},
+          {"power_w", optional(r.power_w)},
+          {"energy_j", optional(r.energy_j)},
+          {"cpu_percent", optional(r.cpu_percent)},
+          {"peak_rss_mib", optional(r.peak_rss_mib)},
+          {"valid", r.valid},
+          {"invalid_reasons", reasons},
+          {"warnings", r.warnings.size()}};
+}
+
+std::string csv_cell(const json& v) {
+  if (v.is_null()) return "";
+  if (v.is_boolean()) return v.get<bool>() ? "true" : "false";
+  if (!v.is_string()) return v.dump();
+  const std::string text = v.get<std::string>();
+  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
+}  // namespace
+
+json runs_json(const std::vector<StoredRun>& runs) {
+  json out = json::array();
+  for (const auto& r : runs) {
+    json row = json::object();
+    for (auto& [field, value] : run_fields(r)) row[field] = std::move(value);
+    out.push_back(std::move(row));
+  }
+  return out;
+}
+
+std::string runs_csv(const std::vector<StoredRun>& runs) {
+  std::string out;
+  for (const auto& [field, value] : run_fields(StoredRun{}))
+    out += (out.empty() ? "" : ",") + std::string(field);
+  out += "\r\n";
+  for (const auto& r : runs) {
+    std::string line;
+    for (const auto& [field, value] : run_fields(r)) {
+      line += (line.empty() ? "" : ",") + csv_cell(value);
+    }
+    out += line + "\r\n";
+  }
+  return out;
 }
 
 }  // namespace robotperf::report

@@ -10,6 +10,9 @@
 namespace robotperf::report::detail {
 namespace {
 
+// 11 px text: about 6.5 px per character.
+constexpr double kLabelCharWidth = 6.5;
+
 std::string num(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.1f", v);
@@ -30,15 +33,15 @@ double nice_step(double range, int count) {
 // A series name that fits the legend: long ones lose their middle, not their end, since what
 // tells two series of one machine apart (transport, layout, rate) is at the end. The full name is
 // the entry's title.
-std::string legend_label(const std::string& name) {
-  constexpr std::size_t kMax = 68, kHead = 38;
-  if (name.size() <= kMax) return name;
+std::string legend_label(const std::string& name, std::size_t max = 68) {
+  const std::size_t head_size = max * 38 / 68;
+  if (name.size() <= max) return name;
   auto boundary = [&](std::size_t at) {  // not inside a UTF-8 sequence
     while (at > 0 && (static_cast<unsigned char>(name[at]) & 0xC0) == 0x80) --at;
     return at;
   };
-  const std::size_t head = boundary(kHead);
-  const std::size_t tail = boundary(name.size() - (kMax - kHead - 1));
+  const std::size_t head = boundary(head_size);
+  const std::size_t tail = boundary(name.size() - (max - head_size - 1));
   return name.substr(0, head) + "…" + name.substr(tail);
 }
 
@@ -114,14 +117,30 @@ std::string bars_svg(const Radar& r) {
   return drawn > 0 ? s.str() : std::string();
 }
 
+// How many series have a value on each axis.
+std::vector<std::size_t> values_on_axes(const Radar& r) {
+  std::vector<std::size_t> on_axis(r.axes.size(), 0);
+  for (const auto& row : r.values) {
+    for (std::size_t a = 0; a < r.axes.size(); ++a)
+      on_axis[a] += std::isfinite(row[a]) && row[a] > 0;
+  }
+  return on_axis;
+}
+
 }  // namespace
 
+bool drawn_as_bars(const Radar& r) {
+  // Each axis is scaled to its own values: with no axis holding two, a polygon would only say
+  // "every value is its axis' maximum". Bars show the values themselves.
+  const auto on_axis = values_on_axes(r);
+  return r.axes.size() < 3 || std::ranges::max(on_axis) < 2;
+}
+
 void place_labels(std::vector<Label>& labels) {
-  // 11 px text: about 6.5 px per character, 12 px from one baseline to the next line's.
-  constexpr double kCharWidth = 6.5, kLineHeight = 12;
+  constexpr double kLineHeight = 12;  // from one baseline to the next line's, 11 px text
   auto overlap = [&](const Label& a, const Label& b) {
-    const double aw = kCharWidth * static_cast<double>(a.text.size());
-    const double bw = kCharWidth * static_cast<double>(b.text.size());
+    const double aw = kLabelCharWidth * static_cast<double>(a.text.size());
+    const double bw = kLabelCharWidth * static_cast<double>(b.text.size());
     return a.x < b.x + bw && b.x < a.x + aw && a.y - kLineHeight < b.y && b.y - kLineHeight < a.y;
   };
   for (std::size_t i = 0; i < labels.size(); ++i) {
@@ -141,7 +160,8 @@ void place_labels(std::vector<Label>& labels) {
 std::string radar_svg(const Radar& r) {
   constexpr double kSize = 480, kCx = 240, kCy = 200, kRadius = 120;
   const std::size_t n = r.axes.size();
-  if (n < 3) return bars_svg(r);
+  if (drawn_as_bars(r)) return bars_svg(r);
+  const std::vector<std::size_t> on_axis = values_on_axes(r);
   const double legend_height =
       18.0 * static_cast<double>(r.series.size() + (r.omitted.empty() ? 0 : 1)) + 10;
   std::ostringstream s;
@@ -171,7 +191,10 @@ std::string radar_svg(const Radar& r) {
   }
   bool logarithmic = false;
   for (std::size_t a = 0; a < n; ++a) logarithmic = logarithmic || axis_max[a] > 20 * axis_min[a];
+  // An axis with one value has nothing to scale it against: its point sits mid-way, not on the
+  // rim where it would read as the worst, and the axis says "only".
   auto fraction = [&](std::size_t a, double v) {
+    if (on_axis[a] == 1) return 0.5;
     if (!logarithmic) return v / axis_max[a];
     if (axis_max[a] <= axis_min[a]) return 1.0;
     return 0.1 + 0.9 * std::log(v / axis_min[a]) / std::log(axis_max[a] / axis_min[a]);
@@ -210,7 +233,8 @@ std::string radar_svg(const Radar& r) {
       << anchor << "\">" << html_escape(r.axes[a]) << " (" << r.unit << ")</text>\n";
     s << "<text class=\"axis-scale\" x=\"" << num(lx) << "\" y=\"" << num(ly + 13)
       << "\" text-anchor=\"" << anchor << "\">"
-      << (logarithmic && axis_max[a] > axis_min[a]
+      << (on_axis[a] == 1 ? "only " + format_value(axis_max[a])
+          : logarithmic && axis_max[a] > axis_min[a]
               ? format_value(axis_min[a]) + "–" + format_value(axis_max[a]) + " (log)"
               : "max " + format_value(axis_max[a]))
       << "</text>\n";
@@ -321,8 +345,11 @@ std::string distribution_svg(const std::vector<Distribution>& curves, const std:
         << "\" stroke-dasharray=\"4,3\"/>\n";
       s << "<circle cx=\"" << num(px(v)) << "\" cy=\"" << num(py(q)) << "\" r=\"4\" fill=\""
         << colour << "\"/>\n";
-      labels.push_back({px(v) + 5, py(q) + (q > 0.9 ? 14 : -6),
-                        std::string(q == 0.5 ? "p50 " : "p99 ") + format_value(v), colour});
+      std::string text = std::string(q == 0.5 ? "p50 " : "p99 ") + format_value(v);
+      // Right of the marker, or left of it where the text would run past the plot's edge.
+      const double width = kLabelCharWidth * static_cast<double>(text.size());
+      const double x = px(v) + 5 + width <= kWidth - 2 ? px(v) + 5 : px(v) - 5 - width;
+      labels.push_back({x, py(q) + (q > 0.9 ? 14 : -6), std::move(text), colour});
     }
   }
   place_labels(labels);
@@ -335,7 +362,9 @@ std::string distribution_svg(const std::vector<Distribution>& curves, const std:
     s << "<rect x=\"" << kLeft << "\" y=\"" << num(ly - 10)
       << "\" width=\"14\" height=\"10\" fill=\"" << colour_of(i)
       << "\"/><text class=\"legend\" x=\"" << num(kLeft + 20) << "\" y=\"" << num(ly) << "\">"
-      << html_escape(curves[i].label + " — from the " + curves[i].source) << "</text>\n";
+      << html_escape(legend_label(curves[i].label + " — from the " + curves[i].source, 100))
+      << "<title>" << html_escape(curves[i].label + " — from the " + curves[i].source)
+      << "</title></text>\n";
     ly += 18;
   }
   s << "</svg>\n";

@@ -7,6 +7,7 @@
 #include <array>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
@@ -59,6 +60,86 @@ TEST_F(ResultsCli, ListShowsEveryRun) {
   const auto missing = robotperf_cli("results list " + (dir_ / "nothing").string());
   EXPECT_EQ(missing.exit_code, 2);
   EXPECT_NE(missing.out.find("no such results folder"), std::string::npos);
+}
+
+// Published rows imported into a results folder are no runs: listed by no one, skipped silently.
+TEST_F(ResultsCli, ListAsJsonAndCsvForPrograms) {
+  const std::string folder = (dir_ / "results").string();
+  const auto json_out = shell(std::string(ROBOTPERF_EXECUTABLE) + " results list " + folder +
+                              " --format json 2>/dev/null");
+  ASSERT_EQ(json_out.exit_code, 0) << json_out.out;
+  const auto runs = nlohmann::json::parse(json_out.out);
+  ASSERT_TRUE(runs.is_array());
+  ASSERT_EQ(runs.size(), 3u);
+  std::size_t a5 = 0;
+  for (const auto& r : runs) {
+    a5 += r.at("benchmark") == "a5";
+    EXPECT_EQ(r.at("valid"), true);
+    EXPECT_EQ(r.at("rmw"), "intra");
+    EXPECT_EQ(r.at("rate_hz"), 30.0);
+    EXPECT_GT(r.at("latency_max_ms").get<double>(), 0.0);
+    EXPECT_TRUE(r.at("power_w").is_null() || r.at("power_w").get<double>() > 0);
+  }
+  EXPECT_EQ(a5, 2u);
+
+  const auto csv = robotperf_cli("results list " + folder + " --format csv");
+  ASSERT_EQ(csv.exit_code, 0) << csv.out;
+  EXPECT_EQ(count(csv.out, "\r\n"), 4u) << csv.out;  // the header and three runs
+  EXPECT_TRUE(csv.out.starts_with("file,benchmark,name,")) << csv.out;
+  const std::string header = csv.out.substr(0, csv.out.find("\r\n"));
+  const std::string first = csv.out.substr(
+      header.size() + 2, csv.out.find("\r\n", header.size() + 2) - header.size() - 2);
+  EXPECT_EQ(count(header, ","), count(first, ",")) << header << "\n" << first;
+
+  ASSERT_EQ(
+      robotperf_cli("results import " + (kPublished / "a5_resize").string() + " --into " + folder)
+          .exit_code,
+      0);
+  const auto with_published = robotperf_cli("results list " + folder);
+  EXPECT_EQ(with_published.out.find("skipped"), std::string::npos) << with_published.out;
+  EXPECT_EQ(count(with_published.out, " valid\n"), 3u) << with_published.out;
+  fs::remove(dir_ / "results" / "published-perception-a5_resize.json");
+  EXPECT_EQ(robotperf_cli("results list " + folder + " --format xml").exit_code, 2);
+}
+
+TEST_F(ResultsCli, ExportToAFileOrStandardOutputAndMergeOnlyItsOwnBenchmark) {
+  const std::string folder = (dir_ / "results").string();
+  const auto dash =
+      shell(std::string(ROBOTPERF_EXECUTABLE) + " results export -o - " + folder + " 2>/dev/null");
+  ASSERT_EQ(dash.exit_code, 0) << dash.out;
+  EXPECT_TRUE(dash.out.starts_with("results:\n")) << dash.out;
+  const fs::path file = dir_ / "entries.yaml";
+  const auto to_file = robotperf_cli("results export -o " + file.string() + " " + folder);
+  ASSERT_EQ(to_file.exit_code, 0) << to_file.out;
+  EXPECT_EQ(read_text(file), dash.out);
+
+  const fs::path copy = dir_ / "a5-only" / "benchmark.yaml";
+  fs::create_directories(copy.parent_path());
+  fs::copy_file(kPublished / "a5_resize/benchmark.yaml", copy,
+                fs::copy_options::overwrite_existing);
+  const std::string before = read_text(copy);
+  const auto refused = robotperf_cli("results export --merge " + copy.string() + " " + folder);
+  EXPECT_EQ(refused.exit_code, 2) << refused.out;
+  EXPECT_EQ(count(refused.out, "\n"), 1u) << refused.out;
+  EXPECT_NE(refused.out.find("is a run of a2, not of a5"), std::string::npos) << refused.out;
+  EXPECT_EQ(read_text(copy), before) << "nothing may be merged when a run is refused";
+}
+
+TEST_F(ResultsCli, CompareInTheTerminal) {
+  const std::string inputs = "--results " + (dir_ / "results").string() + " --results " +
+                             (kPublished / "a5_resize/benchmark.yaml").string();
+  const auto o = robotperf_cli("compare a5-intra \"hardware=Intel i7-8700K,mode=black\" " + inputs);
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("A = a5-intra"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("B / A"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("a5         latency max (ms)"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("2 local runs, 0 published rows"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("Significance:"), std::string::npos) << o.out;
+  const auto unknown = robotperf_cli("compare a5-intra nowhere " + inputs);
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_EQ(count(unknown.out, "\n"), 1u) << unknown.out;
+  EXPECT_NE(unknown.out.find("'nowhere' matches no results file"), std::string::npos)
+      << unknown.out;
 }
 
 TEST_F(ResultsCli, ExportMergeImportRoundTrip) {
@@ -180,6 +261,90 @@ TEST_F(ResultsCli, ReportRendersInHeadlessChromium) {
   EXPECT_GT(series, 300u);
   EXPECT_GT(header, 1000u);
   EXPECT_GT(ink, 5000u);
+}
+
+// Run in the page by Chromium: every text of every plot lies inside its plot and overlaps no
+// other text of it. The result is written into the DOM, which --dump-dom prints.
+constexpr const char* kLayoutCheck = R"(<script>
+window.addEventListener('load', () => {
+  const problems = [];
+  let texts = 0;
+  document.querySelectorAll('svg').forEach((svg, i) => {
+    const box = svg.getBoundingClientRect();
+    const plot = (svg.getAttribute('class') || 'svg') + ' ' + i + ' ' +
+                 (svg.dataset.category || svg.dataset.benchmark || '') + ' ' +
+                 (svg.dataset.metric || '');
+    const placed = [];
+    svg.querySelectorAll('text').forEach(t => {
+      const r = t.getBoundingClientRect();
+      if (r.width === 0) return;
+      ++texts;
+      const label = t.childNodes[0] ? t.childNodes[0].textContent : t.textContent;
+      if (r.left < box.left - 1 || r.right > box.right + 1 || r.top < box.top - 1 ||
+          r.bottom > box.bottom + 1)
+        problems.push('clipped in ' + plot + ': ' + label);
+      for (const [o, other] of placed) {
+        const w = Math.min(r.right, o.right) - Math.max(r.left, o.left);
+        const h = Math.min(r.bottom, o.bottom) - Math.max(r.top, o.top);
+        if (w > 1 && h > 2) problems.push('overlap in ' + plot + ': ' + label + ' / ' + other);
+      }
+      placed.push([r, label]);
+    });
+  });
+  const out = document.createElement('pre');
+  out.id = 'layout-check';
+  out.textContent = (problems.length ? 'PROBLEMS\n' + problems.join('\n') : 'OK') + '\n' +
+                    texts + ' texts';
+  document.body.appendChild(out);
+});
+</script>)";
+
+// A folder as a user has it after a while: two transports, both process layouts, two rates, an
+// INVALID run and published rows of two categories.
+TEST_F(ResultsCli, MixedReportLabelsNeitherOverlapNorClipInChromium) {
+  ASSERT_EQ(shell("command -v chromium").exit_code, 0)
+      << "chromium is not installed: run scripts/install-deps.sh";
+  const fs::path mixed = dir_ / "mixed";
+  for (const char* args : {"run a5 --count 40", "run a5 --count 40 --rmw fastdds",
+                           "run a5 --count 40 --rate 60", "run a1 --count 40 --processes per-node",
+                           "run a1 --count 40", "run a2 --count 40", "run a5 --count 8"}) {
+    const auto o = robotperf_cli(std::string(args) + " --quiet --output " + mixed.string());
+    ASSERT_TRUE(o.exit_code == 0 || (o.exit_code == 3 && std::string(args).ends_with("8")))
+        << args << ": " << o.out;
+  }
+  const fs::path shared = fs::path(ROBOTPERF_SHARED_DATA_DIR) / "robotperf";
+  ASSERT_EQ(robotperf_cli("results import " + (shared / "perception").string() + " " +
+                          (shared / "control").string() + " --into " + mixed.string())
+                .exit_code,
+            0);
+  const fs::path html = dir_ / "mixed.html";
+  const auto o = robotperf_cli("report " + mixed.string() + " --html " + html.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  std::string page = read_text(html);
+  EXPECT_NE(page.find("1 INVALID run"), std::string::npos);
+  EXPECT_NE(page.find("class=\"curve invalid\""), std::string::npos);
+  const auto body_end = page.rfind("</body>");
+  ASSERT_NE(body_end, std::string::npos);
+  page.insert(body_end, kLayoutCheck);
+  const fs::path checked = dir_ / "mixed-checked.html";
+  {
+    std::ofstream out(checked, std::ios::binary);
+    out << page;
+  }
+  const auto dom = shell(
+      "timeout 120 chromium --headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
+      "--disable-background-networking --disable-component-update --disable-sync "
+      "--hide-scrollbars --window-size=1600,1400 --user-data-dir=" +
+      (dir_ / "chromium-layout").string() + " --dump-dom file://" + checked.string() +
+      " 2>/dev/null");
+  ASSERT_EQ(dom.exit_code, 0) << dom.out.substr(0, 400);
+  const auto at = dom.out.find("<pre id=\"layout-check\">");
+  ASSERT_NE(at, std::string::npos) << "the check did not run";
+  const std::string result = dom.out.substr(at, dom.out.find("</pre>", at) - at);
+  EXPECT_NE(result.find(">OK\n"), std::string::npos) << result;
+  // The plots were there to check: radars or bars of two categories, distributions, legends.
+  const auto texts = std::stoul(result.substr(result.rfind('\n') + 1));
+  EXPECT_GT(texts, 150u) << result;
 }
 
 TEST_F(ResultsCli, RunWritesItsReport) {

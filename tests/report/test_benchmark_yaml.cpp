@@ -152,6 +152,44 @@ TEST_F(BenchmarkYaml, PowerBelowOneMilliwattIsFlagged) {
   EXPECT_TRUE(has_flag(r, "negative latency"));
 }
 
+// a1's file writes one platform both as "...(ROBOTCORE\xAE Perception)" in double quotes (YAML
+// reads ®) and as a plain scalar (YAML keeps the four characters): both are the one platform.
+TEST_F(BenchmarkYaml, HardwareNamesLoseTheirEscapes) {
+  const auto b = import_benchmark_yaml(kPublishedA1);
+  std::size_t robotcore_12700h = 0;
+  for (const auto& r : b.results) {
+    EXPECT_EQ(r.hardware.find("\\x"), std::string::npos) << "line " << r.line << ": " << r.hardware;
+    robotcore_12700h +=
+        r.hardware == "Intel i7-12700H + NVIDIA GeForce RTX 3060 (ROBOTCORE\xC2\xAE Perception)";
+  }
+  EXPECT_EQ(robotcore_12700h, 10u);
+}
+
+// RobotPerf's notes state the input rate in several ways; a sweep is not a rate, and a measured
+// figure ("mean_benchmark 10.00 fps", "Mean FPS observed 174") states none.
+TEST_F(BenchmarkYaml, NotesStateTheirRate) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"lost 0.00 %, throughput bounded to 30fps", "30 Hz"},
+      {"Fixed at 30 FPS. lost 0.00 %.", "30 Hz"},
+      {"mean 0.08 ms, rms 0.10 ms, max 0.55 ms, min 0.02 ms, lost 0.00%, update rate 10 Hz",
+       "10 Hz"},
+      {"mean 5.51 ms, lost 0.00 %, throughput swept from 30 to 300 fps", "30-300 Hz sweep"},
+      {"lost messages 0.00 %, throughput swept 30-300fps", "30-300 Hz sweep"},
+      {"Throughput configured in the 30-500 FPS range. Mean FPS observed 174.432.",
+       "30-500 Hz sweep"},
+      {"mean_benchmark 10.00 fps, rms_benchmark 10.00 fps, lost messages 0.00 %", ""},
+      {"Mean FPS observed 220.91.", ""},
+      {"", ""}};
+  for (const auto& [note, rate] : cases) {
+    PublishedResult r;
+    r.metric = "latency";
+    r.value = 5;
+    r.note = note;
+    check_published(r);
+    EXPECT_EQ(r.stated_rate(), rate) << note;
+  }
+}
+
 // Found by fuzz_benchmark_packages: a figure in a note beyond double's range threw stod's
 // out_of_range out of import.
 TEST_F(BenchmarkYaml, NoteFiguresBeyondDoubleAreFlaggedNotThrown) {

@@ -327,6 +327,80 @@ TEST_F(Report, AMissingValueIsAGapNotALineAcrossIt) {
   EXPECT_EQ(count(html, "<line class=\"series-part\""), polygons) << html;
 }
 
+// A radar scales each axis to its own values: one series (or one value per axis) would be a
+// polygon on the rim saying nothing, so it is drawn as bars; an axis with a single value among
+// others puts it mid-way and says "only", not on the rim where it would read as the worst.
+TEST_F(Report, SingleValuesAreNeverDrawnAsTheWorst) {
+  int64_t t = 1'790'000'000'000'000'000;
+  for (const char* id : {"a1", "a2", "a3"}) {
+    testing::SampleRun run;
+    run.id = id;
+    run.name = std::string(id) + "_bench";
+    run.start_unix_ns = (t += 60'000'000'000);
+    testing::write_sample(dir_, run);
+  }
+  const std::string single = render_html(load_report_inputs({dir_}), {});
+  EXPECT_EQ(count(single, "<svg class=\"radar\""), 0u);
+  EXPECT_EQ(count(single, "<svg class=\"bars\""), 2u);  // latency and throughput
+  EXPECT_NE(single.find("or one value per benchmark, make no radar"), std::string::npos);
+
+  testing::SampleRun other;
+  other.id = "a1";
+  other.name = "a1_bench";
+  other.cpu = "Other CPU";
+  other.base_latency_ms = 9;
+  other.start_unix_ns = (t += 60'000'000'000);
+  testing::write_sample(dir_, other);
+  const std::string two = render_html(load_report_inputs({dir_}), {});
+  EXPECT_EQ(count(two, "<svg class=\"radar\""), 2u);
+  // a1 has two values and a real scale; a2 and a3 have one each, written as such.
+  EXPECT_EQ(count(two, ">only "), 4u) << two;
+  EXPECT_EQ(count(two, "class=\"axis-scale\" x=\""), 6u);
+  const std::regex scale_max("class=\"axis-scale\"[^>]*>max ");
+  EXPECT_EQ(std::distance(std::sregex_iterator(two.begin(), two.end(), scale_max),
+                          std::sregex_iterator()),
+            2);
+}
+
+// Published rows state the rate they were measured at ("bounded to 30fps", "swept from 30 to
+// 300 fps"): a local run at another rate is named beside the plot, the published table lists
+// the rates, and --compare rate= selects published rows by it.
+TEST_F(Report, PublishedRowsAreMatchedOnTheirStatedRate) {
+  testing::SampleRun run;
+  testing::write_sample(dir_, run);
+  const auto input = load_report_inputs({dir_, kPublishedA1});
+  const std::string md = render_markdown(input, {});
+  EXPECT_NE(md.find("Not alike: a1: the published rows state 30 Hz, 30-300 Hz sweep, 30-500 Hz "
+                    "sweep, the local runs ran at 30 Hz (--compare rate=HZ picks one)"),
+            std::string::npos)
+      << md.substr(0, 4000);
+  EXPECT_NE(md.find("| rates stated |"), std::string::npos);
+  // One published configuration: the i7-12700H's black-box rows at 30 Hz.
+  ReportOptions options;
+  options.compare = std::pair{std::string("rmw=intra"),
+                              std::string("hardware=Intel i7-12700H,mode=black,rate=30")};
+  const std::string compared = render_markdown(input, options);
+  EXPECT_NE(compared.find("B = hardware=Intel i7-12700H,mode=black,rate=30: 0 local runs, 3 "
+                          "published rows"),
+            std::string::npos)
+      << compared.substr(compared.find("## Comparison"));
+  // Its rows at 30 Hz and its sweeps are two configurations: never one median.
+  options.compare = std::pair{std::string("rmw=intra"), std::string("Intel i7-12700H")};
+  try {
+    render_markdown(input, options);
+    ADD_FAILURE() << "a side pooling two published configurations was accepted";
+  } catch (const ReportError& e) {
+    const std::string why = e.what();
+    EXPECT_NE(why.find("Intel i7-12700H (RobotPerf) · black · 30 Hz; Intel i7-12700H (RobotPerf) "
+                       "· black · 30-500 Hz sweep"),
+              std::string::npos)
+        << why;
+  }
+  // Nor local runs with published rows.
+  options.compare = std::pair{std::string("Intel i7-12700H"), std::string("mode=black,rate=30")};
+  EXPECT_THROW(render_markdown(input, options), ReportError);
+}
+
 // What the terminal summary shows beside the latency is on the page too: the functional check,
 // the graph's CPU and memory, energy per message, the control loops and the grey-box hops.
 TEST_F(Report, RunsShowWhatElseTheyMeasured) {

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "robotperf/report/run_store.hpp"
@@ -32,6 +33,12 @@ struct PublishedResult {
   // Figures read from the free-text note (RobotPerf writes "mean 14.73 ms, RMS 14.84 ms, ...",
   // "mean_benchmark ...", "min_latency ...", "lost messages 4.55 %").
   std::optional<double> note_mean, note_rms, note_min, note_max, note_loss_percent;
+  // The input rate the note states, in Hz: one rate ("bounded to 30fps", "Fixed at 30 FPS",
+  // "update rate 10 Hz": low == high) or a sweep ("swept from 30 to 300 fps", "configured in
+  // the 30-500 FPS range").
+  std::optional<std::pair<double, double>> note_rate_hz;
+  // "30 Hz", "30-300 Hz sweep", or "" when the note states none.
+  std::string stated_rate() const;
 
   // Equal in the nine RobotPerf fields (value compared as a number).
   bool same_entry(const PublishedResult& other) const;

@@ -40,5 +40,9 @@ struct ReportOptions {
 // Throws ReportError when a --compare selector matches nothing.
 std::string render_html(const ReportInput& input, const ReportOptions& options);
 std::string render_markdown(const ReportInput& input, const ReportOptions& options);
+// `robotperf compare A B`: the report's comparison of two selectors (as ReportOptions::compare
+// takes them) as an aligned text table with ratios and judgements, then what each side holds.
+std::string render_comparison_text(const ReportInput& input, const std::string& a,
+                                   const std::string& b);
 
 }  // namespace robotperf::report

@@ -70,6 +70,7 @@ struct StoredRun {
   std::optional<double> cpu_percent;
   std::optional<double> peak_rss_mib;
   std::string control;
+  std::optional<double> update_rate_hz;  // control benchmarks: the (first) controller loop's rate
   std::optional<LogHistogram> histogram;
   std::optional<std::filesystem::path> csv_path;  // <stem>.latencies.csv beside the JSON
 
@@ -96,8 +97,10 @@ struct RunScan {
 RunScan scan_results(const std::filesystem::path& dir);
 
 // A .json file that may be a run: not the summary of a --repeat series or --sweep written
-// beside its runs (.series.json, .sweep.json).
+// beside its runs (.series.json, .sweep.json), nor published rows imported with
+// `results import --into` (may_be_imported_file).
 bool may_be_run_file(const std::filesystem::path& path);
+bool may_be_imported_file(const std::filesystem::path& path);
 
 // A short platform name from a machine description (robotperf sysinfo JSON):
 // "AMD Ryzen 7 5800X", "Intel Core i7-12700H + NVIDIA GeForce RTX 3060", "NVIDIA Jetson AGX Orin".
@@ -113,6 +116,10 @@ std::vector<double> read_latency_csv(const std::filesystem::path& csv);
 
 // The `results list` table: one line per run.
 std::string runs_table(const std::vector<StoredRun>& runs);
+// The same runs for programs: a JSON array of objects, or CSV (RFC 4180, a header line), with
+// the same fields ("" / null where a run has no value). Latencies in ms, rates in Hz.
+nlohmann::json runs_json(const std::vector<StoredRun>& runs);
+std::string runs_csv(const std::vector<StoredRun>& runs);
 
 // "12.345" with `decimals` digits, or "-" for NaN.
 std::string format_fixed(double value, int decimals);
