@@ -181,7 +181,11 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
         }
         if (!b.hops.rows.empty()) {
           s << "<p class=\"note\">Where the time goes (grey-box, per hop):</p>\n"
-            << table_html(b.hops);
+            << detail::hops_svg(b.hop_bars, b.hops_run) << table_html(b.hops);
+        }
+        if (!b.peak_search.rows.empty()) {
+          s << "<p class=\"note\">Peak search (--find-peak), step by step:</p>\n"
+            << table_html(b.peak_search);
         }
         if (!b.distribution.empty()) s << detail::distribution_svg(b.distribution, b.id);
       } else {
@@ -269,6 +273,10 @@ std::string render_markdown(const ReportInput& input, const ReportOptions& optio
       if (!b.hops.rows.empty()) {
         s << "Where the time goes (grey-box, per hop):\n\n";
         table(b.hops);
+      }
+      if (!b.peak_search.rows.empty()) {
+        s << "Peak search (--find-peak), step by step:\n\n";
+        table(b.peak_search);
       }
       if (!b.published.rows.empty()) {
         s << "Published RobotPerf results (" << b.published_rows

@@ -347,6 +347,29 @@ Table hops_table_for(const std::vector<const StoredRun*>& runs) {
   return t;
 }
 
+// Each --find-peak run's search, step by step, as its terminal summary shows it.
+Table peak_search_table_for(const std::vector<const StoredRun*>& runs) {
+  Table t;
+  t.css_class = "peak-search";
+  t.header = {"run",       "step",   "rate Hz",    "offered Hz",
+              "output Hz", "loss %", "latency ms", "verdict"};
+  t.numeric = {false, true, true, true, true, true, true, false};
+  for (const StoredRun* r : runs) {
+    for (std::size_t i = 0; i < r->peak_steps.size(); ++i) {
+      const auto& step = r->peak_steps[i];
+      std::string verdict = step.passed ? "sustained" : "failed: " + step.reason;
+      if (i + 1 == r->peak_steps.size() && !r->peak_stop_reason.empty())
+        verdict += " (" + r->peak_stop_reason + ")";
+      t.rows.push_back({i == 0 ? r->stem() : "", std::to_string(i + 1),
+                        format_fixed(step.rate_hz, 1), format_fixed(step.offered_hz, 1),
+                        format_fixed(step.output_hz, 1), format_fixed(step.loss_percent, 2),
+                        format_fixed(step.latency_ms, 3), verdict});
+      t.row_warning.push_back(false);
+    }
+  }
+  return t;
+}
+
 void published_tables(const PublishedBenchmark& b, Table& summary, Table& flagged) {
   summary.css_class = "published";
   summary.header = {"hardware",
@@ -930,6 +953,13 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
       section.runs = runs_table_for(runs);
       section.also_measured = also_measured_table_for(runs);
       section.hops = hops_table_for(runs);
+      section.peak_search = peak_search_table_for(runs);
+      for (auto it = runs.rbegin(); it != runs.rend(); ++it) {
+        if ((*it)->hops.empty()) continue;
+        section.hops_run = (*it)->stem();
+        section.hop_bars = (*it)->hops;
+        break;
+      }
       std::vector<const StoredRun*> recent(
           runs.end() -
               static_cast<std::ptrdiff_t>(std::min(runs.size(), options.max_distribution_runs)),

@@ -44,9 +44,12 @@ struct Distribution {
 
 struct BenchmarkSection {
   std::string id, name, category;
-  Table runs;           // local runs
-  Table also_measured;  // their functional check, resources, energy per message, control loops
-  Table hops;           // the newest grey-box run's per-hop breakdown
+  Table runs;            // local runs
+  Table also_measured;   // their functional check, resources, energy per message, control loops
+  Table hops;            // the newest grey-box run's per-hop breakdown
+  std::string hops_run;  // that run, and its hops' mean durations drawn as bars
+  std::vector<StoredRun::Hop> hop_bars;
+  Table peak_search;  // the steps of each --find-peak run
   std::vector<Distribution> distribution;
   Table published;  // per published hardware: medians of unflagged rows
   Table flagged;    // published rows that break the measurement rules
@@ -115,6 +118,8 @@ struct Label {
 // Moves labels down, in order, until no two of them overlap (each keeps its x).
 void place_labels(std::vector<Label>& labels);
 std::string distribution_svg(const std::vector<Distribution>& curves, const std::string& id);
+// One stacked bar of a grey-box run's hops: where the mean latency of a message goes.
+std::string hops_svg(const std::vector<StoredRun::Hop>& hops, const std::string& run);
 extern const char* const kPalette[12];
 
 }  // namespace robotperf::report::detail

@@ -107,6 +107,20 @@ void read_also_measured(const json& j, StoredRun& run) {
                           number_or_nan(d, "p99")});
     }
   }
+  const json& peak = member(j, "peak_search");
+  if (const json& steps = member(peak, "steps"); steps.is_array()) {
+    for (const auto& step : steps) {
+      const json& passed = member(step, "passed");
+      const json& reason = member(step, "reason");
+      run.peak_steps.push_back(
+          {number_or_nan(step, "rate_hz"), number_or_nan(step, "offered_hz"),
+           number_or_nan(step, "output_hz"), number_or_nan(step, "loss_percent"),
+           number_or_nan(step, "latency_ms"), passed.is_boolean() && passed.get<bool>(),
+           reason.is_string() ? reason.get<std::string>() : ""});
+    }
+    if (const json& why = member(peak, "stop_reason"); why.is_string())
+      run.peak_stop_reason = why.get<std::string>();
+  }
   const json& loops = member(j, "control_loops");
   if (loops.is_array()) {
     for (const auto& loop : loops) {

@@ -277,6 +277,73 @@ std::string radar_svg(const Radar& r) {
   return s.str();
 }
 
+std::string hops_svg(const std::vector<StoredRun::Hop>& hops, const std::string& run) {
+  // A graph's hops are no chain (a node has a path per input and output, a kernel runs inside its
+  // node), so their durations are drawn side by side, never stacked: one bar per hop, its mean,
+  // with a whisker to its p99, coloured by kind, on one linear scale from 0.
+  constexpr double kWidth = 760, kLabelsLeft = 10, kBarsLeft = 370, kBarsWidth = 300, kRow = 18;
+  constexpr std::pair<const char*, const char*> kKinds[] = {
+      {"transport", "#1f77b4"}, {"node", "#ff7f0e"}, {"kernel", "#2ca02c"}};
+  auto colour_of = [&](const std::string& kind) {
+    for (const auto& [k, c] : kKinds) {
+      if (kind == k) return c;
+    }
+    return "#7f7f7f";
+  };
+  double x_max = 0;
+  for (const auto& h : hops) {
+    for (double v : {h.mean_ms, h.p99_ms}) {
+      if (std::isfinite(v)) x_max = std::max(x_max, v);
+    }
+  }
+  if (hops.empty() || !(x_max > 0)) return "";
+  const double top = 40;
+  const double height = top + kRow * static_cast<double>(hops.size()) + 40;
+  auto px = [&](double v) { return kBarsLeft + kBarsWidth * v / x_max; };
+  std::ostringstream s;
+  s << "<svg class=\"hops\" data-run=\"" << html_escape(run)
+    << "\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kWidth << "\" height=\"" << num(height)
+    << "\" viewBox=\"0 0 " << kWidth << " " << num(height) << "\" role=\"img\">\n";
+  s << "<title>" << html_escape(run) << ": per-hop durations</title>\n";
+  s << "<text class=\"plot-title\" x=\"" << kLabelsLeft << "\" y=\"18\">"
+    << html_escape("per hop: mean duration (ms), whisker to p99 — " + run) << "</text>\n";
+  double y = top;
+  for (const auto& h : hops) {
+    const char* colour = colour_of(h.kind);
+    s << "<text class=\"tick\" x=\"" << kLabelsLeft << "\" y=\"" << num(y + 12) << "\">"
+      << html_escape(legend_label(h.label, 54)) << "<title>"
+      << html_escape(h.label + " (" + h.kind + ")") << "</title></text>\n";
+    double end = kBarsLeft;
+    if (std::isfinite(h.mean_ms)) {
+      end = px(h.mean_ms);
+      s << "<rect class=\"bar\" x=\"" << kBarsLeft << "\" y=\"" << num(y + 3) << "\" width=\""
+        << num(std::max(end - kBarsLeft, 1.0)) << "\" height=\"12\" fill=\"" << colour
+        << "\"><title>" << html_escape(h.label) << ": mean " << format_value(h.mean_ms)
+        << " ms</title></rect>\n";
+    }
+    if (std::isfinite(h.p99_ms)) {
+      end = std::max(end, px(h.p99_ms));
+      s << "<line x1=\"" << num(px(std::isfinite(h.mean_ms) ? h.mean_ms : 0)) << "\" x2=\""
+        << num(px(h.p99_ms)) << "\" y1=\"" << num(y + 9) << "\" y2=\"" << num(y + 9)
+        << "\" stroke=\"#444\"/><line x1=\"" << num(px(h.p99_ms)) << "\" x2=\"" << num(px(h.p99_ms))
+        << "\" y1=\"" << num(y + 5) << "\" y2=\"" << num(y + 13) << "\" stroke=\"#444\"/>\n";
+    }
+    s << "<text class=\"tick\" x=\"" << num(end + 4) << "\" y=\"" << num(y + 12) << "\">"
+      << format_value(h.mean_ms) << "</text>\n";
+    y += kRow;
+  }
+  // The kinds' colours, under the bars.
+  double lx = kBarsLeft;
+  for (const auto& [kind, colour] : kKinds) {
+    s << "<rect x=\"" << num(lx) << "\" y=\"" << num(y + 12)
+      << "\" width=\"14\" height=\"10\" fill=\"" << colour << "\"/><text class=\"legend\" x=\""
+      << num(lx + 18) << "\" y=\"" << num(y + 21) << "\">" << kind << "</text>\n";
+    lx += 90;
+  }
+  s << "</svg>\n";
+  return s.str();
+}
+
 std::string distribution_svg(const std::vector<Distribution>& curves, const std::string& id) {
   constexpr double kWidth = 760, kLeft = 60, kRight = 20, kTop = 30, kPlotHeight = 240;
   const double legend_height = 18.0 * static_cast<double>(curves.size()) + 10;

@@ -417,8 +417,34 @@ TEST_F(Report, RunsShowWhatElseTheyMeasured) {
   j["grey"]["hops"] = {{{"label", "rectify: image_proc/rectify"},
                         {"kind", "kernel"},
                         {"duration_ms", {{"mean", 2.25}, {"p50", 1.75}, {"p99", 5.5}}}}};
+  j["peak_search"] = {{"steps",
+                       {{{"rate_hz", 30.0},
+                         {"offered_hz", 30.0},
+                         {"output_hz", 30.0},
+                         {"loss_percent", 0.0},
+                         {"latency_ms", 4.5},
+                         {"passed", true},
+                         {"reason", ""}},
+                        {{"rate_hz", 60.0},
+                         {"offered_hz", 60.0},
+                         {"output_hz", 41.0},
+                         {"loss_percent", 31.6},
+                         {"latency_ms", 80.25},
+                         {"passed", false},
+                         {"reason", "loss 31.6 % > 0 %"}}}},
+                      {"stop_reason", "the failing rate is within 5 % of the sustained one"}};
   std::ofstream(path) << j.dump();
-  const std::string md = render_markdown(load_report_inputs({dir_}), {});
+  const auto input = load_report_inputs({dir_});
+  const std::string md = render_markdown(input, {});
+  const std::string html = render_html(input, {});
+  EXPECT_NE(md.find("| 2 | 60.0 | 60.0 | 41.0 | 31.60 | 80.250 | failed: loss 31.6 % > 0 % (the "
+                    "failing rate is within 5 % of the sustained one) |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(html.find("<table class=\"peak-search\""), std::string::npos);
+  // The hops as bars too, mean with a whisker to p99.
+  EXPECT_NE(html.find("<svg class=\"hops\""), std::string::npos);
+  EXPECT_NE(html.find("rectify: image_proc/rectify: mean 2.25 ms"), std::string::npos);
   EXPECT_NE(md.find("| VALID: mae_px 0.0861 px | 42.5 | 120.0 |"), std::string::npos) << md;
   EXPECT_NE(md.find("| rectify: image_proc/rectify | kernel | 2.250 | 1.750 | 5.500 |"),
             std::string::npos)

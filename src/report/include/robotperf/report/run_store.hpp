@@ -67,6 +67,15 @@ struct StoredRun {
     double mean_ms = kNoValue, p50_ms = kNoValue, p99_ms = kNoValue;
   };
   std::vector<Hop> hops;
+  // --find-peak: each step of the search, and why it stopped.
+  struct PeakStep {
+    double rate_hz = kNoValue, offered_hz = kNoValue, output_hz = kNoValue;
+    double loss_percent = kNoValue, latency_ms = kNoValue;
+    bool passed = false;
+    std::string reason;  // why a step failed
+  };
+  std::vector<PeakStep> peak_steps;
+  std::string peak_stop_reason;
   std::optional<double> cpu_percent;
   std::optional<double> peak_rss_mib;
   std::string control;
