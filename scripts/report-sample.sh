@@ -42,7 +42,7 @@ run d6
 
 if command -v chromium > /dev/null; then
   chromium --headless --no-sandbox --disable-gpu --no-first-run --hide-scrollbars \
-    --user-data-dir="$out/chromium-profile" --window-size=1500,1700 \
+    --user-data-dir="$out/chromium-profile" --window-size=1600,1800 \
     --screenshot="$out/report-sample.png" "file://$out/report.html" 2> /dev/null
   echo "screenshot: $out/report-sample.png (copy it to docs/ to update the README's)"
 fi
