@@ -79,7 +79,8 @@ NodeProcesses::NodeProcesses(
     Child c;
     c.name = node.name;
     c.kernel = node.kernel;
-    c.report = {node.name, node.kernel, 0, "running", -1, -1, {}, node.host, "", true};
+    c.report = {node.name, node.kernel, 0,  "running", -1,          -1,
+                {},        node.host,   "", true,      node.backend};
     int in[2], out[2];
     make_pipe(in);
     make_pipe(out);

@@ -537,7 +537,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
       graph_executor->add_node(node);
       local_nodes.push_back(node);
       kernel_nodes.push_back(node);
-      r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1, {}, "", "", true});
+      r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1, {}, "", "", true, n.backend});
     }
   } else {
     std::vector<std::string> node_arguments = options.scheduling.node_arguments();

@@ -445,8 +445,8 @@ struct FieldSelector {
       const std::string key = lower(part.substr(0, eq));
       if (eq == std::string::npos || !kKeys.contains(key)) {
         throw ReportError("'" + selector + "': '" + part +
-                          "' is not a field=value (fields: hardware, rmw, processes, mode, "
-                          "arrivals, rate)");
+                          "' is not a field=value (fields: hardware, rmw, processes, backend, "
+                          "mode, arrivals, rate)");
       }
       f.fields[key] = lower(part.substr(eq + 1));
     }
@@ -461,6 +461,7 @@ struct FieldSelector {
       const std::string have = key == "hardware"    ? r.hardware
                                : key == "rmw"       ? r.rmw
                                : key == "processes" ? r.processes
+                               : key == "backend"   ? (r.backend.empty() ? "cpu" : r.backend)
                                : key == "mode"      ? r.type
                                                     : (r.timeline.empty() ? "fixed" : r.timeline);
       if (lower(have) != want) return false;
@@ -488,7 +489,7 @@ struct FieldSelector {
     return *end == '\0' && std::fabs(hz - wanted) <= 1e-6 * std::max(1.0, wanted);
   }
 
-  static inline const std::set<std::string> kKeys = {"hardware", "rmw",      "processes",
+  static inline const std::set<std::string> kKeys = {"hardware", "rmw",      "processes", "backend",
                                                      "mode",     "arrivals", "rate"};
 };
 
@@ -778,9 +779,11 @@ const char* const kPalette[12] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#
 
 std::string configuration_series(const StoredRun& run) {
   // What makes two runs comparable (DESIGN.md §3.9), the rate aside: the machine, the transport,
-  // the process layout, black- or grey-box and the arrivals. Defaults are left out of the label.
+  // the process layout, the backend, black- or grey-box and the arrivals. Defaults are left out of
+  // the label.
   std::string label = run.hardware + " · " + run.rmw;
   if (run.processes == "per-node") label += " · per-node";
+  if (!run.backend.empty()) label += " · " + run.backend;
   if (run.type == "grey") label += " · grey";
   if (!run.timeline.empty() && run.timeline != "fixed") label += " · " + run.timeline;
   return label;

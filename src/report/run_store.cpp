@@ -107,6 +107,14 @@ void read_also_measured(const json& j, StoredRun& run) {
                           number_or_nan(d, "p99")});
     }
   }
+  if (const json& nodes = member(j, "nodes"); nodes.is_array()) {
+    std::set<std::string> backends;
+    for (const auto& node : nodes) {
+      const json& b = member(node, "backend");
+      if (b.is_string() && b.get<std::string>() != "cpu") backends.insert(b.get<std::string>());
+    }
+    for (const auto& b : backends) run.backend += (run.backend.empty() ? "" : "+") + b;
+  }
   const json& peak = member(j, "peak_search");
   if (const json& steps = member(peak, "steps"); steps.is_array()) {
     for (const auto& step : steps) {
@@ -487,6 +495,7 @@ std::vector<std::pair<const char*, json>> run_fields(const StoredRun& r) {
           {"hardware", r.hardware},
           {"rmw", r.rmw},
           {"processes", r.processes},
+          {"backend", r.backend.empty() ? "cpu" : r.backend},
           {"arrivals", r.timeline.empty() ? "fixed" : r.timeline},
           {"rate_hz", number(r.rate_hz)},
           {"update_rate_hz", optional(r.update_rate_hz)},

@@ -120,6 +120,7 @@ TEST_P(CliPerNode, RunA1OneProcessPerNode) {
   ASSERT_EQ(j["nodes"].size(), 2u);
   for (const auto& n : j["nodes"]) {
     EXPECT_EQ(n["exit_status"], "ok") << n.dump();
+    EXPECT_EQ(n["backend"], "cpu") << n.dump();
     EXPECT_GT(n["pid"].get<int>(), 0);
   }
   // Resources are those of the node processes, by node name.

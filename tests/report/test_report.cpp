@@ -550,10 +550,17 @@ TEST_F(Report, RunsOfDifferentConfigurationsAreSeparateSeries) {
   j["type"] = "grey";
   std::ofstream(per_node) << j.dump();
   base.start_unix_ns += 1'000'000'000;
+  const auto accelerated = testing::write_sample(dir_, base);
+  j = nlohmann::json::parse(read_text(accelerated));
+  j["nodes"] = {{{"name", "rectify"}, {"kernel", "image_proc/rectify"}, {"backend", "opencl"}},
+                {{"name", "resize"}, {"kernel", "image_proc/resize"}, {"backend", "cpu"}}};
+  std::ofstream(accelerated) << j.dump();
+  base.start_unix_ns += 1'000'000'000;
   testing::write_sample(dir_, base);
   const std::string html = render_html(load_report_inputs({dir_}), {});
   for (const char* series : {"AMD Ryzen 7 5800X · intra · 60 Hz<title>",
                              "AMD Ryzen 7 5800X · intra · per-node · grey · 30 Hz<title>",
+                             "AMD Ryzen 7 5800X · intra · opencl · 30 Hz<title>",
                              "AMD Ryzen 7 5800X · intra · 30 Hz<title>"}) {
     EXPECT_NE(html.find(series), std::string::npos) << series;
   }

@@ -123,9 +123,10 @@ struct NodeReport {
   double cpu_system_s = -1;
   // What the kernel counted (plugin::NodeCounters), e.g. inputs that never paired.
   std::map<std::string, uint64_t> counters;
-  std::string host;          // graph.yaml `host:`; empty: the runner's
-  std::string hostname;      // of the machine it ran on, as it reported (per-node runs)
-  bool same_machine = true;  // as the runner's (same boot id): its pid's resources were sampled
+  std::string host;             // graph.yaml `host:`; empty: the runner's
+  std::string hostname;         // of the machine it ran on, as it reported (per-node runs)
+  bool same_machine = true;     // as the runner's (same boot id): its pid's resources were sampled
+  std::string backend = "cpu";  // where its kernel ran (graph.yaml `backend:`)
 };
 
 // A process of an external graph (graph.yaml `launch:`), as it ended.

@@ -79,7 +79,9 @@ struct StoredRun {
   std::optional<double> cpu_percent;
   std::optional<double> peak_rss_mib;
   std::string control;
-  std::optional<double> update_rate_hz;  // control benchmarks: the (first) controller loop's rate
+  std::optional<double> update_rate_hz;
+  // The backends other than cpu its nodes ran on ("cuda", "cuda+opencl"); "" when all ran on cpu.
+  std::string backend;  // control benchmarks: the (first) controller loop's rate
   std::optional<LogHistogram> histogram;
   std::optional<std::filesystem::path> csv_path;  // <stem>.latencies.csv beside the JSON
 
