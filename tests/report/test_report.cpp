@@ -433,6 +433,7 @@ TEST_F(Report, RunsShowWhatElseTheyMeasured) {
                          {"passed", false},
                          {"reason", "loss 31.6 % > 0 %"}}}},
                       {"stop_reason", "the failing rate is within 5 % of the sustained one"}};
+  j["power"] = {{"available", true}, {"average_w", 12.5}, {"energy_j", 0.625}};
   std::ofstream(path) << j.dump();
   const auto input = load_report_inputs({dir_});
   const std::string md = render_markdown(input, {});
@@ -442,10 +443,13 @@ TEST_F(Report, RunsShowWhatElseTheyMeasured) {
             std::string::npos)
       << md;
   EXPECT_NE(html.find("<table class=\"peak-search\""), std::string::npos);
+  EXPECT_NE(html.find("<td>VALID: mae_px 0.0861 px</td><td class=\"num\">42.5</td><td "
+                      "class=\"num\">120.0</td><td class=\"num\">6.250</td>"),
+            std::string::npos);
   // The hops as bars too, mean with a whisker to p99.
   EXPECT_NE(html.find("<svg class=\"hops\""), std::string::npos);
   EXPECT_NE(html.find("rectify: image_proc/rectify: mean 2.25 ms"), std::string::npos);
-  EXPECT_NE(md.find("| VALID: mae_px 0.0861 px | 42.5 | 120.0 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| VALID: mae_px 0.0861 px | 42.5 | 120.0 | 6.250 |"), std::string::npos) << md;
   EXPECT_NE(md.find("| rectify: image_proc/rectify | kernel | 2.250 | 1.750 | 5.500 |"),
             std::string::npos)
       << md;
