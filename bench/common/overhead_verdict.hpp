@@ -1,0 +1,49 @@
+// The verdict of a bench that compares a time in the graph with its like-for-like reference:
+// the overhead at p50, how far apart the two p50s may be by chance, and whether the graph came out
+// faster than its reference beyond that (a bench defect: the reference does different or colder
+// work, and the overhead figure says nothing).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace robotperf::bench {
+
+struct OverheadVerdict {
+  double reference_p50 = 0, graph_p50 = 0;  // over every round's samples
+  double ratio = 0;                         // (graph - reference) / reference
+  // How far apart the two p50s may be by chance, relative to the reference: the wider half of
+  // the two medians' 95 % intervals, or half the spread of the rounds' own ratios where that is
+  // wider (samples of one round are not independent: a kernel whose threads the scheduler places
+  // well or badly for a while moves a whole round).
+  double band = 0;
+  double round_low = 0, round_high = 0;  // the rounds' own ratios
+  // The same ratio at p10: the floor both sides reach when the scheduler places their threads
+  // well. A kernel with threads of its own (OpenCV's) runs in two modes, and a round can catch
+  // one side more often in the slow one; a reference doing different or colder work moves its
+  // floor too.
+  double floor_ratio = 0;
+  // Faster than the reference beyond the band at p50 and at the floor, and in every round.
+  bool defect = false;
+  bool met = false;  // ratio <= the target
+};
+
+// One round: the reference's and the graph's samples, taken in turns.
+struct OverheadRound {
+  std::vector<double> reference, graph;
+};
+
+OverheadVerdict judge_overhead(const std::vector<OverheadRound>& rounds, double target_ratio);
+
+// "(met)", "(NOT met)", "(information)" or "(BENCH DEFECT: ...)".
+std::string verdict_text(const OverheadVerdict& v, bool target_applies);
+
+// Benches registered as CTest smoke tests take --smoke (fewer samples) and exit 1 when a
+// comparison came out as a bench defect.
+struct BenchOptions {
+  bool smoke = false;
+  std::vector<std::string> args;  // the others
+};
+BenchOptions parse_bench_options(int argc, char** argv);
+
+}  // namespace robotperf::bench

@@ -1,0 +1,72 @@
+// The verdict every overhead bench prints: a graph faster than its reference beyond the noise,
+// in every round, is a bench defect; anything else is judged against the target.
+#include "overhead_verdict.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace robotperf::bench {
+namespace {
+
+// n samples spread evenly over [centre - 2 %, centre + 2 %].
+std::vector<double> around(double centre, std::size_t n = 60) {
+  std::vector<double> v;
+  for (std::size_t i = 0; i < n; ++i)
+    v.push_back(centre * (0.98 + 0.04 * static_cast<double>(i) / static_cast<double>(n - 1)));
+  return v;
+}
+
+TEST(OverheadVerdict, AGraphFasterThanItsReferenceInEveryRoundIsADefect) {
+  const auto v = judge_overhead({{around(10), around(8)}, {around(10), around(8.1)}}, 0.10);
+  EXPECT_NEAR(v.ratio, -0.195, 0.01);
+  EXPECT_LT(v.band, 0.05);
+  EXPECT_TRUE(v.defect);
+  EXPECT_FALSE(v.met);
+  EXPECT_NE(verdict_text(v, true).find("BENCH DEFECT"), std::string::npos);
+}
+
+TEST(OverheadVerdict, RoundsThatDisagreeWidenTheBandAndAreNoDefect) {
+  // One round says 20 % faster, the other 4 % slower: the band is half their spread.
+  const auto v = judge_overhead({{around(10), around(8)}, {around(10), around(10.4)}}, 0.10);
+  EXPECT_NEAR(v.round_low, -0.20, 0.01);
+  EXPECT_NEAR(v.round_high, 0.04, 0.01);
+  EXPECT_GE(v.band, 0.11);
+  EXPECT_FALSE(v.defect);
+}
+
+TEST(OverheadVerdict, AnOverheadIsJudgedAgainstTheTarget) {
+  const auto small = judge_overhead({{around(10), around(10.5)}, {around(10), around(10.6)}}, 0.10);
+  EXPECT_FALSE(small.defect);
+  EXPECT_TRUE(small.met);
+  EXPECT_EQ(verdict_text(small, true), "(met)");
+  EXPECT_EQ(verdict_text(small, false), "(information)");
+  const auto large = judge_overhead({{around(10), around(13)}, {around(10), around(13.1)}}, 0.10);
+  EXPECT_FALSE(large.met);
+  EXPECT_EQ(verdict_text(large, true), "(NOT met)");
+}
+
+// A kernel running in two modes (its second thread placed well or badly): the graph caught more
+// often in the fast one has a lower p50, but the same floor: no defect.
+TEST(OverheadVerdict, AModeMixIsNoDefectWhenTheFloorsAgree) {
+  auto modes = [](std::size_t fast) {
+    std::vector<double> v = around(12, fast);
+    const auto slow = around(17, 60 - fast);
+    v.insert(v.end(), slow.begin(), slow.end());
+    return v;
+  };
+  const auto v = judge_overhead({{modes(20), modes(45)}, {modes(22), modes(44)}}, 0.10);
+  EXPECT_LT(v.ratio, -v.band);
+  EXPECT_NEAR(v.floor_ratio, 0.0, 0.02);
+  EXPECT_FALSE(v.defect);
+}
+
+TEST(OverheadVerdict, TooFewSamplesAreNoEvidence) {
+  // Two samples give a median interval without ends: no defect can be claimed from them.
+  const auto v = judge_overhead({{{10, 10.1}, {5, 5.1}}}, 0.10);
+  EXPECT_FALSE(std::isfinite(v.band));
+  EXPECT_FALSE(v.defect);
+}
+
+}  // namespace
+}  // namespace robotperf::bench
