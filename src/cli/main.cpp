@@ -1226,7 +1226,7 @@ int main(int argc, char** argv) {
   compare_cmd
       ->add_option("A", compare_a,
                    "a results file, a file-name prefix (a1-intra), a hardware or series name, or "
-                   "fields: hardware=,rmw=,processes=,mode=,arrivals=,rate=")
+                   "fields: hardware=,rmw=,processes=,backend=,mode=,arrivals=,rate=")
       ->required();
   compare_cmd->add_option("B", compare_b, "the other side, as A")->required();
   compare_cmd->add_option("--results", compare_results,

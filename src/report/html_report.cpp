@@ -183,6 +183,9 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
           s << "<p class=\"note\">Where the time goes (grey-box, per hop):</p>\n"
             << detail::hops_svg(b.hop_bars, b.hops_run) << table_html(b.hops);
         }
+        if (!b.callbacks.rows.empty()) {
+          s << "<p class=\"note\">Callback durations (grey-box):</p>\n" << table_html(b.callbacks);
+        }
         if (!b.peak_search.rows.empty()) {
           s << "<p class=\"note\">Peak search (--find-peak), step by step:</p>\n"
             << table_html(b.peak_search);
@@ -273,6 +276,10 @@ std::string render_markdown(const ReportInput& input, const ReportOptions& optio
       if (!b.hops.rows.empty()) {
         s << "Where the time goes (grey-box, per hop):\n\n";
         table(b.hops);
+      }
+      if (!b.callbacks.rows.empty()) {
+        s << "Callback durations (grey-box):\n\n";
+        table(b.callbacks);
       }
       if (!b.peak_search.rows.empty()) {
         s << "Peak search (--find-peak), step by step:\n\n";

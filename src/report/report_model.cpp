@@ -347,6 +347,31 @@ Table hops_table_for(const std::vector<const StoredRun*>& runs) {
   return t;
 }
 
+// The newest grey-box run's callbacks: how long each node's callback for each trigger ran.
+Table callbacks_table_for(const std::vector<const StoredRun*>& runs) {
+  Table t;
+  t.css_class = "callbacks";
+  for (auto it = runs.rbegin(); it != runs.rend(); ++it) {
+    if ((*it)->callbacks.empty()) continue;
+    t.header = {"node (" + (*it)->stem() + ")",
+                "callback of",
+                "count",
+                "mean ms",
+                "p50 ms",
+                "p99 ms",
+                "max ms"};
+    t.numeric = {false, false, true, true, true, true, true};
+    for (const auto& cb : (*it)->callbacks) {
+      t.rows.push_back({cb.node, cb.source, std::to_string(cb.count), format_fixed(cb.mean_ms, 3),
+                        format_fixed(cb.p50_ms, 3), format_fixed(cb.p99_ms, 3),
+                        format_fixed(cb.max_ms, 3)});
+      t.row_warning.push_back(false);
+    }
+    break;
+  }
+  return t;
+}
+
 // Each --find-peak run's search, step by step, as its terminal summary shows it.
 Table peak_search_table_for(const std::vector<const StoredRun*>& runs) {
   Table t;
@@ -956,6 +981,7 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
       section.runs = runs_table_for(runs);
       section.also_measured = also_measured_table_for(runs);
       section.hops = hops_table_for(runs);
+      section.callbacks = callbacks_table_for(runs);
       section.peak_search = peak_search_table_for(runs);
       for (auto it = runs.rbegin(); it != runs.rend(); ++it) {
         if ((*it)->hops.empty()) continue;

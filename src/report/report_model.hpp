@@ -49,6 +49,7 @@ struct BenchmarkSection {
   Table hops;            // the newest grey-box run's per-hop breakdown
   std::string hops_run;  // that run, and its hops' mean durations drawn as bars
   std::vector<StoredRun::Hop> hop_bars;
+  Table callbacks;    // the newest grey-box run's callback durations
   Table peak_search;  // the steps of each --find-peak run
   std::vector<Distribution> distribution;
   Table published;  // per published hardware: medians of unflagged rows

@@ -129,6 +129,19 @@ void read_also_measured(const json& j, StoredRun& run) {
     if (const json& why = member(peak, "stop_reason"); why.is_string())
       run.peak_stop_reason = why.get<std::string>();
   }
+  const json& callbacks = member(member(j, "grey"), "callbacks");
+  if (callbacks.is_array()) {
+    for (const auto& cb : callbacks) {
+      const json& d = member(cb, "duration_ms");
+      const double count = number_or_nan(d, "count");
+      run.callbacks.push_back(
+          {member(cb, "node").is_string() ? cb["node"].get<std::string>() : "?",
+           member(cb, "source").is_string() ? cb["source"].get<std::string>() : "",
+           std::isfinite(count) && count >= 0 ? static_cast<std::size_t>(count) : 0,
+           number_or_nan(d, "mean"), number_or_nan(d, "p50"), number_or_nan(d, "p99"),
+           number_or_nan(d, "max")});
+    }
+  }
   const json& loops = member(j, "control_loops");
   if (loops.is_array()) {
     for (const auto& loop : loops) {

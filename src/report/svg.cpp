@@ -209,17 +209,12 @@ std::string radar_svg(const Radar& r) {
   };
   // Grid rings.
   for (double ring : {0.25, 0.5, 0.75, 1.0}) {
-    if (n >= 3) {
-      s << "<polygon class=\"grid\" points=\"";
-      for (std::size_t a = 0; a < n; ++a) {
-        const auto [x, y] = point(a, ring);
-        s << num(x) << "," << num(y) << " ";
-      }
-      s << "\" fill=\"none\" stroke=\"#ccc\"/>\n";
-    } else {
-      s << "<circle cx=\"" << kCx << "\" cy=\"" << kCy << "\" r=\"" << num(kRadius * ring)
-        << "\" fill=\"none\" stroke=\"#ccc\"/>\n";
+    s << "<polygon class=\"grid\" points=\"";
+    for (std::size_t a = 0; a < n; ++a) {
+      const auto [x, y] = point(a, ring);
+      s << num(x) << "," << num(y) << " ";
     }
+    s << "\" fill=\"none\" stroke=\"#ccc\"/>\n";
   }
   // Axes with their labels.
   for (std::size_t a = 0; a < n; ++a) {
@@ -254,14 +249,14 @@ std::string radar_svg(const Radar& r) {
     const std::string stroke = std::string("stroke=\"") + colour + "\" stroke-width=\"" +
                                (r.series_local[si] ? "3" : "1.5") + "\"" +
                                (r.series_local[si] ? "" : " stroke-dasharray=\"5,3\"");
-    if (pts.size() == n && n >= 2) {
+    if (pts.size() == n) {
       s << "<polygon class=\"series\" points=\"";
       for (const auto& [x, y] : pts) s << num(x) << "," << num(y) << " ";
       s << "\" fill=\"" << colour << "\" fill-opacity=\"0.12\" " << stroke << "/>\n";
     } else if (pts.size() >= 2) {
       for (std::size_t a = 0; a < n; ++a) {
         const std::size_t b = (a + 1) % n;
-        if (!at[a] || !at[b] || (n == 2 && b == 0)) continue;
+        if (!at[a] || !at[b]) continue;
         s << "<line class=\"series-part\" x1=\"" << num(at[a]->first) << "\" y1=\""
           << num(at[a]->second) << "\" x2=\"" << num(at[b]->first) << "\" y2=\""
           << num(at[b]->second) << "\" " << stroke << "/>\n";

@@ -417,6 +417,10 @@ TEST_F(Report, RunsShowWhatElseTheyMeasured) {
   j["grey"]["hops"] = {{{"label", "rectify: image_proc/rectify"},
                         {"kind", "kernel"},
                         {"duration_ms", {{"mean", 2.25}, {"p50", 1.75}, {"p99", 5.5}}}}};
+  j["grey"]["callbacks"] = {
+      {{"node", "rectify"},
+       {"source", "/camera/image_raw"},
+       {"duration_ms", {{"count", 68}, {"mean", 1.5}, {"p50", 1.25}, {"p99", 4.5}, {"max", 7.0}}}}};
   j["peak_search"] = {{"steps",
                        {{{"rate_hz", 30.0},
                          {"offered_hz", 30.0},
@@ -443,6 +447,10 @@ TEST_F(Report, RunsShowWhatElseTheyMeasured) {
             std::string::npos)
       << md;
   EXPECT_NE(html.find("<table class=\"peak-search\""), std::string::npos);
+  EXPECT_NE(md.find("| rectify | /camera/image_raw | 68 | 1.500 | 1.250 | 4.500 | 7.000 |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(html.find("<table class=\"callbacks\""), std::string::npos);
   EXPECT_NE(html.find("<td>VALID: mae_px 0.0861 px</td><td class=\"num\">42.5</td><td "
                       "class=\"num\">120.0</td><td class=\"num\">6.250</td>"),
             std::string::npos);

@@ -67,6 +67,13 @@ struct StoredRun {
     double mean_ms = kNoValue, p50_ms = kNoValue, p99_ms = kNoValue;
   };
   std::vector<Hop> hops;
+  // Grey-box runs: each callback's duration (node, what triggers it: a topic or a timer).
+  struct Callback {
+    std::string node, source;
+    std::size_t count = 0;
+    double mean_ms = kNoValue, p50_ms = kNoValue, p99_ms = kNoValue, max_ms = kNoValue;
+  };
+  std::vector<Callback> callbacks;
   // --find-peak: each step of the search, and why it stopped.
   struct PeakStep {
     double rate_hz = kNoValue, offered_hz = kNoValue, output_hz = kNoValue;
