@@ -55,6 +55,8 @@ NodeReference::NodeReference(const harness::BenchmarkSpec& spec, const harness::
         const auto now = Clock::now();
         {
           std::lock_guard lock(mutex_);
+          // An answer to a frame given up on: not this frame's.
+          if (first_callback_ == Clock::time_point{}) return;
           took_ms_.push_back(
               std::chrono::duration<double, std::milli>(now - first_callback_).count());
           first_callback_ = {};
