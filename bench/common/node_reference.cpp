@@ -1,5 +1,7 @@
 #include "node_reference.hpp"
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 #include <thread>
@@ -101,6 +103,43 @@ std::vector<double> NodeReference::run_paced(Clock::time_point first, Clock::dur
     }
   }
   return took;
+}
+
+harness::RunResult NodeReference::run_beside(
+    harness::RunOptions options,
+    const std::function<harness::RunResult(const harness::RunOptions&)>& run_graph,
+    std::vector<double>& reference_ms) {
+  if (!options.rate_hz || !options.count || !options.warmup)
+    throw std::invalid_argument("a round beside the graph needs its rate, count and warm-up");
+  const std::size_t count = *options.count, warmup = *options.warmup;
+  // The graph's first send, as a steady-clock count; -1 when the graph ended without one.
+  std::atomic<Clock::rep> first_send{0};
+  options.progress = [&](std::size_t sent, std::size_t, std::size_t) {
+    if (sent == 1 && first_send == 0) first_send = Clock::now().time_since_epoch().count();
+  };
+  const auto period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(1.0 / *options.rate_hz));
+  std::thread beside([&] {
+    while (first_send == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    if (first_send < 0) return;
+    const Clock::time_point first{Clock::duration(first_send.load())};
+    const auto took = run_paced(first + period / 2, period, std::chrono::milliseconds(2), count);
+    reference_ms.assign(took.begin() + static_cast<long>(std::min(warmup, took.size())),
+                        took.end());
+  });
+  auto give_up = [&] {
+    Clock::rep none = 0;
+    first_send.compare_exchange_strong(none, -1);
+    beside.join();
+  };
+  try {
+    harness::RunResult r = run_graph(options);
+    give_up();
+    return r;
+  } catch (...) {
+    give_up();
+    throw;
+  }
 }
 
 }  // namespace robotperf::bench

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "robotperf/graph/node.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
+#include "robotperf/harness/run.hpp"
 
 namespace robotperf::bench {
 
@@ -36,6 +38,15 @@ class NodeReference {
   // for a frame whose answer did not come within a second).
   std::vector<double> run_paced(Clock::time_point first, Clock::duration period,
                                 Clock::duration lead, std::size_t count);
+
+  // A round: `run_graph` runs the benchmark with `options` (given a progress callback to see its
+  // first send) and, beside it in the same process, this reference takes the same frames half a
+  // period after each of the graph's sends, 2 ms lead, so that both meet the same load. Returns the
+  // graph's result; `reference_ms` gets the reference's times of the frames after the warm-up.
+  harness::RunResult run_beside(
+      harness::RunOptions options,
+      const std::function<harness::RunResult(const harness::RunOptions&)>& run_graph,
+      std::vector<double>& reference_ms);
 
  private:
   struct Input {

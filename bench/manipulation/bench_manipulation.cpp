@@ -40,12 +40,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 constexpr std::size_t kWarmup = 10;
 constexpr double kRateHz = 50;  // every kernel answers well within the 20 ms period
-constexpr auto kPeriod = std::chrono::milliseconds(20);
-constexpr auto kPrepareLead = std::chrono::milliseconds(2);
 constexpr double kTargetRatio = 0.10;
 constexpr int kCollisionPasses = 25;  // over the collision dataset, per backend
 
@@ -68,7 +64,6 @@ double mean(const std::vector<double>& v) {
 bench::OverheadRound measure_round(const harness::BenchmarkSpec& spec,
                                    bench::NodeReference& reference, std::size_t requests, bool grey,
                                    std::vector<double>& node_us) {
-  std::atomic<Clock::rep> first_send{0};
   harness::RunOptions o;
   o.rate_hz = kRateHz;
   o.count = kWarmup + requests;
@@ -76,40 +71,36 @@ bench::OverheadRound measure_round(const harness::BenchmarkSpec& spec,
   o.mode = grey ? harness::RunMode::kGrey : harness::RunMode::kBlack;
   o.trace_dir = fs::temp_directory_path() /
                 ("robotperf-bench-manipulation-" + std::to_string(getpid()) + "-" + spec.id);
-  o.progress = [&](std::size_t sent, std::size_t, std::size_t) {
-    if (sent == 1) first_send = Clock::now().time_since_epoch().count();
-  };
   bench::OverheadRound round;
-  std::thread direct_caller([&] {
-    while (first_send == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    const Clock::time_point first{Clock::duration(first_send.load())};
-    const auto took =
-        reference.run_paced(first + kPeriod / 2, kPeriod, kPrepareLead, kWarmup + requests);
-    for (std::size_t k = kWarmup; k < took.size(); ++k) round.reference.push_back(took[k] * 1e3);
-  });
-  std::optional<harness::RunResult> r;
-  try {
-    r = harness::run_benchmark(spec, o);
-  } catch (const std::exception& e) {
-    // No LTTng here: the reference thread waits for a first send that a black-box run makes.
-    std::fprintf(stderr, "%s: grey-box run failed (%s); black-box only\n", spec.id.c_str(),
-                 e.what());
-    o.mode = harness::RunMode::kBlack;
-    first_send = 0;
-    r = harness::run_benchmark(spec, o);
-  }
-  direct_caller.join();
+  std::vector<double> reference_ms;
+  const harness::RunResult r = reference.run_beside(
+      o,
+      [&](const harness::RunOptions& with) {
+        try {
+          return harness::run_benchmark(spec, with);
+        } catch (const std::exception& e) {
+          // No LTTng here (the run fails before its first send): black-box only.
+          if (with.mode != harness::RunMode::kGrey) throw;
+          std::fprintf(stderr, "%s: grey-box run failed (%s); black-box only\n", spec.id.c_str(),
+                       e.what());
+          harness::RunOptions black = with;
+          black.mode = harness::RunMode::kBlack;
+          return harness::run_benchmark(spec, black);
+        }
+      },
+      reference_ms);
+  for (double ms : reference_ms) round.reference.push_back(ms * 1e3);
   std::error_code ignored;
   fs::remove_all(o.trace_dir, ignored);
-  if (r->matched + 5 < requests)
-    std::fprintf(stderr, "%s: only %zu of %zu outputs matched\n", spec.id.c_str(), r->matched,
+  if (r.matched + 5 < requests)
+    std::fprintf(stderr, "%s: only %zu of %zu outputs matched\n", spec.id.c_str(), r.matched,
                  requests);
-  for (const auto& rec : r->records) {
+  for (const auto& rec : r.records) {
     if (!rec.warmup && rec.received_ns >= 0)
       round.graph.push_back(static_cast<double>(rec.received_ns - rec.sent_ns) / 1e3);
   }
-  if (r->grey) {
-    for (const auto& hop : r->grey->hops)
+  if (r.grey) {
+    for (const auto& hop : r.grey->hops)
       if (hop.kind == "node") node_us.push_back(hop.duration.p50 / 1e3);
   }
   return round;

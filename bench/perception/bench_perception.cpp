@@ -30,12 +30,7 @@ using namespace robotperf;
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 constexpr std::size_t kWarmup = 5;
-constexpr auto kPeriod = std::chrono::milliseconds(100);  // 10 Hz
-// How long before its send the Playback prepares a message, at least (black_box.cpp).
-constexpr auto kPrepareLead = std::chrono::milliseconds(2);
 constexpr double kTargetRatio = 0.10;
 
 // One round: benchmark `id` on intra and, half a period after each of its sends, the same frame
@@ -43,24 +38,14 @@ constexpr double kTargetRatio = 0.10;
 bench::OverheadRound measure_round(const harness::BenchmarkSpec& spec,
                                    bench::NodeReference& reference, std::size_t frames,
                                    std::optional<double>& other_load) {
-  std::atomic<Clock::rep> first_send{0};
   harness::RunOptions o;
   o.rate_hz = 10;
   o.count = kWarmup + frames;
   o.warmup = kWarmup;
-  o.progress = [&](std::size_t sent, std::size_t, std::size_t) {
-    if (sent == 1) first_send = Clock::now().time_since_epoch().count();
-  };
   bench::OverheadRound round;
-  std::thread direct_caller([&] {
-    while (first_send == 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    const Clock::time_point first{Clock::duration(first_send.load())};
-    const auto took =
-        reference.run_paced(first + kPeriod / 2, kPeriod, kPrepareLead, kWarmup + frames);
-    round.reference.assign(took.begin() + kWarmup, took.end());
-  });
-  const auto r = harness::run_benchmark(spec, o);
-  direct_caller.join();
+  const auto r = reference.run_beside(
+      o, [&](const harness::RunOptions& with) { return harness::run_benchmark(spec, with); },
+      round.reference);
   if (r.matched < frames)
     std::fprintf(stderr, "%s: only %zu of %zu outputs matched\n", spec.id.c_str(), r.matched,
                  frames);
