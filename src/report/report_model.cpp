@@ -329,20 +329,27 @@ Table also_measured_table_for(const std::vector<const StoredRun*>& runs) {
   return t;
 }
 
+// The newest of `runs` that `has`, or null.
+template <class Has>
+const StoredRun* newest_where(const std::vector<const StoredRun*>& runs, Has has) {
+  for (auto it = runs.rbegin(); it != runs.rend(); ++it) {
+    if (has(**it)) return *it;
+  }
+  return nullptr;
+}
+
 // The newest grey-box run's per-hop breakdown: where the time of a message goes.
 Table hops_table_for(const std::vector<const StoredRun*>& runs) {
   Table t;
   t.css_class = "hops";
-  for (auto it = runs.rbegin(); it != runs.rend(); ++it) {
-    if ((*it)->hops.empty()) continue;
-    t.header = {"hop (" + (*it)->stem() + ")", "kind", "mean ms", "p50 ms", "p99 ms"};
-    t.numeric = {false, false, true, true, true};
-    for (const auto& hop : (*it)->hops) {
-      t.rows.push_back({hop.label, hop.kind, format_fixed(hop.mean_ms, 3),
-                        format_fixed(hop.p50_ms, 3), format_fixed(hop.p99_ms, 3)});
-      t.row_warning.push_back(false);
-    }
-    break;
+  const StoredRun* r = newest_where(runs, [](const StoredRun& x) { return !x.hops.empty(); });
+  if (r == nullptr) return t;
+  t.header = {"hop (" + r->stem() + ")", "kind", "mean ms", "p50 ms", "p99 ms"};
+  t.numeric = {false, false, true, true, true};
+  for (const auto& hop : r->hops) {
+    t.rows.push_back({hop.label, hop.kind, format_fixed(hop.mean_ms, 3),
+                      format_fixed(hop.p50_ms, 3), format_fixed(hop.p99_ms, 3)});
+    t.row_warning.push_back(false);
   }
   return t;
 }
@@ -351,23 +358,16 @@ Table hops_table_for(const std::vector<const StoredRun*>& runs) {
 Table callbacks_table_for(const std::vector<const StoredRun*>& runs) {
   Table t;
   t.css_class = "callbacks";
-  for (auto it = runs.rbegin(); it != runs.rend(); ++it) {
-    if ((*it)->callbacks.empty()) continue;
-    t.header = {"node (" + (*it)->stem() + ")",
-                "callback of",
-                "count",
-                "mean ms",
-                "p50 ms",
-                "p99 ms",
-                "max ms"};
-    t.numeric = {false, false, true, true, true, true, true};
-    for (const auto& cb : (*it)->callbacks) {
-      t.rows.push_back({cb.node, cb.source, std::to_string(cb.count), format_fixed(cb.mean_ms, 3),
-                        format_fixed(cb.p50_ms, 3), format_fixed(cb.p99_ms, 3),
-                        format_fixed(cb.max_ms, 3)});
-      t.row_warning.push_back(false);
-    }
-    break;
+  const StoredRun* r = newest_where(runs, [](const StoredRun& x) { return !x.callbacks.empty(); });
+  if (r == nullptr) return t;
+  t.header = {
+      "node (" + r->stem() + ")", "callback of", "count", "mean ms", "p50 ms", "p99 ms", "max ms"};
+  t.numeric = {false, false, true, true, true, true, true};
+  for (const auto& cb : r->callbacks) {
+    t.rows.push_back({cb.node, cb.source, std::to_string(cb.count), format_fixed(cb.mean_ms, 3),
+                      format_fixed(cb.p50_ms, 3), format_fixed(cb.p99_ms, 3),
+                      format_fixed(cb.max_ms, 3)});
+    t.row_warning.push_back(false);
   }
   return t;
 }
@@ -983,11 +983,10 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
       section.hops = hops_table_for(runs);
       section.callbacks = callbacks_table_for(runs);
       section.peak_search = peak_search_table_for(runs);
-      for (auto it = runs.rbegin(); it != runs.rend(); ++it) {
-        if ((*it)->hops.empty()) continue;
-        section.hops_run = (*it)->stem();
-        section.hop_bars = (*it)->hops;
-        break;
+      if (const StoredRun* grey =
+              newest_where(runs, [](const StoredRun& x) { return !x.hops.empty(); })) {
+        section.hops_run = grey->stem();
+        section.hop_bars = grey->hops;
       }
       std::vector<const StoredRun*> recent(
           runs.end() -
