@@ -124,8 +124,10 @@ harness::RunResult NodeReference::run_beside(
     if (first_send < 0) return;
     const Clock::time_point first{Clock::duration(first_send.load())};
     const auto took = run_paced(first + period / 2, period, std::chrono::milliseconds(2), count);
-    reference_ms.assign(took.begin() + static_cast<long>(std::min(warmup, took.size())),
-                        took.end());
+    // A frame whose answer never came (NaN) has no time: the graph's side counts it as lost.
+    for (std::size_t k = warmup; k < took.size(); ++k) {
+      if (std::isfinite(took[k])) reference_ms.push_back(took[k]);
+    }
   });
   auto give_up = [&] {
     Clock::rep none = 0;

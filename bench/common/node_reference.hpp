@@ -42,7 +42,8 @@ class NodeReference {
   // A round: `run_graph` runs the benchmark with `options` (given a progress callback to see its
   // first send) and, beside it in the same process, this reference takes the same frames half a
   // period after each of the graph's sends, 2 ms lead, so that both meet the same load. Returns the
-  // graph's result; `reference_ms` gets the reference's times of the frames after the warm-up.
+  // graph's result; `reference_ms` gets the reference's times of the frames after the warm-up
+  // that it answered.
   harness::RunResult run_beside(
       harness::RunOptions options,
       const std::function<harness::RunResult(const harness::RunOptions&)>& run_graph,
