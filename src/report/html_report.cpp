@@ -94,12 +94,10 @@ constexpr const char* kSignificanceNote =
 
 std::string render_comparison_text(const ReportInput& input, const std::string& a,
                                    const std::string& b) {
-  ReportOptions options;
-  options.compare = std::pair{a, b};
-  const detail::Model m = detail::build_model(input, options);
+  const detail::Comparison c = detail::build_comparison(input, a, b);
   std::ostringstream s;
-  s << "A = " << a << "\nB = " << b << "\n\n" << table_text(m.comparison->table) << "\n";
-  for (const auto& n : m.comparison->notes) s << n << "\n";
+  s << "A = " << a << "\nB = " << b << "\n\n" << table_text(c.table) << "\n";
+  for (const auto& n : c.notes) s << n << "\n";
   s << kSignificanceNote << "\n";
   return s.str();
 }

@@ -116,23 +116,18 @@ std::vector<std::string> differences_on_axes(const std::string& category, const 
     if (!o.type.empty()) types[o.benchmark_id][o.local].insert(o.type);
     if (!o.rate.empty()) rates[o.benchmark_id][o.local].insert(o.rate);
   }
-  auto listed = [](const std::set<std::string>& s, const char* separator = "/") {
-    std::string out;
-    for (const auto& t : s) out += (out.empty() ? "" : separator) + t;
-    return out;
-  };
   std::vector<std::string> notes;
   for (const auto& [id, v] : values) {
     if (v[0].empty() || v[1].empty()) continue;
     const auto& [published_types, local_types] = types[id];
     if (!published_types.empty() && !local_types.empty() && published_types != local_types) {
-      notes.push_back(id + ": the published rows are " + listed(published_types) +
-                      "-box measurements, the local runs " + listed(local_types) + "-box");
+      notes.push_back(id + ": the published rows are " + joined(published_types, "/") +
+                      "-box measurements, the local runs " + joined(local_types, "/") + "-box");
     }
     const auto& [published_rates, local_rates] = rates[id];
     if (!published_rates.empty() && !local_rates.empty() && published_rates != local_rates) {
-      notes.push_back(id + ": the published rows state " + listed(published_rates, ", ") +
-                      ", the local runs ran at " + listed(local_rates, ", ") +
+      notes.push_back(id + ": the published rows state " + joined(published_rates, ", ") +
+                      ", the local runs ran at " + joined(local_rates, ", ") +
                       " (--compare rate=HZ picks one)");
     }
     const double published = median(v[0]), local = median(v[1]);
@@ -422,10 +417,8 @@ void published_tables(const PublishedBenchmark& b, Table& summary, Table& flagge
     }
   }
   for (const auto& h : order) {
-    std::string cats, stated;
-    for (const auto& c : categories[h]) cats += (cats.empty() ? "" : ", ") + c;
-    for (const auto& r : rates[h]) stated += (stated.empty() ? "" : ", ") + r;
-    summary.rows.push_back({h, cats, std::to_string(rows[h]),
+    const std::string stated = joined(rates[h], ", ");
+    summary.rows.push_back({h, joined(categories[h], ", "), std::to_string(rows[h]),
                             detail::format_value(median(values[h]["latency"])),
                             detail::format_value(median(values[h]["throughput"])),
                             detail::format_value(median(values[h]["power"])),
@@ -437,11 +430,9 @@ void published_tables(const PublishedBenchmark& b, Table& summary, Table& flagge
   flagged.numeric = {true, false, false, true, false};
   for (const auto& r : b.results) {
     if (r.flags.empty()) continue;
-    std::string why;
-    for (const auto& f : r.flags) why += (why.empty() ? "" : "; ") + f;
     flagged.rows.push_back(
         {b.source.filename().string() + ":" + std::to_string(r.line), r.hardware, r.metric,
-         (r.value_text.empty() ? "?" : r.value_text) + " " + r.metric_unit, why});
+         (r.value_text.empty() ? "?" : r.value_text) + " " + r.metric_unit, joined(r.flags, "; ")});
     flagged.row_warning.push_back(true);
   }
 }
@@ -631,8 +622,7 @@ detail::Comparison compare(const std::string& a_sel, const std::string& b_sel,
                               (rate.empty() ? "" : " · " + rate));
       }
       if (configurations.size() > 1) {
-        std::string list;
-        for (const auto& s : configurations) list += (list.empty() ? "" : "; ") + s;
+        const std::string list = joined(configurations, "; ");
         throw ReportError("'" + selector + "' selects " + std::to_string(configurations.size()) +
                           " configurations of " + id + " (" + list +
                           "): name one series, or narrow it with fields, e.g. --compare "
@@ -895,9 +885,11 @@ std::string warning_summary(const Model& model) {
   }
   if (run_items > 0) parts.push_back(counted(run_items, "run warning"));
   if (!model.warnings.empty()) parts.push_back(counted(model.warnings.size(), "other warning"));
-  std::string out;
-  for (const auto& p : parts) out += (out.empty() ? "" : " · ") + p;
-  return out;
+  return joined(parts, " · ");
+}
+
+Comparison build_comparison(const ReportInput& in, const std::string& a, const std::string& b) {
+  return compare(a, b, in);
 }
 
 Model build_model(const ReportInput& in, const ReportOptions& options) {
@@ -916,9 +908,8 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
     ids_by_category[r.category].insert(r.benchmark_id);
     names[r.benchmark_id] = r.benchmark_name;
     if (!r.valid) {
-      std::string why;
-      for (const auto& reason : r.invalid_reasons) why += (why.empty() ? "" : "; ") + reason;
-      model.invalid_runs.push_back("run " + r.stem() + " is INVALID: " + why +
+      model.invalid_runs.push_back("run " + r.stem() +
+                                   " is INVALID: " + joined(r.invalid_reasons, "; ") +
                                    " (shown in its table, left out of the plots)");
     }
     WarningGroup own{"run " + r.stem(), {}};

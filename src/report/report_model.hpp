@@ -85,6 +85,9 @@ struct Model {
 };
 
 Model build_model(const ReportInput& input, const ReportOptions& options);
+// The comparison of two selectors alone (what build_model puts in Model::comparison); throws
+// ReportError as it does.
+Comparison build_comparison(const ReportInput& input, const std::string& a, const std::string& b);
 
 // "2 INVALID runs · 5 machine warnings (1 machine) · 12 run warnings · 1 other": the line that
 // stands for all of them.

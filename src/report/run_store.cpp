@@ -19,9 +19,13 @@ double number_or_nan(const json& j, const char* key) {
   return it != j.end() && it->is_number() ? it->get<double>() : kNoValue;
 }
 
-std::string string_or_empty(const json& j, const char* key) {
+std::string string_or(const json& j, const char* key, std::string fallback) {
   const auto it = j.find(key);
-  return it != j.end() && it->is_string() ? it->get<std::string>() : std::string();
+  return it != j.end() && it->is_string() ? it->get<std::string>() : std::move(fallback);
+}
+
+std::string string_or_empty(const json& j, const char* key) {
+  return string_or(j, key, {});
 }
 
 const json& member(const json& j, const char* key) {
@@ -67,17 +71,14 @@ void read_also_measured(const json& j, StoredRun& run) {
         for (const auto& [name, metric] : m.items()) {
           const double v = number_or_nan(metric, "value");
           if (!std::isfinite(v)) continue;
-          const std::string unit =
-              member(metric, "unit").is_string() ? metric["unit"].get<std::string>() : "";
+          const std::string unit = string_or_empty(metric, "unit");
           metrics += (metrics.empty() ? "" : ", ") + name + " " + short_number(v) +
                      (unit.empty() || unit == "fraction" ? "" : " " + unit);
         }
       }
       run.functional = "VALID" + (metrics.empty() ? "" : ": " + metrics);
     } else {
-      std::string why;
-      for (const auto& reason : strings(member(functional, "reasons")))
-        why += (why.empty() ? "" : "; ") + reason;
+      const std::string why = joined(strings(member(functional, "reasons")), "; ");
       run.functional = "INVALID" + (why.empty() ? "" : ": " + why);
     }
   }
@@ -97,12 +98,12 @@ void read_also_measured(const json& j, StoredRun& run) {
       run.peak_rss_mib = rss / (1024.0 * 1024.0);
     }
   }
-  const json& hops = member(member(j, "grey"), "hops");
+  const json& grey = member(j, "grey");
+  const json& hops = member(grey, "hops");
   if (hops.is_array()) {
     for (const auto& hop : hops) {
       const json& d = member(hop, "duration_ms");
-      run.hops.push_back({member(hop, "label").is_string() ? hop["label"].get<std::string>() : "?",
-                          member(hop, "kind").is_string() ? hop["kind"].get<std::string>() : "",
+      run.hops.push_back({string_or(hop, "label", "?"), string_or_empty(hop, "kind"),
                           number_or_nan(d, "mean"), number_or_nan(d, "p50"),
                           number_or_nan(d, "p99")});
     }
@@ -113,30 +114,28 @@ void read_also_measured(const json& j, StoredRun& run) {
       const json& b = member(node, "backend");
       if (b.is_string() && b.get<std::string>() != "cpu") backends.insert(b.get<std::string>());
     }
-    for (const auto& b : backends) run.backend += (run.backend.empty() ? "" : "+") + b;
+    run.backend = joined(backends, "+");
   }
   const json& peak = member(j, "peak_search");
   if (const json& steps = member(peak, "steps"); steps.is_array()) {
     for (const auto& step : steps) {
       const json& passed = member(step, "passed");
-      const json& reason = member(step, "reason");
       run.peak_steps.push_back(
           {number_or_nan(step, "rate_hz"), number_or_nan(step, "offered_hz"),
            number_or_nan(step, "output_hz"), number_or_nan(step, "loss_percent"),
            number_or_nan(step, "latency_ms"), passed.is_boolean() && passed.get<bool>(),
-           reason.is_string() ? reason.get<std::string>() : ""});
+           string_or_empty(step, "reason")});
     }
     if (const json& why = member(peak, "stop_reason"); why.is_string())
       run.peak_stop_reason = why.get<std::string>();
   }
-  const json& callbacks = member(member(j, "grey"), "callbacks");
+  const json& callbacks = member(grey, "callbacks");
   if (callbacks.is_array()) {
     for (const auto& cb : callbacks) {
       const json& d = member(cb, "duration_ms");
       const double count = number_or_nan(d, "count");
       run.callbacks.push_back(
-          {member(cb, "node").is_string() ? cb["node"].get<std::string>() : "?",
-           member(cb, "source").is_string() ? cb["source"].get<std::string>() : "",
+          {string_or(cb, "node", "?"), string_or_empty(cb, "source"),
            std::isfinite(count) && count >= 0 ? static_cast<std::size_t>(count) : 0,
            number_or_nan(d, "mean"), number_or_nan(d, "p50"), number_or_nan(d, "p99"),
            number_or_nan(d, "max")});
@@ -149,8 +148,7 @@ void read_also_measured(const json& j, StoredRun& run) {
           !run.update_rate_hz && std::isfinite(hz))
         run.update_rate_hz = hz;
       const double jitter = number_or_nan(member(loop, "period_jitter_us"), "p99");
-      run.control += (run.control.empty() ? "" : "; ") +
-                     (member(loop, "node").is_string() ? loop["node"].get<std::string>() : "loop") +
+      run.control += (run.control.empty() ? "" : "; ") + string_or(loop, "node", "loop") +
                      ": period jitter p99 " + (std::isfinite(jitter) ? short_number(jitter) : "?") +
                      " us, " + count_text(loop, "deadline_misses") + " deadline misses in " +
                      count_text(loop, "cycles") + " cycles";
@@ -498,8 +496,6 @@ namespace {
 std::vector<std::pair<const char*, json>> run_fields(const StoredRun& r) {
   auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
   auto optional = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
-  std::string reasons;
-  for (const auto& why : r.invalid_reasons) reasons += (reasons.empty() ? "" : "; ") + why;
   return {{"file", r.path.string()},
           {"benchmark", r.benchmark_id},
           {"name", r.benchmark_name},
@@ -527,7 +523,7 @@ std::vector<std::pair<const char*, json>> run_fields(const StoredRun& r) {
           {"cpu_percent", optional(r.cpu_percent)},
           {"peak_rss_mib", optional(r.peak_rss_mib)},
           {"valid", r.valid},
-          {"invalid_reasons", reasons},
+          {"invalid_reasons", joined(r.invalid_reasons, "; ")},
           {"warnings", r.warnings.size()}};
 }
 

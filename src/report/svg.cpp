@@ -62,8 +62,9 @@ void legend(std::ostringstream& s, const Radar& r, double top) {
   }
 }
 
-// Fewer than three benchmarks make no polygon: one group of bars per benchmark, one bar per
-// series, each group on its own linear scale from 0, the value written at the bar's end.
+// What radar_svg draws where a polygon would say nothing (drawn_as_bars): one group of bars per
+// benchmark, one bar per series, each group on its own linear scale from 0, the value written at
+// the bar's end.
 std::string bars_svg(const Radar& r) {
   constexpr double kWidth = 480, kLeft = 20, kBarsLeft = 20, kBarsWidth = 330, kBar = 14;
   const std::size_t n = r.axes.size();

@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "robotperf/report/histogram.hpp"
@@ -86,9 +87,9 @@ struct StoredRun {
   std::optional<double> cpu_percent;
   std::optional<double> peak_rss_mib;
   std::string control;
-  std::optional<double> update_rate_hz;
+  std::optional<double> update_rate_hz;  // control benchmarks: the (first) controller loop's rate
   // The backends other than cpu its nodes ran on ("cuda", "cuda+opencl"); "" when all ran on cpu.
-  std::string backend;  // control benchmarks: the (first) controller loop's rate
+  std::string backend;
   std::optional<LogHistogram> histogram;
   std::optional<std::filesystem::path> csv_path;  // <stem>.latencies.csv beside the JSON
 
@@ -141,5 +142,16 @@ std::string runs_csv(const std::vector<StoredRun>& runs);
 
 // "12.345" with `decimals` digits, or "-" for NaN.
 std::string format_fixed(double value, int decimals);
+
+// The strings of `items` (a vector, a set) in order, with `separator` between them.
+template <class Strings>
+std::string joined(const Strings& items, std::string_view separator) {
+  std::string out;
+  for (const auto& item : items) {
+    if (!out.empty()) out += separator;
+    out += item;
+  }
+  return out;
+}
 
 }  // namespace robotperf::report
