@@ -3,6 +3,7 @@
 # configurations (two transports, both process layouts, two rates, a grey-box run, an INVALID
 # run, control and manipulation) beside the published RobotPerf rows, then its screenshot.
 #   scripts/report-sample.sh [OUT_DIR]   (default: build/report-sample)
+# The DDS runs take a domain no other participant uses (--domain auto).
 # Needs a built robotperf (scripts/build.sh; ROBOTPERF=path picks another) and chromium for the
 # screenshot.
 set -euo pipefail
@@ -17,8 +18,8 @@ mkdir -p "$results"
 run() { "$robotperf" run "$@" --quiet --output "$results" > /dev/null; }
 run a1
 run a1
-run a1 --rmw fastdds
-run a1 --processes per-node
+run a1 --rmw fastdds --domain auto
+run a1 --processes per-node --domain auto
 run a1 --rate 60
 run a1 --mode grey
 # Fewer samples than the benchmark requires: INVALID (exit status 3), kept in the folder.
@@ -27,7 +28,7 @@ run a2
 run a3
 run a4
 run a5
-run a5 --rmw cyclonedds
+run a5 --rmw cyclonedds --domain auto
 run c3 --duration 10
 run c4 --duration 10
 run c5 --duration 10

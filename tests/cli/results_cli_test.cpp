@@ -12,6 +12,7 @@
 #include <string>
 
 #include "../command_line.hpp"
+#include "robotperf/rmw/transport.hpp"
 
 namespace {
 
@@ -305,11 +306,15 @@ TEST_F(ResultsCli, MixedReportLabelsNeitherOverlapNorClipInChromium) {
   ASSERT_EQ(shell("command -v chromium").exit_code, 0)
       << "chromium is not installed: run scripts/install-deps.sh";
   const fs::path mixed = dir_ / "mixed";
-  for (const char* args : {"run a5 --count 40", "run a5 --count 40 --rmw fastdds",
-                           "run a5 --count 40 --rate 60", "run a1 --count 40 --processes per-node",
-                           "run a1 --count 40", "run a2 --count 40", "run a5 --count 8"}) {
-    const auto o = robotperf_cli(std::string(args) + " --quiet --output " + mixed.string());
-    ASSERT_TRUE(o.exit_code == 0 || (o.exit_code == 3 && std::string(args).ends_with("8")))
+  // The DDS runs on a domain no other process uses.
+  const std::string dds = " --domain " + std::to_string(robotperf::rmw::reserved_domain());
+  for (const std::string& args :
+       {std::string("run a5 --count 40"), "run a5 --count 40 --rmw fastdds" + dds,
+        std::string("run a5 --count 40 --rate 60"), "run a1 --count 40 --processes per-node" + dds,
+        std::string("run a1 --count 40"), std::string("run a2 --count 40"),
+        std::string("run a5 --count 8")}) {
+    const auto o = robotperf_cli(args + " --quiet --output " + mixed.string());
+    ASSERT_TRUE(o.exit_code == 0 || (o.exit_code == 3 && args.ends_with("8")))
         << args << ": " << o.out;
   }
   const fs::path shared = fs::path(ROBOTPERF_SHARED_DATA_DIR) / "robotperf";
