@@ -60,10 +60,12 @@ double mean(const std::vector<double>& v) {
 }
 
 // One round: the graph (grey-box where LTTng records, else black-box) and, half a period after
-// each of its sends, the same request through the reference. Microseconds.
+// each of its sends, the same request through the reference, built afresh as the graph is, so that
+// each round draws both sides' thread placement anew. Microseconds.
 bench::OverheadRound measure_round(const harness::BenchmarkSpec& spec,
-                                   bench::NodeReference& reference, std::size_t requests, bool grey,
+                                   const harness::Dataset& dataset, std::size_t requests, bool grey,
                                    std::vector<double>& node_us) {
+  bench::NodeReference reference(spec, dataset);
   harness::RunOptions o;
   o.rate_hz = kRateHz;
   o.count = kWarmup + requests;
@@ -133,11 +135,10 @@ bool kernel_overheads(const std::vector<std::string>& ids, std::size_t requests,
         kernel != "manipulation/forward_kinematics")
       throw std::invalid_argument(id + " is not one of d2-d6 (its kernel is " + kernel + ")");
     const harness::Dataset d = harness::load_dataset(spec.dataset, spec.workload);
-    bench::NodeReference reference(spec, d);
     std::vector<bench::OverheadRound> measured;
     std::vector<double> node_us;
     for (std::size_t i = 0; i < rounds; ++i)
-      measured.push_back(measure_round(spec, reference, requests, grey, node_us));
+      measured.push_back(measure_round(spec, d, requests, grey, node_us));
     const bench::OverheadVerdict v = bench::judge_overhead(measured, kTargetRatio);
     const bool target_applies = id != "d6";
     const std::string label = id + " " + kernel;

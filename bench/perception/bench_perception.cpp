@@ -11,10 +11,18 @@
 // The graph runs at 10 Hz so that no frame queues behind the previous one, and the reference runs
 // in the same process between its frames, half a period after each send: both sides meet the
 // same load from other processes, which on a shared machine comes and goes within seconds.
+// Each round builds both sides afresh (new nodes, new executor threads), so that where the
+// scheduler happens to put a side's threads is drawn anew per round for both, not once for the
+// reference and per round for the graph.
+// Both sides run OpenCV on one thread: with its worker pool on a 2-core machine, a calling
+// thread's StereoBM time moves by up to 50 % from one round to the next with where the scheduler
+// puts the pool's worker beside it (seen with two plain threads calling StereoBM in turn, no
+// graph at all) — noise of the kernel's parallelism, not the graph's overhead.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <opencv2/core/utility.hpp>
 #include <optional>
 #include <thread>
 #include <vector>
@@ -36,8 +44,9 @@ constexpr double kTargetRatio = 0.10;
 // One round: benchmark `id` on intra and, half a period after each of its sends, the same frame
 // through the reference, paced as the Playback paces the graph.
 bench::OverheadRound measure_round(const harness::BenchmarkSpec& spec,
-                                   bench::NodeReference& reference, std::size_t frames,
+                                   const harness::Dataset& dataset, std::size_t frames,
                                    std::optional<double>& other_load) {
+  bench::NodeReference reference(spec, dataset);
   harness::RunOptions o;
   o.rate_hz = 10;
   o.count = kWarmup + frames;
@@ -62,11 +71,10 @@ bench::OverheadRound measure_round(const harness::BenchmarkSpec& spec,
 bool compare(const char* id, std::size_t frames, std::size_t rounds) {
   const auto spec = harness::find_benchmark(ROBOTPERF_BENCHMARKS_DIR, id);
   const harness::Dataset dataset = harness::load_dataset(spec.dataset, spec.workload);
-  bench::NodeReference reference(spec, dataset);
   std::vector<bench::OverheadRound> measured;
   std::optional<double> other_load;
   for (std::size_t i = 0; i < rounds; ++i)
-    measured.push_back(measure_round(spec, reference, frames, other_load));
+    measured.push_back(measure_round(spec, dataset, frames, other_load));
   const bench::OverheadVerdict v = bench::judge_overhead(measured, kTargetRatio);
   const std::string label = std::string(id) + " " + spec.nodes.front().kernel;
   std::printf(
@@ -89,6 +97,7 @@ bool compare(const char* id, std::size_t frames, std::size_t rounds) {
 int main(int argc, char** argv) {
   robotperf::categories::register_builtin_categories();
   const bench::BenchOptions options = bench::parse_bench_options(argc, argv);
+  cv::setNumThreads(1);
   const std::size_t frames = options.smoke ? 30 : 80;
   const std::size_t rounds = options.smoke ? 2 : 3;
   std::printf(
@@ -98,7 +107,9 @@ int main(int argc, char** argv) {
       "fed the same frames as the Playback feeds them (made ahead, stamped, published at their "
       "time), timed from the executor's first callback for a frame to the answer's arrival on "
       "that executor; the graph adds the Playback's publish, the wake-up into the executor and "
-      "the Monitor\n",
+      "the Monitor\n"
+      "both sides built afresh each round; OpenCV on one thread on both sides (its worker pool "
+      "moves a kernel's time per round with thread placement, which is not graph overhead)\n",
       rounds, frames);
   std::printf("%-34s %10s %10s %10s %10s\n", "kernel", "reference", "graph", "overhead", "share");
   bool defect = false;
