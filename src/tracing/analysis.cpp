@@ -1,13 +1,20 @@
 #include "robotperf/tracing/analysis.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
+#include <exception>
+#include <iterator>
 #include <map>
+#include <mutex>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
+#include <thread>
 #include <tuple>
 #include <unordered_map>
 
@@ -22,6 +29,9 @@ using ctf::Event;
 using ctf::Value;
 
 constexpr double kNsPerMs = 1e6;
+// Decoding threads at most, and the smallest part of a stream worth a thread of its own.
+constexpr unsigned kMaxDecodeThreads = 16;
+constexpr uint64_t kMinPartBytes = 1 << 20;
 
 // What the analysis does with an event class, and where its fields are.
 enum class Handler : uint8_t {
@@ -218,15 +228,11 @@ struct Collected {
   bool has_rmw_publish = false, rmw_publish_has_timestamp = false;
 };
 
-void collect(ctf::Trace& trace, Collected& c, TraceAnalysis& a) {
-  // Room for every event the streams may hold (LTTng events take 40 bytes or
-  // more): growing the vectors would copy them and fault in pages twice.
-  const std::size_t estimate = c.id_events.size() + trace.total_bytes() / 40;
-  c.id_events.reserve(estimate);
-  c.inputs.reserve(c.inputs.size() + estimate / 8);
-  c.outputs.reserve(c.outputs.size() + estimate / 8);
-  c.callbacks.reserve(c.callbacks.size() + estimate / 4);
-  std::unordered_map<const ctf::EventClass*, Dispatch> dispatch;
+using DispatchTable = std::unordered_map<const ctf::EventClass*, Dispatch>;
+
+// What each of a trace's event classes is for; notes what the metadata declares in `c`.
+DispatchTable dispatch_table(const ctf::Trace& trace, Collected& c) {
+  DispatchTable dispatch;
   for (const auto& ec : trace.metadata().events) {
     dispatch[ec.get()] = dispatch_for(*ec, trace);
     if (ec->name == "ros2:rmw_publish") {
@@ -234,133 +240,285 @@ void collect(ctf::Trace& trace, Collected& c, TraceAnalysis& a) {
       c.rmw_publish_has_timestamp |= ec->field_index("timestamp") >= 0;
     }
   }
+  return dispatch;
+}
+
+// A run of consecutive packets of one stream, decoded on its own (by one thread), and what it
+// gave: the part of the Collected of the whole trace that its events make.
+struct StreamPart {
+  const ctf::Trace* trace = nullptr;
+  const DispatchTable* dispatch = nullptr;
+  std::size_t stream = 0;
+  std::span<const ctf::Packet> packets;
+  uint64_t bytes = 0;
+
+  Collected c;
+  uint64_t events = 0;
+  int64_t first_ns = 0, last_ns = 0;
+  std::exception_ptr error;
+};
+
+void collect(StreamPart& part) {
+  Collected& c = part.c;
+  // Room for every event the part may hold (LTTng events take 40 bytes or more): growing the
+  // vectors would copy them and fault in pages twice.
+  const std::size_t estimate = part.bytes / 40;
+  c.id_events.reserve(estimate);
+  c.inputs.reserve(estimate / 8);
+  c.outputs.reserve(estimate / 8);
+  c.callbacks.reserve(estimate / 4);
+  const DispatchTable& dispatch = *part.dispatch;
   const ctf::EventClass* last_class = nullptr;
   const Dispatch* d = nullptr;
+  part.events = part.trace->read_packets(part.stream, part.packets, [&](const Event& e) {
+    const auto ts = static_cast<int64_t>(e.timestamp);
+    if (part.events == 0 || ts < part.first_ns) part.first_ns = ts;
+    if (ts > part.last_ns) part.last_ns = ts;
+    ++part.events;
+    if (e.cls != last_class) {
+      last_class = e.cls;
+      d = &dispatch.at(e.cls);
+    }
+    if (d->handler == Handler::kIgnore) return;
+    const auto& f = e.fields;
+    auto field = [&](int i) -> const Value& { return f[static_cast<std::size_t>(d->f[i])]; };
+    const int32_t vpid =
+        d->vpid >= 0
+            ? static_cast<int32_t>(e.stream_context[static_cast<std::size_t>(d->vpid)].as_int())
+            : 0;
+    auto vtid = [&] {
+      return d->vtid >= 0 ? static_cast<int32_t>(
+                                e.stream_context[static_cast<std::size_t>(d->vtid)].as_int())
+                          : 0;
+    };
+    switch (d->handler) {
+      case Handler::kIgnore:
+        break;
+      case Handler::kRunBegin: {
+        RunInfo r;
+        r.benchmark = std::string(field(0).s);
+        r.rmw = std::string(field(1).s);
+        r.count = field(2).as_uint();
+        r.warmup = field(3).as_uint();
+        r.period_ns = field(4).as_int();
+        r.min_samples = field(5).as_uint();
+        r.max_loss_percent = field(6).tag == Value::Tag::kFloat
+                                 ? field(6).f
+                                 : static_cast<double>(field(6).as_int());
+        r.pid = vpid;
+        c.runs.emplace_back(ts, std::move(r));
+        break;
+      }
+      case Handler::kRunJoin:
+        c.joins.emplace_back(vpid, static_cast<int32_t>(field(0).as_int()));
+        break;
+      case Handler::kRunEnd:
+        c.ends.emplace_back(vpid, field(0).as_uint());
+        break;
+      case Handler::kInput:
+        c.inputs.push_back({ts, field(0).as_int(), field(2).as_int(), field(1).as_uint(), vpid});
+        break;
+      case Handler::kOutput:
+        c.outputs.push_back({ts, field(0).as_int(), vpid});
+        break;
+      case Handler::kPublish:
+      case Handler::kCallbackEntry:
+      case Handler::kKernelInit:
+      case Handler::kKernelFini: {
+        const IdKind kind = d->handler == Handler::kPublish         ? IdKind::kPublish
+                            : d->handler == Handler::kCallbackEntry ? IdKind::kEntry
+                            : d->handler == Handler::kKernelInit    ? IdKind::kKernelInit
+                                                                    : IdKind::kKernelFini;
+        c.id_events.push_back({ts, field(2).as_int(), vpid, vtid(), c.intern(field(0).s),
+                               c.intern(field(1).s), kind});
+        break;
+      }
+      case Handler::kNodeInit: {
+        std::string ns = d->f[2] >= 0 ? std::string(field(2).s) : std::string();
+        std::string name(field(1).s);
+        // A node in a namespace other than "/" is shown with it.
+        if (!ns.empty() && ns != "/") name = ns + (ns.ends_with('/') ? "" : "/") + name;
+        c.node_names[{vpid, field(0).u}] = std::move(name);
+        break;
+      }
+      case Handler::kPublisherInit:
+        c.publishers_by_rmw[{vpid, field(2).u}] = {c.intern(field(3).s), field(1).u};
+        break;
+      case Handler::kSubscriptionInit: {
+        const Endpoint ep{c.intern(field(3).s), field(1).u};
+        c.subscriptions_by_handle[{vpid, field(0).u}] = ep;
+        c.subscriptions_by_rmw[{vpid, field(2).u}] = ep;
+        break;
+      }
+      case Handler::kRclcppSubscriptionInit:
+        c.rclcpp_subscriptions[{vpid, field(1).u}] = field(0).u;
+        break;
+      case Handler::kSubscriptionCallbackAdded:
+        c.callback_subscription[{vpid, field(1).u}] = field(0).u;
+        break;
+      case Handler::kTimerInit:
+        c.timer_period[{vpid, field(0).u}] = field(1).as_int();
+        break;
+      case Handler::kTimerCallbackAdded:
+        c.callback_timer[{vpid, field(1).u}] = field(0).u;
+        break;
+      case Handler::kTimerLinkNode:
+        c.timer_node[{vpid, field(0).u}] = field(1).u;
+        break;
+      case Handler::kCallbackRegister:
+        c.callback_symbol[{vpid, field(0).u}] = field(1).s;
+        break;
+      case Handler::kCallbackStart:
+      case Handler::kCallbackEnd:
+        c.callbacks.push_back(
+            {ts, vpid, vtid(), field(0).u, d->handler == Handler::kCallbackStart});
+        break;
+      case Handler::kRmwPublish:
+        c.rmw_publishes.push_back({ts, vpid, field(0).u, field(1).as_int()});
+        break;
+      case Handler::kRmwTake:
+        if (d->f[2] < 0 || field(2).as_int() != 0)
+          c.rmw_takes.push_back({ts, vpid, field(0).u, field(1).as_int()});
+        break;
+      case Handler::kControllerUpdateBegin:
+      case Handler::kControllerUpdateEnd:
+        c.controller_updates.push_back({ts, vpid, c.intern(field(0).s), c.intern(field(1).s),
+                                        field(2).as_uint(),
+                                        d->handler == Handler::kControllerUpdateBegin});
+        break;
+    }
+  });
+}
 
-  for (std::size_t s = 0; s < trace.stream_count(); ++s) {
-    const ctf::StreamStats st = trace.read_stream(s, [&](const Event& e) {
-      const auto ts = static_cast<int64_t>(e.timestamp);
-      if (a.events == 0 || ts < a.first_ns) a.first_ns = ts;
-      if (ts > a.last_ns) a.last_ns = ts;
-      ++a.events;
-      if (e.cls != last_class) {
-        last_class = e.cls;
-        d = &dispatch[e.cls];
-      }
-      if (d->handler == Handler::kIgnore) return;
-      const auto& f = e.fields;
-      auto field = [&](int i) -> const Value& { return f[static_cast<std::size_t>(d->f[i])]; };
-      const int32_t vpid =
-          d->vpid >= 0
-              ? static_cast<int32_t>(e.stream_context[static_cast<std::size_t>(d->vpid)].as_int())
-              : 0;
-      auto vtid = [&] {
-        return d->vtid >= 0 ? static_cast<int32_t>(
-                                  e.stream_context[static_cast<std::size_t>(d->vtid)].as_int())
-                            : 0;
-      };
-      switch (d->handler) {
-        case Handler::kIgnore:
-          break;
-        case Handler::kRunBegin: {
-          RunInfo r;
-          r.benchmark = std::string(field(0).s);
-          r.rmw = std::string(field(1).s);
-          r.count = field(2).as_uint();
-          r.warmup = field(3).as_uint();
-          r.period_ns = field(4).as_int();
-          r.min_samples = field(5).as_uint();
-          r.max_loss_percent = field(6).tag == Value::Tag::kFloat
-                                   ? field(6).f
-                                   : static_cast<double>(field(6).as_int());
-          r.pid = vpid;
-          c.runs.emplace_back(ts, std::move(r));
-          break;
-        }
-        case Handler::kRunJoin:
-          c.joins.emplace_back(vpid, static_cast<int32_t>(field(0).as_int()));
-          break;
-        case Handler::kRunEnd:
-          c.ends.emplace_back(vpid, field(0).as_uint());
-          break;
-        case Handler::kInput:
-          c.inputs.push_back({ts, field(0).as_int(), field(2).as_int(), field(1).as_uint(), vpid});
-          break;
-        case Handler::kOutput:
-          c.outputs.push_back({ts, field(0).as_int(), vpid});
-          break;
-        case Handler::kPublish:
-        case Handler::kCallbackEntry:
-        case Handler::kKernelInit:
-        case Handler::kKernelFini: {
-          const IdKind kind = d->handler == Handler::kPublish         ? IdKind::kPublish
-                              : d->handler == Handler::kCallbackEntry ? IdKind::kEntry
-                              : d->handler == Handler::kKernelInit    ? IdKind::kKernelInit
-                                                                      : IdKind::kKernelFini;
-          c.id_events.push_back({ts, field(2).as_int(), vpid, vtid(), c.intern(field(0).s),
-                                 c.intern(field(1).s), kind});
-          break;
-        }
-        case Handler::kNodeInit: {
-          std::string ns = d->f[2] >= 0 ? std::string(field(2).s) : std::string();
-          std::string name(field(1).s);
-          // A node in a namespace other than "/" is shown with it.
-          if (!ns.empty() && ns != "/") name = ns + (ns.ends_with('/') ? "" : "/") + name;
-          c.node_names[{vpid, field(0).u}] = std::move(name);
-          break;
-        }
-        case Handler::kPublisherInit:
-          c.publishers_by_rmw[{vpid, field(2).u}] = {c.intern(field(3).s), field(1).u};
-          break;
-        case Handler::kSubscriptionInit: {
-          const Endpoint ep{c.intern(field(3).s), field(1).u};
-          c.subscriptions_by_handle[{vpid, field(0).u}] = ep;
-          c.subscriptions_by_rmw[{vpid, field(2).u}] = ep;
-          break;
-        }
-        case Handler::kRclcppSubscriptionInit:
-          c.rclcpp_subscriptions[{vpid, field(1).u}] = field(0).u;
-          break;
-        case Handler::kSubscriptionCallbackAdded:
-          c.callback_subscription[{vpid, field(1).u}] = field(0).u;
-          break;
-        case Handler::kTimerInit:
-          c.timer_period[{vpid, field(0).u}] = field(1).as_int();
-          break;
-        case Handler::kTimerCallbackAdded:
-          c.callback_timer[{vpid, field(1).u}] = field(0).u;
-          break;
-        case Handler::kTimerLinkNode:
-          c.timer_node[{vpid, field(0).u}] = field(1).u;
-          break;
-        case Handler::kCallbackRegister:
-          c.callback_symbol[{vpid, field(0).u}] = field(1).s;
-          break;
-        case Handler::kCallbackStart:
-        case Handler::kCallbackEnd:
-          c.callbacks.push_back(
-              {ts, vpid, vtid(), field(0).u, d->handler == Handler::kCallbackStart});
-          break;
-        case Handler::kRmwPublish:
-          c.rmw_publishes.push_back({ts, vpid, field(0).u, field(1).as_int()});
-          break;
-        case Handler::kRmwTake:
-          if (d->f[2] < 0 || field(2).as_int() != 0)
-            c.rmw_takes.push_back({ts, vpid, field(0).u, field(1).as_int()});
-          break;
-        case Handler::kControllerUpdateBegin:
-        case Handler::kControllerUpdateEnd:
-          c.controller_updates.push_back({ts, vpid, c.intern(field(0).s), c.intern(field(1).s),
-                                          field(2).as_uint(),
-                                          d->handler == Handler::kControllerUpdateBegin});
-          break;
-      }
-    });
-    ++a.streams;
-    a.packets += st.packets;
-    a.discarded_events += st.discarded_events;
-    a.lost_packets += st.lost_packets;
+// Appends `part` to `c` as if its events had been collected into `c` after those before it:
+// vectors in order, later handles replacing earlier ones, names interned in order of first use.
+void merge(Collected& c, Collected&& part) {
+  std::vector<uint32_t> id_of(part.names.size());
+  for (std::size_t i = 0; i < part.names.size(); ++i) id_of[i] = c.intern(part.names[i]);
+  auto append = [](auto& to, auto& from) {
+    if (to.empty()) {
+      to.swap(from);
+    } else {
+      to.insert(to.end(), std::make_move_iterator(from.begin()),
+                std::make_move_iterator(from.end()));
+    }
+  };
+  auto replace = [](auto& to, auto& from) {
+    for (auto& [k, v] : from) to.insert_or_assign(k, std::move(v));
+  };
+  for (auto& e : part.id_events) {
+    e.node = id_of[e.node];
+    e.what = id_of[e.what];
   }
+  for (auto& u : part.controller_updates) {
+    u.node = id_of[u.node];
+    u.controller = id_of[u.controller];
+  }
+  for (auto* endpoints :
+       {&part.publishers_by_rmw, &part.subscriptions_by_handle, &part.subscriptions_by_rmw}) {
+    for (auto& [k, ep] : *endpoints) ep.topic = id_of[ep.topic];
+  }
+  append(c.runs, part.runs);
+  append(c.joins, part.joins);
+  append(c.ends, part.ends);
+  append(c.inputs, part.inputs);
+  append(c.outputs, part.outputs);
+  append(c.id_events, part.id_events);
+  append(c.callbacks, part.callbacks);
+  append(c.rmw_publishes, part.rmw_publishes);
+  append(c.rmw_takes, part.rmw_takes);
+  append(c.controller_updates, part.controller_updates);
+  replace(c.node_names, part.node_names);
+  replace(c.publishers_by_rmw, part.publishers_by_rmw);
+  replace(c.subscriptions_by_handle, part.subscriptions_by_handle);
+  replace(c.subscriptions_by_rmw, part.subscriptions_by_rmw);
+  replace(c.rclcpp_subscriptions, part.rclcpp_subscriptions);
+  replace(c.callback_subscription, part.callback_subscription);
+  replace(c.callback_timer, part.callback_timer);
+  replace(c.timer_period, part.timer_period);
+  replace(c.timer_node, part.timer_node);
+  replace(c.callback_symbol, part.callback_symbol);
+}
+
+// Cuts each stream into parts of about `target_bytes`, at packets that give their clock.
+std::vector<StreamPart> cut_into_parts(const ctf::Trace& trace, const DispatchTable& dispatch,
+                                       std::size_t stream, std::span<const ctf::Packet> packets,
+                                       uint64_t target_bytes) {
+  std::vector<StreamPart> parts;
+  std::size_t first = 0;
+  uint64_t bytes = 0;
+  auto add = [&](std::size_t end) {
+    StreamPart& p = parts.emplace_back();
+    p.trace = &trace;
+    p.dispatch = &dispatch;
+    p.stream = stream;
+    p.packets = packets.subspan(first, end - first);
+    p.bytes = bytes;
+  };
+  for (std::size_t i = 0; i < packets.size(); ++i) {
+    if (i > first && bytes >= target_bytes && packets[i].has_clock) {
+      add(i);
+      first = i;
+      bytes = 0;
+    }
+    bytes += (packets[i].end_bits - packets[i].start_bits) / 8;
+  }
+  if (first < packets.size()) add(packets.size());
+  return parts;
+}
+
+// Decodes the parts on up to `threads` threads and merges them into `c` in order, each as soon as
+// it and those before it are done (so that at most a few parts' events are held twice). The
+// first part in order that failed gives the error, as reading them one after another would.
+void collect_parallel(std::vector<StreamPart>& parts, unsigned threads, Collected& c,
+                      TraceAnalysis& a) {
+  std::mutex mutex;
+  std::condition_variable done_cv;
+  std::vector<char> done(parts.size(), 0);
+  std::atomic<std::size_t> next{0};
+  std::atomic<bool> failed{false};
+  auto work = [&] {
+    for (std::size_t i; !failed && (i = next++) < parts.size();) {
+      try {
+        collect(parts[i]);
+      } catch (...) {
+        parts[i].error = std::current_exception();
+        failed = true;
+      }
+      {
+        std::lock_guard lock(mutex);
+        done[i] = 1;
+      }
+      done_cv.notify_all();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
+  std::exception_ptr error;
+  if (pool.empty()) work();
+  for (std::size_t i = 0; i < parts.size() && !error; ++i) {
+    {
+      std::unique_lock lock(mutex);
+      // A part no thread took (a part before it failed) never comes.
+      done_cv.wait(lock, [&] { return done[i] != 0 || (failed && next > parts.size()); });
+      if (!done[i]) break;
+    }
+    StreamPart& p = parts[i];
+    if (p.error) {
+      error = p.error;
+      break;
+    }
+    if (p.events > 0) {
+      if (a.events == 0 || p.first_ns < a.first_ns) a.first_ns = p.first_ns;
+      if (p.last_ns > a.last_ns) a.last_ns = p.last_ns;
+      a.events += p.events;
+    }
+    merge(c, std::move(p.c));
+    p.c = Collected{};
+  }
+  failed = failed || error != nullptr;
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
 }
 
 std::vector<double> to_doubles(const std::vector<int64_t>& v) {
@@ -786,13 +944,41 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
   const auto dirs = ctf::find_traces(dir);
   if (dirs.empty())
     throw std::invalid_argument(dir.string() + " holds no CTF trace (no 'metadata' file)");
+  // Every trace opened and its streams' packets indexed first (cheap: headers only), then the
+  // events decoded in parts on every core.
   std::vector<ctf::Trace> traces;
+  traces.reserve(dirs.size());
   Collected c;
-  for (const auto& d : dirs) {
-    traces.emplace_back(d);
-    a.traces.push_back(d.string());
-    collect(traces.back(), c, a);
+  std::vector<DispatchTable> dispatch;
+  dispatch.reserve(dirs.size());
+  std::vector<std::vector<ctf::StreamIndex>> indexes(dirs.size());
+  uint64_t total_bytes = 0;
+  for (std::size_t t = 0; t < dirs.size(); ++t) {
+    traces.emplace_back(dirs[t]);
+    a.traces.push_back(dirs[t].string());
+    dispatch.push_back(dispatch_table(traces[t], c));
+    for (std::size_t s = 0; s < traces[t].stream_count(); ++s) {
+      indexes[t].push_back(traces[t].index_stream(s));
+      const ctf::StreamStats& st = indexes[t].back().stats;
+      ++a.streams;
+      a.packets += st.packets;
+      a.discarded_events += st.discarded_events;
+      a.lost_packets += st.lost_packets;
+    }
+    total_bytes += traces[t].total_bytes();
   }
+  const unsigned threads = std::clamp(std::thread::hardware_concurrency(), 1u, kMaxDecodeThreads);
+  // Several parts per thread, so that a thread that drew small ones takes more.
+  const uint64_t target_bytes = std::max<uint64_t>(total_bytes / (4 * threads), kMinPartBytes);
+  std::vector<StreamPart> parts;
+  for (std::size_t t = 0; t < traces.size(); ++t) {
+    for (std::size_t s = 0; s < indexes[t].size(); ++s) {
+      auto cut = cut_into_parts(traces[t], dispatch[t], s, indexes[t][s].packets, target_bytes);
+      std::move(cut.begin(), cut.end(), std::back_inserter(parts));
+    }
+  }
+  c.id_events.reserve(total_bytes / 40);
+  collect_parallel(parts, std::min<unsigned>(threads, static_cast<unsigned>(parts.size())), c, a);
 
   if (!c.runs.empty()) {
     std::sort(c.runs.begin(), c.runs.end(),

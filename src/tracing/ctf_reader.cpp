@@ -543,13 +543,88 @@ int Trace::stream_context_index(uint64_t stream_id, std::string_view name) const
 
 StreamStats Trace::read_stream(std::size_t index,
                                const std::function<void(const Event&)>& on_event) {
+  StreamIndex i = index_stream(index);
+  i.stats.events = read_packets(index, i.packets, on_event);
+  return i.stats;
+}
+
+StreamIndex Trace::index_stream(std::size_t index) const {
   const Mapped& m = *mapped_.at(index);
-  StreamStats stats;
-  stats.file = stream_files_[index].string();
-  if (m.size == 0) return stats;
+  StreamIndex out;
+  out.stats.file = stream_files_[index].string();
+  if (m.size == 0) return out;
   const Metadata& md = metadata_;
-  Decoder d(m.data, m.size * 8, md.big_endian, stats.file);
-  std::vector<Value> header_values, context_values, payload, event_context;
+  Decoder d(m.data, m.size * 8, md.big_endian, out.stats.file);
+  d.set_clock_updates(false);
+  std::vector<Value> header_values, context_values;
+  const int magic = md.packet_header ? index_of(md.packet_header, "magic") : -1;
+  const int sid = md.packet_header ? index_of(md.packet_header, "stream_id") : -1;
+  uint64_t last_discarded = 0;
+  bool have_seq = false;
+  uint64_t last_seq = 0;
+  const uint64_t file_bits = m.size * 8;
+  uint64_t packet_start = 0;
+  while (packet_start < file_bits) {
+    d.set_end(file_bits);
+    d.seek(packet_start);
+    uint64_t stream_id = 0;
+    if (md.packet_header) {
+      header_values.clear();
+      d.decode_struct(*md.packet_header, &header_values, nullptr);
+      if (magic >= 0 && header_values[static_cast<std::size_t>(magic)].u != kPacketMagic)
+        d.fail("bad packet magic (not a CTF stream, or corrupt)");
+      if (sid >= 0) stream_id = header_values[static_cast<std::size_t>(sid)].u;
+    }
+    Packet p;
+    p.stream_class = md.stream(stream_id);
+    if (p.stream_class == nullptr) d.fail("unknown stream id " + std::to_string(stream_id));
+    uint64_t content_bits = file_bits - packet_start, packet_bits = content_bits;
+    if (const TypePtr& pc = p.stream_class->packet_context) {
+      context_values.clear();
+      d.decode_struct(*pc, &context_values, nullptr);
+      auto get = [&](std::string_view name) -> const Value* {
+        const int i = index_of(pc, name);
+        return i >= 0 ? &context_values[static_cast<std::size_t>(i)] : nullptr;
+      };
+      if (const Value* v = get("content_size")) content_bits = v->u;
+      if (const Value* v = get("packet_size")) packet_bits = v->u;
+      if (const Value* v = get("timestamp_begin")) {
+        p.has_clock = true;
+        p.timestamp_begin = v->u;
+      }
+      if (const Value* v = get("cpu_id")) p.cpu_id = static_cast<uint32_t>(v->u);
+      if (const Value* v = get("events_discarded")) {
+        // A running count per stream: what it gained since the previous packet.
+        if (v->u >= last_discarded) out.stats.discarded_events += v->u - last_discarded;
+        last_discarded = v->u;
+      }
+      if (const Value* v = get("packet_seq_num")) {
+        if (have_seq && v->u > last_seq + 1) out.stats.lost_packets += v->u - last_seq - 1;
+        have_seq = true;
+        last_seq = v->u;
+      }
+    }
+    if (packet_bits == 0 || content_bits > packet_bits || packet_start + packet_bits > file_bits)
+      d.fail("packet size " + std::to_string(packet_bits / 8) + " bytes does not fit the file");
+    p.start_bits = packet_start;
+    p.events_bits = d.pos();
+    p.content_end_bits = packet_start + content_bits;
+    p.end_bits = packet_start + packet_bits;
+    out.packets.push_back(p);
+    packet_start += packet_bits;
+  }
+  out.stats.packets = out.packets.size();
+  return out;
+}
+
+uint64_t Trace::read_packets(std::size_t index, std::span<const Packet> packets,
+                             const std::function<void(const Event&)>& on_event) const {
+  const Mapped& m = *mapped_.at(index);
+  if (m.size == 0 || packets.empty()) return 0;
+  const Metadata& md = metadata_;
+  const std::string& file = stream_files_[index].string();
+  Decoder d(m.data, m.size * 8, md.big_endian, file);
+  std::vector<Value> payload, event_context;
   // Layouts compiled on first use, per stream class and event class.
   struct Compiled {
     bool tried = false;
@@ -571,57 +646,13 @@ StreamStats Trace::read_stream(std::size_t index,
   std::vector<uint8_t> payload_flat;
   HeaderShape shape = HeaderShape::kGeneral;
   const FlatLayout* context_layout = nullptr;
-  uint64_t last_discarded = 0;
-  bool have_seq = false;
-  uint64_t last_seq = 0;
-  const uint64_t file_bits = m.size * 8;
-  uint64_t packet_start = 0;
+  uint64_t events = 0;
 
-  while (packet_start < file_bits) {
-    d.set_end(file_bits);
-    d.seek(packet_start);
-    d.set_clock_updates(false);
-    uint64_t stream_id = 0;
-    if (md.packet_header) {
-      header_values.clear();
-      d.decode_struct(*md.packet_header, &header_values, nullptr);
-      const int magic = index_of(md.packet_header, "magic");
-      if (magic >= 0 && header_values[static_cast<std::size_t>(magic)].u != kPacketMagic)
-        d.fail("bad packet magic (not a CTF stream, or corrupt)");
-      const int sid = index_of(md.packet_header, "stream_id");
-      if (sid >= 0) stream_id = header_values[static_cast<std::size_t>(sid)].u;
-    }
-    const StreamClass* sc = md.stream(stream_id);
-    if (sc == nullptr) d.fail("unknown stream id " + std::to_string(stream_id));
-    uint64_t content_bits = file_bits - packet_start, packet_bits = content_bits;
-    uint32_t cpu_id = 0;
-    if (sc->packet_context) {
-      context_values.clear();
-      d.decode_struct(*sc->packet_context, &context_values, nullptr);
-      auto get = [&](std::string_view name) -> const Value* {
-        const int i = index_of(sc->packet_context, name);
-        return i >= 0 ? &context_values[static_cast<std::size_t>(i)] : nullptr;
-      };
-      if (const Value* v = get("content_size")) content_bits = v->u;
-      if (const Value* v = get("packet_size")) packet_bits = v->u;
-      if (const Value* v = get("timestamp_begin")) d.set_clock(v->u);
-      if (const Value* v = get("cpu_id")) cpu_id = static_cast<uint32_t>(v->u);
-      if (const Value* v = get("events_discarded")) {
-        // A running count per stream: what it gained since the previous packet.
-        if (v->u >= last_discarded) stats.discarded_events += v->u - last_discarded;
-        last_discarded = v->u;
-      }
-      if (const Value* v = get("packet_seq_num")) {
-        if (have_seq && v->u > last_seq + 1) stats.lost_packets += v->u - last_seq - 1;
-        have_seq = true;
-        last_seq = v->u;
-      }
-    }
-    if (packet_bits == 0 || content_bits > packet_bits || packet_start + packet_bits > file_bits)
-      d.fail("packet size " + std::to_string(packet_bits / 8) + " bytes does not fit the file");
-    ++stats.packets;
-    const uint64_t content_end = packet_start + content_bits;
-    d.set_end(content_end);
+  for (const Packet& p : packets) {
+    const StreamClass* sc = p.stream_class;
+    d.seek(p.events_bits);
+    d.set_end(p.content_end_bits);
+    if (p.has_clock) d.set_clock(p.timestamp_begin);
     d.set_clock_updates(true);
     if (layouts_for != sc) {
       layouts_for = sc;
@@ -641,7 +672,7 @@ StreamStats Trace::read_stream(std::size_t index,
 
     while (true) {
       // Events end where the next header would not fit (trailing padding).
-      if (d.pos() >= content_end) break;
+      if (d.pos() >= p.content_end_bits) break;
       const uint64_t event_start = d.pos();
       uint64_t id = 0;
       if (shape != HeaderShape::kGeneral) {
@@ -674,15 +705,14 @@ StreamStats Trace::read_stream(std::size_t index,
       Event ev;
       ev.cls = ec;
       ev.timestamp = d.clock();
-      ev.cpu_id = cpu_id;
+      ev.cpu_id = p.cpu_id;
       ev.fields = payload;
       ev.stream_context = event_context;
-      ++stats.events;
+      ++events;
       on_event(ev);
     }
-    packet_start += packet_bits;
   }
-  return stats;
+  return events;
 }
 
 std::vector<fs::path> find_traces(const fs::path& root) {

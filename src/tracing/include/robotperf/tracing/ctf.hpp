@@ -141,6 +141,26 @@ struct StreamStats {
   uint64_t lost_packets = 0;      // gaps in packet_seq_num
 };
 
+// One packet of a stream: where it lies and what its context says. Its events can be decoded
+// on their own when it gives its first clock value (timestamp_begin, as LTTng writes).
+struct Packet {
+  const StreamClass* stream_class = nullptr;
+  uint64_t start_bits = 0;   // of the packet header
+  uint64_t events_bits = 0;  // of its first event
+  uint64_t content_end_bits = 0;
+  uint64_t end_bits = 0;  // of the packet, padding included
+  bool has_clock = false;
+  uint64_t timestamp_begin = 0;
+  uint32_t cpu_id = 0;
+};
+
+// A stream's packets in file order, and the stream's counters from their contexts (its events
+// are not counted: that takes decoding them).
+struct StreamIndex {
+  std::vector<Packet> packets;
+  StreamStats stats;
+};
+
 // One trace: a folder holding `metadata` and its stream files.
 class Trace {
  public:
@@ -159,6 +179,14 @@ class Trace {
   // the stream), calling `on_event` for each. The Event and its views are valid
   // during the call only; string views stay valid while the Trace lives.
   StreamStats read_stream(std::size_t index, const std::function<void(const Event&)>& on_event);
+
+  // Reads the packet headers and contexts of stream `index`, without its events.
+  StreamIndex index_stream(std::size_t index) const;
+  // Decodes the events of `packets` (consecutive packets of stream `index`'s index, in order),
+  // calling `on_event` for each; returns how many. Stream parts whose first packet has its clock
+  // can be decoded on different threads at once: a Trace is only read.
+  uint64_t read_packets(std::size_t index, std::span<const Packet> packets,
+                        const std::function<void(const Event&)>& on_event) const;
 
   // Index of a stream event-context field ("vpid", "vtid", "procname"), or -1.
   int stream_context_index(uint64_t stream_id, std::string_view name) const;
