@@ -967,9 +967,13 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
     }
     total_bytes += traces[t].total_bytes();
   }
-  const unsigned threads = std::clamp(std::thread::hardware_concurrency(), 1u, kMaxDecodeThreads);
+  const unsigned threads = std::clamp(
+      options.decode_threads != 0 ? options.decode_threads : std::thread::hardware_concurrency(),
+      1u, kMaxDecodeThreads);
   // Several parts per thread, so that a thread that drew small ones takes more.
-  const uint64_t target_bytes = std::max<uint64_t>(total_bytes / (4 * threads), kMinPartBytes);
+  const uint64_t target_bytes =
+      options.part_bytes != 0 ? options.part_bytes
+                              : std::max<uint64_t>(total_bytes / (4 * threads), kMinPartBytes);
   std::vector<StreamPart> parts;
   for (std::size_t t = 0; t < traces.size(); ++t) {
     for (std::size_t s = 0; s < indexes[t].size(); ++s) {

@@ -236,6 +236,83 @@ TEST(Analyzer, HandBuiltTraceGivesExactLatencies) {
   }
 }
 
+// A run whose streams hold many packets, names first used in late packets and handles
+// re-declared in later ones: what decoding the streams in parts must merge exactly.
+void write_long_run(CtfWriter& w, uint64_t frames) {
+  testing::define_robotperf_events(w);
+  const std::string play = "robotperf_playback", mon = "robotperf_monitor";
+  w.event(0, "robotperf:run_begin", kStart - 10, kRunPid, 1,
+          {V(std::string("t1")), V(std::string("intra")), V(frames), V(uint64_t{2}), V(kPeriod),
+           V(uint64_t{1}), V(50.0)});
+  // A subscription of node 0x10 with callback 0x40: the callback table names the node.
+  w.event(1, "ros2:rcl_subscription_init", kStart - 9, kRunPid, 1,
+          {V(uint64_t{0x20}), V(uint64_t{0x10}), V(uint64_t{0x30}), V(std::string("/in")),
+           V(uint64_t{10})});
+  w.event(1, "ros2:rclcpp_subscription_init", kStart - 8, kRunPid, 1,
+          {V(uint64_t{0x20}), V(uint64_t{0x21})});
+  w.event(1, "ros2:rclcpp_subscription_callback_added", kStart - 7, kRunPid, 1,
+          {V(uint64_t{0x21}), V(uint64_t{0x40})});
+  for (uint64_t k = 0; k < frames; ++k) {
+    const int64_t id = id_of(k);
+    const uint64_t sent = sent_of(k);
+    // Node handle 0x10 is re-declared every 7 frames under a new name: the last one holds.
+    if (k % 7 == 0) {
+      w.event(1, "ros2:rcl_node_init", sent - 5, kRunPid, 1,
+              {V(uint64_t{0x10}), V(uint64_t{0}), V("relay_" + std::to_string(k / 7)),
+               V(std::string("/"))});
+    }
+    // A node and kernel name used from frame k on only.
+    const std::string relay = "relay_" + std::to_string(k / 5);
+    const std::string kernel = "k" + std::to_string(k % 3);
+    w.event(0, "robotperf:input", sent, kRunPid, 1,
+            {V(play), V(id), V(k), V(static_cast<int64_t>(kStart + k * kPeriod))});
+    w.event(0, "robotperf:publish", sent + 10, kRunPid, 1,
+            {V(play), V(std::string("/in")), V(id), V(uint64_t{100})});
+    w.event(1, "ros2:callback_start", sent + 990, kRunPid, 2, {V(uint64_t{0x40}), V(int64_t{1})});
+    w.event(1, "robotperf:callback_entry", sent + 1000, kRunPid, 2,
+            {V(relay), V(std::string("/in")), V(id), V(uint64_t{100})});
+    w.event(1, "robotperf:kernel_init", sent + 2000, kRunPid, 2,
+            {V(relay), V(kernel), V(id), V(uint64_t{100})});
+    w.event(1, "robotperf:kernel_fini", sent + 3000 + 37 * k, kRunPid, 2,
+            {V(relay), V(kernel), V(id), V(uint64_t{100})});
+    w.event(1, "robotperf:publish", sent + 5000 + 11 * k, kRunPid, 2,
+            {V(relay), V(std::string("/out")), V(id), V(uint64_t{100})});
+    w.event(1, "ros2:callback_end", sent + 6000 + 7 * k, kRunPid, 2, {V(uint64_t{0x40})});
+    w.event(0, "robotperf:output", sent + 9000 + 13 * (k % 17), kRunPid, 3,
+            {V(mon), V(std::string("/out")), V(id), V(uint64_t{100})});
+    if (k % 3 == 2) w.end_packet(0);
+    if (k % 4 == 3) w.end_packet(1);
+  }
+  w.event(0, "robotperf:run_end", sent_of(frames) + 1000, kRunPid, 1, {V(frames)});
+  w.finish();
+}
+
+// Decoding in parts on several threads gives what one thread reading every stream in order
+// gives, to the last field.
+TEST(Analyzer, DecodingInPartsGivesTheResultOfOneThread) {
+  TempDir dir("parts");
+  CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
+  write_long_run(w, 60);
+  AnalyzeOptions one;
+  one.decode_threads = 1;
+  one.part_bytes = uint64_t{1} << 40;
+  nlohmann::json expected = to_json(analyze_trace(dir.path(), one));
+  expected["trace"].erase("analysis_s");
+  ASSERT_GT(expected["trace"]["packets"].get<int>(), 30);
+  ASSERT_GT(expected["hops"].size(), 3u);
+  ASSERT_EQ(expected["callbacks"].size(), 1u);
+  EXPECT_EQ(expected["callbacks"][0]["node"], "relay_8") << "the handle's last declaration";
+  for (unsigned threads : {2u, 3u, 8u}) {
+    AnalyzeOptions parts;
+    parts.decode_threads = threads;
+    parts.part_bytes = 1;  // every packet a part of its own
+    nlohmann::json got = to_json(analyze_trace(dir.path(), parts));
+    got["trace"].erase("analysis_s");
+    EXPECT_TRUE(got == expected) << threads << " threads differ from one: "
+                                 << nlohmann::json::diff(expected, got).dump().substr(0, 600);
+  }
+}
+
 TEST(Analyzer, DiscardedEventsAreReportedAndInvalidate) {
   TempDir dir("discarded");
   CtfWriter w(dir.path(), CtfWriter::Header::kLarge, false, 2);

@@ -119,6 +119,11 @@ struct AnalyzeOptions {
   int run_pid = 0;
   // Processes that belong to the run besides the ones the trace says (per-node children).
   std::set<int> extra_processes;
+  // Threads that decode the streams (0: one per core), and the bytes of a stream one of them
+  // takes at a time (0: sized so that each thread takes a few parts). The result does not depend
+  // on either.
+  unsigned decode_threads = 0;
+  uint64_t part_bytes = 0;
 };
 
 // Reads every CTF trace under `dir` (one per buffer domain) and analyses it.
