@@ -201,17 +201,28 @@ struct Collected {
   std::unordered_map<std::string_view, uint32_t> name_ids;
   std::vector<std::string_view> names;
   uint32_t intern(std::string_view s) {
+    // A trace repeats a few names millions of times: a small cache keyed on a name's length and
+    // three of its bytes answers most without hashing the whole name.
+    uint32_t& cached = recent[s.empty() ? 0
+                                        : (s.size() * 31 + static_cast<unsigned char>(s.front()) +
+                                           static_cast<unsigned char>(s[s.size() / 2]) * 7 +
+                                           static_cast<unsigned char>(s.back()) * 13) %
+                                              std::size(recent)];
+    if (cached < names.size() && names[cached] == s) return cached;
     auto [it, inserted] = name_ids.try_emplace(s, static_cast<uint32_t>(names.size()));
     if (inserted) names.push_back(s);
+    cached = it->second;
     return it->second;
   }
+  uint32_t recent[64] = {};  // ids of names recently interned; any value is only a guess
 
   std::vector<std::pair<int64_t, RunInfo>> runs;   // (time, info)
   std::vector<std::pair<int32_t, int32_t>> joins;  // (vpid, run pid)
   std::vector<std::pair<int32_t, uint64_t>> ends;  // (vpid, sent)
   std::vector<Input> inputs;
   std::vector<Output> outputs;
-  std::vector<IdEvent> id_events;
+  // One vector per part of a stream decoded (see StreamPart), in order: merged without a copy.
+  std::vector<std::vector<IdEvent>> id_events;
   std::vector<CallbackEvent> callbacks;
   std::vector<RmwEvent> rmw_publishes, rmw_takes;
   std::vector<ControllerUpdateEvent> controller_updates;
@@ -263,7 +274,8 @@ void collect(StreamPart& part) {
   // Room for every event the part may hold (LTTng events take 40 bytes or more): growing the
   // vectors would copy them and fault in pages twice.
   const std::size_t estimate = part.bytes / 40;
-  c.id_events.reserve(estimate);
+  std::vector<IdEvent>& id_events = c.id_events.emplace_back();
+  id_events.reserve(estimate);
   c.inputs.reserve(estimate / 8);
   c.outputs.reserve(estimate / 8);
   c.callbacks.reserve(estimate / 4);
@@ -329,8 +341,8 @@ void collect(StreamPart& part) {
                             : d->handler == Handler::kCallbackEntry ? IdKind::kEntry
                             : d->handler == Handler::kKernelInit    ? IdKind::kKernelInit
                                                                     : IdKind::kKernelFini;
-        c.id_events.push_back({ts, field(2).as_int(), vpid, vtid(), c.intern(field(0).s),
-                               c.intern(field(1).s), kind});
+        id_events.push_back({ts, field(2).as_int(), vpid, vtid(), c.intern(field(0).s),
+                             c.intern(field(1).s), kind});
         break;
       }
       case Handler::kNodeInit: {
@@ -406,9 +418,11 @@ void merge(Collected& c, Collected&& part) {
   auto replace = [](auto& to, auto& from) {
     for (auto& [k, v] : from) to.insert_or_assign(k, std::move(v));
   };
-  for (auto& e : part.id_events) {
-    e.node = id_of[e.node];
-    e.what = id_of[e.what];
+  for (auto& events : part.id_events) {
+    for (auto& e : events) {
+      e.node = id_of[e.node];
+      e.what = id_of[e.what];
+    }
   }
   for (auto& u : part.controller_updates) {
     u.node = id_of[u.node];
@@ -423,7 +437,7 @@ void merge(Collected& c, Collected&& part) {
   append(c.ends, part.ends);
   append(c.inputs, part.inputs);
   append(c.outputs, part.outputs);
-  append(c.id_events, part.id_events);
+  std::move(part.id_events.begin(), part.id_events.end(), std::back_inserter(c.id_events));
   append(c.callbacks, part.callbacks);
   append(c.rmw_publishes, part.rmw_publishes);
   append(c.rmw_takes, part.rmw_takes);
@@ -623,26 +637,50 @@ void breakdown(TraceAnalysis& a, Collected& c, const RunInfo& run,
                const std::unordered_map<int64_t, std::size_t>& by_id) {
   // Group the events of measured messages by message (a counting sort on the
   // message's index: linear in the number of events), then by time within one.
+  std::size_t id_event_count = 0;
+  for (const auto& events : c.id_events) id_event_count += events.size();
   std::vector<uint32_t> slot_of;
-  slot_of.reserve(c.id_events.size());
+  slot_of.reserve(id_event_count);
   std::vector<std::size_t> starts(a.messages.size() + 1, 0);
-  for (const auto& e : c.id_events) {
-    uint32_t slot = UINT32_MAX;
-    if (run.processes.contains(e.vpid)) {
-      auto it = by_id.find(e.id);
-      if (it != by_id.end() && !a.messages[it->second].warmup) {
-        slot = static_cast<uint32_t>(it->second);
-        ++starts[slot + 1];
+  // A frame's events follow one another in a stream: the last process and message looked up
+  // are most often the next ones too.
+  int32_t last_vpid = 0;
+  bool last_in_run = false;
+  int64_t last_id = 0;
+  uint32_t last_slot = UINT32_MAX;
+  bool have_last_id = false;
+  for (const auto& events : c.id_events) {
+    for (const auto& e : events) {
+      if (e.vpid != last_vpid || slot_of.empty()) {
+        last_vpid = e.vpid;
+        last_in_run = run.processes.contains(e.vpid);
       }
+      uint32_t slot = UINT32_MAX;
+      if (last_in_run) {
+        if (!have_last_id || e.id != last_id) {
+          auto it = by_id.find(e.id);
+          last_slot = it != by_id.end() && !a.messages[it->second].warmup
+                          ? static_cast<uint32_t>(it->second)
+                          : UINT32_MAX;
+          last_id = e.id;
+          have_last_id = true;
+        }
+        slot = last_slot;
+        if (slot != UINT32_MAX) ++starts[slot + 1];
+      }
+      slot_of.push_back(slot);
     }
-    slot_of.push_back(slot);
   }
   for (std::size_t i = 1; i < starts.size(); ++i) starts[i] += starts[i - 1];
   std::vector<IdEvent> ev(starts.back());
   {
     std::vector<std::size_t> next(starts.begin(), starts.end() - 1);
-    for (std::size_t i = 0; i < c.id_events.size(); ++i) {
-      if (slot_of[i] != UINT32_MAX) ev[next[slot_of[i]]++] = c.id_events[i];
+    std::size_t i = 0;
+    for (const auto& events : c.id_events) {
+      for (const auto& e : events) {
+        if (slot_of[i] != UINT32_MAX) ev[next[slot_of[i]]++] = e;
+        ++i;
+      }
     }
   }
   for (std::size_t m = 0; m + 1 < starts.size(); ++m) {
@@ -981,7 +1019,6 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
       std::move(cut.begin(), cut.end(), std::back_inserter(parts));
     }
   }
-  c.id_events.reserve(total_bytes / 40);
   collect_parallel(parts, std::min<unsigned>(threads, static_cast<unsigned>(parts.size())), c, a);
 
   if (!c.runs.empty()) {
