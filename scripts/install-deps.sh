@@ -9,6 +9,7 @@ packages=(
   libfastrtps-dev libfastcdr-dev cyclonedds-dev cyclonedds-tools  # cyclonedds-tools: idlc, for bench_transport
   libssl-dev  # DDS Security keystores (security init)
   libopencv-dev
+  pocl-opencl-icd clinfo  # an OpenCL CPU device: the opencl backend runs and is tested everywhere
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   libsqlite3-dev ros2-test-interface-files
   libzstd-dev liblz4-dev libdeflate-dev

@@ -77,15 +77,16 @@ class CannyNode final : public graph::Node, public plugin::NodeCounters {
         params_(canny_params(config.parameters, "node '" + config.node_name + "'")),
         opencl_(config.backend == "opencl") {
     if (opencl_) {
-      // The transparent API falls back to the CPU without a device: say so instead of measuring
-      // the CPU under the name of the accelerator.
-      if (!cv::ocl::haveOpenCL()) {
+      // The transparent API falls back to the CPU without a device it uses (by default OpenCV
+      // uses GPUs only): say so instead of measuring the CPU under the name of the accelerator.
+      cv::ocl::setUseOpenCL(true);
+      if (!cv::ocl::useOpenCL()) {
         throw std::invalid_argument(
             "node '" + name() +
-            "': backend opencl needs an OpenCL device, and OpenCV finds none (install the "
-            "device's OpenCL ICD, e.g. pocl-opencl-icd for the CPU, or use backend cpu)");
+            "': backend opencl needs an OpenCL device, and OpenCV uses none (install the "
+            "device's OpenCL ICD, or set OPENCV_OPENCL_DEVICE=:CPU: for a CPU one such as "
+            "pocl-opencl-icd's, or use backend cpu)");
       }
-      cv::ocl::setUseOpenCL(true);
     }
     edges_ = create_publisher<msgs::Image>(config.topic("edges"), config.qos);
     image_ = create_subscription<msgs::Image>(

@@ -30,6 +30,7 @@
 #include "robotperf/harness/run.hpp"
 #include "robotperf/msgs/cdr.hpp"
 #include "robotperf/msgs/dynamic.hpp"
+#include "robotperf/perception/opencl_device.hpp"
 #include "robotperf/report/atomic_file.hpp"
 #include "robotperf/report/benchmark_yaml.hpp"
 #include "robotperf/report/readme.hpp"
@@ -254,8 +255,9 @@ int describe_benchmark(const Roots& roots, const std::string& id) {
 
 struct RunArgs {
   std::string id;
-  std::optional<std::string> rate;    // Hz, or "bag"
-  std::optional<double> update_rate;  // Hz: the controller managers' loop rate
+  std::optional<std::string> rate;     // Hz, or "bag"
+  std::optional<double> update_rate;   // Hz: the controller managers' loop rate
+  std::optional<std::string> backend;  // --backend: nodes whose kernel has it run on it
   std::optional<double> duration, drain;
   std::optional<std::string> dataset, window;
   std::vector<std::string> remaps;
@@ -653,6 +655,7 @@ int run(const Roots& roots, const RunArgs& a) {
   o.arrival = harness::ArrivalPattern::parse(a.arrival);
   o.arrival.seed = a.arrival_seed;
   o.update_rate_hz = a.update_rate;
+  o.backend = a.backend;
   o.count = a.count;
   o.duration_s = a.duration;
   o.warmup = a.warmup;
@@ -1100,6 +1103,9 @@ int main(int argc, char** argv) {
                    "transport: intra, fastdds or cyclonedds (default: intra; fastdds for a "
                    "per-node layout)")
       ->check(CLI::IsMember({"intra", "fastdds", "cyclonedds"}));
+  run_cmd->add_option("--backend", ra.backend,
+                      "run every node whose kernel has this backend on it (cpu, opencl, or a "
+                      "plug-in's); the others stay on theirs (see robotperf list kernels)");
   run_cmd
       ->add_option("--processes", ra.processes,
                    "single (all nodes in one process) or per-node (default: the benchmark's)")
@@ -1313,6 +1319,8 @@ int main(int argc, char** argv) {
   node_cmd->add_option("--domain", node_domain);
   std::optional<double> node_update_rate;
   node_cmd->add_option("--update-rate", node_update_rate);
+  std::optional<std::string> node_backend;
+  node_cmd->add_option("--backend", node_backend);
   double node_callback_timeout_s = 30.0;
   node_cmd->add_option("--callback-timeout", node_callback_timeout_s);
   std::string node_run_token;
@@ -1412,13 +1420,20 @@ int main(int argc, char** argv) {
           {"machine", sysinfo::to_json(sysinfo::collect_machine_info())},
           {"software", report::software_json()},
           {"power",
-           metrics::sources_to_json(metrics::discover_power_sources(sysinfo_power.options()))}};
+           metrics::sources_to_json(metrics::discover_power_sources(sysinfo_power.options()))},
+          {"opencl_devices", [] {
+             nlohmann::json devices = nlohmann::json::array();
+             for (const auto& d : perception::opencl_devices())
+               devices.push_back(harness::device_to_json(d));
+             return devices;
+           }()}};
       std::cout << json_text(description, 2) << "\n";
       return kExitOk;
     }
     if (*node_cmd) {
       harness::BenchmarkSpec spec = harness::load_benchmark(node_package);
       if (node_update_rate) harness::override_update_rate(spec, *node_update_rate);
+      if (node_backend) harness::override_backend(spec, *node_backend);
       return harness::run_node_process(spec, node_name, node_rmw, node_domain,
                                        node_scheduling.options(), node_callback_timeout_s,
                                        node_run_token, node_keystore,

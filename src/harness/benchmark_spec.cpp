@@ -509,4 +509,22 @@ void override_update_rate(BenchmarkSpec& spec, double hz) {
         spec.id + " has none");
 }
 
+void override_backend(BenchmarkSpec& spec, const std::string& backend) {
+  std::set<std::string> available;
+  bool found = false;
+  for (auto& n : spec.nodes) {
+    const auto& backends = kernel_of(n).info.backends;
+    available.insert(backends.begin(), backends.end());
+    if (std::ranges::count(backends, backend) == 0) continue;
+    n.backend = backend;
+    found = true;
+  }
+  if (!found) {
+    std::string names;
+    for (const auto& b : available) names += (names.empty() ? "" : ", ") + b;
+    throw std::invalid_argument("--backend " + backend + ": no kernel of " + spec.id +
+                                " has it (they have: " + (names.empty() ? "none" : names) + ")");
+  }
+}
+
 }  // namespace robotperf::harness

@@ -79,8 +79,8 @@ NodeProcesses::NodeProcesses(
     Child c;
     c.name = node.name;
     c.kernel = node.kernel;
-    c.report = {node.name, node.kernel, 0,  "running", -1,          -1,
-                {},        node.host,   "", true,      node.backend};
+    c.report = {node.name, node.kernel, 0,  "running", -1,           -1,
+                {},        node.host,   "", true,      node.backend, {}};
     int in[2], out[2];
     make_pipe(in);
     make_pipe(out);
@@ -202,6 +202,9 @@ void NodeProcesses::on_line(Child& child, const std::string& line) {
       // Behind a launcher, the node is not the process we started.
       if (child.report.same_machine) child.report.pid = j.value("pid", child.report.pid);
     }
+  } else if (line.rfind("device ", 0) == 0) {
+    const auto j = nlohmann::json::parse(line.substr(7), nullptr, false);
+    if (j.is_object()) child.report.device = device_from_json(j);
   } else if (line == "ready") {
     child.ready = true;
   } else if (line.rfind("hung ", 0) == 0) {

@@ -340,12 +340,26 @@ std::vector<double> scheduled_latencies_ms(const RunResult& r) {
   return out;
 }
 
+nlohmann::json device_to_json(const plugin::DeviceInfo& device) {
+  return {{"name", device.name},
+          {"vendor", device.vendor},
+          {"driver", device.driver},
+          {"runtime", device.runtime},
+          {"memory_bytes", device.memory_bytes}};
+}
+
+plugin::DeviceInfo device_from_json(const nlohmann::json& j) {
+  return {j.value("name", ""), j.value("vendor", ""), j.value("driver", ""), j.value("runtime", ""),
+          j.value("memory_bytes", uint64_t{0})};
+}
+
 RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& options) {
   check_run_options(options);
   std::optional<BenchmarkSpec> overridden;
-  if (options.update_rate_hz) {
+  if (options.update_rate_hz || options.backend) {
     overridden = package_spec;
-    override_update_rate(*overridden, *options.update_rate_hz);
+    if (options.update_rate_hz) override_update_rate(*overridden, *options.update_rate_hz);
+    if (options.backend) override_backend(*overridden, *options.backend);
   }
   const BenchmarkSpec& spec = overridden ? *overridden : package_spec;
   RunResult r;
@@ -537,7 +551,10 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
       graph_executor->add_node(node);
       local_nodes.push_back(node);
       kernel_nodes.push_back(node);
-      r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1, {}, "", "", true, n.backend});
+      r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1, {}, "", "", true, n.backend, {}});
+      if (const auto* d = dynamic_cast<const plugin::DeviceNode*>(node.get());
+          d != nullptr && n.backend != "cpu")
+        r.nodes.back().device = d->device();
     }
   } else {
     std::vector<std::string> node_arguments = options.scheduling.node_arguments();
@@ -548,6 +565,8 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
       hz << *options.update_rate_hz;
       node_arguments.insert(node_arguments.end(), {"--update-rate", hz.str()});
     }
+    if (options.backend)
+      node_arguments.insert(node_arguments.end(), {"--backend", *options.backend});
     node_arguments.insert(node_arguments.end(),
                           {"--callback-timeout", number_text(options.callback_timeout_s),
                            "--run-token", r.run_token});
@@ -833,6 +852,9 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   graph::Context context(rmw::make_transport(rmw, t));
   trace_run_join();
   auto node = make_kernel_node(*node_spec, context, spec.workload);
+  if (const auto* d = dynamic_cast<const plugin::DeviceNode*>(node.get());
+      d != nullptr && node_spec->backend != "cpu")
+    std::cout << "device " << device_to_json(d->device()).dump() << std::endl;
   graph::Executor executor(spec.executor_threads);
   executor.add_node(node);
 

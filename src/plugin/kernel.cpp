@@ -25,6 +25,7 @@ std::string KernelConfig::topic(const std::string& port) const {
 }
 
 NodeCounters::~NodeCounters() = default;
+DeviceNode::~DeviceNode() = default;
 ControlLoopSource::~ControlLoopSource() = default;
 
 bool kernel_trace_enabled() {

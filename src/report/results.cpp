@@ -229,6 +229,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
     node["cpu_user_s"] = n.cpu_user_s >= 0 ? json(n.cpu_user_s) : json(nullptr);
     node["cpu_system_s"] = n.cpu_system_s >= 0 ? json(n.cpu_system_s) : json(nullptr);
     if (!n.counters.empty()) node["counters"] = n.counters;
+    if (n.device) node["device"] = harness::device_to_json(*n.device);
     if (!n.hostname.empty()) node["hostname"] = n.hostname;
     if (!n.host.empty()) {
       node["host"] = n.host;
@@ -482,6 +483,15 @@ std::string summary_table(const harness::RunResult& r) {
     out << " (" << parameters << ")";
   }
   out << "\n";
+  // Which node ran where, when any ran on a backend other than the host CPU.
+  if (std::ranges::any_of(r.nodes, [](const auto& n) { return n.backend != "cpu"; })) {
+    out << "backends:";
+    for (const auto& n : r.nodes) {
+      out << " " << n.name << " " << n.backend;
+      if (n.device) out << " (" << n.device->name << ", " << n.device->runtime << ")";
+      out << (&n == &r.nodes.back() ? "\n" : ";");
+    }
+  }
   for (const auto& [host, launcher] : r.host_launchers) {
     std::string nodes, hostname;
     for (const auto& n : r.nodes) {

@@ -838,6 +838,62 @@ TEST_F(Cli, UpdateRateOverridesTheControlLoopRate) {
   }
 }
 
+// --backend opencl runs a1's rectify and resize on the OpenCL device (pocl's CPU device where
+// there is no GPU), records the backend and the device per node, and its answer passes a1's
+// functional checks; a backend no kernel has, or one without its device, is one line and exit 2.
+TEST_F(Cli, BackendRunsTheKernelsThatHaveItAndRecordsTheDevice) {
+  for (const std::string args : {"run a1 --backend cuda", "run a3 --backend opencl"}) {
+    const Outcome bad =
+        robotperf_cli(args + " --count 20 --quiet --output " + (out_ / "bad").string());
+    EXPECT_EQ(bad.exit_code, 2) << args << ": " << bad.out;
+    EXPECT_EQ(std::count(bad.out.begin(), bad.out.end(), '\n'), 1) << args << ": " << bad.out;
+    EXPECT_NE(bad.out.find("--backend"), std::string::npos) << args << ": " << bad.out;
+  }
+  // An ICD loader that finds no driver: what to install, in one line.
+  const fs::path no_drivers = out_ / "no-opencl-drivers";
+  fs::create_directories(no_drivers);
+  const Outcome missing = robotperf_cli(
+      "run a5 --backend opencl --count 20 --quiet --output " + (out_ / "bad").string(),
+      "OCL_ICD_VENDORS=" + no_drivers.string());
+  EXPECT_EQ(missing.exit_code, 2) << missing.out;
+  EXPECT_EQ(std::count(missing.out.begin(), missing.out.end(), '\n'), 1) << missing.out;
+  EXPECT_NE(missing.out.find("pocl-opencl-icd"), std::string::npos) << missing.out;
+  EXPECT_TRUE(!fs::exists(out_ / "bad") || fs::is_empty(out_ / "bad"))
+      << "nothing written for a run that could not start";
+
+  const Outcome probe = robotperf_cli("sysinfo");
+  ASSERT_EQ(probe.exit_code, 0) << probe.out;
+  if (nlohmann::json::parse(probe.out)["opencl_devices"].empty())
+    GTEST_SKIP() << "no OpenCL device on this machine (Debian: pocl-opencl-icd)";
+  const Outcome o = robotperf_cli("run a1 --backend opencl --count 40 --output " + out_.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("backends: rectify opencl ("), std::string::npos) << o.out;
+  const auto j = result_json();
+  ASSERT_TRUE(j.is_object()) << o.out;
+  ASSERT_EQ(j["nodes"].size(), 2u);
+  for (const auto& node : j["nodes"]) {
+    EXPECT_EQ(node["backend"], "opencl") << node.dump();
+    EXPECT_FALSE(node["device"]["name"].get<std::string>().empty()) << node.dump();
+    EXPECT_GT(node["device"]["memory_bytes"].get<uint64_t>(), 0u) << node.dump();
+  }
+  EXPECT_EQ(j["validity"]["valid"], true) << o.out;
+
+  // Per-node children build their node on the backend too, and report their device.
+  const fs::path per_node = out_ / "per-node";
+  const Outcome p = robotperf_cli(
+      "run a1 --backend opencl --processes per-node --count 40 "
+      "--quiet --domain " +
+      domain() + " --output " + per_node.string());
+  ASSERT_EQ(p.exit_code, 0) << p.out;
+  std::ifstream in(fs::directory_iterator(per_node)->path());
+  const auto children = nlohmann::json::parse(in);
+  for (const auto& node : children["nodes"]) {
+    EXPECT_GT(node.value("pid", 0), 0) << node.dump();
+    EXPECT_EQ(node["backend"], "opencl") << node.dump();
+    EXPECT_FALSE(node["device"]["name"].get<std::string>().empty()) << node.dump();
+  }
+}
+
 TEST_F(Cli, ControlLoopCpuThatCannotBeHadIsOneClearLine) {
   // No machine here has CPU 1000: pinning the loop thread there fails before the run.
   fs::create_directories(out_ / "control" / "c9_bad");

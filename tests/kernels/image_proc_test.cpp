@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "robotperf/perception/camera_model.hpp"
+#include "robotperf/perception/opencl_device.hpp"
 #include "robotperf/perception/synthetic_camera.hpp"
 
 namespace robotperf::perception {
@@ -554,6 +555,66 @@ TEST(Resize, RejectsBadInput) {
   EXPECT_THROW(resize(unknown, info, ResizeParams{}, out, out_info), std::invalid_argument);
   msgs::Image same = image;
   EXPECT_THROW(resize(same, info, ResizeParams{}, same, out_info), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The OpenCL backend: the CPU's answer on the same inputs (DESIGN.md section 6)
+// ---------------------------------------------------------------------------------------------
+
+// Share of pixel channels where `a` and `b` differ by more than 1.
+double share_off_by_more_than_one(const msgs::Image& a, const msgs::Image& b) {
+  cv::Mat diff;
+  cv::absdiff(image_view(a), image_view(b), diff);
+  const cv::Mat channels = diff.reshape(1);
+  return static_cast<double>(cv::countNonZero(channels > 1)) /
+         static_cast<double>(channels.total());
+}
+
+// The reason to skip when this machine has no OpenCL device, else empty.
+std::string without_opencl() {
+  try {
+    opencl_device();
+    return "";
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+}
+
+TEST_F(RectifySynthetic, OpenClRectifiesAsTheCpuDoes) {
+  if (const std::string why = without_opencl(); !why.empty()) GTEST_SKIP() << why;
+  Rectifier cpu, device(cv::INTER_LINEAR, ImageBackend::kOpenCl);
+  for (const uint32_t index : {0u, 5u, 9u}) {
+    const CameraFrame& frame = (*frames_)[index];
+    const msgs::Image expected = cpu.rectify(frame.image, frame.info);
+    const msgs::Image got = device.rectify(frame.image, frame.info);
+    EXPECT_EQ(got.header.stamp.to_ns(), expected.header.stamp.to_ns());
+    ASSERT_EQ(got.data.size(), expected.data.size());
+    EXPECT_LE(share_off_by_more_than_one(got, expected), 0.001) << "frame " << index;
+  }
+  EXPECT_EQ(device.map_computations(), 1u) << "the device keeps the map of one camera model";
+}
+
+TEST_F(RectifySynthetic, OpenClResizesAsTheCpuDoes) {
+  if (const std::string why = without_opencl(); !why.empty()) GTEST_SKIP() << why;
+  const CameraFrame& frame = frames_->front();
+  for (const double scale : {0.5, 0.37, 2.0}) {
+    ResizeParams p;
+    p.scale_width = p.scale_height = scale;
+    msgs::Image expected, got;
+    msgs::CameraInfo expected_info, got_info;
+    resize(frame.image, frame.info, p, expected, expected_info);
+    resize(frame.image, frame.info, p, got, got_info, ImageBackend::kOpenCl);
+    ASSERT_EQ(got.width, expected.width);
+    ASSERT_EQ(got.height, expected.height);
+    EXPECT_EQ(got_info.k, expected_info.k);
+    EXPECT_LE(share_off_by_more_than_one(got, expected), 0.001) << "scale " << scale;
+  }
+}
+
+TEST(ImageBackend, NamesAreCpuAndOpencl) {
+  EXPECT_EQ(image_backend("cpu"), ImageBackend::kCpu);
+  EXPECT_EQ(image_backend("opencl"), ImageBackend::kOpenCl);
+  EXPECT_THROW(image_backend("cuda"), std::invalid_argument);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -186,7 +186,30 @@ cv::Mat prepare_image(msgs::Image& image, const msgs::Header& header, std::strin
 // Rectifier
 // ---------------------------------------------------------------------------------------------
 
-Rectifier::Rectifier(int interpolation) : interpolation_(interpolation) {
+ImageBackend image_backend(std::string_view name) {
+  if (name == "cpu") return ImageBackend::kCpu;
+  if (name == "opencl") return ImageBackend::kOpenCl;
+  throw std::invalid_argument("no image backend '" + std::string(name) + "' (cpu, opencl)");
+}
+
+namespace {
+
+// Computes `compute(device_in, device_out)` on the OpenCL device: uploads `in` into `device_in`,
+// and downloads `device_out` into `out` (already the output's size and type: written in place).
+template <class Compute>
+void on_device(const cv::Mat& in, cv::UMat& device_in, cv::UMat& device_out, cv::Mat& out,
+               const Compute& compute) {
+  in.copyTo(device_in);
+  compute(device_in, device_out);
+  uint8_t* const data = out.data;
+  device_out.copyTo(out);
+  if (out.data != data) throw std::logic_error("the device's output has another size or type");
+}
+
+}  // namespace
+
+Rectifier::Rectifier(int interpolation, ImageBackend backend)
+    : interpolation_(interpolation), backend_(backend) {
   require_valid_interpolation(interpolation);
 }
 
@@ -281,6 +304,10 @@ void Rectifier::update_maps(const msgs::CameraInfo& info) {
     cv::subtract(full_map_xy_(binned_roi), cv::Scalar(binned_roi.x, binned_roi.y), map_xy_);
     map_fraction_ = full_map_fraction_(binned_roi).clone();
   }
+  if (backend_ == ImageBackend::kOpenCl) {
+    map_xy_.copyTo(device_map_xy_);
+    map_fraction_.copyTo(device_map_fraction_);
+  }
 }
 
 void Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& info,
@@ -307,6 +334,14 @@ void Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& info,
   const bool is_float = raw_view.depth() == CV_32F || raw_view.depth() == CV_64F;
   const cv::Scalar border =
       cv::Scalar::all(is_float ? std::numeric_limits<float>::quiet_NaN() : 0.0);
+  if (backend_ == ImageBackend::kOpenCl) {
+    on_device(raw_view, device_in_, device_out_, rectified_view,
+              [&](const cv::UMat& in, cv::UMat& out) {
+                cv::remap(in, out, device_map_xy_, device_map_fraction_, interpolation_,
+                          cv::BORDER_CONSTANT, border);
+              });
+    return;
+  }
   cv::remap(raw_view, rectified_view, map_xy_, map_fraction_, interpolation_, cv::BORDER_CONSTANT,
             border);
 }
@@ -322,7 +357,7 @@ msgs::Image Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& i
 // ---------------------------------------------------------------------------------------------
 
 void resize(const msgs::Image& image, const msgs::CameraInfo& info, const ResizeParams& params,
-            msgs::Image& out, msgs::CameraInfo& out_info) {
+            msgs::Image& out, msgs::CameraInfo& out_info, ImageBackend backend) {
   require_distinct(image, out, "resize");
   require_valid_interpolation(params.interpolation);
   const cv::Mat in_view = image_view(image);
@@ -362,10 +397,18 @@ void resize(const msgs::Image& image, const msgs::CameraInfo& info, const Resize
 
   cv::Mat out_view =
       prepare_image(out, image.header, image.encoding, out_size.width, out_size.height);
-  if (params.use_scale) {
-    cv::resize(in_view, out_view, cv::Size(), scale_x, scale_y, params.interpolation);
+  auto compute = [&](cv::InputArray in, cv::OutputArray to) {
+    if (params.use_scale) {
+      cv::resize(in, to, cv::Size(), scale_x, scale_y, params.interpolation);
+    } else {
+      cv::resize(in, to, out_size, 0.0, 0.0, params.interpolation);
+    }
+  };
+  if (backend == ImageBackend::kOpenCl) {
+    cv::UMat device_in, device_out;
+    on_device(in_view, device_in, device_out, out_view, compute);
   } else {
-    cv::resize(in_view, out_view, out_size, 0.0, 0.0, params.interpolation);
+    compute(in_view, out_view);
   }
   if (out_view.data != out.data.data()) {
     throw std::logic_error("resize: cv::resize chose another output size than " +

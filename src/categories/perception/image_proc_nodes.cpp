@@ -4,6 +4,7 @@
 #include "camera_sync.hpp"
 #include "category.hpp"
 #include "robotperf/perception/image_proc.hpp"
+#include "robotperf/perception/opencl_device.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -40,10 +41,31 @@ class CameraNode : public graph::Node {
   std::shared_ptr<graph::GenericSubscription> image_sub_, info_sub_;
 };
 
-class RectifyNode final : public CameraNode {
+// The backend a node's config names; an OpenCL one needs its device now, not at the first frame.
+ImageBackend backend_of(const KernelConfig& config) {
+  const ImageBackend b = image_backend(config.backend);
+  if (b == ImageBackend::kOpenCl) opencl_device();
+  return b;
+}
+
+// What a camera node records about the device its backend runs on.
+class ImageDeviceNode : public plugin::DeviceNode {
+ public:
+  explicit ImageDeviceNode(ImageBackend backend) : backend_(backend) {}
+  plugin::DeviceInfo device() const override {
+    return backend_ == ImageBackend::kOpenCl ? opencl_device() : plugin::DeviceInfo{};
+  }
+
+ protected:
+  ImageBackend backend_;
+};
+
+class RectifyNode final : public CameraNode, public ImageDeviceNode {
  public:
   RectifyNode(graph::Context& context, const KernelConfig& config)
-      : CameraNode(context, config), rectifier_(interpolation_parameter(config)) {
+      : CameraNode(context, config),
+        ImageDeviceNode(backend_of(config)),
+        rectifier_(interpolation_parameter(config), backend_) {
     output_ = create_publisher<msgs::Image>(config.topic("image_rect"), config.qos);
   }
 
@@ -61,9 +83,10 @@ class RectifyNode final : public CameraNode {
   std::shared_ptr<graph::Publisher<msgs::Image>> output_;
 };
 
-class ResizeNode final : public CameraNode {
+class ResizeNode final : public CameraNode, public ImageDeviceNode {
  public:
-  ResizeNode(graph::Context& context, const KernelConfig& config) : CameraNode(context, config) {
+  ResizeNode(graph::Context& context, const KernelConfig& config)
+      : CameraNode(context, config), ImageDeviceNode(backend_of(config)) {
     const auto& p = config.parameters;
     params_.use_scale = p.get_bool("use_scale");
     params_.scale_height = p.get_double("scale_height");
@@ -80,7 +103,7 @@ class ResizeNode final : public CameraNode {
     auto out = std::make_shared<msgs::Image>();
     auto out_info = std::make_shared<msgs::CameraInfo>();
     plugin::trace_kernel_init(*this, kKernel, image->header.stamp.to_ns(), *image);
-    resize(*image, *info, params_, *out, *out_info);
+    resize(*image, *info, params_, *out, *out_info, backend_);
     plugin::trace_kernel_fini(*this, kKernel, *out);
     // CameraInfo first: a subscriber pairing on the image then finds its partner waiting.
     info_out_->publish(std::shared_ptr<const msgs::CameraInfo>(std::move(out_info)));
@@ -111,6 +134,7 @@ void register_image_proc_kernels(plugin::Registrar& registrar) {
       {.name = "image_proc/rectify",
        .description = "undistort and rectify an image with its CameraInfo (cached map, cv::remap), "
                       "as image_proc",
+       .backends = {"cpu", "opencl"},
        .inputs = camera_inputs(),
        .outputs = {{"image_rect", "sensor_msgs/msg/Image"}},
        .parameters = {interpolation_declaration()}},
@@ -121,6 +145,7 @@ void register_image_proc_kernels(plugin::Registrar& registrar) {
   registrar.add_kernel(
       {.name = "image_proc/resize",
        .description = "resize an image and scale its CameraInfo (K, P, ROI), as image_proc",
+       .backends = {"cpu", "opencl"},
        .inputs = camera_inputs(),
        .outputs = {{"resize", "sensor_msgs/msg/Image"},
                    {"resize_info", "sensor_msgs/msg/CameraInfo"}},

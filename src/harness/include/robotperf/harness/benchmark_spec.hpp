@@ -139,4 +139,9 @@ std::shared_ptr<graph::Node> make_kernel_node(const NodeSpec& node, graph::Conte
 // loop can run at (0 < hz <= 100000).
 void override_update_rate(BenchmarkSpec& spec, double hz);
 
+// Runs every node of `spec` whose kernel has `backend` on it (--backend); the others keep theirs.
+// Throws std::invalid_argument with one line when no kernel of the benchmark has it, naming the
+// backends they have.
+void override_backend(BenchmarkSpec& spec, const std::string& backend);
+
 }  // namespace robotperf::harness

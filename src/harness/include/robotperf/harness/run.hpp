@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -19,6 +20,7 @@
 #include "robotperf/metrics/latency_stats.hpp"
 #include "robotperf/metrics/power.hpp"
 #include "robotperf/metrics/resources.hpp"
+#include "robotperf/plugin/kernel.hpp"
 #include "robotperf/rmw/transport.hpp"
 #include "robotperf/sysinfo/run_rules.hpp"
 #include "robotperf/tracing/analysis.hpp"
@@ -51,6 +53,8 @@ struct RunOptions {
   std::optional<double> rate_hz;  // default: the benchmark's
   // Control benchmarks: the controller managers' loop rate in Hz (default: the graph's).
   std::optional<double> update_rate_hz;
+  // --backend: the nodes whose kernel has this backend run on it (override_backend).
+  std::optional<std::string> backend;
   std::optional<std::size_t> count;   // messages to send, warm-up included
   std::optional<double> duration_s;   // alternative to count: rate * duration
   std::optional<std::size_t> warmup;  // default: the benchmark's
@@ -114,6 +118,10 @@ struct MessageRecord {
   bool warmup = false;
 };
 
+// A backend's device as results, sysinfo and a per-node child's report to the runner write it.
+nlohmann::json device_to_json(const plugin::DeviceInfo& device);
+plugin::DeviceInfo device_from_json(const nlohmann::json& j);
+
 struct NodeReport {
   std::string name;
   std::string kernel;
@@ -127,6 +135,9 @@ struct NodeReport {
   std::string hostname;         // of the machine it ran on, as it reported (per-node runs)
   bool same_machine = true;     // as the runner's (same boot id): its pid's resources were sampled
   std::string backend = "cpu";  // where its kernel ran (graph.yaml `backend:`)
+  // The device of a backend other than the host CPU (plugin::DeviceNode), for nodes in the
+  // runner's process.
+  std::optional<plugin::DeviceInfo> device;
 };
 
 // A process of an external graph (graph.yaml `launch:`), as it ended.

@@ -70,6 +70,23 @@ class NodeCounters {
   virtual std::map<std::string, uint64_t> counters() const = 0;
 };
 
+// The device a kernel computes on when its backend is not the host CPU, as results record it.
+struct DeviceInfo {
+  std::string name{};     // "NVIDIA H100 80GB HBM3", "pthread-haswell-AMD EPYC"
+  std::string vendor{};   // "NVIDIA Corporation"
+  std::string driver{};   // the device driver's version
+  std::string runtime{};  // the API and its version: "OpenCL 3.0 PoCL", "CUDA 13.0"
+  uint64_t memory_bytes = 0;
+};
+
+// Implemented by kernel nodes whose backend runs on such a device: the harness asks it once the
+// node is built and records it with the node.
+class DeviceNode {
+ public:
+  virtual ~DeviceNode();
+  virtual DeviceInfo device() const = 0;
+};
+
 // Grey-box: robotperf:kernel_init and kernel_fini around a kernel's computation, so that the
 // trace analysis can split a node's time into the kernel and the rest. `message_id` is the
 // input's ID (its header stamp in nanoseconds), `bytes` its or the output's CDR size.

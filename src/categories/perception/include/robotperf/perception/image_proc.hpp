@@ -43,6 +43,18 @@ cv::Mat prepare_image(msgs::Image& image, const msgs::Header& header, std::strin
                       int width, int height);
 
 // ---------------------------------------------------------------------------------------------
+// Backends
+// ---------------------------------------------------------------------------------------------
+
+// Where an image function computes: on the host CPU, or on the OpenCL device (opencl_device())
+// through OpenCV's transparent API. With kOpenCl every call uploads its input and downloads its
+// output, as a node whose messages live in host memory must (DESIGN.md section 6).
+enum class ImageBackend { kCpu, kOpenCl };
+
+// "cpu" or "opencl"; throws std::invalid_argument for any other name.
+ImageBackend image_backend(std::string_view name);
+
+// ---------------------------------------------------------------------------------------------
 // Rectification (image_proc RectifyNode + image_geometry::PinholeCameraModel)
 // ---------------------------------------------------------------------------------------------
 
@@ -63,7 +75,9 @@ class Rectifier {
  public:
   // `interpolation`: cv::InterpolationFlags value, INTER_NEAREST .. INTER_LANCZOS4
   // (image_proc's "interpolation" parameter, default 1 = INTER_LINEAR).
-  explicit Rectifier(int interpolation = cv::INTER_LINEAR);
+  // With ImageBackend::kOpenCl the maps are uploaded once per camera model.
+  explicit Rectifier(int interpolation = cv::INTER_LINEAR,
+                     ImageBackend backend = ImageBackend::kCpu);
 
   // Writes the rectified image (same header, encoding and size) into `rectified`, reusing its
   // buffer. `rectified` must not be `raw`.
@@ -101,6 +115,9 @@ class Rectifier {
   cv::Mat full_map_xy_, full_map_fraction_;
   // The maps cropped to the ROI (the full maps themselves when the ROI is the full image).
   cv::Mat map_xy_, map_fraction_;
+  ImageBackend backend_;
+  // kOpenCl: the maps, and the input and output images, on the device.
+  cv::UMat device_map_xy_, device_map_fraction_, device_in_, device_out_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -127,6 +144,7 @@ struct ResizeParams {
 // size is rounded (cv::resize) and the CameraInfo size truncated, as in image_proc.
 // Throws std::invalid_argument for non-positive scales or sizes, or a bad image.
 void resize(const msgs::Image& image, const msgs::CameraInfo& info, const ResizeParams& params,
-            msgs::Image& out, msgs::CameraInfo& out_info);
+            msgs::Image& out, msgs::CameraInfo& out_info,
+            ImageBackend backend = ImageBackend::kCpu);
 
 }  // namespace robotperf::perception
