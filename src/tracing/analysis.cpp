@@ -7,6 +7,7 @@
 #include <condition_variable>
 #include <cstdio>
 #include <exception>
+#include <future>
 #include <iterator>
 #include <map>
 #include <mutex>
@@ -507,9 +508,14 @@ void collect_parallel(std::vector<StreamPart>& parts, unsigned threads, Collecte
     }
   };
   std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
+  // One thread alone decodes here; several decode beside this one, which merges (a copy-free
+  // append, mostly waiting).
   std::exception_ptr error;
-  if (pool.empty()) work();
+  if (threads <= 1) {
+    work();
+  } else {
+    for (unsigned t = 0; t < threads; ++t) pool.emplace_back(work);
+  }
   for (std::size_t i = 0; i < parts.size() && !error; ++i) {
     {
       std::unique_lock lock(mutex);
@@ -601,9 +607,15 @@ void summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run,
   a.lost = a.measured - a.matched - a.unobserved;
   a.loss_percent =
       a.measured ? 100.0 * static_cast<double>(a.lost) / static_cast<double>(a.measured) : 0.0;
-  a.latency_from_scheduled = metrics::compute_stats(to_doubles(from_scheduled));
-  a.latency_from_sent = metrics::compute_stats(to_doubles(from_sent));
-  a.send_lateness = metrics::compute_stats(to_doubles(lateness));
+  {
+    auto scheduled = std::async(std::launch::async,
+                                [&] { return metrics::compute_stats(to_doubles(from_scheduled)); });
+    auto sent = std::async(std::launch::async,
+                           [&] { return metrics::compute_stats(to_doubles(from_sent)); });
+    a.send_lateness = metrics::compute_stats(to_doubles(lateness));
+    a.latency_from_scheduled = scheduled.get();
+    a.latency_from_sent = sent.get();
+  }
   if (receptions.size() >= 2) {
     std::sort(receptions.begin(), receptions.end());
     const double span = static_cast<double>(receptions.back() - receptions.front()) * 1e-9;
@@ -633,7 +645,7 @@ void summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run,
 }
 
 // Per-hop breakdown from the events that carry message IDs.
-void breakdown(TraceAnalysis& a, Collected& c, const RunInfo& run,
+void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
                const std::unordered_map<int64_t, std::size_t>& by_id) {
   // Group the events of measured messages by message (a counting sort on the
   // message's index: linear in the number of events), then by time within one.
@@ -735,6 +747,8 @@ void breakdown(TraceAnalysis& a, Collected& c, const RunInfo& run,
     }
   }
   static const char* kinds[] = {"transport", "node", "kernel"};
+  // Each hop's statistics on a thread of its own: sorting its samples is what takes the time.
+  std::vector<std::future<metrics::SampleStats>> stats;
   for (auto& [key, x] : acc) {
     const auto& [kind, node, from, to] = key;
     Hop h;
@@ -743,9 +757,11 @@ void breakdown(TraceAnalysis& a, Collected& c, const RunInfo& run,
     h.from = kind == 2 ? std::string() : std::string(c.names[from]);
     h.to = std::string(c.names[to]);
     h.mean_start_offset_ns = x.offset_sum / static_cast<double>(x.durations.size());
-    h.duration = metrics::compute_stats(x.durations);
+    stats.push_back(std::async(
+        std::launch::async, [&samples = x.durations] { return metrics::compute_stats(samples); }));
     a.hops.push_back(std::move(h));
   }
+  for (std::size_t i = 0; i < stats.size(); ++i) a.hops[i].duration = stats[i].get();
   std::stable_sort(a.hops.begin(), a.hops.end(), [](const Hop& x, const Hop& y) {
     return x.mean_start_offset_ns < y.mean_start_offset_ns;
   });
@@ -763,7 +779,7 @@ std::string node_name(const Collected& c, int32_t vpid, uint64_t node_handle) {
 }
 
 // Callback durations from ros2:callback_start/end, per node and source.
-void callback_durations(TraceAnalysis& a, Collected& c, const std::optional<RunInfo>& run) {
+void callback_durations(TraceAnalysis& a, const Collected& c, const std::optional<RunInfo>& run) {
   std::vector<CallbackEvent> ev;
   for (const auto& e : c.callbacks) {
     if (!run || run->processes.contains(e.vpid)) ev.push_back(e);
@@ -873,7 +889,7 @@ void explain_missing_tables(TraceAnalysis& a, const Collected& c) {
 
 // Controller update durations from robotperf:controller_update_begin/end, per controller manager
 // and controller: a begin and an end of the same cycle of the same loop make one update.
-void controller_update_durations(TraceAnalysis& a, Collected& c,
+void controller_update_durations(TraceAnalysis& a, const Collected& c,
                                  const std::optional<RunInfo>& run) {
   std::vector<ControllerUpdateEvent> ev;
   for (const auto& e : c.controller_updates) {
@@ -899,7 +915,7 @@ void controller_update_durations(TraceAnalysis& a, Collected& c,
 }
 
 // rmw_publish -> rmw_take latencies, matched by topic and source timestamp.
-void topic_latencies(TraceAnalysis& a, Collected& c, const std::optional<RunInfo>& run) {
+void topic_latencies(TraceAnalysis& a, const Collected& c, const std::optional<RunInfo>& run) {
   struct PubKey {
     uint32_t topic;
     int64_t stamp;
@@ -1045,14 +1061,21 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
         }
       }
       a.run = run;
-      std::unordered_map<int64_t, std::size_t> by_id;
-      summarise_run(a, c, run, by_id);
-      breakdown(a, c, run, by_id);
     }
   }
-  callback_durations(a, c, a.run);
-  topic_latencies(a, c, a.run);
-  controller_update_durations(a, c, a.run);
+  // The callback, topic and controller tables need the run's processes only: they are made on
+  // another thread meanwhile (reading what was collected, each writing a table of its own).
+  auto tables = std::async(std::launch::async, [&] {
+    callback_durations(a, c, a.run);
+    topic_latencies(a, c, a.run);
+    controller_update_durations(a, c, a.run);
+  });
+  if (a.run) {
+    std::unordered_map<int64_t, std::size_t> by_id;
+    summarise_run(a, c, *a.run, by_id);
+    breakdown(a, c, *a.run, by_id);
+  }
+  tables.get();
   explain_missing_tables(a, c);
 
   if (a.discarded_events > 0) {
