@@ -8,6 +8,7 @@
 #include "robotperf/perception/camera_model.hpp"
 #include "robotperf/perception/depth_image_proc.hpp"
 #include "robotperf/perception/image_proc.hpp"
+#include "robotperf/perception/opencl_device.hpp"
 #include "robotperf/perception/stereo_image_proc.hpp"
 #include "robotperf/perception/synthetic_depth.hpp"
 #include "robotperf/perception/synthetic_stereo.hpp"
@@ -414,6 +415,62 @@ TEST(PointCloudXyzrgb, ScenePointsMatchTheTruth) {
     }
     EXPECT_LT(worst, depth->encoding == "16UC1" ? 1e-3 : 1e-5) << depth->encoding;
   }
+}
+
+// The OpenCL backend gives the CPU's cloud bit for bit: float and millimetre depth, invalid
+// pixels as NaN and as range_max, every colour layout, and the synthetic scene; a colour image
+// of another size is resized on the device (coordinates still identical, colours within 1).
+TEST(PointCloudXyzrgb, OpenClGivesTheCpusCloud) {
+  try {
+    opencl_device();
+  } catch (const std::invalid_argument& e) {
+    GTEST_SKIP() << e.what();
+  }
+  auto both = [](const msgs::Image& depth, const msgs::Image& colour, const msgs::CameraInfo& info,
+                 PointCloudXyzrgbParams params) {
+    std::pair<msgs::PointCloud2, msgs::PointCloud2> c;
+    point_cloud_xyzrgb(depth, colour, info, params, c.first);
+    point_cloud_xyzrgb(depth, colour, info, params, c.second, ImageBackend::kOpenCl);
+    return c;
+  };
+  for (const char* depth_encoding : {"32FC1", "16UC1"}) {
+    for (const char* colour_encoding : {"rgb8", "bgra8", "mono8"}) {
+      Tiny t(depth_encoding, colour_encoding);
+      if (image_view(t.depth).depth() == CV_32F) {
+        image_view(t.depth).at<float>(1, 2) = std::numeric_limits<float>::quiet_NaN();
+      } else {
+        image_view(t.depth).at<uint16_t>(1, 2) = 0;
+      }
+      for (const double range_max : {0.0, 5.0}) {
+        const auto [cpu, device] = both(t.depth, t.colour, t.info, {range_max});
+        EXPECT_EQ(device, cpu) << depth_encoding << " " << colour_encoding << " " << range_max;
+      }
+    }
+  }
+  perception::SyntheticDepthConfig config;
+  config.frames = 1;
+  const auto frames = perception::generate_depth_sequence(config);
+  const auto& f = frames[0];
+  for (const msgs::Image* depth : {&f.depth, &f.depth_mm}) {
+    const auto [cpu, device] = both(*depth, f.colour, f.info, {});
+    EXPECT_EQ(device, cpu) << depth->encoding;
+  }
+  msgs::Image half;
+  msgs::CameraInfo half_info;
+  ResizeParams p;
+  p.scale_width = p.scale_height = 0.5;
+  resize(f.colour, f.info, p, half, half_info);
+  const auto [cpu, device] = both(f.depth, half, half_info, {});
+  ASSERT_EQ(device.data.size(), cpu.data.size());
+  std::size_t colours_off = 0;
+  for (uint32_t v = 0; v < cpu.height; ++v) {
+    for (uint32_t u = 0; u < cpu.width; ++u) {
+      const Point a = point_at(cpu, u, v), b = point_at(device, u, v);
+      ASSERT_EQ(std::memcmp(&a, &b, 12), 0) << "x, y, z of " << u << "," << v;
+      colours_off += std::abs(a.r - b.r) > 1 || std::abs(a.g - b.g) > 1 || std::abs(a.b - b.b) > 1;
+    }
+  }
+  EXPECT_LE(colours_off, cpu.width * cpu.height / 1000);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <opencv2/core/ocl.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
@@ -88,11 +89,91 @@ void convert_colour(const cv::Mat& colour, const ColourLayout& layout, msgs::Poi
   }
 }
 
+// The OpenCL twin of convert_depth and convert_colour: one work item per point, writing all of
+// its 32 bytes (padding zero) so that the downloaded cloud is complete.
+constexpr const char* kXyzrgbSource = R"CL(
+#pragma OPENCL FP_CONTRACT OFF
+__kernel void xyzrgb(__global const uchar* depth, int depth_step, int depth_offset,
+                     __global const uchar* colour, int colour_step, int colour_offset,
+                     __global uchar* cloud, int cloud_step, int cloud_offset,
+                     int rows, int cols, int is_float, float cx, float cy, float constant_x,
+                     float constant_y, int fill_invalid, float fill, int red, int green,
+                     int blue, int colour_px) {
+  const int u = get_global_id(0), v = get_global_id(1);
+  if (u >= cols || v >= rows) return;
+  float d;
+  int valid;
+  if (is_float) {
+    d = *(__global const float*)(depth + depth_offset + v * depth_step + u * 4);
+    valid = isfinite(d);
+  } else {
+    const ushort raw = *(__global const ushort*)(depth + depth_offset + v * depth_step + u * 2);
+    d = (float)raw;
+    valid = raw != 0;
+  }
+  float x, y, z;
+  if (!valid && !fill_invalid) {
+    x = y = z = as_float(0x7fc00000u);
+  } else {
+    if (!valid) d = fill;
+    x = ((float)u - cx) * d * constant_x;
+    y = ((float)v - cy) * d * constant_y;
+    z = is_float ? d : d * 0.001f;
+  }
+  __global uchar* p = cloud + cloud_offset + v * cloud_step + u * 32;
+  __global float* f = (__global float*)p;
+  f[0] = x;
+  f[1] = y;
+  f[2] = z;
+  f[3] = 0.0f;
+  __global const uchar* px = colour + colour_offset + v * colour_step + u * colour_px;
+  p[16] = px[blue];
+  p[17] = px[green];
+  p[18] = px[red];
+  p[19] = 0;
+  f[5] = f[6] = f[7] = 0.0f;
+}
+)CL";
+
+void convert_on_device(const cv::Mat& depth, const cv::Mat& colour, const ColourLayout& layout,
+                       const Pinhole& model, double range_max, bool is_float,
+                       msgs::PointCloud2& cloud) {
+  static const cv::ocl::ProgramSource source(kXyzrgbSource);
+  cv::ocl::Kernel kernel("xyzrgb", source);
+  if (kernel.empty())
+    throw std::runtime_error("point_cloud_xyzrgb: the OpenCL kernel did not build");
+  cv::UMat device_depth, device_colour;
+  depth.copyTo(device_depth);
+  colour.copyTo(device_colour);
+  if (device_colour.size() != device_depth.size()) {
+    cv::UMat resized;
+    cv::resize(device_colour, resized, device_depth.size(), 0, 0, cv::INTER_LINEAR);
+    device_colour = resized;
+  }
+  cv::UMat device_cloud(depth.rows, static_cast<int>(cloud.row_step), CV_8UC1);
+  const float unit = is_float ? 1.0f : 0.001f;
+  const float fill = is_float ? DepthTraits<float>::from_metres(range_max)
+                              : static_cast<float>(DepthTraits<uint16_t>::from_metres(range_max));
+  kernel.args(cv::ocl::KernelArg::ReadOnlyNoSize(device_depth),
+              cv::ocl::KernelArg::ReadOnlyNoSize(device_colour),
+              cv::ocl::KernelArg::WriteOnlyNoSize(device_cloud), depth.rows, depth.cols,
+              static_cast<int>(is_float), model.cx, model.cy, unit / model.fx, unit / model.fy,
+              static_cast<int>(range_max != 0.0), fill, layout.red, layout.green, layout.blue,
+              layout.step);
+  size_t global[2] = {static_cast<size_t>(depth.cols), static_cast<size_t>(depth.rows)};
+  if (!kernel.run(2, global, nullptr, true))
+    throw std::runtime_error("point_cloud_xyzrgb: the OpenCL kernel did not run");
+  cv::Mat out(depth.rows, static_cast<int>(cloud.row_step), CV_8UC1, cloud.data.data());
+  device_cloud.copyTo(out);
+  if (out.data != cloud.data.data())
+    throw std::logic_error("point_cloud_xyzrgb: the device's cloud has another size");
+}
+
 }  // namespace
 
 void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
                         const msgs::CameraInfo& info, const PointCloudXyzrgbParams& params,
-                        msgs::PointCloud2& cloud) {
+                        msgs::PointCloud2& cloud, ImageBackend backend) {
   if (depth.header.frame_id != colour.header.frame_id) {
     throw std::invalid_argument("point_cloud_xyzrgb: depth frame '" + depth.header.frame_id +
                                 "' differs from colour frame '" + colour.header.frame_id +
@@ -120,9 +201,11 @@ void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
     const double ratio = static_cast<double>(depth.width) / colour.width;
     model = {static_cast<float>(info.p[2] * ratio), static_cast<float>(info.p[6] * ratio),
              static_cast<float>(info.p[0] * ratio), static_cast<float>(info.p[5] * ratio)};
-    cv::Mat resized;
-    cv::resize(colour_view, resized, depth_view.size(), 0, 0, cv::INTER_LINEAR);
-    colour_view = resized;
+    if (backend == ImageBackend::kCpu) {
+      cv::Mat resized;
+      cv::resize(colour_view, resized, depth_view.size(), 0, 0, cv::INTER_LINEAR);
+      colour_view = resized;
+    }
   }
 
   cloud.header = depth.header;
@@ -142,6 +225,10 @@ void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
   const std::size_t bytes = static_cast<std::size_t>(cloud.row_step) * depth.height;
   if (cloud.data.size() != bytes) cloud.data.assign(bytes, 0);
   if (depth_view.empty()) return;
+  if (backend == ImageBackend::kOpenCl) {
+    convert_on_device(depth_view, colour_view, layout, model, params.range_max, is_float, cloud);
+    return;
+  }
   if (is_float) {
     convert_depth<float>(depth_view, model, params.range_max, cloud);
   } else {

@@ -3,8 +3,8 @@
 
 #include "camera_sync.hpp"
 #include "category.hpp"
+#include "device_node.hpp"
 #include "robotperf/perception/image_proc.hpp"
-#include "robotperf/perception/opencl_device.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -39,25 +39,6 @@ class CameraNode : public graph::Node {
  private:
   CameraSync sync_;
   std::shared_ptr<graph::GenericSubscription> image_sub_, info_sub_;
-};
-
-// The backend a node's config names; an OpenCL one needs its device now, not at the first frame.
-ImageBackend backend_of(const KernelConfig& config) {
-  const ImageBackend b = image_backend(config.backend);
-  if (b == ImageBackend::kOpenCl) opencl_device();
-  return b;
-}
-
-// What a camera node records about the device its backend runs on.
-class ImageDeviceNode : public plugin::DeviceNode {
- public:
-  explicit ImageDeviceNode(ImageBackend backend) : backend_(backend) {}
-  plugin::DeviceInfo device() const override {
-    return backend_ == ImageBackend::kOpenCl ? opencl_device() : plugin::DeviceInfo{};
-  }
-
- protected:
-  ImageBackend backend_;
 };
 
 class RectifyNode final : public CameraNode, public ImageDeviceNode {

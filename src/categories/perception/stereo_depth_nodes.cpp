@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "category.hpp"
+#include "device_node.hpp"
 #include "robotperf/perception/depth_image_proc.hpp"
 #include "robotperf/perception/stereo_image_proc.hpp"
 
@@ -156,12 +157,13 @@ class DisparityNode final : public SkippingNode {
   std::vector<std::shared_ptr<graph::GenericSubscription>> subscriptions_;
 };
 
-class PointCloudXyzrgbNode final : public SkippingNode {
+class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
  public:
   enum Input { kDepth, kImage, kInfo };
 
   PointCloudXyzrgbNode(graph::Context& context, const KernelConfig& config)
       : SkippingNode(context, config.node_name),
+        ImageDeviceNode(backend_of(config)),
         sync_(sync_options(config, !config.parameters.get_bool("exact_sync")),
               [this](const auto& set) { process(set); }) {
     params_.range_max = config.parameters.get_double("range_max");
@@ -201,7 +203,7 @@ class PointCloudXyzrgbNode final : public SkippingNode {
       plugin::trace_kernel_init(*this, kKernel, depth.header.stamp.to_ns(), depth, image);
       point_cloud_xyzrgb(depth, image,
                          *std::static_pointer_cast<const msgs::CameraInfo>(set[kInfo]), params_,
-                         *cloud);
+                         *cloud, backend_);
       plugin::trace_kernel_fini(*this, kKernel, *cloud);
       output_->publish(std::shared_ptr<const msgs::PointCloud2>(std::move(cloud)));
     });
@@ -265,6 +267,7 @@ void register_stereo_depth_kernels(plugin::Registrar& registrar) {
       {.name = "depth_image_proc/point_cloud_xyzrgb",
        .description = "organised xyz + rgb point cloud from registered depth and colour, as "
                       "depth_image_proc",
+       .backends = {"cpu", "opencl"},
        .inputs = {{"depth", "sensor_msgs/msg/Image"},
                   {"image", "sensor_msgs/msg/Image"},
                   {"camera_info", "sensor_msgs/msg/CameraInfo"}},

@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/perception/image_proc.hpp"
 
 namespace robotperf::perception {
 
@@ -37,8 +38,12 @@ struct PointCloudXyzrgbParams {
 //   bytes are then left as they are: zero when this function made the cloud).
 // Throws std::invalid_argument for other encodings, differing frame_ids, a CameraInfo without a
 // focal length, or a bad image.
+// With ImageBackend::kOpenCl the points are computed on the OpenCL device by a kernel of
+// robotperf's own (same float operations, no contraction into fused multiply-adds: the same bits
+// as the CPU's), the depth and colour uploaded and the cloud downloaded per call; a colour image
+// of another size is resized on the device (bilinear, within 1 of the CPU's per channel).
 void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
                         const msgs::CameraInfo& info, const PointCloudXyzrgbParams& params,
-                        msgs::PointCloud2& cloud);
+                        msgs::PointCloud2& cloud, ImageBackend backend = ImageBackend::kCpu);
 
 }  // namespace robotperf::perception
