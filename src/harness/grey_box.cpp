@@ -10,11 +10,16 @@ namespace robotperf::harness {
 namespace {
 
 // Events one frame causes: every port of the graph is one side of a topic
-// (publish: 4 events, take and callback: 7), kernels add 2, input and output 2.
+// (publish: 4 events, take and callback: 7), kernels add 2 (8 on a device: its upload, compute
+// and download stages), input and output 2.
 double events_per_frame(const BenchmarkSpec& spec) {
   std::size_t ports = spec.inputs.size() + 1;
-  for (const auto& n : spec.nodes) ports += n.topics.size();
-  return 6.0 * static_cast<double>(ports) + 2.0 * static_cast<double>(spec.nodes.size()) + 4.0;
+  double kernels = 0;
+  for (const auto& n : spec.nodes) {
+    ports += n.topics.size();
+    kernels += n.backend == "cpu" ? 2.0 : 8.0;
+  }
+  return 6.0 * static_cast<double>(ports) + kernels + 4.0;
 }
 
 // Events of the control loops, per second, whatever the message rate (each kernel with a loop

@@ -41,6 +41,19 @@ void trace_kernel_fini(const char* node, const char* kernel, int64_t message_id,
   lttng_ust_tracepoint(robotperf, kernel_fini, node, kernel, message_id, bytes);
 }
 
+bool device_trace_enabled() {
+  return lttng_ust_tracepoint_enabled(robotperf, device_begin) ||
+         lttng_ust_tracepoint_enabled(robotperf, device_end);
+}
+
+void trace_device_begin(const char* node, const char* stage, int64_t message_id, uint64_t bytes) {
+  lttng_ust_tracepoint(robotperf, device_begin, node, stage, message_id, bytes);
+}
+
+void trace_device_end(const char* node, const char* stage, int64_t message_id, uint64_t bytes) {
+  lttng_ust_tracepoint(robotperf, device_end, node, stage, message_id, bytes);
+}
+
 void trace_controller_update_begin(const char* manager, const char* controller, uint64_t cycle,
                                    int64_t observed_command) {
   lttng_ust_tracepoint(robotperf, controller_update_begin, manager, controller, cycle,

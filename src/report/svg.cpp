@@ -279,7 +279,7 @@ std::string hops_svg(const std::vector<StoredRun::Hop>& hops, const std::string&
   // with a whisker to its p99, coloured by kind, on one linear scale from 0.
   constexpr double kWidth = 760, kLabelsLeft = 10, kBarsLeft = 370, kBarsWidth = 300, kRow = 18;
   constexpr std::pair<const char*, const char*> kKinds[] = {
-      {"transport", "#1f77b4"}, {"node", "#ff7f0e"}, {"kernel", "#2ca02c"}};
+      {"transport", "#1f77b4"}, {"node", "#ff7f0e"}, {"kernel", "#2ca02c"}, {"device", "#9467bd"}};
   auto colour_of = [&](const std::string& kind) {
     for (const auto& [k, c] : kKinds) {
       if (kind == k) return c;
@@ -328,9 +328,11 @@ std::string hops_svg(const std::vector<StoredRun::Hop>& hops, const std::string&
       << format_value(h.mean_ms) << "</text>\n";
     y += kRow;
   }
-  // The kinds' colours, under the bars.
+  // The colours of the kinds drawn, under the bars.
   double lx = kBarsLeft;
   for (const auto& [kind, colour] : kKinds) {
+    if (std::none_of(hops.begin(), hops.end(), [&](const auto& h) { return h.kind == kind; }))
+      continue;
     s << "<rect x=\"" << num(lx) << "\" y=\"" << num(y + 12)
       << "\" width=\"14\" height=\"10\" fill=\"" << colour << "\"/><text class=\"legend\" x=\""
       << num(lx + 18) << "\" y=\"" << num(y + 21) << "\">" << kind << "</text>\n";

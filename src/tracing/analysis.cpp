@@ -46,6 +46,8 @@ enum class Handler : uint8_t {
   kCallbackEntry,
   kKernelInit,
   kKernelFini,
+  kDeviceBegin,
+  kDeviceEnd,
   kNodeInit,
   kPublisherInit,
   kSubscriptionInit,
@@ -87,6 +89,8 @@ Dispatch dispatch_for(const ctf::EventClass& ec, const ctf::Trace& trace) {
       {"robotperf:callback_entry", Handler::kCallbackEntry, {"node", "topic", "message_id"}},
       {"robotperf:kernel_init", Handler::kKernelInit, {"node", "kernel", "message_id"}},
       {"robotperf:kernel_fini", Handler::kKernelFini, {"node", "kernel", "message_id"}},
+      {"robotperf:device_begin", Handler::kDeviceBegin, {"node", "stage", "message_id"}},
+      {"robotperf:device_end", Handler::kDeviceEnd, {"node", "stage", "message_id"}},
       {"ros2:rcl_node_init", Handler::kNodeInit, {"node_handle", "node_name", "namespace"}},
       {"ros2:rcl_publisher_init",
        Handler::kPublisherInit,
@@ -151,7 +155,14 @@ struct KeyHash {
 template <class V>
 using HandleMap = std::unordered_map<Key, V, KeyHash>;
 
-enum class IdKind : uint8_t { kPublish, kEntry, kKernelInit, kKernelFini };
+enum class IdKind : uint8_t {
+  kPublish,
+  kEntry,
+  kKernelInit,
+  kKernelFini,
+  kDeviceBegin,
+  kDeviceEnd
+};
 
 struct IdEvent {
   int64_t ts;
@@ -337,11 +348,15 @@ void collect(StreamPart& part) {
       case Handler::kPublish:
       case Handler::kCallbackEntry:
       case Handler::kKernelInit:
-      case Handler::kKernelFini: {
+      case Handler::kKernelFini:
+      case Handler::kDeviceBegin:
+      case Handler::kDeviceEnd: {
         const IdKind kind = d->handler == Handler::kPublish         ? IdKind::kPublish
                             : d->handler == Handler::kCallbackEntry ? IdKind::kEntry
                             : d->handler == Handler::kKernelInit    ? IdKind::kKernelInit
-                                                                    : IdKind::kKernelFini;
+                            : d->handler == Handler::kKernelFini    ? IdKind::kKernelFini
+                            : d->handler == Handler::kDeviceBegin   ? IdKind::kDeviceBegin
+                                                                    : IdKind::kDeviceEnd;
         id_events.push_back({ts, field(2).as_int(), vpid, vtid(), c.intern(field(0).s),
                              c.intern(field(1).s), kind});
         break;
@@ -735,18 +750,21 @@ void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
             break;
           }
         }
-      } else if (e.kind == IdKind::kKernelFini) {
+      } else if (e.kind == IdKind::kKernelFini || e.kind == IdKind::kDeviceEnd) {
+        // Kernel, or one stage of it on a device: from its begin on the same thread.
+        const bool device = e.kind == IdKind::kDeviceEnd;
+        const IdKind begin = device ? IdKind::kDeviceBegin : IdKind::kKernelInit;
         for (std::size_t j = i; j-- > lo;) {
-          if (ev[j].kind == IdKind::kKernelInit && ev[j].node == e.node && ev[j].what == e.what &&
+          if (ev[j].kind == begin && ev[j].node == e.node && ev[j].what == e.what &&
               ev[j].vtid == e.vtid) {
-            add(2, e.node, e.what, e.what, ev[j].ts, e.ts, sent);
+            add(device ? 3 : 2, e.node, e.what, e.what, ev[j].ts, e.ts, sent);
             break;
           }
         }
       }
     }
   }
-  static const char* kinds[] = {"transport", "node", "kernel"};
+  static const char* kinds[] = {"transport", "node", "kernel", "device"};
   // Each hop's statistics on a thread of its own: sorting its samples is what takes the time.
   std::vector<std::future<metrics::SampleStats>> stats;
   for (auto& [key, x] : acc) {
@@ -754,7 +772,7 @@ void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
     Hop h;
     h.kind = kinds[kind];
     h.node = std::string(c.names[node]);
-    h.from = kind == 2 ? std::string() : std::string(c.names[from]);
+    h.from = kind >= 2 ? std::string() : std::string(c.names[from]);
     h.to = std::string(c.names[to]);
     h.mean_start_offset_ns = x.offset_sum / static_cast<double>(x.durations.size());
     stats.push_back(std::async(
@@ -989,6 +1007,7 @@ std::string ms(double ns) {
 std::string Hop::label() const {
   if (kind == "transport") return to + ": " + from + " -> " + node;
   if (kind == "node") return node + ": " + from + " -> " + to;
+  if (kind == "device") return node + ": device " + to;
   return node + ": " + to;
 }
 

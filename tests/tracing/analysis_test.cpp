@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 #include "ctf_writer.hpp"
 #include "robotperf/tracing/ctf.hpp"
@@ -50,7 +51,9 @@ uint64_t sent_of(uint64_t k) {
 // A relay run of 4 frames (warm-up 1), traced on two CPUs (streams): the
 // Playback publishes /in, node "relay" runs kernel "k" and publishes /out,
 // the Monitor takes /out. Frame 2 is lost after the kernel.
-void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0) {
+// With `device_stages`, the kernel runs on a device: upload 200 ns, compute 500 ns, download
+// 150 ns inside its kernel_init..kernel_fini.
+void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool device_stages = false) {
   testing::define_robotperf_events(w);
   const std::string play = "robotperf_playback", relay = "relay", mon = "robotperf_monitor";
   const uint64_t t0 = kStart - 1'000'000;
@@ -96,6 +99,16 @@ void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0) {
             {V(relay), V(std::string("/in")), V(id), V(uint64_t{100})});
     w.event(1, "robotperf:kernel_init", sent + 2000, kRunPid, 2,
             {V(relay), V(std::string("k")), V(id), V(uint64_t{100})});
+    if (device_stages) {
+      const std::pair<const char*, uint64_t> stages[] = {
+          {"upload", 2100}, {"compute", 2300}, {"download", 2800}, {nullptr, 2950}};
+      for (int i = 0; i < 3; ++i) {
+        w.event(1, "robotperf:device_begin", sent + stages[i].second, kRunPid, 2,
+                {V(relay), V(std::string(stages[i].first)), V(id), V(uint64_t{100})});
+        w.event(1, "robotperf:device_end", sent + stages[i + 1].second, kRunPid, 2,
+                {V(relay), V(std::string(stages[i].first)), V(id), V(uint64_t{100})});
+      }
+    }
     w.event(1, "robotperf:kernel_fini", sent + 3000 + 100 * k, kRunPid, 2,
             {V(relay), V(std::string("k")), V(id), V(uint64_t{100})});
     if (kLatency[k] >= 0) {
@@ -311,6 +324,28 @@ TEST(Analyzer, DecodingInPartsGivesTheResultOfOneThread) {
     EXPECT_TRUE(got == expected) << threads << " threads differ from one: "
                                  << nlohmann::json::diff(expected, got).dump().substr(0, 600);
   }
+}
+
+// A kernel on a device: its upload, compute and download stages are hops of their own, beside
+// the kernel's.
+TEST(Analyzer, DeviceStagesAreHopsOfTheirOwn) {
+  TempDir dir("device");
+  CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
+  write_run(w, 0, true);
+  const TraceAnalysis a = analyze_trace(dir.path());
+  std::map<std::string, const Hop*> by_label;
+  for (const auto& h : a.hops) by_label[h.label()] = &h;
+  for (const auto& [stage, ns] :
+       {std::pair{"upload", 200.0}, {"compute", 500.0}, {"download", 150.0}}) {
+    const auto it = by_label.find(std::string("relay: device ") + stage);
+    ASSERT_NE(it, by_label.end()) << stage;
+    EXPECT_EQ(it->second->kind, "device");
+    EXPECT_EQ(it->second->duration.count, 3u) << stage;
+    EXPECT_DOUBLE_EQ(it->second->duration.mean, ns) << stage;
+  }
+  ASSERT_TRUE(by_label.contains("relay: k"));
+  EXPECT_DOUBLE_EQ(by_label["relay: k"]->duration.mean, 1200.0);
+  EXPECT_EQ(a.hops.size(), 7u);
 }
 
 TEST(Analyzer, DiscardedEventsAreReportedAndInvalidate) {

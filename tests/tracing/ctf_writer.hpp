@@ -391,6 +391,11 @@ inline void define_robotperf_events(CtfWriter& w, Ros2Layout layout = Ros2Layout
         e,
         {{"node", K::kString}, {"kernel", K::kString}, {"message_id", K::kI64}, {"size", K::kU64}});
   }
+  for (const char* e : {"robotperf:device_begin", "robotperf:device_end"}) {
+    w.define(
+        e,
+        {{"node", K::kString}, {"stage", K::kString}, {"message_id", K::kI64}, {"size", K::kU64}});
+  }
   w.define("ros2:rcl_node_init", {{"node_handle", K::kHex64},
                                   {"rmw_handle", K::kHex64},
                                   {"node_name", K::kString},

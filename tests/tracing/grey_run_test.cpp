@@ -14,6 +14,7 @@
 
 #include "../command_line.hpp"
 #include "robotperf/harness/run.hpp"
+#include "robotperf/perception/opencl_device.hpp"
 #include "robotperf/rmw/transport.hpp"
 #include "robotperf/tracing/ctf.hpp"
 #include "robotperf/tracing/session.hpp"
@@ -233,6 +234,37 @@ TEST_F(GreyRun, A4PairsItsThreeInputsPerFrameAndTracesTheKernel) {
   ASSERT_TRUE(g.functional.has_value());
   EXPECT_TRUE(g.functional->valid);
   EXPECT_EQ(g.grey->events, babeltrace_events(g.trace_dir));
+}
+
+// a5 on the OpenCL device: the kernel's time splits into its upload, compute and download, each
+// a hop that fits inside the kernel's.
+TEST_F(GreyRun, AKernelOnADeviceShowsItsTransfersAndComputation) {
+  try {
+    perception::opencl_device();
+  } catch (const std::invalid_argument& e) {
+    GTEST_SKIP() << e.what();
+  }
+  RunOptions o;
+  o.rate_hz = 10;
+  o.count = 35;
+  o.backend = "opencl";
+  const RunResult g = run_benchmark(benchmark("a5"), grey(o, "a5-opencl.trace"));
+  ASSERT_TRUE(g.grey.has_value());
+  ASSERT_TRUE(g.valid) << reasons(g);
+  std::map<std::string, const tracing::Hop*> hops;
+  for (const auto& h : g.grey->hops) hops[h.label()] = &h;
+  ASSERT_TRUE(hops.contains("resize: image_proc/resize"));
+  const double kernel = hops["resize: image_proc/resize"]->duration.mean;
+  double stages = 0;
+  for (const char* stage : {"upload", "compute", "download"}) {
+    const auto it = hops.find(std::string("resize: device ") + stage);
+    ASSERT_NE(it, hops.end()) << stage;
+    EXPECT_EQ(it->second->kind, "device");
+    EXPECT_EQ(it->second->duration.count, g.measured) << stage;
+    EXPECT_GT(it->second->duration.mean, 0.0) << stage;
+    stages += it->second->duration.mean;
+  }
+  EXPECT_LE(stages, kernel) << "the stages lie inside the kernel";
 }
 
 TEST_F(GreyRun, TinySubbuffersUnderLoadAreReportedAndInvalid) {

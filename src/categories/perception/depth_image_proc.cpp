@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "device_node.hpp"
 #include "robotperf/perception/image_proc.hpp"
 
 namespace robotperf::perception {
@@ -143,28 +144,38 @@ void convert_on_device(const cv::Mat& depth, const cv::Mat& colour, const Colour
   if (kernel.empty())
     throw std::runtime_error("point_cloud_xyzrgb: the OpenCL kernel did not build");
   cv::UMat device_depth, device_colour;
-  depth.copyTo(device_depth);
-  colour.copyTo(device_colour);
-  if (device_colour.size() != device_depth.size()) {
-    cv::UMat resized;
-    cv::resize(device_colour, resized, device_depth.size(), 0, 0, cv::INTER_LINEAR);
-    device_colour = resized;
+  {
+    DeviceStage upload("upload",
+                       depth.total() * depth.elemSize() + colour.total() * colour.elemSize());
+    depth.copyTo(device_depth);
+    colour.copyTo(device_colour);
   }
   cv::UMat device_cloud(depth.rows, static_cast<int>(cloud.row_step), CV_8UC1);
-  const float unit = is_float ? 1.0f : 0.001f;
-  const float fill = is_float ? DepthTraits<float>::from_metres(range_max)
-                              : static_cast<float>(DepthTraits<uint16_t>::from_metres(range_max));
-  kernel.args(cv::ocl::KernelArg::ReadOnlyNoSize(device_depth),
-              cv::ocl::KernelArg::ReadOnlyNoSize(device_colour),
-              cv::ocl::KernelArg::WriteOnlyNoSize(device_cloud), depth.rows, depth.cols,
-              static_cast<int>(is_float), model.cx, model.cy, unit / model.fx, unit / model.fy,
-              static_cast<int>(range_max != 0.0), fill, layout.red, layout.green, layout.blue,
-              layout.step);
-  size_t global[2] = {static_cast<size_t>(depth.cols), static_cast<size_t>(depth.rows)};
-  if (!kernel.run(2, global, nullptr, true))
-    throw std::runtime_error("point_cloud_xyzrgb: the OpenCL kernel did not run");
+  {
+    DeviceStage stage("compute", 0);
+    if (device_colour.size() != device_depth.size()) {
+      cv::UMat resized;
+      cv::resize(device_colour, resized, device_depth.size(), 0, 0, cv::INTER_LINEAR);
+      device_colour = resized;
+    }
+    const float unit = is_float ? 1.0f : 0.001f;
+    const float fill = is_float ? DepthTraits<float>::from_metres(range_max)
+                                : static_cast<float>(DepthTraits<uint16_t>::from_metres(range_max));
+    kernel.args(cv::ocl::KernelArg::ReadOnlyNoSize(device_depth),
+                cv::ocl::KernelArg::ReadOnlyNoSize(device_colour),
+                cv::ocl::KernelArg::WriteOnlyNoSize(device_cloud), depth.rows, depth.cols,
+                static_cast<int>(is_float), model.cx, model.cy, unit / model.fx, unit / model.fy,
+                static_cast<int>(range_max != 0.0), fill, layout.red, layout.green, layout.blue,
+                layout.step);
+    size_t global[2] = {static_cast<size_t>(depth.cols), static_cast<size_t>(depth.rows)};
+    if (!kernel.run(2, global, nullptr, true))
+      throw std::runtime_error("point_cloud_xyzrgb: the OpenCL kernel did not run");
+  }
   cv::Mat out(depth.rows, static_cast<int>(cloud.row_step), CV_8UC1, cloud.data.data());
-  device_cloud.copyTo(out);
+  {
+    DeviceStage download("download", cloud.data.size());
+    device_cloud.copyTo(out);
+  }
   if (out.data != cloud.data.data())
     throw std::logic_error("point_cloud_xyzrgb: the device's cloud has another size");
 }

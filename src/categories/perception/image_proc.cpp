@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "device_node.hpp"
 #include "robotperf/perception/camera_model.hpp"
 
 namespace robotperf::perception {
@@ -199,10 +200,19 @@ namespace {
 template <class Compute>
 void on_device(const cv::Mat& in, cv::UMat& device_in, cv::UMat& device_out, cv::Mat& out,
                const Compute& compute) {
-  in.copyTo(device_in);
-  compute(device_in, device_out);
+  {
+    DeviceStage upload("upload", in.total() * in.elemSize());
+    in.copyTo(device_in);
+  }
+  {
+    DeviceStage stage("compute", 0);
+    compute(device_in, device_out);
+  }
   uint8_t* const data = out.data;
-  device_out.copyTo(out);
+  {
+    DeviceStage download("download", out.total() * out.elemSize());
+    device_out.copyTo(out);
+  }
   if (out.data != data) throw std::logic_error("the device's output has another size or type");
 }
 

@@ -54,6 +54,7 @@ class RectifyNode final : public CameraNode, public ImageDeviceNode {
   void process(const CameraSync::ImagePtr& image, const CameraSync::InfoPtr& info) override {
     auto out = std::make_shared<msgs::Image>();
     plugin::trace_kernel_init(*this, kKernel, image->header.stamp.to_ns(), *image);
+    const DeviceStageContext stages(*this, image->header.stamp.to_ns());
     rectifier_.rectify(*image, *info, *out);
     plugin::trace_kernel_fini(*this, kKernel, *out);
     output_->publish(std::shared_ptr<const msgs::Image>(std::move(out)));
@@ -84,6 +85,7 @@ class ResizeNode final : public CameraNode, public ImageDeviceNode {
     auto out = std::make_shared<msgs::Image>();
     auto out_info = std::make_shared<msgs::CameraInfo>();
     plugin::trace_kernel_init(*this, kKernel, image->header.stamp.to_ns(), *image);
+    const DeviceStageContext stages(*this, image->header.stamp.to_ns());
     resize(*image, *info, params_, *out, *out_info, backend_);
     plugin::trace_kernel_fini(*this, kKernel, *out);
     // CameraInfo first: a subscriber pairing on the image then finds its partner waiting.

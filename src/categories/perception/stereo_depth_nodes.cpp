@@ -201,6 +201,7 @@ class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
       const auto& depth = *std::static_pointer_cast<const msgs::Image>(set[kDepth]);
       const auto& image = *std::static_pointer_cast<const msgs::Image>(set[kImage]);
       plugin::trace_kernel_init(*this, kKernel, depth.header.stamp.to_ns(), depth, image);
+      const DeviceStageContext stages(*this, depth.header.stamp.to_ns());
       point_cloud_xyzrgb(depth, image,
                          *std::static_pointer_cast<const msgs::CameraInfo>(set[kInfo]), params_,
                          *cloud, backend_);

@@ -94,6 +94,14 @@ bool kernel_trace_enabled();
 void trace_kernel_init(const char* node, const char* kernel, int64_t message_id, uint64_t bytes);
 void trace_kernel_fini(const char* node, const char* kernel, int64_t message_id, uint64_t bytes);
 
+// Grey-box, for a kernel on a device: robotperf:device_begin and device_end around each stage of
+// a message's computation there — "upload" (host to device), "compute", "download" (device to
+// host) — so that the analysis splits the kernel's time into its transfers and its computation.
+// `bytes`: what the stage moved (0 for compute).
+bool device_trace_enabled();
+void trace_device_begin(const char* node, const char* stage, int64_t message_id, uint64_t bytes);
+void trace_device_end(const char* node, const char* stage, int64_t message_id, uint64_t bytes);
+
 // The same with the sizes of the messages the kernel reads (summed) or writes, computed only
 // while a session records; the output's ID is its header stamp.
 template <class... Inputs>

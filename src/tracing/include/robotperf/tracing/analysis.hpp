@@ -45,12 +45,13 @@ struct MessageTimes {
 
 // One hop of the message path: a transport hop (published by one node, taken
 // by another), a node hop (a node's callback start on its input to its
-// publish of the output), or a kernel (its computation). Nanoseconds.
+// publish of the output), a kernel (its computation), or one stage of a kernel on a
+// device (upload, compute, download). Nanoseconds.
 struct Hop {
-  std::string kind;  // "transport", "node" or "kernel"
+  std::string kind;  // "transport", "node", "kernel" or "device"
   std::string node;  // the receiving node (transport) or the node
   std::string from;  // transport: publishing node; node: input topic
-  std::string to;    // transport and node: topic; kernel: kernel name
+  std::string to;    // transport and node: topic; kernel: kernel name; device: the stage
   metrics::SampleStats duration;
   double mean_start_offset_ns = 0;  // mean hop start after the frame's send: orders the path
   std::string label() const;

@@ -122,6 +122,27 @@ LTTNG_UST_TRACEPOINT_EVENT(
         lttng_ust_field_integer(int64_t, message_id, message_id_arg)
         lttng_ust_field_integer(uint64_t, size, size_arg)))
 
+/* One stage of a message's computation by a kernel on a device (a backend other than the host
+ * CPU): "upload" (host to device), "compute" or "download" (device to host), with the bytes it
+ * moved; device_begin when it starts, device_end when it is done. */
+LTTNG_UST_TRACEPOINT_EVENT_CLASS(
+    robotperf, device_stage,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, const char *, stage_arg, int64_t, message_id_arg,
+                      uint64_t, size_arg),
+    LTTNG_UST_TP_FIELDS(
+        lttng_ust_field_string(node, node_arg)
+        lttng_ust_field_string(stage, stage_arg)
+        lttng_ust_field_integer(int64_t, message_id, message_id_arg)
+        lttng_ust_field_integer(uint64_t, size, size_arg)))
+LTTNG_UST_TRACEPOINT_EVENT_INSTANCE(
+    robotperf, device_stage, robotperf, device_begin,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, const char *, stage_arg, int64_t, message_id_arg,
+                      uint64_t, size_arg))
+LTTNG_UST_TRACEPOINT_EVENT_INSTANCE(
+    robotperf, device_stage, robotperf, device_end,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, const char *, stage_arg, int64_t, message_id_arg,
+                      uint64_t, size_arg))
+
 /* A controller manager's cycle (src/control): one controller's update begins (with the newest
  * command the state it reads reflects) and ends (with the command it took this cycle, -1 when
  * none). `cycle` counts the loop's cycles from 0. */
