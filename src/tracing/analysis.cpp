@@ -277,7 +277,7 @@ struct StreamPart {
 
   Collected c;
   uint64_t events = 0;
-  int64_t first_ns = 0, last_ns = 0;
+  int64_t first_ns = INT64_MAX, last_ns = 0;  // of its events; meaningful when it has some
   std::exception_ptr error;
 };
 
@@ -296,9 +296,8 @@ void collect(StreamPart& part) {
   const Dispatch* d = nullptr;
   part.events = part.trace->read_packets(part.stream, part.packets, [&](const Event& e) {
     const auto ts = static_cast<int64_t>(e.timestamp);
-    if (part.events == 0 || ts < part.first_ns) part.first_ns = ts;
-    if (ts > part.last_ns) part.last_ns = ts;
-    ++part.events;
+    part.first_ns = std::min(part.first_ns, ts);
+    part.last_ns = std::max(part.last_ns, ts);
     if (e.cls != last_class) {
       last_class = e.cls;
       d = &dispatch.at(e.cls);
@@ -531,12 +530,12 @@ void collect_parallel(std::vector<StreamPart>& parts, unsigned threads, Collecte
   } else {
     for (unsigned t = 0; t < threads; ++t) pool.emplace_back(work);
   }
+  // Parts are taken in order, so every part before the first failed one was taken and comes: the
+  // merge stops at that failed one and never waits for a part no thread took.
   for (std::size_t i = 0; i < parts.size() && !error; ++i) {
     {
       std::unique_lock lock(mutex);
-      // A part no thread took (a part before it failed) never comes.
-      done_cv.wait(lock, [&] { return done[i] != 0 || (failed && next > parts.size()); });
-      if (!done[i]) break;
+      done_cv.wait(lock, [&] { return done[i] != 0; });
     }
     StreamPart& p = parts[i];
     if (p.error) {
@@ -551,7 +550,6 @@ void collect_parallel(std::vector<StreamPart>& parts, unsigned threads, Collecte
     merge(c, std::move(p.c));
     p.c = Collected{};
   }
-  failed = failed || error != nullptr;
   for (auto& t : pool) t.join();
   if (error) std::rethrow_exception(error);
 }

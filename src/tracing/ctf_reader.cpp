@@ -622,7 +622,7 @@ uint64_t Trace::read_packets(std::size_t index, std::span<const Packet> packets,
   const Mapped& m = *mapped_.at(index);
   if (m.size == 0 || packets.empty()) return 0;
   const Metadata& md = metadata_;
-  const std::string& file = stream_files_[index].string();
+  const std::string file = stream_files_[index].string();
   Decoder d(m.data, m.size * 8, md.big_endian, file);
   std::vector<Value> payload, event_context;
   // Layouts compiled on first use, per stream class and event class.
