@@ -340,6 +340,17 @@ std::vector<double> scheduled_latencies_ms(const RunResult& r) {
   return out;
 }
 
+namespace {
+
+// The device a built kernel node computes on, when its backend is not the host CPU.
+std::optional<plugin::DeviceInfo> device_of(const graph::Node& node, const NodeSpec& spec) {
+  const auto* d = dynamic_cast<const plugin::DeviceNode*>(&node);
+  if (d == nullptr || spec.backend == "cpu") return std::nullopt;
+  return d->device();
+}
+
+}  // namespace
+
 nlohmann::json device_to_json(const plugin::DeviceInfo& device) {
   return {{"name", device.name},
           {"vendor", device.vendor},
@@ -551,10 +562,8 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
       graph_executor->add_node(node);
       local_nodes.push_back(node);
       kernel_nodes.push_back(node);
-      r.nodes.push_back({n.name, n.kernel, 0, "ok", -1, -1, {}, "", "", true, n.backend, {}});
-      if (const auto* d = dynamic_cast<const plugin::DeviceNode*>(node.get());
-          d != nullptr && n.backend != "cpu")
-        r.nodes.back().device = d->device();
+      r.nodes.push_back(
+          {n.name, n.kernel, 0, "ok", -1, -1, {}, "", "", true, n.backend, device_of(*node, n)});
     }
   } else {
     std::vector<std::string> node_arguments = options.scheduling.node_arguments();
@@ -852,9 +861,8 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   graph::Context context(rmw::make_transport(rmw, t));
   trace_run_join();
   auto node = make_kernel_node(*node_spec, context, spec.workload);
-  if (const auto* d = dynamic_cast<const plugin::DeviceNode*>(node.get());
-      d != nullptr && node_spec->backend != "cpu")
-    std::cout << "device " << device_to_json(d->device()).dump() << std::endl;
+  if (const auto device = device_of(*node, *node_spec))
+    std::cout << "device " << device_to_json(*device).dump() << std::endl;
   graph::Executor executor(spec.executor_threads);
   executor.add_node(node);
 
