@@ -17,6 +17,7 @@ packages=(
   liblttng-ust-dev lttng-tools babeltrace2
   chromium  # headless, for the report rendering test
   liborocos-kdl-dev liburdfdom-dev libfcl-dev libbullet-dev libompl-dev libeigen3-dev  # manipulation (d1-d6)
+  libapriltag-dev  # localization b3
 )
 
 missing=()

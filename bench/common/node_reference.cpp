@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <thread>
 
@@ -142,6 +143,26 @@ harness::RunResult NodeReference::run_beside(
     give_up();
     throw;
   }
+}
+
+OverheadSamples measure_overhead_round(const harness::BenchmarkSpec& spec,
+                                       const harness::Dataset& dataset,
+                                       const harness::RunOptions& options,
+                                       harness::RunResult& graph_result) {
+  NodeReference reference(spec, dataset);
+  OverheadSamples samples;
+  graph_result = reference.run_beside(
+      options, [&](const harness::RunOptions& with) { return harness::run_benchmark(spec, with); },
+      samples.reference_ms);
+  const std::size_t measured = graph_result.count - graph_result.warmup;
+  if (graph_result.matched < measured)
+    std::fprintf(stderr, "%s: only %zu of %zu outputs matched\n", spec.id.c_str(),
+                 graph_result.matched, measured);
+  for (const auto& rec : graph_result.records) {
+    if (!rec.warmup && rec.received_ns >= 0)
+      samples.graph_ms.push_back(static_cast<double>(rec.received_ns - rec.sent_ns) / 1e6);
+  }
+  return samples;
 }
 
 }  // namespace robotperf::bench

@@ -68,4 +68,16 @@ class NodeReference {
   std::unique_ptr<graph::Executor> executor_;  // last: stopped before the rest goes
 };
 
+// One round of an overhead bench, at `options`' rate, count and warm-up: `spec` on intra (as
+// harness::run_benchmark runs it) and, beside it, a NodeReference built afresh, so that each round
+// draws both sides' thread placement anew. Times of the measured frames in ms; `graph_result` gets
+// the graph's run (its functional result among the rest).
+struct OverheadSamples {
+  std::vector<double> reference_ms, graph_ms;
+};
+OverheadSamples measure_overhead_round(const harness::BenchmarkSpec& spec,
+                                       const harness::Dataset& dataset,
+                                       const harness::RunOptions& options,
+                                       harness::RunResult& graph_result);
+
 }  // namespace robotperf::bench

@@ -46,25 +46,15 @@ constexpr double kTargetRatio = 0.10;
 bench::OverheadRound measure_round(const harness::BenchmarkSpec& spec,
                                    const harness::Dataset& dataset, std::size_t frames,
                                    std::optional<double>& other_load) {
-  bench::NodeReference reference(spec, dataset);
   harness::RunOptions o;
   o.rate_hz = 10;
   o.count = kWarmup + frames;
   o.warmup = kWarmup;
-  bench::OverheadRound round;
-  const auto r = reference.run_beside(
-      o, [&](const harness::RunOptions& with) { return harness::run_benchmark(spec, with); },
-      round.reference);
-  if (r.matched < frames)
-    std::fprintf(stderr, "%s: only %zu of %zu outputs matched\n", spec.id.c_str(), r.matched,
-                 frames);
-  for (const auto& rec : r.records) {
-    if (!rec.warmup && rec.received_ns >= 0)
-      round.graph.push_back(static_cast<double>(rec.received_ns - rec.sent_ns) / 1e6);
-  }
+  harness::RunResult r;
+  auto samples = bench::measure_overhead_round(spec, dataset, o, r);
   const auto load = r.resources.other_cpu_percent;
   if (load) other_load = std::max(other_load.value_or(0.0), *load);
-  return round;
+  return {std::move(samples.reference_ms), std::move(samples.graph_ms)};
 }
 
 // Returns whether the comparison came out as a bench defect.

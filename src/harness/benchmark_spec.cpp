@@ -255,7 +255,8 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   }
 
   if (const YAML::Node f = root["functional"]; f.IsDefined()) {
-    file.allow_keys(f, {"evaluator", "truth", "sample", "observed_truth", "parameters"});
+    file.allow_keys(
+        f, {"evaluator", "truth", "sample", "observed_truth", "second_output", "parameters"});
     FunctionalSpec functional;
     functional.evaluator = file.require_string(f, "evaluator");
     const plugin::EvaluatorEntry* entry = plugin::registry().find_evaluator(functional.evaluator);
@@ -288,11 +289,20 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
       }
     }
     functional.sample = file.get<std::size_t>(f, "sample", functional.sample);
+    // The evaluator's second topic: a truth observed during the run, or a second output of the
+    // graph; one slot under the name that says which.
     functional.observed_truth_topic = file.get<std::string>(f, "observed_truth", "");
+    if (const auto second = file.get<std::string>(f, "second_output", ""); !second.empty()) {
+      if (!functional.observed_truth_topic.empty())
+        file.fail(f, "give observed_truth or second_output, not both");
+      functional.observed_truth_topic = second;
+    }
     if (info->observed_truth_type.empty() != functional.observed_truth_topic.empty()) {
       file.fail(f, info->observed_truth_type.empty()
-                       ? "evaluator " + info->name + " takes no observed_truth topic"
-                       : "evaluator " + info->name + " needs an observed_truth topic (" +
+                       ? "evaluator " + info->name + " takes no observed_truth or second_output"
+                       : "evaluator " + info->name +
+                             " needs an observed_truth or second_output "
+                             "topic (" +
                              info->observed_truth_type + ")");
     }
     spec.functional = std::move(functional);

@@ -45,7 +45,10 @@ const std::map<std::string_view, std::string_view>& definitions() {
       {"geometry_msgs/msg/Quaternion", "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n"},
       {"geometry_msgs/msg/Pose", "Point position\nQuaternion orientation\n"},
       {"geometry_msgs/msg/PoseStamped", "std_msgs/Header header\nPose pose\n"},
+      {"geometry_msgs/msg/PoseArray", "std_msgs/Header header\nPose[] poses\n"},
       {"geometry_msgs/msg/PoseWithCovariance", "Pose pose\nfloat64[36] covariance\n"},
+      {"geometry_msgs/msg/PoseWithCovarianceStamped",
+       "std_msgs/Header header\nPoseWithCovariance pose\n"},
       {"geometry_msgs/msg/Twist", "Vector3 linear\nVector3 angular\n"},
       {"geometry_msgs/msg/TwistStamped", "std_msgs/Header header\nTwist twist\n"},
       {"geometry_msgs/msg/TwistWithCovariance", "Twist twist\nfloat64[36] covariance\n"},
@@ -55,6 +58,20 @@ const std::map<std::string_view, std::string_view>& definitions() {
       {"nav_msgs/msg/Odometry",
        "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/PoseWithCovariance pose\n"
        "geometry_msgs/TwistWithCovariance twist\n"},
+      {"nav_msgs/msg/MapMetaData",
+       "builtin_interfaces/Time map_load_time\nfloat32 resolution\nuint32 width\n"
+       "uint32 height\ngeometry_msgs/Pose origin\n"},
+      {"nav_msgs/msg/OccupancyGrid", "std_msgs/Header header\nMapMetaData info\nint8[] data\n"},
+      {"sensor_msgs/msg/LaserScan",
+       "std_msgs/Header header\nfloat32 angle_min\nfloat32 angle_max\nfloat32 angle_increment\n"
+       "float32 time_increment\nfloat32 scan_time\nfloat32 range_min\nfloat32 range_max\n"
+       "float32[] ranges\nfloat32[] intensities\n"},
+      {"apriltag_msgs/msg/Point", "float64 x\nfloat64 y\n"},
+      {"apriltag_msgs/msg/AprilTagDetection",
+       "string family\nint32 id\nint32 hamming\nfloat32 goodness\nfloat32 decision_margin\n"
+       "Point centre\nPoint[4] corners\nfloat64[9] homography\n"},
+      {"apriltag_msgs/msg/AprilTagDetectionArray",
+       "std_msgs/Header header\nAprilTagDetection[] detections\n"},
       {"tf2_msgs/msg/TFMessage", "geometry_msgs/TransformStamped[] transforms\n"},
       {"trajectory_msgs/msg/JointTrajectoryPoint",
        "float64[] positions\nfloat64[] velocities\nfloat64[] accelerations\nfloat64[] effort\n"

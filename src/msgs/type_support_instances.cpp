@@ -2,6 +2,7 @@
 // library, and declared extern in the message headers, so that robotperf, its libraries and every
 // plug-in it loads hold the same TypeSupport object for a type (datasets and evaluators compare
 // them by address).
+#include "robotperf/msgs/apriltag_msgs.hpp"
 #include "robotperf/msgs/builtin_interfaces.hpp"
 #include "robotperf/msgs/geometry_msgs.hpp"
 #include "robotperf/msgs/nav_msgs.hpp"
@@ -21,13 +22,17 @@ template const TypeSupport& type_support<Point>();
 template const TypeSupport& type_support<Quaternion>();
 template const TypeSupport& type_support<Pose>();
 template const TypeSupport& type_support<PoseStamped>();
+template const TypeSupport& type_support<PoseArray>();
 template const TypeSupport& type_support<PoseWithCovariance>();
+template const TypeSupport& type_support<PoseWithCovarianceStamped>();
 template const TypeSupport& type_support<Twist>();
 template const TypeSupport& type_support<TwistStamped>();
 template const TypeSupport& type_support<TwistWithCovariance>();
 template const TypeSupport& type_support<Transform>();
 template const TypeSupport& type_support<TransformStamped>();
 template const TypeSupport& type_support<Odometry>();
+template const TypeSupport& type_support<MapMetaData>();
+template const TypeSupport& type_support<OccupancyGrid>();
 template const TypeSupport& type_support<CollisionResult>();
 template const TypeSupport& type_support<PlanExecutionResult>();
 template const TypeSupport& type_support<RegionOfInterest>();
@@ -36,6 +41,10 @@ template const TypeSupport& type_support<Image>();
 template const TypeSupport& type_support<PointField>();
 template const TypeSupport& type_support<PointCloud2>();
 template const TypeSupport& type_support<JointState>();
+template const TypeSupport& type_support<LaserScan>();
+template const TypeSupport& type_support<AprilTagPoint>();
+template const TypeSupport& type_support<AprilTagDetection>();
+template const TypeSupport& type_support<AprilTagDetectionArray>();
 template const TypeSupport& type_support<Header>();
 template const TypeSupport& type_support<MultiArrayDimension>();
 template const TypeSupport& type_support<MultiArrayLayout>();

@@ -414,6 +414,49 @@ TEST_F(Cli, RunManipulationBenchmarks) {
   EXPECT_EQ(d1_path_length(), first);
 }
 
+// The localization benchmarks end to end on every transport, on a bag without ground truth, and
+// with a kernel misconfigured the way a user can (a wrong tag size), which only the functional
+// check catches.
+TEST_F(Cli, RunLocalizationBenchmarks) {
+  for (const std::string rmw : {"intra", "fastdds", "cyclonedds"}) {
+    fs::remove_all(out_);
+    const Outcome o = robotperf_cli("run b3 --count 110 --rate 25 --rmw " + rmw + " --domain " +
+                                    domain() + " --output " + out_.string());
+    ASSERT_EQ(o.exit_code, 0) << rmw << "\n" << o.out;
+    EXPECT_NE(o.out.find("functional result: VALID"), std::string::npos) << o.out;
+    expect_functional_result(result_json(), "b3", rmw, "apriltag_detection");
+  }
+
+  fs::remove_all(out_);
+  const std::string bag = (out_ / "tags").string();
+  Outcome o = robotperf_cli("dataset generate localization/apriltags --out " + bag);
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  o = robotperf_cli("run b3 --dataset " + bag + " --count 110 --output " + (out_ / "r").string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("outputs not checked for accuracy (apriltag_detection)"), std::string::npos)
+      << o.out;
+
+  // b3 with the tags declared 0.20 m instead of 0.22 m: every tag found, every distance 9 % short.
+  const fs::path package = out_ / "bench" / "localization" / "x3_wrong_tag_size";
+  fs::create_directories(package);
+  for (const char* file : {"benchmark.yaml", "graph.yaml"}) {
+    std::ifstream in(fs::path(ROBOTPERF_SOURCE_DIR) /
+                     "benchmarks/localization/b3_apriltag_detection" / file);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    for (const auto& [from, to] : {std::pair<std::string, std::string>{"id: b3", "id: x3"},
+                                   {"name: b3_apriltag_detection", "name: x3_wrong_tag_size"},
+                                   {"size: 0.22", "size: 0.20"}}) {
+      if (auto at = text.find(from); at != std::string::npos) text.replace(at, from.size(), to);
+    }
+    std::ofstream(package / file) << text;
+  }
+  o = robotperf_cli("--benchmarks " + (out_ / "bench").string() + " run x3 --count 110 --output " +
+                    (out_ / "x3").string());
+  EXPECT_EQ(o.exit_code, 3) << o.out;
+  EXPECT_NE(o.out.find("functional result: INVALID"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("translation_error_median_m"), std::string::npos) << o.out;
+}
+
 TEST_F(Cli, UnknownBenchmarkIsOneClearLine) {
   const Outcome o = robotperf_cli("run z9 --output " + out_.string());
   EXPECT_EQ(o.exit_code, 2);

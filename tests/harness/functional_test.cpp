@@ -255,10 +255,17 @@ TEST(Functional, SampleIdsAreSpreadOverTheMeasuredMessages) {
   EXPECT_TRUE(functional_sample_ids(5, 5, 3).empty());
 }
 
-// graph.yaml of a3 with `functional:` replaced.
+// graph.yaml of a3 (or b3) with `functional:` replaced.
+std::string graph_with(const fs::path& package, const std::string& functional) {
+  std::string g = read(package / "graph.yaml");
+  return g.substr(0, g.find("\nfunctional:") + 1) + functional;
+}
 std::string a3_graph_with(const std::string& functional) {
-  std::string g = read(kBenchmarks / "a3_stereo_image_proc" / "graph.yaml");
-  return g.substr(0, g.find("functional:")) + functional;
+  return graph_with(kBenchmarks / "a3_stereo_image_proc", functional);
+}
+std::string b3_graph_with(const std::string& functional) {
+  return graph_with(kBenchmarks.parent_path() / "localization" / "b3_apriltag_detection",
+                    functional);
 }
 
 TEST(Functional, BadFunctionalSectionsAreReportedWithFileAndLine) {
@@ -280,6 +287,20 @@ TEST(Functional, BadFunctionalSectionsAreReportedWithFileAndLine) {
             std::string::npos);
   EXPECT_NE(error_of(a3_graph_with("functional: {evaluator: stereo_disparity, truth: {}}\n"))
                 .find("needs truth stream 'disparity'"),
+            std::string::npos);
+  // The second topic: only for evaluators that read one, and named once.
+  EXPECT_NE(error_of(a3_graph_with("functional: {evaluator: stereo_disparity, truth: {disparity: "
+                                   "d}, second_output: /x}\n"))
+                .find("takes no observed_truth or second_output"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of(b3_graph_with("functional: {evaluator: apriltag_detection, truth: {tags: t, "
+                             "poses: p}}\n"))
+          .find("needs an observed_truth or second_output topic (geometry_msgs/msg/PoseArray)"),
+      std::string::npos);
+  EXPECT_NE(error_of(b3_graph_with("functional: {evaluator: apriltag_detection, truth: {tags: t, "
+                                   "poses: p}, second_output: /a, observed_truth: /b}\n"))
+                .find("not both"),
             std::string::npos);
   const std::string ok = "functional: {evaluator: stereo_disparity, truth: {disparity: d}}\n";
   const std::string e =

@@ -5,25 +5,26 @@
 #include <utility>
 
 namespace robotperf::perception {
-namespace {
-
-// tan from the sine and cosine series, with IEEE-754 + - * / only: unlike libm's tan it gives
-// the same bits on every platform, so datasets built on these cameras hash the same everywhere.
-// Relative error below 1e-13 on (-pi/2, pi/2).
-double portable_tan(double x) {
-  double sine = 0.0;
-  double cosine = 0.0;
+SinCos portable_sin_cos(double x) {
+  SinCos out;
   double term = 1.0;  // x^n / n!
   for (int n = 0; n <= 40; ++n) {
     const double signed_term = (n / 2) % 2 == 0 ? term : -term;
     if (n % 2 == 0) {
-      cosine += signed_term;
+      out.cos += signed_term;
     } else {
-      sine += signed_term;
+      out.sin += signed_term;
     }
     term *= x / (n + 1);
   }
-  return sine / cosine;
+  return out;
+}
+
+namespace {
+
+double portable_tan(double x) {
+  const SinCos sc = portable_sin_cos(x);
+  return sc.sin / sc.cos;
 }
 
 }  // namespace

@@ -6,9 +6,9 @@
 #include <opencv2/core.hpp>
 #include <stdexcept>
 
-#include "raycast_scene.hpp"
 #include "robotperf/perception/camera_model.hpp"
 #include "robotperf/perception/image_proc.hpp"
+#include "robotperf/perception/raycast_scene.hpp"
 
 namespace robotperf::perception {
 namespace {

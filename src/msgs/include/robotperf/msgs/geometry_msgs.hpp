@@ -4,6 +4,7 @@
 
 #include <array>
 #include <string>
+#include <vector>
 
 #include "robotperf/msgs/std_msgs.hpp"
 
@@ -98,6 +99,22 @@ struct MessageTraits<PoseStamped> {
   static constexpr std::string_view ros_type = "geometry_msgs/msg/PoseStamped";
 };
 
+struct PoseArray {
+  Header header;
+  std::vector<Pose> poses;
+  friend bool operator==(const PoseArray&, const PoseArray&) = default;
+};
+template <class V, class M>
+requires std::is_same_v<std::remove_const_t<M>, PoseArray>
+void visit_fields(V& v, M& m) {
+  v(m.header);
+  v(m.poses);
+}
+template <>
+struct MessageTraits<PoseArray> {
+  static constexpr std::string_view ros_type = "geometry_msgs/msg/PoseArray";
+};
+
 // Row-major 6x6 covariance of (x, y, z, rotation about x, y, z).
 using Covariance6 = std::array<double, 36>;
 
@@ -115,6 +132,23 @@ void visit_fields(V& v, M& m) {
 template <>
 struct MessageTraits<PoseWithCovariance> {
   static constexpr std::string_view ros_type = "geometry_msgs/msg/PoseWithCovariance";
+};
+
+struct PoseWithCovarianceStamped {
+  Header header;
+  PoseWithCovariance pose;
+  friend bool operator==(const PoseWithCovarianceStamped&,
+                         const PoseWithCovarianceStamped&) = default;
+};
+template <class V, class M>
+requires std::is_same_v<std::remove_const_t<M>, PoseWithCovarianceStamped>
+void visit_fields(V& v, M& m) {
+  v(m.header);
+  v(m.pose);
+}
+template <>
+struct MessageTraits<PoseWithCovarianceStamped> {
+  static constexpr std::string_view ros_type = "geometry_msgs/msg/PoseWithCovarianceStamped";
 };
 
 struct Twist {
@@ -205,7 +239,9 @@ extern template const TypeSupport& type_support<Point>();
 extern template const TypeSupport& type_support<Quaternion>();
 extern template const TypeSupport& type_support<Pose>();
 extern template const TypeSupport& type_support<PoseStamped>();
+extern template const TypeSupport& type_support<PoseArray>();
 extern template const TypeSupport& type_support<PoseWithCovariance>();
+extern template const TypeSupport& type_support<PoseWithCovarianceStamped>();
 extern template const TypeSupport& type_support<Twist>();
 extern template const TypeSupport& type_support<TwistStamped>();
 extern template const TypeSupport& type_support<TwistWithCovariance>();

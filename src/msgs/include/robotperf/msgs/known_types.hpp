@@ -4,6 +4,7 @@
 #include <string_view>
 #include <utility>
 
+#include "robotperf/msgs/apriltag_msgs.hpp"
 #include "robotperf/msgs/geometry_msgs.hpp"
 #include "robotperf/msgs/nav_msgs.hpp"
 #include "robotperf/msgs/robotperf_msgs.hpp"
@@ -20,9 +21,10 @@ struct MessageTypeList {};
 // The top-level messages graphs exchange (not the nested-only ones).
 using KnownMessageTypes =
     MessageTypeList<Image, CameraInfo, PointCloud2, DisparityImage, JointState, Float64MultiArray,
-                    Pose, PoseStamped, Twist, TwistStamped, TransformStamped, Odometry, TFMessage,
-                    JointTrajectory, JointTrajectoryControllerState, CollisionResult,
-                    PlanExecutionResult>;
+                    Pose, PoseStamped, PoseArray, PoseWithCovarianceStamped, Twist, TwistStamped,
+                    TransformStamped, Odometry, TFMessage, LaserScan, OccupancyGrid,
+                    AprilTagDetectionArray, JointTrajectory, JointTrajectoryControllerState,
+                    CollisionResult, PlanExecutionResult>;
 
 // Calls `f.template operator()<T>()` for the message type named `ros_type`
 // ("sensor_msgs/msg/Image"); returns false when the type is not compiled in.

@@ -176,6 +176,40 @@ struct MessageTraits<JointState> {
   static constexpr std::string_view ros_type = "sensor_msgs/msg/JointState";
 };
 
+// sensor_msgs/LaserScan: one sweep of a planar range finder; beam i at angle_min + i *
+// angle_increment about +z from +x; a range outside [range_min, range_max] is no return.
+struct LaserScan {
+  Header header;
+  float angle_min = 0;
+  float angle_max = 0;
+  float angle_increment = 0;
+  float time_increment = 0;
+  float scan_time = 0;
+  float range_min = 0;
+  float range_max = 0;
+  std::vector<float> ranges;
+  std::vector<float> intensities;
+  friend bool operator==(const LaserScan&, const LaserScan&) = default;
+};
+template <class V, class M>
+requires std::is_same_v<std::remove_const_t<M>, LaserScan>
+void visit_fields(V& v, M& m) {
+  v(m.header);
+  v(m.angle_min);
+  v(m.angle_max);
+  v(m.angle_increment);
+  v(m.time_increment);
+  v(m.scan_time);
+  v(m.range_min);
+  v(m.range_max);
+  v(m.ranges);
+  v(m.intensities);
+}
+template <>
+struct MessageTraits<LaserScan> {
+  static constexpr std::string_view ros_type = "sensor_msgs/msg/LaserScan";
+};
+
 // Their type supports live in the msgs library (type_support_instances.cpp).
 extern template const TypeSupport& type_support<RegionOfInterest>();
 extern template const TypeSupport& type_support<CameraInfo>();
@@ -183,5 +217,6 @@ extern template const TypeSupport& type_support<Image>();
 extern template const TypeSupport& type_support<PointField>();
 extern template const TypeSupport& type_support<PointCloud2>();
 extern template const TypeSupport& type_support<JointState>();
+extern template const TypeSupport& type_support<LaserScan>();
 
 }  // namespace robotperf::msgs

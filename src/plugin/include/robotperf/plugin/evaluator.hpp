@@ -30,8 +30,10 @@ struct EvaluatorInfo {
   std::string output_type{};               // ROS type of the outputs it reads
   std::vector<std::string> truth_roles{};  // the dataset streams it needs, by role
   std::vector<MetricInfo> metrics{};
-  // Non-empty when the truth is observed during the run on a graph topic of this type
-  // (functional.observed_truth in graph.yaml) instead of read from the dataset alone.
+  // Non-empty when the evaluator reads, beside each output, the message of the same ID on a second
+  // graph topic of this type (add_observed): the truth observed during the run
+  // (functional.observed_truth in graph.yaml, e.g. a simulated robot's pose) or a second output
+  // of the graph under test (functional.second_output, e.g. the poses of detected tags).
   std::string observed_truth_type{};
   // graph.yaml `functional: parameters:`.
   std::vector<ParameterInfo> parameters{};
@@ -60,7 +62,7 @@ class FunctionalEvaluator {
   virtual ~FunctionalEvaluator();
   // One output message (of the evaluator's output type) produced from dataset frame `frame`.
   virtual void add(const void* output, std::size_t frame) = 0;
-  // The same with the truth observed for this output's message ID (evaluators with an
+  // The same with the second topic's message of this output's message ID (evaluators with an
   // observed_truth_type); null when none was received.
   virtual void add_observed(const void* output, const void* observed_truth, std::size_t frame);
   // Every metric of the evaluator's info over the outputs added; NaN when not computable.

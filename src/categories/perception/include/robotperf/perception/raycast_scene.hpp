@@ -1,7 +1,7 @@
-// Private to the perception category: a small ray caster for scenes of textured boxes and
-// rectangles, from which the stereo and depth datasets are rendered with exact ground truth.
-// Only + - * / and floor are used, so the bytes are the same on every platform (the library is
-// built without fused multiply-add contraction).
+// A small ray caster for scenes of textured boxes and rectangles, from which the stereo, depth
+// and visual-odometry datasets are rendered with exact ground truth. Only + - * / and floor are
+// used, so the bytes are the same on every platform when the including file is built without
+// fused multiply-add contraction (-ffp-contract=off).
 #pragma once
 
 #include <cmath>

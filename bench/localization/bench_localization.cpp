@@ -1,0 +1,122 @@
+// The localization kernels (b1-b3): each kernel's time per frame inside its benchmark graph
+// against its like-for-like reference (the graph overhead), its absolute time per frame on this
+// machine, and the accuracy the graph's answers reached, each against its target.
+// Run on demand: ./build/bench/localization/bench_localization [--smoke] [b3 ...]
+//
+// Targets (issue #18): graph overhead <= 10 % at p50 (intra, black-box from send against the
+// reference, bench/common/node_reference.hpp); per frame b3 >= 30 Hz at 1280x720; accuracy b3
+// recall >= 0.99 and corner RMS <= 0.5 px on unoccluded tags. A graph faster than its reference
+// beyond the noise, in every round, is a bench defect (exit status 1); CTest runs --smoke.
+// The graph runs at 10 Hz so that no frame queues behind the previous one; both sides run OpenCV
+// (and libapriltag) on one thread, as the benchmarks configure them.
+#include <cstdio>
+#include <opencv2/core/utility.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "node_reference.hpp"
+#include "overhead_verdict.hpp"
+#include "robotperf/categories/builtin.hpp"
+#include "robotperf/harness/dataset.hpp"
+#include "robotperf/harness/run.hpp"
+
+using namespace robotperf;
+
+namespace {
+
+constexpr std::size_t kWarmup = 5;
+constexpr double kTargetRatio = 0.10;
+
+// What a benchmark must reach on this machine: its kernel's time per frame, and its accuracy.
+struct Targets {
+  double max_frame_ms;
+  const char* time_target;  // as the issue states it
+  struct Accuracy {
+    const char* metric;
+    double bound;
+    bool at_least;
+  };
+  std::vector<Accuracy> accuracy;
+};
+
+Targets targets_of(const std::string& id) {
+  if (id == "b3")
+    return {1000.0 / 30.0, ">= 30 Hz", {{"recall", 0.99, true}, {"corner_rms_px", 0.5, false}}};
+  throw std::invalid_argument("no targets for benchmark " + id + " (known: b3)");
+}
+
+// Returns whether the comparison came out as a bench defect.
+bool compare(const std::string& id, std::size_t frames, std::size_t rounds) {
+  const auto spec = harness::find_benchmark(ROBOTPERF_BENCHMARKS_DIR, id);
+  const harness::Dataset dataset = harness::load_dataset(spec.dataset, spec.workload);
+  const Targets targets = targets_of(id);
+  std::vector<bench::OverheadRound> measured;
+  harness::RunResult last;
+  for (std::size_t i = 0; i < rounds; ++i) {
+    harness::RunOptions o;
+    o.rate_hz = 10;
+    o.count = kWarmup + frames;
+    o.warmup = kWarmup;
+    auto samples = bench::measure_overhead_round(spec, dataset, o, last);
+    measured.push_back({std::move(samples.reference_ms), std::move(samples.graph_ms)});
+  }
+  const bench::OverheadVerdict v = bench::judge_overhead(measured, kTargetRatio);
+  const std::string label = id + " " + spec.nodes.front().kernel;
+  std::printf(
+      "%-26s %10.3f %10.3f %10.3f %9.1f %%   noise +-%.1f %% (rounds %+.1f..%+.1f %%, p10 "
+      "%+.1f %%)   target <= %.0f %%: ratio %.2f %s\n",
+      label.c_str(), v.reference_p50, v.graph_p50, v.graph_p50 - v.reference_p50, 100 * v.ratio,
+      100 * v.band, 100 * v.round_low, 100 * v.round_high, 100 * v.floor_ratio, 100 * kTargetRatio,
+      v.ratio / kTargetRatio, bench::verdict_text(v, true).c_str());
+  std::printf("%-26s per frame %.2f ms = %.1f Hz   target %s: ratio %.2f (%s)\n", "",
+              v.reference_p50, 1000.0 / v.reference_p50, targets.time_target,
+              v.reference_p50 / targets.max_frame_ms,
+              v.reference_p50 <= targets.max_frame_ms ? "met" : "NOT met");
+  for (const auto& a : targets.accuracy) {
+    std::optional<double> value;
+    if (last.functional) {
+      for (const auto& m : last.functional->metrics)
+        if (m.name == a.metric) value = m.value;
+    }
+    if (!value) {
+      std::printf("%-26s %s: not measured\n", "", a.metric);
+      continue;
+    }
+    const bool met = a.at_least ? *value >= a.bound : *value <= a.bound;
+    std::printf("%-26s %s %.4g   target %s %g (%s)\n", "", a.metric, *value,
+                a.at_least ? ">=" : "<=", a.bound, met ? "met" : "NOT met");
+  }
+  return v.defect;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  robotperf::categories::register_builtin_categories();
+  const bench::BenchOptions options = bench::parse_bench_options(argc, argv);
+  cv::setNumThreads(1);
+  const std::size_t frames = options.smoke ? 15 : 80;
+  const std::size_t rounds = options.smoke ? 4 : 3;
+  std::vector<std::string> ids = options.args;
+  if (ids.empty()) ids = {"b3"};
+  std::printf(
+      "Kernel time per frame in the graph (intra, black-box p50 from send) vs its reference (p50), "
+      "%zu rounds of %zu frames at 10 Hz, ms\n"
+      "reference: the benchmark's nodes built as a run builds them, on an executor of their own, "
+      "fed the same frames as the Playback feeds them (made ahead, stamped, published at their "
+      "time), timed from the executor's first callback for a frame to the answer's arrival on "
+      "that executor; the graph adds the Playback's publish, the wake-up into the executor and "
+      "the Monitor. Both sides built afresh each round; OpenCV on one thread.\n"
+      "accuracy: the graph's functional metrics in its last round\n",
+      rounds, frames);
+  std::printf("%-26s %10s %10s %10s %10s\n", "kernel", "reference", "graph", "overhead", "share");
+  bool defect = false;
+  try {
+    for (const auto& id : ids) defect = compare(id, frames, rounds) || defect;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_localization: %s\n", e.what());
+    return 2;
+  }
+  return defect ? 1 : 0;
+}

@@ -1,0 +1,154 @@
+// Functional evaluators of the localization benchmarks: every answer against the dataset's
+// ground truth.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "category.hpp"
+#include "quaternion.hpp"
+#include "robotperf/msgs/apriltag_msgs.hpp"
+#include "robotperf/msgs/geometry_msgs.hpp"
+
+namespace robotperf::localization {
+namespace {
+
+using plugin::DatasetStream;
+using plugin::FunctionalEvaluator;
+
+const double kNaN = std::nan("");
+
+double median(std::vector<double> v) {
+  if (v.empty()) return kNaN;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+// Detections against the true tags of their frame. A detection is correct when a true tag of
+// its id lies within `match_px` (mean corner distance): a wrong id, or the right id far from
+// its tag, is a false positive. Recall and corner accuracy count the unoccluded tags (goodness
+// 1); occluded ones have a recall of their own. Poses come from the graph's second output, in
+// the order of the detections.
+class AprilTagEvaluator final : public FunctionalEvaluator {
+ public:
+  AprilTagEvaluator(const DatasetStream& tags, const DatasetStream& poses, double match_px)
+      : tags_(tags), poses_(poses), match_px_(match_px) {
+    plugin::require_type<msgs::AprilTagDetectionArray>(tags, "apriltag_detection");
+    plugin::require_type<msgs::PoseArray>(poses, "apriltag_detection");
+  }
+
+  void add(const void* output, std::size_t frame) override { add_observed(output, nullptr, frame); }
+
+  void add_observed(const void* output, const void* observed, std::size_t frame) override {
+    const auto& found = *static_cast<const msgs::AprilTagDetectionArray*>(output);
+    const auto& truth =
+        *static_cast<const msgs::AprilTagDetectionArray*>(tags_.messages[frame].get());
+    const auto& true_poses = *static_cast<const msgs::PoseArray*>(poses_.messages[frame].get());
+    const auto* poses = static_cast<const msgs::PoseArray*>(observed);
+    if (poses == nullptr) {
+      ++missing_poses_;
+    } else if (poses->poses.size() != found.detections.size()) {
+      problem("the poses output holds " + std::to_string(poses->poses.size()) + " poses for " +
+              std::to_string(found.detections.size()) + " detections");
+      poses = nullptr;
+    }
+    for (const auto& t : truth.detections) (t.goodness >= 1.0f ? unoccluded_ : occluded_) += 1;
+    std::vector<bool> taken(truth.detections.size(), false);
+    for (std::size_t i = 0; i < found.detections.size(); ++i) {
+      const auto& d = found.detections[i];
+      ++detections_;
+      std::size_t best = truth.detections.size();
+      double best_error = match_px_;
+      for (std::size_t j = 0; j < truth.detections.size(); ++j) {
+        const auto& t = truth.detections[j];
+        if (t.id != d.id || taken[j]) continue;
+        const double e = mean_corner_distance(d, t);
+        if (e <= best_error) {
+          best_error = e;
+          best = j;
+        }
+      }
+      if (best == truth.detections.size()) continue;
+      taken[best] = true;
+      ++correct_;
+      const auto& t = truth.detections[best];
+      if (t.goodness < 1.0f) {
+        ++occluded_found_;
+        continue;
+      }
+      ++unoccluded_found_;
+      for (std::size_t c = 0; c < 4; ++c) {
+        const double dx = d.corners[c].x - t.corners[c].x;
+        const double dy = d.corners[c].y - t.corners[c].y;
+        corner_sq_sum_ += dx * dx + dy * dy;
+        ++corners_;
+      }
+      if (poses != nullptr) {
+        const msgs::Pose& p = poses->poses[i];
+        const msgs::Pose& q = true_poses.poses[best];
+        translation_errors_.push_back(std::hypot(
+            p.position.x - q.position.x, p.position.y - q.position.y, p.position.z - q.position.z));
+        rotation_errors_.push_back(rotation_angle_between(p.orientation, q.orientation) * 180.0 /
+                                   std::numbers::pi);
+      }
+    }
+  }
+
+  std::map<std::string, double> metrics() const override {
+    auto ratio = [](std::size_t a, std::size_t b) { return b == 0 ? kNaN : double(a) / b; };
+    return {{"recall", ratio(unoccluded_found_, unoccluded_)},
+            {"recall_occluded", ratio(occluded_found_, occluded_)},
+            {"precision", detections_ == 0 ? kNaN : ratio(correct_, detections_)},
+            {"corner_rms_px", corners_ == 0 ? kNaN : std::sqrt(corner_sq_sum_ / corners_)},
+            {"translation_error_median_m", median(translation_errors_)},
+            {"rotation_error_median_deg", median(rotation_errors_)},
+            {"outputs_without_poses", static_cast<double>(missing_poses_)}};
+  }
+
+ private:
+  static double mean_corner_distance(const msgs::AprilTagDetection& a,
+                                     const msgs::AprilTagDetection& b) {
+    double sum = 0.0;
+    for (std::size_t c = 0; c < 4; ++c) {
+      sum += std::hypot(a.corners[c].x - b.corners[c].x, a.corners[c].y - b.corners[c].y);
+    }
+    return sum / 4.0;
+  }
+
+  const DatasetStream& tags_;
+  const DatasetStream& poses_;
+  double match_px_;
+  std::size_t unoccluded_ = 0, occluded_ = 0, detections_ = 0, correct_ = 0;
+  std::size_t unoccluded_found_ = 0, occluded_found_ = 0, corners_ = 0, missing_poses_ = 0;
+  double corner_sq_sum_ = 0.0;
+  std::vector<double> translation_errors_, rotation_errors_;
+};
+
+}  // namespace
+
+void register_evaluators(plugin::Registrar& registrar) {
+  registrar.add_evaluator(
+      {.name = "apriltag_detection",
+       .description = "detections against the true tags (ids, corners) and their poses against "
+                      "the true poses",
+       .output_type = "apriltag_msgs/msg/AprilTagDetectionArray",
+       .truth_roles = {"tags", "poses"},
+       .metrics = {{"recall", "fraction", "unoccluded tags detected with their id and corners"},
+                   {"recall_occluded", "fraction", "partly occluded tags detected"},
+                   {"precision", "fraction", "detections that are a true tag at its place"},
+                   {"corner_rms_px", "px", "RMS corner error of the unoccluded tags detected"},
+                   {"translation_error_median_m", "m",
+                    "median distance of a detected tag's position from the truth"},
+                   {"rotation_error_median_deg", "deg",
+                    "median rotation between a detected tag's orientation and the truth"},
+                   {"outputs_without_poses", "count", "outputs whose poses message never arrived"}},
+       .observed_truth_type = "geometry_msgs/msg/PoseArray",
+       .parameters = {plugin::double_parameter(
+           "match_px", 3.0, "largest mean corner distance (px) of a detection from its tag")}},
+      [](const plugin::TruthStreams& t, const plugin::Parameters& p) {
+        return std::make_unique<AprilTagEvaluator>(t["tags"], t["poses"], p.get_double("match_px"));
+      });
+}
+
+}  // namespace robotperf::localization

@@ -1,0 +1,51 @@
+// Private to the localization category: rotations as geometry_msgs/Quaternion.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "robotperf/msgs/geometry_msgs.hpp"
+
+namespace robotperf::localization {
+
+// The unit quaternion of rotation matrix `r` (anything with r(row, col)), by the largest of its
+// diagonal terms for accuracy; + - * / and sqrt only, so the same bits everywhere.
+template <class Matrix>
+msgs::Quaternion quaternion_from_matrix(const Matrix& r) {
+  msgs::Quaternion q;
+  const double trace = r(0, 0) + r(1, 1) + r(2, 2);
+  if (trace > 0.0) {
+    const double s = 2.0 * std::sqrt(trace + 1.0);
+    q.w = 0.25 * s;
+    q.x = (r(2, 1) - r(1, 2)) / s;
+    q.y = (r(0, 2) - r(2, 0)) / s;
+    q.z = (r(1, 0) - r(0, 1)) / s;
+  } else if (r(0, 0) > r(1, 1) && r(0, 0) > r(2, 2)) {
+    const double s = 2.0 * std::sqrt(1.0 + r(0, 0) - r(1, 1) - r(2, 2));
+    q.w = (r(2, 1) - r(1, 2)) / s;
+    q.x = 0.25 * s;
+    q.y = (r(0, 1) + r(1, 0)) / s;
+    q.z = (r(0, 2) + r(2, 0)) / s;
+  } else if (r(1, 1) > r(2, 2)) {
+    const double s = 2.0 * std::sqrt(1.0 + r(1, 1) - r(0, 0) - r(2, 2));
+    q.w = (r(0, 2) - r(2, 0)) / s;
+    q.x = (r(0, 1) + r(1, 0)) / s;
+    q.y = 0.25 * s;
+    q.z = (r(1, 2) + r(2, 1)) / s;
+  } else {
+    const double s = 2.0 * std::sqrt(1.0 + r(2, 2) - r(0, 0) - r(1, 1));
+    q.w = (r(1, 0) - r(0, 1)) / s;
+    q.x = (r(0, 2) + r(2, 0)) / s;
+    q.y = (r(1, 2) + r(2, 1)) / s;
+    q.z = 0.25 * s;
+  }
+  return q;
+}
+
+// The angle (rad, 0..pi) of the rotation from unit quaternion a to b.
+inline double rotation_angle_between(const msgs::Quaternion& a, const msgs::Quaternion& b) {
+  const double dot = std::abs(a.x * b.x + a.y * b.y + a.z * b.z + a.w * b.w);
+  return 2.0 * std::acos(std::min(1.0, dot));
+}
+
+}  // namespace robotperf::localization
