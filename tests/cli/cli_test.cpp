@@ -418,13 +418,17 @@ TEST_F(Cli, RunManipulationBenchmarks) {
 // with a kernel misconfigured the way a user can (a wrong tag size), which only the functional
 // check catches.
 TEST_F(Cli, RunLocalizationBenchmarks) {
-  for (const std::string rmw : {"intra", "fastdds", "cyclonedds"}) {
-    fs::remove_all(out_);
-    const Outcome o = robotperf_cli("run b3 --count 110 --rate 25 --rmw " + rmw + " --domain " +
-                                    domain() + " --output " + out_.string());
-    ASSERT_EQ(o.exit_code, 0) << rmw << "\n" << o.out;
-    EXPECT_NE(o.out.find("functional result: VALID"), std::string::npos) << o.out;
-    expect_functional_result(result_json(), "b3", rmw, "apriltag_detection");
+  const std::pair<const char*, const char*> benchmarks[] = {{"b2", "map_localization"},
+                                                            {"b3", "apriltag_detection"}};
+  for (const auto& [id, evaluator] : benchmarks) {
+    for (const std::string rmw : {"intra", "fastdds", "cyclonedds"}) {
+      fs::remove_all(out_);
+      const Outcome o = robotperf_cli(std::string("run ") + id + " --count 110 --rate 20 --rmw " +
+                                      rmw + " --domain " + domain() + " --output " + out_.string());
+      ASSERT_EQ(o.exit_code, 0) << id << " " << rmw << "\n" << o.out;
+      EXPECT_NE(o.out.find("functional result: VALID"), std::string::npos) << o.out;
+      expect_functional_result(result_json(), id, rmw, evaluator);
+    }
   }
 
   fs::remove_all(out_);

@@ -1,6 +1,9 @@
 // The localization datasets, rendered deterministically with their ground truth.
 #include "category.hpp"
+#include "quaternion.hpp"
 #include "robotperf/localization/synthetic_apriltags.hpp"
+#include "robotperf/localization/synthetic_scans.hpp"
+#include "robotperf/msgs/nav_msgs.hpp"
 
 namespace robotperf::localization {
 namespace {
@@ -24,6 +27,49 @@ std::vector<DatasetStream> apriltag_streams(const plugin::Parameters&) {
   return {std::move(images), std::move(infos), std::move(tags), std::move(poses)};
 }
 
+// The map goes with every scan (one message shared by all frames): a node keeps the latest, as it
+// would keep a latched map.
+std::vector<DatasetStream> map_scan_streams(const plugin::Parameters&) {
+  const SyntheticScanDataset data = generate_scan_dataset();
+  msgs::OccupancyGrid grid;
+  grid.header.frame_id = "map";
+  grid.info.resolution = static_cast<float>(data.map.resolution);
+  grid.info.width = data.map.width;
+  grid.info.height = data.map.height;
+  grid.info.origin.position = {data.map.origin_x, data.map.origin_y, 0.0};
+  grid.data = data.map.cells;
+  const auto map = std::make_shared<const msgs::OccupancyGrid>(std::move(grid));
+
+  auto maps = make_stream<msgs::OccupancyGrid>("map", "/map");
+  auto scans = make_stream<msgs::LaserScan>("scan", "/scan");
+  auto truth = make_stream<msgs::PoseStamped>("pose_truth", "/ground_truth/pose");
+  for (std::size_t k = 0; k < data.scans.size(); ++k) {
+    const SyntheticScan& s = data.scans[k];
+    msgs::Header header;
+    header.stamp = msgs::Time::from_ns(static_cast<int64_t>(k) * 100'000'000);
+    maps.messages.push_back(map);
+    msgs::LaserScan scan;
+    scan.header = header;
+    scan.header.frame_id = "laser";
+    scan.angle_min = s.scan.angle_min;
+    scan.angle_increment = s.scan.angle_increment;
+    scan.angle_max = static_cast<float>(s.scan.angle_min +
+                                        s.scan.angle_increment * (s.scan.ranges.size() - 1.0));
+    scan.range_min = s.scan.range_min;
+    scan.range_max = s.scan.range_max;
+    scan.scan_time = 0.1f;
+    scan.ranges = s.scan.ranges;
+    append(scans, std::move(scan));
+    msgs::PoseStamped pose;
+    pose.header = header;
+    pose.header.frame_id = "map";
+    pose.pose.position = {s.x, s.y, 0.0};
+    pose.pose.orientation = quaternion_from_yaw(s.yaw);
+    append(truth, std::move(pose));
+  }
+  return {std::move(maps), std::move(scans), std::move(truth)};
+}
+
 }  // namespace
 
 void register_datasets(plugin::Registrar& registrar) {
@@ -45,6 +91,21 @@ void register_datasets(plugin::Registrar& registrar) {
                    {"tag_poses", "/ground_truth/tag_poses", "geometry_msgs/msg/PoseArray", true,
                     "their true poses in the camera frame, in the same order"}}},
       apriltag_streams);
+  const SyntheticScansConfig scans;
+  registrar.add_dataset(
+      {.name = "localization/map_scans",
+       .description = "synthetic 20 m x 20 m office floor as a 0.05 m occupancy grid and 100 "
+                      "360-degree lidar scans (720 beams, 20 m, noise 0.02 m, 2 % dropouts, "
+                      "unmapped people and boxes) from known poses, 10 Hz",
+       .rate_hz = 10.0,
+       .frames = scans.scans,
+       .streams = {{"map", "/map", "nav_msgs/msg/OccupancyGrid", false,
+                    "the floor's occupancy grid, the same with every scan"},
+                   {"scan", "/scan", "sensor_msgs/msg/LaserScan", false,
+                    "one sweep from the robot's pose"},
+                   {"pose_truth", "/ground_truth/pose", "geometry_msgs/msg/PoseStamped", true,
+                    "the pose the scan was taken from, map frame"}}},
+      map_scan_streams);
 }
 
 }  // namespace robotperf::localization

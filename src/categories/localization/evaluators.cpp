@@ -125,6 +125,80 @@ class AprilTagEvaluator final : public FunctionalEvaluator {
   std::vector<double> translation_errors_, rotation_errors_;
 };
 
+// Global localizations against the true poses: a success is within `max_position_error` and
+// `max_yaw_error` (Isaac ROS's and the 0.1 m and 2 degrees). The covariance is judged
+// too: a localizer that is wrong must say it is unsure, so the share of answers whose error lies
+// inside the 99 % ellipsoid of their own covariance (chi-square, 3 degrees of freedom) is
+// reported.
+class MapLocalizationEvaluator final : public FunctionalEvaluator {
+ public:
+  MapLocalizationEvaluator(const DatasetStream& truth, double max_position_m, double max_yaw_deg)
+      : truth_(truth), max_position_m_(max_position_m), max_yaw_rad_(max_yaw_deg * kDegree) {
+    plugin::require_type<msgs::PoseStamped>(truth, "map_localization");
+  }
+
+  void add(const void* output, std::size_t frame) override {
+    const auto& out = *static_cast<const msgs::PoseWithCovarianceStamped*>(output);
+    const auto& truth = *static_cast<const msgs::PoseStamped*>(truth_.messages[frame].get());
+    if (out.header.frame_id != truth.header.frame_id)
+      problem("pose frame is '" + out.header.frame_id + "', expected '" + truth.header.frame_id +
+              "'");
+    const double dx = out.pose.pose.position.x - truth.pose.position.x;
+    const double dy = out.pose.pose.position.y - truth.pose.position.y;
+    const double dyaw = std::remainder(
+        yaw_of(out.pose.pose.orientation) - yaw_of(truth.pose.orientation), 2.0 * std::numbers::pi);
+    const double position = std::hypot(dx, dy);
+    positions_.push_back(position);
+    yaws_.push_back(std::abs(dyaw) / kDegree);
+    successes_ += position <= max_position_m_ && std::abs(dyaw) <= max_yaw_rad_ ? 1 : 0;
+    covered_ += inside_99_percent(out.pose.covariance, dx, dy, dyaw) ? 1 : 0;
+  }
+
+  std::map<std::string, double> metrics() const override {
+    const double n = static_cast<double>(positions_.size());
+    return {{"success_rate", positions_.empty() ? kNaN : successes_ / n},
+            {"position_error_median_m", median(positions_)},
+            {"yaw_error_median_deg", median(yaws_)},
+            {"covariance_coverage", positions_.empty() ? kNaN : covered_ / n}};
+  }
+
+ private:
+  static constexpr double kDegree = std::numbers::pi / 180.0;
+
+  // e^T C^-1 e <= 11.345 (chi-square, 3 degrees of freedom, 99 %) over (x, y, yaw).
+  static bool inside_99_percent(const msgs::Covariance6& c, double dx, double dy, double dyaw) {
+    const std::size_t index[3] = {0, 1, 5};
+    double m[3][3];
+    for (std::size_t i = 0; i < 3; ++i) {
+      for (std::size_t j = 0; j < 3; ++j) m[i][j] = c[6 * index[i] + index[j]];
+    }
+    const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                       m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                       m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    if (!(det > 0.0)) return false;
+    const double inv[3][3] = {{(m[1][1] * m[2][2] - m[1][2] * m[2][1]) / det,
+                               (m[0][2] * m[2][1] - m[0][1] * m[2][2]) / det,
+                               (m[0][1] * m[1][2] - m[0][2] * m[1][1]) / det},
+                              {(m[1][2] * m[2][0] - m[1][0] * m[2][2]) / det,
+                               (m[0][0] * m[2][2] - m[0][2] * m[2][0]) / det,
+                               (m[0][2] * m[1][0] - m[0][0] * m[1][2]) / det},
+                              {(m[1][0] * m[2][1] - m[1][1] * m[2][0]) / det,
+                               (m[0][1] * m[2][0] - m[0][0] * m[2][1]) / det,
+                               (m[0][0] * m[1][1] - m[0][1] * m[1][0]) / det}};
+    const double e[3] = {dx, dy, dyaw};
+    double d2 = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) d2 += e[i] * inv[i][j] * e[j];
+    }
+    return d2 <= 11.345;
+  }
+
+  const DatasetStream& truth_;
+  double max_position_m_, max_yaw_rad_;
+  std::vector<double> positions_, yaws_;
+  std::size_t successes_ = 0, covered_ = 0;
+};
+
 }  // namespace
 
 void register_evaluators(plugin::Registrar& registrar) {
@@ -148,6 +222,28 @@ void register_evaluators(plugin::Registrar& registrar) {
            "match_px", 3.0, "largest mean corner distance (px) of a detection from its tag")}},
       [](const plugin::TruthStreams& t, const plugin::Parameters& p) {
         return std::make_unique<AprilTagEvaluator>(t["tags"], t["poses"], p.get_double("match_px"));
+      });
+  registrar.add_evaluator(
+      {.name = "map_localization",
+       .description = "global localizations against the true poses, and their covariance against "
+                      "their errors",
+       .output_type = "geometry_msgs/msg/PoseWithCovarianceStamped",
+       .truth_roles = {"pose"},
+       .metrics = {{"success_rate", "fraction",
+                    "answers within max_position_error_m and max_yaw_error_deg"},
+                   {"position_error_median_m", "m", "median distance from the true position"},
+                   {"yaw_error_median_deg", "deg", "median heading error"},
+                   {"covariance_coverage", "fraction",
+                    "answers whose (x, y, yaw) error lies in the 99 % ellipsoid of their own "
+                    "covariance"}},
+       .parameters = {plugin::double_parameter("max_position_error_m", 0.1,
+                                               "a success is at most this far off"),
+                      plugin::double_parameter("max_yaw_error_deg", 2.0,
+                                               "and at most this many degrees off")},
+       .on_arrival = true},
+      [](const plugin::TruthStreams& t, const plugin::Parameters& p) {
+        return std::make_unique<MapLocalizationEvaluator>(
+            t["pose"], p.get_double("max_position_error_m"), p.get_double("max_yaw_error_deg"));
       });
 }
 

@@ -3,9 +3,12 @@
 #include <stdexcept>
 
 #include "category.hpp"
+#include "quaternion.hpp"
 #include "robotperf/localization/apriltag_detector.hpp"
+#include "robotperf/localization/scan_matcher.hpp"
 #include "robotperf/msgs/apriltag_msgs.hpp"
 #include "robotperf/msgs/geometry_msgs.hpp"
+#include "robotperf/msgs/nav_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
 
 namespace robotperf::localization {
@@ -118,6 +121,133 @@ class AprilTagNode final : public SyncedNode<2> {
   std::shared_ptr<graph::Publisher<msgs::PoseArray>> poses_out_;
 };
 
+GridMap grid_map(const msgs::OccupancyGrid& grid) {
+  const msgs::Quaternion& q = grid.info.origin.orientation;
+  if (q.x != 0.0 || q.y != 0.0 || q.z != 0.0) {
+    throw std::invalid_argument(
+        "map_localization: the map's origin is rotated; only maps aligned "
+        "with their frame are supported");
+  }
+  GridMap map;
+  map.width = grid.info.width;
+  map.height = grid.info.height;
+  map.resolution = grid.info.resolution;
+  map.origin_x = grid.info.origin.position.x;
+  map.origin_y = grid.info.origin.position.y;
+  map.cells = grid.data;
+  return map;
+}
+
+// Global localization of each scan in the latest map, as Isaac ROS's occupancy grid localizer:
+// the map arrives on its own topic (latched in ROS; here it may come with every frame) and the
+// search structures are rebuilt only when its content changes; each scan is localized from
+// scratch.
+class MapLocalizationNode final : public graph::Node, public plugin::NodeCounters {
+ public:
+  MapLocalizationNode(graph::Context& context, const KernelConfig& config)
+      : Node(context, config.node_name), options_(options_from(config)) {
+    output_ = create_publisher<msgs::PoseWithCovarianceStamped>(config.topic("pose"), config.qos);
+    map_sub_ = create_subscription<msgs::OccupancyGrid>(
+        config.topic("map"), config.qos,
+        [this](std::shared_ptr<const msgs::OccupancyGrid> m) { take_map(*m); });
+    scan_sub_ = create_subscription<msgs::LaserScan>(
+        config.topic("scan"), config.qos,
+        [this](std::shared_ptr<const msgs::LaserScan> m) { localize(*m); });
+  }
+
+  std::map<std::string, uint64_t> counters() const override {
+    return {{"maps_built", maps_built_},
+            {"scans_without_map", scans_without_map_},
+            {"rejected_inputs", rejected_},
+            {"not_found", not_found_}};
+  }
+
+ private:
+  static GlobalLocalizerOptions options_from(const KernelConfig& c) {
+    const auto& p = c.parameters;
+    GlobalLocalizerOptions o;
+    o.max_range_m = p.get_double("max_range");
+    o.min_score = p.get_double("min_score");
+    o.branch_and_bound_depth = static_cast<int>(p.get_int("branch_and_bound_depth"));
+    o.angular_step_rad = p.get_double("angular_step");
+    o.max_points = static_cast<std::size_t>(std::max<int64_t>(0, p.get_int("max_points")));
+    o.likelihood_sigma_m = p.get_double("likelihood_sigma");
+    o.ambiguity_ratio = p.get_double("ambiguity_ratio");
+    o.refinement_iterations = static_cast<int>(p.get_int("refinement_iterations"));
+    o.threads = static_cast<unsigned>(std::max<int64_t>(0, p.get_int("threads")));
+    // Checked here, once, so that a bad value is one line when the graph is built.
+    try {
+      const GridMap probe{1, 1, 0.05, 0.0, 0.0, {0}};
+      GlobalLocalizer check(probe, o);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("node '" + c.node_name + "': " + e.what());
+    }
+    return o;
+  }
+
+  void take_map(const msgs::OccupancyGrid& grid) {
+    if (localizer_ && grid.info == map_info_ && grid.data == map_data_) return;
+    try {
+      localizer_ = std::make_unique<GlobalLocalizer>(grid_map(grid), options_);
+      map_info_ = grid.info;
+      map_data_ = grid.data;
+      map_frame_ = grid.header.frame_id;
+      ++maps_built_;
+    } catch (const std::invalid_argument& e) {
+      reject(e);
+    }
+  }
+
+  void localize(const msgs::LaserScan& scan) {
+    if (!localizer_) {
+      ++scans_without_map_;
+      return;
+    }
+    try {
+      plugin::trace_kernel_init(*this, kKernel, scan.header.stamp.to_ns(), scan);
+      Scan in;
+      in.angle_min = scan.angle_min;
+      in.angle_increment = scan.angle_increment;
+      in.range_min = scan.range_min;
+      in.range_max = scan.range_max;
+      in.ranges = scan.ranges;
+      const LocalizationResult r = localizer_->localize(in);
+      auto out = std::make_shared<msgs::PoseWithCovarianceStamped>();
+      out->header.stamp = scan.header.stamp;
+      out->header.frame_id = map_frame_;
+      out->pose.pose.position = {r.x, r.y, 0.0};
+      out->pose.pose.orientation = quaternion_from_yaw(r.yaw);
+      // (x, y, yaw) into the 6x6 of (x, y, z, roll, pitch, yaw); z, roll and pitch are fixed.
+      const std::size_t index[3] = {0, 1, 5};
+      for (std::size_t i = 0; i < 3; ++i) {
+        for (std::size_t j = 0; j < 3; ++j) {
+          out->pose.covariance[6 * index[i] + index[j]] = r.covariance[3 * i + j];
+        }
+      }
+      not_found_ += r.found ? 0 : 1;
+      plugin::trace_kernel_fini(*this, kKernel, *out);
+      output_->publish(std::shared_ptr<const msgs::PoseWithCovarianceStamped>(std::move(out)));
+    } catch (const std::invalid_argument& e) {
+      reject(e);
+    }
+  }
+
+  void reject(const std::invalid_argument& e) {
+    if (rejected_++ == 0)
+      std::cerr << "robotperf node " << name() << ": skipping input: " << e.what() << "\n";
+  }
+
+  static constexpr const char* kKernel = "localization/map_localization";
+  GlobalLocalizerOptions options_;
+  std::unique_ptr<GlobalLocalizer> localizer_;
+  msgs::MapMetaData map_info_;
+  std::vector<int8_t> map_data_;
+  std::string map_frame_;
+  uint64_t maps_built_ = 0, scans_without_map_ = 0, rejected_ = 0, not_found_ = 0;
+  std::shared_ptr<graph::Publisher<msgs::PoseWithCovarianceStamped>> output_;
+  std::shared_ptr<graph::GenericSubscription> map_sub_, scan_sub_;
+};
+
 }  // namespace
 
 void register_kernels(plugin::Registrar& registrar) {
@@ -145,6 +275,34 @@ void register_kernels(plugin::Registrar& registrar) {
             plugin::double_parameter("sharpening", tag.sharpening, "decode sharpening")}},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<AprilTagNode>(context, config);
+      });
+  const GlobalLocalizerOptions map;
+  registrar.add_kernel(
+      {.name = "localization/map_localization",
+       .description = "global 2D localization of a laser scan in an occupancy grid (correlative "
+                      "search, multi-resolution branch and bound), as Isaac ROS's occupancy grid "
+                      "localizer",
+       .inputs = {{"map", "nav_msgs/msg/OccupancyGrid"}, {"scan", "sensor_msgs/msg/LaserScan"}},
+       .outputs = {{"pose", "geometry_msgs/msg/PoseWithCovarianceStamped"}},
+       .parameters =
+           {plugin::double_parameter("max_range", map.max_range_m, "returns farther are unused, m"),
+            plugin::double_parameter("min_score", map.min_score,
+                                     "score (mean likelihood of the scan's hits) for a pose"),
+            plugin::int_parameter("branch_and_bound_depth", map.branch_and_bound_depth,
+                                  "levels of the search tree (1..10)"),
+            plugin::double_parameter("angular_step", map.angular_step_rad,
+                                     "yaw lattice step, rad; 0 = one cell at the farthest point"),
+            plugin::int_parameter("max_points", static_cast<int64_t>(map.max_points),
+                                  "scan points scored, thinned along the contour"),
+            plugin::double_parameter("likelihood_sigma", map.likelihood_sigma_m,
+                                     "likelihood field's width, m"),
+            plugin::double_parameter("ambiguity_ratio", map.ambiguity_ratio,
+                                     "poses within this fraction of the best make the covariance"),
+            plugin::int_parameter("refinement_iterations", map.refinement_iterations,
+                                  "Gauss-Newton iterations of the sub-cell refinement"),
+            plugin::int_parameter("threads", map.threads, "threads the search is split over")}},
+      [](graph::Context& context, const KernelConfig& config) {
+        return std::make_shared<MapLocalizationNode>(context, config);
       });
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "robotperf/msgs/geometry_msgs.hpp"
+#include "robotperf/perception/camera_model.hpp"
 
 namespace robotperf::localization {
 
@@ -40,6 +41,21 @@ msgs::Quaternion quaternion_from_matrix(const Matrix& r) {
     q.z = 0.25 * s;
   }
   return q;
+}
+
+// A rotation by `yaw` (rad, within [-2 pi, 2 pi]) about +z, a planar robot's heading; the same
+// bits on every machine (datasets hold it).
+inline msgs::Quaternion quaternion_from_yaw(double yaw) {
+  const perception::SinCos half = perception::portable_sin_cos(0.5 * yaw);
+  msgs::Quaternion q;
+  q.z = half.sin;
+  q.w = half.cos;
+  return q;
+}
+
+// The heading of a rotation about +z (the yaw of any unit quaternion, by its z-y-x angles).
+inline double yaw_of(const msgs::Quaternion& q) {
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
 }
 
 // The angle (rad, 0..pi) of the rotation from unit quaternion a to b.

@@ -1,11 +1,15 @@
 #include "robotperf/perception/camera_model.hpp"
 
+#include <cmath>
 #include <numbers>
 #include <stdexcept>
 #include <utility>
 
 namespace robotperf::perception {
 SinCos portable_sin_cos(double x) {
+  // Into [-pi, pi], where the series is accurate; angles there are kept as they are, bit for bit.
+  constexpr double kTwoPi = 2.0 * std::numbers::pi;
+  if (x > std::numbers::pi || x < -std::numbers::pi) x -= kTwoPi * std::floor(x / kTwoPi + 0.5);
   SinCos out;
   double term = 1.0;  // x^n / n!
   for (int n = 0; n <= 40; ++n) {

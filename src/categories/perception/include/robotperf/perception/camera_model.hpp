@@ -18,7 +18,7 @@ inline constexpr std::string_view kEquidistant = "equidistant";
 
 // sin and cos from their series with IEEE-754 + - * / only: unlike libm's they give the same bits
 // on every platform, so that datasets built from them hash the same everywhere. Absolute error
-// below 1e-13 on [-pi, pi]; for angles outside, reduce first.
+// below 1e-13 on [-pi, pi]; other angles are first reduced into it by whole turns.
 struct SinCos {
   double sin = 0;
   double cos = 0;
