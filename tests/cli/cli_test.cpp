@@ -418,8 +418,8 @@ TEST_F(Cli, RunManipulationBenchmarks) {
 // with a kernel misconfigured the way a user can (a wrong tag size), which only the functional
 // check catches.
 TEST_F(Cli, RunLocalizationBenchmarks) {
-  const std::pair<const char*, const char*> benchmarks[] = {{"b2", "map_localization"},
-                                                            {"b3", "apriltag_detection"}};
+  const std::pair<const char*, const char*> benchmarks[] = {
+      {"b1", "visual_odometry"}, {"b2", "map_localization"}, {"b3", "apriltag_detection"}};
   for (const auto& [id, evaluator] : benchmarks) {
     for (const std::string rmw : {"intra", "fastdds", "cyclonedds"}) {
       fs::remove_all(out_);

@@ -5,9 +5,11 @@
 #include <cmath>
 
 #include "robotperf/localization/scan_matcher.hpp"
+#include "robotperf/localization/stereo_odometry.hpp"
 #include "robotperf/msgs/geometry_msgs.hpp"
 #include "robotperf/msgs/nav_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/perception/image_proc.hpp"
 #include "robotperf/plugin/registry.hpp"
 
 namespace robotperf::localization {
@@ -77,6 +79,45 @@ TEST(LocalizationEvaluators, MapLocalizationPassesAndAMiscalibratedScannerFails)
   EXPECT_GE(good.at("covariance_coverage"), 0.9);
   const auto bad = judge(1.2, 10);
   EXPECT_LT(bad.at("success_rate"), 0.5);
+}
+
+// b1: the odometry over the dataset's lap, and the same with a focal length 10 % off (a wrong
+// calibration), which must break the drift threshold.
+TEST(LocalizationEvaluators, VisualOdometryPassesAndAWrongFocalLengthFails) {
+  const Streams data = generate("localization/stereo_odometry");
+  const auto& left_info =
+      *static_cast<const msgs::CameraInfo*>(data["left_camera_info"].messages[0].get());
+  const auto& right_info =
+      *static_cast<const msgs::CameraInfo*>(data["right_camera_info"].messages[0].get());
+  const double baseline = -right_info.p[3] / right_info.p[0];
+  auto judge = [&](double focal_scale) {
+    StereoOdometry odometry(left_info.p[0] * focal_scale, left_info.p[5] * focal_scale,
+                            left_info.p[2], left_info.p[6], baseline);
+    auto e = evaluator("visual_odometry", {{"pose", &data["pose_truth"]}});
+    cv::Mat left, right;
+    for (std::size_t k = 0; k < data["left_image"].messages.size(); ++k) {
+      perception::to_mono8(*static_cast<const msgs::Image*>(data["left_image"].messages[k].get()),
+                           "left", left);
+      perception::to_mono8(*static_cast<const msgs::Image*>(data["right_image"].messages[k].get()),
+                           "right", right);
+      const Eigen::Isometry3d pose = odometry.process(left, right).pose;
+      msgs::Odometry out;
+      out.header.frame_id = "odom";
+      const Eigen::Quaterniond q(pose.rotation());
+      out.pose.pose.position = {pose.translation().x(), pose.translation().y(),
+                                pose.translation().z()};
+      out.pose.pose.orientation = {q.x(), q.y(), q.z(), q.w()};
+      e->add(&out, k);
+    }
+    EXPECT_TRUE(e->problems().empty());
+    return e->metrics();
+  };
+  const auto good = judge(1.0);
+  EXPECT_LE(good.at("translational_drift_percent"), 2.0);
+  EXPECT_LE(good.at("rotational_drift_deg_per_m"), 0.5);
+  EXPECT_LE(good.at("ate_rmse_m"), 0.1);
+  const auto bad = judge(1.1);
+  EXPECT_GT(bad.at("translational_drift_percent"), 2.0);
 }
 
 TEST(LocalizationEvaluators, AnAnswerInAnotherFrameIsADefect) {

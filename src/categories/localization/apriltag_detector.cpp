@@ -7,7 +7,6 @@
 
 #include <cmath>
 #include <opencv2/calib3d.hpp>
-#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <vector>
 
@@ -34,17 +33,6 @@ const FamilyFunctions* find_family(const std::string& name) {
     if (name == f.name) return &f;
   }
   return nullptr;
-}
-
-// The grey image libapriltag reads, converted as cv_bridge would to mono8.
-int grey_conversion(const std::string& encoding) {
-  if (encoding == "mono8") return -1;
-  if (encoding == "rgb8") return cv::COLOR_RGB2GRAY;
-  if (encoding == "bgr8") return cv::COLOR_BGR2GRAY;
-  if (encoding == "rgba8") return cv::COLOR_RGBA2GRAY;
-  if (encoding == "bgra8") return cv::COLOR_BGRA2GRAY;
-  throw std::invalid_argument("apriltag: image encoding '" + encoding +
-                              "' is not mono8, rgb8, bgr8, rgba8 or bgra8");
 }
 
 }  // namespace
@@ -98,14 +86,8 @@ void AprilTagDetector::detect(const msgs::Image& image, const msgs::CameraInfo& 
                                 std::to_string(image.height) + " but its CameraInfo " +
                                 std::to_string(info.width) + "x" + std::to_string(info.height));
   }
-  const int conversion = grey_conversion(image.encoding);
-  const cv::Mat view = perception::image_view(image);
   cv::Mat& grey = library_->grey;
-  if (conversion < 0) {
-    grey = view;
-  } else {
-    cv::cvtColor(view, grey, conversion);
-  }
+  perception::to_mono8(image, "apriltag: image", grey);
   image_u8_t frame{grey.cols, grey.rows, static_cast<int32_t>(grey.step[0]), grey.data};
   zarray_t* found = apriltag_detector_detect(library_->detector, &frame);
 

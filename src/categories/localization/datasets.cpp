@@ -2,8 +2,11 @@
 #include "category.hpp"
 #include "quaternion.hpp"
 #include "robotperf/localization/synthetic_apriltags.hpp"
+#include "robotperf/localization/synthetic_odometry.hpp"
 #include "robotperf/localization/synthetic_scans.hpp"
 #include "robotperf/msgs/nav_msgs.hpp"
+#include "robotperf/perception/camera_model.hpp"
+#include "robotperf/perception/image_proc.hpp"
 
 namespace robotperf::localization {
 namespace {
@@ -70,6 +73,52 @@ std::vector<DatasetStream> map_scan_streams(const plugin::Parameters&) {
   return {std::move(maps), std::move(scans), std::move(truth)};
 }
 
+msgs::Image mono_image(const cv::Mat& pixels, const msgs::Header& header) {
+  msgs::Image image;
+  pixels.copyTo(perception::prepare_image(image, header, "mono8", pixels.cols, pixels.rows));
+  return image;
+}
+
+// A rectified stereo pair on stereo_image_proc's topics, and the left camera's true pose in the
+// first frame's left camera (the odometry frame a visual odometry starts from).
+std::vector<DatasetStream> odometry_streams(const plugin::Parameters&) {
+  const SyntheticOdometryConfig config;
+  const OdometrySequence sequence = generate_odometry_sequence(config);
+  auto left = make_stream<msgs::Image>("left_image", "/left/image_rect");
+  auto left_info = make_stream<msgs::CameraInfo>("left_camera_info", "/left/camera_info");
+  auto right = make_stream<msgs::Image>("right_image", "/right/image_rect");
+  auto right_info = make_stream<msgs::CameraInfo>("right_camera_info", "/right/camera_info");
+  auto truth = make_stream<msgs::PoseStamped>("pose_truth", "/ground_truth/pose");
+  msgs::CameraInfo left_camera = perception::make_pinhole_camera_info(
+      config.width, config.height, config.hfov_rad, std::vector<double>(5, 0.0),
+      "left_camera_optical_frame");
+  msgs::CameraInfo right_camera = left_camera;
+  right_camera.header.frame_id = "right_camera_optical_frame";
+  right_camera.p[3] = -right_camera.p[0] * config.baseline_m;
+  for (std::size_t k = 0; k < sequence.frames.size(); ++k) {
+    const OdometryFrame& f = sequence.frames[k];
+    msgs::Header header;
+    header.stamp = msgs::Time::from_ns(std::llround(f.stamp_s * 1e9));
+    header.frame_id = left_camera.header.frame_id;
+    append(left, mono_image(f.left, header));
+    left_camera.header.stamp = header.stamp;
+    append(left_info, left_camera);
+    header.frame_id = right_camera.header.frame_id;
+    append(right, mono_image(f.right, header));
+    right_camera.header.stamp = header.stamp;
+    append(right_info, right_camera);
+    msgs::PoseStamped pose;
+    pose.header.stamp = header.stamp;
+    pose.header.frame_id = "odom";
+    const Eigen::Vector3d t = f.left_in_first.translation();
+    pose.pose.position = {t.x(), t.y(), t.z()};
+    pose.pose.orientation = quaternion_from_matrix(f.left_in_first.rotation());
+    append(truth, std::move(pose));
+  }
+  return {std::move(left), std::move(left_info), std::move(right), std::move(right_info),
+          std::move(truth)};
+}
+
 }  // namespace
 
 void register_datasets(plugin::Registrar& registrar) {
@@ -106,6 +155,25 @@ void register_datasets(plugin::Registrar& registrar) {
                    {"pose_truth", "/ground_truth/pose", "geometry_msgs/msg/PoseStamped", true,
                     "the pose the scan was taken from, map frame"}}},
       map_scan_streams);
+  const SyntheticOdometryConfig odometry;
+  registrar.add_dataset(
+      {.name = "localization/stereo_odometry",
+       .description = "synthetic rectified 640x480 mono8 stereo pair, 20 Hz, 300 frames (one "
+                      "15 s, 16.5 m lap of a figure-of-eight), baseline 0.12 m, hfov 1.1 rad; "
+                      "ray-cast textured room with pillars and crates",
+       .rate_hz = odometry.rate_hz,
+       .frames = odometry.frames,
+       .streams = {{"left_image", "/left/image_rect", "sensor_msgs/msg/Image", false,
+                    "rectified left image"},
+                   {"left_camera_info", "/left/camera_info", "sensor_msgs/msg/CameraInfo", false,
+                    "left calibration"},
+                   {"right_image", "/right/image_rect", "sensor_msgs/msg/Image", false,
+                    "rectified right image"},
+                   {"right_camera_info", "/right/camera_info", "sensor_msgs/msg/CameraInfo", false,
+                    "right calibration (P[3] = -fx * baseline)"},
+                   {"pose_truth", "/ground_truth/pose", "geometry_msgs/msg/PoseStamped", true,
+                    "the left camera's true pose in the first frame's left camera"}}},
+      odometry_streams);
 }
 
 }  // namespace robotperf::localization

@@ -7,8 +7,10 @@
 
 #include "category.hpp"
 #include "quaternion.hpp"
+#include "robotperf/localization/trajectory_metrics.hpp"
 #include "robotperf/msgs/apriltag_msgs.hpp"
 #include "robotperf/msgs/geometry_msgs.hpp"
+#include "robotperf/msgs/nav_msgs.hpp"
 
 namespace robotperf::localization {
 namespace {
@@ -199,6 +201,55 @@ class MapLocalizationEvaluator final : public FunctionalEvaluator {
   std::size_t successes_ = 0, covered_ = 0;
 };
 
+Eigen::Isometry3d isometry_of(const msgs::Pose& p) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() =
+      Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)
+          .normalized()
+          .toRotationMatrix();
+  out.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
+  return out;
+}
+
+// Odometry against the true trajectory, as TUM and KITTI evaluate it: the absolute trajectory
+// error after a rigid alignment, and the drift over path segments of the given lengths. The
+// outputs are taken in the order they arrive, which is the order of the frames.
+class VisualOdometryEvaluator final : public FunctionalEvaluator {
+ public:
+  VisualOdometryEvaluator(const DatasetStream& truth, std::vector<double> lengths_m)
+      : truth_(truth), lengths_m_(std::move(lengths_m)) {
+    plugin::require_type<msgs::PoseStamped>(truth, "visual_odometry");
+  }
+
+  void add(const void* output, std::size_t frame) override {
+    const auto& out = *static_cast<const msgs::Odometry*>(output);
+    const auto& truth = *static_cast<const msgs::PoseStamped*>(truth_.messages[frame].get());
+    if (out.header.frame_id != truth.header.frame_id)
+      problem("odometry frame is '" + out.header.frame_id + "', expected '" +
+              truth.header.frame_id + "'");
+    estimate_.push_back(isometry_of(out.pose.pose));
+    truth_poses_.push_back(isometry_of(truth.pose));
+  }
+
+  std::map<std::string, double> metrics() const override {
+    if (estimate_.size() < 2) {
+      return {{"ate_rmse_m", kNaN},
+              {"translational_drift_percent", kNaN},
+              {"rotational_drift_deg_per_m", kNaN}};
+    }
+    const AbsoluteTrajectoryError ate = absolute_trajectory_error(estimate_, truth_poses_);
+    const RelativePoseError rpe = relative_pose_error(estimate_, truth_poses_, lengths_m_);
+    return {{"ate_rmse_m", ate.rmse_m},
+            {"translational_drift_percent", rpe.translation_percent},
+            {"rotational_drift_deg_per_m", rpe.rotation_deg_per_m}};
+  }
+
+ private:
+  const DatasetStream& truth_;
+  std::vector<double> lengths_m_;
+  std::vector<Eigen::Isometry3d> estimate_, truth_poses_;
+};
+
 }  // namespace
 
 void register_evaluators(plugin::Registrar& registrar) {
@@ -244,6 +295,29 @@ void register_evaluators(plugin::Registrar& registrar) {
       [](const plugin::TruthStreams& t, const plugin::Parameters& p) {
         return std::make_unique<MapLocalizationEvaluator>(
             t["pose"], p.get_double("max_position_error_m"), p.get_double("max_yaw_error_deg"));
+      });
+  registrar.add_evaluator(
+      {.name = "visual_odometry",
+       .description = "odometry against the true trajectory: absolute trajectory error and drift "
+                      "per path length (TUM, KITTI)",
+       .output_type = "nav_msgs/msg/Odometry",
+       .truth_roles = {"pose"},
+       .metrics = {{"ate_rmse_m", "m",
+                    "RMS position error after the rigid alignment that minimises it"},
+                   {"translational_drift_percent", "%",
+                    "mean translation error of the relative motion over path segments, per "
+                    "length"},
+                   {"rotational_drift_deg_per_m", "deg/m",
+                    "mean rotation error of the relative motion over path segments, per length"}},
+       .parameters = {plugin::double_parameter("segment_m", 1.0,
+                                               "drift over segments of 1, 2, 4 and 8 times this "
+                                               "length of path")},
+       .on_arrival = true},
+      [](const plugin::TruthStreams& t, const plugin::Parameters& p) {
+        const double unit = p.get_double("segment_m");
+        if (!(unit > 0.0)) throw std::invalid_argument("visual_odometry: segment_m must be > 0");
+        return std::make_unique<VisualOdometryEvaluator>(
+            t["pose"], std::vector<double>{unit, 2 * unit, 4 * unit, 8 * unit});
       });
 }
 

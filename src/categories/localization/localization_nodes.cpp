@@ -6,10 +6,12 @@
 #include "quaternion.hpp"
 #include "robotperf/localization/apriltag_detector.hpp"
 #include "robotperf/localization/scan_matcher.hpp"
+#include "robotperf/localization/stereo_odometry.hpp"
 #include "robotperf/msgs/apriltag_msgs.hpp"
 #include "robotperf/msgs/geometry_msgs.hpp"
 #include "robotperf/msgs/nav_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/perception/image_proc.hpp"
 
 namespace robotperf::localization {
 namespace {
@@ -248,6 +250,130 @@ class MapLocalizationNode final : public graph::Node, public plugin::NodeCounter
   std::shared_ptr<graph::GenericSubscription> map_sub_, scan_sub_;
 };
 
+StereoOdometryOptions odometry_options(const KernelConfig& c) {
+  const auto& p = c.parameters;
+  StereoOdometryOptions o;
+  o.max_features = static_cast<int>(p.get_int("max_features"));
+  o.fast_threshold = static_cast<int>(p.get_int("fast_threshold"));
+  o.max_disparity_px = p.get_double("max_disparity");
+  o.ratio = p.get_double("ratio");
+  o.search_radius_px = p.get_double("search_radius");
+  o.ransac_reprojection_px = p.get_double("ransac_reprojection");
+  o.ransac_iterations = static_cast<int>(p.get_int("ransac_iterations"));
+  o.min_inliers = static_cast<int>(p.get_int("min_inliers"));
+  o.keyframe_inlier_fraction = p.get_double("keyframe_inlier_fraction");
+  o.keyframe_min_inliers = static_cast<int>(p.get_int("keyframe_min_inliers"));
+  try {
+    StereoOdometry check(500.0, 500.0, 320.0, 240.0, 0.1, o);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("node '" + c.node_name + "': " + e.what());
+  }
+  return o;
+}
+
+// The camera a rectified pair's CameraInfos describe: the left P's intrinsics and the baseline
+// from the right P (P[3] = -fx * baseline), as stereo_image_proc reads them.
+struct StereoIntrinsics {
+  double fx, fy, cx, cy, baseline;
+  friend bool operator==(const StereoIntrinsics&, const StereoIntrinsics&) = default;
+};
+
+StereoIntrinsics stereo_intrinsics(const msgs::CameraInfo& left, const msgs::CameraInfo& right) {
+  if (left.p[0] == 0.0 || right.p[0] == 0.0)
+    throw std::invalid_argument("stereo_odometry: camera is not calibrated (P[0] = 0)");
+  const StereoIntrinsics s{left.p[0], left.p[5], left.p[2], left.p[6], -right.p[3] / right.p[0]};
+  if (!(s.baseline > 0.0)) {
+    throw std::invalid_argument(
+        "stereo_odometry: the right CameraInfo gives no baseline "
+        "(P[3] = -fx * baseline must be negative)");
+  }
+  return s;
+}
+
+// Stereo visual odometry, the SLAM front end (as Isaac ROS Visual SLAM's odometry output): the
+// left camera's pose in the odometry frame, which is the first frame's left camera, and its
+// velocity between the last two frames in the camera's own frame. The covariance is not
+// estimated (all zero). A new calibration starts a new odometry frame.
+class StereoOdometryNode final : public SyncedNode<4> {
+ public:
+  enum Input { kLeftImage, kLeftInfo, kRightImage, kRightInfo };
+
+  StereoOdometryNode(graph::Context& context, const KernelConfig& config)
+      : SyncedNode(context, config,
+                   {"left_image", "left_camera_info", "right_image", "right_camera_info"}),
+        options_(odometry_options(config)),
+        odom_frame_(config.parameters.get_string("odom_frame")) {
+    output_ = create_publisher<msgs::Odometry>(config.topic("odom"), config.qos);
+    subscribe<msgs::Image>(config, kLeftImage);
+    subscribe<msgs::CameraInfo>(config, kLeftInfo);
+    subscribe<msgs::Image>(config, kRightImage);
+    subscribe<msgs::CameraInfo>(config, kRightInfo);
+  }
+
+  std::map<std::string, uint64_t> counters() const override {
+    auto out = SyncedNode::counters();
+    out["keyframes"] = keyframes_;
+    out["tracking_lost"] = lost_;
+    return out;
+  }
+
+ private:
+  void process(const MessageSync<4>::Set& set) override {
+    const auto& left = input<msgs::Image>(set[kLeftImage]);
+    const auto& right = input<msgs::Image>(set[kRightImage]);
+    const StereoIntrinsics camera = stereo_intrinsics(input<msgs::CameraInfo>(set[kLeftInfo]),
+                                                      input<msgs::CameraInfo>(set[kRightInfo]));
+    plugin::trace_kernel_init(*this, kKernel, left.header.stamp.to_ns(), left, right);
+    perception::to_mono8(left, "stereo_odometry: left image", left_mono_);
+    perception::to_mono8(right, "stereo_odometry: right image", right_mono_);
+    if (!odometry_ || camera != camera_) {
+      odometry_ = std::make_unique<StereoOdometry>(camera.fx, camera.fy, camera.cx, camera.cy,
+                                                   camera.baseline, options_);
+      camera_ = camera;
+      have_previous_ = false;
+    }
+    const StereoOdometryResult r = odometry_->process(left_mono_, right_mono_);
+    keyframes_ += r.new_keyframe ? 1 : 0;
+    lost_ += r.tracking_lost ? 1 : 0;
+
+    auto out = std::make_shared<msgs::Odometry>();
+    out->header.stamp = left.header.stamp;
+    out->header.frame_id = odom_frame_;
+    out->child_frame_id = left.header.frame_id;
+    const Eigen::Vector3d t = r.pose.translation();
+    const Eigen::Quaterniond q(r.pose.rotation());
+    out->pose.pose.position = {t.x(), t.y(), t.z()};
+    out->pose.pose.orientation = {q.x(), q.y(), q.z(), q.w()};
+    const int64_t stamp_ns = left.header.stamp.to_ns();
+    if (have_previous_ && stamp_ns > previous_ns_) {
+      const double dt = static_cast<double>(stamp_ns - previous_ns_) * 1e-9;
+      const Eigen::Isometry3d step = previous_.inverse() * r.pose;
+      const Eigen::AngleAxisd turn(step.rotation());
+      const Eigen::Vector3d v = step.translation() / dt;
+      const Eigen::Vector3d w = turn.axis() * (turn.angle() / dt);
+      out->twist.twist.linear = {v.x(), v.y(), v.z()};
+      out->twist.twist.angular = {w.x(), w.y(), w.z()};
+    }
+    previous_ = r.pose;
+    previous_ns_ = stamp_ns;
+    have_previous_ = true;
+    plugin::trace_kernel_fini(*this, kKernel, *out);
+    output_->publish(std::shared_ptr<const msgs::Odometry>(std::move(out)));
+  }
+
+  static constexpr const char* kKernel = "localization/stereo_odometry";
+  StereoOdometryOptions options_;
+  std::string odom_frame_;
+  std::unique_ptr<StereoOdometry> odometry_;
+  StereoIntrinsics camera_{};
+  cv::Mat left_mono_, right_mono_;
+  Eigen::Isometry3d previous_ = Eigen::Isometry3d::Identity();
+  int64_t previous_ns_ = 0;
+  bool have_previous_ = false;
+  uint64_t keyframes_ = 0, lost_ = 0;
+  std::shared_ptr<graph::Publisher<msgs::Odometry>> output_;
+};
+
 }  // namespace
 
 void register_kernels(plugin::Registrar& registrar) {
@@ -303,6 +429,40 @@ void register_kernels(plugin::Registrar& registrar) {
             plugin::int_parameter("threads", map.threads, "threads the search is split over")}},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<MapLocalizationNode>(context, config);
+      });
+  const StereoOdometryOptions vo;
+  registrar.add_kernel(
+      {.name = "localization/stereo_odometry",
+       .description = "stereo visual odometry (FAST + ORB features, row matching, triangulation, "
+                      "frame to keyframe PnP RANSAC and refinement) on OpenCV",
+       .inputs = {{"left_image", "sensor_msgs/msg/Image"},
+                  {"left_camera_info", "sensor_msgs/msg/CameraInfo"},
+                  {"right_image", "sensor_msgs/msg/Image"},
+                  {"right_camera_info", "sensor_msgs/msg/CameraInfo"}},
+       .outputs = {{"odom", "nav_msgs/msg/Odometry"}},
+       .parameters = {plugin::int_parameter("max_features", vo.max_features,
+                                            "features kept per image after grid bucketing"),
+                      plugin::int_parameter("fast_threshold", vo.fast_threshold,
+                                            "FAST threshold (1..255)"),
+                      plugin::double_parameter("max_disparity", vo.max_disparity_px,
+                                               "largest stereo disparity searched, px"),
+                      plugin::double_parameter("ratio", vo.ratio, "descriptor ratio test (0..1]"),
+                      plugin::double_parameter("search_radius", vo.search_radius_px,
+                                               "tracking window around the predicted position, px"),
+                      plugin::double_parameter("ransac_reprojection", vo.ransac_reprojection_px,
+                                               "PnP RANSAC inlier threshold, px"),
+                      plugin::int_parameter("ransac_iterations", vo.ransac_iterations,
+                                            "PnP RANSAC iterations"),
+                      plugin::int_parameter("min_inliers", vo.min_inliers,
+                                            "fewer PnP inliers: tracking lost"),
+                      plugin::double_parameter(
+                          "keyframe_inlier_fraction", vo.keyframe_inlier_fraction,
+                          "new keyframe below this share of its points as inliers"),
+                      plugin::int_parameter("keyframe_min_inliers", vo.keyframe_min_inliers,
+                                            "new keyframe below this many inliers"),
+                      plugin::string_parameter("odom_frame", "odom", "the output's header frame")}},
+      [](graph::Context& context, const KernelConfig& config) {
+        return std::make_shared<StereoOdometryNode>(context, config);
       });
 }
 

@@ -162,6 +162,25 @@ cv::Mat image_view(const msgs::Image& image) {
   return make_view(image);
 }
 
+void to_mono8(const msgs::Image& image, const std::string& what, cv::Mat& mono) {
+  const cv::Mat view = image_view(image);
+  if (image.encoding == "mono8" || image.encoding == "8UC1") {
+    mono = view;
+  } else if (image.encoding == "rgb8") {
+    cv::cvtColor(view, mono, cv::COLOR_RGB2GRAY);
+  } else if (image.encoding == "bgr8") {
+    cv::cvtColor(view, mono, cv::COLOR_BGR2GRAY);
+  } else if (image.encoding == "rgba8") {
+    cv::cvtColor(view, mono, cv::COLOR_RGBA2GRAY);
+  } else if (image.encoding == "bgra8") {
+    cv::cvtColor(view, mono, cv::COLOR_BGRA2GRAY);
+  } else {
+    throw std::invalid_argument(what + " encoding '" + image.encoding +
+                                "' cannot be converted to mono8 (use mono8, rgb8, bgr8, rgba8 or "
+                                "bgra8)");
+  }
+}
+
 cv::Mat prepare_image(msgs::Image& image, const msgs::Header& header, std::string_view encoding,
                       int width, int height) {
   const int type = cv_type_from_encoding(encoding);

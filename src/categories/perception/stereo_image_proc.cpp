@@ -20,27 +20,6 @@ bool odd_in(int v, int lo, int hi) {
   return v % 2 == 1 && v >= lo && v <= hi;
 }
 
-// cv_bridge's conversion to mono8 for the 8-bit colour encodings.
-void to_mono8(const msgs::Image& image, const char* which, cv::Mat& mono) {
-  const cv::Mat view = image_view(image);
-  if (image.encoding == "mono8" || image.encoding == "8UC1") {
-    mono = view;
-  } else if (image.encoding == "rgb8") {
-    cv::cvtColor(view, mono, cv::COLOR_RGB2GRAY);
-  } else if (image.encoding == "bgr8") {
-    cv::cvtColor(view, mono, cv::COLOR_BGR2GRAY);
-  } else if (image.encoding == "rgba8") {
-    cv::cvtColor(view, mono, cv::COLOR_RGBA2GRAY);
-  } else if (image.encoding == "bgra8") {
-    cv::cvtColor(view, mono, cv::COLOR_BGRA2GRAY);
-  } else {
-    throw std::invalid_argument(std::string("disparity: ") + which + " image encoding '" +
-                                image.encoding +
-                                "' cannot be converted to mono8 (use mono8, rgb8, bgr8, rgba8 or "
-                                "bgra8)");
-  }
-}
-
 }  // namespace
 
 void validate(const StereoParams& p) {
@@ -104,8 +83,8 @@ void DisparityProcessor::compute(const msgs::Image& left, const msgs::Image& rig
   require(right_info.p[0] != 0.0, "disparity: right CameraInfo has no focal length (P[0] = 0)");
   require(left.width > 0 && left.height > 0, "disparity: empty images");
 
-  to_mono8(left, "left", left_mono_);
-  to_mono8(right, "right", right_mono_);
+  to_mono8(left, "disparity: left image", left_mono_);
+  to_mono8(right, "disparity: right image", right_mono_);
   matcher_->compute(left_mono_, right_mono_, disparity16_);
 
   const int width = static_cast<int>(left.width);
