@@ -187,6 +187,28 @@ TEST_F(ResultsCli, ImportFlagsThePublishedA1Rows) {
   EXPECT_EQ(count(bad.out, "\n"), 1u) << bad.out;  // one line
 }
 
+// RobotPerf's b1-b3 rows ("not valid at the moment, just a placeholder") import, and a report
+// draws them beside a local b3 run.
+TEST_F(ResultsCli, PublishedLocalizationRowsPlotBesideALocalRun) {
+  const fs::path published = kPublished.parent_path() / "localization";
+  auto o = robotperf_cli("results import " + published.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  for (const char* name : {"b1_visual_slam", "b2_map_localization", "b3_apriltag_detection"})
+    EXPECT_NE(o.out.find(name), std::string::npos) << o.out;
+  const fs::path out = dir_ / "b3";
+  o = robotperf_cli("run b3 --count 110 --rate 20 --quiet --output " + out.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  const fs::path html = dir_ / "b3.html";
+  o = robotperf_cli("report " + out.string() + " " +
+                    (published / "b3_apriltag_detection" / "benchmark.yaml").string() + " --html " +
+                    html.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  const std::string page = read_text(html);
+  EXPECT_NE(page.find("NVIDIA AGX Orin Dev. Kit (ROBOTCORE® Perception) (RobotPerf)"),
+            std::string::npos);
+  EXPECT_NE(page.find("b3-intra-"), std::string::npos);
+}
+
 TEST_F(ResultsCli, ReportNeedsAnOutputAndExistingInputs) {
   EXPECT_EQ(robotperf_cli("report " + (dir_ / "results").string()).exit_code, 2);
   const auto o = robotperf_cli("report " + (dir_ / "missing").string() + " --html x.html");
