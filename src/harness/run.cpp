@@ -549,6 +549,12 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
       monitor.keep_observed_truth(topic, *ts);
     }
   }
+  // Answers of nodes on another backend are compared with the cpu's afterwards: keep a sample
+  // where the functional check keeps none.
+  if (uses_other_backend(spec) && functional_ids.empty() && has_comparison(spec.output.type)) {
+    functional_ids = functional_sample_ids(r.count, r.warmup, 16);
+    monitor.keep_outputs(functional_ids);
+  }
   graph::Executor monitor_executor(1);
   monitor_executor.add_node(monitor.node());
 
@@ -828,6 +834,16 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   } else if (evaluate_outputs) {
     r.functional = evaluate_functional(*spec.functional, dataset, tally.kept, functional_ids.size(),
                                        tally.observed_truth);
+  }
+  r.backend_check = check_backend_answers(spec, dataset, tally.kept);
+  if (r.backend_check && !r.backend_check->passed) {
+    // A backend that computes another answer is functionally invalid, ground truth or not.
+    if (!r.functional) {
+      r.functional.emplace();
+      r.functional->evaluator = "backend check";
+    }
+    r.functional->valid = false;
+    for (const auto& why : r.backend_check->reasons) r.functional->reasons.push_back(why);
   }
   return r;
 }

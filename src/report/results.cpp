@@ -117,6 +117,13 @@ nlohmann::json functional_json(const std::optional<harness::FunctionalResult>& f
           {"reasons", f->reasons}};
 }
 
+nlohmann::json backend_check_json(const std::optional<harness::BackendCheck>& c) {
+  if (!c) return nullptr;
+  return {{"backend", c->backend},     {"output_type", c->output_type}, {"compared", c->compared},
+          {"criterion", c->criterion}, {"agreement", c->agreement},     {"required", c->required},
+          {"passed", c->passed},       {"reasons", c->reasons}};
+}
+
 nlohmann::json dataset_json(const harness::RunResult& r) {
   nlohmann::json d{{"name", r.dataset}, {"hash", r.dataset_hash}, {"frames", r.dataset_frames}};
   // Generated request streams: the seed and sizes that reproduce them.
@@ -333,6 +340,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"errors", r.errors},
       {"validity", {{"valid", r.valid}, {"reasons", r.invalid_reasons}}},
       {"functional", functional_json(r.functional)},
+      {"backend_check", backend_check_json(r.backend_check)},
   };
   if (!r.host_launchers.empty()) out["network"] = network_json(r);
   if (!r.launched.empty()) {
@@ -609,6 +617,14 @@ std::string summary_table(const harness::RunResult& r) {
     for (std::size_t i = 0; i < f.reasons.size(); ++i)
       out << (i == 0 ? " — " : "; ") << f.reasons[i];
     out << "\n";
+  }
+  if (r.backend_check) {
+    const auto& c = *r.backend_check;
+    std::snprintf(line, sizeof line, "%.3f %% in the worst output (>= %.1f %%)", 100 * c.agreement,
+                  100 * c.required);
+    out << "backend check (" << c.backend << " against cpu on the same inputs, " << c.compared
+        << " outputs): " << (c.compared > 0 ? c.criterion + " " + line : std::string("none"))
+        << (c.passed ? "  ok" : "  FAILED") << "\n";
   }
   for (const auto& e : r.errors) out << "error: " << e << "\n";
   out << "result: " << (r.valid ? "VALID" : "INVALID");

@@ -924,6 +924,10 @@ TEST_F(Cli, BackendRunsTheKernelsThatHaveItAndRecordsTheDevice) {
     EXPECT_GT(node["device"]["memory_bytes"].get<uint64_t>(), 0u) << node.dump();
   }
   EXPECT_EQ(j["validity"]["valid"], true) << o.out;
+  // The sampled answers agree with the cpu nodes' answers to the same frames.
+  EXPECT_EQ(j["backend_check"]["passed"], true) << j["backend_check"].dump();
+  EXPECT_EQ(j["backend_check"]["compared"], 16) << j["backend_check"].dump();
+  EXPECT_GE(j["backend_check"]["agreement"].get<double>(), 0.999) << j["backend_check"].dump();
 
   // Per-node children build their node on the backend too, and report their device.
   const fs::path per_node = out_ / "per-node";

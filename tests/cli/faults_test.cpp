@@ -179,6 +179,40 @@ TEST_F(Faults, APluginKernelThatThrowsEndsTheRunNamingIt) {
   }
 }
 
+// A kernel whose accelerated backend answers differently from its cpu backend: the run compares
+// a sample of its answers with the cpu's to the same inputs and is functionally invalid, though
+// the benchmark has no ground truth; the same kernel without drift passes the check.
+TEST_F(Faults, ABackendThatDriftsFromTheCpuIsFunctionallyInvalid) {
+  for (const std::string drift : {"0", "3"}) {
+    fs::remove_all(dir_ / "results");
+    const auto o = robotperf_cli(benchmarks("drift: " + drift, "faulty_plugin/relay") +
+                                 " run f1 --count 30 --backend opencl --output " +
+                                 (dir_ / "results").string());
+    const auto j = result();
+    ASSERT_TRUE(j.is_object()) << o.out;
+    const auto& check = j["backend_check"];
+    ASSERT_TRUE(check.is_object()) << j.dump();
+    EXPECT_EQ(check["backend"], "opencl");
+    EXPECT_EQ(check["compared"], 16);
+    if (drift == "0") {
+      EXPECT_EQ(o.exit_code, 0) << o.out;
+      EXPECT_EQ(check["passed"], true);
+      EXPECT_EQ(check["agreement"], 1.0);
+      EXPECT_NE(o.out.find("backend check (opencl against cpu on the same inputs, 16 outputs)"),
+                std::string::npos)
+          << o.out;
+    } else {
+      EXPECT_EQ(o.exit_code, 3) << o.out;
+      EXPECT_EQ(check["passed"], false);
+      EXPECT_EQ(check["agreement"], 0.0);
+      EXPECT_EQ(j["functional"]["valid"], false);
+      EXPECT_NE(o.out.find("functional result: INVALID — opencl drifts from cpu"),
+                std::string::npos)
+          << o.out;
+    }
+  }
+}
+
 TEST_F(Faults, APluginKernelThatRefusesToStartIsOneLine) {
   for (const std::string layout : {"single", "per-node"}) {
     fs::remove_all(dir_ / "results");

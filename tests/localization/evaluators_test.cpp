@@ -6,6 +6,7 @@
 
 #include "robotperf/localization/scan_matcher.hpp"
 #include "robotperf/localization/stereo_odometry.hpp"
+#include "robotperf/msgs/eigen_geometry.hpp"
 #include "robotperf/msgs/geometry_msgs.hpp"
 #include "robotperf/msgs/nav_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
@@ -103,10 +104,7 @@ TEST(LocalizationEvaluators, VisualOdometryPassesAndAWrongFocalLengthFails) {
       const Eigen::Isometry3d pose = odometry.process(left, right).pose;
       msgs::Odometry out;
       out.header.frame_id = "odom";
-      const Eigen::Quaterniond q(pose.rotation());
-      out.pose.pose.position = {pose.translation().x(), pose.translation().y(),
-                                pose.translation().z()};
-      out.pose.pose.orientation = {q.x(), q.y(), q.z(), q.w()};
+      out.pose.pose = msgs::pose_msg_of(pose);
       e->add(&out, k);
     }
     EXPECT_TRUE(e->problems().empty());

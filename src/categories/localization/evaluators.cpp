@@ -9,6 +9,7 @@
 #include "quaternion.hpp"
 #include "robotperf/localization/trajectory_metrics.hpp"
 #include "robotperf/msgs/apriltag_msgs.hpp"
+#include "robotperf/msgs/eigen_geometry.hpp"
 #include "robotperf/msgs/geometry_msgs.hpp"
 #include "robotperf/msgs/nav_msgs.hpp"
 
@@ -201,16 +202,6 @@ class MapLocalizationEvaluator final : public FunctionalEvaluator {
   std::size_t successes_ = 0, covered_ = 0;
 };
 
-Eigen::Isometry3d isometry_of(const msgs::Pose& p) {
-  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
-  out.linear() =
-      Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)
-          .normalized()
-          .toRotationMatrix();
-  out.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
-  return out;
-}
-
 // Odometry against the true trajectory, as TUM and KITTI evaluate it: the absolute trajectory
 // error after a rigid alignment, and the drift over path segments of the given lengths. The
 // outputs are taken in the order they arrive, which is the order of the frames.
@@ -227,8 +218,8 @@ class VisualOdometryEvaluator final : public FunctionalEvaluator {
     if (out.header.frame_id != truth.header.frame_id)
       problem("odometry frame is '" + out.header.frame_id + "', expected '" +
               truth.header.frame_id + "'");
-    estimate_.push_back(isometry_of(out.pose.pose));
-    truth_poses_.push_back(isometry_of(truth.pose));
+    estimate_.push_back(msgs::isometry_of(out.pose.pose));
+    truth_poses_.push_back(msgs::isometry_of(truth.pose));
   }
 
   std::map<std::string, double> metrics() const override {

@@ -8,6 +8,7 @@
 #include "robotperf/localization/scan_matcher.hpp"
 #include "robotperf/localization/stereo_odometry.hpp"
 #include "robotperf/msgs/apriltag_msgs.hpp"
+#include "robotperf/msgs/eigen_geometry.hpp"
 #include "robotperf/msgs/geometry_msgs.hpp"
 #include "robotperf/msgs/nav_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
@@ -19,15 +20,23 @@ namespace {
 using plugin::KernelConfig;
 using plugin::MessageSync;
 
-// Inputs paired by exact stamps (as the ROS nodes' message_filters do); inputs the kernel rejects
-// are skipped and counted, as the ROS nodes log and skip them: the frame shows as lost at the
-// Monitor.
+// Inputs the kernel rejected (a bad image, a map it cannot use): skipped and counted, as the ROS
+// nodes log and skip them; the frame shows as lost at the Monitor. The first one is said.
+struct RejectedInputs {
+  uint64_t count = 0;
+  void note(const std::string& node, const std::invalid_argument& e) {
+    if (count++ == 0)
+      std::cerr << "robotperf node " << node << ": skipping input: " << e.what() << "\n";
+  }
+};
+
+// Inputs paired by exact stamps (as the ROS nodes' message_filters do).
 template <std::size_t N>
 class SyncedNode : public graph::Node, public plugin::NodeCounters {
  public:
   std::map<std::string, uint64_t> counters() const override {
     std::map<std::string, uint64_t> out{{"sets_processed", sync_.emitted()},
-                                        {"rejected_sets", rejected_}};
+                                        {"rejected_sets", rejected_.count}};
     for (std::size_t i = 0; i < N; ++i) out["unpaired_" + port_names_[i]] = sync_.dropped()[i];
     return out;
   }
@@ -55,14 +64,13 @@ class SyncedNode : public graph::Node, public plugin::NodeCounters {
     try {
       process(set);
     } catch (const std::invalid_argument& e) {
-      if (rejected_++ == 0)
-        std::cerr << "robotperf node " << name() << ": skipping input: " << e.what() << "\n";
+      rejected_.note(name(), e);
     }
   }
 
   std::array<std::string, N> port_names_;
   MessageSync<N> sync_;
-  uint64_t rejected_ = 0;
+  RejectedInputs rejected_;
   std::vector<std::shared_ptr<graph::GenericSubscription>> subscriptions_;
 };
 
@@ -160,7 +168,7 @@ class MapLocalizationNode final : public graph::Node, public plugin::NodeCounter
   std::map<std::string, uint64_t> counters() const override {
     return {{"maps_built", maps_built_},
             {"scans_without_map", scans_without_map_},
-            {"rejected_inputs", rejected_},
+            {"rejected_inputs", rejected_.count},
             {"not_found", not_found_}};
   }
 
@@ -196,7 +204,7 @@ class MapLocalizationNode final : public graph::Node, public plugin::NodeCounter
       map_frame_ = grid.header.frame_id;
       ++maps_built_;
     } catch (const std::invalid_argument& e) {
-      reject(e);
+      rejected_.note(name(), e);
     }
   }
 
@@ -230,13 +238,8 @@ class MapLocalizationNode final : public graph::Node, public plugin::NodeCounter
       plugin::trace_kernel_fini(*this, kKernel, *out);
       output_->publish(std::shared_ptr<const msgs::PoseWithCovarianceStamped>(std::move(out)));
     } catch (const std::invalid_argument& e) {
-      reject(e);
+      rejected_.note(name(), e);
     }
-  }
-
-  void reject(const std::invalid_argument& e) {
-    if (rejected_++ == 0)
-      std::cerr << "robotperf node " << name() << ": skipping input: " << e.what() << "\n";
   }
 
   static constexpr const char* kKernel = "localization/map_localization";
@@ -245,7 +248,8 @@ class MapLocalizationNode final : public graph::Node, public plugin::NodeCounter
   msgs::MapMetaData map_info_;
   std::vector<int8_t> map_data_;
   std::string map_frame_;
-  uint64_t maps_built_ = 0, scans_without_map_ = 0, rejected_ = 0, not_found_ = 0;
+  RejectedInputs rejected_;
+  uint64_t maps_built_ = 0, scans_without_map_ = 0, not_found_ = 0;
   std::shared_ptr<graph::Publisher<msgs::PoseWithCovarianceStamped>> output_;
   std::shared_ptr<graph::GenericSubscription> map_sub_, scan_sub_;
 };
@@ -340,10 +344,7 @@ class StereoOdometryNode final : public SyncedNode<4> {
     out->header.stamp = left.header.stamp;
     out->header.frame_id = odom_frame_;
     out->child_frame_id = left.header.frame_id;
-    const Eigen::Vector3d t = r.pose.translation();
-    const Eigen::Quaterniond q(r.pose.rotation());
-    out->pose.pose.position = {t.x(), t.y(), t.z()};
-    out->pose.pose.orientation = {q.x(), q.y(), q.z(), q.w()};
+    out->pose.pose = msgs::pose_msg_of(r.pose);
     const int64_t stamp_ns = left.header.stamp.to_ns();
     if (have_previous_ && stamp_ns > previous_ns_) {
       const double dt = static_cast<double>(stamp_ns - previous_ns_) * 1e-9;

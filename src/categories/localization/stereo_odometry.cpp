@@ -33,6 +33,28 @@ int hamming(const uint8_t* a, const uint8_t* b) {
   return distance;
 }
 
+// The two closest candidates of a descriptor by Hamming distance, and whether the closest is a
+// match: near enough, and clearly nearer than the second (the ratio test).
+struct BestMatch {
+  int best = std::numeric_limits<int>::max();
+  int second = std::numeric_limits<int>::max();
+  int index = -1;
+
+  void offer(int distance, int candidate) {
+    if (distance < best) {
+      second = best;
+      best = distance;
+      index = candidate;
+    } else if (distance < second) {
+      second = distance;
+    }
+  }
+  bool accepted(const StereoOdometryOptions& options) const {
+    return index >= 0 && best <= options.max_descriptor_distance &&
+           (second == std::numeric_limits<int>::max() || best < options.ratio * second);
+  }
+};
+
 struct Features {
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;  // CV_8U, one row of kDescriptorBytes per keypoint
@@ -260,9 +282,7 @@ struct StereoOdometry::State {
     for (std::size_t i = 0; i < left.keypoints.size(); ++i) {
       const cv::Point2f p = left.keypoints[i].pt;
       const uint8_t* d = left.descriptors.ptr<uint8_t>(static_cast<int>(i));
-      int best = std::numeric_limits<int>::max();
-      int second = std::numeric_limits<int>::max();
-      int best_index = -1;
+      BestMatch match;
       const int v = cvRound(p.y);
       for (int r = std::max(0, v - row_reach); r <= std::min(height - 1, v + row_reach); ++r) {
         for (int k = row_start[static_cast<std::size_t>(r)];
@@ -274,24 +294,15 @@ struct StereoOdometry::State {
               std::abs(p.y - q.y) > options.max_row_offset_px) {
             continue;
           }
-          const int distance = hamming(d, right.descriptors.ptr<uint8_t>(j));
-          if (distance < best) {
-            second = best;
-            best = distance;
-            best_index = j;
-          } else if (distance < second) {
-            second = distance;
-          }
+          match.offer(hamming(d, right.descriptors.ptr<uint8_t>(j)), j);
         }
       }
-      if (best_index < 0 || best > options.max_descriptor_distance ||
-          (second != std::numeric_limits<int>::max() && best >= options.ratio * second)) {
-        continue;
-      }
-      choice[i] = best_index;
-      if (best < owner_distance[static_cast<std::size_t>(best_index)]) {
-        owner_distance[static_cast<std::size_t>(best_index)] = best;
-        owner[static_cast<std::size_t>(best_index)] = static_cast<int>(i);
+      if (!match.accepted(options)) continue;
+      choice[i] = match.index;
+      const auto j = static_cast<std::size_t>(match.index);
+      if (match.best < owner_distance[j]) {
+        owner_distance[j] = match.best;
+        owner[j] = static_cast<int>(i);
       }
     }
     for (std::size_t i = 0; i < left.keypoints.size(); ++i) {
@@ -372,30 +383,19 @@ struct StereoOdometry::State {
         continue;
       }
       const uint8_t* d = keyframe.descriptors.ptr<uint8_t>(static_cast<int>(i));
-      int best = std::numeric_limits<int>::max();
-      int second = std::numeric_limits<int>::max();
-      int best_index = -1;
+      BestMatch match;
       grid.for_each_near(projected, radius, [&](int j) {
         const cv::Point2f q = current.keypoints[static_cast<std::size_t>(j)].pt;
         const double du = q.x - projected.x;
         const double dv = q.y - projected.y;
         if (du * du + dv * dv > radius2) return;
-        const int distance = hamming(d, current.descriptors.ptr<uint8_t>(j));
-        if (distance < best) {
-          second = best;
-          best = distance;
-          best_index = j;
-        } else if (distance < second) {
-          second = distance;
-        }
+        match.offer(hamming(d, current.descriptors.ptr<uint8_t>(j)), j);
       });
-      if (best_index < 0 || best > options.max_descriptor_distance ||
-          (second != std::numeric_limits<int>::max() && best >= options.ratio * second)) {
-        continue;
-      }
-      if (best < owner_distance[static_cast<std::size_t>(best_index)]) {
-        owner_distance[static_cast<std::size_t>(best_index)] = best;
-        owner[static_cast<std::size_t>(best_index)] = static_cast<int>(i);
+      if (!match.accepted(options)) continue;
+      const auto j = static_cast<std::size_t>(match.index);
+      if (match.best < owner_distance[j]) {
+        owner_distance[j] = match.best;
+        owner[j] = static_cast<int>(i);
       }
     }
     for (std::size_t j = 0; j < owner.size(); ++j) {

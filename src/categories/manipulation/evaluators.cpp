@@ -10,7 +10,7 @@
 #include "robotperf/manipulation/collision.hpp"
 #include "robotperf/manipulation/kinematics.hpp"
 #include "robotperf/manipulation/planning.hpp"
-#include "robotperf/manipulation/pose_msgs.hpp"
+#include "robotperf/msgs/eigen_geometry.hpp"
 #include "robotperf/msgs/robotperf_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
 
@@ -47,8 +47,7 @@ class ForwardKinematicsEvaluator final : public FunctionalEvaluator {
       problem("pose frame is '" + out.header.frame_id + "', expected '" + truth.header.frame_id +
               "'");
     double dp, dr;
-    manipulation::pose_error(manipulation::isometry_of(out.pose),
-                             manipulation::isometry_of(truth.pose), dp, dr);
+    manipulation::pose_error(msgs::isometry_of(out.pose), msgs::isometry_of(truth.pose), dp, dr);
     position_ = std::max(position_, dp);
     orientation_ = std::max(orientation_, dr);
     ++n_;
@@ -82,7 +81,7 @@ class InverseKinematicsEvaluator final : public FunctionalEvaluator {
     }
     if (!m.within_limits(q.data(), 1e-9)) problem("a solution is outside the joint limits");
     double dp, dr;
-    manipulation::pose_error(m.tip_pose(q.data()), manipulation::isometry_of(target.pose), dp, dr);
+    manipulation::pose_error(m.tip_pose(q.data()), msgs::isometry_of(target.pose), dp, dr);
     ++solved_;
     position_ = std::max(position_, dp);
     orientation_ = std::max(orientation_, dr);

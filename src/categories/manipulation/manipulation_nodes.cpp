@@ -8,7 +8,7 @@
 #include "robotperf/manipulation/collision.hpp"
 #include "robotperf/manipulation/kinematics.hpp"
 #include "robotperf/manipulation/planning.hpp"
-#include "robotperf/manipulation/pose_msgs.hpp"
+#include "robotperf/msgs/eigen_geometry.hpp"
 #include "robotperf/msgs/geometry_msgs.hpp"
 #include "robotperf/msgs/robotperf_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
@@ -98,7 +98,7 @@ class ForwardKinematicsNode final : public RequestNode<msgs::JointState, msgs::P
     const auto q = model_positions(m, request.name, request.position);
     const Eigen::Isometry3d t = fk_.tip_pose(q.data());
     answer.header.frame_id = m.base_link();
-    answer.pose = manipulation::pose_msg_of(t);
+    answer.pose = msgs::pose_msg_of(t);
   }
   manipulation::ForwardKinematics fk_;
 };
@@ -132,7 +132,7 @@ class InverseKinematicsNode final : public RequestNode<msgs::PoseStamped, msgs::
     const Eigen::Quaterniond r(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
     if (!(std::abs(r.norm() - 1.0) < 1e-3))
       throw std::invalid_argument("target orientation is not a unit quaternion");
-    const Eigen::Isometry3d target = manipulation::isometry_of(p);
+    const Eigen::Isometry3d target = msgs::isometry_of(p);
     const manipulation::IkResult result = ik_.solve(target, seed_state_);
     answer.name = RobotModel::xarm6().joint_names();
     if (result.success) answer.position = result.q;

@@ -6,7 +6,7 @@
 
 #include "robotperf/manipulation/collision.hpp"
 #include "robotperf/manipulation/planning.hpp"
-#include "robotperf/manipulation/pose_msgs.hpp"
+#include "robotperf/msgs/eigen_geometry.hpp"
 
 namespace robotperf::manipulation {
 namespace {
@@ -49,7 +49,7 @@ KinematicsRequests generate_kinematics_requests(const ManipulationWorkload& w) {
     const Eigen::Isometry3d t = m.tip_pose(q.data());
     msgs::PoseStamped p;
     p.header.frame_id = m.base_link();
-    p.pose = manipulation::pose_msg_of(t);
+    p.pose = msgs::pose_msg_of(t);
     out.poses.push_back(p);
     out.states.push_back(joint_state(m, std::move(q)));
   }

@@ -14,6 +14,7 @@
 
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
+#include "robotperf/harness/backend_check.hpp"
 #include "robotperf/harness/functional.hpp"
 #include "robotperf/harness/network_link.hpp"
 #include "robotperf/harness/scheduling.hpp"
@@ -296,6 +297,9 @@ struct RunResult {
   // Accuracy of the outputs against the dataset's ground truth; absent when the benchmark
   // names no functional evaluator.
   std::optional<FunctionalResult> functional;
+  // Nodes on another backend than cpu: their sampled answers against the cpu's to the same inputs
+  // (harness/backend_check.hpp); a drift makes the result functionally invalid.
+  std::optional<BackendCheck> backend_check;
   // Control kernels: their loops' timing (empty for other benchmarks).
   std::vector<ControlLoopResult> control_loops;
   std::optional<double> update_rate_hz;  // the loop rate given with --update-rate

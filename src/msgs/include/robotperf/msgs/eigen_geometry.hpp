@@ -1,15 +1,16 @@
-// geometry_msgs/Pose <-> Eigen rigid transform, for the nodes, datasets and checks that turn
-// requests and answers into the model's poses.
+// geometry_msgs/Pose <-> Eigen rigid transform, for the kernels, datasets and checks that turn
+// messages into poses they compute with. Header-only: who includes it needs Eigen (the msgs
+// library itself does not).
 #pragma once
 
 #include <Eigen/Geometry>
 
 #include "robotperf/msgs/geometry_msgs.hpp"
 
-namespace robotperf::manipulation {
+namespace robotperf::msgs {
 
 // The quaternion is normalised: a message rounds it, the model needs a rotation.
-inline Eigen::Isometry3d isometry_of(const msgs::Pose& p) {
+inline Eigen::Isometry3d isometry_of(const Pose& p) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.linear() =
       Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)
@@ -19,12 +20,12 @@ inline Eigen::Isometry3d isometry_of(const msgs::Pose& p) {
   return t;
 }
 
-inline msgs::Pose pose_msg_of(const Eigen::Isometry3d& t) {
+inline Pose pose_msg_of(const Eigen::Isometry3d& t) {
   const Eigen::Quaterniond r(t.linear());
-  msgs::Pose p;
+  Pose p;
   p.position = {t.translation().x(), t.translation().y(), t.translation().z()};
   p.orientation = {r.x(), r.y(), r.z(), r.w()};
   return p;
 }
 
-}  // namespace robotperf::manipulation
+}  // namespace robotperf::msgs

@@ -1,0 +1,253 @@
+#include "robotperf/harness/backend_check.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstring>
+#include <mutex>
+
+#include "robotperf/graph/executor.hpp"
+#include "robotperf/graph/node.hpp"
+#include "robotperf/msgs/known_types.hpp"
+#include "robotperf/msgs/serialized_message.hpp"
+
+namespace robotperf::harness {
+namespace {
+
+// |a - b| <= tolerance, NaN agreeing only with NaN.
+template <class T>
+bool close(T a, T b, double tolerance) {
+  if constexpr (std::is_floating_point_v<T>) {
+    if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
+  }
+  return std::abs(static_cast<double>(a) - static_cast<double>(b)) <= tolerance;
+}
+
+template <class T>
+double share_close(const uint8_t* a, const uint8_t* b, std::size_t bytes, double tolerance) {
+  const std::size_t n = bytes / sizeof(T);
+  if (n == 0) return 1.0;
+  std::size_t within = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    T x, y;
+    std::memcpy(&x, a + i * sizeof(T), sizeof(T));
+    std::memcpy(&y, b + i * sizeof(T), sizeof(T));
+    within += close(x, y, tolerance) ? 1 : 0;
+  }
+  return static_cast<double>(within) / static_cast<double>(n);
+}
+
+// The element type of an encoding, by its depth: 32F, 64F, 16-bit or else 8-bit channels.
+double image_share(const msgs::Image& a, const msgs::Image& b) {
+  if (a.width != b.width || a.height != b.height || a.encoding != b.encoding || a.step != b.step ||
+      a.data.size() != b.data.size()) {
+    return 0.0;
+  }
+  const std::string& e = a.encoding;
+  if (e.find("32F") != std::string::npos)
+    return share_close<float>(a.data.data(), b.data.data(), a.data.size(), 1.0);
+  if (e.find("64F") != std::string::npos)
+    return share_close<double>(a.data.data(), b.data.data(), a.data.size(), 1.0);
+  if (e.find("16") != std::string::npos)
+    return share_close<uint16_t>(a.data.data(), b.data.data(), a.data.size(), 1.0);
+  return share_close<uint8_t>(a.data.data(), b.data.data(), a.data.size(), 1.0);
+}
+
+double cloud_share(const msgs::PointCloud2& a, const msgs::PointCloud2& b) {
+  if (a.width != b.width || a.height != b.height || a.fields != b.fields ||
+      a.point_step != b.point_step || a.data.size() != b.data.size() || a.point_step == 0) {
+    return 0.0;
+  }
+  const std::size_t points = a.data.size() / a.point_step;
+  if (points == 0) return 1.0;
+  std::size_t agree = 0;
+  for (std::size_t p = 0; p < points; ++p) {
+    const uint8_t* x = a.data.data() + p * a.point_step;
+    const uint8_t* y = b.data.data() + p * b.point_step;
+    bool same = true;
+    for (const auto& f : a.fields) {
+      const std::size_t size = f.datatype == msgs::PointField::kFloat64  ? 8
+                               : f.datatype <= msgs::PointField::kUint8  ? 1
+                               : f.datatype <= msgs::PointField::kUint16 ? 2
+                                                                         : 4;
+      for (uint32_t c = 0; c < std::max<uint32_t>(f.count, 1) && same; ++c) {
+        const std::size_t at = f.offset + c * size;
+        if (at + size > a.point_step) {
+          same = false;
+        } else if (f.datatype == msgs::PointField::kFloat32) {
+          same = share_close<float>(x + at, y + at, size, 1e-6) == 1.0;
+        } else if (f.datatype == msgs::PointField::kFloat64) {
+          same = share_close<double>(x + at, y + at, size, 1e-6) == 1.0;
+        } else {
+          same = std::memcmp(x + at, y + at, size) == 0;
+        }
+      }
+    }
+    agree += same ? 1 : 0;
+  }
+  return static_cast<double>(agree) / static_cast<double>(points);
+}
+
+// Of the pixels where the cpu found a disparity, the share the other backend has within 1 px.
+double disparity_share(const msgs::DisparityImage& accelerated, const msgs::DisparityImage& cpu) {
+  const msgs::Image& a = accelerated.image;
+  const msgs::Image& c = cpu.image;
+  if (a.width != c.width || a.height != c.height || a.encoding != "32FC1" ||
+      c.encoding != "32FC1" || a.data.size() != c.data.size()) {
+    return 0.0;
+  }
+  const std::size_t n = c.data.size() / sizeof(float);
+  std::size_t valid = 0, within = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    float x, y;
+    std::memcpy(&x, a.data.data() + i * sizeof(float), sizeof(float));
+    std::memcpy(&y, c.data.data() + i * sizeof(float), sizeof(float));
+    if (!(y >= cpu.min_disparity)) continue;
+    ++valid;
+    within += std::abs(x - y) <= 1.0f ? 1 : 0;
+  }
+  return valid == 0 ? 1.0 : static_cast<double>(within) / static_cast<double>(valid);
+}
+
+// The n-th frame's stamp in the reference: increasing, as the nodes' pairing wants.
+int64_t stamp_of(std::size_t n) {
+  return 1'000'000'000 + static_cast<int64_t>(n) * 1'000'000;
+}
+
+// The frame's message of a stream as the typed object the intra transport hands over (a bag's
+// messages are CDR until decoded).
+rmw::MessagePtr typed_copy(const DatasetStream& stream, const msgs::TypeSupport& typed,
+                           std::size_t frame, int64_t stamp_ns) {
+  const void* original = stream.messages[frame].get();
+  if (!msgs::is_serialized_type_support(*stream.type))
+    return stream.type->copy_with_stamp_ns(original, stamp_ns);
+  std::shared_ptr<void> decoded = typed.create();
+  typed.deserialize(static_cast<const msgs::SerializedMessage*>(original)->cdr, decoded.get());
+  return typed.copy_with_stamp_ns(decoded.get(), stamp_ns);
+}
+
+const msgs::TypeSupport& known_type(const std::string& ros_type) {
+  const msgs::TypeSupport* ts = nullptr;
+  msgs::with_message_type(ros_type, [&]<class T>() { ts = &msgs::type_support<T>(); });
+  if (ts == nullptr)
+    throw std::invalid_argument("backend check: type " + ros_type + " is not compiled in");
+  return *ts;
+}
+
+}  // namespace
+
+std::optional<Agreement> compare_answers(const std::string& ros_type, const void* accelerated,
+                                         const void* cpu) {
+  if (ros_type == msgs::MessageTraits<msgs::Image>::ros_type) {
+    return Agreement{image_share(*static_cast<const msgs::Image*>(accelerated),
+                                 *static_cast<const msgs::Image*>(cpu)),
+                     0.999, "|difference| <= 1 on pixel channels"};
+  }
+  if (ros_type == msgs::MessageTraits<msgs::PointCloud2>::ros_type) {
+    return Agreement{cloud_share(*static_cast<const msgs::PointCloud2*>(accelerated),
+                                 *static_cast<const msgs::PointCloud2*>(cpu)),
+                     1.0, "points with every float field within 1e-6, the rest identical"};
+  }
+  if (ros_type == msgs::MessageTraits<msgs::DisparityImage>::ros_type) {
+    return Agreement{disparity_share(*static_cast<const msgs::DisparityImage*>(accelerated),
+                                     *static_cast<const msgs::DisparityImage*>(cpu)),
+                     0.95, "pixels with a cpu disparity that are within 1 px of it"};
+  }
+  return std::nullopt;
+}
+
+bool has_comparison(const std::string& ros_type) {
+  return ros_type == msgs::MessageTraits<msgs::Image>::ros_type ||
+         ros_type == msgs::MessageTraits<msgs::PointCloud2>::ros_type ||
+         ros_type == msgs::MessageTraits<msgs::DisparityImage>::ros_type;
+}
+
+bool uses_other_backend(const BenchmarkSpec& spec) {
+  return std::ranges::any_of(spec.nodes, [](const NodeSpec& n) { return n.backend != "cpu"; });
+}
+
+std::optional<BackendCheck> check_backend_answers(
+    const BenchmarkSpec& spec, const Dataset& dataset,
+    const std::vector<std::pair<uint64_t, rmw::MessagePtr>>& kept) {
+  if (!uses_other_backend(spec) || kept.empty() || spec.inputs.empty() ||
+      !has_comparison(spec.output.type)) {
+    return std::nullopt;
+  }
+  BackendCheck check;
+  for (const auto& n : spec.nodes) {
+    if (n.backend != "cpu" && check.backend.find(n.backend) == std::string::npos)
+      check.backend += (check.backend.empty() ? "" : ", ") + n.backend;
+  }
+  check.output_type = spec.output.type;
+
+  graph::Context context(rmw::make_transport("intra"));
+  graph::Node driver(context, "backend_check_driver");
+  struct Input {
+    std::shared_ptr<graph::GenericPublisher> publisher;
+    const DatasetStream* stream;
+    const msgs::TypeSupport* type;
+  };
+  std::vector<Input> inputs;
+  for (const auto& in : spec.inputs) {
+    const DatasetStream& stream = dataset.stream(in.stream);
+    const msgs::TypeSupport& type = known_type(in.type);
+    inputs.push_back({driver.create_generic_publisher(in.topic, type, in.qos), &stream, &type});
+  }
+  std::mutex mutex;
+  std::condition_variable answered;
+  rmw::MessagePtr answer;
+  auto sink = std::make_shared<graph::Node>(context, "backend_check_sink");
+  sink->create_generic_subscription(spec.output.topic, known_type(spec.output.type),
+                                    spec.output.qos,
+                                    [&](rmw::MessagePtr m, const graph::MessageInfo&) {
+                                      {
+                                        std::lock_guard lock(mutex);
+                                        answer = std::move(m);
+                                      }
+                                      answered.notify_all();
+                                    });
+  graph::Executor executor(spec.executor_threads);
+  for (NodeSpec n : spec.nodes) {
+    n.backend = "cpu";
+    executor.add_node(make_kernel_node(n, context, spec.workload));
+  }
+  executor.add_node(sink);
+  executor.start();
+
+  auto in_order = kept;
+  std::ranges::sort(in_order, {}, &std::pair<uint64_t, rmw::MessagePtr>::first);
+  check.agreement = 1.0;
+  std::string criterion;
+  for (std::size_t n = 0; n < in_order.size(); ++n) {
+    const auto& [id, output] = in_order[n];
+    std::unique_lock lock(mutex);
+    answer.reset();
+    lock.unlock();
+    for (const Input& in : inputs) {
+      const auto frame = static_cast<std::size_t>(id % in.stream->messages.size());
+      in.publisher->publish(typed_copy(*in.stream, *in.type, frame, stamp_of(n)));
+    }
+    lock.lock();
+    if (!answered.wait_for(lock, std::chrono::seconds(10), [&] { return answer != nullptr; })) {
+      check.reasons.push_back("the nodes on cpu gave no answer to message " + std::to_string(id) +
+                              " within 10 s");
+      break;
+    }
+    const auto a = compare_answers(spec.output.type, output.get(), answer.get());
+    ++check.compared;
+    check.agreement = std::min(check.agreement, a->share);
+    check.required = a->required;
+    check.criterion = a->criterion;
+  }
+  executor.stop();
+  check.passed = check.reasons.empty() && check.compared > 0 && check.agreement >= check.required;
+  if (check.reasons.empty() && !check.passed) {
+    check.reasons.push_back(check.backend + " drifts from cpu: " + check.criterion + " " +
+                            std::to_string(100.0 * check.agreement) + " % in the worst output, " +
+                            std::to_string(100.0 * check.required) + " % required");
+  }
+  return check;
+}
+
+}  // namespace robotperf::harness

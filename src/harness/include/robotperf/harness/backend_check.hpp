@@ -1,0 +1,58 @@
+#pragma once
+
+// Answers checked across backends (DESIGN.md section 6): a run whose nodes computed on another
+// backend than the host CPU has a sample of its outputs compared with what the same nodes on
+// `cpu` answer to the same inputs. An accelerator that computes a slightly different answer is
+// caught here whether or not the benchmark has ground truth (a bag has none).
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "robotperf/harness/benchmark_spec.hpp"
+#include "robotperf/harness/dataset.hpp"
+#include "robotperf/rmw/transport.hpp"
+
+namespace robotperf::harness {
+
+struct BackendCheck {
+  std::string backend;       // the nodes' other backend(s), e.g. "opencl"
+  std::string output_type;   // what was compared
+  std::size_t compared = 0;  // outputs compared with the cpu answer to the same inputs
+  double agreement = 0;      // the worst output's share of elements within the tolerance
+  double required = 0;       // the least share that passes
+  std::string criterion;     // "|difference| <= 1 on pixel channels"
+  bool passed = false;
+  std::vector<std::string> reasons;  // why not, one line each
+};
+
+// How two answers of one output type compare: the share of their elements within the type's
+// tolerance, and the least share that passes. Images: |difference| <= 1 per channel on >= 99.9 %
+// (the two backends may round a bilinear tap differently); point clouds: every point's float
+// fields within 1e-6 (m) or both NaN, other fields identical; disparity images: >= 95 % of the
+// pixels with a cpu disparity within 1 px. An answer of another size, encoding or layout agrees
+// nowhere. nullopt for a type without a comparison.
+struct Agreement {
+  double share = 0;
+  double required = 0;
+  std::string criterion;
+};
+std::optional<Agreement> compare_answers(const std::string& ros_type, const void* accelerated,
+                                         const void* cpu);
+bool has_comparison(const std::string& ros_type);
+
+// Whether `spec` runs a node on another backend than cpu.
+bool uses_other_backend(const BenchmarkSpec& spec);
+
+// Feeds the frames of `kept` (message ID, output) through the benchmark's own nodes built on
+// `cpu`, on an intra transport of their own, one frame at a time in ID order, and compares each
+// answer with the kept output. nullopt when every node ran on cpu, nothing was kept or the output
+// type has no comparison.
+std::optional<BackendCheck> check_backend_answers(
+    const BenchmarkSpec& spec, const Dataset& dataset,
+    const std::vector<std::pair<uint64_t, rmw::MessagePtr>>& kept);
+
+}  // namespace robotperf::harness

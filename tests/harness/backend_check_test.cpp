@@ -1,0 +1,101 @@
+// How answers of two backends are compared (the tolerances of DESIGN.md section 6).
+#include "robotperf/harness/backend_check.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/msgs/stereo_msgs.hpp"
+
+namespace robotperf::harness {
+namespace {
+
+msgs::Image rgb(uint8_t value) {
+  msgs::Image i;
+  i.width = 100;
+  i.height = 10;
+  i.encoding = "rgb8";
+  i.step = 300;
+  i.data.assign(3000, value);
+  return i;
+}
+
+double share(const std::string& type, const void* a, const void* b) {
+  const auto r = compare_answers(type, a, b);
+  EXPECT_TRUE(r.has_value());
+  return r ? r->share : -1.0;
+}
+
+TEST(BackendCheck, ImagesAgreeWithinOneGreyLevelPerChannel) {
+  const std::string type = "sensor_msgs/msg/Image";
+  const msgs::Image cpu = rgb(100);
+  msgs::Image other = rgb(101);  // rounding one way everywhere: within the tolerance
+  EXPECT_EQ(share(type, &other, &cpu), 1.0);
+  other.data[7] = 103;  // one channel of 3000 two levels off
+  EXPECT_DOUBLE_EQ(share(type, &other, &cpu), 2999.0 / 3000.0);
+  EXPECT_GE(2999.0 / 3000.0, compare_answers(type, &other, &cpu)->required);
+  other.data[8] = other.data[9] = other.data[10] = 0;  // four of 3000: 99.87 %, below 99.9 %
+  EXPECT_LT(share(type, &other, &cpu), compare_answers(type, &other, &cpu)->required);
+  msgs::Image smaller = cpu;
+  smaller.width = 99;
+  EXPECT_EQ(share(type, &smaller, &cpu), 0.0);
+  msgs::Image bgr = cpu;
+  bgr.encoding = "bgr8";
+  EXPECT_EQ(share(type, &bgr, &cpu), 0.0);
+}
+
+TEST(BackendCheck, PointCloudsAgreeWithinAMicrometreAndNanOnlyWithNan) {
+  msgs::PointCloud2 cpu;
+  cpu.width = 2;
+  cpu.height = 1;
+  cpu.point_step = 16;
+  cpu.fields = {{"x", 0, msgs::PointField::kFloat32, 1},
+                {"y", 4, msgs::PointField::kFloat32, 1},
+                {"z", 8, msgs::PointField::kFloat32, 1},
+                {"rgb", 12, msgs::PointField::kUint32, 1}};
+  cpu.data.assign(32, 0);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::memcpy(cpu.data.data() + 16, &nan, 4);
+  msgs::PointCloud2 other = cpu;
+  const std::string type = "sensor_msgs/msg/PointCloud2";
+  EXPECT_EQ(share(type, &other, &cpu), 1.0);
+  const float off = 2e-6f;
+  std::memcpy(other.data.data() + 4, &off, 4);  // the first point's y, 2 um off
+  EXPECT_EQ(share(type, &other, &cpu), 0.5);
+  other = cpu;
+  other.data[12] = 1;  // the first point's colour
+  EXPECT_EQ(share(type, &other, &cpu), 0.5);
+  other = cpu;
+  const float zero = 0.0f;
+  std::memcpy(other.data.data() + 16, &zero, 4);  // a point where the cpu has none
+  EXPECT_EQ(share(type, &other, &cpu), 0.5);
+}
+
+TEST(BackendCheck, DisparitiesAgreeWithinOnePixelWhereTheCpuHasOne) {
+  msgs::DisparityImage cpu;
+  cpu.min_disparity = 0;
+  cpu.image.width = 4;
+  cpu.image.height = 1;
+  cpu.image.encoding = "32FC1";
+  cpu.image.step = 16;
+  const float cpu_values[4] = {-1.0f, 10.0f, 20.0f, 30.0f};  // the first: no disparity
+  cpu.image.data.resize(16);
+  std::memcpy(cpu.image.data.data(), cpu_values, 16);
+  msgs::DisparityImage other = cpu;
+  const float other_values[4] = {55.0f, 10.9f, 22.0f, 30.0f};
+  std::memcpy(other.image.data.data(), other_values, 16);
+  EXPECT_DOUBLE_EQ(share("stereo_msgs/msg/DisparityImage", &other, &cpu), 2.0 / 3.0);
+}
+
+TEST(BackendCheck, TypesWithoutAComparisonAreNotCompared) {
+  EXPECT_FALSE(has_comparison("nav_msgs/msg/Odometry"));
+  EXPECT_TRUE(has_comparison("sensor_msgs/msg/Image"));
+  int unused = 0;
+  EXPECT_FALSE(compare_answers("nav_msgs/msg/Odometry", &unused, &unused).has_value());
+}
+
+}  // namespace
+}  // namespace robotperf::harness
