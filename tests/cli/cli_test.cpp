@@ -889,7 +889,7 @@ TEST_F(Cli, UpdateRateOverridesTheControlLoopRate) {
 // there is no GPU), records the backend and the device per node, and its answer passes a1's
 // functional checks; a backend no kernel has, or one without its device, is one line and exit 2.
 TEST_F(Cli, BackendRunsTheKernelsThatHaveItAndRecordsTheDevice) {
-  for (const std::string args : {"run a1 --backend cuda", "run a3 --backend opencl"}) {
+  for (const std::string args : {"run a1 --backend cuda", "run b3 --backend opencl"}) {
     const Outcome bad =
         robotperf_cli(args + " --count 20 --quiet --output " + (out_ / "bad").string());
     EXPECT_EQ(bad.exit_code, 2) << args << ": " << bad.out;

@@ -475,3 +475,62 @@ TEST(PointCloudXyzrgb, OpenClGivesTheCpusCloud) {
 
 }  // namespace
 }  // namespace robotperf::perception
+
+namespace robotperf::perception {
+namespace {
+
+// StereoBM on the OpenCL device against OpenCV's StereoBM on the CPU, on the synthetic pair at
+// stereo_image_proc's defaults and with another window, range, texture and uniqueness: the same
+// pixels get a disparity, and the same one (the kernels follow OpenCV's fixed-point arithmetic);
+// SGBM is refused.
+TEST(DisparityOpenCl, GivesTheCpusDisparity) {
+  try {
+    opencl_device();
+  } catch (const std::invalid_argument& e) {
+    GTEST_SKIP() << e.what();
+  }
+  SyntheticStereoConfig config;
+  config.frames = 2;
+  const auto frames = generate_stereo_sequence(config);
+  StereoParams narrow;
+  narrow.correlation_window_size = 9;
+  narrow.disparity_range = 32;
+  narrow.min_disparity = 4;
+  narrow.texture_threshold = 40;
+  narrow.uniqueness_ratio = 5;
+  narrow.speckle_size = 0;
+  for (const StereoParams& params : {StereoParams{}, narrow}) {
+    DisparityProcessor cpu(params);
+    DisparityProcessor device(params, ImageBackend::kOpenCl);
+    for (const auto& f : frames) {
+      msgs::DisparityImage a, b;
+      cpu.compute(f.left, f.right, f.left_info, f.right_info, a);
+      device.compute(f.left, f.right, f.left_info, f.right_info, b);
+      ASSERT_EQ(a.image.data.size(), b.image.data.size());
+      const float* x = reinterpret_cast<const float*>(a.image.data.data());
+      const float* y = reinterpret_cast<const float*>(b.image.data.data());
+      const std::size_t n = a.image.data.size() / sizeof(float);
+      std::size_t valid = 0, within = 0, identical = 0, validity_differs = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const bool cpu_valid = x[i] >= a.min_disparity;
+        validity_differs += cpu_valid != (y[i] >= b.min_disparity) ? 1 : 0;
+        if (!cpu_valid) continue;
+        ++valid;
+        within += std::abs(x[i] - y[i]) <= 1.0f ? 1 : 0;
+        identical += x[i] == y[i] ? 1 : 0;
+      }
+      ASSERT_GT(valid, n / 2) << params.correlation_window_size;
+      // Measured: identical at the defaults, 3 pixels of 307200 apart with the narrow window.
+      EXPECT_GE(within, valid - valid / 1000) << params.correlation_window_size;
+      EXPECT_GE(identical, valid - valid / 1000) << params.correlation_window_size;
+      EXPECT_LE(validity_differs, n / 1000) << params.correlation_window_size;
+      EXPECT_EQ(b.valid_window, a.valid_window);
+    }
+  }
+  StereoParams sgbm;
+  sgbm.algorithm = StereoAlgorithm::kSemiGlobal;
+  EXPECT_THROW(DisparityProcessor(sgbm, ImageBackend::kOpenCl), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace robotperf::perception

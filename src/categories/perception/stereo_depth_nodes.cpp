@@ -73,13 +73,14 @@ class SkippingNode : public graph::Node, public plugin::NodeCounters {
   uint64_t rejected_ = 0;
 };
 
-class DisparityNode final : public SkippingNode {
+class DisparityNode final : public SkippingNode, public ImageDeviceNode {
  public:
   enum Input { kLeftImage, kLeftInfo, kRightImage, kRightInfo };
 
   DisparityNode(graph::Context& context, const KernelConfig& config)
       : SkippingNode(context, config.node_name),
-        processor_(params_from(config)),
+        ImageDeviceNode(backend_of(config)),
+        processor_(params_from(config), backend_),
         sync_(sync_options(config, config.parameters.get_bool("approximate_sync")),
               [this](const auto& set) { process(set); }) {
     output_ = create_publisher<msgs::DisparityImage>(config.topic("disparity"), config.qos);
@@ -141,6 +142,7 @@ class DisparityNode final : public SkippingNode {
       const auto& left = *std::static_pointer_cast<const msgs::Image>(set[kLeftImage]);
       const auto& right = *std::static_pointer_cast<const msgs::Image>(set[kRightImage]);
       plugin::trace_kernel_init(*this, kKernel, left.header.stamp.to_ns(), left, right);
+      const DeviceStageContext stages(*this, left.header.stamp.to_ns());
       processor_.compute(left, right,
                          *std::static_pointer_cast<const msgs::CameraInfo>(set[kLeftInfo]),
                          *std::static_pointer_cast<const msgs::CameraInfo>(set[kRightInfo]), *out);
@@ -233,6 +235,7 @@ void register_stereo_depth_kernels(plugin::Registrar& registrar) {
       {.name = "stereo_image_proc/disparity",
        .description = "disparity of a rectified stereo pair (StereoBM, or StereoSGBM), as "
                       "stereo_image_proc",
+       .backends = {"cpu", "opencl"},
        .inputs = {{"left_image", "sensor_msgs/msg/Image"},
                   {"left_camera_info", "sensor_msgs/msg/CameraInfo"},
                   {"right_image", "sensor_msgs/msg/Image"},

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "robotperf/perception/image_proc.hpp"
+#include "stereo_bm_opencl.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -46,8 +47,14 @@ void validate(const StereoParams& p) {
   require(p.speckle_range >= 0, "speckle_range must be >= 0");
 }
 
-DisparityProcessor::DisparityProcessor(const StereoParams& params) : params_(params) {
+DisparityProcessor::DisparityProcessor(const StereoParams& params, ImageBackend backend)
+    : params_(params), backend_(backend) {
   validate(params_);
+  if (backend_ == ImageBackend::kOpenCl) {
+    require(params_.algorithm == StereoAlgorithm::kBlockMatching,
+            "stereo_algorithm 1 (StereoSGBM) has no opencl backend; use 0 (StereoBM)");
+    require(params_.min_disparity >= 0, "the opencl backend needs min_disparity >= 0");
+  }
   if (params_.algorithm == StereoAlgorithm::kBlockMatching) {
     auto bm = cv::StereoBM::create(params_.disparity_range, params_.correlation_window_size);
     bm->setPreFilterSize(params_.prefilter_size);
@@ -85,7 +92,11 @@ void DisparityProcessor::compute(const msgs::Image& left, const msgs::Image& rig
 
   to_mono8(left, "disparity: left image", left_mono_);
   to_mono8(right, "disparity: right image", right_mono_);
-  matcher_->compute(left_mono_, right_mono_, disparity16_);
+  if (backend_ == ImageBackend::kOpenCl) {
+    stereo_bm_opencl(left_mono_, right_mono_, params_, disparity16_);
+  } else {
+    matcher_->compute(left_mono_, right_mono_, disparity16_);
+  }
 
   const int width = static_cast<int>(left.width);
   const int height = static_cast<int>(left.height);

@@ -1,0 +1,216 @@
+// StereoBM on an OpenCL device: OpenCV's block matcher as its documentation and source define it
+// (x-Sobel pre-filter clipped to [-cap, cap], sum of absolute differences over the window,
+// texture and uniqueness checks, sub-pixel fit of the three costs around the best, the valid
+// region), which OpenCV's own OpenCL StereoBM does only without the texture check. The left-right
+// check (disp12_max_diff) and the speckle filter (connected components, sequential) run on the
+// host after the download, with OpenCV's own functions, as part of the kernel's time.
+#include "stereo_bm_opencl.hpp"
+
+#include <algorithm>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/ocl.hpp>
+#include <stdexcept>
+
+#include "device_node.hpp"
+
+namespace robotperf::perception {
+namespace {
+
+// The cost volume is kept whole on the device, an int per pixel and disparity (and one plane for
+// the texture): sliding sums along the rows, then along the columns.
+const char* const kStereoBmSource = R"CL(
+// x-Sobel of rows y-1, y, y+1 (mirrored at the top and bottom rows), clipped and offset to
+// [0, 2 cap]; the first and last columns read cap.
+__kernel void prefilter(__global const uchar* src, int src_step, int src_offset,
+                        __global uchar* dst, int dst_step, int dst_offset, int rows, int cols,
+                        int cap) {
+  const int x = get_global_id(0), y = get_global_id(1);
+  if (x >= cols || y >= rows) return;
+  __global uchar* out = dst + dst_offset + y * dst_step + x;
+  if (x == 0 || x == cols - 1) {
+    *out = (uchar)cap;
+    return;
+  }
+  const int up = y > 0 ? y - 1 : (rows > 1 ? 1 : 0);
+  const int down = y < rows - 1 ? y + 1 : (rows > 1 ? rows - 2 : 0);
+  __global const uchar* r0 = src + src_offset + up * src_step;
+  __global const uchar* r1 = src + src_offset + y * src_step;
+  __global const uchar* r2 = src + src_offset + down * src_step;
+  const int d = (r0[x + 1] - r0[x - 1]) + 2 * (r1[x + 1] - r1[x - 1]) + (r2[x + 1] - r2[x - 1]);
+  *out = (uchar)(clamp(d, -cap, cap) + cap);
+}
+
+// The cost of pixel column c for disparity index k (disparity = lofs - k), the columns clamped as
+// OpenCV clamps them; index ndisp is the texture, |L - cap|.
+int column_cost(__global const uchar* l, __global const uchar* r, int c, int k, int cols, int ndisp,
+                int lofs, int cap) {
+  const int lc = clamp(c, 0, cols - 1);
+  if (k == ndisp) return abs((int)l[lc] - cap);
+  return abs((int)l[lc] - (int)r[min(max(c - lofs, 0) + k, cols - 1)]);
+}
+
+// Per row and disparity index: the window's horizontal sums along the row, sliding.
+__kernel void row_costs(__global const uchar* left, int left_step, int left_offset,
+                        __global const uchar* right, int right_step, int right_offset,
+                        __global int* rows_cost, int rows, int cols, int ndisp, int lofs,
+                        int radius, int cap) {
+  const int y = get_global_id(0), k = get_global_id(1);
+  if (y >= rows || k > ndisp) return;
+  __global const uchar* l = left + left_offset + y * left_step;
+  __global const uchar* r = right + right_offset + y * right_step;
+  __global int* out = rows_cost + ((size_t)k * rows + y) * cols;
+  int sum = 0;
+  for (int i = -radius; i <= radius; ++i) sum += column_cost(l, r, i, k, cols, ndisp, lofs, cap);
+  out[0] = sum;
+  for (int x = 1; x < cols; ++x) {
+    sum += column_cost(l, r, x + radius, k, cols, ndisp, lofs, cap) -
+           column_cost(l, r, x - radius - 1, k, cols, ndisp, lofs, cap);
+    out[x] = sum;
+  }
+}
+
+// Per column and disparity index: the window's vertical sums of the row sums, sliding, the rows
+// clamped at the top and bottom.
+__kernel void window_costs(__global const int* rows_cost, __global int* costs, int rows, int cols,
+                           int ndisp, int radius) {
+  const int x = get_global_id(0), k = get_global_id(1);
+  if (x >= cols || k > ndisp) return;
+  __global const int* in = rows_cost + (size_t)k * rows * cols + x;
+  __global int* out = costs + (size_t)k * rows * cols + x;
+  int sum = 0;
+  for (int j = -radius; j <= radius; ++j) sum += in[(size_t)clamp(j, 0, rows - 1) * cols];
+  out[0] = sum;
+  for (int y = 1; y < rows; ++y) {
+    sum += in[(size_t)min(y + radius, rows - 1) * cols] - in[(size_t)max(y - radius - 1, 0) * cols];
+    out[(size_t)y * cols] = sum;
+  }
+}
+
+// Per pixel of the region where the window and the search range fit ([x0, x1) x [y0, y1), as
+// OpenCV's valid disparity ROI): the best disparity, the texture and uniqueness checks, and the
+// fixed-point (1/16 px) disparity with OpenCV's sub-pixel fit of the costs on either side.
+__kernel void choose(__global const int* costs, __global short* disp, int disp_step,
+                     int disp_offset, __global int* best_cost, int best_step, int best_offset,
+                     int rows, int cols, int ndisp, int lofs, int mindisp,
+                     int texture_threshold, int uniqueness, int x0, int x1, int y0, int y1) {
+  const int x = get_global_id(0), y = get_global_id(1);
+  if (x >= cols || y >= rows) return;
+  __global short* out = (__global short*)((__global uchar*)disp + disp_offset + y * disp_step) + x;
+  const short filtered = (short)((mindisp - 1) * 16);
+  const size_t plane = (size_t)rows * cols, at = (size_t)y * cols + x;
+  if (x < x0 || x >= x1 || y < y0 || y >= y1 || costs[ndisp * plane + at] < texture_threshold) {
+    *out = filtered;
+    return;
+  }
+  int best = INT_MAX, best_k = 0;
+  for (int k = 0; k < ndisp; ++k) {
+    const int c = costs[k * plane + at];
+    if (c < best) {
+      best = c;
+      best_k = k;
+    }
+  }
+  if (uniqueness > 0) {
+    const int limit = best + best * uniqueness / 100;
+    for (int k = 0; k < ndisp; ++k) {
+      if ((k < best_k - 1 || k > best_k + 1) && costs[k * plane + at] <= limit) {
+        *out = filtered;
+        return;
+      }
+    }
+  }
+  *(__global int*)((__global uchar*)best_cost + best_offset + y * best_step + x * 4) = best;
+  if (best_k == 0 || best_k == ndisp - 1) {
+    *out = (short)((ndisp - best_k - 1 + mindisp) * 16);
+    return;
+  }
+  const int p = costs[(best_k + 1) * plane + at];
+  const int n = costs[(best_k - 1) * plane + at];
+  const int d = p + n - 2 * best + abs(p - n);
+  *out = (short)(((ndisp - best_k - 1 + mindisp) * 256 + (d != 0 ? (p - n) * 256 / d : 0) + 15) >>
+                 4);
+}
+)CL";
+
+cv::ocl::Kernel build(const char* name) {
+  static const cv::ocl::ProgramSource source(kStereoBmSource);
+  cv::ocl::Kernel kernel(name, source);
+  if (kernel.empty())
+    throw std::runtime_error(std::string("disparity: the OpenCL kernel ") + name +
+                             " did not build");
+  return kernel;
+}
+
+void run(cv::ocl::Kernel& kernel, std::size_t x, std::size_t y) {
+  std::size_t global[2] = {x, y};
+  if (!kernel.run(2, global, nullptr, true))
+    throw std::runtime_error("disparity: an OpenCL kernel did not run");
+}
+
+}  // namespace
+
+void stereo_bm_opencl(const cv::Mat& left, const cv::Mat& right, const StereoParams& p,
+                      cv::Mat& disparity16) {
+  if (p.algorithm != StereoAlgorithm::kBlockMatching)
+    throw std::invalid_argument("disparity: the opencl backend has StereoBM only");
+  const int rows = left.rows, cols = left.cols;
+  const int ndisp = p.disparity_range;
+  const int lofs = std::max(ndisp - 1 + p.min_disparity, 0);
+  if (p.min_disparity < 0)
+    throw std::invalid_argument("disparity: the opencl backend needs min_disparity >= 0");
+  cv::UMat device_left, device_right;
+  cv::Mat best_cost;
+  {
+    DeviceStage upload("upload", left.total() + right.total());
+    left.copyTo(device_left);
+    right.copyTo(device_right);
+  }
+  cv::UMat filtered_left(rows, cols, CV_8UC1), filtered_right(rows, cols, CV_8UC1);
+  cv::UMat rows_cost(1, (ndisp + 1) * rows * cols, CV_32SC1);
+  cv::UMat costs(1, (ndisp + 1) * rows * cols, CV_32SC1);
+  cv::UMat device_disparity(rows, cols, CV_16SC1);
+  // The best window cost of each pixel, for the left-right check.
+  cv::UMat device_best_cost(rows, cols, CV_32SC1, cv::Scalar(0));
+  {
+    DeviceStage stage("compute", 0);
+    cv::ocl::Kernel prefilter = build("prefilter");
+    for (auto [in, out] :
+         {std::pair{&device_left, &filtered_left}, {&device_right, &filtered_right}}) {
+      prefilter.args(cv::ocl::KernelArg::ReadOnlyNoSize(*in),
+                     cv::ocl::KernelArg::WriteOnlyNoSize(*out), rows, cols, p.prefilter_cap);
+      run(prefilter, static_cast<std::size_t>(cols), static_cast<std::size_t>(rows));
+    }
+    const int radius = p.correlation_window_size / 2;
+    cv::ocl::Kernel row_costs = build("row_costs");
+    row_costs.args(cv::ocl::KernelArg::ReadOnlyNoSize(filtered_left),
+                   cv::ocl::KernelArg::ReadOnlyNoSize(filtered_right),
+                   cv::ocl::KernelArg::PtrWriteOnly(rows_cost), rows, cols, ndisp, lofs, radius,
+                   p.prefilter_cap);
+    run(row_costs, static_cast<std::size_t>(rows), static_cast<std::size_t>(ndisp + 1));
+    cv::ocl::Kernel window_costs = build("window_costs");
+    window_costs.args(cv::ocl::KernelArg::PtrReadOnly(rows_cost),
+                      cv::ocl::KernelArg::PtrWriteOnly(costs), rows, cols, ndisp, radius);
+    run(window_costs, static_cast<std::size_t>(cols), static_cast<std::size_t>(ndisp + 1));
+    cv::ocl::Kernel choose = build("choose");
+    choose.args(cv::ocl::KernelArg::PtrReadOnly(costs),
+                cv::ocl::KernelArg::WriteOnlyNoSize(device_disparity),
+                cv::ocl::KernelArg::WriteOnlyNoSize(device_best_cost), rows, cols, ndisp, lofs,
+                p.min_disparity, p.texture_threshold, p.uniqueness_ratio,
+                p.min_disparity + ndisp - 1 + radius,
+                std::min(cols, cols + p.min_disparity) - radius, radius, rows - radius);
+    run(choose, static_cast<std::size_t>(cols), static_cast<std::size_t>(rows));
+  }
+  {
+    DeviceStage download("download", static_cast<uint64_t>(rows) * cols * (2 + 4));
+    device_disparity.copyTo(disparity16);
+    device_best_cost.copyTo(best_cost);
+  }
+  if (p.disp12_max_diff >= 0) {
+    cv::validateDisparity(disparity16, best_cost, p.min_disparity, ndisp, p.disp12_max_diff);
+  }
+  if (p.speckle_size > 0 && p.speckle_range >= 0) {
+    cv::filterSpeckles(disparity16, (p.min_disparity - 1) * 16, p.speckle_size, p.speckle_range);
+  }
+}
+
+}  // namespace robotperf::perception
