@@ -3,6 +3,7 @@
 
 #include <time.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -108,6 +109,7 @@ PowerMeter::PowerMeter(std::vector<std::unique_ptr<PowerSource>> sources,
                        std::vector<std::string> notes)
     : sources_(std::move(sources)), notes_(std::move(notes)) {
   for (const auto& s : sources_) integrators_.emplace_back(s->info());
+  loads_.resize(sources_.size());
 }
 
 void PowerMeter::sample_round(int64_t time_ns) {
@@ -116,6 +118,16 @@ void PowerMeter::sample_round(int64_t time_ns) {
     error.clear();
     const auto value = sources_[i]->read(error);
     integrators_[i].add(time_ns, value, error);
+    if (const auto load = sources_[i]->load()) {
+      DeviceLoadSummary& l = loads_[i];
+      // The mean is kept as a running mean of the rounds' readings.
+      ++l.readings;
+      l.utilisation_mean_percent += (load->utilisation_percent - l.utilisation_mean_percent) /
+                                    static_cast<double>(l.readings);
+      l.utilisation_max_percent = std::max(l.utilisation_max_percent, load->utilisation_percent);
+      l.memory_used_max_bytes = std::max(l.memory_used_max_bytes, load->memory_used_bytes);
+      l.memory_total_bytes = load->memory_total_bytes;
+    }
   }
   if (rounds_ == 0) first_ns_ = time_ns;
   last_ns_ = time_ns;
@@ -127,8 +139,9 @@ PowerReport PowerMeter::report() const {
   r.rounds = rounds_;
   r.window_s = static_cast<double>(last_ns_ - first_ns_) * 1e-9;
   std::string failures;
-  for (const auto& integrator : integrators_) {
-    SourceEnergy s = integrator.result();
+  for (std::size_t i = 0; i < integrators_.size(); ++i) {
+    SourceEnergy s = integrators_[i].result();
+    if (loads_[i].readings > 0) s.load = loads_[i];
     if (s.available && s.info.in_total) {
       r.available = true;
       r.total_energy_j += s.energy_j;
@@ -242,6 +255,12 @@ nlohmann::json to_json(const PowerReport& report, std::size_t messages, double t
         {"failed_readings", s.failed_readings},
         {"wraps", s.wraps},
         {"first_error", s.first_error.empty() ? json(nullptr) : json(s.first_error)},
+        {"load", s.load ? json{{"readings", s.load->readings},
+                               {"utilisation_mean_percent", s.load->utilisation_mean_percent},
+                               {"utilisation_max_percent", s.load->utilisation_max_percent},
+                               {"memory_used_max_bytes", s.load->memory_used_max_bytes},
+                               {"memory_total_bytes", s.load->memory_total_bytes}}
+                        : json(nullptr)},
     });
   }
   json total = nullptr;

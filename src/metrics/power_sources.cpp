@@ -355,6 +355,16 @@ void discover_jetson(const fs::path& root, PowerDiscovery& out) {
 using NvmlReturn = int;
 using NvmlDevice = void*;
 constexpr NvmlReturn kNvmlSuccess = 0;
+// nvmlUtilization_t and nvmlMemory_t.
+struct NvmlUtilisation {
+  unsigned gpu;
+  unsigned memory;
+};
+struct NvmlMemory {
+  unsigned long long total;
+  unsigned long long free;
+  unsigned long long used;
+};
 
 class NvmlLibrary {
  public:
@@ -377,6 +387,10 @@ class NvmlLibrary {
       energy_ = symbol<NvmlReturn (*)(NvmlDevice, unsigned long long*)>(
           "nvmlDeviceGetTotalEnergyConsumption");
       power_ = symbol<NvmlReturn (*)(NvmlDevice, unsigned*)>("nvmlDeviceGetPowerUsage");
+      // The load is extra: a library without these still measures power.
+      utilisation_ = optional_symbol<NvmlReturn (*)(NvmlDevice, NvmlUtilisation*)>(
+          "nvmlDeviceGetUtilizationRates");
+      memory_ = optional_symbol<NvmlReturn (*)(NvmlDevice, NvmlMemory*)>("nvmlDeviceGetMemoryInfo");
       if (const NvmlReturn rc = init_(); rc != kNvmlSuccess) {
         throw std::runtime_error(path + ": nvmlInit failed: " + error(rc));
       }
@@ -401,8 +415,21 @@ class NvmlLibrary {
   NvmlReturn name(NvmlDevice d, char* buf, unsigned size) const { return name_(d, buf, size); }
   NvmlReturn energy_mj(NvmlDevice d, unsigned long long* mj) const { return energy_(d, mj); }
   NvmlReturn power_mw(NvmlDevice d, unsigned* mw) const { return power_(d, mw); }
+  // Utilisation (percent of its last sample window the GPU ran a kernel) and memory in use;
+  // nullopt when the library or the GPU does not report them.
+  std::optional<DeviceLoad> load(NvmlDevice d) const {
+    if (utilisation_ == nullptr || memory_ == nullptr) return std::nullopt;
+    NvmlUtilisation u{};
+    NvmlMemory m{};
+    if (utilisation_(d, &u) != kNvmlSuccess || memory_(d, &m) != kNvmlSuccess) return std::nullopt;
+    return DeviceLoad{static_cast<double>(u.gpu), m.used, m.total};
+  }
 
  private:
+  template <typename Function>
+  Function optional_symbol(const char* name) {
+    return reinterpret_cast<Function>(dlsym(handle_, name));
+  }
   template <typename Function>
   Function symbol(const char* name, const char* fallback = nullptr) {
     void* address = dlsym(handle_, name);
@@ -420,6 +447,8 @@ class NvmlLibrary {
   NvmlReturn (*name_)(NvmlDevice, char*, unsigned) = nullptr;
   NvmlReturn (*energy_)(NvmlDevice, unsigned long long*) = nullptr;
   NvmlReturn (*power_)(NvmlDevice, unsigned*) = nullptr;
+  NvmlReturn (*utilisation_)(NvmlDevice, NvmlUtilisation*) = nullptr;
+  NvmlReturn (*memory_)(NvmlDevice, NvmlMemory*) = nullptr;
 };
 
 class NvmlSource : public PowerSource {
@@ -442,6 +471,7 @@ class NvmlSource : public PowerSource {
     }
     return static_cast<double>(mw) * 1e-3;
   }
+  std::optional<DeviceLoad> load() override { return nvml_->load(device_); }
 
  private:
   std::shared_ptr<NvmlLibrary> nvml_;

@@ -84,6 +84,18 @@ std::string resources_line(const harness::RunResult& r) {
     }
     out << "\n";
   }
+  // Devices whose power source also reports their load (NVML: GPUs).
+  for (const auto& source : r.power.sources) {
+    if (!source.load) continue;
+    const auto& l = *source.load;
+    out << "  " << source.info.name;
+    if (!source.info.description.empty()) out << " (" << source.info.description << ")";
+    out << ": busy " << format_fixed(l.utilisation_mean_percent, 1) << " % mean, "
+        << format_fixed(l.utilisation_max_percent, 1) << " % max; memory in use up to "
+        << format_fixed(static_cast<double>(l.memory_used_max_bytes) / (1 << 30), 2) << " of "
+        << format_fixed(static_cast<double>(l.memory_total_bytes) / (1 << 30), 2) << " GiB ("
+        << l.readings << " readings)\n";
+  }
   return out.str();
 }
 

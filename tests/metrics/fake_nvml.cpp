@@ -1,6 +1,7 @@
 // A stand-in for libnvidia-ml.so: the NVML entry points robotperf uses, with values the tests set
-// through fake_nvml_set(). Built as a shared library and loaded through robotperf's own dlopen
-// path. GPU 0 has an energy counter (Volta and later); GPU 1 only reports power (older boards).
+// through fake_nvml_set() and fake_nvml_set_load(). Built as a shared library and loaded through
+// robotperf's own dlopen path. GPU 0 has an energy counter (Volta and later) and reports its
+// utilisation; GPU 1 only reports power (older boards).
 #include <cstring>
 
 namespace {
@@ -15,9 +16,23 @@ struct FakeGpu {
   bool has_energy_counter;
   unsigned long long energy_mj;
   unsigned power_mw;
+  unsigned utilisation_percent = 0;
+  unsigned long long memory_used = 0;
+  unsigned long long memory_total = 0;
 };
 
 FakeGpu gpus[2] = {{"NVIDIA Fake A100", true, 0, 0}, {"NVIDIA Fake K80", false, 0, 0}};
+
+// nvmlUtilization_t and nvmlMemory_t.
+struct Utilisation {
+  unsigned gpu;
+  unsigned memory;
+};
+struct Memory {
+  unsigned long long total;
+  unsigned long long free;
+  unsigned long long used;
+};
 int init_count = 0;
 
 FakeGpu* gpu(void* handle) {
@@ -86,7 +101,31 @@ int nvmlDeviceGetPowerUsage(void* device, unsigned* power_mw) {
   return kSuccess;
 }
 
+int nvmlDeviceGetUtilizationRates(void* device, Utilisation* u) {
+  FakeGpu* g = gpu(device);
+  if (g == nullptr) return kInvalidArgument;
+  // The K80 stands for a board that does not report it.
+  if (!g->has_energy_counter) return kNotSupported;
+  u->gpu = g->utilisation_percent;
+  u->memory = 0;
+  return kSuccess;
+}
+int nvmlDeviceGetMemoryInfo(void* device, Memory* m) {
+  FakeGpu* g = gpu(device);
+  if (g == nullptr) return kInvalidArgument;
+  m->total = g->memory_total;
+  m->used = g->memory_used;
+  m->free = g->memory_total - g->memory_used;
+  return kSuccess;
+}
+
 // Test controls.
+void fake_nvml_set_load(unsigned index, unsigned utilisation_percent,
+                        unsigned long long memory_used, unsigned long long memory_total) {
+  gpus[index].utilisation_percent = utilisation_percent;
+  gpus[index].memory_used = memory_used;
+  gpus[index].memory_total = memory_total;
+}
 void fake_nvml_set(unsigned index, unsigned long long energy_mj, unsigned power_mw) {
   gpus[index].energy_mj = energy_mj;
   gpus[index].power_mw = power_mw;

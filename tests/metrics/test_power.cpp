@@ -297,14 +297,34 @@ TEST(Nvml, FakeLibraryThroughTheDlopenPath) {
     EXPECT_EQ(meter.sources()[0]->info().kind, PowerSourceKind::kEnergyCounter);
     EXPECT_EQ(meter.sources()[1]->info().kind, PowerSourceKind::kPowerGauge);
 
+    // GPU 0 reports its load as well: busy 20 %, 90 %, 40 % of the time, memory growing.
+    const auto set_load =
+        reinterpret_cast<void (*)(unsigned, unsigned, unsigned long long, unsigned long long)>(
+            dlsym(fake, "fake_nvml_set_load"));
+    ASSERT_NE(set_load, nullptr);
+    constexpr unsigned long long kGiB = 1ULL << 30;
+    set_load(0, 20, 2 * kGiB, 80 * kGiB);
     meter.sample_round(0);
     set(0, 1'150'000, 0);
     set(1, 0, 60'000);
+    set_load(0, 90, 6 * kGiB, 80 * kGiB);
     meter.sample_round(kSecond);
     set(0, 1'450'000, 0);
     set(1, 0, 60'000);
+    set_load(0, 40, 5 * kGiB, 80 * kGiB);
     meter.sample_round(3 * kSecond);
     const PowerReport r = meter.report();
+    const auto& load = source(r, "nvml:gpu0").load;
+    ASSERT_TRUE(load.has_value());
+    EXPECT_EQ(load->readings, 3u);
+    EXPECT_NEAR(load->utilisation_mean_percent, 50.0, 1e-9);
+    EXPECT_EQ(load->utilisation_max_percent, 90.0);
+    EXPECT_EQ(load->memory_used_max_bytes, 6 * kGiB);
+    EXPECT_EQ(load->memory_total_bytes, 80 * kGiB);
+    EXPECT_FALSE(source(r, "nvml:gpu1").load.has_value()) << "a board without utilisation";
+    const auto json = to_json(r, 10, 1.0);
+    EXPECT_EQ(json["sources"][0]["load"]["utilisation_max_percent"], 90.0);
+    EXPECT_TRUE(json["sources"][1]["load"].is_null());
     ASSERT_TRUE(r.available);
     EXPECT_NEAR(source(r, "nvml:gpu0").energy_j, 450.0, 1e-9);
     EXPECT_NEAR(source(r, "nvml:gpu0").average_w, 150.0, 1e-9);

@@ -684,3 +684,21 @@ TEST_F(Report, ReadmeIsStableAndMatchesTheCommittedOnes) {
 
 }  // namespace
 }  // namespace robotperf::report
+
+// A GPU's load (NVML utilisation and memory, read with its power) is in the resources section.
+TEST(Summary, ResourcesShowAGpusLoad) {
+  using namespace robotperf;
+  harness::RunResult r = report::testing::make_run({});
+  r.resources.measured = true;
+  r.resources.window_s = 3.0;
+  metrics::SourceEnergy gpu;
+  gpu.info.name = "nvml:gpu0";
+  gpu.info.description = "NVIDIA H100 80GB HBM3";
+  gpu.load = metrics::DeviceLoadSummary{30, 42.5, 97.0, 3ULL << 30, 80ULL << 30};
+  r.power.sources.push_back(gpu);
+  const std::string text = report::summary_table(r);
+  EXPECT_NE(text.find("  nvml:gpu0 (NVIDIA H100 80GB HBM3): busy 42.5 % mean, 97.0 % max; "
+                      "memory in use up to 3.00 of 80.00 GiB (30 readings)"),
+            std::string::npos)
+      << text;
+}

@@ -38,6 +38,23 @@ struct PowerSourceInfo {
   bool in_total = true;
 };
 
+// What a device's source reports beside its power (NVML: a GPU): how busy it was and how much of
+// its memory is in use.
+struct DeviceLoad {
+  double utilisation_percent = 0;  // of the time the device ran work, over its own last window
+  uint64_t memory_used_bytes = 0;
+  uint64_t memory_total_bytes = 0;
+};
+
+// A device's load over the window, from the readings of every sampling round.
+struct DeviceLoadSummary {
+  std::size_t readings = 0;
+  double utilisation_mean_percent = 0;
+  double utilisation_max_percent = 0;
+  uint64_t memory_used_max_bytes = 0;
+  uint64_t memory_total_bytes = 0;
+};
+
 class PowerSource {
  public:
   explicit PowerSource(PowerSourceInfo info) : info_(std::move(info)) {}
@@ -48,6 +65,8 @@ class PowerSource {
   const PowerSourceInfo& info() const { return info_; }
   // Joules (energy counter) or watts (power gauge); nullopt with `error` set when it failed.
   virtual std::optional<double> read(std::string& error) = 0;
+  // The device's load now, for sources that are a device's; nullopt otherwise or when it failed.
+  virtual std::optional<DeviceLoad> load() { return std::nullopt; }
 
  private:
   PowerSourceInfo info_;
@@ -87,6 +106,7 @@ struct SourceEnergy {
   std::size_t failed_readings = 0;
   std::size_t wraps = 0;  // counter wrap-arounds seen
   std::string first_error;
+  std::optional<DeviceLoadSummary> load;  // a device's source that reported its load
 };
 
 struct PowerReport {
@@ -141,6 +161,7 @@ class PowerMeter {
  private:
   std::vector<std::unique_ptr<PowerSource>> sources_;
   std::vector<EnergyIntegrator> integrators_;
+  std::vector<DeviceLoadSummary> loads_;  // per source; readings 0 when it reports none
   std::vector<std::string> notes_;
   std::size_t rounds_ = 0;
   int64_t first_ns_ = 0;
