@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "robotperf/localization/apriltag_detector.hpp"
 #include "robotperf/localization/synthetic_apriltags.hpp"
@@ -77,6 +79,48 @@ TEST(AprilTag, AWrongTagSizeScalesTheDistance) {
   const Detected found = detect(frame, wrong);
   ASSERT_EQ(found.poses.poses.size(), 1u);
   EXPECT_NEAR(found.poses.poses[0].position.z, 2.0 * 0.20 / 0.22, 0.01);
+}
+
+// A camera whose images are not rectified: the same tags seen through a lens with barrel
+// distortion are found at their ideal corners only when the node rectifies first.
+TEST(AprilTag, RectifyingFirstFindsTheTagsOfADistortedCamera) {
+  const AprilTagFrame ideal = render_apriltag_frame(
+      {}, {{7, facing_pose(-0.55, 0.25, 1.6)}, {8, facing_pose(0.6, -0.25, 1.8)}});
+  msgs::CameraInfo lens = ideal.info;
+  lens.d = {-0.25, 0.08, 0.0, 0.0, 0.0};
+  // Each pixel of the distorted image shows the ideal image where its undistorted ray goes.
+  const cv::Mat k(3, 3, CV_64F, lens.k.data());
+  std::vector<cv::Point2f> pixels;
+  for (uint32_t v = 0; v < lens.height; ++v)
+    for (uint32_t u = 0; u < lens.width; ++u) pixels.emplace_back(u, v);
+  std::vector<cv::Point2f> sources;
+  cv::undistortPoints(pixels, sources, k, lens.d, cv::noArray(), k);
+  const cv::Mat map(static_cast<int>(lens.height), static_cast<int>(lens.width), CV_32FC2,
+                    sources.data());
+  msgs::Image distorted = ideal.image;
+  const cv::Mat from(static_cast<int>(ideal.image.height), static_cast<int>(ideal.image.width),
+                     CV_8UC3, const_cast<uint8_t*>(ideal.image.data.data()));
+  cv::Mat to(from.size(), CV_8UC3, distorted.data.data());
+  cv::remap(from, to, map, cv::noArray(), cv::INTER_LINEAR);
+
+  auto worst_corner = [&](bool rectify) {
+    AprilTagParams params;
+    params.rectify = rectify;
+    AprilTagDetector detector(params);
+    msgs::AprilTagDetectionArray tags;
+    msgs::PoseArray poses;
+    detector.detect(distorted, lens, tags, poses);
+    EXPECT_EQ(tags.detections.size(), 2u) << rectify;
+    double worst = 0.0;
+    for (const auto& d : tags.detections) {
+      for (const auto& t : ideal.tags.detections) {
+        if (t.id == d.id) worst = std::max(worst, corner_error(d, t));
+      }
+    }
+    return worst;
+  };
+  EXPECT_LT(worst_corner(true), 1.0);
+  EXPECT_GT(worst_corner(false), 3.0);
 }
 
 TEST(AprilTag, EveryEncodingGivesTheSameTagsAndBadInputIsRefused) {

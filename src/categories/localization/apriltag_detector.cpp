@@ -54,6 +54,8 @@ struct AprilTagDetector::Library {
   apriltag_family_t* family = nullptr;
   apriltag_detector_t* detector = nullptr;
   cv::Mat grey;
+  perception::Rectifier rectifier;
+  msgs::Image rectified;
   ~Library() {
     if (detector != nullptr) apriltag_detector_destroy(detector);
     if (family != nullptr) functions->destroy(family);
@@ -87,7 +89,13 @@ void AprilTagDetector::detect(const msgs::Image& image, const msgs::CameraInfo& 
                                 std::to_string(info.width) + "x" + std::to_string(info.height));
   }
   cv::Mat& grey = library_->grey;
-  perception::to_mono8(image, "apriltag: image", grey);
+  if (params_.rectify) {
+    // Rectified first (the cached undistortion map of image_proc), then grey.
+    library_->rectifier.rectify(image, info, library_->rectified);
+    perception::to_mono8(library_->rectified, "apriltag: image", grey);
+  } else {
+    perception::to_mono8(image, "apriltag: image", grey);
+  }
   image_u8_t frame{grey.cols, grey.rows, static_cast<int32_t>(grey.step[0]), grey.data};
   zarray_t* found = apriltag_detector_detect(library_->detector, &frame);
 

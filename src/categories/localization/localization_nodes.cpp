@@ -90,6 +90,7 @@ AprilTagParams apriltag_params(const KernelConfig& c) {
   out.threads = static_cast<int>(p.get_int("threads"));
   out.refine_edges = p.get_bool("refine_edges");
   out.sharpening = p.get_double("sharpening");
+  out.rectify = p.get_bool("rectify");
   try {
     validate(out);
   } catch (const std::invalid_argument& e) {
@@ -399,7 +400,9 @@ void register_kernels(plugin::Registrar& registrar) {
             plugin::int_parameter("threads", tag.threads, "libapriltag worker threads"),
             plugin::bool_parameter("refine_edges", tag.refine_edges,
                                    "snap quad edges to the image gradients"),
-            plugin::double_parameter("sharpening", tag.sharpening, "decode sharpening")}},
+            plugin::double_parameter("sharpening", tag.sharpening, "decode sharpening"),
+            plugin::bool_parameter("rectify", tag.rectify,
+                                   "undistort and rectify the image with its CameraInfo first")}},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<AprilTagNode>(context, config);
       });

@@ -22,6 +22,9 @@ struct AprilTagParams {
   int threads = 1;               // libapriltag's worker threads
   bool refine_edges = true;      // snap the quad's edges to the image's gradients
   double sharpening = 0.25;      // decode sharpening
+  // Undistort and rectify the image with its CameraInfo first (image_proc's rectify, its map
+  // cached), for a camera whose images are not rectified yet.
+  bool rectify = false;
 };
 
 // Throws std::invalid_argument naming the parameter that is out of range.
@@ -37,13 +40,13 @@ class AprilTagDetector {
   AprilTagDetector& operator=(const AprilTagDetector&) = delete;
 
   // The tags in `image` (mono8, rgb8, bgr8, rgba8 or bgra8), rectified with projection P of
-  // `info`. Corners and centres are in ROS's pixel convention (the first pixel's centre at
-  // (0, 0); libapriltag's own is half a pixel off), corners in libapriltag's order. `poses` holds
-  // each tag's pose in the camera's optical frame in the order of `detections`: origin at the
-  // tag's centre, x to the right and y up as the tag is printed, z out of its face (OpenCV's
-  // IPPE for squares, the better of its two solutions). Both get the image's header.
-  // Throws std::invalid_argument for another encoding, an image whose size differs from the
-  // calibration's, or an uncalibrated camera (P[0] == 0).
+  // `info` (or rectified here first with `rectify`). Corners and centres are in ROS's pixel
+  // convention (the first pixel's centre at (0, 0); libapriltag's own is half a pixel off), corners
+  // in libapriltag's order. `poses` holds each tag's pose in the camera's optical frame in the
+  // order of `detections`: origin at the tag's centre, x to the right and y up as the tag is
+  // printed, z out of its face (OpenCV's IPPE for squares, the better of its two solutions). Both
+  // get the image's header. Throws std::invalid_argument for another encoding, an image whose size
+  // differs from the calibration's, or an uncalibrated camera (P[0] == 0).
   void detect(const msgs::Image& image, const msgs::CameraInfo& info,
               msgs::AprilTagDetectionArray& detections, msgs::PoseArray& poses);
 
