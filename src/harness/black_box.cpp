@@ -181,6 +181,14 @@ rmw::MessagePtr Playback::Input::copy_with_stamp(std::size_t frame, int64_t stam
   return copy;
 }
 
+bool DeviceWarmup::ready_after_round(std::size_t answers_so_far) {
+  const std::size_t previous_round = answers_in_round_;
+  answers_in_round_ = answers_so_far - answers_before_;
+  answers_before_ = answers_so_far;
+  return answers_in_round_ >= per_round_ ||
+         (answers_in_round_ > 0 && answers_in_round_ <= previous_round);
+}
+
 std::size_t Playback::run(std::vector<MessageRecord>& records,
                           const std::function<bool()>& should_stop,
                           const std::function<void(std::size_t)>& after_send,
@@ -207,11 +215,8 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
     if (gated && first == gate->warmup) {
       repeating = !gate->delivering();
       if (repeating) {
-        if (rmw::steady_now_ns() > gate->deadline_ns) {
-          throw GraphNotConnected(
-              "the graph matched every endpoint but delivered no output to its warm-up messages "
-              "before --connect-timeout: is it running, and does it publish the output topic?");
-        }
+        if (rmw::steady_now_ns() > gate->deadline_ns)
+          throw GraphNotConnected(gate->timeout_message);
         shift_ns += offset(gate->warmup);
         if (repeated_ns != nullptr) *repeated_ns += offset(gate->warmup);
         first = 0;

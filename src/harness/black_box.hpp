@@ -34,6 +34,23 @@ std::vector<int64_t> timeline_schedule(const std::vector<int64_t>& frame_times_n
 std::vector<int64_t> arrival_schedule(const ArrivalPattern& pattern, int64_t period_ns,
                                       std::size_t count);
 
+// When a graph whose nodes compute on a device has warmed up: its device programs are built at
+// the first message (an OpenCL driver compiles them then, for seconds on a CPU device), and the
+// messages sent meanwhile queue up. Given the graph's answers so far at the end of each round of
+// the warm-up, it is ready when it answers at its steady pace: as many answers in a round as
+// messages sent in it (it keeps up), or some but no more than in the round before (it is slower
+// than the rate, which the measurement will show).
+class DeviceWarmup {
+ public:
+  explicit DeviceWarmup(std::size_t messages_per_round) : per_round_(messages_per_round) {}
+  bool ready_after_round(std::size_t answers_so_far);
+
+ private:
+  std::size_t per_round_;
+  std::size_t answers_before_ = 0;
+  std::size_t answers_in_round_ = 0;
+};
+
 class Playback {
  public:
   // Streams of serialized payloads (bags) are published as they are, with the
@@ -51,7 +68,8 @@ class Playback {
   struct DeliveryGate {
     std::size_t warmup = 0;
     std::function<bool()> delivering;
-    int64_t deadline_ns = 0;  // steady clock; past it, GraphNotConnected
+    int64_t deadline_ns = 0;  // steady clock; past it, GraphNotConnected with `timeout_message`
+    std::string timeout_message;
   };
 
   // Sends ids.count messages, message k at start + k·period or start + schedule_ns[k] (absolute

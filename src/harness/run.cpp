@@ -699,12 +699,26 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   };
   trace_run_begin(spec, r, period_ns);
   // Discovery shows only our side of an external graph's matches: its warm-up is repeated until
-  // an output comes back, so that timing starts once its side has matched too.
+  // an output comes back, so that timing starts once its side has matched too. A graph with a
+  // node on a device repeats it until the device is warm (DeviceWarmup), so that neither its
+  // program build nor the backlog that made is timed.
   std::optional<Playback::DeliveryGate> gate;
+  const int64_t gate_deadline =
+      rmw::steady_now_ns() + static_cast<int64_t>(options.connect_timeout_s * 1e9);
+  DeviceWarmup device_warmup(r.warmup);
   if (spec.external()) {
     gate = Playback::DeliveryGate{
-        r.warmup, [&] { return monitor.received() > 0; },
-        rmw::steady_now_ns() + static_cast<int64_t>(options.connect_timeout_s * 1e9)};
+        r.warmup, [&] { return monitor.received() > 0; }, gate_deadline,
+        "the graph matched every endpoint but delivered no output to its warm-up messages "
+        "before --connect-timeout: is it running, and does it publish the output topic?"};
+  } else if (uses_other_backend(spec)) {
+    gate = Playback::DeliveryGate{
+        r.warmup, [&] { return device_warmup.ready_after_round(monitor.received()); },
+        gate_deadline,
+        "the graph's nodes on a device answered none of the warm-up messages within "
+        "--connect-timeout (" +
+            number_text(options.connect_timeout_s) +
+            " s): is the device working? a slow one needs a longer --connect-timeout"};
   }
   int64_t repeated_ns = 0;
   playback.run(

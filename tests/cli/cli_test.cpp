@@ -912,7 +912,10 @@ TEST_F(Cli, BackendRunsTheKernelsThatHaveItAndRecordsTheDevice) {
   ASSERT_EQ(probe.exit_code, 0) << probe.out;
   if (nlohmann::json::parse(probe.out)["opencl_devices"].empty())
     GTEST_SKIP() << "no OpenCL device on this machine (Debian: pocl-opencl-icd)";
-  const Outcome o = robotperf_cli("run a1 --backend opencl --count 40 --output " + out_.string());
+  // At 10 Hz: pocl's CPU device takes about 21 ms a frame for a1, too close to 30 Hz's period
+  // with the other core busy (a test beside this one).
+  const Outcome o =
+      robotperf_cli("run a1 --backend opencl --rate 10 --count 40 --output " + out_.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("backends: rectify opencl ("), std::string::npos) << o.out;
   const auto j = result_json();
@@ -929,25 +932,30 @@ TEST_F(Cli, BackendRunsTheKernelsThatHaveItAndRecordsTheDevice) {
   EXPECT_EQ(j["backend_check"]["compared"], 16) << j["backend_check"].dump();
   EXPECT_GE(j["backend_check"]["agreement"].get<double>(), 0.999) << j["backend_check"].dump();
 
-  // Every perception benchmark with a kernel on the device gives the cpu's answers (a3 at 4 Hz:
-  // its block matcher takes about 150 ms a pair on a CPU device).
-  for (const std::string run : {"a2 --rate 10", "a3 --rate 4", "a4 --rate 10", "a5 --rate 10"}) {
+  // Every perception benchmark with a kernel on the device gives the cpu's answers. a3 at 1 Hz:
+  // its block matcher takes 150-600 ms a pair on a CPU device with the other core busy, so its
+  // 12 messages are too few for a valid run (exit 3), and the answers are what is checked.
+  for (const std::string run : {"a2 --rate 10 --count 35", "a3 --rate 1 --count 12 --warmup 2",
+                                "a4 --rate 10 --count 35", "a5 --rate 10 --count 35"}) {
+    const bool few = run.starts_with("a3");
     const fs::path dir = out_ / ("each-" + run.substr(0, 2));
-    const Outcome each = robotperf_cli("run " + run +
-                                       " --backend opencl --count 35 --quiet "
-                                       "--output " +
-                                       dir.string());
-    EXPECT_EQ(each.exit_code, 0) << run << ": " << each.out;
+    const Outcome each =
+        robotperf_cli("run " + run + " --backend opencl --quiet --output " + dir.string());
+    ASSERT_EQ(each.exit_code, few ? 3 : 0) << run << ": " << each.out;
     std::ifstream in(fs::directory_iterator(dir)->path());
     const auto r = nlohmann::json::parse(in);
     EXPECT_EQ(r["backend_check"]["passed"], true) << run << ": " << r["backend_check"].dump();
     EXPECT_GT(r["backend_check"]["compared"].get<int>(), 0) << run;
+    if (few) {
+      EXPECT_EQ(r["functional"]["valid"], true) << run << ": " << r["functional"].dump();
+      EXPECT_EQ(r["counts"]["lost"], 0) << run << ": " << each.out;
+    }
   }
 
   // Per-node children build their node on the backend too, and report their device.
   const fs::path per_node = out_ / "per-node";
   const Outcome p = robotperf_cli(
-      "run a1 --backend opencl --processes per-node --count 40 "
+      "run a1 --backend opencl --processes per-node --rate 10 --count 40 "
       "--quiet --domain " +
       domain() + " --output " + per_node.string());
   ASSERT_EQ(p.exit_code, 0) << p.out;

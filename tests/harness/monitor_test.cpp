@@ -119,7 +119,7 @@ TEST(Playback, RepeatsTheWarmupUntilTheGraphDelivers) {
 
   int checks = 0;
   const Playback::DeliveryGate gate{4, [&] { return ++checks == 3; },
-                                    rmw::steady_now_ns() + 10'000'000'000};
+                                    rmw::steady_now_ns() + 10'000'000'000, "never reached"};
   std::vector<MessageRecord> records;
   std::vector<std::size_t> counted;
   int64_t repeated_ns = 0;
@@ -144,17 +144,52 @@ TEST(Playback, RepeatsTheWarmupUntilTheGraphDelivers) {
   executor.stop();
 }
 
+// A device graph's warm-up, 5 messages a round: its answers so far at the end of each round.
+TEST(DeviceWarmup, ReadyOnceTheGraphAnswersAtItsSteadyPace) {
+  // Compiling for three rounds, then the backlog and the round's own answers: ready at once.
+  {
+    DeviceWarmup w(5);
+    EXPECT_FALSE(w.ready_after_round(0));
+    EXPECT_FALSE(w.ready_after_round(0));
+    EXPECT_FALSE(w.ready_after_round(0));
+    EXPECT_TRUE(w.ready_after_round(9));
+  }
+  // A graph that keeps up from the start.
+  EXPECT_TRUE(DeviceWarmup(5).ready_after_round(5));
+  // Slower than the rate: its answers per round rise while the build ends, then hold (2, 2).
+  {
+    DeviceWarmup w(5);
+    EXPECT_FALSE(w.ready_after_round(0));
+    EXPECT_FALSE(w.ready_after_round(1));
+    EXPECT_FALSE(w.ready_after_round(3));
+    EXPECT_TRUE(w.ready_after_round(5));
+  }
+  // Answers that still rise from round to round are a backlog being worked off, not a pace.
+  {
+    DeviceWarmup w(5);
+    EXPECT_FALSE(w.ready_after_round(1));
+    EXPECT_FALSE(w.ready_after_round(3));
+    EXPECT_FALSE(w.ready_after_round(7));
+    EXPECT_TRUE(w.ready_after_round(11));
+  }
+}
+
 TEST(Playback, AGraphThatNeverDeliversIsRefusedAtTheDeadline) {
   testing::TestPackage package("gate_never", testing::relay_graph("none"));
   const BenchmarkSpec spec = load_benchmark(package.dir());
   graph::Context context(rmw::make_transport("intra", {}));
   const MessageIds ids{1'000'000'000, 1'000'000, 12};
   Playback playback(context, spec, load_dataset(spec.dataset), ids);
-  const Playback::DeliveryGate gate{4, [] { return false; }, rmw::steady_now_ns() + 50'000'000};
+  const Playback::DeliveryGate gate{4, [] { return false; }, rmw::steady_now_ns() + 50'000'000,
+                                    "no answer to the warm-up"};
   std::vector<MessageRecord> records;
-  EXPECT_THROW(playback.run(
-                   records, [] { return false; }, nullptr, &gate),
-               GraphNotConnected);
+  try {
+    playback.run(
+        records, [] { return false; }, nullptr, &gate);
+    ADD_FAILURE() << "a graph that never delivers was not refused";
+  } catch (const GraphNotConnected& e) {
+    EXPECT_STREQ(e.what(), "no answer to the warm-up");
+  }
 }
 
 }  // namespace

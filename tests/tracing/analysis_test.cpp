@@ -53,7 +53,10 @@ uint64_t sent_of(uint64_t k) {
 // the Monitor takes /out. Frame 2 is lost after the kernel.
 // With `device_stages`, the kernel runs on a device: upload 200 ns, compute 500 ns, download
 // 150 ns inside its kernel_init..kernel_fini.
-void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool device_stages = false) {
+// With `repeated_outputs`, the Monitor takes frame 0 (warm-up, as when the Playback repeats the
+// warm-up) and frame 1 (measured) a second time after the last frame.
+void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool device_stages = false,
+               bool repeated_outputs = false) {
   testing::define_robotperf_events(w);
   const std::string play = "robotperf_playback", relay = "relay", mon = "robotperf_monitor";
   const uint64_t t0 = kStart - 1'000'000;
@@ -133,11 +136,29 @@ void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool devic
       w.end_packet(1, discarded_in_second_packet);
     }
   }
+  if (repeated_outputs) {
+    for (uint64_t k : {0, 1}) {
+      w.event(1, "robotperf:output", sent_of(3) + 8'500'000 + k, kRunPid, 3,
+              {V(mon), V(std::string("/out")), V(id_of(k)), V(uint64_t{100})});
+    }
+  }
   // Another run's process receiving one of our IDs: not ours, not counted.
   w.event(1, "robotperf:output", sent_of(3) + 9'000'000, 99, 99,
           {V(mon), V(std::string("/out")), V(id_of(3)), V(uint64_t{100})});
   w.event(0, "robotperf:run_end", sent_of(3) + 9'500'000, kRunPid, 1, {V(uint64_t{4})});
   w.finish();
+}
+
+// A warm-up message the Playback sent again comes back again: not a duplicate, as in the
+// black-box count; a measured message taken twice is one.
+TEST(Analyzer, ARepeatedWarmupIsNoDuplicate) {
+  TempDir dir("repeated-warmup");
+  CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
+  write_run(w, 0, false, true);
+  const TraceAnalysis a = analyze_trace(dir.path());
+  EXPECT_EQ(a.duplicates, 1u);
+  EXPECT_EQ(a.matched, 2u);
+  EXPECT_EQ(a.unknown, 0u);
 }
 
 TEST(CtfReader, DecodesCompactAndExtendedHeadersWithClockWrap) {
