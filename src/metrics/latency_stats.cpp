@@ -85,15 +85,22 @@ double quantile_of_sorted(std::span<const double> sorted_samples, double q) {
 }
 
 SampleStats compute_stats(std::span<const double> samples) {
-  SampleStats stats;
-  stats.count = samples.size();
-  if (samples.empty()) return stats;
-  if (!std::all_of(samples.begin(), samples.end(), [](double x) { return std::isfinite(x); })) {
+  std::vector<double> sorted(samples.begin(), samples.end());
+  // NaN breaks the sort's ordering: refused before sorting.
+  if (!std::all_of(sorted.begin(), sorted.end(), [](double x) { return !std::isnan(x); })) {
     throw std::invalid_argument("compute_stats: samples must be finite (found NaN or infinity)");
   }
-
-  std::vector<double> sorted(samples.begin(), samples.end());
   std::sort(sorted.begin(), sorted.end());
+  return compute_stats_of_sorted(sorted);
+}
+
+SampleStats compute_stats_of_sorted(std::span<const double> sorted) {
+  SampleStats stats;
+  stats.count = sorted.size();
+  if (sorted.empty()) return stats;
+  if (!std::all_of(sorted.begin(), sorted.end(), [](double x) { return std::isfinite(x); })) {
+    throw std::invalid_argument("compute_stats: samples must be finite (found NaN or infinity)");
+  }
 
   const auto n = static_cast<double>(sorted.size());
   CompensatedSum sum;

@@ -19,6 +19,7 @@
 #include <tuple>
 #include <unordered_map>
 
+#include "huge_page_allocator.hpp"
 #include "robotperf/metrics/delivery_validity.hpp"
 #include "robotperf/tracing/ctf.hpp"
 
@@ -164,15 +165,20 @@ enum class IdKind : uint8_t {
   kDeviceEnd
 };
 
+// Names are numbered below 2^29 (Collected::intern), so that an event takes 32 bytes: millions of
+// them are written and read again.
+constexpr uint32_t kMaxNames = uint32_t{1} << 29;
 struct IdEvent {
   int64_t ts;
   int64_t id;
   int32_t vpid;
   int32_t vtid;
   uint32_t node;
-  uint32_t what;  // topic, or kernel name
-  IdKind kind;
+  uint32_t what : 29;  // topic, or kernel name
+  uint32_t kind_bits : 3;
+  IdKind kind() const { return static_cast<IdKind>(kind_bits); }
 };
+static_assert(sizeof(IdEvent) == 32);
 
 struct Input {
   int64_t ts, id, scheduled;
@@ -222,7 +228,10 @@ struct Collected {
                                               std::size(recent)];
     if (cached < names.size() && names[cached] == s) return cached;
     auto [it, inserted] = name_ids.try_emplace(s, static_cast<uint32_t>(names.size()));
-    if (inserted) names.push_back(s);
+    if (inserted) {
+      if (names.size() >= kMaxNames) throw ctf::CtfError("the trace holds more than 2^29 names");
+      names.push_back(s);
+    }
     cached = it->second;
     return it->second;
   }
@@ -231,13 +240,13 @@ struct Collected {
   std::vector<std::pair<int64_t, RunInfo>> runs;   // (time, info)
   std::vector<std::pair<int32_t, int32_t>> joins;  // (vpid, run pid)
   std::vector<std::pair<int32_t, uint64_t>> ends;  // (vpid, sent)
-  std::vector<Input> inputs;
-  std::vector<Output> outputs;
+  BigVector<Input> inputs;
+  BigVector<Output> outputs;
   // One vector per part of a stream decoded (see StreamPart), in order: merged without a copy.
-  std::vector<std::vector<IdEvent>> id_events;
-  std::vector<CallbackEvent> callbacks;
-  std::vector<RmwEvent> rmw_publishes, rmw_takes;
-  std::vector<ControllerUpdateEvent> controller_updates;
+  std::vector<BigVector<IdEvent>> id_events;
+  BigVector<CallbackEvent> callbacks;
+  BigVector<RmwEvent> rmw_publishes, rmw_takes;
+  BigVector<ControllerUpdateEvent> controller_updates;
 
   HandleMap<std::string> node_names;
   HandleMap<Endpoint> publishers_by_rmw, subscriptions_by_handle, subscriptions_by_rmw;
@@ -286,11 +295,15 @@ void collect(StreamPart& part) {
   // Room for every event the part may hold (LTTng events take 40 bytes or more): growing the
   // vectors would copy them and fault in pages twice.
   const std::size_t estimate = part.bytes / 40;
-  std::vector<IdEvent>& id_events = c.id_events.emplace_back();
+  BigVector<IdEvent>& id_events = c.id_events.emplace_back();
   id_events.reserve(estimate);
+  // Reserved room that is never written costs nothing (pages are mapped when first written); a
+  // vector grown from small blocks would fault each of their 4 KiB pages.
   c.inputs.reserve(estimate / 8);
   c.outputs.reserve(estimate / 8);
   c.callbacks.reserve(estimate / 4);
+  c.rmw_publishes.reserve(estimate / 8);
+  c.rmw_takes.reserve(estimate / 8);
   const DispatchTable& dispatch = *part.dispatch;
   const ctf::EventClass* last_class = nullptr;
   const Dispatch* d = nullptr;
@@ -357,7 +370,7 @@ void collect(StreamPart& part) {
                             : d->handler == Handler::kDeviceBegin   ? IdKind::kDeviceBegin
                                                                     : IdKind::kDeviceEnd;
         id_events.push_back({ts, field(2).as_int(), vpid, vtid(), c.intern(field(0).s),
-                             c.intern(field(1).s), kind});
+                             c.intern(field(1).s), static_cast<uint32_t>(kind)});
         break;
       }
       case Handler::kNodeInit: {
@@ -554,15 +567,93 @@ void collect_parallel(std::vector<StreamPart>& parts, unsigned threads, Collecte
   if (error) std::rethrow_exception(error);
 }
 
-std::vector<double> to_doubles(const std::vector<int64_t>& v) {
-  return std::vector<double>(v.begin(), v.end());
+// Millions of samples a table: kept in huge pages, and sorted where they lie (not copied).
+using Samples = BigVector<double>;
+
+// The statistics of `samples`, sorting them.
+metrics::SampleStats stats_of(Samples& samples) {
+  std::sort(samples.begin(), samples.end());
+  return metrics::compute_stats_of_sorted(samples);
+}
+
+// Message ID -> index in a run's messages (sorted by index). robotperf's Playback makes ID k
+// base + k * period: when every message has such an ID at its own place, the index is computed;
+// otherwise (a trace from elsewhere, a missing input) it is looked up.
+class MessageLookup {
+ public:
+  MessageLookup(const std::vector<MessageTimes>& messages, int64_t period_ns) {
+    arithmetic_ = period_ns > 0 && !messages.empty();
+    if (arithmetic_) {
+      base_ = messages.front().id - static_cast<int64_t>(messages.front().index) * period_ns;
+      period_ = period_ns;
+      for (std::size_t i = 0; i < messages.size() && arithmetic_; ++i) {
+        arithmetic_ =
+            messages[i].index == i && messages[i].id == base_ + static_cast<int64_t>(i) * period_;
+      }
+      count_ = messages.size();
+    }
+    if (arithmetic_) return;
+    by_id_.reserve(messages.size() * 2);
+    for (std::size_t i = 0; i < messages.size(); ++i) {
+      if (!by_id_.try_emplace(messages[i].id, i).second) repeated_.push_back(messages[i].id);
+    }
+  }
+  // IDs that two messages carry (a lookup finds the first).
+  const std::vector<int64_t>& repeated() const { return repeated_; }
+
+  std::optional<std::size_t> find(int64_t id) const {
+    if (arithmetic_) {
+      // Unsigned: an ID below the base wraps to a huge offset, past count_.
+      const uint64_t offset = static_cast<uint64_t>(id) - static_cast<uint64_t>(base_);
+      if (offset % static_cast<uint64_t>(period_) != 0) return std::nullopt;
+      const uint64_t index = offset / static_cast<uint64_t>(period_);
+      if (index >= count_) return std::nullopt;
+      return static_cast<std::size_t>(index);
+    }
+    auto it = by_id_.find(id);
+    if (it == by_id_.end()) return std::nullopt;
+    return it->second;
+  }
+
+ private:
+  bool arithmetic_ = false;
+  int64_t base_ = 0, period_ = 1;
+  std::size_t count_ = 0;
+  std::unordered_map<int64_t, std::size_t> by_id_;
+  std::vector<int64_t> repeated_;
+};
+
+// Sorts messages by index. Where the indices are 0..n-1 (robotperf's own runs, whatever order
+// the parts were decoded in) each is swapped to its place: linear, and no second buffer.
+void sort_by_index(std::vector<MessageTimes>& messages) {
+  const std::size_t n = messages.size();
+  std::vector<bool> seen(n, false);
+  bool permutation = true;
+  for (const auto& m : messages) {
+    if (m.index >= n || seen[m.index]) {
+      permutation = false;
+      break;
+    }
+    seen[m.index] = true;
+  }
+  if (!permutation) {
+    std::stable_sort(
+        messages.begin(), messages.end(),
+        [](const MessageTimes& x, const MessageTimes& y) { return x.index < y.index; });
+    return;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    while (messages[i].index != i) std::swap(messages[i], messages[messages[i].index]);
+  }
 }
 
 // The black-box statistics and validity rules (harness/run.cpp), from the trace.
-// Fills a.messages and `by_id` (message ID -> index in a.messages).
-void summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run,
-                   std::unordered_map<int64_t, std::size_t>& by_id) {
+// Fills a.messages and returns the lookup of their IDs.
+std::unique_ptr<MessageLookup> summarise_run(TraceAnalysis& a, const Collected& c,
+                                             const RunInfo& run) {
   auto in_run = [&](int32_t vpid) { return run.processes.contains(vpid); };
+  a.messages.reserve(c.inputs.size());
+  advise_huge_pages(a.messages.data(), a.messages.capacity() * sizeof(MessageTimes));
   for (const auto& in : c.inputs) {
     if (!in_run(in.vpid)) continue;
     MessageTimes m;
@@ -573,48 +664,43 @@ void summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run,
     m.warmup = in.index < run.warmup;
     a.messages.push_back(m);
   }
-  std::sort(a.messages.begin(), a.messages.end(),
-            [](const MessageTimes& x, const MessageTimes& y) { return x.index < y.index; });
-  by_id.reserve(a.messages.size() * 2);
-  for (std::size_t i = 0; i < a.messages.size(); ++i) {
-    if (!by_id.try_emplace(a.messages[i].id, i).second) {
-      a.invalid_reasons.push_back("two inputs carry the message ID " +
-                                  std::to_string(a.messages[i].id));
-    }
-  }
-  std::vector<Output> outputs;
+  sort_by_index(a.messages);
+  auto lookup = std::make_unique<MessageLookup>(a.messages, run.period_ns);
+  for (const int64_t id : lookup->repeated())
+    a.invalid_reasons.push_back("two inputs carry the message ID " + std::to_string(id));
+  // The first reception of an ID is the one counted (the earliest: the outputs are in stream
+  // order, not in time order); every other one of a measured message is a duplicate.
+  std::size_t receptions_of_measured = 0;
   for (const auto& o : c.outputs) {
-    if (in_run(o.vpid)) outputs.push_back(o);
-  }
-  // Receptions in time order, so the first one of an ID is the one counted.
-  std::sort(outputs.begin(), outputs.end(),
-            [](const Output& x, const Output& y) { return x.ts < y.ts; });
-  for (const auto& o : outputs) {
-    auto it = by_id.find(o.id);
-    if (it == by_id.end()) {
+    if (!in_run(o.vpid)) continue;
+    const auto i = lookup->find(o.id);
+    if (!i) {
       ++a.unknown;
-    } else if (a.messages[it->second].received_ns >= 0) {
-      // A warm-up message again: the Playback repeats the warm-up until the graph delivers.
-      if (!a.messages[it->second].warmup) ++a.duplicates;
-    } else {
-      a.messages[it->second].received_ns = o.ts;
+      continue;
     }
+    MessageTimes& m = a.messages[*i];
+    if (!m.warmup) ++receptions_of_measured;
+    if (m.received_ns < 0 || o.ts < m.received_ns) m.received_ns = o.ts;
   }
 
-  std::vector<int64_t> from_scheduled, from_sent, lateness, receptions, sends;
+  Samples from_scheduled, from_sent, lateness;
+  BigVector<int64_t> receptions, sends;
+  for (auto* v : {&from_scheduled, &from_sent, &lateness}) v->reserve(a.messages.size());
+  for (auto* v : {&receptions, &sends}) v->reserve(a.messages.size());
   int64_t first_measured_send = -1;
   for (const auto& m : a.messages) {
-    lateness.push_back(m.sent_ns - m.scheduled_ns);
+    lateness.push_back(static_cast<double>(m.sent_ns - m.scheduled_ns));
     if (m.warmup) continue;
     ++a.measured;
     sends.push_back(m.sent_ns);
     if (first_measured_send < 0) first_measured_send = m.sent_ns;
     if (m.received_ns < 0) continue;
     ++a.matched;
-    from_scheduled.push_back(m.received_ns - m.scheduled_ns);
-    from_sent.push_back(m.received_ns - m.sent_ns);
+    from_scheduled.push_back(static_cast<double>(m.received_ns - m.scheduled_ns));
+    from_sent.push_back(static_cast<double>(m.received_ns - m.sent_ns));
     receptions.push_back(m.received_ns);
   }
+  a.duplicates = receptions_of_measured - a.matched;
   a.sent = a.messages.size();
   // Trace loss is never message loss: with events discarded, a missing output event says nothing.
   if (a.discarded_events > 0 || a.lost_packets > 0) a.unobserved = a.measured - a.matched;
@@ -622,11 +708,9 @@ void summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run,
   a.loss_percent =
       a.measured ? 100.0 * static_cast<double>(a.lost) / static_cast<double>(a.measured) : 0.0;
   {
-    auto scheduled = std::async(std::launch::async,
-                                [&] { return metrics::compute_stats(to_doubles(from_scheduled)); });
-    auto sent = std::async(std::launch::async,
-                           [&] { return metrics::compute_stats(to_doubles(from_sent)); });
-    a.send_lateness = metrics::compute_stats(to_doubles(lateness));
+    auto scheduled = std::async(std::launch::async, [&] { return stats_of(from_scheduled); });
+    auto sent = std::async(std::launch::async, [&] { return stats_of(from_sent); });
+    a.send_lateness = stats_of(lateness);
     a.latency_from_scheduled = scheduled.get();
     a.latency_from_sent = sent.get();
   }
@@ -656,18 +740,19 @@ void summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run,
            {a.matched, a.duplicates, a.unknown, a.loss_percent},
            static_cast<std::size_t>(run.min_samples), run.max_loss_percent))
     invalid(std::move(why));
+  return lookup;
 }
 
 // Per-hop breakdown from the events that carry message IDs.
 void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
-               const std::unordered_map<int64_t, std::size_t>& by_id) {
+               const MessageLookup& lookup) {
   // Group the events of measured messages by message (a counting sort on the
   // message's index: linear in the number of events), then by time within one.
   std::size_t id_event_count = 0;
   for (const auto& events : c.id_events) id_event_count += events.size();
-  std::vector<uint32_t> slot_of;
+  BigVector<uint32_t> slot_of;
   slot_of.reserve(id_event_count);
-  std::vector<std::size_t> starts(a.messages.size() + 1, 0);
+  BigVector<std::size_t> starts(a.messages.size() + 1, 0);
   // A frame's events follow one another in a stream: the last process and message looked up
   // are most often the next ones too.
   int32_t last_vpid = 0;
@@ -684,10 +769,8 @@ void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
       uint32_t slot = UINT32_MAX;
       if (last_in_run) {
         if (!have_last_id || e.id != last_id) {
-          auto it = by_id.find(e.id);
-          last_slot = it != by_id.end() && !a.messages[it->second].warmup
-                          ? static_cast<uint32_t>(it->second)
-                          : UINT32_MAX;
+          const auto i = lookup.find(e.id);
+          last_slot = i && !a.messages[*i].warmup ? static_cast<uint32_t>(*i) : UINT32_MAX;
           last_id = e.id;
           have_last_id = true;
         }
@@ -698,13 +781,14 @@ void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
     }
   }
   for (std::size_t i = 1; i < starts.size(); ++i) starts[i] += starts[i - 1];
-  std::vector<IdEvent> ev(starts.back());
+  // Pointers, not copies: a tenth of the memory to fill, and a frame's events lie close together.
+  BigVector<const IdEvent*> ev(starts.back());
   {
-    std::vector<std::size_t> next(starts.begin(), starts.end() - 1);
+    BigVector<std::size_t> next(starts.begin(), starts.end() - 1);
     std::size_t i = 0;
     for (const auto& events : c.id_events) {
       for (const auto& e : events) {
-        if (slot_of[i] != UINT32_MAX) ev[next[slot_of[i]]++] = e;
+        if (slot_of[i] != UINT32_MAX) ev[next[slot_of[i]]++] = &e;
         ++i;
       }
     }
@@ -712,11 +796,11 @@ void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
   for (std::size_t m = 0; m + 1 < starts.size(); ++m) {
     std::sort(ev.begin() + static_cast<std::ptrdiff_t>(starts[m]),
               ev.begin() + static_cast<std::ptrdiff_t>(starts[m + 1]),
-              [](const IdEvent& x, const IdEvent& y) { return x.ts < y.ts; });
+              [](const IdEvent* x, const IdEvent* y) { return x->ts < y->ts; });
   }
 
   struct Acc {
-    std::vector<double> durations;
+    Samples durations;
     double offset_sum = 0;
   };
   // (kind, node, from, to) -> samples
@@ -732,31 +816,31 @@ void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
     const std::size_t lo = starts[m], hi = starts[m + 1];
     const int64_t sent = a.messages[m].sent_ns;
     for (std::size_t i = lo; i < hi; ++i) {
-      const IdEvent& e = ev[i];
-      if (e.kind == IdKind::kEntry) {
+      const IdEvent& e = *ev[i];
+      if (e.kind() == IdKind::kEntry) {
         // Transport: the latest publish of this message on this topic before the take.
         for (std::size_t j = i; j-- > lo;) {
-          if (ev[j].kind == IdKind::kPublish && ev[j].what == e.what) {
-            add(0, e.node, ev[j].node, e.what, ev[j].ts, e.ts, sent);
+          if (ev[j]->kind() == IdKind::kPublish && ev[j]->what == e.what) {
+            add(0, e.node, ev[j]->node, e.what, ev[j]->ts, e.ts, sent);
             break;
           }
         }
-      } else if (e.kind == IdKind::kPublish) {
+      } else if (e.kind() == IdKind::kPublish) {
         // Node: from the node's latest callback start on this message to its publish.
         for (std::size_t j = i; j-- > lo;) {
-          if (ev[j].kind == IdKind::kEntry && ev[j].node == e.node && ev[j].vpid == e.vpid) {
-            add(1, e.node, ev[j].what, e.what, ev[j].ts, e.ts, sent);
+          if (ev[j]->kind() == IdKind::kEntry && ev[j]->node == e.node && ev[j]->vpid == e.vpid) {
+            add(1, e.node, ev[j]->what, e.what, ev[j]->ts, e.ts, sent);
             break;
           }
         }
-      } else if (e.kind == IdKind::kKernelFini || e.kind == IdKind::kDeviceEnd) {
+      } else if (e.kind() == IdKind::kKernelFini || e.kind() == IdKind::kDeviceEnd) {
         // Kernel, or one stage of it on a device: from its begin on the same thread.
-        const bool device = e.kind == IdKind::kDeviceEnd;
+        const bool device = e.kind() == IdKind::kDeviceEnd;
         const IdKind begin = device ? IdKind::kDeviceBegin : IdKind::kKernelInit;
         for (std::size_t j = i; j-- > lo;) {
-          if (ev[j].kind == begin && ev[j].node == e.node && ev[j].what == e.what &&
-              ev[j].vtid == e.vtid) {
-            add(device ? 3 : 2, e.node, e.what, e.what, ev[j].ts, e.ts, sent);
+          if (ev[j]->kind() == begin && ev[j]->node == e.node && ev[j]->what == e.what &&
+              ev[j]->vtid == e.vtid) {
+            add(device ? 3 : 2, e.node, e.what, e.what, ev[j]->ts, e.ts, sent);
             break;
           }
         }
@@ -774,8 +858,8 @@ void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
     h.from = kind >= 2 ? std::string() : std::string(c.names[from]);
     h.to = std::string(c.names[to]);
     h.mean_start_offset_ns = x.offset_sum / static_cast<double>(x.durations.size());
-    stats.push_back(std::async(
-        std::launch::async, [&samples = x.durations] { return metrics::compute_stats(samples); }));
+    stats.push_back(
+        std::async(std::launch::async, [&samples = x.durations] { return stats_of(samples); }));
     a.hops.push_back(std::move(h));
   }
   for (std::size_t i = 0; i < stats.size(); ++i) a.hops[i].duration = stats[i].get();
@@ -797,7 +881,8 @@ std::string node_name(const Collected& c, int32_t vpid, uint64_t node_handle) {
 
 // Callback durations from ros2:callback_start/end, per node and source.
 void callback_durations(TraceAnalysis& a, const Collected& c, const std::optional<RunInfo>& run) {
-  std::vector<CallbackEvent> ev;
+  BigVector<CallbackEvent> ev;
+  ev.reserve(c.callbacks.size());
   for (const auto& e : c.callbacks) {
     if (!run || run->processes.contains(e.vpid)) ev.push_back(e);
   }
@@ -807,11 +892,7 @@ void callback_durations(TraceAnalysis& a, const Collected& c, const std::optiona
     return x.ts < y.ts;
   });
   using Name = std::tuple<std::string, std::string, std::string>;  // node, source, symbol
-  std::map<Name, std::vector<double>> acc;
-  HandleMap<Name> names;
-  auto name_of = [&](int32_t vpid, uint64_t cb) -> const Name& {
-    auto [it, inserted] = names.try_emplace({vpid, cb});
-    if (!inserted) return it->second;
+  auto name_of = [&](int32_t vpid, uint64_t cb) -> Name {
     std::string symbol;
     if (auto sym = c.callback_symbol.find({vpid, cb}); sym != c.callback_symbol.end())
       symbol = sym->second;
@@ -821,9 +902,8 @@ void callback_durations(TraceAnalysis& a, const Collected& c, const std::optiona
         handle = r->second;
       if (auto ep = c.subscriptions_by_handle.find({vpid, handle});
           ep != c.subscriptions_by_handle.end()) {
-        it->second = {node_name(c, vpid, ep->second.node_handle),
-                      std::string(c.names[ep->second.topic]), symbol};
-        return it->second;
+        return {node_name(c, vpid, ep->second.node_handle), std::string(c.names[ep->second.topic]),
+                symbol};
       }
     }
     if (auto t = c.callback_timer.find({vpid, cb}); t != c.callback_timer.end()) {
@@ -836,11 +916,22 @@ void callback_durations(TraceAnalysis& a, const Collected& c, const std::optiona
         std::snprintf(buf, sizeof buf, "timer %g ms", static_cast<double>(p->second) / kNsPerMs);
         source = buf;
       }
-      it->second = {node, source, symbol};
-      return it->second;
+      return {node, source, symbol};
     }
-    it->second = {"?", "callback " + hex(cb), symbol};
-    return it->second;
+    return {"?", "callback " + hex(cb), symbol};
+  };
+  // Callbacks with the same name make one series; each callback's series is named once.
+  std::map<Name, std::size_t> series_of_name;
+  std::vector<Samples> series;
+  HandleMap<std::size_t> series_of_callback;
+  auto samples_of = [&](int32_t vpid, uint64_t cb) -> Samples& {
+    auto [it, inserted] = series_of_callback.try_emplace({vpid, cb}, 0);
+    if (inserted) {
+      auto [named, added] = series_of_name.try_emplace(name_of(vpid, cb), series.size());
+      if (added) series.emplace_back();
+      it->second = named->second;
+    }
+    return series[it->second];
   };
   std::vector<std::pair<uint64_t, int64_t>> stack;
   for (std::size_t i = 0; i < ev.size(); ++i) {
@@ -848,14 +939,14 @@ void callback_durations(TraceAnalysis& a, const Collected& c, const std::optiona
     if (ev[i].start) {
       stack.emplace_back(ev[i].callback, ev[i].ts);
     } else if (!stack.empty() && stack.back().first == ev[i].callback) {
-      acc[name_of(ev[i].vpid, ev[i].callback)].push_back(
-          static_cast<double>(ev[i].ts - stack.back().second));
+      samples_of(ev[i].vpid, ev[i].callback)
+          .push_back(static_cast<double>(ev[i].ts - stack.back().second));
       stack.pop_back();
     }
   }
-  for (auto& [key, d] : acc) {
+  for (auto& [name, index] : series_of_name) {
     a.callbacks.push_back(
-        {std::get<0>(key), std::get<1>(key), std::get<2>(key), metrics::compute_stats(d)});
+        {std::get<0>(name), std::get<1>(name), std::get<2>(name), stats_of(series[index])});
   }
 }
 
@@ -916,7 +1007,7 @@ void controller_update_durations(TraceAnalysis& a, const Collected& c,
     return std::tuple(e.vpid, e.node, e.controller, e.cycle, !e.begin, e.ts);
   };
   std::sort(ev.begin(), ev.end(), [&](const auto& x, const auto& y) { return key(x) < key(y); });
-  std::map<std::pair<std::string, std::string>, std::vector<double>> acc;
+  std::map<std::pair<std::string, std::string>, Samples> acc;
   for (std::size_t i = 0; i + 1 < ev.size(); ++i) {
     const auto& b = ev[i];
     const auto& e = ev[i + 1];
@@ -927,8 +1018,7 @@ void controller_update_durations(TraceAnalysis& a, const Collected& c,
         static_cast<double>(e.ts - b.ts));
     ++i;
   }
-  for (auto& [k, d] : acc)
-    a.controller_updates.push_back({k.first, k.second, metrics::compute_stats(d)});
+  for (auto& [k, d] : acc) a.controller_updates.push_back({k.first, k.second, stats_of(d)});
 }
 
 // rmw_publish -> rmw_take latencies, matched by topic and source timestamp.
@@ -943,29 +1033,45 @@ void topic_latencies(TraceAnalysis& a, const Collected& c, const std::optional<R
       return std::hash<int64_t>()(k.stamp) ^ (static_cast<std::size_t>(k.topic) << 40);
     }
   };
-  std::unordered_map<PubKey, std::pair<int64_t, std::string>, PubHash> pubs;
+  // Nodes by (process, handle), numbered in order of first use; named at the end.
+  HandleMap<uint32_t> node_numbers;
+  std::vector<Key> nodes;
+  auto node_number = [&](int32_t vpid, uint64_t handle) {
+    auto [it, inserted] = node_numbers.try_emplace({vpid, handle}, nodes.size());
+    if (inserted) nodes.push_back({vpid, handle});
+    return it->second;
+  };
+  // (topic, stamp) -> the first publish's time and publishing node.
+  std::unordered_map<PubKey, std::pair<int64_t, uint32_t>, PubHash> pubs;
   pubs.reserve(c.rmw_publishes.size());
   for (const auto& p : c.rmw_publishes) {
     if (run && !run->processes.contains(p.vpid)) continue;
     auto ep = c.publishers_by_rmw.find({p.vpid, p.handle});
     if (ep == c.publishers_by_rmw.end()) continue;
     pubs.try_emplace({ep->second.topic, p.stamp}, p.ts,
-                     node_name(c, p.vpid, ep->second.node_handle));
+                     node_number(p.vpid, ep->second.node_handle));
   }
-  std::map<std::tuple<std::string, std::string, std::string>, std::vector<double>> acc;
+  // (topic, publisher, subscriber) -> samples.
+  std::map<std::tuple<uint32_t, uint32_t, uint32_t>, Samples> acc;
   for (const auto& t : c.rmw_takes) {
     if (run && !run->processes.contains(t.vpid)) continue;
     auto ep = c.subscriptions_by_rmw.find({t.vpid, t.handle});
     if (ep == c.subscriptions_by_rmw.end()) continue;
     auto p = pubs.find({ep->second.topic, t.stamp});
     if (p == pubs.end()) continue;
-    acc[{std::string(c.names[ep->second.topic]), p->second.second,
-         node_name(c, t.vpid, ep->second.node_handle)}]
+    acc[{ep->second.topic, p->second.second, node_number(t.vpid, ep->second.node_handle)}]
         .push_back(static_cast<double>(t.ts - p->second.first));
   }
+  // Named: nodes that share a name ("?" for unknown handles) share a row.
+  std::map<std::tuple<std::string, std::string, std::string>, Samples> named;
   for (auto& [key, d] : acc) {
-    a.topics.push_back(
-        {std::get<0>(key), std::get<1>(key), std::get<2>(key), metrics::compute_stats(d)});
+    const auto& [topic, publisher, subscriber] = key;
+    auto name = [&](uint32_t n) { return node_name(c, nodes[n].vpid, nodes[n].handle); };
+    auto& samples = named[{std::string(c.names[topic]), name(publisher), name(subscriber)}];
+    samples.insert(samples.end(), d.begin(), d.end());
+  }
+  for (auto& [key, d] : named) {
+    a.topics.push_back({std::get<0>(key), std::get<1>(key), std::get<2>(key), stats_of(d)});
   }
 }
 
@@ -1089,9 +1195,8 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
     controller_update_durations(a, c, a.run);
   });
   if (a.run) {
-    std::unordered_map<int64_t, std::size_t> by_id;
-    summarise_run(a, c, *a.run, by_id);
-    breakdown(a, c, *a.run, by_id);
+    const auto lookup = summarise_run(a, c, *a.run);
+    breakdown(a, c, *a.run, *lookup);
   }
   tables.get();
   explain_missing_tables(a, c);

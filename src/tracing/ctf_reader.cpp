@@ -217,11 +217,31 @@ class Decoder {
   std::string_view read_string() {
     align(8);
     const uint64_t start = pos_ / 8, end = end_bits_ / 8;
-    const void* nul = std::memchr(data_ + start, 0, end > start ? end - start : 0);
-    if (nul == nullptr) fail("unterminated string");
-    const auto len = static_cast<std::size_t>(static_cast<const uint8_t*>(nul) - (data_ + start));
+    const std::size_t len = string_length(data_ + start, end > start ? end - start : 0);
     pos_ = (start + len + 1) * 8;
     return {reinterpret_cast<const char*>(data_ + start), len};
+  }
+
+  // The length of the NUL-terminated string at p, within `left` bytes. Trace strings are mostly
+  // names and topics a few words long: their first words are tested here, eight bytes at a time,
+  // before a call to memchr for the rest.
+  std::size_t string_length(const uint8_t* p, std::size_t left) const {
+    constexpr uint64_t kOnes = 0x0101010101010101ull, kHighs = 0x8080808080808080ull;
+    std::size_t len = 0;
+    for (; len + 8 <= left && len < 64; len += 8) {
+      uint64_t word;
+      std::memcpy(&word, p + len, 8);
+      // The lowest flagged byte is the first zero byte (little-endian): flags above a zero byte
+      // can be false, below it never are.
+      if (const uint64_t zero = (word - kOnes) & ~word & kHighs; zero != 0) {
+        if constexpr (std::endian::native == std::endian::little)
+          return len + static_cast<std::size_t>(std::countr_zero(zero)) / 8;
+        break;
+      }
+    }
+    const void* nul = std::memchr(p + len, 0, left - len);
+    if (nul == nullptr) fail("unterminated string");
+    return static_cast<std::size_t>(static_cast<const uint8_t*>(nul) - p);
   }
 
   // Text stored as a fixed array or a sequence of 8-bit characters: up to the first NUL.
@@ -621,6 +641,14 @@ uint64_t Trace::read_packets(std::size_t index, std::span<const Packet> packets,
                              const std::function<void(const Event&)>& on_event) const {
   const Mapped& m = *mapped_.at(index);
   if (m.size == 0 || packets.empty()) return 0;
+  // The packets' pages mapped in one call, on this thread: a page fault each 64 KiB costs
+  // microseconds in a virtual machine. Without MADV_POPULATE_READ (Linux < 5.14), faults map them.
+  {
+    const auto page = static_cast<uint64_t>(sysconf(_SC_PAGESIZE));
+    const uint64_t from = packets.front().start_bits / 8 / page * page;
+    const uint64_t to = std::min<uint64_t>(packets.back().end_bits / 8, m.size);
+    if (to > from) madvise(const_cast<uint8_t*>(m.data) + from, to - from, MADV_POPULATE_READ);
+  }
   const Metadata& md = metadata_;
   const std::string file = stream_files_[index].string();
   Decoder d(m.data, m.size * 8, md.big_endian, file);
