@@ -54,9 +54,10 @@ uint64_t sent_of(uint64_t k) {
 // With `device_stages`, the kernel runs on a device: upload 200 ns, compute 500 ns, download
 // 150 ns inside its kernel_init..kernel_fini.
 // With `repeated_outputs`, the Monitor takes frame 0 (warm-up, as when the Playback repeats the
-// warm-up) and frame 1 (measured) a second time after the last frame.
+// warm-up) and frame 1 (measured) a second time after the last frame. `declared_period` is the
+// period the run_begin event gives (the IDs are kPeriod apart whatever it says).
 void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool device_stages = false,
-               bool repeated_outputs = false) {
+               bool repeated_outputs = false, int64_t declared_period = kPeriod) {
   testing::define_robotperf_events(w);
   const std::string play = "robotperf_playback", relay = "relay", mon = "robotperf_monitor";
   const uint64_t t0 = kStart - 1'000'000;
@@ -83,7 +84,7 @@ void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool devic
            V(uint64_t{10})});
   w.event(0, "robotperf:run_begin", t0 + 9, kRunPid, 1,
           {V(std::string("t1")), V(std::string("intra")), V(uint64_t{4}), V(uint64_t{1}),
-           V(kPeriod), V(uint64_t{1}), V(50.0)});
+           V(declared_period), V(uint64_t{1}), V(50.0)});
 
   for (uint64_t k = 0; k < 4; ++k) {
     const int64_t id = id_of(k);
@@ -147,6 +148,30 @@ void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool devic
           {V(mon), V(std::string("/out")), V(id_of(3)), V(uint64_t{100})});
   w.event(0, "robotperf:run_end", sent_of(3) + 9'500'000, kRunPid, 1, {V(uint64_t{4})});
   w.finish();
+}
+
+// IDs that are not base + k * period of the run (a trace robotperf's Playback did not write) are
+// looked up instead of computed: the same counts, latencies and hops.
+TEST(Analyzer, IdsOfAnotherSpacingGiveTheSameResult) {
+  auto analysed = [](const std::string& name, int64_t declared_period) {
+    TempDir dir(name);
+    CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
+    write_run(w, 0, false, true, declared_period);
+    return analyze_trace(dir.path());
+  };
+  const TraceAnalysis computed = analysed("ids-computed", kPeriod);
+  const TraceAnalysis looked_up = analysed("ids-looked-up", kPeriod + 1);
+  EXPECT_EQ(looked_up.matched, 2u);
+  EXPECT_EQ(looked_up.duplicates, 1u);
+  EXPECT_EQ(looked_up.lost, computed.lost);
+  EXPECT_DOUBLE_EQ(looked_up.latency_from_sent.max, 7'000'000.0);
+  EXPECT_DOUBLE_EQ(looked_up.latency_from_sent.p50, computed.latency_from_sent.p50);
+  ASSERT_EQ(looked_up.hops.size(), computed.hops.size());
+  ASSERT_FALSE(computed.hops.empty());
+  for (std::size_t i = 0; i < computed.hops.size(); ++i) {
+    EXPECT_EQ(looked_up.hops[i].label(), computed.hops[i].label());
+    EXPECT_DOUBLE_EQ(looked_up.hops[i].duration.mean, computed.hops[i].duration.mean);
+  }
 }
 
 // A warm-up message the Playback sent again comes back again: not a duplicate, as in the
