@@ -127,6 +127,26 @@ HeaderShape header_shape(const Type& h, bool trace_big_endian) {
   return id_bits == 5 ? HeaderShape::kCompact : HeaderShape::kLarge;
 }
 
+// Where the first NUL byte lies in [p, p + left), or `left` when there is none. Trace strings are
+// mostly names, topics and process names a few words long: their first words are tested here,
+// eight bytes at a time, before a call to memchr for the rest.
+std::size_t nul_offset(const uint8_t* p, std::size_t left) {
+  constexpr uint64_t kOnes = 0x0101010101010101ull, kHighs = 0x8080808080808080ull;
+  std::size_t len = 0;
+  if constexpr (std::endian::native == std::endian::little) {
+    for (; len + 8 <= left && len < 64; len += 8) {
+      uint64_t word;
+      std::memcpy(&word, p + len, 8);
+      // The lowest flagged byte is the first zero byte: flags above a zero byte can be false,
+      // below it never are.
+      if (const uint64_t zero = (word - kOnes) & ~word & kHighs; zero != 0)
+        return len + static_cast<std::size_t>(std::countr_zero(zero)) / 8;
+    }
+  }
+  const void* nul = std::memchr(p + len, 0, left - len);
+  return nul != nullptr ? static_cast<std::size_t>(static_cast<const uint8_t*>(nul) - p) : left;
+}
+
 class Decoder {
  public:
   Decoder(const uint8_t* data, uint64_t end_bits, bool trace_big_endian, const std::string& file)
@@ -217,41 +237,20 @@ class Decoder {
   std::string_view read_string() {
     align(8);
     const uint64_t start = pos_ / 8, end = end_bits_ / 8;
-    const std::size_t len = string_length(data_ + start, end > start ? end - start : 0);
+    const std::size_t left = end > start ? end - start : 0;
+    const std::size_t len = nul_offset(data_ + start, left);
+    if (len == left) fail("unterminated string");
     pos_ = (start + len + 1) * 8;
     return {reinterpret_cast<const char*>(data_ + start), len};
-  }
-
-  // The length of the NUL-terminated string at p, within `left` bytes. Trace strings are mostly
-  // names and topics a few words long: their first words are tested here, eight bytes at a time,
-  // before a call to memchr for the rest.
-  std::size_t string_length(const uint8_t* p, std::size_t left) const {
-    constexpr uint64_t kOnes = 0x0101010101010101ull, kHighs = 0x8080808080808080ull;
-    std::size_t len = 0;
-    for (; len + 8 <= left && len < 64; len += 8) {
-      uint64_t word;
-      std::memcpy(&word, p + len, 8);
-      // The lowest flagged byte is the first zero byte (little-endian): flags above a zero byte
-      // can be false, below it never are.
-      if (const uint64_t zero = (word - kOnes) & ~word & kHighs; zero != 0) {
-        if constexpr (std::endian::native == std::endian::little)
-          return len + static_cast<std::size_t>(std::countr_zero(zero)) / 8;
-        break;
-      }
-    }
-    const void* nul = std::memchr(p + len, 0, left - len);
-    if (nul == nullptr) fail("unterminated string");
-    return static_cast<std::size_t>(static_cast<const uint8_t*>(nul) - p);
   }
 
   // Text stored as a fixed array or a sequence of 8-bit characters: up to the first NUL.
   std::string_view read_text(uint64_t count) {
     align(8);
     if (pos_ + count * 8 > end_bits_) fail("text runs past the end of its packet");
-    const auto* p = reinterpret_cast<const char*>(data_ + pos_ / 8);
+    const uint8_t* p = data_ + pos_ / 8;
     pos_ += count * 8;
-    const void* nul = std::memchr(p, 0, count);
-    return {p, nul ? static_cast<std::size_t>(static_cast<const char*>(nul) - p) : count};
+    return {reinterpret_cast<const char*>(p), nul_offset(p, count)};
   }
 
   // Decodes one value of type t. `siblings` holds the integer values of the

@@ -218,6 +218,29 @@ TEST(CtfReader, DecodesCompactAndExtendedHeadersWithClockWrap) {
   EXPECT_EQ(seen, std::vector<uint64_t>(std::begin(ts), std::end(ts)));
 }
 
+// Strings of every length up to 80 bytes (found a word at a time, then by memchr), each followed
+// by a number that must be read from right after its NUL.
+TEST(CtfReader, StringsOfEveryLengthEndAtTheirNul) {
+  TempDir dir("string-lengths");
+  CtfWriter w(dir.path(), CtfWriter::Header::kLarge, false);
+  w.define("a:s", {{"s", testing::FieldKind::kString}, {"v", testing::FieldKind::kU64}});
+  auto text = [](uint64_t n) {
+    std::string t;
+    for (uint64_t i = 0; i < n; ++i) t += static_cast<char>('a' + (i * 7 + n) % 26);
+    return t;
+  };
+  for (uint64_t n = 0; n <= 80; ++n) w.event(0, "a:s", 1000 + n, 7, 8, {V(text(n)), V(n * 11)});
+  w.finish();
+  ctf::Trace trace(dir.path());
+  uint64_t n = 0;
+  trace.read_stream(0, [&](const ctf::Event& e) {
+    EXPECT_EQ(e.fields[0].s, text(n)) << n;
+    EXPECT_EQ(e.fields[1].u, n * 11) << n;
+    ++n;
+  });
+  EXPECT_EQ(n, 81u);
+}
+
 TEST(Analyzer, HandBuiltTraceGivesExactLatencies) {
   for (auto header : {CtfWriter::Header::kCompact, CtfWriter::Header::kLarge}) {
     TempDir dir(header == CtfWriter::Header::kCompact ? "exact-compact" : "exact-large");
