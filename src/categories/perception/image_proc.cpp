@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "device_node.hpp"
+#include "device_stage.hpp"
 #include "robotperf/perception/camera_model.hpp"
 
 namespace robotperf::perception {
@@ -220,16 +220,16 @@ template <class Compute>
 void on_device(const cv::Mat& in, cv::UMat& device_in, cv::UMat& device_out, cv::Mat& out,
                const Compute& compute) {
   {
-    DeviceStage upload("upload", in.total() * in.elemSize());
+    DeviceStage upload("upload", in.total() * in.elemSize(), opencl_queue());
     in.copyTo(device_in);
   }
   {
-    DeviceStage stage("compute", 0);
+    DeviceStage stage("compute", 0, opencl_queue());
     compute(device_in, device_out);
   }
   uint8_t* const data = out.data;
   {
-    DeviceStage download("download", out.total() * out.elemSize());
+    DeviceStage download("download", out.total() * out.elemSize(), opencl_queue());
     device_out.copyTo(out);
   }
   if (out.data != data) throw std::logic_error("the device's output has another size or type");
