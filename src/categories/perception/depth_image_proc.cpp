@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "cuda/cuda_backend.hpp"
 #include "device_stage.hpp"
 #include "robotperf/perception/image_proc.hpp"
 #include "xyzrgb_model.hpp"
@@ -200,9 +201,20 @@ void convert_on_opencl(const cv::Mat& depth, const cv::Mat& colour, const Xyzrgb
 
 }  // namespace
 
-void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
-                        const msgs::CameraInfo& info, const PointCloudXyzrgbParams& params,
-                        msgs::PointCloud2& cloud, ImageBackend backend) {
+PointCloudXyzrgbProcessor::PointCloudXyzrgbProcessor(ImageBackend backend) : backend_(backend) {
+  if (backend == ImageBackend::kCuda) cuda_ = cuda::make_point_cloud_maker();
+}
+
+PointCloudXyzrgbProcessor::~PointCloudXyzrgbProcessor() = default;
+PointCloudXyzrgbProcessor::PointCloudXyzrgbProcessor(PointCloudXyzrgbProcessor&&) noexcept =
+    default;
+PointCloudXyzrgbProcessor& PointCloudXyzrgbProcessor::operator=(
+    PointCloudXyzrgbProcessor&&) noexcept = default;
+
+void PointCloudXyzrgbProcessor::compute(const msgs::Image& depth, const msgs::Image& colour,
+                                        const msgs::CameraInfo& info,
+                                        const PointCloudXyzrgbParams& params,
+                                        msgs::PointCloud2& cloud) {
   if (depth.header.frame_id != colour.header.frame_id) {
     throw std::invalid_argument("point_cloud_xyzrgb: depth frame '" + depth.header.frame_id +
                                 "' differs from colour frame '" + colour.header.frame_id +
@@ -230,7 +242,7 @@ void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
     const double ratio = static_cast<double>(depth.width) / colour.width;
     model = {static_cast<float>(info.p[2] * ratio), static_cast<float>(info.p[6] * ratio),
              static_cast<float>(info.p[0] * ratio), static_cast<float>(info.p[5] * ratio)};
-    if (backend == ImageBackend::kCpu) {
+    if (backend_ == ImageBackend::kCpu) {
       cv::Mat resized;
       cv::resize(colour_view, resized, depth_view.size(), 0, 0, cv::INTER_LINEAR);
       colour_view = resized;
@@ -254,9 +266,15 @@ void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
   const std::size_t bytes = static_cast<std::size_t>(cloud.row_step) * depth.height;
   if (cloud.data.size() != bytes) cloud.data.assign(bytes, 0);
   if (depth_view.empty()) return;
-  if (backend == ImageBackend::kOpenCl) {
+  if (backend_ == ImageBackend::kOpenCl) {
     convert_on_opencl(depth_view, colour_view,
                       device_model(is_float, model, params.range_max, layout), cloud);
+    return;
+  }
+  if (backend_ == ImageBackend::kCuda) {
+    cv::Mat points(depth_view.rows, static_cast<int>(cloud.row_step), CV_8UC1, cloud.data.data());
+    cuda_->xyzrgb(depth_view, colour_view, device_model(is_float, model, params.range_max, layout),
+                  points);
     return;
   }
   if (is_float) {
@@ -265,6 +283,12 @@ void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
     convert_depth<uint16_t>(depth_view, model, params.range_max, cloud);
   }
   convert_colour(colour_view, layout, cloud);
+}
+
+void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
+                        const msgs::CameraInfo& info, const PointCloudXyzrgbParams& params,
+                        msgs::PointCloud2& cloud, ImageBackend backend) {
+  PointCloudXyzrgbProcessor(backend).compute(depth, colour, info, params, cloud);
 }
 
 }  // namespace robotperf::perception

@@ -2,17 +2,31 @@
 // records about the device that backend runs on.
 #pragma once
 
+#include <string>
+#include <vector>
+
 #include "device_stage.hpp"
+#include "robotperf/perception/cuda_device.hpp"
 #include "robotperf/perception/image_proc.hpp"
 #include "robotperf/perception/opencl_device.hpp"
 #include "robotperf/plugin/kernel.hpp"
 
 namespace robotperf::perception {
 
-// The backend a node's config names; an OpenCL one needs its device now, not at the first frame.
+// The backends of the perception kernels that have device code: cuda only in a build with the
+// CUDA toolkit, so that a run asking for it elsewhere is refused before any node is built.
+inline std::vector<std::string> perception_backends() {
+  std::vector<std::string> names{"cpu", "opencl"};
+  if (cuda_backend_built()) names.push_back("cuda");
+  return names;
+}
+
+// The backend a node's config names; a device backend needs its device now, not at the first
+// frame.
 inline ImageBackend backend_of(const plugin::KernelConfig& config) {
   const ImageBackend b = image_backend(config.backend);
   if (b == ImageBackend::kOpenCl) opencl_device();
+  if (b == ImageBackend::kCuda) cuda_device();
   return b;
 }
 
@@ -20,7 +34,15 @@ class ImageDeviceNode : public plugin::DeviceNode {
  public:
   explicit ImageDeviceNode(ImageBackend backend) : backend_(backend) {}
   plugin::DeviceInfo device() const override {
-    return backend_ == ImageBackend::kOpenCl ? opencl_device() : plugin::DeviceInfo{};
+    switch (backend_) {
+      case ImageBackend::kOpenCl:
+        return opencl_device();
+      case ImageBackend::kCuda:
+        return cuda_device();
+      case ImageBackend::kCpu:
+        break;
+    }
+    return {};
   }
 
  protected:
