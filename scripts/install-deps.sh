@@ -1,7 +1,17 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages robotperf needs to build and test.
 # Idempotent: returns at once when every package is already installed.
+# --cuda: also a CUDA toolkit, for the perception kernels' cuda backend (skipped when nvcc is
+# already there, e.g. NVIDIA's own toolkit in /usr/local/cuda).
 set -euo pipefail
+
+cuda=false
+for arg in "$@"; do
+  case "$arg" in
+    --cuda) cuda=true ;;
+    *) echo "install-deps: unknown argument $arg (known: --cuda)" >&2; exit 2 ;;
+  esac
+done
 
 packages=(
   g++ cmake make pkg-config git
@@ -20,6 +30,12 @@ packages=(
   libapriltag-dev  # localization b3
 )
 
+# Debian's CUDA toolkit is in the non-free component, which a default sources.list leaves out.
+cuda_package=nvidia-cuda-toolkit
+if $cuda && ! command -v nvcc >/dev/null && [[ ! -x /usr/local/cuda/bin/nvcc ]]; then
+  packages+=("$cuda_package")
+fi
+
 missing=()
 for p in "${packages[@]}"; do
   status=$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)
@@ -35,4 +51,11 @@ if [[ $(id -u) -ne 0 ]]; then
 fi
 export DEBIAN_FRONTEND=noninteractive
 "${sudo[@]}" apt-get update -qq
+if [[ " ${missing[*]} " == *" $cuda_package "* ]]; then
+  candidate=$(apt-cache policy "$cuda_package" | sed -n 's/^ *Candidate: *//p')
+  if [[ -z "$candidate" || "$candidate" == "(none)" ]]; then
+    echo "install-deps: apt has no $cuda_package: enable Debian's non-free component (add non-free to the components in /etc/apt/sources.list) or install NVIDIA's CUDA toolkit" >&2
+    exit 1
+  fi
+fi
 "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -30,6 +30,7 @@
 #include "robotperf/harness/run.hpp"
 #include "robotperf/msgs/cdr.hpp"
 #include "robotperf/msgs/dynamic.hpp"
+#include "robotperf/perception/cuda_device.hpp"
 #include "robotperf/perception/opencl_device.hpp"
 #include "robotperf/report/atomic_file.hpp"
 #include "robotperf/report/benchmark_yaml.hpp"
@@ -632,6 +633,13 @@ std::map<std::string, std::vector<std::string>> host_launchers(const harness::Be
   return out;
 }
 
+// A list of devices as results record them.
+nlohmann::json devices_json(const std::vector<plugin::DeviceInfo>& devices) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& d : devices) list.push_back(harness::device_to_json(d));
+  return list;
+}
+
 int run(const Roots& roots, const RunArgs& a) {
   auto spec = harness::find_benchmark(roots, a.id);
   for (const std::string& assignment : a.workload) {
@@ -655,6 +663,9 @@ int run(const Roots& roots, const RunArgs& a) {
   o.arrival = harness::ArrivalPattern::parse(a.arrival);
   o.arrival.seed = a.arrival_seed;
   o.update_rate_hz = a.update_rate;
+  // Said here, where the build is known: the kernels of a build without CUDA do not name it.
+  if (a.backend == "cuda" && !perception::cuda_backend_built())
+    throw std::invalid_argument(std::string("--backend cuda: ") + perception::kCudaNotBuilt);
   o.backend = a.backend;
   o.count = a.count;
   o.duration_s = a.duration;
@@ -1421,12 +1432,8 @@ int main(int argc, char** argv) {
           {"software", report::software_json()},
           {"power",
            metrics::sources_to_json(metrics::discover_power_sources(sysinfo_power.options()))},
-          {"opencl_devices", [] {
-             nlohmann::json devices = nlohmann::json::array();
-             for (const auto& d : perception::opencl_devices())
-               devices.push_back(harness::device_to_json(d));
-             return devices;
-           }()}};
+          {"opencl_devices", devices_json(perception::opencl_devices())},
+          {"cuda_devices", devices_json(perception::cuda_devices())}};
       std::cout << json_text(description, 2) << "\n";
       return kExitOk;
     }

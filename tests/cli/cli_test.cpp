@@ -889,7 +889,7 @@ TEST_F(Cli, UpdateRateOverridesTheControlLoopRate) {
 // there is no GPU), records the backend and the device per node, and its answer passes a1's
 // functional checks; a backend no kernel has, or one without its device, is one line and exit 2.
 TEST_F(Cli, BackendRunsTheKernelsThatHaveItAndRecordsTheDevice) {
-  for (const std::string args : {"run a1 --backend cuda", "run b3 --backend opencl"}) {
+  for (const std::string args : {"run a1 --backend vulkan", "run b3 --backend opencl"}) {
     const Outcome bad =
         robotperf_cli(args + " --count 20 --quiet --output " + (out_ / "bad").string());
     EXPECT_EQ(bad.exit_code, 2) << args << ": " << bad.out;
@@ -965,6 +965,67 @@ TEST_F(Cli, BackendRunsTheKernelsThatHaveItAndRecordsTheDevice) {
     EXPECT_GT(node.value("pid", 0), 0) << node.dump();
     EXPECT_EQ(node["backend"], "opencl") << node.dump();
     EXPECT_FALSE(node["device"]["name"].get<std::string>().empty()) << node.dump();
+  }
+}
+
+TEST_F(Cli, CudaBackendIsOneLineWithoutItsBuildOrDeviceAndRunsWithOne) {
+  // The kernels name cuda only in a build with the CUDA toolkit.
+  const Outcome kernels = robotperf_cli("list kernels");
+  ASSERT_EQ(kernels.exit_code, 0) << kernels.out;
+  const bool built = kernels.out.find("backends: cpu, opencl, cuda)") != std::string::npos;
+  const Outcome probe = robotperf_cli("sysinfo");
+  ASSERT_EQ(probe.exit_code, 0) << probe.out;
+  const auto devices = nlohmann::json::parse(probe.out)["cuda_devices"];
+  ASSERT_TRUE(devices.is_array()) << probe.out;
+  if (!built) {
+    EXPECT_TRUE(devices.empty()) << devices.dump();
+  }
+
+  // Without the build, or in it without a device (CUDA_VISIBLE_DEVICES=-1 hides any GPU from
+  // CUDA): one line saying what is missing, exit 2, nothing written.
+  for (const std::string args : {"run a5", "run a3"}) {
+    const Outcome refused = robotperf_cli(
+        args + " --backend cuda --count 20 --quiet --output " + (out_ / "bad").string(),
+        built ? "CUDA_VISIBLE_DEVICES=-1" : "");
+    EXPECT_EQ(refused.exit_code, 2) << args << ": " << refused.out;
+    EXPECT_EQ(std::count(refused.out.begin(), refused.out.end(), '\n'), 1) << refused.out;
+    EXPECT_NE(refused.out.find(built ? "no CUDA device" : "install-deps.sh --cuda"),
+              std::string::npos)
+        << refused.out;
+  }
+  EXPECT_TRUE(!fs::exists(out_ / "bad") || fs::is_empty(out_ / "bad"))
+      << "nothing written for a run that could not start";
+
+  if (devices.empty())
+    GTEST_SKIP() << "no CUDA device on this machine (built with CUDA: " << built << ")";
+  const Outcome o = robotperf_cli("run a1 --backend cuda --count 40 --output " + out_.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("backends: rectify cuda ("), std::string::npos) << o.out;
+  const auto j = result_json();
+  ASSERT_TRUE(j.is_object()) << o.out;
+  for (const auto& node : j["nodes"]) {
+    EXPECT_EQ(node["backend"], "cuda") << node.dump();
+    EXPECT_EQ(node["device"]["vendor"], "NVIDIA") << node.dump();
+    EXPECT_GT(node["device"]["memory_bytes"].get<uint64_t>(), 0u) << node.dump();
+  }
+  EXPECT_EQ(j["validity"]["valid"], true) << o.out;
+  EXPECT_EQ(j["backend_check"]["passed"], true) << j["backend_check"].dump();
+
+  // Every perception benchmark's kernels on the GPU give the cpu's answers, in one process and
+  // in per-node children.
+  for (const std::string run : {"a2", "a3", "a4", "a5", "a1 --processes per-node"}) {
+    const fs::path dir = out_ / ("each-" + run.substr(0, 2) + std::to_string(run.size()));
+    const Outcome each =
+        robotperf_cli("run " + run + " --backend cuda --count 35 --quiet --domain " + domain() +
+                      " --output " + dir.string());
+    EXPECT_EQ(each.exit_code, 0) << run << ": " << each.out;
+    std::ifstream in(fs::directory_iterator(dir)->path());
+    const auto r = nlohmann::json::parse(in);
+    EXPECT_EQ(r["backend_check"]["passed"], true) << run << ": " << r["backend_check"].dump();
+    EXPECT_GT(r["backend_check"]["compared"].get<int>(), 0) << run;
+    for (const auto& node : r["nodes"]) {
+      EXPECT_EQ(node["backend"], "cuda") << run << node.dump();
+    }
   }
 }
 

@@ -4,10 +4,13 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
+#include <iostream>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "cuda_test_support.hpp"
 #include "robotperf/perception/camera_model.hpp"
 #include "robotperf/perception/opencl_device.hpp"
 #include "robotperf/perception/synthetic_camera.hpp"
@@ -561,13 +564,37 @@ TEST(Resize, RejectsBadInput) {
 // The OpenCL backend: the CPU's answer on the same inputs (DESIGN.md section 6)
 // ---------------------------------------------------------------------------------------------
 
-// Share of pixel channels where `a` and `b` differ by more than 1.
+// How two images of one size and encoding agree, channel by channel (a NaN agreeing with a NaN
+// only): the share that differ by more than 1, and the share that are identical.
+struct Agreement {
+  double off_by_more_than_one = 1.0;
+  double identical = 0.0;
+};
+
+Agreement agreement(const msgs::Image& a, const msgs::Image& b) {
+  cv::Mat x, y;
+  image_view(a).convertTo(x, CV_64F);
+  image_view(b).convertTo(y, CV_64F);
+  x = x.reshape(1, 1);
+  y = y.reshape(1, 1);
+  std::size_t off = 0, identical = 0;
+  for (int i = 0; i < x.cols; ++i) {
+    const double u = x.at<double>(i), v = y.at<double>(i);
+    if (std::isnan(u) || std::isnan(v)) {
+      const bool both = std::isnan(u) && std::isnan(v);
+      off += both ? 0 : 1;
+      identical += both ? 1 : 0;
+      continue;
+    }
+    off += std::abs(u - v) > 1.0 ? 1 : 0;
+    identical += u == v ? 1 : 0;
+  }
+  const double n = static_cast<double>(x.cols);
+  return {static_cast<double>(off) / n, static_cast<double>(identical) / n};
+}
+
 double share_off_by_more_than_one(const msgs::Image& a, const msgs::Image& b) {
-  cv::Mat diff;
-  cv::absdiff(image_view(a), image_view(b), diff);
-  const cv::Mat channels = diff.reshape(1);
-  return static_cast<double>(cv::countNonZero(channels > 1)) /
-         static_cast<double>(channels.total());
+  return agreement(a, b).off_by_more_than_one;
 }
 
 // The reason to skip when this machine has no OpenCL device, else empty.
@@ -611,10 +638,127 @@ TEST_F(RectifySynthetic, OpenClResizesAsTheCpuDoes) {
   }
 }
 
-TEST(ImageBackend, NamesAreCpuAndOpencl) {
+// ---------------------------------------------------------------------------------------------
+// The cuda backend: the CPU's answer on the same inputs (DESIGN.md section 6)
+// ---------------------------------------------------------------------------------------------
+
+// The frame's rgb8 image as `encoding`: bgra8, or its grey as mono8, mono16 or 32FC1 (0..1).
+msgs::Image as_encoding(const msgs::Image& rgb, const std::string& encoding) {
+  msgs::Image out;
+  cv::Mat view = prepare_image(out, rgb.header, encoding, static_cast<int>(rgb.width),
+                               static_cast<int>(rgb.height));
+  const cv::Mat in = image_view(rgb);
+  if (encoding == "bgra8") {
+    cv::cvtColor(in, view, cv::COLOR_RGB2BGRA);
+    return out;
+  }
+  cv::Mat grey;
+  cv::cvtColor(in, grey, cv::COLOR_RGB2GRAY);
+  const double scale = encoding == "mono16" ? 257.0 : (encoding == "32FC1" ? 1.0 / 255 : 1.0);
+  grey.convertTo(view, view.type(), scale);
+  return out;
+}
+
+// The backend's answer against the cpu's, with the share of identical channels for the record
+// (the kernels follow OpenCV's CPU arithmetic: as a rule all are).
+void expect_within_one(const msgs::Image& got, const msgs::Image& expected,
+                       const std::string& what) {
+  EXPECT_EQ(got.header, expected.header) << what;
+  EXPECT_EQ(got.encoding, expected.encoding) << what;
+  ASSERT_EQ(got.data.size(), expected.data.size()) << what;
+  const Agreement a = agreement(got, expected);
+  EXPECT_LE(a.off_by_more_than_one, 0.001) << what;
+  std::cout << "[          ] " << what << ": " << a.identical * 100 << " % of channels identical\n";
+}
+
+TEST_F(RectifySynthetic, CudaRectifiesAsTheCpuDoes) {
+  if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
+  Rectifier cpu, device(cv::INTER_LINEAR, ImageBackend::kCuda);
+  for (const uint32_t index : {0u, 5u, 9u}) {
+    const CameraFrame& frame = (*frames_)[index];
+    for (const std::string encoding : {"rgb8", "bgra8", "mono8", "mono16", "32FC1"}) {
+      const msgs::Image raw = encoding == "rgb8" ? frame.image : as_encoding(frame.image, encoding);
+      expect_within_one(device.rectify(raw, frame.info), cpu.rectify(raw, frame.info),
+                        "rectify frame " + std::to_string(index) + " " + encoding);
+    }
+  }
+  EXPECT_EQ(device.map_computations(), 1u) << "the device keeps the map of one camera model";
+}
+
+TEST_F(RectifySynthetic, CudaResizesAsTheCpuDoes) {
+  if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
+  const CameraFrame& frame = frames_->front();
+  ResizeParams to_size;
+  to_size.use_scale = false;
+  to_size.width = 500;
+  to_size.height = 300;
+  std::vector<std::pair<std::string, ResizeParams>> cases{{"to 500x300", to_size}};
+  for (const double scale : {0.5, 0.37, 2.0, 1.0}) {
+    ResizeParams p;
+    p.scale_width = p.scale_height = scale;
+    cases.emplace_back("scale " + std::to_string(scale), p);
+  }
+  for (const auto& [name, params] : cases) {
+    // One Resizer per geometry, as a node has: its taps are computed once.
+    Resizer device(params, ImageBackend::kCuda);
+    for (const std::string encoding : {"rgb8", "bgra8", "mono8", "mono16", "32FC1"}) {
+      const msgs::Image image =
+          encoding == "rgb8" ? frame.image : as_encoding(frame.image, encoding);
+      msgs::Image expected, got;
+      msgs::CameraInfo expected_info, got_info;
+      resize(image, frame.info, params, expected, expected_info);
+      device.resize(image, frame.info, got, got_info);
+      ASSERT_EQ(got.width, expected.width) << name;
+      ASSERT_EQ(got.height, expected.height) << name;
+      EXPECT_EQ(got_info, expected_info) << name;
+      expect_within_one(got, expected, "resize " + name + " " + encoding);
+    }
+  }
+}
+
+TEST(ImageBackend, CudaHasInterLinearOnly) {
+  for (const int interpolation :
+       {cv::INTER_NEAREST, cv::INTER_CUBIC, cv::INTER_AREA, cv::INTER_LANCZOS4}) {
+    ResizeParams params;
+    params.interpolation = interpolation;
+    const std::string named = "interpolation " + std::to_string(interpolation);
+    for (const auto& make :
+         std::vector<std::function<void()>>{[&] { Rectifier(interpolation, ImageBackend::kCuda); },
+                                            [&] { Resizer(params, ImageBackend::kCuda); }}) {
+      try {
+        make();
+        ADD_FAILURE() << named << " was accepted on cuda";
+      } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
+      }
+    }
+  }
+}
+
+TEST(ImageBackend, CudaWithoutItsBuildOrDeviceIsOneLine) {
+  if (without_cuda().empty()) GTEST_SKIP() << "this machine has a CUDA device";
+  expect_cuda_missing_line(
+      [] {
+        image_backend("cuda");
+        cuda_device();
+      },
+      "the cuda backend's device");
+  expect_cuda_missing_line([] { Rectifier(cv::INTER_LINEAR, ImageBackend::kCuda); }, "Rectifier");
+  expect_cuda_missing_line([] { Resizer(ResizeParams{}, ImageBackend::kCuda); }, "Resizer");
+}
+
+TEST(ImageBackend, NamesAreCpuOpenclAndCuda) {
   EXPECT_EQ(image_backend("cpu"), ImageBackend::kCpu);
   EXPECT_EQ(image_backend("opencl"), ImageBackend::kOpenCl);
-  EXPECT_THROW(image_backend("cuda"), std::invalid_argument);
+  if (cuda_backend_built()) {
+    EXPECT_EQ(image_backend("cuda"), ImageBackend::kCuda);
+  } else {
+    expect_cuda_missing_line([] { image_backend("cuda"); }, "image_backend(\"cuda\")");
+  }
+  EXPECT_THROW(image_backend("vulkan"), std::invalid_argument);
+  EXPECT_STREQ(image_backend_name(ImageBackend::kCuda), "cuda");
+  EXPECT_STREQ(image_backend_name(ImageBackend::kOpenCl), "opencl");
+  EXPECT_STREQ(image_backend_name(ImageBackend::kCpu), "cpu");
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -8,8 +8,10 @@
 #include <stdexcept>
 #include <string>
 
-#include "device_node.hpp"
+#include "cuda/cuda_backend.hpp"
+#include "device_stage.hpp"
 #include "robotperf/perception/image_proc.hpp"
+#include "xyzrgb_model.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -90,6 +92,27 @@ void convert_colour(const cv::Mat& colour, const ColourLayout& layout, msgs::Poi
   }
 }
 
+// The constants convert_depth computes with and the colour layout, for the device kernels.
+XyzrgbModel device_model(bool is_float, const Pinhole& model, double range_max,
+                         const ColourLayout& layout) {
+  XyzrgbModel m;
+  m.metres = is_float;
+  const float unit =
+      is_float ? DepthTraits<float>::to_metres(1.0f) : DepthTraits<uint16_t>::to_metres(1);
+  m.cx = model.cx;
+  m.cy = model.cy;
+  m.constant_x = unit / model.fx;
+  m.constant_y = unit / model.fy;
+  m.fill_invalid = range_max != 0.0;
+  m.fill = is_float ? DepthTraits<float>::from_metres(range_max)
+                    : static_cast<float>(DepthTraits<uint16_t>::from_metres(range_max));
+  m.red = layout.red;
+  m.green = layout.green;
+  m.blue = layout.blue;
+  m.colour_bytes = layout.step;
+  return m;
+}
+
 // The OpenCL twin of convert_depth and convert_colour: one work item per point, writing all of
 // its 32 bytes (padding zero) so that the downloaded cloud is complete.
 constexpr const char* kXyzrgbSource = R"CL(
@@ -136,8 +159,7 @@ __kernel void xyzrgb(__global const uchar* depth, int depth_step, int depth_offs
 }
 )CL";
 
-void convert_on_device(const cv::Mat& depth, const cv::Mat& colour, const ColourLayout& layout,
-                       const Pinhole& model, double range_max, bool is_float,
+void convert_on_opencl(const cv::Mat& depth, const cv::Mat& colour, const XyzrgbModel& m,
                        msgs::PointCloud2& cloud) {
   static const cv::ocl::ProgramSource source(kXyzrgbSource);
   cv::ocl::Kernel kernel("xyzrgb", source);
@@ -146,34 +168,31 @@ void convert_on_device(const cv::Mat& depth, const cv::Mat& colour, const Colour
   cv::UMat device_depth, device_colour;
   {
     DeviceStage upload("upload",
-                       depth.total() * depth.elemSize() + colour.total() * colour.elemSize());
+                       depth.total() * depth.elemSize() + colour.total() * colour.elemSize(),
+                       opencl_queue());
     depth.copyTo(device_depth);
     colour.copyTo(device_colour);
   }
   cv::UMat device_cloud(depth.rows, static_cast<int>(cloud.row_step), CV_8UC1);
   {
-    DeviceStage stage("compute", 0);
+    DeviceStage stage("compute", 0, opencl_queue());
     if (device_colour.size() != device_depth.size()) {
       cv::UMat resized;
       cv::resize(device_colour, resized, device_depth.size(), 0, 0, cv::INTER_LINEAR);
       device_colour = resized;
     }
-    const float unit = is_float ? 1.0f : 0.001f;
-    const float fill = is_float ? DepthTraits<float>::from_metres(range_max)
-                                : static_cast<float>(DepthTraits<uint16_t>::from_metres(range_max));
     kernel.args(cv::ocl::KernelArg::ReadOnlyNoSize(device_depth),
                 cv::ocl::KernelArg::ReadOnlyNoSize(device_colour),
                 cv::ocl::KernelArg::WriteOnlyNoSize(device_cloud), depth.rows, depth.cols,
-                static_cast<int>(is_float), model.cx, model.cy, unit / model.fx, unit / model.fy,
-                static_cast<int>(range_max != 0.0), fill, layout.red, layout.green, layout.blue,
-                layout.step);
+                static_cast<int>(m.metres), m.cx, m.cy, m.constant_x, m.constant_y,
+                static_cast<int>(m.fill_invalid), m.fill, m.red, m.green, m.blue, m.colour_bytes);
     size_t global[2] = {static_cast<size_t>(depth.cols), static_cast<size_t>(depth.rows)};
     if (!kernel.run(2, global, nullptr, true))
       throw std::runtime_error("point_cloud_xyzrgb: the OpenCL kernel did not run");
   }
   cv::Mat out(depth.rows, static_cast<int>(cloud.row_step), CV_8UC1, cloud.data.data());
   {
-    DeviceStage download("download", cloud.data.size());
+    DeviceStage download("download", cloud.data.size(), opencl_queue());
     device_cloud.copyTo(out);
   }
   if (out.data != cloud.data.data())
@@ -182,9 +201,20 @@ void convert_on_device(const cv::Mat& depth, const cv::Mat& colour, const Colour
 
 }  // namespace
 
-void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
-                        const msgs::CameraInfo& info, const PointCloudXyzrgbParams& params,
-                        msgs::PointCloud2& cloud, ImageBackend backend) {
+PointCloudXyzrgbProcessor::PointCloudXyzrgbProcessor(ImageBackend backend) : backend_(backend) {
+  if (backend == ImageBackend::kCuda) cuda_ = cuda::make_point_cloud_maker();
+}
+
+PointCloudXyzrgbProcessor::~PointCloudXyzrgbProcessor() = default;
+PointCloudXyzrgbProcessor::PointCloudXyzrgbProcessor(PointCloudXyzrgbProcessor&&) noexcept =
+    default;
+PointCloudXyzrgbProcessor& PointCloudXyzrgbProcessor::operator=(
+    PointCloudXyzrgbProcessor&&) noexcept = default;
+
+void PointCloudXyzrgbProcessor::compute(const msgs::Image& depth, const msgs::Image& colour,
+                                        const msgs::CameraInfo& info,
+                                        const PointCloudXyzrgbParams& params,
+                                        msgs::PointCloud2& cloud) {
   if (depth.header.frame_id != colour.header.frame_id) {
     throw std::invalid_argument("point_cloud_xyzrgb: depth frame '" + depth.header.frame_id +
                                 "' differs from colour frame '" + colour.header.frame_id +
@@ -212,7 +242,7 @@ void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
     const double ratio = static_cast<double>(depth.width) / colour.width;
     model = {static_cast<float>(info.p[2] * ratio), static_cast<float>(info.p[6] * ratio),
              static_cast<float>(info.p[0] * ratio), static_cast<float>(info.p[5] * ratio)};
-    if (backend == ImageBackend::kCpu) {
+    if (backend_ == ImageBackend::kCpu) {
       cv::Mat resized;
       cv::resize(colour_view, resized, depth_view.size(), 0, 0, cv::INTER_LINEAR);
       colour_view = resized;
@@ -236,8 +266,15 @@ void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
   const std::size_t bytes = static_cast<std::size_t>(cloud.row_step) * depth.height;
   if (cloud.data.size() != bytes) cloud.data.assign(bytes, 0);
   if (depth_view.empty()) return;
-  if (backend == ImageBackend::kOpenCl) {
-    convert_on_device(depth_view, colour_view, layout, model, params.range_max, is_float, cloud);
+  if (backend_ == ImageBackend::kOpenCl) {
+    convert_on_opencl(depth_view, colour_view,
+                      device_model(is_float, model, params.range_max, layout), cloud);
+    return;
+  }
+  if (backend_ == ImageBackend::kCuda) {
+    cv::Mat points(depth_view.rows, static_cast<int>(cloud.row_step), CV_8UC1, cloud.data.data());
+    cuda_->xyzrgb(depth_view, colour_view, device_model(is_float, model, params.range_max, layout),
+                  points);
     return;
   }
   if (is_float) {
@@ -246,6 +283,12 @@ void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
     convert_depth<uint16_t>(depth_view, model, params.range_max, cloud);
   }
   convert_colour(colour_view, layout, cloud);
+}
+
+void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
+                        const msgs::CameraInfo& info, const PointCloudXyzrgbParams& params,
+                        msgs::PointCloud2& cloud, ImageBackend backend) {
+  PointCloudXyzrgbProcessor(backend).compute(depth, colour, info, params, cloud);
 }
 
 }  // namespace robotperf::perception

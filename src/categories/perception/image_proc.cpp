@@ -8,8 +8,10 @@
 #include <stdexcept>
 #include <string>
 
-#include "device_node.hpp"
+#include "cuda/cuda_backend.hpp"
+#include "device_stage.hpp"
 #include "robotperf/perception/camera_model.hpp"
+#include "robotperf/perception/cuda_device.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -48,10 +50,14 @@ bool starts_with_any(std::string_view s, std::initializer_list<std::string_view>
                      [s](std::string_view p) { return s.starts_with(p); });
 }
 
-void require_valid_interpolation(int interpolation) {
+void require_valid_interpolation(int interpolation, ImageBackend backend) {
   if (interpolation < cv::INTER_NEAREST || interpolation > cv::INTER_LANCZOS4) {
     throw std::invalid_argument("interpolation " + std::to_string(interpolation) +
                                 " is not one of INTER_NEAREST(0) .. INTER_LANCZOS4(4)");
+  }
+  if (backend == ImageBackend::kCuda && interpolation != cv::INTER_LINEAR) {
+    throw std::invalid_argument("interpolation " + std::to_string(interpolation) +
+                                " has no cuda backend: it has INTER_LINEAR (1) only");
   }
 }
 
@@ -209,7 +215,23 @@ cv::Mat prepare_image(msgs::Image& image, const msgs::Header& header, std::strin
 ImageBackend image_backend(std::string_view name) {
   if (name == "cpu") return ImageBackend::kCpu;
   if (name == "opencl") return ImageBackend::kOpenCl;
-  throw std::invalid_argument("no image backend '" + std::string(name) + "' (cpu, opencl)");
+  if (name == "cuda") {
+    if (!cuda_backend_built()) throw std::invalid_argument(kCudaNotBuilt);
+    return ImageBackend::kCuda;
+  }
+  throw std::invalid_argument("no image backend '" + std::string(name) + "' (cpu, opencl, cuda)");
+}
+
+const char* image_backend_name(ImageBackend backend) {
+  switch (backend) {
+    case ImageBackend::kOpenCl:
+      return "opencl";
+    case ImageBackend::kCuda:
+      return "cuda";
+    case ImageBackend::kCpu:
+      break;
+  }
+  return "cpu";
 }
 
 namespace {
@@ -220,16 +242,16 @@ template <class Compute>
 void on_device(const cv::Mat& in, cv::UMat& device_in, cv::UMat& device_out, cv::Mat& out,
                const Compute& compute) {
   {
-    DeviceStage upload("upload", in.total() * in.elemSize());
+    DeviceStage upload("upload", in.total() * in.elemSize(), opencl_queue());
     in.copyTo(device_in);
   }
   {
-    DeviceStage stage("compute", 0);
+    DeviceStage stage("compute", 0, opencl_queue());
     compute(device_in, device_out);
   }
   uint8_t* const data = out.data;
   {
-    DeviceStage download("download", out.total() * out.elemSize());
+    DeviceStage download("download", out.total() * out.elemSize(), opencl_queue());
     device_out.copyTo(out);
   }
   if (out.data != data) throw std::logic_error("the device's output has another size or type");
@@ -239,8 +261,13 @@ void on_device(const cv::Mat& in, cv::UMat& device_in, cv::UMat& device_out, cv:
 
 Rectifier::Rectifier(int interpolation, ImageBackend backend)
     : interpolation_(interpolation), backend_(backend) {
-  require_valid_interpolation(interpolation);
+  require_valid_interpolation(interpolation, backend);
+  if (backend == ImageBackend::kCuda) cuda_ = cuda::make_remapper();
 }
+
+Rectifier::~Rectifier() = default;
+Rectifier::Rectifier(Rectifier&&) noexcept = default;
+Rectifier& Rectifier::operator=(Rectifier&&) noexcept = default;
 
 bool Rectifier::MapInputs::matches(const msgs::CameraInfo& info) const {
   return width == info.width && height == info.height &&
@@ -337,6 +364,7 @@ void Rectifier::update_maps(const msgs::CameraInfo& info) {
     map_xy_.copyTo(device_map_xy_);
     map_fraction_.copyTo(device_map_fraction_);
   }
+  if (backend_ == ImageBackend::kCuda) cuda_->set_maps(map_xy_, map_fraction_);
 }
 
 void Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& info,
@@ -371,6 +399,10 @@ void Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& info,
               });
     return;
   }
+  if (backend_ == ImageBackend::kCuda) {
+    cuda_->remap(raw_view, rectified_view);
+    return;
+  }
   cv::remap(raw_view, rectified_view, map_xy_, map_fraction_, interpolation_, cv::BORDER_CONSTANT,
             border);
 }
@@ -385,10 +417,20 @@ msgs::Image Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& i
 // Resize
 // ---------------------------------------------------------------------------------------------
 
-void resize(const msgs::Image& image, const msgs::CameraInfo& info, const ResizeParams& params,
-            msgs::Image& out, msgs::CameraInfo& out_info, ImageBackend backend) {
+Resizer::Resizer(const ResizeParams& params, ImageBackend backend)
+    : params_(params), backend_(backend) {
+  require_valid_interpolation(params.interpolation, backend);
+  if (backend == ImageBackend::kCuda) cuda_ = cuda::make_resizer();
+}
+
+Resizer::~Resizer() = default;
+Resizer::Resizer(Resizer&&) noexcept = default;
+Resizer& Resizer::operator=(Resizer&&) noexcept = default;
+
+void Resizer::resize(const msgs::Image& image, const msgs::CameraInfo& info, msgs::Image& out,
+                     msgs::CameraInfo& out_info) {
   require_distinct(image, out, "resize");
-  require_valid_interpolation(params.interpolation);
+  const ResizeParams& params = params_;
   const cv::Mat in_view = image_view(image);
   if (in_view.empty()) throw std::invalid_argument("resize: empty image");
 
@@ -433,9 +475,16 @@ void resize(const msgs::Image& image, const msgs::CameraInfo& info, const Resize
       cv::resize(in, to, out_size, 0.0, 0.0, params.interpolation);
     }
   };
-  if (backend == ImageBackend::kOpenCl) {
+  if (backend_ == ImageBackend::kOpenCl) {
     cv::UMat device_in, device_out;
     on_device(in_view, device_in, device_out, out_view, compute);
+  } else if (backend_ == ImageBackend::kCuda) {
+    // The inverse scales cv::resize computes with: those given, or the sizes' ratios.
+    const double inv_scale_x =
+        params.use_scale ? scale_x : static_cast<double>(out_size.width) / in_view.cols;
+    const double inv_scale_y =
+        params.use_scale ? scale_y : static_cast<double>(out_size.height) / in_view.rows;
+    cuda_->resize(in_view, out_view, inv_scale_x, inv_scale_y);
   } else {
     compute(in_view, out_view);
   }
@@ -460,6 +509,11 @@ void resize(const msgs::Image& image, const msgs::CameraInfo& info, const Resize
   out_info.roi.y_offset = scaled_truncated(info.roi.y_offset, scale_y);
   out_info.roi.width = scaled_truncated(info.roi.width, scale_x);
   out_info.roi.height = scaled_truncated(info.roi.height, scale_y);
+}
+
+void resize(const msgs::Image& image, const msgs::CameraInfo& info, const ResizeParams& params,
+            msgs::Image& out, msgs::CameraInfo& out_info, ImageBackend backend) {
+  Resizer(params, backend).resize(image, info, out, out_info);
 }
 
 }  // namespace robotperf::perception

@@ -68,14 +68,9 @@ class RectifyNode final : public CameraNode, public ImageDeviceNode {
 class ResizeNode final : public CameraNode, public ImageDeviceNode {
  public:
   ResizeNode(graph::Context& context, const KernelConfig& config)
-      : CameraNode(context, config), ImageDeviceNode(backend_of(config)) {
-    const auto& p = config.parameters;
-    params_.use_scale = p.get_bool("use_scale");
-    params_.scale_height = p.get_double("scale_height");
-    params_.scale_width = p.get_double("scale_width");
-    params_.height = static_cast<int>(p.get_int("height"));
-    params_.width = static_cast<int>(p.get_int("width"));
-    params_.interpolation = interpolation_parameter(config);
+      : CameraNode(context, config),
+        ImageDeviceNode(backend_of(config)),
+        resizer_(params_from(config), backend_) {
     image_out_ = create_publisher<msgs::Image>(config.topic("resize"), config.qos);
     info_out_ = create_publisher<msgs::CameraInfo>(config.topic("resize_info"), config.qos);
   }
@@ -86,15 +81,27 @@ class ResizeNode final : public CameraNode, public ImageDeviceNode {
     auto out_info = std::make_shared<msgs::CameraInfo>();
     plugin::trace_kernel_init(*this, kKernel, image->header.stamp.to_ns(), *image);
     const DeviceStageContext stages(*this, image->header.stamp.to_ns());
-    resize(*image, *info, params_, *out, *out_info, backend_);
+    resizer_.resize(*image, *info, *out, *out_info);
     plugin::trace_kernel_fini(*this, kKernel, *out);
     // CameraInfo first: a subscriber pairing on the image then finds its partner waiting.
     info_out_->publish(std::shared_ptr<const msgs::CameraInfo>(std::move(out_info)));
     image_out_->publish(std::shared_ptr<const msgs::Image>(std::move(out)));
   }
 
+  static ResizeParams params_from(const KernelConfig& config) {
+    const auto& p = config.parameters;
+    ResizeParams params;
+    params.use_scale = p.get_bool("use_scale");
+    params.scale_height = p.get_double("scale_height");
+    params.scale_width = p.get_double("scale_width");
+    params.height = static_cast<int>(p.get_int("height"));
+    params.width = static_cast<int>(p.get_int("width"));
+    params.interpolation = interpolation_parameter(config);
+    return params;
+  }
+
   static constexpr const char* kKernel = "image_proc/resize";
-  ResizeParams params_;
+  Resizer resizer_;
   std::shared_ptr<graph::Publisher<msgs::Image>> image_out_;
   std::shared_ptr<graph::Publisher<msgs::CameraInfo>> info_out_;
 };
@@ -117,7 +124,7 @@ void register_image_proc_kernels(plugin::Registrar& registrar) {
       {.name = "image_proc/rectify",
        .description = "undistort and rectify an image with its CameraInfo (cached map, cv::remap), "
                       "as image_proc",
-       .backends = {"cpu", "opencl"},
+       .backends = perception_backends(),
        .inputs = camera_inputs(),
        .outputs = {{"image_rect", "sensor_msgs/msg/Image"}},
        .parameters = {interpolation_declaration()}},
@@ -128,7 +135,7 @@ void register_image_proc_kernels(plugin::Registrar& registrar) {
   registrar.add_kernel(
       {.name = "image_proc/resize",
        .description = "resize an image and scale its CameraInfo (K, P, ROI), as image_proc",
-       .backends = {"cpu", "opencl"},
+       .backends = perception_backends(),
        .inputs = camera_inputs(),
        .outputs = {{"resize", "sensor_msgs/msg/Image"},
                    {"resize_info", "sensor_msgs/msg/CameraInfo"}},

@@ -6,8 +6,15 @@
 #include <stdexcept>
 #include <string>
 
+#include "device_stage.hpp"
+
 namespace robotperf::perception {
 namespace {
+
+class OpenClQueue final : public DeviceQueue {
+ public:
+  void finish() const noexcept override { cv::ocl::finish(); }
+};
 
 plugin::DeviceInfo describe(const cv::ocl::Device& d) {
   return {d.name(), d.vendorName(), d.driverVersion(), d.version(),
@@ -38,6 +45,11 @@ std::vector<plugin::DeviceInfo> opencl_devices() {
   std::vector<plugin::DeviceInfo> out;
   for_each_device([&](const cv::ocl::Device& d) { out.push_back(describe(d)); });
   return out;
+}
+
+const DeviceQueue& opencl_queue() {
+  static const OpenClQueue queue;
+  return queue;
 }
 
 const plugin::DeviceInfo& opencl_device() {

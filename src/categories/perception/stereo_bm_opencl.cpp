@@ -7,11 +7,11 @@
 #include "stereo_bm_opencl.hpp"
 
 #include <algorithm>
-#include <opencv2/calib3d.hpp>
 #include <opencv2/core/ocl.hpp>
 #include <stdexcept>
 
-#include "device_node.hpp"
+#include "device_stage.hpp"
+#include "stereo_bm_device.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -153,64 +153,56 @@ void stereo_bm_opencl(const cv::Mat& left, const cv::Mat& right, const StereoPar
                       cv::Mat& disparity16) {
   if (p.algorithm != StereoAlgorithm::kBlockMatching)
     throw std::invalid_argument("disparity: the opencl backend has StereoBM only");
-  const int rows = left.rows, cols = left.cols;
-  const int ndisp = p.disparity_range;
-  const int lofs = std::max(ndisp - 1 + p.min_disparity, 0);
   if (p.min_disparity < 0)
     throw std::invalid_argument("disparity: the opencl backend needs min_disparity >= 0");
+  const BlockMatchingShape s = block_matching_shape(left.rows, left.cols, p);
+  const int rows = s.rows, cols = s.cols;
   cv::UMat device_left, device_right;
   cv::Mat best_cost;
   {
-    DeviceStage upload("upload", left.total() + right.total());
+    DeviceStage upload("upload", left.total() + right.total(), opencl_queue());
     left.copyTo(device_left);
     right.copyTo(device_right);
   }
   cv::UMat filtered_left(rows, cols, CV_8UC1), filtered_right(rows, cols, CV_8UC1);
-  cv::UMat rows_cost(1, (ndisp + 1) * rows * cols, CV_32SC1);
-  cv::UMat costs(1, (ndisp + 1) * rows * cols, CV_32SC1);
+  cv::UMat rows_cost(1, (s.disparities + 1) * rows * cols, CV_32SC1);
+  cv::UMat costs(1, (s.disparities + 1) * rows * cols, CV_32SC1);
   cv::UMat device_disparity(rows, cols, CV_16SC1);
   // The best window cost of each pixel, for the left-right check.
   cv::UMat device_best_cost(rows, cols, CV_32SC1, cv::Scalar(0));
   {
-    DeviceStage stage("compute", 0);
+    DeviceStage stage("compute", 0, opencl_queue());
     cv::ocl::Kernel prefilter = build("prefilter");
     for (auto [in, out] :
          {std::pair{&device_left, &filtered_left}, {&device_right, &filtered_right}}) {
       prefilter.args(cv::ocl::KernelArg::ReadOnlyNoSize(*in),
-                     cv::ocl::KernelArg::WriteOnlyNoSize(*out), rows, cols, p.prefilter_cap);
+                     cv::ocl::KernelArg::WriteOnlyNoSize(*out), rows, cols, s.prefilter_cap);
       run(prefilter, static_cast<std::size_t>(cols), static_cast<std::size_t>(rows));
     }
-    const int radius = p.correlation_window_size / 2;
     cv::ocl::Kernel row_costs = build("row_costs");
     row_costs.args(cv::ocl::KernelArg::ReadOnlyNoSize(filtered_left),
                    cv::ocl::KernelArg::ReadOnlyNoSize(filtered_right),
-                   cv::ocl::KernelArg::PtrWriteOnly(rows_cost), rows, cols, ndisp, lofs, radius,
-                   p.prefilter_cap);
-    run(row_costs, static_cast<std::size_t>(rows), static_cast<std::size_t>(ndisp + 1));
+                   cv::ocl::KernelArg::PtrWriteOnly(rows_cost), rows, cols, s.disparities,
+                   s.right_offset, s.radius, s.prefilter_cap);
+    run(row_costs, static_cast<std::size_t>(rows), static_cast<std::size_t>(s.disparities + 1));
     cv::ocl::Kernel window_costs = build("window_costs");
     window_costs.args(cv::ocl::KernelArg::PtrReadOnly(rows_cost),
-                      cv::ocl::KernelArg::PtrWriteOnly(costs), rows, cols, ndisp, radius);
-    run(window_costs, static_cast<std::size_t>(cols), static_cast<std::size_t>(ndisp + 1));
+                      cv::ocl::KernelArg::PtrWriteOnly(costs), rows, cols, s.disparities, s.radius);
+    run(window_costs, static_cast<std::size_t>(cols), static_cast<std::size_t>(s.disparities + 1));
     cv::ocl::Kernel choose = build("choose");
     choose.args(cv::ocl::KernelArg::PtrReadOnly(costs),
                 cv::ocl::KernelArg::WriteOnlyNoSize(device_disparity),
-                cv::ocl::KernelArg::WriteOnlyNoSize(device_best_cost), rows, cols, ndisp, lofs,
-                p.min_disparity, p.texture_threshold, p.uniqueness_ratio,
-                p.min_disparity + ndisp - 1 + radius,
-                std::min(cols, cols + p.min_disparity) - radius, radius, rows - radius);
+                cv::ocl::KernelArg::WriteOnlyNoSize(device_best_cost), rows, cols, s.disparities,
+                s.right_offset, s.min_disparity, s.texture_threshold, s.uniqueness_ratio, s.x0,
+                s.x1, s.y0, s.y1);
     run(choose, static_cast<std::size_t>(cols), static_cast<std::size_t>(rows));
   }
   {
-    DeviceStage download("download", static_cast<uint64_t>(rows) * cols * (2 + 4));
+    DeviceStage download("download", static_cast<uint64_t>(rows) * cols * (2 + 4), opencl_queue());
     device_disparity.copyTo(disparity16);
     device_best_cost.copyTo(best_cost);
   }
-  if (p.disp12_max_diff >= 0) {
-    cv::validateDisparity(disparity16, best_cost, p.min_disparity, ndisp, p.disp12_max_diff);
-  }
-  if (p.speckle_size > 0 && p.speckle_range >= 0) {
-    cv::filterSpeckles(disparity16, (p.min_disparity - 1) * 16, p.speckle_size, p.speckle_range);
-  }
+  filter_on_host(disparity16, best_cost, p);
 }
 
 }  // namespace robotperf::perception

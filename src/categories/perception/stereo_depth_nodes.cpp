@@ -166,6 +166,7 @@ class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
   PointCloudXyzrgbNode(graph::Context& context, const KernelConfig& config)
       : SkippingNode(context, config.node_name),
         ImageDeviceNode(backend_of(config)),
+        processor_(backend_),
         sync_(sync_options(config, !config.parameters.get_bool("exact_sync")),
               [this](const auto& set) { process(set); }) {
     params_.range_max = config.parameters.get_double("range_max");
@@ -204,9 +205,9 @@ class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
       const auto& image = *std::static_pointer_cast<const msgs::Image>(set[kImage]);
       plugin::trace_kernel_init(*this, kKernel, depth.header.stamp.to_ns(), depth, image);
       const DeviceStageContext stages(*this, depth.header.stamp.to_ns());
-      point_cloud_xyzrgb(depth, image,
+      processor_.compute(depth, image,
                          *std::static_pointer_cast<const msgs::CameraInfo>(set[kInfo]), params_,
-                         *cloud, backend_);
+                         *cloud);
       plugin::trace_kernel_fini(*this, kKernel, *cloud);
       output_->publish(std::shared_ptr<const msgs::PointCloud2>(std::move(cloud)));
     });
@@ -214,6 +215,7 @@ class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
 
   static constexpr const char* kKernel = "depth_image_proc/point_cloud_xyzrgb";
   PointCloudXyzrgbParams params_;
+  PointCloudXyzrgbProcessor processor_;
   OutputPool<msgs::PointCloud2> pool_;
   MessageSync<3> sync_;
   std::shared_ptr<graph::Publisher<msgs::PointCloud2>> output_;
@@ -235,7 +237,7 @@ void register_stereo_depth_kernels(plugin::Registrar& registrar) {
       {.name = "stereo_image_proc/disparity",
        .description = "disparity of a rectified stereo pair (StereoBM, or StereoSGBM), as "
                       "stereo_image_proc",
-       .backends = {"cpu", "opencl"},
+       .backends = perception_backends(),
        .inputs = {{"left_image", "sensor_msgs/msg/Image"},
                   {"left_camera_info", "sensor_msgs/msg/CameraInfo"},
                   {"right_image", "sensor_msgs/msg/Image"},
@@ -271,7 +273,7 @@ void register_stereo_depth_kernels(plugin::Registrar& registrar) {
       {.name = "depth_image_proc/point_cloud_xyzrgb",
        .description = "organised xyz + rgb point cloud from registered depth and colour, as "
                       "depth_image_proc",
-       .backends = {"cpu", "opencl"},
+       .backends = perception_backends(),
        .inputs = {{"depth", "sensor_msgs/msg/Image"},
                   {"image", "sensor_msgs/msg/Image"},
                   {"camera_info", "sensor_msgs/msg/CameraInfo"}},

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "cuda/cuda_backend.hpp"
 #include "robotperf/perception/image_proc.hpp"
 #include "stereo_bm_opencl.hpp"
 
@@ -50,11 +51,13 @@ void validate(const StereoParams& p) {
 DisparityProcessor::DisparityProcessor(const StereoParams& params, ImageBackend backend)
     : params_(params), backend_(backend) {
   validate(params_);
-  if (backend_ == ImageBackend::kOpenCl) {
+  if (backend_ != ImageBackend::kCpu) {
+    const std::string name = image_backend_name(backend_);
     require(params_.algorithm == StereoAlgorithm::kBlockMatching,
-            "stereo_algorithm 1 (StereoSGBM) has no opencl backend; use 0 (StereoBM)");
-    require(params_.min_disparity >= 0, "the opencl backend needs min_disparity >= 0");
+            "stereo_algorithm 1 (StereoSGBM) has no " + name + " backend; use 0 (StereoBM)");
+    require(params_.min_disparity >= 0, "the " + name + " backend needs min_disparity >= 0");
   }
+  if (backend_ == ImageBackend::kCuda) cuda_ = cuda::make_block_matcher();
   if (params_.algorithm == StereoAlgorithm::kBlockMatching) {
     auto bm = cv::StereoBM::create(params_.disparity_range, params_.correlation_window_size);
     bm->setPreFilterSize(params_.prefilter_size);
@@ -77,6 +80,10 @@ DisparityProcessor::DisparityProcessor(const StereoParams& params, ImageBackend 
   matcher_->setDisp12MaxDiff(params_.disp12_max_diff);
 }
 
+DisparityProcessor::~DisparityProcessor() = default;
+DisparityProcessor::DisparityProcessor(DisparityProcessor&&) noexcept = default;
+DisparityProcessor& DisparityProcessor::operator=(DisparityProcessor&&) noexcept = default;
+
 void DisparityProcessor::compute(const msgs::Image& left, const msgs::Image& right,
                                  const msgs::CameraInfo& left_info,
                                  const msgs::CameraInfo& right_info, msgs::DisparityImage& out) {
@@ -94,6 +101,8 @@ void DisparityProcessor::compute(const msgs::Image& left, const msgs::Image& rig
   to_mono8(right, "disparity: right image", right_mono_);
   if (backend_ == ImageBackend::kOpenCl) {
     stereo_bm_opencl(left_mono_, right_mono_, params_, disparity16_);
+  } else if (backend_ == ImageBackend::kCuda) {
+    cuda_->compute(left_mono_, right_mono_, params_, disparity16_);
   } else {
     matcher_->compute(left_mono_, right_mono_, disparity16_);
   }

@@ -4,11 +4,16 @@
 // it, without the node plumbing.
 
 #include <cstdint>
+#include <memory>
 
 #include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/perception/image_proc.hpp"
 
 namespace robotperf::perception {
+
+namespace cuda {
+class PointCloudMaker;
+}  // namespace cuda
 
 // Byte layout of the cloud, as sensor_msgs' PointCloud2Modifier lays out fields "xyz", "rgb":
 // x, y, z float32 at 0, 4, 8, padding to 16; rgb (packed b, g, r, 0 bytes in a float32) at 16,
@@ -38,12 +43,31 @@ struct PointCloudXyzrgbParams {
 //   bytes are then left as they are: zero when this function made the cloud).
 // Throws std::invalid_argument for other encodings, differing frame_ids, a CameraInfo without a
 // focal length, or a bad image.
-// With ImageBackend::kOpenCl the points are computed on the OpenCL device by a kernel of
+// With ImageBackend::kOpenCl or kCuda the points are computed on the device by a kernel of
 // robotperf's own (same float operations, no contraction into fused multiply-adds: the same bits
 // as the CPU's), the depth and colour uploaded and the cloud downloaded per call; a colour image
 // of another size is resized on the device (bilinear, within 1 of the CPU's per channel).
 void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
                         const msgs::CameraInfo& info, const PointCloudXyzrgbParams& params,
                         msgs::PointCloud2& cloud, ImageBackend backend = ImageBackend::kCpu);
+
+// point_cloud_xyzrgb() keeping what a node keeps from message to message on its backend (with
+// ImageBackend::kCuda: its stream and buffers; the free function's are for its call only). Not
+// thread-safe: one per node.
+class PointCloudXyzrgbProcessor {
+ public:
+  // With kCuda, throws std::invalid_argument without its device (cuda_device()).
+  explicit PointCloudXyzrgbProcessor(ImageBackend backend = ImageBackend::kCpu);
+  ~PointCloudXyzrgbProcessor();
+  PointCloudXyzrgbProcessor(PointCloudXyzrgbProcessor&&) noexcept;
+  PointCloudXyzrgbProcessor& operator=(PointCloudXyzrgbProcessor&&) noexcept;
+
+  void compute(const msgs::Image& depth, const msgs::Image& colour, const msgs::CameraInfo& info,
+               const PointCloudXyzrgbParams& params, msgs::PointCloud2& cloud);
+
+ private:
+  ImageBackend backend_;
+  std::unique_ptr<cuda::PointCloudMaker> cuda_;
+};
 
 }  // namespace robotperf::perception

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
@@ -14,6 +15,11 @@
 #include "robotperf/msgs/sensor_msgs.hpp"
 
 namespace robotperf::perception {
+
+namespace cuda {
+class Remapper;
+class ImageResizer;
+}  // namespace cuda
 
 // ---------------------------------------------------------------------------------------------
 // sensor_msgs/Image <-> cv::Mat
@@ -51,13 +57,18 @@ void to_mono8(const msgs::Image& image, const std::string& what, cv::Mat& mono);
 // Backends
 // ---------------------------------------------------------------------------------------------
 
-// Where an image function computes: on the host CPU, or on the OpenCL device (opencl_device())
-// through OpenCV's transparent API. With kOpenCl every call uploads its input and downloads its
-// output, as a node whose messages live in host memory must (DESIGN.md section 6).
-enum class ImageBackend { kCpu, kOpenCl };
+// Where an image function computes: on the host CPU, on the OpenCL device (opencl_device())
+// through OpenCV's transparent API, or on the CUDA device (cuda_device()) with kernels of
+// robotperf's own, each object on a CUDA stream of its own. With a device every call uploads its
+// input and downloads its output, as a node whose messages live in host memory must (DESIGN.md
+// section 6).
+enum class ImageBackend { kCpu, kOpenCl, kCuda };
 
-// "cpu" or "opencl"; throws std::invalid_argument for any other name.
+// "cpu", "opencl" or "cuda"; throws std::invalid_argument for any other name, and for "cuda" in a
+// robotperf built without the CUDA toolkit (kCudaNotBuilt's one line).
 ImageBackend image_backend(std::string_view name);
+// The name image_backend() takes.
+const char* image_backend_name(ImageBackend backend);
 
 // ---------------------------------------------------------------------------------------------
 // Rectification (image_proc RectifyNode + image_geometry::PinholeCameraModel)
@@ -80,9 +91,16 @@ class Rectifier {
  public:
   // `interpolation`: cv::InterpolationFlags value, INTER_NEAREST .. INTER_LANCZOS4
   // (image_proc's "interpolation" parameter, default 1 = INTER_LINEAR).
-  // With ImageBackend::kOpenCl the maps are uploaded once per camera model.
+  // With a device backend the maps are uploaded once per camera model. ImageBackend::kCuda has
+  // INTER_LINEAR only (std::invalid_argument naming the interpolation otherwise), OpenCV's CPU
+  // arithmetic (8-bit images within 1 of the cpu's, as a rule the same) for 8-bit, 16-bit
+  // unsigned and float images of 1 to 4 channels; it throws std::invalid_argument without its
+  // device (cuda_device()).
   explicit Rectifier(int interpolation = cv::INTER_LINEAR,
                      ImageBackend backend = ImageBackend::kCpu);
+  ~Rectifier();
+  Rectifier(Rectifier&&) noexcept;
+  Rectifier& operator=(Rectifier&&) noexcept;
 
   // Writes the rectified image (same header, encoding and size) into `rectified`, reusing its
   // buffer. `rectified` must not be `raw`.
@@ -123,6 +141,8 @@ class Rectifier {
   ImageBackend backend_;
   // kOpenCl: the maps, and the input and output images, on the device.
   cv::UMat device_map_xy_, device_map_fraction_, device_in_, device_out_;
+  // kCuda: the stream, the maps and the buffers on the device.
+  std::unique_ptr<cuda::Remapper> cuda_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -142,12 +162,36 @@ struct ResizeParams {
   int interpolation = cv::INTER_LINEAR;
 };
 
-// Resizes `image` into `out` (same header and encoding, reusing out's buffer; must not be
-// `image`) and writes `info` adjusted to the new size into `out_info` (may be `info`): height
-// and width, K[0], K[2], P[0], P[2], P[3] times the x scale, K[4], K[5], P[5], P[6] times the y
-// scale, ROI offsets and size scaled (truncated), as image_proc does. With use_scale, the image
-// size is rounded (cv::resize) and the CameraInfo size truncated, as in image_proc.
-// Throws std::invalid_argument for non-positive scales or sizes, or a bad image.
+// Resizes images as image_proc's ResizeNode, keeping what a node keeps from message to message on
+// its backend (with ImageBackend::kCuda: its stream and buffers). Not thread-safe: one per node.
+class Resizer {
+ public:
+  // Throws std::invalid_argument for an interpolation out of range, with kCuda for any but
+  // INTER_LINEAR (naming it), and with kCuda without its device (cuda_device()).
+  explicit Resizer(const ResizeParams& params, ImageBackend backend = ImageBackend::kCpu);
+  ~Resizer();
+  Resizer(Resizer&&) noexcept;
+  Resizer& operator=(Resizer&&) noexcept;
+
+  // Resizes `image` into `out` (same header and encoding, reusing out's buffer; must not be
+  // `image`) and writes `info` adjusted to the new size into `out_info` (may be `info`): height
+  // and width, K[0], K[2], P[0], P[2], P[3] times the x scale, K[4], K[5], P[5], P[6] times the y
+  // scale, ROI offsets and size scaled (truncated), as image_proc does. With use_scale, the image
+  // size is rounded (cv::resize) and the CameraInfo size truncated, as in image_proc.
+  // Throws std::invalid_argument for non-positive scales or sizes, or a bad image. kCuda follows
+  // OpenCV's CPU arithmetic for INTER_LINEAR (8-bit images within 1 of the cpu's, as a rule the
+  // same) for 8-bit, 16-bit unsigned and float images of 1 to 4 channels.
+  void resize(const msgs::Image& image, const msgs::CameraInfo& info, msgs::Image& out,
+              msgs::CameraInfo& out_info);
+
+ private:
+  ResizeParams params_;
+  ImageBackend backend_;
+  std::unique_ptr<cuda::ImageResizer> cuda_;
+};
+
+// Resizer(params, backend).resize(image, info, out, out_info): a device backend's buffers (and
+// with kCuda, its stream) for this call only.
 void resize(const msgs::Image& image, const msgs::CameraInfo& info, const ResizeParams& params,
             msgs::Image& out, msgs::CameraInfo& out_info,
             ImageBackend backend = ImageBackend::kCpu);

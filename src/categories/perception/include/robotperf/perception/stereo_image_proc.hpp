@@ -3,6 +3,7 @@
 // Stereo disparity as ROS 2 stereo_image_proc's DisparityNode computes it, on OpenCV's StereoBM or
 // StereoSGBM, without the node plumbing.
 
+#include <memory>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 
@@ -11,6 +12,10 @@
 #include "robotperf/perception/image_proc.hpp"
 
 namespace robotperf::perception {
+
+namespace cuda {
+class BlockMatcher;
+}  // namespace cuda
 
 enum class StereoAlgorithm {
   kBlockMatching = 0,  // cv::StereoBM
@@ -51,17 +56,22 @@ void validate(const StereoParams& params);
 // Throws std::invalid_argument when the images differ in size, do not match their CameraInfo,
 // or the right CameraInfo has no focal length.
 //
-// With ImageBackend::kOpenCl, StereoBM runs on the OpenCL device (kernels of robotperf's own:
-// OpenCV's OpenCL StereoBM has no texture check); each pair is uploaded and its disparity
-// downloaded; the speckle filter runs on the host. Its answer agrees with the cpu's within 1 px
-// on >= 95 % of the pixels the cpu gives a disparity. StereoSGBM has no OpenCL backend (the
-// constructor throws std::invalid_argument).
+// With ImageBackend::kOpenCl or kCuda, StereoBM runs on the device (kernels of robotperf's own:
+// OpenCV's OpenCL StereoBM has no texture check; the cuda kernels are their port, on a CUDA
+// stream of the processor's own); each pair is uploaded and its disparity downloaded; the
+// left-right check and the speckle filter run on the host. Its answer agrees with the cpu's
+// within 1 px on >= 95 % of the pixels the cpu gives a disparity. StereoSGBM, and a negative
+// min_disparity, have no device backend (the constructor throws std::invalid_argument), nor has
+// kCuda without its device (cuda_device()).
 //
 // Not thread-safe: one processor per stream.
 class DisparityProcessor {
  public:
   explicit DisparityProcessor(const StereoParams& params = {},
                               ImageBackend backend = ImageBackend::kCpu);
+  ~DisparityProcessor();
+  DisparityProcessor(DisparityProcessor&&) noexcept;
+  DisparityProcessor& operator=(DisparityProcessor&&) noexcept;
   void compute(const msgs::Image& left, const msgs::Image& right, const msgs::CameraInfo& left_info,
                const msgs::CameraInfo& right_info, msgs::DisparityImage& out);
   const StereoParams& params() const { return params_; }
@@ -70,6 +80,7 @@ class DisparityProcessor {
   StereoParams params_;
   ImageBackend backend_;
   cv::Ptr<cv::StereoMatcher> matcher_;
+  std::unique_ptr<cuda::BlockMatcher> cuda_;
   cv::Mat left_mono_, right_mono_, disparity16_;
 };
 

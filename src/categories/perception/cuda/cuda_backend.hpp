@@ -1,0 +1,69 @@
+// Private to the perception category: the kernels' work on a CUDA device, for the
+// ImageBackend::kCuda paths of Rectifier, Resizer, PointCloudXyzrgbProcessor and
+// DisparityProcessor. Free of CUDA's headers, so that those compile in every build; the make_*
+// functions give the CUDA build's objects (cuda_image_ops.cpp, cuda_stereo_bm.cpp) or, in a build
+// without the toolkit, throw (cuda_missing.cpp).
+//
+// Each object owns a CUDA stream and the buffers it reuses from message to message (device memory,
+// pinned host staging). Every call uploads its inputs and downloads its outputs, as a node whose
+// messages live in host memory must (DESIGN.md section 6), in the device stages "upload",
+// "compute" and "download". Not thread-safe: one object per node.
+#pragma once
+
+#include <memory>
+#include <opencv2/core.hpp>
+
+#include "../xyzrgb_model.hpp"
+#include "robotperf/perception/stereo_image_proc.hpp"
+
+namespace robotperf::perception::cuda {
+
+// cv::remap(in, out, map_xy, map_fraction, INTER_LINEAR, BORDER_CONSTANT) with a border of 0, NaN
+// for float images.
+class Remapper {
+ public:
+  virtual ~Remapper() = default;
+  // The fixed-point maps (CV_16SC2 source pixels, CV_16UC1 interpolation-table indices) to the
+  // device: once per camera model, not per message.
+  virtual void set_maps(const cv::Mat& map_xy, const cv::Mat& map_fraction) = 0;
+  // `out` has the maps' size and `in`'s type (written in place). Images: 8-bit, 16-bit unsigned or
+  // 32-bit float with 1 to 4 channels, else std::invalid_argument.
+  virtual void remap(const cv::Mat& in, cv::Mat& out) = 0;
+};
+
+// cv::resize(in, out, out's size, INTER_LINEAR) where cv::resize would take `inv_scale_x` and
+// `inv_scale_y` (the scales it was given, or out's size over in's). Images as Remapper's.
+class ImageResizer {
+ public:
+  virtual ~ImageResizer() = default;
+  virtual void resize(const cv::Mat& in, cv::Mat& out, double inv_scale_x, double inv_scale_y) = 0;
+};
+
+// point_cloud_xyzrgb's points of `depth` (32FC1 or 16UC1, as model.metres) and its 8-bit `colour`
+// (resized on the device, bilinear, where its size differs), into `cloud`: depth.rows x
+// (depth.cols * 32) bytes, CV_8UC1, every byte written.
+class PointCloudMaker {
+ public:
+  virtual ~PointCloudMaker() = default;
+  virtual void xyzrgb(const cv::Mat& depth, const cv::Mat& colour, const XyzrgbModel& model,
+                      cv::Mat& cloud) = 0;
+};
+
+// StereoBM (params.algorithm block matching, min_disparity >= 0) on a rectified mono8 pair: the
+// fixed-point disparity (1/16 px, filtered pixels (min_disparity - 1) * 16) into `disparity16`,
+// the left-right check and the speckle filter on the host after the download.
+class BlockMatcher {
+ public:
+  virtual ~BlockMatcher() = default;
+  virtual void compute(const cv::Mat& left, const cv::Mat& right, const StereoParams& params,
+                       cv::Mat& disparity16) = 0;
+};
+
+// Each throws std::invalid_argument with cuda_device()'s one line when there is no device or no
+// CUDA build, std::runtime_error when CUDA fails.
+std::unique_ptr<Remapper> make_remapper();
+std::unique_ptr<ImageResizer> make_resizer();
+std::unique_ptr<PointCloudMaker> make_point_cloud_maker();
+std::unique_ptr<BlockMatcher> make_block_matcher();
+
+}  // namespace robotperf::perception::cuda

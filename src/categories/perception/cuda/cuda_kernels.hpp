@@ -1,0 +1,64 @@
+// Private to the cuda backend: its kernels, each queued on a stream, over dense images in device
+// memory (rows of width x channels elements, no padding). Free of OpenCV: the .cu files include
+// this and plain data only. Every launcher throws std::runtime_error when the launch fails.
+#pragma once
+
+#include <cuda_runtime.h>
+
+#include <cstdint>
+
+#include "../stereo_bm_shape.hpp"
+#include "../xyzrgb_model.hpp"
+
+namespace robotperf::perception::cuda {
+
+// The element types of the images the kernels take, with 1 to 4 channels.
+enum class PixelDepth { k8U, k16U, k32F };
+
+struct DeviceImage {
+  void* data = nullptr;
+  int width = 0, height = 0;
+};
+
+// cv::remap(src, dst, map_xy, map_fraction, INTER_LINEAR, BORDER_CONSTANT, 0 or NaN for 32F) with
+// OpenCV's fixed-point maps, one entry per dst pixel: map_xy the source pixel (x, y) of the
+// top-left neighbour (CV_16SC2), map_fraction its 1/32-px fraction index (CV_16UC1, fy * 32 + fx).
+void remap_linear(DeviceImage src, DeviceImage dst, PixelDepth depth, int channels,
+                  const int16_t* map_xy, const uint16_t* map_fraction, cudaStream_t stream);
+
+// One dst column's (or row's) source columns (rows) and their weights in cv::resize's
+// INTER_LINEAR: the taps resize_taps() in cuda_image_ops.cpp computes as OpenCV does.
+struct ResizeTap {
+  int first = 0, second = 0;  // a column whose second is its first takes the first alone
+  int16_t fixed[2] = {};      // 8-bit images: the weights in 1/2048 (INTER_RESIZE_COEF_BITS 11)
+  float weight[2] = {};       // the other depths
+};
+
+// cv::resize(src, dst, dst size, INTER_LINEAR) with one tap per dst column and one per dst row.
+void resize_linear(DeviceImage src, DeviceImage dst, PixelDepth depth, int channels,
+                   const ResizeTap* columns, const ResizeTap* rows, cudaStream_t stream);
+
+// depth_image_proc's xyz + rgb point of every pixel of `depth` (32FC1 metres or 16UC1 mm, as
+// model.metres says) and `colour` (8-bit, model.colour_bytes per pixel, the depth's size) into
+// `cloud`: 32 bytes a point, every byte written.
+void xyzrgb(DeviceImage depth, const uint8_t* colour, const XyzrgbModel& model, uint8_t* cloud,
+            cudaStream_t stream);
+
+// StereoBM's device part on a rectified mono8 pair (shape.rows x shape.cols each): the x-Sobel
+// pre-filter, the cost of every window and disparity, the texture and uniqueness checks and the
+// sub-pixel fit, into `disparity` (1/16 px, filtered pixels (min_disparity - 1) * 16) and
+// `best_cost` (each pixel's best window cost, 0 where filtered).
+struct BlockMatchingBuffers {
+  const uint8_t* left = nullptr;
+  const uint8_t* right = nullptr;
+  uint8_t* filtered_left = nullptr;  // rows x cols each
+  uint8_t* filtered_right = nullptr;
+  int32_t* row_costs = nullptr;  // (disparities + 1) x rows x cols each: the last plane texture
+  int32_t* costs = nullptr;
+  int16_t* disparity = nullptr;  // rows x cols
+  int32_t* best_cost = nullptr;  // rows x cols
+};
+void block_match(const BlockMatchingShape& shape, const BlockMatchingBuffers& buffers,
+                 cudaStream_t stream);
+
+}  // namespace robotperf::perception::cuda

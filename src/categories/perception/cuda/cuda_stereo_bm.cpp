@@ -1,0 +1,62 @@
+// The cuda backend's StereoBM on a node's own stream: the pair up, the device's stages
+// (stereo_bm_kernels.cu), the disparity and best costs down, and the host's steps after it, as
+// the opencl backend's.
+#include <cstdint>
+#include <stdexcept>
+
+#include "../stereo_bm_device.hpp"
+#include "cuda_backend.hpp"
+#include "cuda_support.hpp"
+#include "robotperf/perception/cuda_device.hpp"
+
+namespace robotperf::perception::cuda {
+namespace {
+
+class CudaBlockMatcher final : public BlockMatcher {
+ public:
+  void compute(const cv::Mat& left, const cv::Mat& right, const StereoParams& params,
+               cv::Mat& disparity16) override {
+    if (left.type() != CV_8UC1 || right.type() != CV_8UC1 || left.size() != right.size())
+      throw std::logic_error("cuda: block matching takes a mono8 pair of one size");
+    const BlockMatchingShape s = block_matching_shape(left.rows, left.cols, params);
+    const std::size_t pixels = left.total();
+    // The cost volume: a plane of window costs per disparity, and one for the texture.
+    const std::size_t volume = pixels * static_cast<std::size_t>(s.disparities + 1);
+    BlockMatchingBuffers b;
+    b.filtered_left = filtered_left_.reserve_for<uint8_t>(pixels);
+    b.filtered_right = filtered_right_.reserve_for<uint8_t>(pixels);
+    b.row_costs = row_costs_.reserve_for<int32_t>(volume);
+    b.costs = costs_.reserve_for<int32_t>(volume);
+    b.disparity = static_cast<int16_t*>(disparity_.reserve(s.rows, s.cols, CV_16SC1).data);
+    b.best_cost = static_cast<int32_t*>(best_cost_.reserve(s.rows, s.cols, CV_32SC1).data);
+    {
+      DeviceStage upload("upload", left.total() + right.total(), stream_);
+      b.left = static_cast<const uint8_t*>(left_.upload(left, stream_.get()).data);
+      b.right = static_cast<const uint8_t*>(right_.upload(right, stream_.get()).data);
+    }
+    {
+      DeviceStage compute("compute", 0, stream_);
+      block_match(s, b, stream_.get());
+    }
+    disparity16.create(s.rows, s.cols, CV_16SC1);
+    best_cost_on_host_.create(s.rows, s.cols, CV_32SC1);
+    download(stream_, {{disparity_, disparity16}, {best_cost_, best_cost_on_host_}});
+    filter_on_host(disparity16, best_cost_on_host_, params);
+  }
+
+ private:
+  Stream stream_;
+  StagedImage left_, right_, disparity_, best_cost_;
+  Buffer filtered_left_{Memory::kDevice}, filtered_right_{Memory::kDevice};
+  Buffer row_costs_{Memory::kDevice}, costs_{Memory::kDevice};
+  cv::Mat best_cost_on_host_;
+};
+
+}  // namespace
+
+std::unique_ptr<BlockMatcher> make_block_matcher() {
+  cuda_device();
+  return std::make_unique<CudaBlockMatcher>();
+}
+
+}  // namespace robotperf::perception::cuda

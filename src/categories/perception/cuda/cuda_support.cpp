@@ -1,0 +1,117 @@
+#include "cuda_support.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace robotperf::perception::cuda {
+
+Stream::Stream() {
+  // Non-blocking: no implicit ordering with other streams' work (other nodes, OpenCV's).
+  check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreateWithFlags");
+}
+
+Stream::~Stream() {
+  // Every call waited for its work; a destructor has nobody to report an error to.
+  static_cast<void>(cudaStreamDestroy(stream_));
+}
+
+void Stream::synchronize() {
+  const cudaError_t seen = deferred_;
+  deferred_ = cudaSuccess;
+  check(seen, "cudaStreamSynchronize (a recorded stage's wait)");
+  check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
+}
+
+void Stream::finish() const noexcept {
+  const cudaError_t error = cudaStreamSynchronize(stream_);
+  if (deferred_ == cudaSuccess) deferred_ = error;
+}
+
+Buffer::~Buffer() {
+  release();
+}
+
+void* Buffer::reserve(std::size_t bytes) {
+  if (bytes <= capacity_) return data_;
+  release();
+  if (memory_ == Memory::kDevice) {
+    check(cudaMalloc(&data_, bytes), "cudaMalloc");
+  } else {
+    check(cudaHostAlloc(&data_, bytes, cudaHostAllocDefault), "cudaHostAlloc");
+  }
+  capacity_ = bytes;
+  return data_;
+}
+
+void Buffer::release() noexcept {
+  if (data_ == nullptr) return;
+  // Freeing fails only for a pointer CUDA did not give or a device already lost: nothing to do.
+  static_cast<void>(memory_ == Memory::kDevice ? cudaFree(data_) : cudaFreeHost(data_));
+  data_ = nullptr;
+  capacity_ = 0;
+}
+
+std::size_t StagedImage::bytes() const {
+  return static_cast<std::size_t>(rows_) * cols_ * CV_ELEM_SIZE(type_);
+}
+
+DeviceImage StagedImage::upload(const cv::Mat& image, cudaStream_t stream) {
+  const DeviceImage on_device = reserve(image.rows, image.cols, image.type());
+  pinned_data_ = pinned_.reserve(bytes());
+  cv::Mat staging(rows_, cols_, type_, pinned_data_);
+  image.copyTo(staging);
+  check(cudaMemcpyAsync(device_data_, pinned_data_, bytes(), cudaMemcpyHostToDevice, stream),
+        "cudaMemcpyAsync (upload)");
+  return on_device;
+}
+
+DeviceImage StagedImage::reserve(int rows, int cols, int type) {
+  rows_ = rows;
+  cols_ = cols;
+  type_ = type;
+  device_data_ = device_.reserve(bytes());
+  return {device_data_, cols, rows};
+}
+
+void StagedImage::queue_download(cudaStream_t stream) {
+  pinned_data_ = pinned_.reserve(bytes());
+  check(cudaMemcpyAsync(pinned_data_, device_data_, bytes(), cudaMemcpyDeviceToHost, stream),
+        "cudaMemcpyAsync (download)");
+}
+
+void StagedImage::copy_to(cv::Mat& out) const {
+  if (out.rows != rows_ || out.cols != cols_ || out.type() != type_) {
+    throw std::logic_error("cuda: the device's output has another size or type");
+  }
+  cv::Mat(rows_, cols_, type_, pinned_data_).copyTo(out);
+}
+
+void download(Stream& stream, std::initializer_list<Download> downloads) {
+  uint64_t bytes = 0;
+  for (const Download& d : downloads) bytes += d.from.bytes();
+  DeviceStage stage("download", bytes, stream);
+  for (const Download& d : downloads) d.from.queue_download(stream.get());
+  stream.synchronize();
+  for (const Download& d : downloads) d.from.copy_to(d.to);
+}
+
+PixelDepth pixel_depth(int type, const char* what) {
+  const int channels = CV_MAT_CN(type);
+  if (channels >= 1 && channels <= 4) {
+    switch (CV_MAT_DEPTH(type)) {
+      case CV_8U:
+        return PixelDepth::k8U;
+      case CV_16U:
+        return PixelDepth::k16U;
+      case CV_32F:
+        return PixelDepth::k32F;
+      default:
+        break;
+    }
+  }
+  throw std::invalid_argument(std::string(what) +
+                              ": the cuda backend takes 8-bit, 16-bit unsigned and 32-bit float "
+                              "images of 1 to 4 channels");
+}
+
+}  // namespace robotperf::perception::cuda
