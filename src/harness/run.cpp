@@ -551,7 +551,8 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   }
   // Answers of nodes on another backend are compared with the cpu's afterwards: keep a sample
   // where the functional check keeps none.
-  if (uses_other_backend(spec) && functional_ids.empty() && has_comparison(spec.output.type)) {
+  const bool on_device = uses_other_backend(spec);
+  if (on_device && functional_ids.empty() && has_comparison(spec.output.type)) {
     functional_ids = functional_sample_ids(r.count, r.warmup, 16);
     monitor.keep_outputs(functional_ids);
   }
@@ -711,7 +712,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
         r.warmup, [&] { return monitor.received() > 0; }, gate_deadline,
         "the graph matched every endpoint but delivered no output to its warm-up messages "
         "before --connect-timeout: is it running, and does it publish the output topic?"};
-  } else if (uses_other_backend(spec)) {
+  } else if (on_device) {
     gate = Playback::DeliveryGate{
         r.warmup, [&] { return device_warmup.ready_after_round(monitor.received()); },
         gate_deadline,

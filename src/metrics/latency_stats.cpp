@@ -84,23 +84,19 @@ double quantile_of_sorted(std::span<const double> sorted_samples, double q) {
   return below + fraction * (above - below);
 }
 
-SampleStats compute_stats(std::span<const double> samples) {
-  std::vector<double> sorted(samples.begin(), samples.end());
-  // NaN breaks the sort's ordering: refused before sorting.
-  if (!std::all_of(sorted.begin(), sorted.end(), [](double x) { return !std::isnan(x); })) {
+namespace {
+
+void require_finite(std::span<const double> samples) {
+  if (!std::all_of(samples.begin(), samples.end(), [](double x) { return std::isfinite(x); })) {
     throw std::invalid_argument("compute_stats: samples must be finite (found NaN or infinity)");
   }
-  std::sort(sorted.begin(), sorted.end());
-  return compute_stats_of_sorted(sorted);
 }
 
-SampleStats compute_stats_of_sorted(std::span<const double> sorted) {
+// The statistics of finite samples sorted ascending.
+SampleStats stats_of_sorted(std::span<const double> sorted) {
   SampleStats stats;
   stats.count = sorted.size();
   if (sorted.empty()) return stats;
-  if (!std::all_of(sorted.begin(), sorted.end(), [](double x) { return std::isfinite(x); })) {
-    throw std::invalid_argument("compute_stats: samples must be finite (found NaN or infinity)");
-  }
 
   const auto n = static_cast<double>(sorted.size());
   CompensatedSum sum;
@@ -143,6 +139,21 @@ SampleStats compute_stats_of_sorted(std::span<const double> sorted) {
   stats.p99_ci = interval(0.99);
   stats.p999_ci = interval(0.999);
   return stats;
+}
+
+}  // namespace
+
+SampleStats compute_stats(std::span<const double> samples) {
+  // Checked before sorting: NaN breaks the sort's ordering.
+  require_finite(samples);
+  std::vector<double> sorted(samples.begin(), samples.end());
+  std::sort(sorted.begin(), sorted.end());
+  return stats_of_sorted(sorted);
+}
+
+SampleStats compute_stats_of_sorted(std::span<const double> sorted) {
+  require_finite(sorted);
+  return stats_of_sorted(sorted);
 }
 
 nlohmann::json to_json(const SampleStats& stats, double scale, std::string_view unit) {

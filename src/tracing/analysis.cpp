@@ -649,8 +649,7 @@ void sort_by_index(std::vector<MessageTimes>& messages) {
 
 // The black-box statistics and validity rules (harness/run.cpp), from the trace.
 // Fills a.messages and returns the lookup of their IDs.
-std::unique_ptr<MessageLookup> summarise_run(TraceAnalysis& a, const Collected& c,
-                                             const RunInfo& run) {
+MessageLookup summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run) {
   auto in_run = [&](int32_t vpid) { return run.processes.contains(vpid); };
   a.messages.reserve(c.inputs.size());
   advise_huge_pages(a.messages.data(), a.messages.capacity() * sizeof(MessageTimes));
@@ -665,15 +664,15 @@ std::unique_ptr<MessageLookup> summarise_run(TraceAnalysis& a, const Collected& 
     a.messages.push_back(m);
   }
   sort_by_index(a.messages);
-  auto lookup = std::make_unique<MessageLookup>(a.messages, run.period_ns);
-  for (const int64_t id : lookup->repeated())
+  MessageLookup lookup(a.messages, run.period_ns);
+  for (const int64_t id : lookup.repeated())
     a.invalid_reasons.push_back("two inputs carry the message ID " + std::to_string(id));
   // The first reception of an ID is the one counted (the earliest: the outputs are in stream
   // order, not in time order); every other one of a measured message is a duplicate.
   std::size_t receptions_of_measured = 0;
   for (const auto& o : c.outputs) {
     if (!in_run(o.vpid)) continue;
-    const auto i = lookup->find(o.id);
+    const auto i = lookup.find(o.id);
     if (!i) {
       ++a.unknown;
       continue;
@@ -1195,8 +1194,8 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
     controller_update_durations(a, c, a.run);
   });
   if (a.run) {
-    const auto lookup = summarise_run(a, c, *a.run);
-    breakdown(a, c, *a.run, *lookup);
+    const MessageLookup lookup = summarise_run(a, c, *a.run);
+    breakdown(a, c, *a.run, lookup);
   }
   tables.get();
   explain_missing_tables(a, c);

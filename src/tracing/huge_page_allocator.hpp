@@ -10,6 +10,17 @@
 
 namespace robotperf::tracing {
 
+constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
+
+// Marks the whole 2 MiB pages inside [p, p + bytes) for transparent huge pages, before they are
+// written; without transparent huge pages (or with them off) the pages stay ordinary ones.
+inline void advise_huge_pages(void* p, std::size_t bytes) {
+  constexpr uintptr_t kHuge = kHugePageBytes;
+  const auto begin = (reinterpret_cast<uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
+  const auto end = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(kHuge - 1);
+  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+}
+
 // Blocks of 2 MiB and more are mapped on their own, aligned to 2 MiB and marked for transparent
 // huge pages, so that filling hundreds of megabytes takes one page fault per 2 MiB instead of one
 // per 4 KiB: in a virtual machine a fault costs microseconds, and with 4 KiB pages the faults took
@@ -17,7 +28,7 @@ namespace robotperf::tracing {
 template <class T>
 struct HugePageAllocator {
   using value_type = T;
-  static constexpr std::size_t kHugePage = std::size_t{2} << 20;
+  static constexpr std::size_t kHugePage = kHugePageBytes;
 
   HugePageAllocator() = default;
   template <class U>
@@ -36,8 +47,7 @@ struct HugePageAllocator {
     if (aligned > start) munmap(mapped, aligned - start);
     const uintptr_t end = start + size + kHugePage;
     if (end > aligned + size) munmap(reinterpret_cast<void*>(aligned + size), end - aligned - size);
-    // Without transparent huge pages (or with them off) the block is an ordinary mapping.
-    madvise(reinterpret_cast<void*>(aligned), size, MADV_HUGEPAGE);
+    advise_huge_pages(reinterpret_cast<void*>(aligned), size);
     return reinterpret_cast<T*>(aligned);
   }
 
@@ -63,14 +73,5 @@ struct HugePageAllocator {
 
 template <class T>
 using BigVector = std::vector<T, HugePageAllocator<T>>;
-
-// Marks the whole 2 MiB pages inside [p, p + bytes) for transparent huge pages, for a large buffer
-// whose allocator is not ours (a std::vector of a public struct), before it is written.
-inline void advise_huge_pages(void* p, std::size_t bytes) {
-  constexpr uintptr_t kHuge = HugePageAllocator<char>::kHugePage;
-  const auto begin = (reinterpret_cast<uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
-  const auto end = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(kHuge - 1);
-  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
-}
 
 }  // namespace robotperf::tracing
