@@ -1,9 +1,13 @@
 #include "robotperf/metrics/latency_stats.hpp"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace robotperf::metrics {
@@ -143,11 +147,60 @@ SampleStats stats_of_sorted(std::span<const double> sorted) {
 
 }  // namespace
 
+void sort_samples(std::span<double> samples, std::span<double> scratch) {
+  const std::size_t n = samples.size();
+  // Below this a comparison sort is as fast, and needs no second buffer.
+  constexpr std::size_t kRadixFrom = 2048;
+  if (n < kRadixFrom) {
+    std::sort(samples.begin(), samples.end());
+    return;
+  }
+  std::vector<double> own;
+  if (scratch.size() < n) {
+    own.resize(n);
+    scratch = own;
+  }
+  // A double's bits as an unsigned key of the same order: negatives have every bit flipped (a
+  // larger magnitude is a smaller value), the others only their sign bit. Keys are kept in the
+  // two buffers' bits.
+  auto key = [](double x) {
+    const auto bits = std::bit_cast<uint64_t>(x);
+    return (bits >> 63) != 0 ? ~bits : bits | (uint64_t{1} << 63);
+  };
+  auto value = [](uint64_t k) {
+    return std::bit_cast<double>((k >> 63) != 0 ? k & ~(uint64_t{1} << 63) : ~k);
+  };
+  // Least significant digit first, 11 bits a pass. Latencies are whole nanoseconds well below
+  // 2^53, so most low mantissa digits are the same in every sample: those passes are skipped.
+  constexpr unsigned kBits = 11, kPasses = (64 + kBits - 1) / kBits;
+  constexpr std::size_t kBuckets = std::size_t{1} << kBits;
+  std::vector<std::array<std::size_t, kBuckets>> counts(kPasses);
+  for (std::size_t i = 0; i < n; ++i) {
+    const uint64_t k = key(samples[i]);
+    samples[i] = std::bit_cast<double>(k);
+    for (unsigned p = 0; p < kPasses; ++p) ++counts[p][(k >> (p * kBits)) & (kBuckets - 1)];
+  }
+  double* from = samples.data();
+  double* to = scratch.data();
+  for (unsigned p = 0; p < kPasses; ++p) {
+    auto& count = counts[p];
+    if (std::find(count.begin(), count.end(), n) != count.end()) continue;  // one digit for all
+    std::size_t start = 0;
+    for (auto& c : count) start += std::exchange(c, start);
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto k = std::bit_cast<uint64_t>(from[i]);
+      to[count[(k >> (p * kBits)) & (kBuckets - 1)]++] = from[i];
+    }
+    std::swap(from, to);
+  }
+  for (std::size_t i = 0; i < n; ++i) samples[i] = value(std::bit_cast<uint64_t>(from[i]));
+}
+
 SampleStats compute_stats(std::span<const double> samples) {
   // Checked before sorting: NaN breaks the sort's ordering.
   require_finite(samples);
   std::vector<double> sorted(samples.begin(), samples.end());
-  std::sort(sorted.begin(), sorted.end());
+  sort_samples(sorted);
   return stats_of_sorted(sorted);
 }
 

@@ -165,20 +165,96 @@ enum class IdKind : uint8_t {
   kDeviceEnd
 };
 
-// Names are numbered below 2^29 (Collected::intern), so that an event takes 32 bytes: millions of
-// them are written and read again.
-constexpr uint32_t kMaxNames = uint32_t{1} << 29;
-struct IdEvent {
-  int64_t ts;
-  int64_t id;
+// Where an event carrying a message ID was emitted and what it says, apart from its time and
+// message. A trace holds few of them (threads x nodes x topics), against millions of events.
+struct IdSite {
   int32_t vpid;
   int32_t vtid;
   uint32_t node;
-  uint32_t what : 29;  // topic, or kernel name
-  uint32_t kind_bits : 3;
-  IdKind kind() const { return static_cast<IdKind>(kind_bits); }
+  uint32_t what;  // topic, or kernel name
+  IdKind kind;
+  bool operator==(const IdSite&) const = default;
 };
-static_assert(sizeof(IdEvent) == 32);
+struct IdSiteHash {
+  std::size_t operator()(const IdSite& s) const {
+    uint64_t h = static_cast<uint32_t>(s.vpid) * 0x9E3779B97F4A7C15ull;
+    h ^= (static_cast<uint64_t>(static_cast<uint32_t>(s.vtid)) << 21) + s.node * 0xC2B2AE3Dull;
+    h ^= (static_cast<uint64_t>(s.what) << 7) * 0x27D4EB2Full + static_cast<uint64_t>(s.kind);
+    return static_cast<std::size_t>(h ^ (h >> 29));
+  }
+};
+
+// Where a callback ran, for ros2:callback_start/end.
+struct CallbackSite {
+  int32_t vpid;
+  int32_t vtid;
+  uint64_t callback;
+  bool operator==(const CallbackSite&) const = default;
+};
+struct CallbackSiteHash {
+  std::size_t operator()(const CallbackSite& s) const {
+    uint64_t h = (static_cast<uint64_t>(static_cast<uint32_t>(s.vpid)) << 32 |
+                  static_cast<uint32_t>(s.vtid)) *
+                 0x9E3779B97F4A7C15ull;
+    h ^= s.callback * 0xC2B2AE3D27D4EB4Full;
+    return static_cast<std::size_t>(h ^ (h >> 29));
+  }
+};
+
+// The distinct sites of a trace's events, numbered in order of first use. The last two are
+// remembered, since a thread's events cycle through a few sites.
+template <class Site, class Hash>
+class SiteTable {
+ public:
+  uint32_t intern(const Site& site) {
+    if (recent_ids_[0] != UINT32_MAX && recent_[0] == site) return recent_ids_[0];
+    uint32_t id;
+    if (recent_ids_[1] != UINT32_MAX && recent_[1] == site) {
+      id = recent_ids_[1];
+    } else {
+      auto [it, inserted] = ids_.try_emplace(site, static_cast<uint32_t>(sites_.size()));
+      if (inserted) sites_.push_back(site);
+      id = it->second;
+    }
+    recent_[1] = recent_[0];
+    recent_ids_[1] = recent_ids_[0];
+    recent_[0] = site;
+    recent_ids_[0] = id;
+    return id;
+  }
+  const Site& operator[](uint32_t id) const { return sites_[id]; }
+  std::size_t size() const { return sites_.size(); }
+
+  // Interns every site of `part` here, each as `rename` makes it; returns their numbers here, or
+  // an empty vector when every number stays the same.
+  template <class Rename>
+  std::vector<uint32_t> merge(const SiteTable& part, Rename rename) {
+    std::vector<uint32_t> number(part.sites_.size());
+    bool renumbered = false;
+    for (std::size_t i = 0; i < part.sites_.size(); ++i) {
+      number[i] = intern(rename(part.sites_[i]));
+      renumbered |= number[i] != i;
+    }
+    if (!renumbered) number.clear();
+    return number;
+  }
+
+ private:
+  std::vector<Site> sites_;
+  std::unordered_map<Site, uint32_t, Hash> ids_;
+  Site recent_[2] = {};
+  uint32_t recent_ids_[2] = {UINT32_MAX, UINT32_MAX};
+};
+
+// 16 bytes, as the callback events: millions of them are written and read again, and in a
+// virtual machine memory that a process touches for the first time costs about a nanosecond a
+// byte.
+struct IdEvent {
+  int64_t ts;
+  uint32_t message;  // index into its part's message IDs (Collected::message_ids)
+  uint32_t site;     // in Collected::id_sites
+};
+static_assert(sizeof(IdEvent) == 16);
 
 struct Input {
   int64_t ts, id, scheduled;
@@ -191,10 +267,10 @@ struct Output {
 };
 struct CallbackEvent {
   int64_t ts;
-  int32_t vpid, vtid;
-  uint64_t callback;
+  uint32_t site;  // in Collected::callback_sites
   bool start;
 };
+static_assert(sizeof(CallbackEvent) == 16);
 struct RmwEvent {
   int64_t ts;
   int32_t vpid;
@@ -228,10 +304,7 @@ struct Collected {
                                               std::size(recent)];
     if (cached < names.size() && names[cached] == s) return cached;
     auto [it, inserted] = name_ids.try_emplace(s, static_cast<uint32_t>(names.size()));
-    if (inserted) {
-      if (names.size() >= kMaxNames) throw ctf::CtfError("the trace holds more than 2^29 names");
-      names.push_back(s);
-    }
+    if (inserted) names.push_back(s);
     cached = it->second;
     return it->second;
   }
@@ -240,13 +313,18 @@ struct Collected {
   std::vector<std::pair<int64_t, RunInfo>> runs;   // (time, info)
   std::vector<std::pair<int32_t, int32_t>> joins;  // (vpid, run pid)
   std::vector<std::pair<int32_t, uint64_t>> ends;  // (vpid, sent)
-  BigVector<Input> inputs;
-  BigVector<Output> outputs;
   // One vector per part of a stream decoded (see StreamPart), in order: merged without a copy.
-  std::vector<BigVector<IdEvent>> id_events;
-  BigVector<CallbackEvent> callbacks;
-  BigVector<RmwEvent> rmw_publishes, rmw_takes;
-  BigVector<ControllerUpdateEvent> controller_updates;
+  PartedVector<Input> inputs;
+  PartedVector<Output> outputs;
+  PartedVector<IdEvent> id_events;
+  // The message IDs of each part's ID events, one part for each of id_events' parts: a frame's
+  // events follow one another in a stream, so an ID is stored once for several events.
+  PartedVector<int64_t> message_ids;
+  SiteTable<IdSite, IdSiteHash> id_sites;
+  PartedVector<CallbackEvent> callbacks;
+  SiteTable<CallbackSite, CallbackSiteHash> callback_sites;
+  PartedVector<RmwEvent> rmw_publishes, rmw_takes;
+  PartedVector<ControllerUpdateEvent> controller_updates;
 
   HandleMap<std::string> node_names;
   HandleMap<Endpoint> publishers_by_rmw, subscriptions_by_handle, subscriptions_by_rmw;
@@ -260,13 +338,54 @@ struct Collected {
   bool has_rmw_publish = false, rmw_publish_has_timestamp = false;
 };
 
-using DispatchTable = std::unordered_map<const ctf::EventClass*, Dispatch>;
+// What each event class of a trace is for. Found by stream and event id, without hashing: the
+// class changes at nearly every event.
+class DispatchTable {
+ public:
+  void add(const ctf::EventClass& ec, const Dispatch& d) {
+    auto it = std::find_if(streams_.begin(), streams_.end(),
+                           [&](const auto& s) { return s.first == ec.stream_id; });
+    if (it == streams_.end()) it = streams_.insert(streams_.end(), {ec.stream_id, {}});
+    if (it->second.size() <= ec.id) it->second.resize(ec.id + 1);
+    it->second[ec.id] = d;
+    for (const int f : {d.vpid, d.vtid}) {
+      if (f >= 0 &&
+          std::find(context_fields_.begin(), context_fields_.end(), f) == context_fields_.end())
+        context_fields_.push_back(f);
+    }
+  }
+  // The fields that the dispatch of some class reads: the reader decodes only those.
+  ctf::FieldSelection selection() const {
+    ctf::FieldSelection s;
+    s.payload = [this](const ctf::EventClass& ec, std::size_t field) {
+      const Dispatch& d = of(ec);
+      return d.handler != Handler::kIgnore &&
+             std::find(std::begin(d.f), std::end(d.f), static_cast<int>(field)) != std::end(d.f);
+    };
+    s.stream_context = [this](const ctf::StreamClass&, std::size_t field) {
+      return std::find(context_fields_.begin(), context_fields_.end(), static_cast<int>(field)) !=
+             context_fields_.end();
+    };
+    return s;
+  }
+  // The dispatch of a class of this trace (every class was added).
+  const Dispatch& of(const ctf::EventClass& ec) const {
+    for (const auto& [stream, by_id] : streams_) {
+      if (stream == ec.stream_id) return by_id[ec.id];
+    }
+    throw std::logic_error("event class '" + ec.name + "' has no dispatch");
+  }
+
+ private:
+  std::vector<std::pair<uint64_t, std::vector<Dispatch>>> streams_;  // few: searched in turn
+  std::vector<int> context_fields_;  // stream-context fields read (vpid, vtid)
+};
 
 // What each of a trace's event classes is for; notes what the metadata declares in `c`.
 DispatchTable dispatch_table(const ctf::Trace& trace, Collected& c) {
   DispatchTable dispatch;
   for (const auto& ec : trace.metadata().events) {
-    dispatch[ec.get()] = dispatch_for(*ec, trace);
+    dispatch.add(*ec, dispatch_for(*ec, trace));
     if (ec->name == "ros2:rmw_publish") {
       c.has_rmw_publish = true;
       c.rmw_publish_has_timestamp |= ec->field_index("timestamp") >= 0;
@@ -280,6 +399,7 @@ DispatchTable dispatch_table(const ctf::Trace& trace, Collected& c) {
 struct StreamPart {
   const ctf::Trace* trace = nullptr;
   const DispatchTable* dispatch = nullptr;
+  const ctf::FieldSelection* selection = nullptr;  // the dispatch's fields
   std::size_t stream = 0;
   std::span<const ctf::Packet> packets;
   uint64_t bytes = 0;
@@ -295,25 +415,26 @@ void collect(StreamPart& part) {
   // Room for every event the part may hold (LTTng events take 40 bytes or more): growing the
   // vectors would copy them and fault in pages twice.
   const std::size_t estimate = part.bytes / 40;
-  BigVector<IdEvent>& id_events = c.id_events.emplace_back();
-  id_events.reserve(estimate);
+  BigVector<IdEvent>& id_events = c.id_events.add_part(estimate);
+  BigVector<int64_t>& message_ids = c.message_ids.add_part(estimate / 2);
   // Reserved room that is never written costs nothing (pages are mapped when first written); a
   // vector grown from small blocks would fault each of their 4 KiB pages.
-  c.inputs.reserve(estimate / 8);
-  c.outputs.reserve(estimate / 8);
-  c.callbacks.reserve(estimate / 4);
-  c.rmw_publishes.reserve(estimate / 8);
-  c.rmw_takes.reserve(estimate / 8);
+  BigVector<Input>& inputs = c.inputs.add_part(estimate / 8);
+  BigVector<Output>& outputs = c.outputs.add_part(estimate / 8);
+  BigVector<CallbackEvent>& callbacks = c.callbacks.add_part(estimate / 4);
+  BigVector<RmwEvent>& rmw_publishes = c.rmw_publishes.add_part(estimate / 8);
+  BigVector<RmwEvent>& rmw_takes = c.rmw_takes.add_part(estimate / 8);
+  BigVector<ControllerUpdateEvent>& controller_updates = c.controller_updates.add_part();
   const DispatchTable& dispatch = *part.dispatch;
   const ctf::EventClass* last_class = nullptr;
   const Dispatch* d = nullptr;
-  part.events = part.trace->read_packets(part.stream, part.packets, [&](const Event& e) {
+  auto on_event = [&](const Event& e) {
     const auto ts = static_cast<int64_t>(e.timestamp);
     part.first_ns = std::min(part.first_ns, ts);
     part.last_ns = std::max(part.last_ns, ts);
     if (e.cls != last_class) {
       last_class = e.cls;
-      d = &dispatch.at(e.cls);
+      d = &dispatch.of(*e.cls);
     }
     if (d->handler == Handler::kIgnore) return;
     const auto& f = e.fields;
@@ -352,10 +473,10 @@ void collect(StreamPart& part) {
         c.ends.emplace_back(vpid, field(0).as_uint());
         break;
       case Handler::kInput:
-        c.inputs.push_back({ts, field(0).as_int(), field(2).as_int(), field(1).as_uint(), vpid});
+        inputs.push_back({ts, field(0).as_int(), field(2).as_int(), field(1).as_uint(), vpid});
         break;
       case Handler::kOutput:
-        c.outputs.push_back({ts, field(0).as_int(), vpid});
+        outputs.push_back({ts, field(0).as_int(), vpid});
         break;
       case Handler::kPublish:
       case Handler::kCallbackEntry:
@@ -369,8 +490,11 @@ void collect(StreamPart& part) {
                             : d->handler == Handler::kKernelFini    ? IdKind::kKernelFini
                             : d->handler == Handler::kDeviceBegin   ? IdKind::kDeviceBegin
                                                                     : IdKind::kDeviceEnd;
-        id_events.push_back({ts, field(2).as_int(), vpid, vtid(), c.intern(field(0).s),
-                             c.intern(field(1).s), static_cast<uint32_t>(kind)});
+        const int64_t id = field(2).as_int();
+        if (message_ids.empty() || message_ids.back() != id) message_ids.push_back(id);
+        const uint32_t site =
+            c.id_sites.intern({vpid, vtid(), c.intern(field(0).s), c.intern(field(1).s), kind});
+        id_events.push_back({ts, static_cast<uint32_t>(message_ids.size() - 1), site});
         break;
       }
       case Handler::kNodeInit: {
@@ -410,24 +534,25 @@ void collect(StreamPart& part) {
         break;
       case Handler::kCallbackStart:
       case Handler::kCallbackEnd:
-        c.callbacks.push_back(
-            {ts, vpid, vtid(), field(0).u, d->handler == Handler::kCallbackStart});
+        callbacks.push_back({ts, c.callback_sites.intern({vpid, vtid(), field(0).u}),
+                             d->handler == Handler::kCallbackStart});
         break;
       case Handler::kRmwPublish:
-        c.rmw_publishes.push_back({ts, vpid, field(0).u, field(1).as_int()});
+        rmw_publishes.push_back({ts, vpid, field(0).u, field(1).as_int()});
         break;
       case Handler::kRmwTake:
         if (d->f[2] < 0 || field(2).as_int() != 0)
-          c.rmw_takes.push_back({ts, vpid, field(0).u, field(1).as_int()});
+          rmw_takes.push_back({ts, vpid, field(0).u, field(1).as_int()});
         break;
       case Handler::kControllerUpdateBegin:
       case Handler::kControllerUpdateEnd:
-        c.controller_updates.push_back({ts, vpid, c.intern(field(0).s), c.intern(field(1).s),
-                                        field(2).as_uint(),
-                                        d->handler == Handler::kControllerUpdateBegin});
+        controller_updates.push_back({ts, vpid, c.intern(field(0).s), c.intern(field(1).s),
+                                      field(2).as_uint(),
+                                      d->handler == Handler::kControllerUpdateBegin});
         break;
     }
-  });
+  };
+  part.events = part.trace->read_packets(part.stream, part.packets, on_event, part.selection);
 }
 
 // Appends `part` to `c` as if its events had been collected into `c` after those before it:
@@ -446,15 +571,26 @@ void merge(Collected& c, Collected&& part) {
   auto replace = [](auto& to, auto& from) {
     for (auto& [k, v] : from) to.insert_or_assign(k, std::move(v));
   };
-  for (auto& events : part.id_events) {
-    for (auto& e : events) {
-      e.node = id_of[e.node];
-      e.what = id_of[e.what];
+  // The part's sites in the names of the whole trace, numbered among its sites; the events are
+  // renumbered only where a number changed (most often none does).
+  auto renumber = [](auto& events, const std::vector<uint32_t>& number) {
+    if (number.empty()) return;
+    for (auto& part_events : events.parts()) {
+      for (auto& e : part_events) e.site = number[e.site];
     }
-  }
-  for (auto& u : part.controller_updates) {
-    u.node = id_of[u.node];
-    u.controller = id_of[u.controller];
+  };
+  renumber(part.id_events, c.id_sites.merge(part.id_sites, [&](IdSite site) {
+    site.node = id_of[site.node];
+    site.what = id_of[site.what];
+    return site;
+  }));
+  renumber(part.callbacks,
+           c.callback_sites.merge(part.callback_sites, [](const CallbackSite& s) { return s; }));
+  for (auto& updates : part.controller_updates.parts()) {
+    for (auto& u : updates) {
+      u.node = id_of[u.node];
+      u.controller = id_of[u.controller];
+    }
   }
   for (auto* endpoints :
        {&part.publishers_by_rmw, &part.subscriptions_by_handle, &part.subscriptions_by_rmw}) {
@@ -463,13 +599,14 @@ void merge(Collected& c, Collected&& part) {
   append(c.runs, part.runs);
   append(c.joins, part.joins);
   append(c.ends, part.ends);
-  append(c.inputs, part.inputs);
-  append(c.outputs, part.outputs);
-  std::move(part.id_events.begin(), part.id_events.end(), std::back_inserter(c.id_events));
-  append(c.callbacks, part.callbacks);
-  append(c.rmw_publishes, part.rmw_publishes);
-  append(c.rmw_takes, part.rmw_takes);
-  append(c.controller_updates, part.controller_updates);
+  c.inputs.append(std::move(part.inputs));
+  c.outputs.append(std::move(part.outputs));
+  c.id_events.append(std::move(part.id_events));
+  c.message_ids.append(std::move(part.message_ids));
+  c.callbacks.append(std::move(part.callbacks));
+  c.rmw_publishes.append(std::move(part.rmw_publishes));
+  c.rmw_takes.append(std::move(part.rmw_takes));
+  c.controller_updates.append(std::move(part.controller_updates));
   replace(c.node_names, part.node_names);
   replace(c.publishers_by_rmw, part.publishers_by_rmw);
   replace(c.subscriptions_by_handle, part.subscriptions_by_handle);
@@ -484,7 +621,8 @@ void merge(Collected& c, Collected&& part) {
 
 // Cuts each stream into parts of about `target_bytes`, at packets that give their clock.
 std::vector<StreamPart> cut_into_parts(const ctf::Trace& trace, const DispatchTable& dispatch,
-                                       std::size_t stream, std::span<const ctf::Packet> packets,
+                                       const ctf::FieldSelection& selection, std::size_t stream,
+                                       std::span<const ctf::Packet> packets,
                                        uint64_t target_bytes) {
   std::vector<StreamPart> parts;
   std::size_t first = 0;
@@ -493,6 +631,7 @@ std::vector<StreamPart> cut_into_parts(const ctf::Trace& trace, const DispatchTa
     StreamPart& p = parts.emplace_back();
     p.trace = &trace;
     p.dispatch = &dispatch;
+    p.selection = &selection;
     p.stream = stream;
     p.packets = packets.subspan(first, end - first);
     p.bytes = bytes;
@@ -572,7 +711,9 @@ using Samples = BigVector<double>;
 
 // The statistics of `samples`, sorting them.
 metrics::SampleStats stats_of(Samples& samples) {
-  std::sort(samples.begin(), samples.end());
+  // The sort's second buffer in huge pages too (Samples' allocator leaves it unwritten).
+  Samples scratch(samples.size());
+  metrics::sort_samples(samples, scratch);
   return metrics::compute_stats_of_sorted(samples);
 }
 
@@ -623,47 +764,50 @@ class MessageLookup {
   std::vector<int64_t> repeated_;
 };
 
-// Sorts messages by index. Where the indices are 0..n-1 (robotperf's own runs, whatever order
-// the parts were decoded in) each is swapped to its place: linear, and no second buffer.
-void sort_by_index(std::vector<MessageTimes>& messages) {
-  const std::size_t n = messages.size();
-  std::vector<bool> seen(n, false);
-  bool permutation = true;
-  for (const auto& m : messages) {
-    if (m.index >= n || seen[m.index]) {
-      permutation = false;
-      break;
-    }
-    seen[m.index] = true;
-  }
-  if (!permutation) {
-    std::stable_sort(
-        messages.begin(), messages.end(),
-        [](const MessageTimes& x, const MessageTimes& y) { return x.index < y.index; });
-    return;
-  }
-  for (std::size_t i = 0; i < n; ++i) {
-    while (messages[i].index != i) std::swap(messages[i], messages[messages[i].index]);
-  }
-}
-
 // The black-box statistics and validity rules (harness/run.cpp), from the trace.
 // Fills a.messages and returns the lookup of their IDs.
 MessageLookup summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run) {
   auto in_run = [&](int32_t vpid) { return run.processes.contains(vpid); };
-  a.messages.reserve(c.inputs.size());
-  advise_huge_pages(a.messages.data(), a.messages.capacity() * sizeof(MessageTimes));
-  for (const auto& in : c.inputs) {
-    if (!in_run(in.vpid)) continue;
+  auto message_of = [&](const Input& in) {
     MessageTimes m;
     m.id = in.id;
     m.index = in.index;
     m.scheduled_ns = in.scheduled;
     m.sent_ns = in.ts;
     m.warmup = in.index < run.warmup;
-    a.messages.push_back(m);
+    return m;
+  };
+  // The messages in order of their index. Where the indices are 0..n-1 (robotperf's own runs,
+  // whatever order the streams hold them in), each is put at its place; otherwise they are sorted.
+  std::size_t n = 0;
+  for (const auto& in : c.inputs) n += in_run(in.vpid) ? 1 : 0;
+  bool permutation = true;
+  {
+    std::vector<char> seen(n, 0);
+    for (const auto& in : c.inputs) {
+      if (!in_run(in.vpid)) continue;
+      if (in.index >= n || seen[in.index] != 0) {
+        permutation = false;
+        break;
+      }
+      seen[in.index] = 1;
+    }
   }
-  sort_by_index(a.messages);
+  a.messages.reserve(n);
+  advise_huge_pages(a.messages.data(), a.messages.capacity() * sizeof(MessageTimes));
+  if (permutation) {
+    a.messages.resize(n);
+    for (const auto& in : c.inputs) {
+      if (in_run(in.vpid)) a.messages[in.index] = message_of(in);
+    }
+  } else {
+    for (const auto& in : c.inputs) {
+      if (in_run(in.vpid)) a.messages.push_back(message_of(in));
+    }
+    std::stable_sort(
+        a.messages.begin(), a.messages.end(),
+        [](const MessageTimes& x, const MessageTimes& y) { return x.index < y.index; });
+  }
   MessageLookup lookup(a.messages, run.period_ns);
   for (const int64_t id : lookup.repeated())
     a.invalid_reasons.push_back("two inputs carry the message ID " + std::to_string(id));
@@ -747,31 +891,24 @@ void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
                const MessageLookup& lookup) {
   // Group the events of measured messages by message (a counting sort on the
   // message's index: linear in the number of events), then by time within one.
-  std::size_t id_event_count = 0;
-  for (const auto& events : c.id_events) id_event_count += events.size();
   BigVector<uint32_t> slot_of;
-  slot_of.reserve(id_event_count);
+  slot_of.reserve(c.id_events.size());
   BigVector<std::size_t> starts(a.messages.size() + 1, 0);
-  // A frame's events follow one another in a stream: the last process and message looked up
-  // are most often the next ones too.
-  int32_t last_vpid = 0;
-  bool last_in_run = false;
-  int64_t last_id = 0;
-  uint32_t last_slot = UINT32_MAX;
-  bool have_last_id = false;
-  for (const auto& events : c.id_events) {
-    for (const auto& e : events) {
-      if (e.vpid != last_vpid || slot_of.empty()) {
-        last_vpid = e.vpid;
-        last_in_run = run.processes.contains(e.vpid);
-      }
+  std::vector<char> site_in_run(c.id_sites.size());
+  for (std::size_t i = 0; i < c.id_sites.size(); ++i)
+    site_in_run[i] = run.processes.contains(c.id_sites[static_cast<uint32_t>(i)].vpid) ? 1 : 0;
+  // Each message ID stored is looked up once; its events follow it.
+  for (std::size_t p = 0; p < c.id_events.parts().size(); ++p) {
+    const BigVector<int64_t>& ids = c.message_ids.parts()[p];
+    uint32_t last_message = UINT32_MAX;
+    uint32_t last_slot = UINT32_MAX;
+    for (const IdEvent& e : c.id_events.parts()[p]) {
       uint32_t slot = UINT32_MAX;
-      if (last_in_run) {
-        if (!have_last_id || e.id != last_id) {
-          const auto i = lookup.find(e.id);
+      if (site_in_run[e.site] != 0) {
+        if (e.message != last_message) {
+          const auto i = lookup.find(ids[e.message]);
           last_slot = i && !a.messages[*i].warmup ? static_cast<uint32_t>(*i) : UINT32_MAX;
-          last_id = e.id;
-          have_last_id = true;
+          last_message = e.message;
         }
         slot = last_slot;
         if (slot != UINT32_MAX) ++starts[slot + 1];
@@ -785,11 +922,9 @@ void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
   {
     BigVector<std::size_t> next(starts.begin(), starts.end() - 1);
     std::size_t i = 0;
-    for (const auto& events : c.id_events) {
-      for (const auto& e : events) {
-        if (slot_of[i] != UINT32_MAX) ev[next[slot_of[i]]++] = &e;
-        ++i;
-      }
+    for (const auto& e : c.id_events) {
+      if (slot_of[i] != UINT32_MAX) ev[next[slot_of[i]]++] = &e;
+      ++i;
     }
   }
   for (std::size_t m = 0; m + 1 < starts.size(); ++m) {
@@ -806,7 +941,11 @@ void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
   std::map<std::tuple<int, uint32_t, uint32_t, uint32_t>, Acc> acc;
   auto add = [&](int kind, uint32_t node, uint32_t from, uint32_t to, int64_t start, int64_t end,
                  int64_t sent) {
-    Acc& x = acc[{kind, node, from, to}];
+    auto [it, added] = acc.try_emplace({kind, node, from, to});
+    Acc& x = it->second;
+    // Most hops take one sample per measured message: room for them all at once, since growing
+    // would write the samples' memory again at each doubling.
+    if (added) x.durations.reserve(a.measured);
     x.durations.push_back(static_cast<double>(end - start));
     x.offset_sum += static_cast<double>(start - sent);
   };
@@ -814,32 +953,34 @@ void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
   for (std::size_t m = 0; m + 1 < starts.size(); ++m) {
     const std::size_t lo = starts[m], hi = starts[m + 1];
     const int64_t sent = a.messages[m].sent_ns;
+    auto site = [&](std::size_t j) -> const IdSite& { return c.id_sites[ev[j]->site]; };
     for (std::size_t i = lo; i < hi; ++i) {
-      const IdEvent& e = *ev[i];
-      if (e.kind() == IdKind::kEntry) {
+      const IdSite& e = site(i);
+      const int64_t ts = ev[i]->ts;
+      if (e.kind == IdKind::kEntry) {
         // Transport: the latest publish of this message on this topic before the take.
         for (std::size_t j = i; j-- > lo;) {
-          if (ev[j]->kind() == IdKind::kPublish && ev[j]->what == e.what) {
-            add(0, e.node, ev[j]->node, e.what, ev[j]->ts, e.ts, sent);
+          if (site(j).kind == IdKind::kPublish && site(j).what == e.what) {
+            add(0, e.node, site(j).node, e.what, ev[j]->ts, ts, sent);
             break;
           }
         }
-      } else if (e.kind() == IdKind::kPublish) {
+      } else if (e.kind == IdKind::kPublish) {
         // Node: from the node's latest callback start on this message to its publish.
         for (std::size_t j = i; j-- > lo;) {
-          if (ev[j]->kind() == IdKind::kEntry && ev[j]->node == e.node && ev[j]->vpid == e.vpid) {
-            add(1, e.node, ev[j]->what, e.what, ev[j]->ts, e.ts, sent);
+          if (site(j).kind == IdKind::kEntry && site(j).node == e.node && site(j).vpid == e.vpid) {
+            add(1, e.node, site(j).what, e.what, ev[j]->ts, ts, sent);
             break;
           }
         }
-      } else if (e.kind() == IdKind::kKernelFini || e.kind() == IdKind::kDeviceEnd) {
+      } else if (e.kind == IdKind::kKernelFini || e.kind == IdKind::kDeviceEnd) {
         // Kernel, or one stage of it on a device: from its begin on the same thread.
-        const bool device = e.kind() == IdKind::kDeviceEnd;
+        const bool device = e.kind == IdKind::kDeviceEnd;
         const IdKind begin = device ? IdKind::kDeviceBegin : IdKind::kKernelInit;
         for (std::size_t j = i; j-- > lo;) {
-          if (ev[j]->kind() == begin && ev[j]->node == e.node && ev[j]->what == e.what &&
-              ev[j]->vtid == e.vtid) {
-            add(device ? 3 : 2, e.node, e.what, e.what, ev[j]->ts, e.ts, sent);
+          if (site(j).kind == begin && site(j).node == e.node && site(j).what == e.what &&
+              site(j).vtid == e.vtid) {
+            add(device ? 3 : 2, e.node, e.what, e.what, ev[j]->ts, ts, sent);
             break;
           }
         }
@@ -880,16 +1021,43 @@ std::string node_name(const Collected& c, int32_t vpid, uint64_t node_handle) {
 
 // Callback durations from ros2:callback_start/end, per node and source.
 void callback_durations(TraceAnalysis& a, const Collected& c, const std::optional<RunInfo>& run) {
-  BigVector<CallbackEvent> ev;
-  ev.reserve(c.callbacks.size());
-  for (const auto& e : c.callbacks) {
-    if (!run || run->processes.contains(e.vpid)) ev.push_back(e);
+  // The run's events grouped by thread (a counting sort on the thread's number), then in time
+  // order within one: a thread's events are in order already unless it moved between CPUs'
+  // streams.
+  const std::size_t site_count = c.callback_sites.size();
+  std::map<std::pair<int32_t, int32_t>, uint32_t> thread_numbers;  // (vpid, vtid), in that order
+  for (std::size_t i = 0; i < site_count; ++i) {
+    const CallbackSite& site = c.callback_sites[static_cast<uint32_t>(i)];
+    if (!run || run->processes.contains(site.vpid))
+      thread_numbers.try_emplace({site.vpid, site.vtid}, 0);
   }
-  std::sort(ev.begin(), ev.end(), [](const CallbackEvent& x, const CallbackEvent& y) {
-    if (x.vpid != y.vpid) return x.vpid < y.vpid;
-    if (x.vtid != y.vtid) return x.vtid < y.vtid;
-    return x.ts < y.ts;
-  });
+  uint32_t threads = 0;
+  for (auto& [key, number] : thread_numbers) number = threads++;
+  constexpr uint32_t kNotInRun = UINT32_MAX;
+  std::vector<uint32_t> thread_of(site_count, kNotInRun);
+  for (std::size_t i = 0; i < site_count; ++i) {
+    const CallbackSite& site = c.callback_sites[static_cast<uint32_t>(i)];
+    if (auto it = thread_numbers.find({site.vpid, site.vtid}); it != thread_numbers.end())
+      thread_of[i] = it->second;
+  }
+  std::vector<std::size_t> starts(threads + 1, 0);
+  for (const auto& e : c.callbacks) {
+    if (thread_of[e.site] != kNotInRun) ++starts[thread_of[e.site] + 1];
+  }
+  for (std::size_t t = 1; t < starts.size(); ++t) starts[t] += starts[t - 1];
+  BigVector<CallbackEvent> ev(starts.back());
+  {
+    std::vector<std::size_t> next(starts.begin(), starts.end() - 1);
+    for (const auto& e : c.callbacks) {
+      if (thread_of[e.site] != kNotInRun) ev[next[thread_of[e.site]]++] = e;
+    }
+  }
+  auto earlier = [](const CallbackEvent& x, const CallbackEvent& y) { return x.ts < y.ts; };
+  for (uint32_t t = 0; t < threads; ++t) {
+    const auto from = ev.begin() + static_cast<std::ptrdiff_t>(starts[t]);
+    const auto to = ev.begin() + static_cast<std::ptrdiff_t>(starts[t + 1]);
+    if (!std::is_sorted(from, to, earlier)) std::stable_sort(from, to, earlier);
+  }
   using Name = std::tuple<std::string, std::string, std::string>;  // node, source, symbol
   auto name_of = [&](int32_t vpid, uint64_t cb) -> Name {
     std::string symbol;
@@ -933,14 +1101,17 @@ void callback_durations(TraceAnalysis& a, const Collected& c, const std::optiona
     return series[it->second];
   };
   std::vector<std::pair<uint64_t, int64_t>> stack;
-  for (std::size_t i = 0; i < ev.size(); ++i) {
-    if (i == 0 || ev[i].vpid != ev[i - 1].vpid || ev[i].vtid != ev[i - 1].vtid) stack.clear();
-    if (ev[i].start) {
-      stack.emplace_back(ev[i].callback, ev[i].ts);
-    } else if (!stack.empty() && stack.back().first == ev[i].callback) {
-      samples_of(ev[i].vpid, ev[i].callback)
-          .push_back(static_cast<double>(ev[i].ts - stack.back().second));
-      stack.pop_back();
+  for (uint32_t t = 0; t < threads; ++t) {
+    stack.clear();
+    for (std::size_t i = starts[t]; i < starts[t + 1]; ++i) {
+      const CallbackSite& site = c.callback_sites[ev[i].site];
+      if (ev[i].start) {
+        stack.emplace_back(site.callback, ev[i].ts);
+      } else if (!stack.empty() && stack.back().first == site.callback) {
+        samples_of(site.vpid, site.callback)
+            .push_back(static_cast<double>(ev[i].ts - stack.back().second));
+        stack.pop_back();
+      }
     }
   }
   for (auto& [name, index] : series_of_name) {
@@ -1128,12 +1299,14 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
   Collected c;
   std::vector<DispatchTable> dispatch;
   dispatch.reserve(dirs.size());
+  std::vector<ctf::FieldSelection> selections;
   std::vector<std::vector<ctf::StreamIndex>> indexes(dirs.size());
   uint64_t total_bytes = 0;
   for (std::size_t t = 0; t < dirs.size(); ++t) {
     traces.emplace_back(dirs[t]);
     a.traces.push_back(dirs[t].string());
     dispatch.push_back(dispatch_table(traces[t], c));
+    selections.push_back(dispatch.back().selection());
     for (std::size_t s = 0; s < traces[t].stream_count(); ++s) {
       indexes[t].push_back(traces[t].index_stream(s));
       const ctf::StreamStats& st = indexes[t].back().stats;
@@ -1154,7 +1327,8 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
   std::vector<StreamPart> parts;
   for (std::size_t t = 0; t < traces.size(); ++t) {
     for (std::size_t s = 0; s < indexes[t].size(); ++s) {
-      auto cut = cut_into_parts(traces[t], dispatch[t], s, indexes[t][s].packets, target_bytes);
+      auto cut = cut_into_parts(traces[t], dispatch[t], selections[t], s, indexes[t][s].packets,
+                                target_bytes);
       std::move(cut.begin(), cut.end(), std::back_inserter(parts));
     }
   }

@@ -33,7 +33,9 @@ constexpr uint32_t kPacketMagic = 0xC1FC1FC1;
 // A struct of byte-aligned scalars, strings and fixed arrays (every LTTng-UST
 // payload and context), compiled once into a list of reads.
 struct FlatOp {
-  enum Kind : uint8_t { kUnsigned, kSigned, kFloat, kString, kText, kSkip } kind;
+  // kSkip steps over `count` bytes, kSkipString over a string: fields not selected, or integer
+  // arrays (gids, uuids).
+  enum Kind : uint8_t { kUnsigned, kSigned, kFloat, kString, kText, kSkip, kSkipString } kind;
   uint8_t bytes;        // scalars
   unsigned align_bits;  // >= 8
   uint64_t count;       // kText, kSkip: bytes
@@ -43,37 +45,46 @@ struct FlatLayout {
 };
 
 // Compiles `t` to a flat layout, or returns false when it needs the general
-// decoder (bit fields, big-endian data, sequences, variants, nested structs).
-bool compile_flat(const Type& t, bool trace_big_endian, FlatLayout& out) {
+// decoder (bit fields, big-endian data, sequences, variants, nested structs). Fields for which
+// `wanted` is false are stepped over.
+bool compile_flat(const Type& t, bool trace_big_endian,
+                  const std::function<bool(std::size_t)>& wanted, FlatLayout& out) {
   if (t.kind != Kind::kStruct || trace_big_endian || std::endian::native != std::endian::little)
     return false;
   auto little = [](const Type& x) { return x.byte_order != ByteOrder::kBig; };
-  for (const auto& f : t.fields) {
-    const Type& ft = *f.type;
+  for (std::size_t i = 0; i < t.fields.size(); ++i) {
+    const Type& ft = *t.fields[i].type;
     const unsigned align = std::max(8u, ft.align_bits);
+    const bool skip = wanted && !wanted(i);
     if (ft.align_bits % 8 != 0 && ft.align_bits != 1) return false;
     switch (ft.kind) {
       case Kind::kInteger:
       case Kind::kEnum:
         if (ft.size_bits % 8 != 0 || ft.align_bits < 8 || !little(ft) || ft.maps_clock)
           return false;
-        out.ops.push_back({ft.is_signed ? FlatOp::kSigned : FlatOp::kUnsigned,
-                           static_cast<uint8_t>(ft.size_bits / 8), align, 0});
+        if (skip) {
+          out.ops.push_back({FlatOp::kSkip, 0, align, ft.size_bits / 8});
+        } else {
+          out.ops.push_back({ft.is_signed ? FlatOp::kSigned : FlatOp::kUnsigned,
+                             static_cast<uint8_t>(ft.size_bits / 8), align, 0});
+        }
         break;
       case Kind::kFloat:
-        if (!little(ft) || ft.align_bits < 8) return false;
-        out.ops.push_back({FlatOp::kFloat, static_cast<uint8_t>(ft.size_bits / 8), align, 0});
+        if (!little(ft) || ft.align_bits < 8 || ft.size_bits % 8 != 0) return false;
+        out.ops.push_back({skip ? FlatOp::kSkip : FlatOp::kFloat,
+                           static_cast<uint8_t>(skip ? 0 : ft.size_bits / 8), align,
+                           skip ? ft.size_bits / 8 : 0});
         break;
       case Kind::kString:
-        out.ops.push_back({FlatOp::kString, 0, 8, 0});
+        out.ops.push_back({skip ? FlatOp::kSkipString : FlatOp::kString, 0, 8, 0});
         break;
       case Kind::kArray: {
         const Type& e = *ft.element;
         if (e.kind != Kind::kInteger || e.size_bits % 8 != 0 || e.align_bits > e.size_bits ||
             e.align_bits < 8)
           return false;
-        out.ops.push_back({e.is_text ? FlatOp::kText : FlatOp::kSkip, 0, std::max(8u, e.align_bits),
-                           ft.length * (e.size_bits / 8)});
+        out.ops.push_back({e.is_text && !skip ? FlatOp::kText : FlatOp::kSkip, 0,
+                           std::max(8u, e.align_bits), ft.length * (e.size_bits / 8)});
         break;
       }
       default:
@@ -145,6 +156,36 @@ std::size_t nul_offset(const uint8_t* p, std::size_t left) {
   }
   const void* nul = std::memchr(p + len, 0, left - len);
   return nul != nullptr ? static_cast<std::size_t>(static_cast<const uint8_t*>(nul) - p) : left;
+}
+
+// An unsigned integer of `bytes` bytes (1..8) stored little-endian on a little-endian host. The
+// usual sizes are loads of their own: a copy of a variable size compiles to a string move, which
+// costs more than the rest of a field's decoding.
+uint64_t load_little(const uint8_t* p, unsigned bytes) {
+  switch (bytes) {
+    case 1:
+      return *p;
+    case 2: {
+      uint16_t x;
+      std::memcpy(&x, p, 2);
+      return x;
+    }
+    case 4: {
+      uint32_t x;
+      std::memcpy(&x, p, 4);
+      return x;
+    }
+    case 8: {
+      uint64_t x;
+      std::memcpy(&x, p, 8);
+      return x;
+    }
+    default: {
+      uint64_t x = 0;
+      std::memcpy(&x, p, bytes);
+      return x;
+    }
+  }
 }
 
 class Decoder {
@@ -356,8 +397,7 @@ class Decoder {
         case FlatOp::kSigned:
         case FlatOp::kFloat: {
           if (pos_ + op.bytes * 8 > end_bits_) fail("event runs past the end of its packet");
-          uint64_t bits = 0;
-          std::memcpy(&bits, data_ + start, op.bytes);  // little-endian host, little-endian trace
+          const uint64_t bits = load_little(data_ + start, op.bytes);
           pos_ += op.bytes * 8;
           if (op.kind == FlatOp::kFloat) {
             v.tag = Value::Tag::kFloat;
@@ -366,9 +406,8 @@ class Decoder {
                       : std::bit_cast<double>(bits);
           } else if (op.kind == FlatOp::kSigned) {
             const unsigned n = op.bytes * 8;
-            if (n < 64 && ((bits >> (n - 1)) & 1)) bits |= ~uint64_t{0} << n;
             v.tag = Value::Tag::kSigned;
-            v.u = bits;
+            v.u = n < 64 && ((bits >> (n - 1)) & 1) ? bits | ~uint64_t{0} << n : bits;
           } else {
             v.tag = Value::Tag::kUnsigned;
             v.u = bits;
@@ -384,9 +423,15 @@ class Decoder {
           v.s = read_text(op.count);
           break;
         case FlatOp::kSkip:
-          if (pos_ + op.count * 8 > end_bits_) fail("array runs past the end of its packet");
+          if (pos_ + op.count * 8 > end_bits_) fail("event runs past the end of its packet");
           pos_ += op.count * 8;
-          v = Value{};
+          v.tag = Value::Tag::kNone;
+          v.u = 0;
+          break;
+        case FlatOp::kSkipString:
+          read_string();
+          v.tag = Value::Tag::kNone;
+          v.u = 0;
           break;
       }
     }
@@ -637,7 +682,8 @@ StreamIndex Trace::index_stream(std::size_t index) const {
 }
 
 uint64_t Trace::read_packets(std::size_t index, std::span<const Packet> packets,
-                             const std::function<void(const Event&)>& on_event) const {
+                             const std::function<void(const Event&)>& on_event,
+                             const FieldSelection* selection) const {
   const Mapped& m = *mapped_.at(index);
   if (m.size == 0 || packets.empty()) return 0;
   // The packets' pages mapped in one call, on this thread: a page fault each 64 KiB costs
@@ -658,12 +704,14 @@ uint64_t Trace::read_packets(std::size_t index, std::span<const Packet> packets,
     bool flat = false;
     FlatLayout layout;
   };
-  std::map<const void*, Compiled> compiled;
-  auto layout_of = [&](const TypePtr& t) -> const FlatLayout* {
-    Compiled& c = compiled[t.get()];
+  // Keyed by the type and the class that selects its fields (types may be shared).
+  std::map<std::pair<const void*, const void*>, Compiled> compiled;
+  auto layout_of = [&](const TypePtr& t, const void* selector,
+                       const std::function<bool(std::size_t)>& wanted) -> const FlatLayout* {
+    Compiled& c = compiled[{t.get(), selector}];
     if (!c.tried) {
       c.tried = true;
-      c.flat = compile_flat(*t, md.big_endian, c.layout);
+      c.flat = compile_flat(*t, md.big_endian, wanted, c.layout);
     }
     return c.flat ? &c.layout : nullptr;
   };
@@ -685,13 +733,20 @@ uint64_t Trace::read_packets(std::size_t index, std::span<const Packet> packets,
       layouts_for = sc;
       shape =
           sc->event_header ? header_shape(*sc->event_header, md.big_endian) : HeaderShape::kGeneral;
-      context_layout = sc->event_context ? layout_of(sc->event_context) : nullptr;
+      std::function<bool(std::size_t)> context_wanted;
+      if (selection != nullptr && selection->stream_context)
+        context_wanted = [&](std::size_t f) { return selection->stream_context(*sc, f); };
+      context_layout =
+          sc->event_context ? layout_of(sc->event_context, sc, context_wanted) : nullptr;
       payload_layouts.assign(sc->events_by_id.size(), nullptr);
       payload_flat.assign(sc->events_by_id.size(), 0);
       for (std::size_t i = 0; i < sc->events_by_id.size(); ++i) {
         const EventClass* ec = sc->events_by_id[i];
         if (ec == nullptr || ec->context) continue;
-        payload_layouts[i] = ec->fields ? layout_of(ec->fields) : nullptr;
+        std::function<bool(std::size_t)> wanted;
+        if (selection != nullptr && selection->payload)
+          wanted = [&](std::size_t f) { return selection->payload(*ec, f); };
+        payload_layouts[i] = ec->fields ? layout_of(ec->fields, ec, wanted) : nullptr;
         payload_flat[i] = !ec->fields || payload_layouts[i] != nullptr;
       }
       if (sc->event_context) event_context.resize(sc->event_context->fields.size());

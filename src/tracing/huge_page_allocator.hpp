@@ -5,7 +5,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <iterator>
 #include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace robotperf::tracing {
@@ -51,6 +54,18 @@ struct HugePageAllocator {
     return reinterpret_cast<T*>(aligned);
   }
 
+  // Elements made without a value are left as they come (default-initialised): the analysis's
+  // big vectors made at their size are written whole afterwards, and zeroing them first would
+  // write hundreds of megabytes twice.
+  template <class U>
+  void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+
   void deallocate(T* p, std::size_t n) {
     const std::size_t bytes = n * sizeof(T);
     if (bytes < kHugePage) {
@@ -73,5 +88,78 @@ struct HugePageAllocator {
 
 template <class T>
 using BigVector = std::vector<T, HugePageAllocator<T>>;
+
+// One kind of record from every part of a trace, part after part: each part's vector is taken
+// over whole when the parts are merged, never copied into a bigger one (a copy would write the
+// records' memory twice, and in a virtual machine fresh memory costs more than the copy).
+template <class T>
+class PartedVector {
+ public:
+  class const_iterator {
+   public:
+    using iterator_category = std::forward_iterator_tag;
+    using value_type = T;
+    using difference_type = std::ptrdiff_t;
+    using pointer = const T*;
+    using reference = const T&;
+
+    const_iterator() = default;
+    const_iterator(const std::vector<BigVector<T>>* parts, std::size_t part)
+        : parts_(parts), part_(part) {
+      skip_empty();
+    }
+    reference operator*() const { return (*parts_)[part_][index_]; }
+    pointer operator->() const { return &(*parts_)[part_][index_]; }
+    const_iterator& operator++() {
+      if (++index_ == (*parts_)[part_].size()) {
+        ++part_;
+        index_ = 0;
+        skip_empty();
+      }
+      return *this;
+    }
+    const_iterator operator++(int) {
+      const_iterator old = *this;
+      ++*this;
+      return old;
+    }
+    bool operator==(const const_iterator& o) const {
+      return part_ == o.part_ && index_ == o.index_;
+    }
+
+   private:
+    void skip_empty() {
+      while (part_ < parts_->size() && (*parts_)[part_].empty()) ++part_;
+    }
+    const std::vector<BigVector<T>>* parts_ = nullptr;
+    std::size_t part_ = 0, index_ = 0;
+  };
+
+  // A new last part, to be filled, with room for `room` records.
+  BigVector<T>& add_part(std::size_t room = 0) {
+    BigVector<T>& part = parts_.emplace_back();
+    part.reserve(room);
+    return part;
+  }
+  // Takes over `other`'s parts, after this one's.
+  void append(PartedVector&& other) {
+    for (auto& p : other.parts_) parts_.push_back(std::move(p));
+    other.parts_.clear();
+  }
+  std::vector<BigVector<T>>& parts() { return parts_; }
+  const std::vector<BigVector<T>>& parts() const { return parts_; }
+
+  std::size_t size() const {
+    std::size_t n = 0;
+    for (const auto& p : parts_) n += p.size();
+    return n;
+  }
+  bool empty() const { return size() == 0; }
+  const_iterator begin() const { return {&parts_, 0}; }
+  const_iterator end() const { return {&parts_, parts_.size()}; }
+
+ private:
+  std::vector<BigVector<T>> parts_;
+};
 
 }  // namespace robotperf::tracing

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -236,3 +237,60 @@ TEST(StatsToJson, IntervalsArePairsWithNullForAnOpenEnd) {
 
 }  // namespace
 }  // namespace robotperf::metrics
+
+// The radix sort must give std::sort's order on every kind of double: negatives (whose bits
+// sort backwards), zeros of both signs, subnormals, infinities, repeats and whole nanoseconds.
+TEST(SortSamples, GivesStdSortsOrder) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> wide(-1e12, 1e12);
+  std::uniform_int_distribution<int64_t> nanoseconds(0, 50'000'000);
+  const double specials[] = {0.0,
+                             -0.0,
+                             std::numeric_limits<double>::denorm_min(),
+                             -std::numeric_limits<double>::denorm_min(),
+                             std::numeric_limits<double>::infinity(),
+                             -std::numeric_limits<double>::infinity(),
+                             std::numeric_limits<double>::max(),
+                             std::numeric_limits<double>::lowest(),
+                             1.0,
+                             -1.0};
+  for (const std::size_t n : {0, 1, 100, 2047, 2048, 5000, 300'000}) {
+    std::vector<double> samples(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      switch (i % 4) {
+        case 0:
+          samples[i] = wide(rng);
+          break;
+        case 1:
+          samples[i] = static_cast<double>(nanoseconds(rng));
+          break;
+        case 2:
+          samples[i] = specials[rng() % std::size(specials)];
+          break;
+        default:
+          samples[i] = -static_cast<double>(nanoseconds(rng)) / 7.0;
+      }
+    }
+    std::vector<double> expected = samples;
+    std::sort(expected.begin(), expected.end());
+    // Half of the sizes with a scratch buffer of the caller's, half with the sort's own.
+    std::vector<double> scratch(n % 2 == 0 ? n + 3 : 0, -1.0);
+    robotperf::metrics::sort_samples(samples, scratch);
+    ASSERT_EQ(samples.size(), expected.size());
+    for (std::size_t i = 0; i < n; ++i)
+      ASSERT_EQ(samples[i], expected[i]) << "n " << n << " at " << i;
+  }
+}
+
+TEST(SortSamples, EqualSamplesAndOneDigitOfDifference) {
+  std::vector<double> same(10'000, 123456.0);
+  robotperf::metrics::sort_samples(same);
+  EXPECT_TRUE(std::all_of(same.begin(), same.end(), [](double x) { return x == 123456.0; }));
+  // Values that differ in one 11-bit digit only: every other pass is skipped.
+  std::vector<double> one_digit;
+  for (int i = 4999; i >= 0; --i) one_digit.push_back(static_cast<double>(i % 2000) * 1024.0);
+  std::vector<double> expected = one_digit;
+  std::sort(expected.begin(), expected.end());
+  robotperf::metrics::sort_samples(one_digit);
+  EXPECT_EQ(one_digit, expected);
+}

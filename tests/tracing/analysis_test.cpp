@@ -241,6 +241,54 @@ TEST(CtfReader, StringsOfEveryLengthEndAtTheirNul) {
   EXPECT_EQ(n, 81u);
 }
 
+// A reader that selects fields gets those exactly as without a selection, and the others with no
+// value; the events after an unselected string or gid array are still read from the right place.
+TEST(CtfReader, FieldsNotSelectedAreSteppedOver) {
+  TempDir dir("selection");
+  CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false);
+  w.define("a:mixed", {{"name", testing::FieldKind::kString},
+                       {"gid", testing::FieldKind::kGid},
+                       {"x", testing::FieldKind::kF64},
+                       {"id", testing::FieldKind::kI64},
+                       {"tail", testing::FieldKind::kString},
+                       {"n", testing::FieldKind::kU64}});
+  for (uint64_t k = 0; k < 20; ++k) {
+    w.event(0, "a:mixed", 1000 + k, 7, static_cast<int32_t>(100 + k),
+            {V("node" + std::string(k, 'x')), V(uint64_t{0}), V(0.5 * static_cast<double>(k)),
+             V(-static_cast<int64_t>(k)), V(std::string(k % 5, 't')), V(k * 3)});
+  }
+  w.finish();
+  ctf::Trace trace(dir.path());
+  const ctf::StreamIndex index = trace.index_stream(0);
+  ctf::FieldSelection selection;
+  selection.payload = [](const ctf::EventClass&, std::size_t field) {
+    return field == 3 || field == 5;
+  };
+  const int vtid = trace.stream_context_index(0, "vtid");
+  ASSERT_GE(vtid, 0);
+  selection.stream_context = [&](const ctf::StreamClass&, std::size_t field) {
+    return static_cast<int>(field) == vtid;
+  };
+  uint64_t k = 0;
+  const uint64_t events = trace.read_packets(
+      0, index.packets,
+      [&](const ctf::Event& e) {
+        ASSERT_EQ(e.fields.size(), 6u);
+        EXPECT_EQ(e.fields[0].tag, ctf::Value::Tag::kNone) << k;
+        EXPECT_EQ(e.fields[2].tag, ctf::Value::Tag::kNone) << k;
+        EXPECT_EQ(e.fields[4].tag, ctf::Value::Tag::kNone) << k;
+        EXPECT_EQ(e.fields[3].as_int(), -static_cast<int64_t>(k)) << k;
+        EXPECT_EQ(e.fields[5].u, k * 3) << k;
+        EXPECT_EQ(e.stream_context[static_cast<std::size_t>(vtid)].as_int(),
+                  static_cast<int64_t>(100 + k));
+        EXPECT_EQ(e.timestamp, 1000 + k);
+        ++k;
+      },
+      &selection);
+  EXPECT_EQ(events, 20u);
+  EXPECT_EQ(k, 20u);
+}
+
 TEST(Analyzer, HandBuiltTraceGivesExactLatencies) {
   for (auto header : {CtfWriter::Header::kCompact, CtfWriter::Header::kLarge}) {
     TempDir dir(header == CtfWriter::Header::kCompact ? "exact-compact" : "exact-large");

@@ -161,6 +161,17 @@ struct StreamIndex {
   StreamStats stats;
 };
 
+// The fields a reader uses. The others are stepped over without being decoded, and their Values
+// are left with tag kNone: a reader of a few fields of millions of events saves most of their
+// decoding (a string must still be scanned for its end). Asked once per event class and stream
+// class, before any of their events is decoded.
+struct FieldSelection {
+  // Whether top-level payload field `field` of events of class `ec` is used.
+  std::function<bool(const EventClass& ec, std::size_t field)> payload;
+  // Whether top-level stream event-context field `field` of stream class `sc` is used.
+  std::function<bool(const StreamClass& sc, std::size_t field)> stream_context;
+};
+
 // One trace: a folder holding `metadata` and its stream files.
 class Trace {
  public:
@@ -184,9 +195,11 @@ class Trace {
   StreamIndex index_stream(std::size_t index) const;
   // Decodes the events of `packets` (consecutive packets of stream `index`'s index, in order),
   // calling `on_event` for each; returns how many. Stream parts whose first packet has its clock
-  // can be decoded on different threads at once: a Trace is only read.
+  // can be decoded on different threads at once: a Trace is only read. With `selection`, only
+  // the fields it selects are decoded (where the layout allows stepping over the others).
   uint64_t read_packets(std::size_t index, std::span<const Packet> packets,
-                        const std::function<void(const Event&)>& on_event) const;
+                        const std::function<void(const Event&)>& on_event,
+                        const FieldSelection* selection = nullptr) const;
 
   // Index of a stream event-context field ("vpid", "vtid", "procname"), or -1.
   int stream_context_index(uint64_t stream_id, std::string_view name) const;
