@@ -1297,6 +1297,7 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
   std::vector<ctf::Trace> traces;
   traces.reserve(dirs.size());
   Collected c;
+  // Reserved whole: the parts and the field selections refer to the tables where they lie.
   std::vector<DispatchTable> dispatch;
   dispatch.reserve(dirs.size());
   std::vector<ctf::FieldSelection> selections;
