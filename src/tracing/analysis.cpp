@@ -223,7 +223,7 @@ class SiteTable {
     return id;
   }
   const Site& operator[](uint32_t id) const { return sites_[id]; }
-  std::size_t size() const { return sites_.size(); }
+  const std::vector<Site>& all() const { return sites_; }
 
   // Interns every site of `part` here, each as `rename` makes it; returns their numbers here, or
   // an empty vector when every number stays the same.
@@ -886,47 +886,62 @@ MessageLookup summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo&
   return lookup;
 }
 
+constexpr uint32_t kNoGroup = UINT32_MAX;
+
+// Groups `items` by a number below `groups` with a counting sort: linear, and in the items' order
+// within a group. `group_of(i, item)` gives the i-th item's group, or kNoGroup to leave it out;
+// `out` receives `place(item)` for each. Returns where each group starts in `out`, and its end.
+template <class Items, class GroupOf, class Place, class Out>
+BigVector<std::size_t> group_by(const Items& items, std::size_t groups, GroupOf group_of,
+                                Place place, Out& out) {
+  BigVector<std::size_t> starts(groups + 1, 0);
+  std::size_t i = 0;
+  for (const auto& item : items) {
+    if (const uint32_t g = group_of(i++, item); g != kNoGroup) ++starts[g + 1];
+  }
+  for (std::size_t g = 1; g < starts.size(); ++g) starts[g] += starts[g - 1];
+  out.resize(starts.back());
+  BigVector<std::size_t> next(starts.begin(), starts.end() - 1);
+  i = 0;
+  for (const auto& item : items) {
+    if (const uint32_t g = group_of(i++, item); g != kNoGroup) out[next[g]++] = place(item);
+  }
+  return starts;
+}
+
 // Per-hop breakdown from the events that carry message IDs.
 void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
                const MessageLookup& lookup) {
   // Group the events of measured messages by message (a counting sort on the
   // message's index: linear in the number of events), then by time within one.
+  std::vector<char> site_in_run;
+  for (const IdSite& site : c.id_sites.all())
+    site_in_run.push_back(run.processes.contains(site.vpid) ? 1 : 0);
+  // Each message ID stored is looked up once; its events follow it.
   BigVector<uint32_t> slot_of;
   slot_of.reserve(c.id_events.size());
-  BigVector<std::size_t> starts(a.messages.size() + 1, 0);
-  std::vector<char> site_in_run(c.id_sites.size());
-  for (std::size_t i = 0; i < c.id_sites.size(); ++i)
-    site_in_run[i] = run.processes.contains(c.id_sites[static_cast<uint32_t>(i)].vpid) ? 1 : 0;
-  // Each message ID stored is looked up once; its events follow it.
   for (std::size_t p = 0; p < c.id_events.parts().size(); ++p) {
     const BigVector<int64_t>& ids = c.message_ids.parts()[p];
     uint32_t last_message = UINT32_MAX;
-    uint32_t last_slot = UINT32_MAX;
+    uint32_t last_slot = kNoGroup;
     for (const IdEvent& e : c.id_events.parts()[p]) {
-      uint32_t slot = UINT32_MAX;
-      if (site_in_run[e.site] != 0) {
-        if (e.message != last_message) {
-          const auto i = lookup.find(ids[e.message]);
-          last_slot = i && !a.messages[*i].warmup ? static_cast<uint32_t>(*i) : UINT32_MAX;
-          last_message = e.message;
-        }
-        slot = last_slot;
-        if (slot != UINT32_MAX) ++starts[slot + 1];
+      if (site_in_run[e.site] == 0) {
+        slot_of.push_back(kNoGroup);
+        continue;
       }
-      slot_of.push_back(slot);
+      if (e.message != last_message) {
+        const auto i = lookup.find(ids[e.message]);
+        last_slot = i && !a.messages[*i].warmup ? static_cast<uint32_t>(*i) : kNoGroup;
+        last_message = e.message;
+      }
+      slot_of.push_back(last_slot);
     }
   }
-  for (std::size_t i = 1; i < starts.size(); ++i) starts[i] += starts[i - 1];
   // Pointers, not copies: a tenth of the memory to fill, and a frame's events lie close together.
-  BigVector<const IdEvent*> ev(starts.back());
-  {
-    BigVector<std::size_t> next(starts.begin(), starts.end() - 1);
-    std::size_t i = 0;
-    for (const auto& e : c.id_events) {
-      if (slot_of[i] != UINT32_MAX) ev[next[slot_of[i]]++] = &e;
-      ++i;
-    }
-  }
+  BigVector<const IdEvent*> ev;
+  const BigVector<std::size_t> starts = group_by(
+      c.id_events, a.messages.size(), [&](std::size_t i, const IdEvent&) { return slot_of[i]; },
+      [](const IdEvent& e) { return &e; }, ev);
   for (std::size_t m = 0; m + 1 < starts.size(); ++m) {
     std::sort(ev.begin() + static_cast<std::ptrdiff_t>(starts[m]),
               ev.begin() + static_cast<std::ptrdiff_t>(starts[m + 1]),
@@ -1024,34 +1039,22 @@ void callback_durations(TraceAnalysis& a, const Collected& c, const std::optiona
   // The run's events grouped by thread (a counting sort on the thread's number), then in time
   // order within one: a thread's events are in order already unless it moved between CPUs'
   // streams.
-  const std::size_t site_count = c.callback_sites.size();
   std::map<std::pair<int32_t, int32_t>, uint32_t> thread_numbers;  // (vpid, vtid), in that order
-  for (std::size_t i = 0; i < site_count; ++i) {
-    const CallbackSite& site = c.callback_sites[static_cast<uint32_t>(i)];
+  for (const CallbackSite& site : c.callback_sites.all()) {
     if (!run || run->processes.contains(site.vpid))
       thread_numbers.try_emplace({site.vpid, site.vtid}, 0);
   }
   uint32_t threads = 0;
   for (auto& [key, number] : thread_numbers) number = threads++;
-  constexpr uint32_t kNotInRun = UINT32_MAX;
-  std::vector<uint32_t> thread_of(site_count, kNotInRun);
-  for (std::size_t i = 0; i < site_count; ++i) {
-    const CallbackSite& site = c.callback_sites[static_cast<uint32_t>(i)];
-    if (auto it = thread_numbers.find({site.vpid, site.vtid}); it != thread_numbers.end())
-      thread_of[i] = it->second;
+  std::vector<uint32_t> thread_of;  // of each site; kNoGroup outside the run
+  for (const CallbackSite& site : c.callback_sites.all()) {
+    auto it = thread_numbers.find({site.vpid, site.vtid});
+    thread_of.push_back(it != thread_numbers.end() ? it->second : kNoGroup);
   }
-  std::vector<std::size_t> starts(threads + 1, 0);
-  for (const auto& e : c.callbacks) {
-    if (thread_of[e.site] != kNotInRun) ++starts[thread_of[e.site] + 1];
-  }
-  for (std::size_t t = 1; t < starts.size(); ++t) starts[t] += starts[t - 1];
-  BigVector<CallbackEvent> ev(starts.back());
-  {
-    std::vector<std::size_t> next(starts.begin(), starts.end() - 1);
-    for (const auto& e : c.callbacks) {
-      if (thread_of[e.site] != kNotInRun) ev[next[thread_of[e.site]]++] = e;
-    }
-  }
+  BigVector<CallbackEvent> ev;
+  const BigVector<std::size_t> starts = group_by(
+      c.callbacks, threads, [&](std::size_t, const CallbackEvent& e) { return thread_of[e.site]; },
+      [](const CallbackEvent& e) { return e; }, ev);
   auto earlier = [](const CallbackEvent& x, const CallbackEvent& y) { return x.ts < y.ts; };
   for (uint32_t t = 0; t < threads; ++t) {
     const auto from = ev.begin() + static_cast<std::ptrdiff_t>(starts[t]);

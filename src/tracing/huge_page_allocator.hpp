@@ -57,13 +57,10 @@ struct HugePageAllocator {
   // Elements made without a value are left as they come (default-initialised): the analysis's
   // big vectors made at their size are written whole afterwards, and zeroing them first would
   // write hundreds of megabytes twice.
+  // (Constructions with values are std::allocator_traits' own.)
   template <class U>
   void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
     ::new (static_cast<void*>(p)) U;
-  }
-  template <class U, class... Args>
-  void construct(U* p, Args&&... args) {
-    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
   }
 
   void deallocate(T* p, std::size_t n) {
