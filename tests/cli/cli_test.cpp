@@ -435,7 +435,10 @@ TEST_F(Cli, RunLocalizationBenchmarks) {
   const std::string bag = (out_ / "tags").string();
   Outcome o = robotperf_cli("dataset generate localization/apriltags --out " + bag);
   ASSERT_EQ(o.exit_code, 0) << o.out;
-  o = robotperf_cli("run b3 --dataset " + bag + " --count 110 --output " + (out_ / "r").string());
+  // At 20 Hz, as the runs above: at the bag's own rate, 1280x720 detection beside another test on
+  // a 2-core machine fell behind and lost frames.
+  o = robotperf_cli("run b3 --dataset " + bag + " --count 110 --rate 20 --output " +
+                    (out_ / "r").string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("outputs not checked for accuracy (apriltag_detection)"), std::string::npos)
       << o.out;
