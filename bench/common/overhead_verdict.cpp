@@ -1,7 +1,14 @@
 #include "overhead_verdict.hpp"
 
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
+#include <stdexcept>
 
 #include "robotperf/metrics/latency_stats.hpp"
 
@@ -62,11 +69,50 @@ BenchOptions parse_bench_options(int argc, char** argv) {
     const std::string a = argv[i];
     if (a == "--smoke") {
       o.smoke = true;
+    } else if (a == "--confirm") {
+      o.confirming = true;
     } else {
       o.args.push_back(a);
     }
   }
   return o;
+}
+
+bool confirm_defect(const std::vector<std::string>& command, int processes) {
+  if (command.empty()) throw std::invalid_argument("confirm_defect: no command");
+  std::vector<char*> args;
+  for (const auto& a : command) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  for (int i = 1; i <= processes; ++i) {
+    std::printf("suspected bench defect: measuring again in a fresh process (%d of %d)\n", i,
+                processes);
+    std::fflush(stdout);  // before the child's lines
+    std::fflush(stderr);
+    pid_t pid = 0;
+    if (const int e = posix_spawn(&pid, args[0], nullptr, nullptr, args.data(), environ); e != 0)
+      throw std::runtime_error("cannot start " + command[0] +
+                               " to confirm a bench defect: " + std::to_string(e));
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0) {
+      if (errno != EINTR) throw std::runtime_error("waitpid failed while confirming a defect");
+    }
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+      std::printf("not confirmed: a fresh process found no defect\n");
+      return false;
+    }
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 1)
+      throw std::runtime_error("the process confirming a bench defect failed (status " +
+                               std::to_string(status) + ")");
+  }
+  std::printf("confirmed: %d fresh processes found the defect too\n", processes);
+  return true;
+}
+
+std::vector<std::string> confirming_command(int argc, char** argv) {
+  std::vector<std::string> command = {"/proc/self/exe"};
+  for (int i = 1; i < argc; ++i) command.emplace_back(argv[i]);
+  command.emplace_back("--confirm");
+  return command;
 }
 
 }  // namespace robotperf::bench

@@ -39,11 +39,26 @@ OverheadVerdict judge_overhead(const std::vector<OverheadRound>& rounds, double 
 std::string verdict_text(const OverheadVerdict& v, bool target_applies);
 
 // Benches registered as CTest smoke tests take --smoke (fewer samples) and exit 1 when a
-// comparison came out as a bench defect.
+// comparison came out as a bench defect, confirmed by confirm_defect(). --confirm marks the run
+// of a bench that confirms another's defect.
 struct BenchOptions {
   bool smoke = false;
+  bool confirming = false;        // --confirm
   std::vector<std::string> args;  // the others
 };
 BenchOptions parse_bench_options(int argc, char** argv);
+
+// A defect that one process shows can be that process's luck rather than the bench's fault: where
+// the scheduler keeps its threads (one vCPU of a shared VM slower than the other for a while) and
+// where its buffers landed hold for the whole process, so its rounds are not independent draws of
+// them. A reference that does different or colder work is slower in every process. Runs
+// `command` (the bench again, with --confirm) in up to `processes` fresh processes, one after the
+// other, and returns whether each found a defect too (exit status 1; 0: none). Throws
+// std::runtime_error when one fails otherwise.
+bool confirm_defect(const std::vector<std::string>& command, int processes = 2);
+
+// The command that runs this bench again as a confirming process: /proc/self/exe, the same
+// arguments, and --confirm.
+std::vector<std::string> confirming_command(int argc, char** argv);
 
 }  // namespace robotperf::bench

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 namespace robotperf::bench {
 namespace {
@@ -66,6 +67,35 @@ TEST(OverheadVerdict, TooFewSamplesAreNoEvidence) {
   const auto v = judge_overhead({{{10, 10.1}, {5, 5.1}}}, 0.10);
   EXPECT_FALSE(std::isfinite(v.band));
   EXPECT_FALSE(v.defect);
+}
+
+TEST(ConfirmDefect, OnlyADefectEveryFreshProcessFindsIsConfirmed) {
+  EXPECT_TRUE(confirm_defect({"/bin/sh", "-c", "exit 1"}));
+  EXPECT_FALSE(confirm_defect({"/bin/sh", "-c", "exit 0"}));
+  // The first process finds the defect, the second does not: not confirmed.
+  const std::string flag = ::testing::TempDir() + "confirm_defect_seen";
+  std::remove(flag.c_str());
+  EXPECT_FALSE(confirm_defect(
+      {"/bin/sh", "-c", "if [ -e " + flag + " ]; then exit 0; fi; touch " + flag + "; exit 1"}));
+  std::remove(flag.c_str());
+  // A process that fails in another way is no verdict.
+  EXPECT_THROW(confirm_defect({"/bin/sh", "-c", "exit 2"}), std::runtime_error);
+  EXPECT_THROW(confirm_defect({"/nonexistent/bench"}), std::runtime_error);
+}
+
+TEST(ConfirmDefect, TheConfirmingRunIsTheSameBenchWithConfirm) {
+  char a0[] = "bench_x", a1[] = "--smoke", a2[] = "b3";
+  char* argv[] = {a0, a1, a2, nullptr};
+  EXPECT_EQ(confirming_command(3, argv),
+            (std::vector<std::string>{"/proc/self/exe", "--smoke", "b3", "--confirm"}));
+  const BenchOptions o = parse_bench_options(3, argv);
+  EXPECT_TRUE(o.smoke);
+  EXPECT_FALSE(o.confirming);
+  char c[] = "--confirm";
+  char* with[] = {a0, a2, c, nullptr};
+  const BenchOptions confirming = parse_bench_options(3, with);
+  EXPECT_TRUE(confirming.confirming);
+  EXPECT_EQ(confirming.args, (std::vector<std::string>{"b3"}));
 }
 
 }  // namespace
