@@ -265,6 +265,7 @@ struct RunArgs {
   double rate_scale = 1.0;
   std::string arrival = "fixed";
   uint64_t arrival_seed = 1;
+  std::string monitor_wait = "sleep";
   // --find-peak and its bounds.
   bool find_peak = false;
   std::optional<double> loss_bound, latency_bound;
@@ -662,6 +663,7 @@ int run(const Roots& roots, const RunArgs& a) {
   }
   o.arrival = harness::ArrivalPattern::parse(a.arrival);
   o.arrival.seed = a.arrival_seed;
+  o.monitor_wait = a.monitor_wait == "spin" ? graph::WaitMode::kSpin : graph::WaitMode::kSleep;
   o.update_rate_hz = a.update_rate;
   // Said here, where the build is known: the kernels of a build without CUDA do not name it.
   if (a.backend == "cuda" && !perception::cuda_backend_built())
@@ -1100,6 +1102,11 @@ int main(int argc, char** argv) {
                       "intervals of mean 1/rate) or burst:N (N back to back every N/rate)");
   run_cmd->add_option("--arrival-seed", ra.arrival_seed,
                       "with --arrival poisson: the schedule's seed (default 1)");
+  run_cmd
+      ->add_option("--monitor-wait", ra.monitor_wait,
+                   "how the Monitor waits for outputs: sleep (default; each latency includes a "
+                   "thread wake-up) or spin (no wake-up; keeps one core busy during the run)")
+      ->check(CLI::IsMember({"sleep", "spin"}));
   auto* count_opt = run_cmd->add_option("--count", ra.count, "messages to send, warm-up included")
                         ->check(CLI::PositiveNumber);
   find_peak_flag->excludes(count_opt);
@@ -1243,7 +1250,7 @@ int main(int argc, char** argv) {
   compare_cmd
       ->add_option("A", compare_a,
                    "a results file, a file-name prefix (a1-intra), a hardware or series name, or "
-                   "fields: hardware=,rmw=,processes=,backend=,mode=,arrivals=,rate=")
+                   "fields: hardware=,rmw=,processes=,backend=,mode=,arrivals=,monitor=,rate=")
       ->required();
   compare_cmd->add_option("B", compare_b, "the other side, as A")->required();
   compare_cmd->add_option("--results", compare_results,

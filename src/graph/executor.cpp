@@ -5,7 +5,7 @@
 
 namespace robotperf::graph {
 
-Executor::Executor(std::size_t threads) : threads_(threads) {
+Executor::Executor(std::size_t threads, WaitMode wait) : threads_(threads), wait_(wait) {
   if (threads_ == 0) throw std::invalid_argument("an executor needs at least one thread");
   busy_ = std::make_unique<Busy[]>(threads_);
 }
@@ -101,7 +101,12 @@ void Executor::run_worker(Busy& busy) {
       signal_->stop();
       return;
     }
-    if (!did_work) signal_->wait(seen, deadline);
+    if (did_work) continue;
+    if (wait_ == WaitMode::kSpin) {
+      signal_->spin_wait(seen, deadline);
+    } else {
+      signal_->wait(seen, deadline);
+    }
   }
 }
 

@@ -380,6 +380,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   r.category = spec.category;
   r.rmw = options.rmw;
   r.processes = options.processes == ProcessLayout::kSingle ? "single" : "per-node";
+  r.monitor_wait = options.monitor_wait == graph::WaitMode::kSpin ? "spin" : "sleep";
   r.executor_threads = spec.executor_threads;
   r.output_topic = spec.output.topic;
   for (const auto& in : spec.inputs) r.qos.push_back({"playback", in.topic, in.qos});
@@ -556,7 +557,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
     functional_ids = functional_sample_ids(r.count, r.warmup, 16);
     monitor.keep_outputs(functional_ids);
   }
-  graph::Executor monitor_executor(1);
+  graph::Executor monitor_executor(1, options.monitor_wait);
   monitor_executor.add_node(monitor.node());
 
   auto graph_executor = std::make_unique<graph::Executor>(spec.executor_threads);

@@ -462,7 +462,7 @@ struct FieldSelector {
       if (eq == std::string::npos || !kKeys.contains(key)) {
         throw ReportError("'" + selector + "': '" + part +
                           "' is not a field=value (fields: hardware, rmw, processes, backend, "
-                          "mode, arrivals, rate)");
+                          "mode, arrivals, monitor, rate)");
       }
       f.fields[key] = lower(part.substr(eq + 1));
     }
@@ -479,7 +479,9 @@ struct FieldSelector {
                                : key == "processes" ? r.processes
                                : key == "backend"   ? (r.backend.empty() ? "cpu" : r.backend)
                                : key == "mode"      ? r.type
-                                                    : (r.timeline.empty() ? "fixed" : r.timeline);
+                               : key == "monitor"
+                                   ? (r.monitor_wait.empty() ? "sleep" : r.monitor_wait)
+                                   : (r.timeline.empty() ? "fixed" : r.timeline);
       if (lower(have) != want) return false;
     }
     return true;
@@ -506,7 +508,7 @@ struct FieldSelector {
   }
 
   static inline const std::set<std::string> kKeys = {"hardware", "rmw",      "processes", "backend",
-                                                     "mode",     "arrivals", "rate"};
+                                                     "mode",     "arrivals", "monitor",   "rate"};
 };
 
 Side select(const std::string& selector, const ReportInput& in) {
@@ -794,13 +796,14 @@ const char* const kPalette[12] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#
 
 std::string configuration_series(const StoredRun& run) {
   // What makes two runs comparable (DESIGN.md §3.9), the rate aside: the machine, the transport,
-  // the process layout, the backend, black- or grey-box and the arrivals. Defaults are left out of
-  // the label.
+  // the process layout, the backend, black- or grey-box, the arrivals and how the Monitor waited
+  // (a spinning one takes no wake-up out of each latency). Defaults are left out of the label.
   std::string label = run.hardware + " · " + run.rmw;
   if (run.processes == "per-node") label += " · per-node";
   if (!run.backend.empty()) label += " · " + run.backend;
   if (run.type == "grey") label += " · grey";
   if (!run.timeline.empty() && run.timeline != "fixed") label += " · " + run.timeline;
+  if (run.monitor_wait == "spin") label += " · monitor spinning";
   return label;
 }
 

@@ -310,6 +310,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"drain_s", r.drain_s},
         {"rmw", r.rmw},
         {"processes", r.processes},
+        {"monitor_wait", r.monitor_wait},
         {"executor_threads", r.executor_threads},
         {"output_topic", r.output_topic},
         {"domain_id", r.domain_id},
@@ -495,6 +496,7 @@ std::string summary_table(const harness::RunResult& r) {
   } else if (r.timeline == "burst") {
     out << " (bursts of " << r.burst << ")";
   }
+  if (r.monitor_wait == "spin") out << " · Monitor spinning (one core kept busy)";
   out << " · dataset " << r.dataset;
   if (!r.dataset_parameters.empty()) {
     std::string parameters;

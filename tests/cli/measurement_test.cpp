@@ -156,6 +156,29 @@ TEST_F(Measurement, PoissonArrivalsAreRecordedWithTheirSeed) {
   EXPECT_TRUE(j["latency_ms"]["from_scheduled"]["p50_ci95"].is_array());
 }
 
+// A spinning Monitor is a configuration of its own: recorded, said in the summary, and never
+// pooled or compared with runs whose Monitor slept unless asked for by field.
+TEST_F(Measurement, ASpinningMonitorIsRecordedAndSelectable) {
+  for (const char* wait : {"sleep", "spin"}) {
+    const Outcome o =
+        robotperf_cli(benchmarks() + " run i1 --rmw intra --rate 200 --count 120 " +
+                      "--monitor-wait " + wait + " --output " + (dir_ / wait).string());
+    ASSERT_EQ(o.exit_code, 0) << o.out;
+    EXPECT_EQ(o.out.find("Monitor spinning") != std::string::npos, std::string(wait) == "spin")
+        << o.out;
+    const nlohmann::json j = result_in(dir_ / wait);
+    EXPECT_EQ(j["configuration"]["monitor_wait"], wait);
+    EXPECT_EQ(j["counts"]["matched"], 70);  // i1 warms up with 50
+  }
+  const Outcome list = robotperf_cli("results list " + (dir_ / "spin").string() + " --format json");
+  ASSERT_EQ(list.exit_code, 0) << list.out;
+  EXPECT_NE(list.out.find("\"monitor\": \"spin\""), std::string::npos) << list.out;
+  const Outcome bad = robotperf_cli(benchmarks() + " run i1 --monitor-wait busy --output " +
+                                    (dir_ / "bad").string());
+  EXPECT_EQ(bad.exit_code, 2) << bad.out;
+  EXPECT_NE(bad.out.find("--monitor-wait"), std::string::npos) << bad.out;
+}
+
 TEST_F(Measurement, RepeatWritesEveryRunAndTheSeries) {
   const fs::path out = dir_ / "out";
   const Outcome o = robotperf_cli(benchmarks() + " run i1 --rmw intra --rate 200 --count 120 " +

@@ -1,6 +1,7 @@
 #include "robotperf/graph/executor.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <atomic>
 #include <condition_variable>
@@ -59,7 +60,10 @@ TEST(Executor, RunsSubscriptionCallbacksOnItsThread) {
   EXPECT_EQ(received.value(), 5);
 }
 
-TEST(Executor, PipelineAcrossNodesPreservesOrder) {
+// Whether its threads sleep or spin while idle, an executor runs the same callbacks in order.
+class ExecutorWait : public ::testing::TestWithParam<WaitMode> {};
+
+TEST_P(ExecutorWait, PipelineAcrossNodesPreservesOrder) {
   Context ctx(rmw::make_transport("intra"));
   auto a = std::make_shared<Node>(ctx, "a");
   auto b = std::make_shared<Node>(ctx, "b");
@@ -73,7 +77,7 @@ TEST(Executor, PipelineAcrossNodesPreservesOrder) {
     done.add();
   });
   auto source = a->create_publisher<Image>("/in");
-  Executor exec(2);
+  Executor exec(2, GetParam());
   exec.add_node(a);
   exec.add_node(b);
   exec.start();
@@ -86,6 +90,28 @@ TEST(Executor, PipelineAcrossNodesPreservesOrder) {
   exec.stop();
   EXPECT_EQ(order, (std::vector<int32_t>{0, 1, 2, 3, 4, 5, 6, 7}));
 }
+
+TEST_P(ExecutorWait, TimerFiresPeriodically) {
+  Context ctx(rmw::make_transport("intra"));
+  auto node = std::make_shared<Node>(ctx, "n");
+  Counter ticks;
+  const int64_t start = rmw::steady_now_ns();
+  auto timer = node->create_timer(std::chrono::milliseconds(10), [&] { ticks.add(); });
+  Executor exec(1, GetParam());
+  exec.add_node(node);
+  exec.start();
+  ASSERT_TRUE(ticks.wait_for(5));
+  exec.stop();
+  // Five ticks of a 10 ms timer take at least 50 ms (absolute deadlines).
+  EXPECT_GE(rmw::steady_now_ns() - start, 50'000'000);
+  EXPECT_THROW(node->create_timer(std::chrono::milliseconds(0), [] {}), std::invalid_argument);
+}
+
+INSTANTIATE_TEST_SUITE_P(SleepAndSpin, ExecutorWait,
+                         ::testing::Values(WaitMode::kSleep, WaitMode::kSpin),
+                         [](const auto& info) {
+                           return info.param == WaitMode::kSpin ? "spin" : "sleep";
+                         });
 
 TEST(Executor, CallbacksOfOneNodeNeverOverlapOnManyThreads) {
   Context ctx(rmw::make_transport("intra"));
@@ -118,22 +144,6 @@ TEST(Executor, CallbacksOfOneNodeNeverOverlapOnManyThreads) {
   EXPECT_EQ(max_inside.load(), 1);
 }
 
-TEST(Executor, TimerFiresPeriodically) {
-  Context ctx(rmw::make_transport("intra"));
-  auto node = std::make_shared<Node>(ctx, "n");
-  Counter ticks;
-  const int64_t start = rmw::steady_now_ns();
-  auto timer = node->create_timer(std::chrono::milliseconds(10), [&] { ticks.add(); });
-  Executor exec(1);
-  exec.add_node(node);
-  exec.start();
-  ASSERT_TRUE(ticks.wait_for(5));
-  exec.stop();
-  // Five ticks of a 10 ms timer take at least 50 ms (absolute deadlines).
-  EXPECT_GE(rmw::steady_now_ns() - start, 50'000'000);
-  EXPECT_THROW(node->create_timer(std::chrono::milliseconds(0), [] {}), std::invalid_argument);
-}
-
 TEST(Executor, ACallbackExceptionStopsSpinAndNamesTheNode) {
   Context ctx(rmw::make_transport("intra"));
   auto node = std::make_shared<Node>(ctx, "faulty");
@@ -149,6 +159,36 @@ TEST(Executor, ACallbackExceptionStopsSpinAndNamesTheNode) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("faulty"), std::string::npos);
     EXPECT_NE(std::string(e.what()).find("bad frame"), std::string::npos);
+  }
+}
+
+// The process's CPU time (user + system), in seconds.
+double process_cpu_s() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
+}
+
+TEST(Executor, OnlyASpinningExecutorKeepsACoreBusyWhileIdle) {
+  // Over the same idle 200 ms, a sleeping executor's process uses next to no CPU and a spinning
+  // one's about a core (at least half of one, whatever else the machine runs).
+  for (const WaitMode mode : {WaitMode::kSleep, WaitMode::kSpin}) {
+    Context ctx(rmw::make_transport("intra"));
+    auto node = std::make_shared<Node>(ctx, "idle");
+    auto sub = node->create_subscription<Image>("/in", QoS{}, [](std::shared_ptr<const Image>) {});
+    Executor exec(1, mode);
+    exec.add_node(node);
+    const double before = process_cpu_s();
+    exec.start();
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the idle span measured
+    exec.stop();
+    const double used = process_cpu_s() - before;
+    if (mode == WaitMode::kSpin) {
+      EXPECT_GT(used, 0.1) << "spinning";
+    } else {
+      EXPECT_LT(used, 0.05) << "sleeping";
+    }
   }
 }
 

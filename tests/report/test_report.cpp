@@ -547,8 +547,8 @@ TEST_F(Report, DistributionLabelsNeverOverlap) {
   }
 }
 
-// Runs that differ in rate, process layout, black/grey or arrivals are separate series, never
-// pooled into one median.
+// Runs that differ in rate, process layout, black/grey, arrivals or how the Monitor waited are
+// separate series, never pooled into one median.
 TEST_F(Report, RunsOfDifferentConfigurationsAreSeparateSeries) {
   testing::SampleRun base;
   const auto at_60 = testing::write_sample(dir_, base);
@@ -568,11 +568,17 @@ TEST_F(Report, RunsOfDifferentConfigurationsAreSeparateSeries) {
                 {{"name", "resize"}, {"kernel", "image_proc/resize"}, {"backend", "cpu"}}};
   std::ofstream(accelerated) << j.dump();
   base.start_unix_ns += 1'000'000'000;
+  const auto spinning = testing::write_sample(dir_, base);
+  j = nlohmann::json::parse(read_text(spinning));
+  j["configuration"]["monitor_wait"] = "spin";
+  std::ofstream(spinning) << j.dump();
+  base.start_unix_ns += 1'000'000'000;
   testing::write_sample(dir_, base);
   const std::string html = render_html(load_report_inputs({dir_}), {});
   for (const char* series : {"AMD Ryzen 7 5800X · intra · 60 Hz<title>",
                              "AMD Ryzen 7 5800X · intra · per-node · grey · 30 Hz<title>",
                              "AMD Ryzen 7 5800X · intra · opencl · 30 Hz<title>",
+                             "AMD Ryzen 7 5800X · intra · monitor spinning · 30 Hz<title>",
                              "AMD Ryzen 7 5800X · intra · 30 Hz<title>"}) {
     EXPECT_NE(html.find(series), std::string::npos) << series;
   }

@@ -40,7 +40,8 @@ struct RunningCallback {
 
 class Executor {
  public:
-  explicit Executor(std::size_t threads = 1);
+  // `wait`: how its threads wait when no callback is ready (WaitMode).
+  explicit Executor(std::size_t threads = 1, WaitMode wait = WaitMode::kSleep);
   ~Executor();
   Executor(const Executor&) = delete;
   Executor& operator=(const Executor&) = delete;
@@ -78,6 +79,7 @@ class Executor {
   bool run_ready_work(int64_t& next_deadline, Busy& busy);
 
   std::size_t threads_;
+  WaitMode wait_;
   std::unique_ptr<Busy[]> busy_;
   std::condition_variable finished_cv_;
   bool finished_ = false;  // the background spin ended

@@ -6,6 +6,7 @@
 // callback group), callbacks of different nodes may, on a multi-threaded executor.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <climits>
 #include <concepts>
@@ -36,24 +37,31 @@ class Context {
   std::unique_ptr<rmw::Transport> transport_;
 };
 
+// How an executor's idle threads wait for work: asleep on a condition variable (each message
+// then costs a thread wake-up, several microseconds), or spinning on the signal's generation
+// (no wake-up, but each waiting thread keeps a core busy the whole time).
+enum class WaitMode { kSleep, kSpin };
+
 // How an executor is told that an entity may have work. Shared between the
 // executor and the nodes it runs; transports call it from their own threads.
 class WakeSignal {
  public:
   void notify();
   // Current generation; a waiter that saw generation g sleeps until it changes.
-  uint64_t generation();
+  uint64_t generation() const { return generation_.load(std::memory_order_acquire); }
   // Waits until the generation differs from `seen`, `deadline_ns` (steady
   // clock) passes, or stop() is called. Returns false once stopped.
   bool wait(uint64_t seen, int64_t deadline_ns);
+  // The same wait without sleeping: checks the generation in a loop.
+  bool spin_wait(uint64_t seen, int64_t deadline_ns);
   void stop();
-  bool stopped();
+  bool stopped() const { return stopped_.load(std::memory_order_acquire); }
 
  private:
-  std::mutex mutex_;
+  std::mutex mutex_;  // with cv_: a sleeping waiter cannot miss a notify between check and sleep
   std::condition_variable cv_;
-  uint64_t generation_ = 0;
-  bool stopped_ = false;
+  std::atomic<uint64_t> generation_{0};
+  std::atomic<bool> stopped_{false};
 };
 
 class Node;

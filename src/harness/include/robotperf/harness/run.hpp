@@ -12,9 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "robotperf/graph/node.hpp"
+#include "robotperf/harness/backend_check.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
-#include "robotperf/harness/backend_check.hpp"
 #include "robotperf/harness/functional.hpp"
 #include "robotperf/harness/network_link.hpp"
 #include "robotperf/harness/scheduling.hpp"
@@ -106,6 +107,10 @@ struct RunOptions {
   double rate_scale = 1.0;
   // Otherwise, when messages are sent at the rate.
   ArrivalPattern arrival;
+  // How the Monitor waits for the graph's outputs. Asleep (the default), an output's latency
+  // includes the Monitor thread's wake-up, as a downstream ROS 2 node would pay it; spinning, it
+  // does not, and the Monitor keeps one core busy for the whole run (--monitor-wait spin).
+  graph::WaitMode monitor_wait = graph::WaitMode::kSleep;
   // Called from the playback thread after each send.
   std::function<void(std::size_t sent, std::size_t total, std::size_t received)> progress;
 };
@@ -212,7 +217,8 @@ struct RunResult {
   // how long timing waited for it.
   double warmup_repeated_s = 0;
   std::string rmw;
-  std::string processes;  // "single" or "per-node"
+  std::string processes;               // "single" or "per-node"
+  std::string monitor_wait = "sleep";  // "sleep" or "spin" (RunOptions::monitor_wait)
   // DDS Security as run: the keystore (absolute) and rmw::describe() of its enclave; empty when
   // unsecured.
   std::filesystem::path keystore;

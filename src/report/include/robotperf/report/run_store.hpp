@@ -39,6 +39,7 @@ struct StoredRun {
   std::string started_utc;  // "2026-11-22T07:42:22Z"
   std::string rmw, processes;
   std::string timeline;  // arrivals: "fixed", "poisson", "burst", "bag" (empty: older files)
+  std::string monitor_wait;  // "sleep" or "spin" (empty: older files, which slept)
   double rate_hz = kNoValue;
   std::string dataset;
   std::string hardware;           // short platform name: CPU model, plus GPU models
