@@ -11,7 +11,11 @@
 // woken by its listener through a condition variable, subtracts the stamp from its clock right
 // after taking (and deserializing) the pong: one clock, one host.
 //
-// usage: bench_transport [--count N] [--rate HZ] [--rounds R]
+// usage: bench_transport [--count N] [--rate HZ] [--rounds R] [--vendor fastdds|cyclonedds]
+//                        [--processes one|two] [--sizes BYTES,BYTES,...]
+// With 6 rounds or more, each cell's verdict is the median of the rounds' own ratios with its
+// distribution-free 95 % interval: a difference smaller than the machine's round-to-round noise
+// is said to be undecided rather than judged.
 #include <dds/dds.h>
 #include <fcntl.h>
 #include <spawn.h>
@@ -43,6 +47,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -449,7 +454,14 @@ struct RunConfig {
   // Each cell alternates plain and ours this many times (plain first, then ours first, ...), so
   // that a machine whose speed drifts during the cell weighs on both alike.
   int rounds = 3;
+  // The cells: every vendor, process layout and size by default.
+  std::vector<std::string> vendors = {"fastdds", "cyclonedds"};
+  std::vector<bool> across = {false, true};
+  std::vector<std::size_t> sizes = {64, 1u << 10, 64u << 10, 1u << 20, 4u << 20};
 };
+
+// Fewer rounds than this cannot bound the median of their ratios with 95 % confidence.
+constexpr int kRoundsForInterval = 6;
 
 bool wait_matched(const std::function<std::size_t()>& matched) {
   const auto deadline = std::chrono::steady_clock::now() + kDiscoveryTimeout;
@@ -634,7 +646,6 @@ constexpr double kMaxBytesPerSecond = 64.0 * (1 << 20);
 constexpr double kTargetRatio = 1.05;
 
 int run_parent(const RunConfig& config) {
-  const std::size_t sizes[] = {64, 1u << 10, 64u << 10, 1u << 20, 4u << 20};
   // A domain of its own, so concurrent runs and tests do not meet.
   const int domain_id = robotperf::rmw::reserved_domain();
   std::printf(
@@ -650,14 +661,15 @@ int run_parent(const RunConfig& config) {
               "size", "plain p50", "plain p99", "ours p50", "ours p99", "p50 ratio", "per round",
               "p99 ratio", "lost", "target");
   int run_index = 0;
-  for (const std::string vendor : {"fastdds", "cyclonedds"}) {
-    for (const bool across : {false, true}) {
-      for (std::size_t size : sizes) {
+  for (const std::string& vendor : config.vendors) {
+    for (const bool across : config.across) {
+      for (std::size_t size : config.sizes) {
         Latencies by_impl[2];  // all rounds pooled
         const std::string impls[] = {"plain-" + vendor, vendor};
         RunConfig cell = config;
         cell.rate_hz = std::min(config.rate_hz, kMaxBytesPerSecond / static_cast<double>(size));
         double round_low = INFINITY, round_high = 0;  // the rounds' own p50 ratios
+        std::vector<double> round_ratios;
         for (int round = 0; round < config.rounds; ++round) {
           Latencies this_round[2];
           for (int k = 0; k < 2; ++k) {
@@ -669,6 +681,7 @@ int run_parent(const RunConfig& config) {
           }
           const double ratio = robotperf::metrics::compute_stats(this_round[1].us).p50 /
                                robotperf::metrics::compute_stats(this_round[0].us).p50;
+          round_ratios.push_back(ratio);
           round_low = std::min(round_low, ratio);
           round_high = std::max(round_high, ratio);
           for (int i = 0; i < 2; ++i) {
@@ -683,15 +696,26 @@ int run_parent(const RunConfig& config) {
         const double ratio_p99 = ours.p99 / plain.p99;
         // The target is on the pooled median. Where the rounds disagree about the side of the
         // target, the machine's noise is larger than the difference: said so, not judged.
-        const char* verdict = ratio_p50 <= kTargetRatio  ? "p50 ok"
+        std::string verdict = ratio_p50 <= kTargetRatio  ? "p50 ok"
                               : round_low > kTargetRatio ? "p50 OVER in every round"
                                                          : "p50 over pooled, not in every round";
+        if (config.rounds >= kRoundsForInterval) {
+          const auto rounds = robotperf::metrics::compute_stats(round_ratios);
+          char text[160];
+          std::snprintf(text, sizeof text, "rounds' median %.3fx (95 %% %.3f-%.3f): %s", rounds.p50,
+                        rounds.p50_ci.lower, rounds.p50_ci.upper,
+                        rounds.p50_ci.upper <= kTargetRatio  ? "met"
+                        : rounds.p50_ci.lower > kTargetRatio ? "OVER"
+                                                             : "undecided (the interval holds the "
+                                                               "target)");
+          verdict = text;
+        }
         std::printf(
             "%-11s %-14s %-7s %10.1f %10.1f %10.1f %10.1f %8.2fx %5.2f-%-5.2f %8.2fx %3d/%-3d "
             "%s\n",
             vendor.c_str(), across ? "two processes" : "one process", size_label(size).c_str(),
             plain.p50, plain.p99, ours.p50, ours.p99, ratio_p50, round_low, round_high, ratio_p99,
-            by_impl[0].lost, by_impl[1].lost, verdict);
+            by_impl[0].lost, by_impl[1].lost, verdict.c_str());
         std::fflush(stdout);
       }
     }
@@ -715,10 +739,38 @@ int main(int argc, char** argv) {
         config.rate_hz = std::atof(argv[++i]);
       } else if (arg == "--rounds" && i + 1 < argc) {
         config.rounds = std::atoi(argv[++i]);
+      } else if (arg == "--vendor" && i + 1 < argc &&
+                 (std::strcmp(argv[i + 1], "fastdds") == 0 ||
+                  std::strcmp(argv[i + 1], "cyclonedds") == 0)) {
+        config.vendors = {argv[++i]};
+      } else if (arg == "--processes" && i + 1 < argc &&
+                 (std::strcmp(argv[i + 1], "one") == 0 || std::strcmp(argv[i + 1], "two") == 0)) {
+        config.across = {std::strcmp(argv[++i], "two") == 0};
+      } else if (arg == "--sizes" && i + 1 < argc) {
+        config.sizes.clear();
+        std::stringstream list(argv[++i]);
+        std::string item;
+        while (std::getline(list, item, ',')) {
+          char* end = nullptr;
+          const unsigned long long bytes = std::strtoull(item.c_str(), &end, 10);
+          if (item.empty() || *end != '\0' || bytes < 64 || bytes > (64ull << 20)) {
+            std::fprintf(stderr, "bench_transport: --sizes: '%s' is not a size of 64 B to 64 MiB\n",
+                         item.c_str());
+            return 2;
+          }
+          config.sizes.push_back(bytes);
+        }
       } else {
-        std::fprintf(stderr, "usage: %s [--count N] [--rate HZ] [--rounds R]\n", argv[0]);
+        std::fprintf(stderr,
+                     "usage: %s [--count N] [--rate HZ] [--rounds R] [--vendor fastdds|cyclonedds] "
+                     "[--processes one|two] [--sizes BYTES,...]\n",
+                     argv[0]);
         return 2;
       }
+    }
+    if (config.sizes.empty()) {
+      std::fprintf(stderr, "bench_transport: --sizes names no size\n");
+      return 2;
     }
     if (config.count <= 0 || config.rate_hz <= 0 || config.rounds <= 0) {
       std::fprintf(stderr, "bench_transport: --count, --rate and --rounds must be positive\n");
