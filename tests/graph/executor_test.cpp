@@ -171,8 +171,8 @@ double process_cpu_s() {
 }
 
 TEST(Executor, OnlyASpinningExecutorKeepsACoreBusyWhileIdle) {
-  // Over the same idle 200 ms, a sleeping executor's process uses next to no CPU and a spinning
-  // one's about a core (at least half of one, whatever else the machine runs).
+  // Over the same idle 300 ms, a sleeping executor's process uses next to no CPU and a spinning
+  // one's about a core (at least 30 % of one, even beside another busy test on two cores).
   for (const WaitMode mode : {WaitMode::kSleep, WaitMode::kSpin}) {
     Context ctx(rmw::make_transport("intra"));
     auto node = std::make_shared<Node>(ctx, "idle");
@@ -181,13 +181,13 @@ TEST(Executor, OnlyASpinningExecutorKeepsACoreBusyWhileIdle) {
     exec.add_node(node);
     const double before = process_cpu_s();
     exec.start();
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the idle span measured
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the idle span measured
     exec.stop();
     const double used = process_cpu_s() - before;
     if (mode == WaitMode::kSpin) {
-      EXPECT_GT(used, 0.1) << "spinning";
+      EXPECT_GT(used, 0.09) << "spinning";
     } else {
-      EXPECT_LT(used, 0.05) << "sleeping";
+      EXPECT_LT(used, 0.04) << "sleeping";
     }
   }
 }
