@@ -40,9 +40,10 @@ class GreyRun : public ::testing::Test {
   static inline bool started_daemon_ = false;
 
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("robotperf-grey-" + std::to_string(getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    // A parameterised test's name holds a '/': one folder, not a folder left behind in another.
+    std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    std::replace(name.begin(), name.end(), '/', '_');
+    dir_ = fs::temp_directory_path() / ("robotperf-grey-" + std::to_string(getpid()) + "-" + name);
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
