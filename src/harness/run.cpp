@@ -220,6 +220,17 @@ void check_run_options(const RunOptions& o) {
     throw std::invalid_argument(
         "--arrival " + o.arrival.name() +
         " replaces the bag's timeline: give one of --rate bag and --arrival");
+  if (o.monitor_wait == graph::WaitMode::kSpin) {
+    // A single-process run's --cpus hold the Monitor too; per node, it runs where this process
+    // may. On one CPU, the spinning Monitor and everything else would take turns by time slice.
+    const std::size_t cpus = !o.scheduling.cpus.empty() && o.processes == ProcessLayout::kSingle
+                                 ? o.scheduling.cpus.size()
+                                 : allowed_cpus().size();
+    if (cpus < 2)
+      throw std::invalid_argument(
+          "--monitor-wait spin keeps a CPU busy for the whole run, and this run's Monitor may "
+          "use only one: give it two or more (--cpus), or let it sleep");
+  }
 }
 
 // The run as derived (rate from a bag, count from a duration): its schedule must fit in time

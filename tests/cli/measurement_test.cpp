@@ -177,6 +177,14 @@ TEST_F(Measurement, ASpinningMonitorIsRecordedAndSelectable) {
                                     (dir_ / "bad").string());
   EXPECT_EQ(bad.exit_code, 2) << bad.out;
   EXPECT_NE(bad.out.find("--monitor-wait"), std::string::npos) << bad.out;
+  // Spinning on the only CPU the run may use would starve the graph: refused in one line.
+  const Outcome one_cpu = robotperf_cli(benchmarks() + " run i1 --monitor-wait spin --cpus 0 " +
+                                        "--output " + (dir_ / "bad").string());
+  EXPECT_EQ(one_cpu.exit_code, 2) << one_cpu.out;
+  EXPECT_NE(one_cpu.out.find("--monitor-wait spin keeps a CPU busy"), std::string::npos)
+      << one_cpu.out;
+  EXPECT_EQ(std::count(one_cpu.out.begin(), one_cpu.out.end(), '\n'), 1) << one_cpu.out;
+  EXPECT_FALSE(fs::exists(dir_ / "bad") && !fs::is_empty(dir_ / "bad"));
 }
 
 TEST_F(Measurement, RepeatWritesEveryRunAndTheSeries) {
