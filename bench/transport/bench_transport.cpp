@@ -668,8 +668,7 @@ int run_parent(const RunConfig& config) {
         const std::string impls[] = {"plain-" + vendor, vendor};
         RunConfig cell = config;
         cell.rate_hz = std::min(config.rate_hz, kMaxBytesPerSecond / static_cast<double>(size));
-        double round_low = INFINITY, round_high = 0;  // the rounds' own p50 ratios
-        std::vector<double> round_ratios;
+        std::vector<double> round_ratios;  // the rounds' own p50 ratios
         for (int round = 0; round < config.rounds; ++round) {
           Latencies this_round[2];
           for (int k = 0; k < 2; ++k) {
@@ -682,8 +681,6 @@ int run_parent(const RunConfig& config) {
           const double ratio = robotperf::metrics::compute_stats(this_round[1].us).p50 /
                                robotperf::metrics::compute_stats(this_round[0].us).p50;
           round_ratios.push_back(ratio);
-          round_low = std::min(round_low, ratio);
-          round_high = std::max(round_high, ratio);
           for (int i = 0; i < 2; ++i) {
             by_impl[i].us.insert(by_impl[i].us.end(), this_round[i].us.begin(),
                                  this_round[i].us.end());
@@ -694,6 +691,8 @@ int run_parent(const RunConfig& config) {
         const auto ours = robotperf::metrics::compute_stats(by_impl[1].us);
         const double ratio_p50 = ours.p50 / plain.p50;
         const double ratio_p99 = ours.p99 / plain.p99;
+        const auto [low, high] = std::minmax_element(round_ratios.begin(), round_ratios.end());
+        const double round_low = *low, round_high = *high;
         // The target is on the pooled median. Where the rounds disagree about the side of the
         // target, the machine's noise is larger than the difference: said so, not judged.
         std::string verdict = ratio_p50 <= kTargetRatio  ? "p50 ok"

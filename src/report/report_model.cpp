@@ -479,9 +479,8 @@ struct FieldSelector {
                                : key == "processes" ? r.processes
                                : key == "backend"   ? (r.backend.empty() ? "cpu" : r.backend)
                                : key == "mode"      ? r.type
-                               : key == "monitor"
-                                   ? (r.monitor_wait.empty() ? "sleep" : r.monitor_wait)
-                                   : (r.timeline.empty() ? "fixed" : r.timeline);
+                               : key == "monitor"   ? r.monitor_wait
+                                                    : r.timeline;
       if (lower(have) != want) return false;
     }
     return true;
@@ -802,7 +801,7 @@ std::string configuration_series(const StoredRun& run) {
   if (run.processes == "per-node") label += " · per-node";
   if (!run.backend.empty()) label += " · " + run.backend;
   if (run.type == "grey") label += " · grey";
-  if (!run.timeline.empty() && run.timeline != "fixed") label += " · " + run.timeline;
+  if (run.timeline != "fixed") label += " · " + run.timeline;
   if (run.monitor_wait == "spin") label += " · monitor spinning";
   return label;
 }

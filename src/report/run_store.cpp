@@ -314,8 +314,9 @@ StoredRun load_run(const fs::path& path) {
   run.rmw = string_or_empty(config, "rmw");
   run.processes = string_or_empty(config, "processes");
   run.rate_hz = number_or_nan(config, "rate_hz");
-  run.timeline = string_or_empty(config, "timeline");
-  run.monitor_wait = string_or_empty(config, "monitor_wait");
+  // Older files have neither: they sent at a fixed rate, and their Monitor slept.
+  run.timeline = string_or(config, "timeline", "fixed");
+  run.monitor_wait = string_or(config, "monitor_wait", "sleep");
   run.dataset = string_or_empty(member(j, "dataset"), "name");
   const json& machine = member(j, "machine");
   run.hardware = hardware_label(machine);
@@ -506,8 +507,8 @@ std::vector<std::pair<const char*, json>> run_fields(const StoredRun& r) {
           {"rmw", r.rmw},
           {"processes", r.processes},
           {"backend", r.backend.empty() ? "cpu" : r.backend},
-          {"arrivals", r.timeline.empty() ? "fixed" : r.timeline},
-          {"monitor", r.monitor_wait.empty() ? "sleep" : r.monitor_wait},
+          {"arrivals", r.timeline},
+          {"monitor", r.monitor_wait},
           {"rate_hz", number(r.rate_hz)},
           {"update_rate_hz", optional(r.update_rate_hz)},
           {"started_utc", r.started_utc},

@@ -38,8 +38,8 @@ struct StoredRun {
   std::string type;         // "black" or "grey"
   std::string started_utc;  // "2026-11-22T07:42:22Z"
   std::string rmw, processes;
-  std::string timeline;  // arrivals: "fixed", "poisson", "burst", "bag" (empty: older files)
-  std::string monitor_wait;  // "sleep" or "spin" (empty: older files, which slept)
+  std::string timeline = "fixed";      // arrivals: "fixed", "poisson", "burst" or "bag"
+  std::string monitor_wait = "sleep";  // "sleep" or "spin"
   double rate_hz = kNoValue;
   std::string dataset;
   std::string hardware;           // short platform name: CPU model, plus GPU models
