@@ -267,8 +267,11 @@ void sertype_realloc_samples(void** ptrs, const ddsi_sertype*, void* old, std::s
 }
 void sertype_free_samples(const ddsi_sertype*, void**, std::size_t, dds_free_op_t) {}
 
+// Cyclone DDS shares equal sertypes across a domain's topics in this process. A type's typed and
+// serialized (SerializedMessage) supports share its name but not its sample layout: each is its
+// own sertype, so that a bag's Playback and the graph's nodes keep theirs.
 bool sertype_equal(const ddsi_sertype* a, const ddsi_sertype* b) {
-  return type_of(a).ros_type == type_of(b).ros_type;
+  return &type_of(a) == &type_of(b);
 }
 uint32_t sertype_hash(const ddsi_sertype* sertype) {
   return static_cast<uint32_t>(std::hash<std::string>{}(type_of(sertype).ros_type));

@@ -720,6 +720,21 @@ TEST_F(Cli, RunReplaysABagOnItsOwnTimeline) {
       << o.out;
 }
 
+// A bag replayed through Cyclone DDS in one process: Playback's participant sends the recorded
+// bytes of the same message type the graph's nodes send typed, and each keeps its own.
+TEST_F(Cli, RunReplaysABagThroughCycloneDdsInOneProcess) {
+  const std::string bag = (out_ / "camera").string();
+  Outcome o = robotperf_cli("dataset generate perception/image --out " + bag);
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  o = robotperf_cli("run a1 --dataset " + bag + " --count 40 --rate 10 --rmw cyclonedds --domain " +
+                    domain() + " --quiet --output " + out_.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  const auto j = result_json();
+  EXPECT_EQ(j["configuration"]["rmw"], "cyclonedds");
+  EXPECT_EQ(j["counts"]["matched"], 35);
+  EXPECT_EQ(j["validity"]["valid"], true) << j["validity"].dump();
+}
+
 // A bag replayed into nodes that each run in their own process: the Playback publishes the
 // recorded CDR payloads as they are, with the IDs written into their header bytes.
 TEST_F(Cli, RunReplaysABagIntoOneProcessPerNode) {

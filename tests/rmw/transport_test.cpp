@@ -11,7 +11,9 @@
 #include <thread>
 #include <vector>
 
+#include "robotperf/msgs/cdr.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/msgs/serialized_message.hpp"
 #include "transport_test_util.hpp"
 
 namespace robotperf::rmw {
@@ -140,6 +142,42 @@ TEST_P(DdsTransport, SecondTypeOnATopicIsATransportError) {
   EXPECT_THROW(
       transport->create_publisher(topic, msgs::type_support<CameraInfo>(), QoS::sensor_data()),
       TransportError);
+}
+
+// What a run with a bag does: Playback's participant sends the recorded CDR bytes
+// (SerializedMessage) while the graph's participants, in the same process, send and take the same
+// type as typed messages. Each endpoint must keep its own type support even where the vendor
+// shares type definitions across the process (Cyclone DDS's sertypes), in either creation order.
+TEST_P(DdsTransport, SerializedAndTypedEndpointsOfOneTypeShareAProcess) {
+  auto typed_side = make();
+  auto serialized_side = make();
+  const msgs::TypeSupport& typed = msgs::type_support<Image>();
+  const msgs::TypeSupport& serialized = msgs::serialized_type_support(typed.ros_type);
+  const std::string to_typed = test_topic("serialized_to_typed");
+  const std::string to_serialized = test_topic("typed_to_serialized");
+  Inbox typed_inbox, serialized_inbox;
+  // Typed first on one topic, serialized first on the other.
+  auto typed_sub =
+      typed_side->create_subscription(to_typed, typed, QoS::ros_default(), typed_inbox.on_ready());
+  auto serialized_pub = serialized_side->create_publisher(to_typed, serialized, QoS::ros_default());
+  auto serialized_sub = serialized_side->create_subscription(
+      to_serialized, serialized, QoS::ros_default(), serialized_inbox.on_ready());
+  auto typed_pub = typed_side->create_publisher(to_serialized, typed, QoS::ros_default());
+  ASSERT_TRUE(wait_until([&] {
+    return typed_sub->matched_publishers() == 1 && serialized_pub->matched_subscriptions() == 1 &&
+           serialized_sub->matched_publishers() == 1 && typed_pub->matched_subscriptions() == 1;
+  }));
+
+  const Image image = make_image(320, 240, 3);
+  serialized_pub->publish(share(msgs::SerializedMessage{msgs::to_cdr(image)}));
+  MessagePtr got_typed = typed_inbox.take(*typed_sub);
+  ASSERT_NE(got_typed, nullptr);
+  EXPECT_TRUE(as<Image>(got_typed) == image);
+
+  typed_pub->publish(share(image));
+  MessagePtr got_serialized = serialized_inbox.take(*serialized_sub);
+  ASSERT_NE(got_serialized, nullptr);
+  EXPECT_TRUE(as<msgs::SerializedMessage>(got_serialized).cdr == msgs::to_cdr(image));
 }
 
 TEST_P(DdsTransport, InvalidTopicNameIsATransportError) {
