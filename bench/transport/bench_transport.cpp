@@ -331,18 +331,22 @@ std::unique_ptr<dds_qos_t, decltype(&dds_delete_qos)> plain_cyclone_qos() {
 struct CycloneRawBytes {
   using Sample = robotperf_bench_RawBytes;
   static const dds_topic_descriptor_t& descriptor() { return robotperf_bench_RawBytes_desc; }
-  // The sample points into `storage`, the Image's CDR without its header.
-  static Sample make(std::size_t payload_size, std::vector<uint8_t>& storage, const msgs::Image&) {
-    // The sequence's 4-byte length takes the place of the encapsulation header, so that the
-    // serialized sizes match.
-    const std::vector<uint8_t> cdr = sample_of_serialized_size<RawBytes>(payload_size);
-    storage.assign(cdr.begin() + msgs::kEncapsulationSize + sizeof(uint32_t), cdr.end());
+  // A sample to write, pointing into its own copy of the Image's CDR after the header. The
+  // sequence's 4-byte length takes the place of the encapsulation header, so that the serialized
+  // sizes match.
+  struct Outgoing {
+    explicit Outgoing(std::size_t payload_size) {
+      const std::vector<uint8_t> cdr = sample_of_serialized_size<RawBytes>(payload_size);
+      bytes.assign(cdr.begin() + msgs::kEncapsulationSize + sizeof(uint32_t), cdr.end());
+      sample.data._buffer = bytes.data();
+      sample.data._length = sample.data._maximum = static_cast<uint32_t>(bytes.size());
+      sample.data._release = false;
+    }
+    Outgoing(const Outgoing&) = delete;
+    Outgoing& operator=(const Outgoing&) = delete;
+    std::vector<uint8_t> bytes;
     Sample sample{};
-    sample.data._buffer = storage.data();
-    sample.data._length = sample.data._maximum = static_cast<uint32_t>(storage.size());
-    sample.data._release = false;
-    return sample;
-  }
+  };
   static void set_stamp(Sample& sample, int64_t ns) {
     std::memcpy(sample.data._buffer, &ns, sizeof ns);
   }
@@ -357,20 +361,24 @@ struct CycloneRawBytes {
 struct CycloneImage {
   using Sample = robotperf_bench_Image;
   static const dds_topic_descriptor_t& descriptor() { return robotperf_bench_Image_desc; }
-  // The sample points into `image`'s strings and data.
-  static Sample make(std::size_t, std::vector<uint8_t>&, msgs::Image& image) {
+  // A sample to write, pointing into its own Image's strings and data.
+  struct Outgoing {
+    explicit Outgoing(std::size_t payload_size) : image(image_of_serialized_size(payload_size)) {
+      sample.header.frame_id = image.header.frame_id.data();
+      sample.height = image.height;
+      sample.width = image.width;
+      sample.encoding = image.encoding.data();
+      sample.is_bigendian = image.is_bigendian;
+      sample.step = image.step;
+      sample.data._buffer = image.data.data();
+      sample.data._length = sample.data._maximum = static_cast<uint32_t>(image.data.size());
+      sample.data._release = false;
+    }
+    Outgoing(const Outgoing&) = delete;
+    Outgoing& operator=(const Outgoing&) = delete;
+    msgs::Image image;
     Sample sample{};
-    sample.header.frame_id = image.header.frame_id.data();
-    sample.height = image.height;
-    sample.width = image.width;
-    sample.encoding = image.encoding.data();
-    sample.is_bigendian = image.is_bigendian;
-    sample.step = image.step;
-    sample.data._buffer = image.data.data();
-    sample.data._length = sample.data._maximum = static_cast<uint32_t>(image.data.size());
-    sample.data._release = false;
-    return sample;
-  }
+  };
   static void set_stamp(Sample& sample, int64_t ns) {
     const msgs::Time stamp = msgs::Time::from_ns(ns);
     sample.header.stamp.sec = stamp.sec;
@@ -386,8 +394,7 @@ template <class Payload>
 class PlainCycloneSender final : public Sender {
  public:
   PlainCycloneSender(dds_entity_t participant, dds_entity_t topic, std::size_t payload_size)
-      : image_(image_of_serialized_size(payload_size)),
-        sample_(Payload::make(payload_size, storage_, image_)),
+      : outgoing_(payload_size),
         writer_(dds_create_writer(participant, topic, plain_cyclone_qos().get(), nullptr)) {
     if (writer_ < 0) throw std::runtime_error("cannot create the plain Cyclone DDS writer");
   }
@@ -398,15 +405,13 @@ class PlainCycloneSender final : public Sender {
     return status.current_count;
   }
   void send(int64_t stamp_ns) override {
-    Payload::set_stamp(sample_, stamp_ns);
-    if (dds_write(writer_, &sample_) != DDS_RETCODE_OK)
+    Payload::set_stamp(outgoing_.sample, stamp_ns);
+    if (dds_write(writer_, &outgoing_.sample) != DDS_RETCODE_OK)
       throw std::runtime_error("plain Cyclone DDS write failed");
   }
 
  private:
-  msgs::Image image_;             // what a typed sample points into
-  std::vector<uint8_t> storage_;  // what a byte-sequence sample points into
-  typename Payload::Sample sample_;
+  typename Payload::Outgoing outgoing_;
   dds_entity_t writer_;
 };
 
@@ -497,9 +502,10 @@ template <class Payload>
 using OurMessage =
     std::conditional_t<std::is_same_v<Payload, RawBytes>, msgs::SerializedMessage, msgs::Image>;
 
-template <class Payload>
-typename Payload::Sample& sample_of(OurMessage<Payload>& msg) {
-  if constexpr (std::is_same_v<Payload, RawBytes>) {
+// The payload a message of ours carries, const as the message is.
+template <class Message>
+auto& sample_of(Message& msg) {
+  if constexpr (std::is_same_v<std::remove_const_t<Message>, msgs::SerializedMessage>) {
     return msg.cdr;
   } else {
     return msg;
@@ -513,13 +519,13 @@ class OurSender final : public Sender {
       : msg_(std::make_shared<OurMessage<Payload>>()),
         publisher_(transport.create_publisher(topic, our_type_support<Payload>(),
                                               rmw::QoS::ros_default())) {
-    sample_of<Payload>(*msg_) = sample_of_serialized_size<Payload>(payload_size);
+    sample_of(*msg_) = sample_of_serialized_size<Payload>(payload_size);
   }
   std::size_t matched() const override { return publisher_->matched_subscriptions(); }
   void send(int64_t stamp_ns) override {
     // The transport serializes during publish() and keeps no reference, so
     // one message is reused rather than copying megabytes before each send.
-    Payload::set_stamp(sample_of<Payload>(*msg_), stamp_ns);
+    Payload::set_stamp(sample_of(*msg_), stamp_ns);
     publisher_->publish(msg_);
   }
 
@@ -539,8 +545,7 @@ class OurReceiver final : public Receiver {
   bool take(int64_t* send_ns) override {
     rmw::MessagePtr msg = subscription_->take(nullptr);
     if (!msg) return false;
-    *send_ns = Payload::stamp(
-        sample_of<Payload>(*static_cast<OurMessage<Payload>*>(const_cast<void*>(msg.get()))));
+    *send_ns = Payload::stamp(sample_of(*static_cast<const OurMessage<Payload>*>(msg.get())));
     return true;
   }
 
@@ -652,30 +657,45 @@ struct Pong {
   std::unique_ptr<Sender> pongs;
 };
 
-// The implementations' pongs, each on a participant (or transport) of its own and echoing from a
-// thread of its own while it lives.
+// One side (a Ping or a Pong) of each implementation, each on a participant (or transport) of its
+// own.
+template <class Side>
+class SideOfEach {
+ public:
+  SideOfEach(const std::string& vendor, int domain_id, const std::string& topic,
+             std::size_t payload_size) {
+    for (int k = 0; k < kImplCount; ++k) {
+      endpoints_[k] = make_endpoints(vendor, kImpls[k], domain_id);
+      sides_[k] = std::make_unique<Side>(*endpoints_[k], impl_topic(topic, k), payload_size);
+    }
+  }
+  bool matched() const {
+    return std::ranges::all_of(sides_, [](const auto& side) { return side->matched(); });
+  }
+  Side& operator[](int k) { return *sides_[k]; }
+
+ private:
+  PerImpl<std::unique_ptr<Endpoints>> endpoints_;  // first: outlive their endpoints
+  PerImpl<std::unique_ptr<Side>> sides_;
+};
+
+// The implementations' pongs, each echoing from a thread of its own while it lives.
 class PongGroup {
  public:
   PongGroup(const std::string& vendor, int domain_id, const std::string& topic,
-            std::size_t payload_size) {
-    for (int k = 0; k < kImplCount; ++k) {
-      endpoints_[k] = make_endpoints(vendor, kImpls[k], domain_id);
-      pongs_[k] = std::make_unique<Pong>(*endpoints_[k], impl_topic(topic, k), payload_size);
-    }
-  }
+            std::size_t payload_size)
+      : pongs_(vendor, domain_id, topic, payload_size) {}
   ~PongGroup() {
     stop_ = true;
     for (auto& thread : echoing_) {
       if (thread.joinable()) thread.join();
     }
   }
-  bool matched() const {
-    return std::ranges::all_of(pongs_, [](const auto& pong) { return pong->matched(); });
-  }
+  bool matched() const { return pongs_.matched(); }
   void start() {
     for (int k = 0; k < kImplCount; ++k) {
       echoing_[k] = std::thread([this, k] {
-        Pong& pong = *pongs_[k];
+        Pong& pong = pongs_[k];
         try {
           echo(*pong.pings, *pong.pongs, pong.bell, stop_);
         } catch (const std::exception& e) {
@@ -692,8 +712,7 @@ class PongGroup {
   }
 
  private:
-  PerImpl<std::unique_ptr<Endpoints>> endpoints_;  // first: outlive their endpoints
-  PerImpl<std::unique_ptr<Pong>> pongs_;
+  SideOfEach<Pong> pongs_;
   std::atomic<bool> stop_{false};
   PerImpl<std::thread> echoing_;
   std::mutex failure_mutex_;
@@ -735,19 +754,13 @@ struct Ping {
   std::unique_ptr<Sender> pings;
 };
 
-// The implementations' pings, each on a participant (or transport) of its own, as their pongs.
+// The implementations' pings, sent in turn from one pacing thread.
 class PingGroup {
  public:
   PingGroup(const std::string& vendor, int domain_id, const std::string& topic,
-            std::size_t payload_size) {
-    for (int k = 0; k < kImplCount; ++k) {
-      endpoints_[k] = make_endpoints(vendor, kImpls[k], domain_id);
-      pings_[k] = std::make_unique<Ping>(*endpoints_[k], impl_topic(topic, k), payload_size);
-    }
-  }
-  bool matched() const {
-    return std::ranges::all_of(pings_, [](const auto& ping) { return ping->matched(); });
-  }
+            std::size_t payload_size)
+      : pings_(vendor, domain_id, topic, payload_size) {}
+  bool matched() const { return pings_.matched(); }
 
   // kWarmupMessages + config.count pings each, in turn, the implementation `first` leading.
   PerImpl<Latencies> run(const RunConfig& config, int first) {
@@ -759,7 +772,7 @@ class PingGroup {
     std::vector<std::thread> receiving;
     for (int k = 1; k < kImplCount; ++k) {
       receiving.emplace_back(
-          [&, k] { out[k] = receive(*pings_[k]->pongs, pings_[k]->bell, total, deadline); });
+          [&, k] { out[k] = receive(*pings_[k].pongs, pings_[k].bell, total, deadline); });
     }
     std::exception_ptr send_failure;
     std::thread sending([&] {
@@ -767,13 +780,13 @@ class PingGroup {
         const auto start = std::chrono::steady_clock::now();
         for (int i = 0; i < kImplCount * total; ++i) {
           std::this_thread::sleep_until(start + i * period);
-          pings_[(first + i) % kImplCount]->pings->send(steady_now_ns());
+          pings_[(first + i) % kImplCount].pings->send(steady_now_ns());
         }
       } catch (...) {
         send_failure = std::current_exception();
       }
     });
-    out[0] = receive(*pings_[0]->pongs, pings_[0]->bell, total, deadline);
+    out[0] = receive(*pings_[0].pongs, pings_[0].bell, total, deadline);
     sending.join();
     for (auto& thread : receiving) thread.join();
     if (send_failure) std::rethrow_exception(send_failure);
@@ -781,8 +794,7 @@ class PingGroup {
   }
 
  private:
-  PerImpl<std::unique_ptr<Endpoints>> endpoints_;  // first: outlive their endpoints
-  PerImpl<std::unique_ptr<Ping>> pings_;
+  SideOfEach<Ping> pings_;
 };
 
 PerImpl<Latencies> run_in_process(const std::string& vendor, int domain_id,

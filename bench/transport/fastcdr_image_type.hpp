@@ -72,7 +72,10 @@ class FastCdrImageType final : public eprosima::fastdds::dds::TopicDataType {
       auto field = [&at](std::size_t size, std::size_t align) {
         at += Cdr::alignment(at, align) + size;
       };
-      auto string = [&](const std::string& s) { field(4, 4), at += s.size() + 1; };
+      auto string = [&](const std::string& s) {
+        field(4, 4);  // its length, then its characters and a NUL
+        at += s.size() + 1;
+      };
       field(4, 4);  // stamp.sec
       field(4, 4);  // stamp.nanosec
       string(image.header.frame_id);
