@@ -736,7 +736,7 @@ TEST(ImageBackend, CudaHasInterLinearOnly) {
 }
 
 TEST(ImageBackend, CudaWithoutItsBuildOrDeviceIsOneLine) {
-  if (without_cuda().empty()) GTEST_SKIP() << "this machine has a CUDA device";
+  if (without_cuda().empty()) GTEST_SKIP() << "a CUDA device is there: " << cuda_device().name;
   expect_cuda_missing_line(
       [] {
         image_backend("cuda");

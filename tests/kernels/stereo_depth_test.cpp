@@ -487,7 +487,7 @@ TEST(PointCloudXyzrgb, CudaGivesTheCpusCloud) {
 }
 
 TEST(PointCloudXyzrgb, CudaWithoutItsBuildOrDeviceIsOneLine) {
-  if (without_cuda().empty()) GTEST_SKIP() << "this machine has a CUDA device";
+  if (without_cuda().empty()) GTEST_SKIP() << "a CUDA device is there: " << cuda_device().name;
   expect_cuda_missing_line([] { PointCloudXyzrgbProcessor(ImageBackend::kCuda); },
                            "PointCloudXyzrgbProcessor");
   Tiny t("32FC1", "rgb8");
@@ -609,7 +609,7 @@ TEST(DisparityCuda, HasStereoBmWithoutNegativeDisparitiesOnly) {
 }
 
 TEST(DisparityCuda, WithoutItsBuildOrDeviceIsOneLine) {
-  if (without_cuda().empty()) GTEST_SKIP() << "this machine has a CUDA device";
+  if (without_cuda().empty()) GTEST_SKIP() << "a CUDA device is there: " << cuda_device().name;
   expect_cuda_missing_line([] { DisparityProcessor({}, ImageBackend::kCuda); },
                            "DisparityProcessor");
 }

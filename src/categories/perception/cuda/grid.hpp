@@ -19,4 +19,20 @@ inline dim3 image_grid(int width, int height, int planes = 1) {
               static_cast<unsigned>(planes));
 }
 
+// Queues `kernel` on `stream` with `grid` x `block` threads. Every launch goes through here so
+// that the tests' host emulation of the CUDA runtime (tests/kernels/cuda_emulation), which has no
+// <<< >>>, runs the same kernels on machines without a GPU.
+template <class... Params, class... Args>
+void launch(void (*kernel)(Params...), dim3 grid, dim3 block, cudaStream_t stream,
+            const Args&... args) {
+#ifdef ROBOTPERF_CUDA_EMULATION
+  cuda_emulation::launch(kernel, grid, block, stream, args...);
+#else
+  // clang-format takes a .hpp for C++, which has no <<< >>>.
+  // clang-format off
+  kernel<<<grid, block, 0, stream>>>(args...);
+  // clang-format on
+#endif
+}
+
 }  // namespace robotperf::perception::cuda

@@ -229,8 +229,8 @@ void remap_linear(DeviceImage src, DeviceImage dst, PixelDepth depth, int channe
                   const int16_t* map_xy, const uint16_t* map_fraction, cudaStream_t stream) {
   launch_per_pixel("remap_linear_kernel", src, dst, depth, channels,
                    [&](auto* element, dim3 grid, dim3 block) {
-                     remap_linear_kernel<Element<decltype(element)>>
-                         <<<grid, block, 0, stream>>>(src, dst, channels, map_xy, map_fraction);
+                     launch(remap_linear_kernel<Element<decltype(element)>>, grid, block, stream,
+                            src, dst, channels, map_xy, map_fraction);
                    });
 }
 
@@ -238,8 +238,8 @@ void resize_linear(DeviceImage src, DeviceImage dst, PixelDepth depth, int chann
                    const ResizeTap* columns, const ResizeTap* rows, cudaStream_t stream) {
   launch_per_pixel("resize_linear_kernel", src, dst, depth, channels,
                    [&](auto* element, dim3 grid, dim3 block) {
-                     resize_linear_kernel<Element<decltype(element)>>
-                         <<<grid, block, 0, stream>>>(src, dst, channels, columns, rows);
+                     launch(resize_linear_kernel<Element<decltype(element)>>, grid, block, stream,
+                            src, dst, channels, columns, rows);
                    });
 }
 

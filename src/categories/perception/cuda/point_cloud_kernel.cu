@@ -60,9 +60,9 @@ void xyzrgb(DeviceImage depth, const uint8_t* colour, const XyzrgbModel& model, 
   }
   const dim3 grid = image_grid(depth.width, depth.height);
   if (model.metres) {
-    xyzrgb_kernel<float><<<grid, image_block(), 0, stream>>>(depth, colour, model, cloud);
+    launch(xyzrgb_kernel<float>, grid, image_block(), stream, depth, colour, model, cloud);
   } else {
-    xyzrgb_kernel<uint16_t><<<grid, image_block(), 0, stream>>>(depth, colour, model, cloud);
+    launch(xyzrgb_kernel<uint16_t>, grid, image_block(), stream, depth, colour, model, cloud);
   }
   check_launch("xyzrgb_kernel");
 }

@@ -129,18 +129,19 @@ void block_match(const BlockMatchingShape& s, const BlockMatchingBuffers& b, cud
                                 std::to_string(s.disparities) + " disparities do not fit");
   }
   const dim3 block = image_block(), pixels = image_grid(s.cols, s.rows);
-  prefilter_kernel<<<pixels, block, 0, stream>>>(b.left, b.filtered_left, s.rows, s.cols,
-                                                 s.prefilter_cap);
+  launch(prefilter_kernel, pixels, block, stream, b.left, b.filtered_left, s.rows, s.cols,
+         s.prefilter_cap);
   check_launch("prefilter_kernel");
-  prefilter_kernel<<<pixels, block, 0, stream>>>(b.right, b.filtered_right, s.rows, s.cols,
-                                                 s.prefilter_cap);
+  launch(prefilter_kernel, pixels, block, stream, b.right, b.filtered_right, s.rows, s.cols,
+         s.prefilter_cap);
   check_launch("prefilter_kernel");
   const dim3 volume = image_grid(s.cols, s.rows, s.disparities + 1);
-  row_costs_kernel<<<volume, block, 0, stream>>>(b.filtered_left, b.filtered_right, b.row_costs, s);
+  launch(row_costs_kernel, volume, block, stream, b.filtered_left, b.filtered_right, b.row_costs,
+         s);
   check_launch("row_costs_kernel");
-  window_costs_kernel<<<volume, block, 0, stream>>>(b.row_costs, b.costs, s);
+  launch(window_costs_kernel, volume, block, stream, b.row_costs, b.costs, s);
   check_launch("window_costs_kernel");
-  choose_kernel<<<pixels, block, 0, stream>>>(b.costs, b.disparity, b.best_cost, s);
+  launch(choose_kernel, pixels, block, stream, b.costs, b.disparity, b.best_cost, s);
   check_launch("choose_kernel");
 }
 
