@@ -1,0 +1,112 @@
+#!/usr/bin/env bash
+# Checks the cuda backend on a machine with an NVIDIA GPU and driver, from the bundle that
+# scripts/gpu-bundle.sh made (.gpu-bundle/bundle.tar.xz), without building or installing anything:
+#   1. the device: nvidia-smi and robotperf sysinfo;
+#   2. the cuda kernels against the cpu's on the same inputs (the kernel tests);
+#   3. robotperf run a1 .. a5 --backend cuda, end to end, results kept (results.tar.gz);
+#   4. bench_backends: cpu against cuda (and opencl where the machine has a driver for it),
+#      p50 / p99, the upload / compute / download split and issue #19's targets;
+#   5. the CLI's cuda test (each benchmark's answers on the GPU, in one process and per node).
+# Run it from the repository's root. Each step's output goes to a file in OUT_DIR (default $OUT,
+# else ./gpu-check), with summary.txt listing each step's outcome. The steps share one deadline
+# (GPU_CHECK_SECONDS, default 480) so that the whole check ends within a lease's command limit;
+# a step cut short says so in the summary.
+set -uo pipefail
+root=$(pwd)
+bundle=$root/.gpu-bundle
+out=${OUT_DIR:-${OUT:-$root/gpu-check}}
+deadline=$((SECONDS + ${GPU_CHECK_SECONDS:-480}))
+mkdir -p "$out"
+summary=$out/summary.txt
+: >"$summary"
+
+die() {
+  echo "gpu-check: $*" | tee -a "$summary" >&2
+  exit 1
+}
+
+[[ -f "$bundle/bundle.tar.xz" ]] ||
+  die "no $bundle/bundle.tar.xz: run scripts/gpu-bundle.sh on the build machine and copy it here"
+unpacked=$(mktemp -d /tmp/robotperf-gpu.XXXXXX)
+# Python's tarfile where there is no xz program.
+if command -v xz >/dev/null; then
+  tar -C "$unpacked" -xJf "$bundle/bundle.tar.xz" || die "cannot unpack the bundle"
+else
+  python3 -m tarfile -e "$bundle/bundle.tar.xz" "$unpacked" || die "cannot unpack the bundle"
+fi
+cat "$unpacked/origin" >>"$summary"
+source_dir=$(sed -n 's/^source_dir=//p' "$unpacked/origin")
+build_dir=$(sed -n 's/^build_dir=//p' "$unpacked/origin")
+
+# The paths the build gave the sources and executables, which the tests use: made again here.
+if [[ "$source_dir" != "$root" ]]; then
+  if [[ -e "$source_dir" && ! "$source_dir" -ef "$root" ]]; then
+    die "$source_dir (where the bundle was built) exists here and is not this repository"
+  fi
+  mkdir -p "$(dirname "$source_dir")"
+  [[ -e "$source_dir" ]] || ln -s "$root" "$source_dir"
+fi
+if [[ -e "$build_dir" && ! -L "$build_dir" ]]; then
+  die "$build_dir (the bundle's build folder) exists here: remove it or check from another copy"
+fi
+rm -f "$build_dir"
+ln -s "$unpacked/build" "$build_dir"
+
+export LD_LIBRARY_PATH=$unpacked/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+# The build machine's libstdc++ only where this machine's cannot run robotperf.
+if ! "$build_dir/robotperf" --version >/dev/null 2>&1; then
+  export LD_LIBRARY_PATH=$LD_LIBRARY_PATH:$unpacked/lib/fallback
+fi
+"$build_dir/robotperf" --version >>"$summary" 2>&1 ||
+  die "robotperf does not start here (is the C library older than the build machine's?): $("$build_dir/robotperf" --version 2>&1 | head -1)"
+export PATH=$unpacked/lttng:$PATH
+export LTTNG_CONSUMERD64_BIN=$unpacked/lttng/lttng-consumerd
+export LTTNG_CONSUMERD64_LIBDIR=$unpacked/lib
+export LTTNG_SESSION_CONFIG_XSD_PATH=$unpacked/lttng
+# An OpenCL driver for the GPU, where the NVIDIA driver has one: the opencl backend's column.
+if [[ -z "${OCL_ICD_VENDORS:-}" ]]; then
+  opencl=$(ldconfig -p 2>/dev/null | awk '/libnvidia-opencl\.so\.1/ {print $NF; exit}')
+  [[ -n "$opencl" ]] || opencl=$(find /usr/local/nvidia /usr/lib /usr/lib64 -name 'libnvidia-opencl.so.1' 2>/dev/null | head -1)
+  if [[ -n "$opencl" ]]; then
+    mkdir -p "$unpacked/icd"
+    echo "$opencl" >"$unpacked/icd/nvidia.icd"
+    export OCL_ICD_VENDORS=$unpacked/icd
+  fi
+fi
+
+# step NAME LIMIT_SECONDS COMMAND...: runs it into OUT_DIR/NAME.txt within the shared deadline.
+step() {
+  local name=$1 limit=$2
+  shift 2
+  local left=$((deadline - SECONDS))
+  if ((left < 10)); then
+    echo "$name: not run (the deadline was reached)" | tee -a "$summary"
+    return
+  fi
+  ((limit > left)) && limit=$left
+  local start=$SECONDS
+  timeout --kill-after=10 "$limit" "$@" >"$out/$name.txt" 2>&1
+  local rc=$?
+  local outcome="exit $rc"
+  ((rc == 0)) && outcome=passed
+  ((rc == 124 || rc == 137)) && outcome="cut short after ${limit} s"
+  # A test that skips here (no device, no driver) checked nothing: say so.
+  local skipped
+  skipped=$(grep -c '^\[  SKIPPED \] .* ms)$' "$out/$name.txt")
+  ((skipped > 0)) && outcome="$outcome, $skipped tests SKIPPED"
+  echo "$name: $outcome ($((SECONDS - start)) s)" | tee -a "$summary"
+}
+
+cd "$build_dir" || die "cannot enter $build_dir"
+step device 60 bash -c 'nvidia-smi && ./robotperf sysinfo'
+step kernels 120 bash -c "./tests/kernels/kernels_image_proc_test --gtest_filter='*Cuda*' &&
+  ./tests/kernels/kernels_stereo_depth_test --gtest_filter='*Cuda*'"
+step runs 150 bash -c "for b in a1 a2 a3 a4 a5; do
+  ./robotperf run \$b --backend cuda --output '$out/results' || exit; done"
+step bench_backends 300 ./bench/backends/bench_backends
+step cli 200 ./tests/cli/cli_test --gtest_filter='*Cuda*'
+# The results as one file: a lent machine hands back few files.
+if [[ -d "$out/results" ]]; then
+  tar -C "$out" -czf "$out/results.tar.gz" results && rm -rf "$out/results"
+fi
+echo "gpu-check: outputs in $out" | tee -a "$summary"
