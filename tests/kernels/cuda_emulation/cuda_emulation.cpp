@@ -17,8 +17,8 @@ struct CUstream_st {
   std::deque<std::function<void()>> work;
 };
 
-thread_local uint3 threadIdx, blockIdx;
-thread_local dim3 blockDim, gridDim;
+constinit thread_local uint3 threadIdx, blockIdx;
+constinit thread_local dim3 blockDim, gridDim;
 
 namespace robotperf::cuda_emulation {
 namespace {

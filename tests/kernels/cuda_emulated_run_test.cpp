@@ -1,0 +1,82 @@
+// The perception benchmarks end to end on the cuda backend's host emulation
+// (cuda_emulation/cuda_runtime.h): the nodes' device path (staging, one stream per node, the
+// device stages, the warm-up), the check of their answers against the cpu backend's and the
+// benchmarks' functional checks, on machines without a GPU. Only the perception category is
+// registered: this program's perception library is the emulated one. Nothing here is timed.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "robotperf/harness/benchmark_spec.hpp"
+#include "robotperf/harness/run.hpp"
+#include "robotperf/plugin/registry.hpp"
+
+namespace robotperf::perception {
+void register_category(plugin::Registrar& registrar);
+}
+
+namespace robotperf {
+namespace {
+
+class EmulatedPerception final : public ::testing::Environment {
+ public:
+  void SetUp() override {
+    plugin::registry().add("built-in perception", perception::register_category);
+  }
+};
+const auto* const environment = ::testing::AddGlobalTestEnvironment(new EmulatedPerception);
+
+harness::RunResult run_on_cuda(const std::string& id, harness::RunOptions o) {
+  o.backend = "cuda";
+  return harness::run_benchmark(
+      harness::find_benchmark(std::string(ROBOTPERF_SOURCE_DIR) + "/benchmarks", id), o);
+}
+
+// `few_samples`: a run too short to be a valid measurement (its answers are still checked).
+void expect_cpus_answers_on_the_emulation(const std::string& what, const harness::RunResult& r,
+                                          bool few_samples = false) {
+  EXPECT_TRUE(r.completed) << what;
+  EXPECT_TRUE(r.errors.empty()) << what << ": " << r.errors.front();
+  if (!few_samples) {
+    EXPECT_TRUE(r.valid) << what << ": "
+                         << (r.invalid_reasons.empty() ? "" : r.invalid_reasons.front());
+  }
+  // a4 and a3 have ground truth; the others' answers are the cpu's or nothing.
+  if (r.functional) {
+    EXPECT_TRUE(r.functional->valid) << what;
+  }
+  ASSERT_TRUE(r.backend_check.has_value()) << what;
+  EXPECT_TRUE(r.backend_check->passed) << what << ": " << r.backend_check->criterion;
+  EXPECT_GT(r.backend_check->compared, 0u) << what;
+  bool any_on_cuda = false;
+  for (const auto& node : r.nodes) {
+    if (node.backend != "cuda") continue;
+    any_on_cuda = true;
+    ASSERT_TRUE(node.device.has_value()) << what << ": " << node.name;
+    EXPECT_NE(node.device->name.find("emulation"), std::string::npos) << node.device->name;
+  }
+  EXPECT_TRUE(any_on_cuda) << what << ": no node ran on cuda";
+}
+
+TEST(CudaEmulatedRun, ImageBenchmarksGiveTheCpusAnswers) {
+  for (const std::string id : {"a1", "a2", "a4", "a5"}) {
+    // A rate the emulation keeps up with on a busy two-core machine.
+    harness::RunOptions o;
+    o.count = 40;
+    o.rate_hz = 10;
+    expect_cpus_answers_on_the_emulation(id, run_on_cuda(id, o));
+  }
+}
+
+// The emulated block matcher takes about a second a pair: a3 at a rate it keeps up with, too few
+// messages for a valid measurement (30) in a test's time.
+TEST(CudaEmulatedRun, StereoGivesTheCpusDisparity) {
+  harness::RunOptions o;
+  o.count = 12;
+  o.warmup = 2;
+  o.rate_hz = 0.5;
+  expect_cpus_answers_on_the_emulation("a3", run_on_cuda("a3", o), true);
+}
+
+}  // namespace
+}  // namespace robotperf
