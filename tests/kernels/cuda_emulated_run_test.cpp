@@ -4,12 +4,16 @@
 // benchmarks' functional checks, on machines without a GPU. Only the perception category is
 // registered: this program's perception library is the emulated one. Nothing here is timed.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <filesystem>
+#include <map>
 #include <string>
 
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/plugin/registry.hpp"
+#include "robotperf/tracing/session.hpp"
 
 namespace robotperf::perception {
 void register_category(plugin::Registrar& registrar);
@@ -76,6 +80,36 @@ TEST(CudaEmulatedRun, StereoGivesTheCpusDisparity) {
   o.warmup = 2;
   o.rate_hz = 0.5;
   expect_cpus_answers_on_the_emulation("a3", run_on_cuda("a3", o), true);
+}
+
+// A grey-box run: the kernel's time splits into its upload, compute and download on the node's
+// stream, each a hop of every measured message inside the kernel's (what bench_backends reports).
+TEST(CudaEmulatedRun, GreyBoxShowsTheTransfersAndComputation) {
+  std::string why;
+  if (!tracing::lttng_available(&why)) GTEST_SKIP() << why;
+  harness::RunOptions o;
+  o.count = 35;
+  o.rate_hz = 10;
+  o.mode = harness::RunMode::kGrey;
+  o.trace_dir = std::filesystem::temp_directory_path() /
+                ("cuda-emulated-a5-" + std::to_string(getpid()) + ".trace");
+  const harness::RunResult g = run_on_cuda("a5", o);
+  std::filesystem::remove_all(o.trace_dir);
+  ASSERT_TRUE(g.grey.has_value());
+  expect_cpus_answers_on_the_emulation("a5 grey", g);
+  std::map<std::string, const tracing::Hop*> hops;
+  for (const auto& h : g.grey->hops) hops[h.label()] = &h;
+  ASSERT_TRUE(hops.contains("resize: image_proc/resize"));
+  double stages = 0;
+  for (const char* stage : {"upload", "compute", "download"}) {
+    const auto it = hops.find(std::string("resize: device ") + stage);
+    ASSERT_NE(it, hops.end()) << stage;
+    EXPECT_EQ(it->second->kind, "device");
+    EXPECT_EQ(it->second->duration.count, g.measured) << stage;
+    stages += it->second->duration.mean;
+  }
+  EXPECT_LE(stages, hops["resize: image_proc/resize"]->duration.mean)
+      << "the stages lie inside the kernel";
 }
 
 }  // namespace
