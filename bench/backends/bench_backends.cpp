@@ -105,6 +105,8 @@ std::string target(const std::string& id, const Measured& cpu, const Measured& m
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A line as soon as it is measured, into a file too: a run cut short keeps what it measured.
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   categories::register_builtin_categories();
   std::size_t count = 300;
   std::vector<std::string> ids;
