@@ -100,7 +100,8 @@ step() {
 cd "$build_dir" || die "cannot enter $build_dir"
 step device 60 bash -c 'nvidia-smi && ./robotperf sysinfo'
 step kernels 120 bash -c "./tests/kernels/kernels_image_proc_test --gtest_filter='*Cuda*' &&
-  ./tests/kernels/kernels_stereo_depth_test --gtest_filter='*Cuda*'"
+  ./tests/kernels/kernels_stereo_depth_test --gtest_filter='*Cuda*' &&
+  ./tests/kernels/kernels_cuda_disparity_filter_test"
 step runs 150 bash -c "for b in a1 a2 a3 a4 a5; do
   ./robotperf run \$b --backend cuda --output '$out/results' || exit; done"
 step bench_backends 300 ./bench/backends/bench_backends

@@ -1,7 +1,9 @@
 // A host emulation of the part of the CUDA runtime that robotperf's cuda backend uses, so that the
 // backend's own kernels and host code run in the tests of machines without a GPU (CI's). The
-// kernels run on the CPU, one GPU thread after another: they share nothing between threads (no
-// shared memory, barriers or atomics), so the order does not change their answer. It is not a GPU:
+// kernels run on the CPU, one GPU thread after another. Most share nothing between threads (no
+// shared memory or barriers), so the order does not change their answer; the speckle filter's
+// union-find shares labels through atomics, and here runs in one order only: that it gives the
+// same regions in every order is its algorithm's claim, which only a GPU tests. It is not a GPU:
 // its times mean nothing, and nothing it computes is reported as a GPU's (its device is named as
 // an emulation). It checks what a GPU would punish and a plain host run would hide:
 // - a stream's work runs only when the host waits for it (cudaStreamSynchronize, or a free), so a
@@ -72,6 +74,23 @@ inline int __float2int_rn(float v) {
   if (v >= 2147483648.f) return INT_MAX;
   if (v <= -2147483648.f) return INT_MIN;
   return static_cast<int>(std::nearbyint(v));
+}
+
+// The atomics: one thread runs at a time here, so a plain read-modify-write is atomic.
+inline int atomicMin(int* address, int value) {
+  const int old = *address;
+  if (value < old) *address = value;
+  return old;
+}
+inline unsigned long long atomicMin(unsigned long long* address, unsigned long long value) {
+  const unsigned long long old = *address;
+  if (value < old) *address = value;
+  return old;
+}
+inline int atomicAdd(int* address, int value) {
+  const int old = *address;
+  *address = old + value;
+  return old;
 }
 
 enum cudaError_t {

@@ -61,4 +61,23 @@ struct BlockMatchingBuffers {
 void block_match(const BlockMatchingShape& shape, const BlockMatchingBuffers& buffers,
                  cudaStream_t stream);
 
+// StereoBM's steps after block_match, in place on its `disparity`, with the answer of
+// cv::validateDisparity(disparity, best_cost, min_disparity, disparities, disp12_max_diff) then
+// cv::filterSpeckles(disparity, (min_disparity - 1) * 16, speckle_size, speckle_range), as
+// filter_on_host() runs them: the left-right check where disp12_max_diff >= 0, the speckle filter
+// where speckle_size > 0 and speckle_range >= 0.
+struct DisparityFilter {
+  int disp12_max_diff = -1;
+  int speckle_size = 0, speckle_range = -1;
+};
+struct DisparityFilterBuffers {
+  int16_t* disparity = nullptr;               // rows x cols, block_match's
+  const int32_t* best_cost = nullptr;         // rows x cols, block_match's
+  unsigned long long* right_match = nullptr;  // rows x cols
+  int32_t* labels = nullptr;                  // rows x cols
+  int32_t* region_sizes = nullptr;            // rows x cols
+};
+void filter_disparity(const BlockMatchingShape& shape, const DisparityFilter& filter,
+                      const DisparityFilterBuffers& buffers, cudaStream_t stream);
+
 }  // namespace robotperf::perception::cuda

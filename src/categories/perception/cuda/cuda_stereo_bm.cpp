@@ -1,6 +1,7 @@
-// The cuda backend's StereoBM on a node's own stream: the pair up, the device's stages
-// (stereo_bm_kernels.cu), the disparity and best costs down, and the host's steps after it, as
-// the opencl backend's.
+// The cuda backend's StereoBM on a node's own stream: the pair up, the block matching and the
+// steps after it (the left-right check and the speckle filter) on the device
+// (stereo_bm_kernels.cu), the disparity down. The opencl backend runs those last steps on the
+// host (filter_on_host); these give their answer.
 #include <cstdint>
 #include <stdexcept>
 
@@ -11,6 +12,15 @@
 
 namespace robotperf::perception::cuda {
 namespace {
+
+// The node's StereoBM parameters for the steps after the block matching.
+DisparityFilter disparity_filter(const StereoParams& params) {
+  DisparityFilter f;
+  f.disp12_max_diff = params.disp12_max_diff;
+  f.speckle_size = params.speckle_size;
+  f.speckle_range = params.speckle_range;
+  return f;
+}
 
 class CudaBlockMatcher final : public BlockMatcher {
  public:
@@ -28,7 +38,13 @@ class CudaBlockMatcher final : public BlockMatcher {
     b.row_costs = row_costs_.reserve_for<int32_t>(volume);
     b.costs = costs_.reserve_for<int32_t>(volume);
     b.disparity = static_cast<int16_t*>(disparity_.reserve(s.rows, s.cols, CV_16SC1).data);
-    b.best_cost = static_cast<int32_t*>(best_cost_.reserve(s.rows, s.cols, CV_32SC1).data);
+    b.best_cost = best_cost_.reserve_for<int32_t>(pixels);
+    DisparityFilterBuffers f;
+    f.disparity = b.disparity;
+    f.best_cost = b.best_cost;
+    f.right_match = right_match_.reserve_for<unsigned long long>(pixels);
+    f.labels = labels_.reserve_for<int32_t>(pixels);
+    f.region_sizes = region_sizes_.reserve_for<int32_t>(pixels);
     {
       DeviceStage upload("upload", left.total() + right.total(), stream_);
       b.left = static_cast<const uint8_t*>(left_.upload(left, stream_.get()).data);
@@ -37,19 +53,18 @@ class CudaBlockMatcher final : public BlockMatcher {
     {
       DeviceStage compute("compute", 0, stream_);
       block_match(s, b, stream_.get());
+      filter_disparity(s, disparity_filter(params), f, stream_.get());
     }
     disparity16.create(s.rows, s.cols, CV_16SC1);
-    best_cost_on_host_.create(s.rows, s.cols, CV_32SC1);
-    download(stream_, {{disparity_, disparity16}, {best_cost_, best_cost_on_host_}});
-    filter_on_host(disparity16, best_cost_on_host_, params);
+    download(stream_, {{disparity_, disparity16}});
   }
 
  private:
   Stream stream_;
-  StagedImage left_, right_, disparity_, best_cost_;
+  StagedImage left_, right_, disparity_;
   Buffer filtered_left_{Memory::kDevice}, filtered_right_{Memory::kDevice};
-  Buffer row_costs_{Memory::kDevice}, costs_{Memory::kDevice};
-  cv::Mat best_cost_on_host_;
+  Buffer row_costs_{Memory::kDevice}, costs_{Memory::kDevice}, best_cost_{Memory::kDevice};
+  Buffer right_match_{Memory::kDevice}, labels_{Memory::kDevice}, region_sizes_{Memory::kDevice};
 };
 
 }  // namespace

@@ -1,0 +1,111 @@
+// The cuda backend's left-right check and speckle filter against filter_on_host (OpenCV's
+// cv::validateDisparity and cv::filterSpeckles) on the same disparity and costs: the same answer,
+// pixel for pixel. Built against the host emulation of the CUDA runtime on every machine, and
+// against CUDA where the toolkit is (there it needs a device, and shows the union-find's answer
+// under a GPU's real concurrency).
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "cuda/cuda_support.hpp"
+#include "robotperf/perception/cuda_device.hpp"
+#include "stereo_bm_device.hpp"
+
+namespace robotperf::perception {
+namespace {
+
+// A fixed-point disparity of sloping surfaces, with blobs of other values (speckles of many
+// sizes), holes of invalid pixels and noise; costs from a small range, so that matches tie.
+void make_disparity(uint32_t seed, cv::Mat& disparity, cv::Mat& cost, int invalid) {
+  std::mt19937 random(seed);
+  const int rows = disparity.rows, cols = disparity.cols;
+  for (int y = 0; y < rows; ++y)
+    for (int x = 0; x < cols; ++x)
+      disparity.at<int16_t>(y, x) = static_cast<int16_t>(16 * (8 + x / 24 + y / 40) + (x + y) % 3);
+  std::uniform_int_distribution<int> row(0, rows - 1), col(0, cols - 1), size(1, 14),
+      value(0, 63 * 16), small(0, 40);
+  for (int blob = 0; blob < 120; ++blob) {
+    const int y0 = row(random), x0 = col(random), h = size(random), w = size(random);
+    const int v = blob % 5 == 0 ? invalid : value(random);
+    for (int y = y0; y < std::min(rows, y0 + h); ++y)
+      for (int x = x0; x < std::min(cols, x0 + w); ++x)
+        disparity.at<int16_t>(y, x) = static_cast<int16_t>(v == invalid ? v : v + (x % 2));
+  }
+  for (int y = 0; y < rows; ++y)
+    for (int x = 0; x < cols; ++x) cost.at<int32_t>(y, x) = small(random);
+}
+
+cv::Mat on_device(const cv::Mat& disparity, const cv::Mat& cost, const BlockMatchingShape& shape,
+                  const cuda::DisparityFilter& filter) {
+  using cuda::Buffer;
+  using cuda::Memory;
+  const std::size_t pixels = disparity.total();
+  cuda::Stream stream;
+  Buffer d{Memory::kDevice}, c{Memory::kDevice}, match{Memory::kDevice}, labels{Memory::kDevice},
+      sizes{Memory::kDevice};
+  cuda::DisparityFilterBuffers b;
+  b.disparity = d.reserve_for<int16_t>(pixels);
+  b.best_cost = c.reserve_for<int32_t>(pixels);
+  b.right_match = match.reserve_for<unsigned long long>(pixels);
+  b.labels = labels.reserve_for<int32_t>(pixels);
+  b.region_sizes = sizes.reserve_for<int32_t>(pixels);
+  cuda::check(cudaMemcpyAsync(b.disparity, disparity.data, pixels * 2, cudaMemcpyHostToDevice,
+                              stream.get()),
+              "upload");
+  cuda::check(cudaMemcpyAsync(const_cast<int32_t*>(b.best_cost), cost.data, pixels * 4,
+                              cudaMemcpyHostToDevice, stream.get()),
+              "upload");
+  cuda::filter_disparity(shape, filter, b, stream.get());
+  cv::Mat out(disparity.size(), CV_16SC1);
+  cuda::check(
+      cudaMemcpyAsync(out.data, b.disparity, pixels * 2, cudaMemcpyDeviceToHost, stream.get()),
+      "download");
+  stream.synchronize();
+  return out;
+}
+
+TEST(DisparityFilterCuda, GivesOpenCvsLeftRightCheckAndSpeckleFilter) {
+  try {
+    cuda_device();
+  } catch (const std::invalid_argument& e) {
+    GTEST_SKIP() << e.what();
+  }
+  struct Case {
+    int disp12_max_diff, speckle_size, speckle_range;
+  };
+  for (const Case k :
+       {Case{1, 100, 4}, Case{0, 20, 16}, Case{-1, 100, 4}, Case{2, 0, 4}, Case{1, 400, 0}}) {
+    for (const uint32_t seed : {1u, 2u, 3u}) {
+      StereoParams params;
+      params.min_disparity = seed == 3 ? 4 : 0;
+      params.disparity_range = 64;
+      params.disp12_max_diff = k.disp12_max_diff;
+      params.speckle_size = k.speckle_size;
+      params.speckle_range = k.speckle_range;
+      const int invalid = (params.min_disparity - 1) * 16;
+      cv::Mat disparity(120, 200, CV_16SC1), cost(120, 200, CV_32SC1);
+      make_disparity(seed, disparity, cost, invalid);
+      cv::Mat expected = disparity.clone();
+      filter_on_host(expected, cost, params);
+      cuda::DisparityFilter filter;
+      filter.disp12_max_diff = k.disp12_max_diff;
+      filter.speckle_size = k.speckle_size;
+      filter.speckle_range = k.speckle_range;
+      const cv::Mat got = on_device(
+          disparity, cost, block_matching_shape(disparity.rows, disparity.cols, params), filter);
+      const std::string what = "disp12_max_diff " + std::to_string(k.disp12_max_diff) +
+                               ", speckles " + std::to_string(k.speckle_size) + "/" +
+                               std::to_string(k.speckle_range) + ", seed " + std::to_string(seed);
+      EXPECT_EQ(cv::countNonZero(got != expected), 0) << what;
+      // The case changed something, so that agreeing means something.
+      EXPECT_GT(cv::countNonZero(expected != disparity), 0) << what;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace robotperf::perception
