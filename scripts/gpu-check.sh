@@ -3,7 +3,7 @@
 # scripts/gpu-bundle.sh made (.gpu-bundle/bundle.tar.xz), without building or installing anything:
 #   1. the device: nvidia-smi and robotperf sysinfo;
 #   2. the cuda kernels against the cpu's on the same inputs (the kernel tests);
-#   3. robotperf run a1 .. a5 --backend cuda, end to end, results kept (results.tar.gz);
+#   3. robotperf run a1 .. a5 --backend cuda, end to end, results kept (results.tar);
 #   4. bench_backends: cpu against cuda (and opencl where the machine has a driver for it),
 #      p50 / p99, the upload / compute / download split and issue #19's targets;
 #   5. the CLI's cuda test (each benchmark's answers on the GPU, in one process and per node).
@@ -108,6 +108,6 @@ step bench_backends 300 ./bench/backends/bench_backends
 step cli 200 ./tests/cli/cli_test --gtest_filter='*Cuda*'
 # The results as one file: a lent machine hands back few files.
 if [[ -d "$out/results" ]]; then
-  tar -C "$out" -czf "$out/results.tar.gz" results && rm -rf "$out/results"
+  tar -C "$out" -cf "$out/results.tar" results && rm -rf "$out/results"
 fi
 echo "gpu-check: outputs in $out" | tee -a "$summary"
