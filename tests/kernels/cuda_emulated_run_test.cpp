@@ -7,9 +7,9 @@
 #include <unistd.h>
 
 #include <filesystem>
-#include <map>
 #include <string>
 
+#include "../tracing/device_hops.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/plugin/registry.hpp"
@@ -97,19 +97,7 @@ TEST(CudaEmulatedRun, GreyBoxShowsTheTransfersAndComputation) {
   std::filesystem::remove_all(o.trace_dir);
   ASSERT_TRUE(g.grey.has_value());
   expect_cpus_answers_on_the_emulation("a5 grey", g);
-  std::map<std::string, const tracing::Hop*> hops;
-  for (const auto& h : g.grey->hops) hops[h.label()] = &h;
-  ASSERT_TRUE(hops.contains("resize: image_proc/resize"));
-  double stages = 0;
-  for (const char* stage : {"upload", "compute", "download"}) {
-    const auto it = hops.find(std::string("resize: device ") + stage);
-    ASSERT_NE(it, hops.end()) << stage;
-    EXPECT_EQ(it->second->kind, "device");
-    EXPECT_EQ(it->second->duration.count, g.measured) << stage;
-    stages += it->second->duration.mean;
-  }
-  EXPECT_LE(stages, hops["resize: image_proc/resize"]->duration.mean)
-      << "the stages lie inside the kernel";
+  test_support::expect_device_stages_inside_kernel(g, "resize", "image_proc/resize");
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <set>
 
 #include "../command_line.hpp"
+#include "device_hops.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/perception/opencl_device.hpp"
 #include "robotperf/rmw/transport.hpp"
@@ -252,20 +253,7 @@ TEST_F(GreyRun, AKernelOnADeviceShowsItsTransfersAndComputation) {
   const RunResult g = run_benchmark(benchmark("a5"), grey(o, "a5-opencl.trace"));
   ASSERT_TRUE(g.grey.has_value());
   ASSERT_TRUE(g.valid) << reasons(g);
-  std::map<std::string, const tracing::Hop*> hops;
-  for (const auto& h : g.grey->hops) hops[h.label()] = &h;
-  ASSERT_TRUE(hops.contains("resize: image_proc/resize"));
-  const double kernel = hops["resize: image_proc/resize"]->duration.mean;
-  double stages = 0;
-  for (const char* stage : {"upload", "compute", "download"}) {
-    const auto it = hops.find(std::string("resize: device ") + stage);
-    ASSERT_NE(it, hops.end()) << stage;
-    EXPECT_EQ(it->second->kind, "device");
-    EXPECT_EQ(it->second->duration.count, g.measured) << stage;
-    EXPECT_GT(it->second->duration.mean, 0.0) << stage;
-    stages += it->second->duration.mean;
-  }
-  EXPECT_LE(stages, kernel) << "the stages lie inside the kernel";
+  robotperf::test_support::expect_device_stages_inside_kernel(g, "resize", "image_proc/resize");
 }
 
 TEST_F(GreyRun, TinySubbuffersUnderLoadAreReportedAndInvalid) {
