@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "cuda/cuda_support.hpp"
-#include "robotperf/perception/cuda_device.hpp"
+#include "cuda_test_support.hpp"
 #include "stereo_bm_device.hpp"
 
 namespace robotperf::perception {
@@ -40,7 +40,7 @@ void make_disparity(uint32_t seed, cv::Mat& disparity, cv::Mat& cost, int invali
 }
 
 cv::Mat on_device(const cv::Mat& disparity, const cv::Mat& cost, const BlockMatchingShape& shape,
-                  const cuda::DisparityFilter& filter) {
+                  const StereoParams& params) {
   using cuda::Buffer;
   using cuda::Memory;
   const std::size_t pixels = disparity.total();
@@ -49,17 +49,18 @@ cv::Mat on_device(const cv::Mat& disparity, const cv::Mat& cost, const BlockMatc
       sizes{Memory::kDevice};
   cuda::DisparityFilterBuffers b;
   b.disparity = d.reserve_for<int16_t>(pixels);
-  b.best_cost = c.reserve_for<int32_t>(pixels);
+  int32_t* cost_on_device = c.reserve_for<int32_t>(pixels);
+  b.best_cost = cost_on_device;
   b.right_match = match.reserve_for<unsigned long long>(pixels);
   b.labels = labels.reserve_for<int32_t>(pixels);
   b.region_sizes = sizes.reserve_for<int32_t>(pixels);
   cuda::check(cudaMemcpyAsync(b.disparity, disparity.data, pixels * 2, cudaMemcpyHostToDevice,
                               stream.get()),
               "upload");
-  cuda::check(cudaMemcpyAsync(const_cast<int32_t*>(b.best_cost), cost.data, pixels * 4,
-                              cudaMemcpyHostToDevice, stream.get()),
-              "upload");
-  cuda::filter_disparity(shape, filter, b, stream.get());
+  cuda::check(
+      cudaMemcpyAsync(cost_on_device, cost.data, pixels * 4, cudaMemcpyHostToDevice, stream.get()),
+      "upload");
+  cuda::filter_disparity(shape, cuda::disparity_filter(params), b, stream.get());
   cv::Mat out(disparity.size(), CV_16SC1);
   cuda::check(
       cudaMemcpyAsync(out.data, b.disparity, pixels * 2, cudaMemcpyDeviceToHost, stream.get()),
@@ -69,11 +70,7 @@ cv::Mat on_device(const cv::Mat& disparity, const cv::Mat& cost, const BlockMatc
 }
 
 TEST(DisparityFilterCuda, GivesOpenCvsLeftRightCheckAndSpeckleFilter) {
-  try {
-    cuda_device();
-  } catch (const std::invalid_argument& e) {
-    GTEST_SKIP() << e.what();
-  }
+  if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
   struct Case {
     int disp12_max_diff, speckle_size, speckle_range;
   };
@@ -91,12 +88,8 @@ TEST(DisparityFilterCuda, GivesOpenCvsLeftRightCheckAndSpeckleFilter) {
       make_disparity(seed, disparity, cost, invalid);
       cv::Mat expected = disparity.clone();
       filter_on_host(expected, cost, params);
-      cuda::DisparityFilter filter;
-      filter.disp12_max_diff = k.disp12_max_diff;
-      filter.speckle_size = k.speckle_size;
-      filter.speckle_range = k.speckle_range;
       const cv::Mat got = on_device(
-          disparity, cost, block_matching_shape(disparity.rows, disparity.cols, params), filter);
+          disparity, cost, block_matching_shape(disparity.rows, disparity.cols, params), params);
       const std::string what = "disp12_max_diff " + std::to_string(k.disp12_max_diff) +
                                ", speckles " + std::to_string(k.speckle_size) + "/" +
                                std::to_string(k.speckle_range) + ", seed " + std::to_string(seed);

@@ -51,7 +51,7 @@ class PointCloudMaker {
 
 // StereoBM (params.algorithm block matching, min_disparity >= 0) on a rectified mono8 pair: the
 // fixed-point disparity (1/16 px, filtered pixels (min_disparity - 1) * 16) into `disparity16`,
-// the left-right check and the speckle filter on the host after the download.
+// after the left-right check and the speckle filter, all on the device.
 class BlockMatcher {
  public:
   virtual ~BlockMatcher() = default;

@@ -13,15 +13,6 @@
 namespace robotperf::perception::cuda {
 namespace {
 
-// The node's StereoBM parameters for the steps after the block matching.
-DisparityFilter disparity_filter(const StereoParams& params) {
-  DisparityFilter f;
-  f.disp12_max_diff = params.disp12_max_diff;
-  f.speckle_size = params.speckle_size;
-  f.speckle_range = params.speckle_range;
-  return f;
-}
-
 class CudaBlockMatcher final : public BlockMatcher {
  public:
   void compute(const cv::Mat& left, const cv::Mat& right, const StereoParams& params,
@@ -68,6 +59,14 @@ class CudaBlockMatcher final : public BlockMatcher {
 };
 
 }  // namespace
+
+DisparityFilter disparity_filter(const StereoParams& params) {
+  DisparityFilter f;
+  f.disp12_max_diff = params.disp12_max_diff;
+  f.speckle_size = params.speckle_size;
+  f.speckle_range = params.speckle_range;
+  return f;
+}
 
 std::unique_ptr<BlockMatcher> make_block_matcher() {
   cuda_device();

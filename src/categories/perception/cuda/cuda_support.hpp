@@ -11,6 +11,7 @@
 #include "../device_stage.hpp"
 #include "cuda_check.hpp"
 #include "cuda_kernels.hpp"
+#include "robotperf/perception/stereo_image_proc.hpp"
 
 namespace robotperf::perception::cuda {
 
@@ -90,6 +91,9 @@ struct Download {
 // A message's "download" stage: queues each download on `stream`, waits for it, and copies each
 // into its output.
 void download(Stream& stream, std::initializer_list<Download> downloads);
+
+// The StereoBM parameters of the steps after the block matching (filter_disparity).
+DisparityFilter disparity_filter(const StereoParams& params);
 
 // The kernels' depth for an OpenCV type: 8U, 16U or 32F with 1 to 4 channels; otherwise throws
 // std::invalid_argument naming `what`.
