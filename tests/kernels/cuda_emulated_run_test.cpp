@@ -64,10 +64,10 @@ void expect_cpus_answers_on_the_emulation(const std::string& what, const harness
 
 TEST(CudaEmulatedRun, ImageBenchmarksGiveTheCpusAnswers) {
   for (const std::string id : {"a1", "a2", "a4", "a5"}) {
-    // A rate the emulation keeps up with on a busy two-core machine.
+    // A rate the emulation keeps up with on a busy two-core machine, sanitizers included.
     harness::RunOptions o;
     o.count = 40;
-    o.rate_hz = 10;
+    o.rate_hz = 5;
     expect_cpus_answers_on_the_emulation(id, run_on_cuda(id, o));
   }
 }
@@ -89,7 +89,7 @@ TEST(CudaEmulatedRun, GreyBoxShowsTheTransfersAndComputation) {
   if (!tracing::lttng_available(&why)) GTEST_SKIP() << why;
   harness::RunOptions o;
   o.count = 35;
-  o.rate_hz = 10;
+  o.rate_hz = 5;  // as the image benchmarks above
   o.mode = harness::RunMode::kGrey;
   o.trace_dir = std::filesystem::temp_directory_path() /
                 ("cuda-emulated-a5-" + std::to_string(getpid()) + ".trace");
