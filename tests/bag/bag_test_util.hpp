@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "../shared_data.hpp"
 #include "robotperf/bag/bag.hpp"
 
 namespace robotperf::bag::testing {
@@ -16,7 +17,7 @@ namespace robotperf::bag::testing {
 namespace fs = std::filesystem;
 
 inline fs::path reference_bag(const std::string& name) {
-  return fs::path(ROBOTPERF_SHARED_DATA_DIR) / "rosbag2" / name;
+  return shared_data("rosbag2/" + name);
 }
 
 // A fresh directory per test, removed afterwards.

@@ -3,6 +3,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "../shared_data.hpp"
 #include "bag_test_util.hpp"
 #include "robotperf/msgs/cdr.hpp"
 #include "robotperf/msgs/definitions.hpp"
@@ -178,7 +179,7 @@ TEST(DynamicCodec, TalkerStringsAndLogs) {
 
 TEST(DynamicCodec, SharedMsgFolderMatchesTheTypedCodec) {
   dyn::TypeRegistry registry;
-  EXPECT_GT(registry.add_directory(fs::path(ROBOTPERF_SHARED_DATA_DIR) / "msg"), 100u);
+  EXPECT_GT(registry.add_directory(shared_data("msg")), 100u);
   msgs::CameraInfo info;
   info.header.stamp.sec = 7;
   info.header.frame_id = "camera";

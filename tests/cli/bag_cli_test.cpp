@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "../command_line.hpp"
+#include "../shared_data.hpp"
 #include "robotperf/bag/bag.hpp"
 
 namespace {
@@ -20,7 +21,10 @@ namespace fs = std::filesystem;
 using robotperf::test_support::Outcome;
 using robotperf::test_support::robotperf_cli;
 
-const std::string kSharedBags = std::string(ROBOTPERF_SHARED_DATA_DIR) + "/rosbag2/";
+// A bag of ROS 2's own, in the shared data folder.
+std::string shared_bag(const std::string& name) {
+  return shared_data("rosbag2/" + name).string();
+}
 // ros2-test-interface-files: test_msgs' .msg files in one flat folder named "msg".
 const std::string kTestMsgs = "/usr/share/test_interface_files/msg";
 
@@ -40,7 +44,7 @@ class BagCli : public ::testing::Test {
   // ROS 2's sqlite3 test bag as Humble writes it: schema 3, no message_definitions table.
   std::string humble_bag() const {
     const fs::path copy = dir_ / "humble.db3";
-    for (const auto& e : fs::directory_iterator(kSharedBags + "sqlite3_cdr_test")) {
+    for (const auto& e : fs::directory_iterator(shared_bag("sqlite3_cdr_test"))) {
       if (e.path().extension() == ".db3") fs::copy_file(e.path(), copy);
     }
     sqlite3* db = nullptr;
@@ -76,7 +80,7 @@ class BagCli : public ::testing::Test {
 
 TEST_F(BagCli, ConversionKeepsDefinitionsBothWays) {
   // MCAP -> sqlite3 -> MCAP: every type still decodes from the bag alone at each step.
-  ASSERT_EQ(robotperf_cli("bag convert " + kSharedBags + "mcap_talker " + path("db") +
+  ASSERT_EQ(robotperf_cli("bag convert " + shared_bag("mcap_talker") + " " + path("db") +
                           " --storage sqlite3")
                 .exit_code,
             0);
@@ -153,7 +157,7 @@ TEST_F(BagCli, ServiceEventTopicsDecode) {
 // A split bag that lost its metadata.yaml: reindex writes it again from the storage files, in
 // the order of their split index, and will not overwrite one that exists.
 TEST_F(BagCli, ReindexRestoresASplitBagsMetadata) {
-  ASSERT_EQ(robotperf_cli("bag convert " + kSharedBags + "mcap_talker " + path("split") +
+  ASSERT_EQ(robotperf_cli("bag convert " + shared_bag("mcap_talker") + " " + path("split") +
                           " --max-file-size 0.001")
                 .exit_code,
             0);

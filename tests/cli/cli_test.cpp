@@ -13,6 +13,7 @@
 #include <tuple>
 
 #include "../command_line.hpp"
+#include "../shared_data.hpp"
 #include "robotperf/rmw/transport.hpp"
 
 namespace {
@@ -601,10 +602,13 @@ TEST_F(Cli, SysinfoShowsMachineSoftwareAndPowerSources) {
 
 namespace {
 
-const std::string kSharedBags = std::string(ROBOTPERF_SHARED_DATA_DIR) + "/rosbag2/";
+// A bag of ROS 2's own, in the shared data folder.
+std::string shared_bag(const std::string& name) {
+  return shared_data("rosbag2/" + name).string();
+}
 
 TEST_F(Cli, BagInfoLikeRos2BagInfo) {
-  const Outcome o = robotperf_cli("bag info " + kSharedBags + "sqlite3_cdr_test");
+  const Outcome o = robotperf_cli("bag info " + shared_bag("sqlite3_cdr_test"));
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("Storage id:        sqlite3"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("Messages:          7"), std::string::npos) << o.out;
@@ -614,7 +618,7 @@ TEST_F(Cli, BagInfoLikeRos2BagInfo) {
 }
 
 TEST_F(Cli, BagEchoAndConvert) {
-  Outcome o = robotperf_cli("bag echo " + kSharedBags + "mcap_talker --topic /topic --limit 4");
+  Outcome o = robotperf_cli("bag echo " + shared_bag("mcap_talker") + " --topic /topic --limit 4");
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("--- /topic [std_msgs/msg/String] at 1585866236.613084249\n"
                        "data: 'Hello, world! 3'\n"),
@@ -622,7 +626,7 @@ TEST_F(Cli, BagEchoAndConvert) {
       << o.out;
   EXPECT_EQ(o.out.find("Hello, world! 4"), std::string::npos) << "--limit 4 printed more";
 
-  o = robotperf_cli("bag convert " + kSharedBags + "mcap_talker " + (out_ / "db").string() +
+  o = robotperf_cli("bag convert " + shared_bag("mcap_talker") + " " + (out_ / "db").string() +
                     " --storage sqlite3");
   ASSERT_EQ(o.exit_code, 0) << o.out;
   o = robotperf_cli("bag echo " + (out_ / "db").string() + " --topic /topic");
@@ -655,7 +659,7 @@ TEST_F(Cli, BadBagIsOneClearLine) {
   for (const std::string& args : std::vector<std::string>{
            "bag info " + out_.string(), "bag echo " + (out_ / "missing").string(),
            "dataset generate no/such",
-           "bag convert " + kSharedBags + "mcap_talker " + (out_ / "x").string() +
+           "bag convert " + shared_bag("mcap_talker") + " " + (out_ / "x").string() +
                " --compression brotli"}) {
     const Outcome o = robotperf_cli(args);
     EXPECT_EQ(o.exit_code, 2) << args << ": " << o.out;

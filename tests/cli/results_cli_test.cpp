@@ -12,13 +12,17 @@
 #include <string>
 
 #include "../command_line.hpp"
+#include "../shared_data.hpp"
 #include "robotperf/rmw/transport.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kPublished = fs::path(ROBOTPERF_SHARED_DATA_DIR) / "robotperf/perception";
+// The published RobotPerf perception results.
+fs::path published() {
+  return shared_data("robotperf/perception");
+}
 
 using robotperf::test_support::Outcome;
 using robotperf::test_support::robotperf_cli;
@@ -93,7 +97,7 @@ TEST_F(ResultsCli, ListAsJsonAndCsvForPrograms) {
   EXPECT_EQ(count(header, ","), count(first, ",")) << header << "\n" << first;
 
   ASSERT_EQ(
-      robotperf_cli("results import " + (kPublished / "a5_resize").string() + " --into " + folder)
+      robotperf_cli("results import " + (published() / "a5_resize").string() + " --into " + folder)
           .exit_code,
       0);
   const auto with_published = robotperf_cli("results list " + folder);
@@ -116,7 +120,7 @@ TEST_F(ResultsCli, ExportToAFileOrStandardOutputAndMergeOnlyItsOwnBenchmark) {
 
   const fs::path copy = dir_ / "a5-only" / "benchmark.yaml";
   fs::create_directories(copy.parent_path());
-  fs::copy_file(kPublished / "a5_resize/benchmark.yaml", copy,
+  fs::copy_file(published() / "a5_resize/benchmark.yaml", copy,
                 fs::copy_options::overwrite_existing);
   const std::string before = read_text(copy);
   const auto refused = robotperf_cli("results export --merge " + copy.string() + " " + folder);
@@ -128,7 +132,7 @@ TEST_F(ResultsCli, ExportToAFileOrStandardOutputAndMergeOnlyItsOwnBenchmark) {
 
 TEST_F(ResultsCli, CompareInTheTerminal) {
   const std::string inputs = "--results " + (dir_ / "results").string() + " --results " +
-                             (kPublished / "a5_resize/benchmark.yaml").string();
+                             (published() / "a5_resize/benchmark.yaml").string();
   const auto o = robotperf_cli("compare a5-intra \"hardware=Intel i7-8700K,mode=black\" " + inputs);
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("A = a5-intra"), std::string::npos) << o.out;
@@ -154,7 +158,7 @@ TEST_F(ResultsCli, ExportMergeImportRoundTrip) {
   // Merge into a copy of the published a5 file: existing bytes kept, new rows imported.
   const fs::path copy = dir_ / "a5" / "benchmark.yaml";
   fs::create_directories(copy.parent_path());
-  fs::copy_file(kPublished / "a5_resize/benchmark.yaml", copy,
+  fs::copy_file(published() / "a5_resize/benchmark.yaml", copy,
                 fs::copy_options::overwrite_existing);
   const std::string before = read_text(copy);
   const auto merge = robotperf_cli("results export --merge " + copy.string() + " " +
@@ -177,7 +181,7 @@ TEST_F(ResultsCli, ExportMergeImportRoundTrip) {
 }
 
 TEST_F(ResultsCli, ImportFlagsThePublishedA1Rows) {
-  const auto o = robotperf_cli("results import " + (kPublished / "a1_perception_2nodes").string());
+  const auto o = robotperf_cli("results import " + (published() / "a1_perception_2nodes").string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("negative min latency"), std::string::npos);
   EXPECT_NE(o.out.find("is above 100 %"), std::string::npos);
@@ -190,8 +194,8 @@ TEST_F(ResultsCli, ImportFlagsThePublishedA1Rows) {
 // RobotPerf's b1-b3 rows ("not valid at the moment, just a placeholder") import, and a report
 // draws them beside a local b3 run.
 TEST_F(ResultsCli, PublishedLocalizationRowsPlotBesideALocalRun) {
-  const fs::path published = kPublished.parent_path() / "localization";
-  auto o = robotperf_cli("results import " + published.string());
+  const fs::path localization = shared_data("robotperf/localization");
+  auto o = robotperf_cli("results import " + localization.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   for (const char* name : {"b1_visual_slam", "b2_map_localization", "b3_apriltag_detection"})
     EXPECT_NE(o.out.find(name), std::string::npos) << o.out;
@@ -200,8 +204,8 @@ TEST_F(ResultsCli, PublishedLocalizationRowsPlotBesideALocalRun) {
   ASSERT_EQ(o.exit_code, 0) << o.out;
   const fs::path html = dir_ / "b3.html";
   o = robotperf_cli("report " + out.string() + " " +
-                    (published / "b3_apriltag_detection" / "benchmark.yaml").string() + " --html " +
-                    html.string());
+                    (localization / "b3_apriltag_detection" / "benchmark.yaml").string() +
+                    " --html " + html.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   const std::string page = read_text(html);
   EXPECT_NE(page.find("NVIDIA AGX Orin Dev. Kit (ROBOTCORE® Perception) (RobotPerf)"),
@@ -219,7 +223,7 @@ TEST_F(ResultsCli, ReportNeedsAnOutputAndExistingInputs) {
 // `--md -` is standard output, and a device path (/dev/stdout, a pipe) is written through: the
 // report alone on stdout, no file named "-", no link replaced.
 TEST_F(ResultsCli, ReportGoesToStandardOutputOrThroughADevice) {
-  const std::string inputs = (dir_ / "results").string() + " " + kPublished.string();
+  const std::string inputs = (dir_ / "results").string() + " " + published().string();
   const auto dash = shell(std::string("{ ") + ROBOTPERF_EXECUTABLE + " report " + inputs +
                           " --md - 2>/dev/null; }");
   ASSERT_EQ(dash.exit_code, 0) << dash.out;
@@ -239,7 +243,7 @@ TEST_F(ResultsCli, ReportRendersInHeadlessChromium) {
   ASSERT_EQ(which.exit_code, 0) << "chromium is not installed: run scripts/install-deps.sh";
   const fs::path html = dir_ / "report.html";
   const auto o =
-      robotperf_cli("report " + (dir_ / "results").string() + " " + kPublished.string() +
+      robotperf_cli("report " + (dir_ / "results").string() + " " + published().string() +
                     " --html " + html.string() + " --md " + (dir_ / "report.md").string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
 
@@ -339,7 +343,7 @@ TEST_F(ResultsCli, MixedReportLabelsNeitherOverlapNorClipInChromium) {
     ASSERT_TRUE(o.exit_code == 0 || (o.exit_code == 3 && args.ends_with("8")))
         << args << ": " << o.out;
   }
-  const fs::path shared = fs::path(ROBOTPERF_SHARED_DATA_DIR) / "robotperf";
+  const fs::path shared = shared_data("robotperf");
   ASSERT_EQ(robotperf_cli("results import " + (shared / "perception").string() + " " +
                           (shared / "control").string() + " --into " + mixed.string())
                 .exit_code,

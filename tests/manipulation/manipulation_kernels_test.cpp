@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 
+#include "../shared_data.hpp"
 #include "robotperf/manipulation/collision.hpp"
 #include "robotperf/manipulation/kinematics.hpp"
 #include "robotperf/manipulation/planning.hpp"
@@ -24,8 +25,7 @@ std::vector<double> random_state(std::mt19937_64& rng) {
 }
 
 TEST(RobotModel, MatchesThePublishedXarm6Description) {
-  const YAML::Node yaml =
-      YAML::LoadFile(std::string(ROBOTPERF_SHARED_DATA_DIR) + "/xarm6/xarm6_kinematics.yaml");
+  const YAML::Node yaml = YAML::LoadFile(shared_data("xarm6/xarm6_kinematics.yaml").string());
   ASSERT_EQ(arm().dof(), 6u);
   EXPECT_EQ(arm().links().size(), 7u);
   EXPECT_EQ(arm().tip_link(), "link6");

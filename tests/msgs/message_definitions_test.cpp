@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 
+#include "../shared_data.hpp"
 #include "robotperf/msgs/cdr.hpp"
 #include "robotperf/msgs/definitions.hpp"
 #include "robotperf/msgs/dynamic.hpp"
@@ -15,8 +16,6 @@ namespace robotperf::msgs {
 namespace {
 
 namespace dyn = dynamic;
-
-const std::filesystem::path kMsgDir = std::filesystem::path(ROBOTPERF_SHARED_DATA_DIR) / "msg";
 
 // Fills every field with a value that differs from its neighbours and from the
 // default, and every sequence with two elements, so that a field out of order
@@ -52,8 +51,8 @@ bool is_robotperf_own(std::string_view type) {
 
 dyn::TypeRegistry shared_registry() {
   dyn::TypeRegistry registry;
-  EXPECT_GT(registry.add_directory(kMsgDir), 100u)
-      << "expected the ROS 2 .msg files in " << kMsgDir;
+  EXPECT_GT(registry.add_directory(shared_data("msg")), 100u)
+      << "expected the ROS 2 .msg files in " << shared_data("msg");
   return registry;
 }
 

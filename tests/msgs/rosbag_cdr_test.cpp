@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "../shared_data.hpp"
 #include "robotperf/msgs/cdr.hpp"
 #include "test_msgs_types.hpp"
 
@@ -40,8 +41,7 @@ struct BagMessage {
 };
 
 std::filesystem::path BagPath() {
-  return std::filesystem::path(ROBOTPERF_SHARED_DATA_DIR) / "rosbag2" / "sqlite3_cdr_test" /
-         "cdr_test_0.db3";
+  return shared_data("rosbag2/sqlite3_cdr_test/cdr_test_0.db3");
 }
 
 // Reads every message of the bag, in id order, with its topic. Fails the test
@@ -49,12 +49,6 @@ std::filesystem::path BagPath() {
 std::vector<BagMessage> ReadBag() {
   const std::filesystem::path path = BagPath();
   std::vector<BagMessage> out;
-  if (!std::filesystem::exists(path)) {
-    ADD_FAILURE() << "reference bag not found at " << path
-                  << " (expected the shared reference data beside the repository, "
-                     "../shared/data)";
-    return out;
-  }
   sqlite3* db = nullptr;
   if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
     ADD_FAILURE() << "cannot open " << path << ": " << sqlite3_errmsg(db);

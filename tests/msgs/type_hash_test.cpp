@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 
+#include "../shared_data.hpp"
 #include "robotperf/msgs/definitions.hpp"
 
 namespace robotperf::msgs {
@@ -14,11 +15,9 @@ namespace {
 
 namespace dyn = dynamic;
 
-const std::filesystem::path kMsgDir = std::filesystem::path(ROBOTPERF_SHARED_DATA_DIR) / "msg";
-
 dyn::TypeRegistry ros2_registry() {
   dyn::TypeRegistry registry;
-  registry.add_directory(kMsgDir);
+  registry.add_directory(shared_data("msg"));
   // ServiceEventInfo (service_msgs) is not among the shared files; its text as ROS 2 has it.
   registry.add_msg("service_msgs/msg/ServiceEventInfo",
                    "uint8 REQUEST_SENT = 0\nuint8 event_type\nbuiltin_interfaces/Time stamp\n"

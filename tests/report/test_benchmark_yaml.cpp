@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "../shared_data.hpp"
 #include "robotperf/report/benchmark_yaml.hpp"
 #include "sample_runs.hpp"
 
@@ -13,8 +14,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kPublished = fs::path(ROBOTPERF_SHARED_DATA_DIR) / "robotperf";
-const fs::path kPublishedA1 = kPublished / "perception/a1_perception_2nodes/benchmark.yaml";
+// The published RobotPerf results, and a1's among them.
+fs::path published() {
+  return shared_data("robotperf");
+}
+fs::path published_a1() {
+  return shared_data("robotperf/perception/a1_perception_2nodes/benchmark.yaml");
+}
 
 std::string read_text(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -51,8 +57,8 @@ class BenchmarkYaml : public ::testing::Test {
 };
 
 TEST_F(BenchmarkYaml, ImportsEveryPublishedA1ResultAndFlagsTheDefectiveRows) {
-  const auto b = import_benchmark_yaml(kPublishedA1);
-  const std::string text = read_text(kPublishedA1);
+  const auto b = import_benchmark_yaml(published_a1());
+  const std::string text = read_text(published_a1());
   std::size_t entries_in_text = 0;
   for (std::size_t at = 0; (at = text.find("\n- result:", at)) != std::string::npos; ++at)
     ++entries_in_text;
@@ -126,7 +132,7 @@ TEST_F(BenchmarkYaml, ImportsEveryPublishedA1ResultAndFlagsTheDefectiveRows) {
 
 TEST_F(BenchmarkYaml, ImportsEveryPublishedFile) {
   std::size_t files = 0;
-  for (const auto& e : fs::recursive_directory_iterator(kPublished)) {
+  for (const auto& e : fs::recursive_directory_iterator(published())) {
     if (e.path().filename() != "benchmark.yaml") continue;
     ++files;
     EXPECT_NO_THROW(import_benchmark_yaml(e.path())) << e.path();
@@ -155,7 +161,7 @@ TEST_F(BenchmarkYaml, PowerBelowOneMilliwattIsFlagged) {
 // a1's file writes one platform both as "...(ROBOTCORE\xAE Perception)" in double quotes (YAML
 // reads ®) and as a plain scalar (YAML keeps the four characters): both are the one platform.
 TEST_F(BenchmarkYaml, HardwareNamesLoseTheirEscapes) {
-  const auto b = import_benchmark_yaml(kPublishedA1);
+  const auto b = import_benchmark_yaml(published_a1());
   std::size_t robotcore_12700h = 0;
   for (const auto& r : b.results) {
     EXPECT_EQ(r.hardware.find("\\x"), std::string::npos) << "line " << r.line << ": " << r.hardware;
@@ -270,8 +276,8 @@ void expect_round_trip(const std::string& original, const std::vector<PublishedR
 }
 
 TEST_F(BenchmarkYaml, RoundTripIntoThePublishedA1File) {
-  const std::string original = read_text(kPublishedA1);
-  const auto before = import_benchmark_yaml(kPublishedA1);
+  const std::string original = read_text(published_a1());
+  const auto before = import_benchmark_yaml(published_a1());
   const auto entries = sample_entries();
   const fs::path file = dir_ / "a1" / "benchmark.yaml";
   expect_round_trip(original, entries, file, 0);
@@ -306,7 +312,7 @@ TEST_F(BenchmarkYaml, RoundTripIntoAnEmptyPackageFile) {
 }
 
 TEST_F(BenchmarkYaml, RoundTripKeepsTheTemplatesIndentation) {
-  const std::string original = read_text(kPublished / "TEMPLATE.yaml");
+  const std::string original = read_text(published() / "TEMPLATE.yaml");
   auto entries = sample_entries();
   entries[0].hardware = "Hardware with \"quotes\": and a colon";
   entries[0].note = "line one\nline two, 100 % \\ backslash, ROBOTCORE\xC2\xAE";
@@ -358,7 +364,7 @@ TEST_F(BenchmarkYaml, ScalarsReadBackExactly) {
 }
 
 TEST_F(BenchmarkYaml, ImportedFilesRoundTripAsJson) {
-  const auto b = import_benchmark_yaml(kPublishedA1);
+  const auto b = import_benchmark_yaml(published_a1());
   const auto back = published_from_json(to_json(b), "x.json");
   ASSERT_EQ(back.results.size(), b.results.size());
   for (std::size_t i = 0; i < b.results.size(); ++i) {

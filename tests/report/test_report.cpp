@@ -5,6 +5,7 @@
 #include <fstream>
 #include <regex>
 
+#include "../shared_data.hpp"
 #include "robotperf/report/histogram.hpp"
 #include "robotperf/report/readme.hpp"
 #include "robotperf/report/report.hpp"
@@ -16,8 +17,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kPublishedA1 = fs::path(ROBOTPERF_SHARED_DATA_DIR) /
-                              "robotperf/perception/a1_perception_2nodes/benchmark.yaml";
+fs::path published_a1() {
+  return shared_data("robotperf/perception/a1_perception_2nodes/benchmark.yaml");
+}
 
 std::size_t count(const std::string& text, const std::string& what) {
   std::size_t n = 0;
@@ -122,7 +124,7 @@ TEST_F(Report, ResultsJsonCarriesTheHistogram) {
 
 TEST_F(Report, HtmlHasRadarsTablesDistributionsAndComparison) {
   write_two_machines(10.0, 10.2);
-  ReportInput input = load_report_inputs({dir_, kPublishedA1});
+  ReportInput input = load_report_inputs({dir_, published_a1()});
   ASSERT_EQ(input.runs.size(), 4u);
   ASSERT_EQ(input.published.size(), 1u);
   ReportOptions options;
@@ -368,7 +370,7 @@ TEST_F(Report, SingleValuesAreNeverDrawnAsTheWorst) {
 TEST_F(Report, PublishedRowsAreMatchedOnTheirStatedRate) {
   testing::SampleRun run;
   testing::write_sample(dir_, run);
-  const auto input = load_report_inputs({dir_, kPublishedA1});
+  const auto input = load_report_inputs({dir_, published_a1()});
   const std::string md = render_markdown(input, {});
   EXPECT_NE(md.find("Not alike: a1: the published rows state 30 Hz, 30-300 Hz sweep, 30-500 Hz "
                     "sweep, the local runs ran at 30 Hz (--compare rate=HZ picks one)"),
@@ -508,7 +510,7 @@ TEST_F(Report, UnalikeLocalAndPublishedValuesAreNamedBesideThePlot) {
   testing::SampleRun fast;
   fast.base_latency_ms = 0.01;
   testing::write_sample(dir_, fast);
-  const std::string md = render_markdown(load_report_inputs({dir_, kPublishedA1}), {});
+  const std::string md = render_markdown(load_report_inputs({dir_, published_a1()}), {});
   EXPECT_NE(md.find("Not alike: a1: the published rows are black/grey-box measurements, the "
                     "local runs black-box"),
             std::string::npos)
@@ -677,7 +679,7 @@ TEST_F(Report, ReadmeIsStableAndMatchesTheCommittedOnes) {
   }
   // With results: tables per metric, flagged rows marked.
   fs::create_directories(dir_ / "pkg");
-  fs::copy_file(kPublishedA1, dir_ / "pkg" / "benchmark.yaml");
+  fs::copy_file(published_a1(), dir_ / "pkg" / "benchmark.yaml");
   const std::string readme = render_package_readme(dir_ / "pkg");
   EXPECT_EQ(readme, render_package_readme(dir_ / "pkg"));
   EXPECT_NE(readme.find("### Latency"), std::string::npos);

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "../shared_data.hpp"
 #include "fastdds_raw_bytes_type.hpp"
 #include "robotperf/msgs/dynamic.hpp"
 #include "transport_test_util.hpp"
@@ -38,8 +39,6 @@ namespace dyn = msgs::dynamic;
 using eprosima::fastrtps::types::ReturnCode_t;
 using namespace testing;
 
-const std::filesystem::path kRmwDdsCommon =
-    std::filesystem::path(ROBOTPERF_SHARED_DATA_DIR) / "msg" / "rmw_dds_common";
 constexpr const char* kImageHash =
     "RIHS01_d31d41a9a4c4bc8eae9be757b0beed306564f7526c88ea6a4588fb9582527d47";
 
@@ -52,13 +51,14 @@ std::string read_text(const std::filesystem::path& file) {
 
 // rmw_dds_common's three types from its .msg files, with Humble's or Iron's Gid.
 dyn::TypeRegistry rmw_dds_common_types(RosDistro distro) {
+  const std::filesystem::path files = shared_data("msg/rmw_dds_common");
   dyn::TypeRegistry registry;
   registry.add_msg("rmw_dds_common/msg/Gid",
-                   read_text(distro == RosDistro::kHumble ? kRmwDdsCommon / "humble" / "Gid.msg"
-                                                          : kRmwDdsCommon / "msg" / "Gid.msg"));
+                   read_text(distro == RosDistro::kHumble ? files / "humble" / "Gid.msg"
+                                                          : files / "msg" / "Gid.msg"));
   for (const char* type : {"NodeEntitiesInfo", "ParticipantEntitiesInfo"}) {
     registry.add_msg(std::string("rmw_dds_common/msg/") + type,
-                     read_text(kRmwDdsCommon / "msg" / (std::string(type) + ".msg")));
+                     read_text(files / "msg" / (std::string(type) + ".msg")));
   }
   return registry;
 }
