@@ -4,7 +4,8 @@
 // benchmark's functional checks, and where a device backend's time goes: upload, compute and
 // download per message (mean ms, summed over the graph's nodes on the device), from a second,
 // grey-box run in which each stage waits for its device (LTTng; the latency comes from the
-// first run, which does not wait).
+// first run, which does not wait). With a CUDA device it first prints the floor under those
+// stages: the same bytes moved with no kernel (perception::cuda_transfer_floor).
 // Run on demand: ./build/bench/backends/bench_backends [--count N] [a1 a2 a3 a4 a5]
 // a3 is in the default list only where a CUDA device is: on a CPU OpenCL device (pocl) its block
 // matcher takes about 150 ms a pair and cannot keep up with a3's 30 Hz, so the figure would be
@@ -88,6 +89,36 @@ std::optional<StageSplit> split(const harness::BenchmarkSpec& spec, const std::s
   }
 }
 
+// The floor under the cuda rows' upload and download: the same bytes moved with no kernel, at
+// the sizes the benchmarks move (a 640x480 mono8 image, an rgb8 one, and a1's 2x upscale of it).
+void print_cuda_transfer_floor() {
+  constexpr int kRepetitions = 100;
+  std::printf(
+      "cuda transfer floor, no kernel (median of %d; microseconds up / down): the DMA alone from "
+      "page-locked memory; staged, the backend's way (the host copy into page-locked memory and "
+      "the DMA); pageable, the driver staging it\n",
+      kRepetitions);
+  std::printf("%10s  %21s  %21s  %21s  %s\n", "bytes", "pinned DMA", "staged (backend)", "pageable",
+              "DMA GB/s up / down");
+  for (const std::size_t bytes : {307200u, 921600u, 3686400u}) {
+    const perception::CudaTransferFloor f = perception::cuda_transfer_floor(bytes, kRepetitions);
+    const auto cell = [](double up, double down) {
+      char text[48];
+      std::snprintf(text, sizeof text, "%9.1f / %9.1f", up, down);
+      return std::string(text);
+    };
+    std::printf("%10zu  %21s  %21s  %21s  %.1f / %.1f\n", bytes,
+                cell(f.pinned_upload_us, f.pinned_download_us).c_str(),
+                cell(f.staged_upload_us, f.staged_download_us).c_str(),
+                cell(f.pageable_upload_us, f.pageable_download_us).c_str(),
+                static_cast<double>(bytes) / f.pinned_upload_us / 1e3,
+                static_cast<double>(bytes) / f.pinned_download_us / 1e3);
+  }
+  std::printf(
+      "per a1 message the cuda backend moves 921600 bytes up and down (rectify), then 921600 up "
+      "and 3686400 down (resize)\n");
+}
+
 // Issue #19's target for the cuda backend of `id`, and whether `m` meets it; empty when none.
 std::string target(const std::string& id, const Measured& cpu, const Measured& m) {
   const std::map<std::string, double> speedup = {{"a1", 3}, {"a2", 3}, {"a3", 10}, {"a5", 3}};
@@ -137,6 +168,14 @@ int main(int argc, char** argv) {
     cuda = true;
   } catch (const std::exception& e) {
     std::printf("cuda: %s\n", e.what());
+  }
+  if (cuda) {
+    try {
+      print_cuda_transfer_floor();
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "bench_backends: %s\n", e.what());
+      return 2;
+    }
   }
   if (ids.empty()) {
     ids = {"a1", "a2", "a4", "a5"};

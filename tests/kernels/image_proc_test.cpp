@@ -745,6 +745,22 @@ TEST(ImageBackend, CudaWithoutItsBuildOrDeviceIsOneLine) {
       "the cuda backend's device");
   expect_cuda_missing_line([] { Rectifier(cv::INTER_LINEAR, ImageBackend::kCuda); }, "Rectifier");
   expect_cuda_missing_line([] { Resizer(ResizeParams{}, ImageBackend::kCuda); }, "Resizer");
+  expect_cuda_missing_line([] { cuda_transfer_floor(1024, 1); }, "cuda_transfer_floor");
+}
+
+// bench_backends' floor under the cuda rows: each way moves the bytes there and back (it checks
+// that itself, and throws), and each takes some time. On the emulation a download that read
+// before its wait, or a way that moved nothing, would bring other bytes back.
+TEST(CudaTransferFloor, EachWayMovesTheBytesThereAndBack) {
+  if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
+  const CudaTransferFloor f = cuda_transfer_floor(640 * 480 * 3, 3);
+  EXPECT_EQ(f.bytes, 640u * 480u * 3u);
+  EXPECT_EQ(f.repetitions, 3);
+  for (const double us : {f.pinned_upload_us, f.pinned_download_us, f.staged_upload_us,
+                          f.staged_download_us, f.pageable_upload_us, f.pageable_download_us})
+    EXPECT_GT(us, 0.0);
+  EXPECT_THROW(cuda_transfer_floor(0, 3), std::invalid_argument);
+  EXPECT_THROW(cuda_transfer_floor(1024, 0), std::invalid_argument);
 }
 
 TEST(ImageBackend, NamesAreCpuOpenclAndCuda) {

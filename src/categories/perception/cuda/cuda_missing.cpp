@@ -26,6 +26,10 @@ const plugin::DeviceInfo& cuda_device() {
   not_built();
 }
 
+CudaTransferFloor cuda_transfer_floor(std::size_t, int) {
+  not_built();
+}
+
 namespace cuda {
 
 std::unique_ptr<Remapper> make_remapper() {
