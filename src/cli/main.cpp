@@ -58,6 +58,23 @@ constexpr int kExitUsage = 2;
 constexpr int kExitInvalidResult = 3;
 constexpr int kExitRefused = 4;
 
+// A number option's bound in words: CLI11's PositiveNumber and NonNegativeNumber print the range
+// up to DBL_MAX, three hundred digits long.
+CLI::Validator number_check(bool zero_allowed) {
+  const char* wanted = zero_allowed ? "a number, 0 or more" : "a number greater than 0";
+  return CLI::Validator(
+      [zero_allowed, wanted](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool number = !text.empty() && end == text.c_str() + text.size();
+        if (number && (zero_allowed ? value >= 0 : value > 0)) return "";
+        return std::string("must be ") + wanted + " (got " + text + ")";
+      },
+      zero_allowed ? "NONNEGATIVE" : "POSITIVE");
+}
+const CLI::Validator kPositive = number_check(false);
+const CLI::Validator kNonNegative = number_check(true);
+
 // Power and scheduling options shared by `run`, `sysinfo` and `node`.
 struct PowerArgs {
   double period_s = 0.1;
@@ -1045,9 +1062,9 @@ int main(int argc, char** argv) {
       ->add_option("--callback-timeout", ra.callback_timeout_s,
                    "seconds a node's callback may run before the run ends with the node named "
                    "as hung (default 30)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   run_cmd->add_option("--rate-scale", ra.rate_scale, "with --rate bag: play this many times faster")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   auto* dataset_opt = run_cmd->add_option(
       "--dataset", ra.dataset, "replay this rosbag2 bag (directory, .db3 or .mcap) as the input");
   run_cmd
@@ -1108,13 +1125,13 @@ int main(int argc, char** argv) {
                    "thread wake-up) or spin (no wake-up; keeps one core busy during the run)")
       ->check(CLI::IsMember({"sleep", "spin"}));
   auto* count_opt = run_cmd->add_option("--count", ra.count, "messages to send, warm-up included")
-                        ->check(CLI::PositiveNumber);
+                        ->check(kPositive);
   find_peak_flag->excludes(count_opt);
   run_cmd->add_option("--duration", ra.duration, "seconds to send for (count = rate x duration)")
       ->excludes(count_opt);
   run_cmd
       ->add_option("--warmup", ra.warmup, "first messages not counted (default: the benchmark's)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   run_cmd->add_option("--drain", ra.drain, "seconds to wait for outputs after the last send");
   run_cmd
       ->add_option("--rmw", ra.rmw,

@@ -482,6 +482,23 @@ TEST_F(Cli, BadOptionIsOneClearLine) {
   }
 }
 
+// A number out of its bounds is named with the bound in words (CLI11's own check printed the
+// range up to DBL_MAX, three hundred digits long).
+TEST_F(Cli, NumberOutOfItsBoundsIsOneShortLine) {
+  for (const auto& [args, says] : std::vector<std::pair<std::string, std::string>>{
+           {"run a1 --count 0", "--count: must be a number greater than 0 (got 0)"},
+           {"run a1 --count -3", "--count: must be a number greater than 0 (got -3)"},
+           {"run a1 --callback-timeout 0", "must be a number greater than 0 (got 0)"},
+           {"run a1 --rate-scale x", "must be a number greater than 0 (got x)"},
+           {"run a1 --warmup -1", "--warmup: must be a number, 0 or more (got -1)"}}) {
+    const Outcome o = robotperf_cli(args);
+    EXPECT_EQ(o.exit_code, 2) << args << "\n" << o.out;
+    EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << args << "\n" << o.out;
+    EXPECT_NE(o.out.find(says), std::string::npos) << args << "\n" << o.out;
+    EXPECT_LT(o.out.size(), 200u) << args << "\n" << o.out;
+  }
+}
+
 TEST_F(Cli, WarmupNotBelowCountIsRefused) {
   const Outcome o = robotperf_cli("run a2 --count 5 --warmup 5 --output " + out_.string());
   EXPECT_EQ(o.exit_code, 2);
