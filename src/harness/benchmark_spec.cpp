@@ -392,8 +392,25 @@ std::vector<BenchmarkSpec> discover_benchmarks(const std::vector<fs::path>& root
     std::error_code ec;
     if (!fs::is_directory(root, ec))
       throw BenchmarkError("benchmarks folder not found: " + root.string());
+    // Packages lie two levels down (<root>/<category>/<package>); one given a level too high up
+    // would otherwise be skipped without a word.
+    if (fs::exists(root / "graph.yaml")) {
+      throw BenchmarkError(root.string() +
+                           " is a benchmark package, not a folder of them: give the folder that "
+                           "holds its category folder (<folder>/<category>/" +
+                           root.filename().string() + ")");
+    }
     for (const auto& category : fs::directory_iterator(root)) {
       if (!category.is_directory()) continue;
+      if (fs::exists(category.path() / "graph.yaml")) {
+        if (broken) {
+          broken->push_back(category.path().string() +
+                            ": a benchmark package directly in the benchmarks folder, where "
+                            "category folders go: move it into one (" +
+                            (root / "<category>" / category.path().filename()).string() + ")");
+        }
+        continue;
+      }
       for (const auto& package : fs::directory_iterator(category.path())) {
         if (!fs::exists(package.path() / "graph.yaml")) continue;
         try {

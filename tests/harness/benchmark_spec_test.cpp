@@ -132,6 +132,36 @@ TEST(BenchmarkSpec, MissingListsAndOddKeysAreOneLineErrors) {
   EXPECT_NE(err.find(r.dir().string()), std::string::npos) << err;
 }
 
+// A package one level too high up (<root>/<package>, with no category folder), or a package given
+// as the benchmarks folder itself, is named with the layout it needs instead of being skipped.
+TEST(BenchmarkSpec, PackageOutsideACategoryFolderIsNamed) {
+  TestPackage p("shallow", relay_graph(""));
+  const std::filesystem::path categories = p.root() / "test";
+  try {
+    find_benchmark(categories, "t1");
+    FAIL() << "a package outside any category folder was found";
+  } catch (const BenchmarkError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(p.dir().string() + ": a benchmark package directly in the benchmarks "
+                                           "folder"),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("<category>"), std::string::npos) << what;
+  }
+  std::vector<std::string> broken;
+  EXPECT_TRUE(discover_benchmarks(categories, &broken).empty());
+  EXPECT_EQ(broken.size(), 1u);
+  try {
+    discover_benchmarks(p.dir());
+    FAIL() << "a package given as the benchmarks folder was accepted";
+  } catch (const BenchmarkError& e) {
+    EXPECT_NE(std::string(e.what()).find("is a benchmark package, not a folder of them"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(find_benchmark(p.root(), "t1").dir, p.dir());
+}
+
 TEST(BenchmarkSpec, MissingFileIsReported) {
   TestPackage p("missing", relay_graph(""));
   std::filesystem::remove(p.dir() / "graph.yaml");
