@@ -3,7 +3,8 @@
 # scripts/gpu-bundle.sh made (.gpu-bundle/bundle.tar.xz), without building or installing anything:
 #   1. the device: nvidia-smi and robotperf sysinfo;
 #   2. the cuda kernels against the cpu's on the same inputs (the kernel tests);
-#   3. robotperf run a1 .. a5 --backend cuda, end to end, results kept (results.tar);
+#   3. robotperf run a1 .. a5 --backend cuda, end to end, and a1 device-resident, results kept
+#      (results.tar);
 #   4. bench_backends: cpu against cuda (and opencl where the machine has a driver for it),
 #      p50 / p99, the upload / compute / download split and issue #19's targets;
 #   5. the CLI's cuda test (each benchmark's answers on the GPU, in one process and per node).
@@ -103,7 +104,8 @@ step kernels 120 bash -c "./tests/kernels/kernels_image_proc_test --gtest_filter
   ./tests/kernels/kernels_stereo_depth_test --gtest_filter='*Cuda*' &&
   ./tests/kernels/kernels_cuda_disparity_filter_test"
 step runs 150 bash -c "for b in a1 a2 a3 a4 a5; do
-  ./robotperf run \$b --backend cuda --output '$out/results' || exit; done"
+  ./robotperf run \$b --backend cuda --output '$out/results' || exit; done &&
+  ./robotperf run a1 --backend cuda --device-resident --output '$out/results'"
 step bench_backends 300 ./bench/backends/bench_backends
 step cli 200 ./tests/cli/cli_test --gtest_filter='*Cuda*'
 # The results as one file: a lent machine hands back few files.

@@ -276,6 +276,7 @@ struct RunArgs {
   std::optional<std::string> rate;     // Hz, or "bag"
   std::optional<double> update_rate;   // Hz: the controller managers' loop rate
   std::optional<std::string> backend;  // --backend: nodes whose kernel has it run on it
+  bool device_resident = false;        // --device-resident
   std::optional<double> duration, drain;
   std::optional<std::string> dataset, window;
   std::vector<std::string> remaps;
@@ -686,6 +687,7 @@ int run(const Roots& roots, const RunArgs& a) {
   if (a.backend == "cuda" && !perception::cuda_backend_built())
     throw std::invalid_argument(std::string("--backend cuda: ") + perception::kCudaNotBuilt);
   o.backend = a.backend;
+  o.device_resident = a.device_resident;
   o.count = a.count;
   o.duration_s = a.duration;
   o.warmup = a.warmup;
@@ -1141,6 +1143,10 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--backend", ra.backend,
                       "run every node whose kernel has this backend on it (cpu, opencl, or a "
                       "plug-in's); the others stay on theirs (see robotperf list kernels)");
+  run_cmd->add_flag("--device-resident", ra.device_resident,
+                    "keep images on the device between nodes that can hand them over there "
+                    "(type adaptation, as NITROS; e.g. a1 with --backend cuda): a configuration "
+                    "of its own, not the host-memory baseline");
   run_cmd
       ->add_option("--processes", ra.processes,
                    "single (all nodes in one process) or per-node (default: the benchmark's)")

@@ -485,6 +485,7 @@ plugin::KernelConfig kernel_config(const NodeSpec& node,
   }
   config.topics = node.topics;
   config.qos = node.qos;
+  config.device_resident_outputs = node.device_resident_outputs;
   return config;
 }
 
@@ -552,6 +553,58 @@ void override_backend(BenchmarkSpec& spec, const std::string& backend) {
     throw std::invalid_argument("--backend " + backend + ": no kernel of " + spec.id +
                                 " has it (they have: " + (names.empty() ? "none" : names) + ")");
   }
+}
+
+std::vector<ResidentTopic> keep_on_device(BenchmarkSpec& spec) {
+  // Whether `node` keeps or takes `port`'s data on its device.
+  const auto on_device = [](const NodeSpec& node, const std::vector<plugin::PortInfo>& ports,
+                            const std::string& port) {
+    const auto& backends = kernel_of(node).info.device_resident_backends;
+    const auto it = std::ranges::find(ports, port, &plugin::PortInfo::name);
+    return it != ports.end() && it->device_resident &&
+           std::ranges::count(backends, node.backend) > 0;
+  };
+  // What takes each topic: the nodes (by index) with an input port wired to it, and whether that
+  // port takes it on the node's device.
+  std::map<std::string, std::vector<std::pair<std::size_t, bool>>> takers;
+  for (std::size_t i = 0; i < spec.nodes.size(); ++i) {
+    const NodeSpec& node = spec.nodes[i];
+    const auto& inputs = kernel_of(node).info.inputs;
+    for (const auto& [port, topic] : node.topics) {
+      if (std::ranges::count(inputs, port, &plugin::PortInfo::name) > 0)
+        takers[topic].emplace_back(i, on_device(node, inputs, port));
+    }
+  }
+  std::set<std::string> on_the_host{spec.output.topic};
+  if (spec.functional && !spec.functional->observed_truth_topic.empty())
+    on_the_host.insert(spec.functional->observed_truth_topic);
+  std::vector<ResidentTopic> kept;
+  for (NodeSpec& from : spec.nodes) {
+    const auto& outputs = kernel_of(from).info.outputs;
+    for (const auto& [port, topic] : from.topics) {
+      if (!on_device(from, outputs, port)) continue;
+      const auto taken = takers.find(topic);
+      if (on_the_host.contains(topic) || taken == takers.end()) continue;
+      ResidentTopic t{topic, from.name, {}, from.backend};
+      bool all = true;
+      for (const auto& [i, takes_on_device] : taken->second) {
+        const NodeSpec& to = spec.nodes[i];
+        all = all && takes_on_device && to.backend == from.backend;
+        t.to.push_back(to.name);
+      }
+      if (!all) continue;
+      from.device_resident_outputs.insert(port);
+      kept.push_back(std::move(t));
+    }
+  }
+  if (kept.empty()) {
+    throw std::invalid_argument(
+        "--device-resident: no topic of " + spec.id +
+        " can stay on the device: that needs a node whose output only other nodes take, all on "
+        "one backend on which their kernels hand data over through those ports (as a1's rectify "
+        "and resize do on cuda)");
+  }
+  return kept;
 }
 
 }  // namespace robotperf::harness

@@ -220,6 +220,11 @@ void check_run_options(const RunOptions& o) {
     throw std::invalid_argument(
         "--arrival " + o.arrival.name() +
         " replaces the bag's timeline: give one of --rate bag and --arrival");
+  if (o.device_resident && (o.rmw != "intra" || o.processes != ProcessLayout::kSingle)) {
+    throw std::invalid_argument(
+        "--device-resident hands images from node to node inside one process: run it with --rmw "
+        "intra (and no --processes per-node)");
+  }
   if (o.monitor_wait == graph::WaitMode::kSpin) {
     // A single-process run's --cpus hold the Monitor too; per node, it runs where this process
     // may. On one CPU, the spinning Monitor and everything else would take turns by time slice.
@@ -378,13 +383,16 @@ plugin::DeviceInfo device_from_json(const nlohmann::json& j) {
 RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& options) {
   check_run_options(options);
   std::optional<BenchmarkSpec> overridden;
-  if (options.update_rate_hz || options.backend) {
+  std::vector<ResidentTopic> resident;
+  if (options.update_rate_hz || options.backend || options.device_resident) {
     overridden = package_spec;
     if (options.update_rate_hz) override_update_rate(*overridden, *options.update_rate_hz);
     if (options.backend) override_backend(*overridden, *options.backend);
+    if (options.device_resident) resident = keep_on_device(*overridden);
   }
   const BenchmarkSpec& spec = overridden ? *overridden : package_spec;
   RunResult r;
+  r.device_resident = std::move(resident);
   r.update_rate_hz = options.update_rate_hz;
   r.benchmark_id = spec.id;
   r.benchmark_name = spec.name;

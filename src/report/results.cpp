@@ -129,6 +129,14 @@ nlohmann::json functional_json(const std::optional<harness::FunctionalResult>& f
           {"reasons", f->reasons}};
 }
 
+// Empty in every run that is not device-resident: its messages all lived in host memory.
+nlohmann::json device_resident_json(const std::vector<harness::ResidentTopic>& topics) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& t : topics)
+    out.push_back({{"topic", t.topic}, {"from", t.from}, {"to", t.to}, {"backend", t.backend}});
+  return out;
+}
+
 nlohmann::json backend_check_json(const std::optional<harness::BackendCheck>& c) {
   if (!c) return nullptr;
   return {{"backend", c->backend},     {"output_type", c->output_type}, {"compared", c->compared},
@@ -311,6 +319,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"rmw", r.rmw},
         {"processes", r.processes},
         {"monitor_wait", r.monitor_wait},
+        {"device_resident", device_resident_json(r.device_resident)},
         {"executor_threads", r.executor_threads},
         {"output_topic", r.output_topic},
         {"domain_id", r.domain_id},
@@ -513,6 +522,12 @@ std::string summary_table(const harness::RunResult& r) {
       if (n.device) out << " (" << n.device->name << ", " << n.device->runtime << ")";
       out << (&n == &r.nodes.back() ? "\n" : ";");
     }
+  }
+  for (const auto& t : r.device_resident) {
+    std::string to;
+    for (const auto& name : t.to) to += (to.empty() ? "" : ", ") + name;
+    out << "device-resident: " << t.topic << " stays on the " << t.backend << " device from "
+        << t.from << " to " << to << " (no download, no upload: not the host-memory baseline)\n";
   }
   for (const auto& [host, launcher] : r.host_launchers) {
     std::string nodes, hostname;

@@ -109,10 +109,24 @@ void read_also_measured(const json& j, StoredRun& run) {
     }
   }
   if (const json& nodes = member(j, "nodes"); nodes.is_array()) {
+    // Nodes that handed images over on the device ran a configuration of their own: their
+    // backend reads "<backend>-resident", so that no comparison takes them for the baseline.
+    std::set<std::string> resident;
+    if (const json& kept = member(member(j, "configuration"), "device_resident"); kept.is_array()) {
+      for (const auto& topic : kept) {
+        resident.insert(string_or_empty(topic, "from"));
+        if (const json& to = member(topic, "to"); to.is_array()) {
+          for (const auto& name : to)
+            if (name.is_string()) resident.insert(name.get<std::string>());
+        }
+      }
+    }
     std::set<std::string> backends;
     for (const auto& node : nodes) {
       const json& b = member(node, "backend");
-      if (b.is_string() && b.get<std::string>() != "cpu") backends.insert(b.get<std::string>());
+      if (!b.is_string() || b.get<std::string>() == "cpu") continue;
+      backends.insert(b.get<std::string>() +
+                      (resident.contains(string_or_empty(node, "name")) ? "-resident" : ""));
     }
     run.backend = joined(backends, "+");
   }

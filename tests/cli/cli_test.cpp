@@ -499,6 +499,21 @@ TEST_F(Cli, NumberOutOfItsBoundsIsOneShortLine) {
   }
 }
 
+// --device-resident refuses, in one line, a run with nothing to keep on the device and a run whose
+// nodes are not in one process.
+TEST_F(Cli, DeviceResidentThatCannotApplyIsOneLine) {
+  for (const auto& [args, says] : std::vector<std::pair<std::string, std::string>>{
+           {"run a1 --device-resident", "no topic of a1 can stay on the device"},
+           {"run a5 --backend opencl --device-resident", "no topic of a5 can stay on the device"},
+           {"run a1 --device-resident --rmw fastdds",
+            "inside one process: run it with --rmw intra"}}) {
+    const Outcome o = robotperf_cli(args + " --output " + out_.string());
+    EXPECT_EQ(o.exit_code, 2) << args << "\n" << o.out;
+    EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << args << "\n" << o.out;
+    EXPECT_NE(o.out.find(says), std::string::npos) << args << "\n" << o.out;
+  }
+}
+
 TEST_F(Cli, WarmupNotBelowCountIsRefused) {
   const Outcome o = robotperf_cli("run a2 --count 5 --warmup 5 --output " + out_.string());
   EXPECT_EQ(o.exit_code, 2);

@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <set>
+#include <string>
+#include <vector>
 
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/run.hpp"
@@ -160,6 +163,43 @@ TEST(BenchmarkSpec, PackageOutsideACategoryFolderIsNamed) {
         << e.what();
   }
   EXPECT_EQ(find_benchmark(p.root(), "t1").dir, p.dir());
+}
+
+// --device-resident keeps on the device only a topic that nodes alone take, all on one backend
+// whose kernels hand images over there: a1's rectified image on cuda, not its output (the
+// Monitor's) and nothing on cpu or in a one-node graph.
+TEST(BenchmarkSpec, DeviceResidentKeepsOnlyTopicsThatNodesAloneTakeOnOneDevice) {
+  const std::filesystem::path shipped = std::filesystem::path(ROBOTPERF_SOURCE_DIR) / "benchmarks";
+  BenchmarkSpec a1 = find_benchmark(shipped, "a1");
+  for (auto& n : a1.nodes) n.backend = "cuda";  // only named: nothing is built here
+  const std::vector<ResidentTopic> kept = keep_on_device(a1);
+  ASSERT_EQ(kept.size(), 1u);
+  EXPECT_EQ(kept[0].topic, "/rectify/image_rect");
+  EXPECT_EQ(kept[0].from, "rectify");
+  EXPECT_EQ(kept[0].to, std::vector<std::string>{"resize"});
+  EXPECT_EQ(kept[0].backend, "cuda");
+  EXPECT_EQ(a1.nodes[0].device_resident_outputs, std::set<std::string>{"image_rect"});
+  EXPECT_TRUE(a1.nodes[1].device_resident_outputs.empty()) << "the Monitor takes a1's output";
+  EXPECT_EQ(kernel_config(a1.nodes[0]).device_resident_outputs,
+            std::set<std::string>{"image_rect"});
+
+  const auto refused = [](BenchmarkSpec spec, const char* what) {
+    try {
+      keep_on_device(spec);
+      ADD_FAILURE() << what << ": kept something on the device";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("no topic of " + spec.id + " can stay on the device"),
+                std::string::npos)
+          << e.what();
+    }
+  };
+  refused(find_benchmark(shipped, "a1"), "a1 on cpu");
+  BenchmarkSpec mixed = find_benchmark(shipped, "a1");
+  mixed.nodes[0].backend = "cuda";  // resize stays on cpu: it needs the pixels on the host
+  refused(mixed, "a1, resize on cpu");
+  BenchmarkSpec a5 = find_benchmark(shipped, "a5");
+  for (auto& n : a5.nodes) n.backend = "cuda";
+  refused(a5, "a5, one node");
 }
 
 TEST(BenchmarkSpec, MissingFileIsReported) {

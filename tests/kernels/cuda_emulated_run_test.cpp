@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "../tracing/device_hops.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
@@ -70,6 +71,34 @@ TEST(CudaEmulatedRun, ImageBenchmarksGiveTheCpusAnswers) {
     o.rate_hz = 5;
     expect_cpus_answers_on_the_emulation(id, run_on_cuda(id, o));
   }
+}
+
+// a1 device-resident: the rectified image goes from rectify to resize on the device (no download
+// after rectify, no upload before resize), and the answers are still the cpu's.
+TEST(CudaEmulatedRun, DeviceResidentA1KeepsTheRectifiedImageOnTheDevice) {
+  harness::RunOptions o;
+  o.count = 35;
+  o.rate_hz = 5;
+  o.device_resident = true;
+  o.mode = harness::RunMode::kGrey;
+  o.trace_dir = std::filesystem::temp_directory_path() /
+                ("cuda-emulated-a1-resident-" + std::to_string(getpid()) + ".trace");
+  std::string why;
+  const bool grey = tracing::lttng_available(&why);
+  if (!grey) o.mode = harness::RunMode::kBlack;
+  const harness::RunResult r = run_on_cuda("a1", o);
+  std::filesystem::remove_all(o.trace_dir);
+  expect_cpus_answers_on_the_emulation("a1 device-resident", r);
+  ASSERT_EQ(r.device_resident.size(), 1u);
+  EXPECT_EQ(r.device_resident[0].topic, "/rectify/image_rect");
+  EXPECT_EQ(r.device_resident[0].from, "rectify");
+  EXPECT_EQ(r.device_resident[0].to, std::vector<std::string>{"resize"});
+  EXPECT_EQ(r.device_resident[0].backend, "cuda");
+  if (!grey) GTEST_SKIP() << "answers checked; no device stages without LTTng: " << why;
+  test_support::expect_device_stages_inside_kernel(r, "rectify", "image_proc/rectify",
+                                                   {"upload", "compute"});
+  test_support::expect_device_stages_inside_kernel(r, "resize", "image_proc/resize",
+                                                   {"compute", "download"});
 }
 
 // The emulated block matcher takes about a second a pair: a3 at a rate it keeps up with, too few

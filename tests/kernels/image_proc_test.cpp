@@ -6,8 +6,10 @@
 #include <cstring>
 #include <functional>
 #include <iostream>
+#include <memory>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <stdexcept>
 
 #include "cuda_test_support.hpp"
@@ -714,6 +716,65 @@ TEST_F(RectifySynthetic, CudaResizesAsTheCpuDoes) {
       expect_within_one(got, expected, "resize " + name + " " + encoding);
     }
   }
+}
+
+// A device-resident hand-over (a1 --device-resident): rectify leaves its image on the device,
+// resize takes it there, and the answer is the cpu's rectify then resize.
+TEST_F(RectifySynthetic, CudaHandsTheRectifiedImageToResizeOnTheDevice) {
+  if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
+  Rectifier cpu, device(cv::INTER_LINEAR, ImageBackend::kCuda);
+  ResizeParams twice;
+  twice.scale_width = twice.scale_height = 2.0;
+  Resizer device_resizer(twice, ImageBackend::kCuda);
+  for (const uint32_t index : {0u, 7u}) {
+    const CameraFrame& frame = (*frames_)[index];
+    msgs::Image header_only;
+    std::optional<ResidentPixels> pixels =
+        device.rectify_on_device(frame.image, frame.info, header_only);
+    ASSERT_TRUE(pixels.has_value());
+    const std::shared_ptr<const msgs::Image> message =
+        resident_image_message(std::move(header_only), std::move(*pixels));
+    const msgs::Image on_host = cpu.rectify(frame.image, frame.info);
+    EXPECT_TRUE(message->data.empty()) << "the pixels stay on the device";
+    EXPECT_EQ(message->header, on_host.header);
+    EXPECT_EQ(message->width, on_host.width);
+    EXPECT_EQ(message->height, on_host.height);
+    EXPECT_EQ(message->step, on_host.step);
+    EXPECT_EQ(message->encoding, on_host.encoding);
+    // As a subscriber gets it: through the transport's type-erased pointer.
+    const auto delivered =
+        std::static_pointer_cast<const msgs::Image>(std::shared_ptr<const void>(message));
+    const ResidentPixels* found = resident_pixels(delivered);
+    ASSERT_NE(found, nullptr);
+    msgs::Image got, expected;
+    msgs::CameraInfo got_info, expected_info;
+    device_resizer.resize(*delivered, frame.info, got, got_info, found);
+    resize(on_host, frame.info, twice, expected, expected_info);
+    EXPECT_EQ(got_info, expected_info);
+    expect_within_one(got, expected,
+                      "rectify then resize on the device, frame " + std::to_string(index));
+  }
+  // Where rectifying is a copy, the pixels stay on the host.
+  msgs::CameraInfo ideal = (*frames_)[0].info;
+  std::fill(ideal.d.begin(), ideal.d.end(), 0.0);
+  msgs::Image copied;
+  EXPECT_FALSE(device.rectify_on_device((*frames_)[0].image, ideal, copied).has_value());
+  EXPECT_EQ(copied.data, (*frames_)[0].image.data);
+}
+
+// Only the cuda backend hands images over; an ordinary message has no pixels on a device.
+TEST_F(RectifySynthetic, ResidentImagesAreCudasOnly) {
+  const CameraFrame& frame = frames_->front();
+  Rectifier cpu;
+  msgs::Image out;
+  EXPECT_THROW(cpu.rectify_on_device(frame.image, frame.info, out), std::logic_error);
+  Resizer cpu_resizer{ResizeParams{}};
+  ResidentPixels pixels{nullptr, static_cast<int>(frame.image.height),
+                        static_cast<int>(frame.image.width), CV_8UC3};
+  msgs::CameraInfo out_info;
+  EXPECT_THROW(cpu_resizer.resize(frame.image, frame.info, out, out_info, &pixels),
+               std::logic_error);
+  EXPECT_EQ(resident_pixels(std::make_shared<const msgs::Image>(frame.image)), nullptr);
 }
 
 TEST(ImageBackend, CudaHasInterLinearOnly) {

@@ -549,8 +549,8 @@ TEST_F(Report, DistributionLabelsNeverOverlap) {
   }
 }
 
-// Runs that differ in rate, process layout, black/grey, arrivals or how the Monitor waited are
-// separate series, never pooled into one median.
+// Runs that differ in rate, process layout, black/grey, arrivals, backend (device-resident or not)
+// or how the Monitor waited are separate series, never pooled into one median.
 TEST_F(Report, RunsOfDifferentConfigurationsAreSeparateSeries) {
   testing::SampleRun base;
   const auto at_60 = testing::write_sample(dir_, base);
@@ -575,12 +575,30 @@ TEST_F(Report, RunsOfDifferentConfigurationsAreSeparateSeries) {
   j["configuration"]["monitor_wait"] = "spin";
   std::ofstream(spinning) << j.dump();
   base.start_unix_ns += 1'000'000'000;
+  // The same nodes on cuda, once with messages in host memory and once device-resident.
+  for (const bool resident : {false, true}) {
+    const auto on_cuda = testing::write_sample(dir_, base);
+    j = nlohmann::json::parse(read_text(on_cuda));
+    j["nodes"] = {{{"name", "rectify"}, {"kernel", "image_proc/rectify"}, {"backend", "cuda"}},
+                  {{"name", "resize"}, {"kernel", "image_proc/resize"}, {"backend", "cuda"}}};
+    j["configuration"]["device_resident"] = nlohmann::json::array();
+    if (resident) {
+      j["configuration"]["device_resident"].push_back({{"topic", "/rectify/image_rect"},
+                                                       {"from", "rectify"},
+                                                       {"to", {"resize"}},
+                                                       {"backend", "cuda"}});
+    }
+    std::ofstream(on_cuda) << j.dump();
+    base.start_unix_ns += 1'000'000'000;
+  }
   testing::write_sample(dir_, base);
   const std::string html = render_html(load_report_inputs({dir_}), {});
   for (const char* series : {"AMD Ryzen 7 5800X · intra · 60 Hz<title>",
                              "AMD Ryzen 7 5800X · intra · per-node · grey · 30 Hz<title>",
                              "AMD Ryzen 7 5800X · intra · opencl · 30 Hz<title>",
                              "AMD Ryzen 7 5800X · intra · monitor spinning · 30 Hz<title>",
+                             "AMD Ryzen 7 5800X · intra · cuda · 30 Hz<title>",
+                             "AMD Ryzen 7 5800X · intra · cuda-resident · 30 Hz<title>",
                              "AMD Ryzen 7 5800X · intra · 30 Hz<title>"}) {
     EXPECT_NE(html.find(series), std::string::npos) << series;
   }
@@ -709,4 +727,22 @@ TEST(Summary, ResourcesShowAGpusLoad) {
                       "memory in use up to 3.00 of 80.00 GiB (30 readings)"),
             std::string::npos)
       << text;
+}
+
+// A device-resident run says so beside the backends, and records which topic stayed where.
+TEST(Summary, DeviceResidentRunNamesWhatStayedOnTheDevice) {
+  using namespace robotperf;
+  harness::RunResult r = report::testing::make_run({});
+  r.device_resident.push_back({"/rectify/image_rect", "rectify", {"resize"}, "cuda"});
+  const std::string text = report::summary_table(r);
+  EXPECT_NE(text.find("device-resident: /rectify/image_rect stays on the cuda device from rectify "
+                      "to resize (no download, no upload: not the host-memory baseline)"),
+            std::string::npos)
+      << text;
+  const sysinfo::MachineInfo machine = report::testing::make_machine({});
+  const nlohmann::json j = report::result_to_json(r, machine);
+  ASSERT_EQ(j["configuration"]["device_resident"].size(), 1u);
+  EXPECT_EQ(j["configuration"]["device_resident"][0]["to"], nlohmann::json::array({"resize"}));
+  const nlohmann::json baseline = report::result_to_json(report::testing::make_run({}), machine);
+  EXPECT_TRUE(baseline["configuration"]["device_resident"].empty());
 }

@@ -236,6 +236,29 @@ const char* image_backend_name(ImageBackend backend) {
 
 namespace {
 
+// A resident image's message holds its pixels in its deleter, where std::get_deleter finds them
+// again through any shared_ptr (of any cv-qualification or aliasing) that shares its ownership.
+struct ResidentImageDeleter {
+  ResidentPixels pixels;
+  void operator()(msgs::Image* image) const { delete image; }
+};
+
+}  // namespace
+
+std::shared_ptr<const msgs::Image> resident_image_message(msgs::Image&& image,
+                                                          ResidentPixels pixels) {
+  image.data.clear();
+  return std::shared_ptr<msgs::Image>(new msgs::Image(std::move(image)),
+                                      ResidentImageDeleter{std::move(pixels)});
+}
+
+const ResidentPixels* resident_pixels(const std::shared_ptr<const msgs::Image>& message) {
+  const auto* deleter = std::get_deleter<ResidentImageDeleter>(message);
+  return deleter != nullptr ? &deleter->pixels : nullptr;
+}
+
+namespace {
+
 // Computes `compute(device_in, device_out)` on the OpenCL device: uploads `in` into `device_in`,
 // and downloads `device_out` into `out` (already the output's size and type: written in place).
 template <class Compute>
@@ -367,7 +390,7 @@ void Rectifier::update_maps(const msgs::CameraInfo& info) {
   if (backend_ == ImageBackend::kCuda) cuda_->set_maps(map_xy_, map_fraction_);
 }
 
-void Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& info,
+bool Rectifier::prepare(const msgs::Image& raw, const msgs::CameraInfo& info,
                         msgs::Image& rectified) {
   require_distinct(raw, rectified, "rectify");
   if (info.k[0] == 0.0) {
@@ -376,7 +399,7 @@ void Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& info,
   const cv::Mat raw_view = image_view(raw);
   if (std::all_of(info.d.begin(), info.d.end(), [](double c) { return c == 0.0; })) {
     copy_image(raw, rectified);
-    return;
+    return false;
   }
   update_maps(info);
   if (raw_view.size() != map_xy_.size()) {
@@ -385,6 +408,28 @@ void Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& info,
                                 " but its CameraInfo (size, binning, roi) gives " +
                                 std::to_string(map_xy_.cols) + "x" + std::to_string(map_xy_.rows));
   }
+  return true;
+}
+
+std::optional<ResidentPixels> Rectifier::rectify_on_device(const msgs::Image& raw,
+                                                           const msgs::CameraInfo& info,
+                                                           msgs::Image& rectified) {
+  if (backend_ != ImageBackend::kCuda)
+    throw std::logic_error("rectify: only the cuda backend leaves images on the device");
+  if (!prepare(raw, info, rectified)) return std::nullopt;
+  // The rectified message's header, size and encoding, without its pixels.
+  prepare_image(rectified, raw.header, raw.encoding, 0, 0);
+  rectified.height = raw.height;
+  rectified.width = raw.width;
+  rectified.step =
+      raw.width * static_cast<uint32_t>(CV_ELEM_SIZE(cv_type_from_encoding(raw.encoding)));
+  return cuda_->remap_to_device(image_view(raw));
+}
+
+void Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& info,
+                        msgs::Image& rectified) {
+  if (!prepare(raw, info, rectified)) return;
+  const cv::Mat raw_view = image_view(raw);
   cv::Mat rectified_view = prepare_image(rectified, raw.header, raw.encoding,
                                          static_cast<int>(raw.width), static_cast<int>(raw.height));
   // Float images get NaN outside the field of view (no data), as image_geometry does.
@@ -428,11 +473,27 @@ Resizer::Resizer(Resizer&&) noexcept = default;
 Resizer& Resizer::operator=(Resizer&&) noexcept = default;
 
 void Resizer::resize(const msgs::Image& image, const msgs::CameraInfo& info, msgs::Image& out,
-                     msgs::CameraInfo& out_info) {
+                     msgs::CameraInfo& out_info, const ResidentPixels* pixels) {
   require_distinct(image, out, "resize");
   const ResizeParams& params = params_;
-  const cv::Mat in_view = image_view(image);
-  if (in_view.empty()) throw std::invalid_argument("resize: empty image");
+  cv::Mat in_view;
+  cv::Size in_size;
+  if (pixels != nullptr) {
+    if (backend_ != ImageBackend::kCuda)
+      throw std::logic_error("resize: only the cuda backend takes images left on the device");
+    if (pixels->cols != static_cast<int64_t>(image.width) ||
+        pixels->rows != static_cast<int64_t>(image.height) ||
+        pixels->type != cv_type_from_encoding(image.encoding)) {
+      throw std::invalid_argument(
+          "resize: the pixels on the device are not of the image's size "
+          "and encoding");
+    }
+    in_size = cv::Size(pixels->cols, pixels->rows);
+  } else {
+    in_view = image_view(image);
+    in_size = in_view.size();
+  }
+  if (in_size.empty()) throw std::invalid_argument("resize: empty image");
 
   double scale_x = 0.0;
   double scale_y = 0.0;
@@ -446,16 +507,16 @@ void Resizer::resize(const msgs::Image& image, const msgs::CameraInfo& info, msg
     scale_x = params.scale_width;
     scale_y = params.scale_height;
     // cv::resize's own rounding of a scaled size, so that the destination is not reallocated.
-    out_size = cv::Size(cv::saturate_cast<int>(in_view.cols * scale_x),
-                        cv::saturate_cast<int>(in_view.rows * scale_y));
+    out_size = cv::Size(cv::saturate_cast<int>(in_size.width * scale_x),
+                        cv::saturate_cast<int>(in_size.height * scale_y));
     info_width = scaled_truncated(info.width, scale_x);
     info_height = scaled_truncated(info.height, scale_y);
   } else {
     if ((params.width <= 0 && params.width != -1) || (params.height <= 0 && params.height != -1)) {
       throw std::invalid_argument("resize: width and height must be positive or -1");
     }
-    out_size = cv::Size(params.width == -1 ? in_view.cols : params.width,
-                        params.height == -1 ? in_view.rows : params.height);
+    out_size = cv::Size(params.width == -1 ? in_size.width : params.width,
+                        params.height == -1 ? in_size.height : params.height);
     if (info.width == 0 || info.height == 0) {
       throw std::invalid_argument("resize: CameraInfo has zero size");
     }
@@ -481,10 +542,14 @@ void Resizer::resize(const msgs::Image& image, const msgs::CameraInfo& info, msg
   } else if (backend_ == ImageBackend::kCuda) {
     // The inverse scales cv::resize computes with: those given, or the sizes' ratios.
     const double inv_scale_x =
-        params.use_scale ? scale_x : static_cast<double>(out_size.width) / in_view.cols;
+        params.use_scale ? scale_x : static_cast<double>(out_size.width) / in_size.width;
     const double inv_scale_y =
-        params.use_scale ? scale_y : static_cast<double>(out_size.height) / in_view.rows;
-    cuda_->resize(in_view, out_view, inv_scale_x, inv_scale_y);
+        params.use_scale ? scale_y : static_cast<double>(out_size.height) / in_size.height;
+    if (pixels != nullptr) {
+      cuda_->resize(*pixels, out_view, inv_scale_x, inv_scale_y);
+    } else {
+      cuda_->resize(in_view, out_view, inv_scale_x, inv_scale_y);
+    }
   } else {
     compute(in_view, out_view);
   }

@@ -46,22 +46,32 @@ class RectifyNode final : public CameraNode, public ImageDeviceNode {
   RectifyNode(graph::Context& context, const KernelConfig& config)
       : CameraNode(context, config),
         ImageDeviceNode(backend_of(config)),
-        rectifier_(interpolation_parameter(config), backend_) {
+        rectifier_(interpolation_parameter(config), backend_),
+        resident_(config.device_resident_outputs.contains("image_rect")) {
     output_ = create_publisher<msgs::Image>(config.topic("image_rect"), config.qos);
   }
 
  private:
   void process(const CameraSync::ImagePtr& image, const CameraSync::InfoPtr& info) override {
-    auto out = std::make_shared<msgs::Image>();
+    msgs::Image out;
     plugin::trace_kernel_init(*this, kKernel, image->header.stamp.to_ns(), *image);
     const DeviceStageContext stages(*this, image->header.stamp.to_ns());
-    rectifier_.rectify(*image, *info, *out);
-    plugin::trace_kernel_fini(*this, kKernel, *out);
-    output_->publish(std::shared_ptr<const msgs::Image>(std::move(out)));
+    std::shared_ptr<const msgs::Image> message;
+    if (resident_) {
+      // The next node takes the pixels on the device; a copy (no distortion) stays on the host.
+      std::optional<ResidentPixels> pixels = rectifier_.rectify_on_device(*image, *info, out);
+      if (pixels) message = resident_image_message(std::move(out), std::move(*pixels));
+    } else {
+      rectifier_.rectify(*image, *info, out);
+    }
+    if (!message) message = std::make_shared<const msgs::Image>(std::move(out));
+    plugin::trace_kernel_fini(*this, kKernel, *message);
+    output_->publish(std::move(message));
   }
 
   static constexpr const char* kKernel = "image_proc/rectify";
   Rectifier rectifier_;
+  bool resident_;  // image_rect's pixels stay on the device (a device-resident run)
   std::shared_ptr<graph::Publisher<msgs::Image>> output_;
 };
 
@@ -81,7 +91,7 @@ class ResizeNode final : public CameraNode, public ImageDeviceNode {
     auto out_info = std::make_shared<msgs::CameraInfo>();
     plugin::trace_kernel_init(*this, kKernel, image->header.stamp.to_ns(), *image);
     const DeviceStageContext stages(*this, image->header.stamp.to_ns());
-    resizer_.resize(*image, *info, *out, *out_info);
+    resizer_.resize(*image, *info, *out, *out_info, resident_pixels(image));
     plugin::trace_kernel_fini(*this, kKernel, *out);
     // CameraInfo first: a subscriber pairing on the image then finds its partner waiting.
     info_out_->publish(std::shared_ptr<const msgs::CameraInfo>(std::move(out_info)));
@@ -112,9 +122,11 @@ plugin::ParameterInfo interpolation_declaration() {
                                "4 lanczos4");
 }
 
-// image_transport's camera subscriber: the image and its CameraInfo.
-std::vector<plugin::PortInfo> camera_inputs() {
-  return {{"image", "sensor_msgs/msg/Image"}, {"camera_info", "sensor_msgs/msg/CameraInfo"}};
+// image_transport's camera subscriber: the image (which the node may take on its device, in a
+// device-resident run) and its CameraInfo.
+std::vector<plugin::PortInfo> camera_inputs(bool image_on_device) {
+  return {{"image", "sensor_msgs/msg/Image", image_on_device},
+          {"camera_info", "sensor_msgs/msg/CameraInfo"}};
 }
 
 }  // namespace
@@ -125,9 +137,10 @@ void register_image_proc_kernels(plugin::Registrar& registrar) {
        .description = "undistort and rectify an image with its CameraInfo (cached map, cv::remap), "
                       "as image_proc",
        .backends = perception_backends(),
-       .inputs = camera_inputs(),
-       .outputs = {{"image_rect", "sensor_msgs/msg/Image"}},
-       .parameters = {interpolation_declaration()}},
+       .inputs = camera_inputs(false),
+       .outputs = {{"image_rect", "sensor_msgs/msg/Image", true}},
+       .parameters = {interpolation_declaration()},
+       .device_resident_backends = {"cuda"}},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<RectifyNode>(context, config);
       });
@@ -136,7 +149,7 @@ void register_image_proc_kernels(plugin::Registrar& registrar) {
       {.name = "image_proc/resize",
        .description = "resize an image and scale its CameraInfo (K, P, ROI), as image_proc",
        .backends = perception_backends(),
-       .inputs = camera_inputs(),
+       .inputs = camera_inputs(true),
        .outputs = {{"resize", "sensor_msgs/msg/Image"},
                    {"resize_info", "sensor_msgs/msg/CameraInfo"}},
        .parameters =
@@ -149,7 +162,8 @@ void register_image_proc_kernels(plugin::Registrar& registrar) {
                                   "target height without use_scale; -1 keeps the input's"),
             plugin::int_parameter("width", defaults.width,
                                   "target width without use_scale; -1 keeps the input's"),
-            interpolation_declaration()}},
+            interpolation_declaration()},
+       .device_resident_backends = {"cuda"}},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<ResizeNode>(context, config);
       });

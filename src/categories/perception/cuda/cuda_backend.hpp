@@ -7,13 +7,15 @@
 // Each object owns a CUDA stream and the buffers it reuses from message to message (device memory,
 // pinned host staging). Every call uploads its inputs and downloads its outputs, as a node whose
 // messages live in host memory must (DESIGN.md section 6), in the device stages "upload",
-// "compute" and "download". Not thread-safe: one object per node.
+// "compute" and "download", except where a device-resident run hands an image from one node to
+// the next on the device (ResidentPixels). Not thread-safe: one object per node.
 #pragma once
 
 #include <memory>
 #include <opencv2/core.hpp>
 
 #include "../xyzrgb_model.hpp"
+#include "robotperf/perception/image_proc.hpp"
 #include "robotperf/perception/stereo_image_proc.hpp"
 
 namespace robotperf::perception::cuda {
@@ -29,6 +31,8 @@ class Remapper {
   // `out` has the maps' size and `in`'s type (written in place). Images: 8-bit, 16-bit unsigned or
   // 32-bit float with 1 to 4 channels, else std::invalid_argument.
   virtual void remap(const cv::Mat& in, cv::Mat& out) = 0;
+  // As remap(), into device memory of the output's own, finished on return, with no download.
+  virtual ResidentPixels remap_to_device(const cv::Mat& in) = 0;
 };
 
 // cv::resize(in, out, out's size, INTER_LINEAR) where cv::resize would take `inv_scale_x` and
@@ -37,6 +41,9 @@ class ImageResizer {
  public:
   virtual ~ImageResizer() = default;
   virtual void resize(const cv::Mat& in, cv::Mat& out, double inv_scale_x, double inv_scale_y) = 0;
+  // As resize(), from pixels another node left on the device (no upload).
+  virtual void resize(const ResidentPixels& in, cv::Mat& out, double inv_scale_x,
+                      double inv_scale_y) = 0;
 };
 
 // point_cloud_xyzrgb's points of `depth` (32FC1 or 16UC1, as model.metres) and its 8-bit `colour`

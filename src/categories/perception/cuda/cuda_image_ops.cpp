@@ -107,46 +107,74 @@ class CudaRemapper final : public Remapper {
   }
 
   void remap(const cv::Mat& in, cv::Mat& out) override {
-    const PixelDepth depth = pixel_depth(in.type(), "rectify");
     if (out.type() != in.type() || out.cols != map_xy_on_device_.width ||
         out.rows != map_xy_on_device_.height) {
       throw std::logic_error("cuda: remap's output is not of the maps' size and the input's type");
     }
-    const DeviceImage dst = out_.reserve(out.rows, out.cols, out.type());
+    remap_into(in, out_.reserve(out.rows, out.cols, out.type()));
+    download(stream_, {{out_, out}});
+  }
+
+  ResidentPixels remap_to_device(const cv::Mat& in) override {
+    ResidentPixels out;
+    out.rows = map_xy_on_device_.height;
+    out.cols = map_xy_on_device_.width;
+    out.type = in.type();
+    out.memory = pool_->take(static_cast<std::size_t>(out.rows) * out.cols * in.elemSize());
+    remap_into(in, {out.memory.get(), out.cols, out.rows});
+    // Finished before the message carrying it is published: the next node's stream reads it.
+    stream_.synchronize();
+    return out;
+  }
+
+ private:
+  // Queues the upload of `in` and its remap into `dst` (the maps' size, in's type).
+  void remap_into(const cv::Mat& in, DeviceImage dst) {
+    const PixelDepth depth = pixel_depth(in.type(), "rectify");
     DeviceImage src;
     {
       DeviceStage upload("upload", in.total() * in.elemSize(), stream_);
       src = in_.upload(in, stream_.get());
     }
-    {
-      DeviceStage compute("compute", 0, stream_);
-      remap_linear(src, dst, depth, in.channels(),
-                   static_cast<const int16_t*>(map_xy_on_device_.data),
-                   static_cast<const uint16_t*>(map_fraction_on_device_.data), stream_.get());
-    }
-    download(stream_, {{out_, out}});
+    DeviceStage compute("compute", 0, stream_);
+    remap_linear(src, dst, depth, in.channels(),
+                 static_cast<const int16_t*>(map_xy_on_device_.data),
+                 static_cast<const uint16_t*>(map_fraction_on_device_.data), stream_.get());
   }
 
- private:
   Stream stream_;
   StagedImage map_xy_, map_fraction_, in_, out_;
   DeviceImage map_xy_on_device_, map_fraction_on_device_;
+  std::shared_ptr<ResidentPool> pool_ = std::make_shared<ResidentPool>();
 };
 
 class CudaResizer final : public ImageResizer {
  public:
   void resize(const cv::Mat& in, cv::Mat& out, double inv_scale_x, double inv_scale_y) override {
-    const PixelDepth depth = pixel_depth(in.type(), "resize");
-    if (out.type() != in.type()) throw std::logic_error("cuda: resize's output has another type");
-    // cv::resize copies an image to its own size.
-    const bool copy = out.size() == in.size();
-    if (!copy) taps_.prepare(in.size(), out.size(), inv_scale_x, inv_scale_y, stream_);
-    const DeviceImage dst = out_.reserve(out.rows, out.cols, out.type());
     DeviceImage src;
     {
       DeviceStage upload("upload", in.total() * in.elemSize(), stream_);
       src = in_.upload(in, stream_.get());
     }
+    resize_from(src, in.size(), in.type(), out, inv_scale_x, inv_scale_y);
+  }
+
+  void resize(const ResidentPixels& in, cv::Mat& out, double inv_scale_x,
+              double inv_scale_y) override {
+    resize_from({in.memory.get(), in.cols, in.rows}, cv::Size(in.cols, in.rows), in.type, out,
+                inv_scale_x, inv_scale_y);
+  }
+
+ private:
+  // Resizes `src` (on the device: in_size, of `type`) into `out`, and downloads it.
+  void resize_from(DeviceImage src, cv::Size in_size, int type, cv::Mat& out, double inv_scale_x,
+                   double inv_scale_y) {
+    const PixelDepth depth = pixel_depth(type, "resize");
+    if (out.type() != type) throw std::logic_error("cuda: resize's output has another type");
+    // cv::resize copies an image to its own size.
+    const bool copy = out.size() == in_size;
+    if (!copy) taps_.prepare(in_size, out.size(), inv_scale_x, inv_scale_y, stream_);
+    const DeviceImage dst = out_.reserve(out.rows, out.cols, out.type());
     {
       DeviceStage compute("compute", 0, stream_);
       if (copy) {
@@ -154,13 +182,13 @@ class CudaResizer final : public ImageResizer {
                               stream_.get()),
               "cudaMemcpyAsync (resize to the same size)");
       } else {
-        resize_linear(src, dst, depth, in.channels(), taps_.columns(), taps_.rows(), stream_.get());
+        resize_linear(src, dst, depth, CV_MAT_CN(type), taps_.columns(), taps_.rows(),
+                      stream_.get());
       }
     }
     download(stream_, {{out_, out}});
   }
 
- private:
   Stream stream_;
   ResizeTaps taps_;
   StagedImage in_, out_;

@@ -1,5 +1,6 @@
 #include "cuda_support.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -49,6 +50,33 @@ void Buffer::release() noexcept {
   static_cast<void>(memory_ == Memory::kDevice ? cudaFree(data_) : cudaFreeHost(data_));
   data_ = nullptr;
   capacity_ = 0;
+}
+
+ResidentPool::~ResidentPool() {
+  // Every message holding a block has gone (each holds the pool): nothing uses them.
+  for (const Block& block : free_) static_cast<void>(cudaFree(block.data));
+}
+
+std::shared_ptr<void> ResidentPool::take(std::size_t bytes) {
+  Block block{nullptr, bytes};
+  {
+    const std::lock_guard lock(mutex_);
+    const auto fits = std::find_if(free_.begin(), free_.end(),
+                                   [bytes](const Block& b) { return b.bytes >= bytes; });
+    if (fits != free_.end()) {
+      block = *fits;
+      free_.erase(fits);
+    }
+  }
+  if (block.data == nullptr) check(cudaMalloc(&block.data, bytes), "cudaMalloc (resident image)");
+  return {block.data, [pool = shared_from_this(), block](void*) {
+            try {
+              const std::lock_guard lock(pool->mutex_);
+              pool->free_.push_back(block);
+            } catch (...) {
+              static_cast<void>(cudaFree(block.data));  // no room to keep it: given back to CUDA
+            }
+          }};
 }
 
 std::size_t StagedImage::bytes() const {

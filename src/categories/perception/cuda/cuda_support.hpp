@@ -6,7 +6,10 @@
 
 #include <cstddef>
 #include <initializer_list>
+#include <memory>
+#include <mutex>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "../device_stage.hpp"
 #include "cuda_check.hpp"
@@ -57,6 +60,28 @@ class Buffer {
   Memory memory_;
   void* data_ = nullptr;
   std::size_t capacity_ = 0;
+};
+
+// Device memory for the images a node hands to the next one on the device (ResidentPixels): each
+// message's own, back in the pool when the last message holding it goes. By then the taking
+// node's stream has finished with it (a node waits for its stream before its callback returns).
+class ResidentPool : public std::enable_shared_from_this<ResidentPool> {
+ public:
+  ResidentPool() = default;
+  ~ResidentPool();
+  ResidentPool(const ResidentPool&) = delete;
+  ResidentPool& operator=(const ResidentPool&) = delete;
+
+  // At least `bytes` bytes of device memory, held by the returned pointer and its copies.
+  std::shared_ptr<void> take(std::size_t bytes);
+
+ private:
+  struct Block {
+    void* data;
+    std::size_t bytes;
+  };
+  std::mutex mutex_;
+  std::vector<Block> free_;
 };
 
 // An image with a dense copy on the device and one in pinned host memory for its transfers (a

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -45,6 +46,9 @@ struct NodeSpec {
   std::map<std::string, std::string> parameters;
   std::map<std::string, std::string> topics;  // port -> topic
   rmw::QoS qos;
+  // Output ports whose images stay on the device in a device-resident run (keep_on_device); empty
+  // otherwise.
+  std::set<std::string> device_resident_outputs;
 };
 
 // A process of an external graph (graph.yaml `launch:`): robotperf starts it before timing and
@@ -143,5 +147,23 @@ void override_update_rate(BenchmarkSpec& spec, double hz);
 // Throws std::invalid_argument with one line when no kernel of the benchmark has it, naming the
 // backends they have.
 void override_backend(BenchmarkSpec& spec, const std::string& backend);
+
+// A topic whose messages a device-resident run keeps on the device: published by node `from`,
+// taken only by the nodes `to`, all of them on `backend` in one process.
+struct ResidentTopic {
+  std::string topic;
+  std::string from;
+  std::vector<std::string> to;
+  std::string backend;
+};
+
+// The device-resident configuration (DESIGN.md section 6: type adaptation, as REP 2007 and
+// NITROS do) of a single-process graph: a node's output stays on the device where no subscriber
+// needs it on the host. That is, where every node that takes the topic runs on the publisher's
+// backend, each kernel can hand its images over there (KernelInfo::device_resident_backends), and
+// neither the Monitor (the graph's output, an observed truth) nor anything else takes it. Marks
+// those ports (NodeSpec::device_resident_outputs) and returns the topics; throws
+// std::invalid_argument with one line when there are none, saying what it needs.
+std::vector<ResidentTopic> keep_on_device(BenchmarkSpec& spec);
 
 }  // namespace robotperf::harness

@@ -57,6 +57,9 @@ struct RunOptions {
   std::optional<double> update_rate_hz;
   // --backend: the nodes whose kernel has this backend run on it (override_backend).
   std::optional<std::string> backend;
+  // --device-resident: images stay on the device between nodes that can hand them over there
+  // (keep_on_device), a configuration of its own; single-process intra runs only.
+  bool device_resident = false;
   std::optional<std::size_t> count;   // messages to send, warm-up included
   std::optional<double> duration_s;   // alternative to count: rate * duration
   std::optional<std::size_t> warmup;  // default: the benchmark's
@@ -219,6 +222,8 @@ struct RunResult {
   std::string rmw;
   std::string processes;               // "single" or "per-node"
   std::string monitor_wait = "sleep";  // "sleep" or "spin" (RunOptions::monitor_wait)
+  // The topics a device-resident run kept on the device (keep_on_device); empty otherwise.
+  std::vector<ResidentTopic> device_resident;
   // DDS Security as run: the keystore (absolute) and rmw::describe() of its enclave; empty when
   // unsecured.
   std::filesystem::path keystore;

@@ -7,6 +7,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,9 @@ struct PortInfo {
   std::string name{};  // "image"
   // ROS type ("sensor_msgs/msg/Image"); empty when a parameter chooses it.
   std::string type{};
+  // On a backend of the kernel's device_resident_backends, this port's messages may keep their
+  // data on the device: an output the node can publish without it, an input it can take so.
+  bool device_resident = false;
 };
 
 // A kernel that runs a periodic control loop (ControlLoopSource): the parameter that sets its
@@ -38,6 +42,10 @@ struct KernelInfo {
   std::vector<PortInfo> outputs{};
   std::vector<ParameterInfo> parameters{};
   std::optional<ControlLoopInfo> control_loop{};
+  // The backends on which the kernel's device_resident ports can leave data on the device for
+  // the next node of its process, or take data another node left there (device-resident runs,
+  // DESIGN.md section 6: type adaptation, as REP 2007 and NITROS do).
+  std::vector<std::string> device_resident_backends{};
 
   const PortInfo* find_port(const std::string& port) const;
 };
@@ -51,6 +59,10 @@ struct KernelConfig {
   // benchmark.yaml's `workload: seed` when the dataset is generated from one: kernels with random
   // choices of their own (planners) follow it unless a parameter of theirs says otherwise.
   std::optional<uint64_t> workload_seed{};
+  // Output ports whose messages may keep their data on the device (a device-resident run): every
+  // subscriber of their topics is a node of this process on the same backend that takes such
+  // inputs. The node publishes those messages without downloading their data.
+  std::set<std::string> device_resident_outputs{};
 
   // The topic wired to `port`; throws std::invalid_argument when none is.
   std::string topic(const std::string& port) const;

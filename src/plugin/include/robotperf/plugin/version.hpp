@@ -4,4 +4,6 @@
 #pragma once
 
 // Raised whenever a type or function a plug-in sees changes incompatibly.
-#define ROBOTPERF_PLUGIN_API_VERSION 2  // 2: EvaluatorInfo::on_arrival
+// 2: EvaluatorInfo::on_arrival; 3: PortInfo::device_resident,
+// KernelInfo::device_resident_backends, KernelConfig::device_resident_outputs.
+#define ROBOTPERF_PLUGIN_API_VERSION 3

@@ -8,6 +8,7 @@
 #include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -70,6 +71,22 @@ ImageBackend image_backend(std::string_view name);
 // The name image_backend() takes.
 const char* image_backend_name(ImageBackend backend);
 
+// An image's pixels left on the CUDA device for the next node of the process, in a
+// device-resident run (DESIGN.md section 6: type adaptation, as REP 2007 and NITROS do): dense
+// rows x cols of OpenCV `type`, finished before the message that carries them is published, and
+// held until the last message that refers to them goes.
+struct ResidentPixels {
+  std::shared_ptr<void> memory;
+  int rows = 0, cols = 0, type = 0;
+};
+
+// A message for such pixels: `image` has its header, size, encoding and step and no data (what a
+// subscriber outside the device would have to download is not there). resident_pixels() finds
+// the pixels again from the message, or gives nullptr for any other message.
+std::shared_ptr<const msgs::Image> resident_image_message(msgs::Image&& image,
+                                                          ResidentPixels pixels);
+const ResidentPixels* resident_pixels(const std::shared_ptr<const msgs::Image>& message);
+
 // ---------------------------------------------------------------------------------------------
 // Rectification (image_proc RectifyNode + image_geometry::PinholeCameraModel)
 // ---------------------------------------------------------------------------------------------
@@ -106,12 +123,23 @@ class Rectifier {
   // buffer. `rectified` must not be `raw`.
   void rectify(const msgs::Image& raw, const msgs::CameraInfo& info, msgs::Image& rectified);
   msgs::Image rectify(const msgs::Image& raw, const msgs::CameraInfo& info);
+  // As rectify(), with the rectified pixels left on the device (kCuda only, else
+  // std::logic_error): `rectified` gets the header, size and encoding but no data. Where
+  // rectifying is a copy (D all zero) there is nothing to compute on the device: `rectified` then
+  // holds the pixels, on the host, and the result is empty.
+  std::optional<ResidentPixels> rectify_on_device(const msgs::Image& raw,
+                                                  const msgs::CameraInfo& info,
+                                                  msgs::Image& rectified);
 
   int interpolation() const { return interpolation_; }
   // How many times the full undistort-rectify map has been computed.
   uint64_t map_computations() const { return map_computations_; }
 
  private:
+  // Checks `raw` and `info` and readies the maps; false where rectifying is a copy (D all zero),
+  // which it has made into `rectified`.
+  bool prepare(const msgs::Image& raw, const msgs::CameraInfo& info, msgs::Image& rectified);
+
   // What the full-resolution map depends on, normalised as image_geometry does (binning 0 = 1).
   struct MapInputs {
     uint32_t width = 0;
@@ -181,8 +209,10 @@ class Resizer {
   // Throws std::invalid_argument for non-positive scales or sizes, or a bad image. kCuda follows
   // OpenCV's CPU arithmetic for INTER_LINEAR (8-bit images within 1 of the cpu's, as a rule the
   // same) for 8-bit, 16-bit unsigned and float images of 1 to 4 channels.
+  // With `pixels` (kCuda only, else std::logic_error), `image`'s pixels are those on the device
+  // (ResidentPixels of its size and type) and image.data is not read.
   void resize(const msgs::Image& image, const msgs::CameraInfo& info, msgs::Image& out,
-              msgs::CameraInfo& out_info);
+              msgs::CameraInfo& out_info, const ResidentPixels* pixels = nullptr);
 
  private:
   ResizeParams params_;
