@@ -47,6 +47,18 @@ int list_kernels(std::ostream& out) {
     out << "  " << i.description << "\n";
     out << "  in:  " << ports(i.inputs) << "\n";
     out << "  out: " << ports(i.outputs) << "\n";
+    if (!i.device_resident_backends.empty()) {
+      std::string on, handed;
+      for (const auto& b : i.device_resident_backends) on += (on.empty() ? "" : ", ") + b;
+      for (const auto* list : {&i.inputs, &i.outputs}) {
+        for (const auto& p : *list) {
+          if (p.device_resident)
+            handed += std::string(handed.empty() ? "" : ", ") +
+                      (list == &i.inputs ? "in " : "out ") + p.name;
+        }
+      }
+      out << "  device-resident on " << on << ": " << handed << " (run --device-resident)\n";
+    }
     if (i.control_loop) {
       out << "  runs a control loop at parameter " << i.control_loop->rate_parameter
           << " (run --update-rate)\n";

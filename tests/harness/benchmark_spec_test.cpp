@@ -9,6 +9,7 @@
 
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/run.hpp"
+#include "robotperf/plugin/registry.hpp"
 #include "test_package.hpp"
 
 namespace robotperf::harness {
@@ -165,41 +166,91 @@ TEST(BenchmarkSpec, PackageOutsideACategoryFolderIsNamed) {
   EXPECT_EQ(find_benchmark(p.root(), "t1").dir, p.dir());
 }
 
-// --device-resident keeps on the device only a topic that nodes alone take, all on one backend
-// whose kernels hand images over there: a1's rectified image on cuda, not its output (the
-// Monitor's) and nothing on cpu or in a one-node graph.
-TEST(BenchmarkSpec, DeviceResidentKeepsOnlyTopicsThatNodesAloneTakeOnOneDevice) {
-  const std::filesystem::path shipped = std::filesystem::path(ROBOTPERF_SOURCE_DIR) / "benchmarks";
-  BenchmarkSpec a1 = find_benchmark(shipped, "a1");
-  for (auto& n : a1.nodes) n.backend = "cuda";  // only named: nothing is built here
-  const std::vector<ResidentTopic> kept = keep_on_device(a1);
-  ASSERT_EQ(kept.size(), 1u);
-  EXPECT_EQ(kept[0].topic, "/rectify/image_rect");
-  EXPECT_EQ(kept[0].from, "rectify");
-  EXPECT_EQ(kept[0].to, std::vector<std::string>{"resize"});
-  EXPECT_EQ(kept[0].backend, "cuda");
-  EXPECT_EQ(a1.nodes[0].device_resident_outputs, std::set<std::string>{"image_rect"});
-  EXPECT_TRUE(a1.nodes[1].device_resident_outputs.empty()) << "the Monitor takes a1's output";
-  EXPECT_EQ(kernel_config(a1.nodes[0]).device_resident_outputs,
-            std::set<std::string>{"image_rect"});
+// Two kernels for keep_on_device's rules, whatever this build's backends: "test/hand_on" keeps
+// its output on "test_device", "test/take_on" takes its "image" input there (not its "info").
+void register_hand_over_kernels() {
+  static const bool registered = [] {
+    plugin::registry().add("benchmark_spec_test", [](plugin::Registrar& r) {
+      const auto no_node = [](graph::Context&, const plugin::KernelConfig&) {
+        return std::shared_ptr<graph::Node>();
+      };
+      const std::vector<std::string> backends{"cpu", "test_device"};
+      r.add_kernel({.name = "test/hand_on",
+                    .description = "keeps its output on the device",
+                    .backends = backends,
+                    .inputs = {{"in", "sensor_msgs/msg/Image"}},
+                    .outputs = {{"out", "sensor_msgs/msg/Image", true}},
+                    .device_resident_backends = {"test_device"}},
+                   no_node);
+      r.add_kernel(
+          {.name = "test/take_on",
+           .description = "takes its image on the device",
+           .backends = backends,
+           .inputs = {{"image", "sensor_msgs/msg/Image", true}, {"info", "sensor_msgs/msg/Image"}},
+           .outputs = {{"out", "sensor_msgs/msg/Image", true}},
+           .device_resident_backends = {"test_device"}},
+          no_node);
+    });
+    return true;
+  }();
+  static_cast<void>(registered);
+}
 
-  const auto refused = [](BenchmarkSpec spec, const char* what) {
+// in -> hand (hand_on) -> /mid -> take (take_on, image) -> /out (the Monitor's), all on
+// `backend`; `mid_port` is the port of take that /mid reaches.
+BenchmarkSpec hand_over_graph(const std::string& backend, const std::string& mid_port = "image") {
+  register_hand_over_kernels();
+  BenchmarkSpec spec;
+  spec.id = "h1";
+  spec.output.topic = "/out";
+  NodeSpec hand, take;
+  hand.name = "hand";
+  hand.kernel = "test/hand_on";
+  hand.backend = backend;
+  hand.topics = {{"in", "/in"}, {"out", "/mid"}};
+  take.name = "take";
+  take.kernel = "test/take_on";
+  take.backend = backend;
+  take.topics = {{mid_port, "/mid"}, {"out", "/out"}};
+  spec.nodes = {hand, take};
+  return spec;
+}
+
+// --device-resident keeps on the device only a topic that nodes alone take, through ports that
+// hand data over, all on one backend that both kernels hand over on; never the Monitor's topic.
+TEST(BenchmarkSpec, DeviceResidentKeepsOnlyTopicsThatNodesAloneTakeOnOneDevice) {
+  BenchmarkSpec spec = hand_over_graph("test_device");
+  const std::vector<ResidentTopic> kept = keep_on_device(spec);
+  ASSERT_EQ(kept.size(), 1u);
+  EXPECT_EQ(kept[0].topic, "/mid");
+  EXPECT_EQ(kept[0].from, "hand");
+  EXPECT_EQ(kept[0].to, std::vector<std::string>{"take"});
+  EXPECT_EQ(kept[0].backend, "test_device");
+  EXPECT_EQ(spec.nodes[0].device_resident_outputs, std::set<std::string>{"out"});
+  EXPECT_TRUE(spec.nodes[1].device_resident_outputs.empty()) << "the Monitor takes /out";
+  EXPECT_EQ(kernel_config(spec.nodes[0]).device_resident_outputs, std::set<std::string>{"out"});
+
+  const auto refused = [](BenchmarkSpec graph, const char* what) {
     try {
-      keep_on_device(spec);
+      keep_on_device(graph);
       ADD_FAILURE() << what << ": kept something on the device";
     } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find("no topic of " + spec.id + " can stay on the device"),
+      EXPECT_NE(std::string(e.what()).find("no topic of h1 can stay on the device"),
                 std::string::npos)
           << e.what();
     }
   };
-  refused(find_benchmark(shipped, "a1"), "a1 on cpu");
-  BenchmarkSpec mixed = find_benchmark(shipped, "a1");
-  mixed.nodes[0].backend = "cuda";  // resize stays on cpu: it needs the pixels on the host
-  refused(mixed, "a1, resize on cpu");
-  BenchmarkSpec a5 = find_benchmark(shipped, "a5");
-  for (auto& n : a5.nodes) n.backend = "cuda";
-  refused(a5, "a5, one node");
+  refused(hand_over_graph("cpu"), "on cpu");
+  refused(hand_over_graph("test_device", "info"), "into a port that takes host data");
+  BenchmarkSpec mixed = hand_over_graph("test_device");
+  mixed.nodes[1].backend = "cpu";
+  refused(mixed, "the taker on another backend");
+  BenchmarkSpec also_watched = hand_over_graph("test_device");
+  NodeSpec watcher = also_watched.nodes[1];
+  watcher.name = "watcher";
+  watcher.topics = {{"info", "/mid"}, {"out", "/other"}};
+  also_watched.nodes.push_back(watcher);
+  refused(also_watched, "a second taker that needs the data on the host");
 }
 
 TEST(BenchmarkSpec, MissingFileIsReported) {

@@ -21,6 +21,13 @@ inline std::vector<std::string> perception_backends() {
   return names;
 }
 
+// The backends on which rectify and resize hand images to each other on the device (a
+// device-resident run): cuda, in a build that has it.
+inline std::vector<std::string> image_resident_backends() {
+  if (cuda_backend_built()) return {"cuda"};
+  return {};
+}
+
 // The backend a node's config names; a device backend needs its device now, not at the first
 // frame.
 inline ImageBackend backend_of(const plugin::KernelConfig& config) {

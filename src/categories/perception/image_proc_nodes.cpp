@@ -140,7 +140,7 @@ void register_image_proc_kernels(plugin::Registrar& registrar) {
        .inputs = camera_inputs(false),
        .outputs = {{"image_rect", "sensor_msgs/msg/Image", true}},
        .parameters = {interpolation_declaration()},
-       .device_resident_backends = {"cuda"}},
+       .device_resident_backends = image_resident_backends()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<RectifyNode>(context, config);
       });
@@ -163,7 +163,7 @@ void register_image_proc_kernels(plugin::Registrar& registrar) {
             plugin::int_parameter("width", defaults.width,
                                   "target width without use_scale; -1 keeps the input's"),
             interpolation_declaration()},
-       .device_resident_backends = {"cuda"}},
+       .device_resident_backends = image_resident_backends()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<ResizeNode>(context, config);
       });
