@@ -123,12 +123,11 @@ void print_cuda_transfer_floor() {
       "and 3686400 down (resize)\n");
 }
 
-// Whether a device-resident run of `spec` on cuda keeps anything on the device.
+// Whether a device-resident run of `spec` on cuda (--backend cuda --device-resident) keeps
+// anything on the device.
 bool can_stay_on_device(harness::BenchmarkSpec spec) {
-  for (auto& n : spec.nodes) {
-    if (std::ranges::count(harness::kernel_of(n).info.backends, "cuda") > 0) n.backend = "cuda";
-  }
   try {
+    harness::override_backend(spec, "cuda");
     harness::keep_on_device(spec);
     return true;
   } catch (const std::invalid_argument&) {
