@@ -13,6 +13,7 @@
 #include <tuple>
 
 #include "../command_line.hpp"
+#include "../sanitized_build.hpp"
 #include "../shared_data.hpp"
 #include "robotperf/rmw/transport.hpp"
 
@@ -100,8 +101,8 @@ TEST_F(Cli, RunA1OnIntra) {
 }
 
 TEST_F(Cli, RunA1OnFastDds) {
-  const Outcome o = robotperf_cli("run a1 --count 60 --rmw fastdds --domain " + domain() +
-                                  " --output " + out_.string());
+  const Outcome o = robotperf_cli("run a1 --count 60 --rmw fastdds" + sanitized_rate_option(5) +
+                                  " --domain " + domain() + " --output " + out_.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   expect_clean_a1_result(result_json(), "fastdds");
 }
@@ -111,7 +112,7 @@ class CliPerNode : public Cli, public ::testing::WithParamInterface<std::string>
 TEST_P(CliPerNode, RunA1OneProcessPerNode) {
   const std::string rmw = GetParam();
   // At 10 Hz even a loaded 2-core machine moves 1.2 MB frames between processes in time.
-  const Outcome o = robotperf_cli("run a1 --count 60 --rate 10 --rmw " + rmw +
+  const Outcome o = robotperf_cli("run a1 --count 60" + rate_option(10, 2) + " --rmw " + rmw +
                                   " --processes per-node --cpus 0 --domain " + domain() +
                                   " --output " + out_.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
@@ -387,15 +388,16 @@ TEST_F(Cli, RunA3AndA4OnEveryTransport) {
 
 // d1-d6 end to end on intra, short: valid, functional checks passed, the workload seed recorded.
 TEST_F(Cli, RunManipulationBenchmarks) {
-  const std::tuple<const char*, const char*, const char*> benchmarks[] = {
+  // A plan takes 0.1 s here, several times that on a loaded machine: at 4 Hz the queue of queries
+  // (10 deep) does not overflow.
+  const std::string d1_rate = rate_option(4, 1);
+  const std::tuple<const char*, const char*, std::string> benchmarks[] = {
       {"d6", "forward_kinematics", "--count 120"},
       {"d4", "inverse_kinematics", "--count 120"},
       {"d5", "inverse_kinematics", "--count 120"},
       {"d2", "collision", "--count 120"},
       {"d3", "collision", "--count 120"},
-      // A plan takes 0.1 s here, several times that on a loaded machine: at 4 Hz the queue of
-      // queries (10 deep) does not overflow.
-      {"d1", "plan_execution", "--count 34 --rate 4"}};
+      {"d1", "plan_execution", "--count 34" + d1_rate}};
   for (const auto& [id, evaluator, options] : benchmarks) {
     fs::remove_all(out_);
     const Outcome o =
@@ -411,7 +413,8 @@ TEST_F(Cli, RunManipulationBenchmarks) {
   };
   const nlohmann::json first = d1_path_length();
   fs::remove_all(out_);
-  ASSERT_EQ(robotperf_cli("run d1 --count 34 --rate 4 --output " + out_.string()).exit_code, 0);
+  ASSERT_EQ(robotperf_cli("run d1 --count 34" + d1_rate + " --output " + out_.string()).exit_code,
+            0);
   EXPECT_EQ(d1_path_length(), first);
 }
 
@@ -424,8 +427,9 @@ TEST_F(Cli, RunLocalizationBenchmarks) {
   for (const auto& [id, evaluator] : benchmarks) {
     for (const std::string rmw : {"intra", "fastdds", "cyclonedds"}) {
       fs::remove_all(out_);
-      const Outcome o = robotperf_cli(std::string("run ") + id + " --count 110 --rate 20 --rmw " +
-                                      rmw + " --domain " + domain() + " --output " + out_.string());
+      const Outcome o =
+          robotperf_cli(std::string("run ") + id + " --count 110" + rate_option(20, 5) + " --rmw " +
+                        rmw + " --domain " + domain() + " --output " + out_.string());
       ASSERT_EQ(o.exit_code, 0) << id << " " << rmw << "\n" << o.out;
       EXPECT_NE(o.out.find("functional result: VALID"), std::string::npos) << o.out;
       expect_functional_result(result_json(), id, rmw, evaluator);
@@ -438,7 +442,7 @@ TEST_F(Cli, RunLocalizationBenchmarks) {
   ASSERT_EQ(o.exit_code, 0) << o.out;
   // At 20 Hz, as the runs above: at the bag's own rate, 1280x720 detection beside another test on
   // a 2-core machine fell behind and lost frames.
-  o = robotperf_cli("run b3 --dataset " + bag + " --count 110 --rate 20 --output " +
+  o = robotperf_cli("run b3 --dataset " + bag + " --count 110" + rate_option(20, 5) + " --output " +
                     (out_ / "r").string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("outputs not checked for accuracy (apriltag_detection)"), std::string::npos)
@@ -458,8 +462,8 @@ TEST_F(Cli, RunLocalizationBenchmarks) {
     }
     std::ofstream(package / file) << text;
   }
-  o = robotperf_cli("--benchmarks " + (out_ / "bench").string() + " run x3 --count 110 --output " +
-                    (out_ / "x3").string());
+  o = robotperf_cli("--benchmarks " + (out_ / "bench").string() + " run x3 --count 110" +
+                    sanitized_rate_option(5) + " --output " + (out_ / "x3").string());
   EXPECT_EQ(o.exit_code, 3) << o.out;
   EXPECT_NE(o.out.find("functional result: INVALID"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("translation_error_median_m"), std::string::npos) << o.out;
@@ -742,17 +746,21 @@ TEST_F(Cli, RunReplaysABagOnItsOwnTimeline) {
   const std::string bag = (out_ / "camera").string();
   Outcome o = robotperf_cli("dataset generate perception/image --out " + bag);
   ASSERT_EQ(o.exit_code, 0) << o.out;
-  o = robotperf_cli("run a1 --dataset " + bag + " --rate bag --rate-scale 2 --count 60 --output " +
-                    out_.string() + " --quiet");
+  // 30 Hz recorded, played twice as fast (a fifth as fast in a sanitized build); the result says
+  // so.
+  const std::string scale = kSanitizedBuild ? "0.2" : "2";
+  const std::string rate = kSanitizedBuild ? "6.0" : "60.0";
+  o = robotperf_cli("run a1 --dataset " + bag + " --rate bag --rate-scale " + scale +
+                    " --count 60 --output " + out_.string() + " --quiet");
   ASSERT_EQ(o.exit_code, 0) << o.out;
   const auto j = result_json();
   expect_clean_a1_result(j, "intra");
   EXPECT_EQ(j["dataset"]["name"], bag);
-  // 30 Hz recorded, played twice as fast; the result says so.
-  EXPECT_NEAR(j["configuration"]["rate_hz"].get<double>(), 60.0, 0.1);
+  EXPECT_NEAR(j["configuration"]["rate_hz"].get<double>(), std::stod(rate), 0.1);
   EXPECT_EQ(j["configuration"]["timeline"], "bag");
-  EXPECT_EQ(j["configuration"]["rate_scale"], 2.0);
-  EXPECT_NE(o.out.find("· 60.0 Hz (the bag's timeline x2) · dataset " + bag), std::string::npos)
+  EXPECT_EQ(j["configuration"]["rate_scale"], std::stod(scale));
+  EXPECT_NE(o.out.find(" · " + rate + " Hz (the bag's timeline x" + scale + ") · dataset " + bag),
+            std::string::npos)
       << o.out;
 }
 
@@ -799,9 +807,9 @@ TEST_F(Cli, RunReplaysABagIntoOneProcessPerNode) {
   o = robotperf_cli("dataset generate perception/depth --out " + depth_bag);
   ASSERT_EQ(o.exit_code, 0) << o.out;
   fs::remove(result_json_path());
-  o = robotperf_cli("run a4 --dataset " + depth_bag +
-                    " --count 35 --rate 10 --rmw fastdds --processes per-node --domain " +
-                    domain() + " --quiet --output " + out_.string());
+  o = robotperf_cli("run a4 --dataset " + depth_bag + " --count 35" + rate_option(10, 3) +
+                    " --rmw fastdds --processes per-node --domain " + domain() +
+                    " --quiet --output " + out_.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   EXPECT_NE(o.out.find("functional: outputs not checked"), std::string::npos) << o.out;
   j = result_json();

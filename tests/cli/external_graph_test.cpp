@@ -12,6 +12,7 @@
 #include <string>
 
 #include "../command_line.hpp"
+#include "../sanitized_build.hpp"
 #include "robotperf/rmw/transport.hpp"
 
 namespace {
@@ -183,6 +184,7 @@ TEST_F(ExternalGraph, TypeMismatchAtTheOutputIsNamed) {
 // side of discovery may complete hundreds of milliseconds after ours; the warm-up is repeated
 // until it delivers, so that no measured message meets an unmatched reader.
 TEST_F(ExternalGraph, ForeignNodeAtVgaColour30HzLosesNothing) {
+  if (kSanitizedBuild) GTEST_SKIP() << kRateNeedsUnsanitizedBuild;
   for (const std::string rmw : {"cyclonedds", "fastdds"}) {
     fs::remove_all(dir_ / "results");
     const Outcome o = run_foreign("copy", rmw, 100);

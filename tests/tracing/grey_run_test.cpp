@@ -13,6 +13,7 @@
 #include <set>
 
 #include "../command_line.hpp"
+#include "../sanitized_build.hpp"
 #include "device_hops.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/perception/opencl_device.hpp"
@@ -305,7 +306,7 @@ class GreyRunPerNode : public GreyRun, public ::testing::WithParamInterface<std:
 TEST_P(GreyRunPerNode, ProcessesAreTracedAsPartOfTheRun) {
   RunOptions o;
   o.count = 45;
-  o.rate_hz = 15;
+  o.rate_hz = test_rate(15, 2);
   o.rmw = GetParam();
   o.processes = ProcessLayout::kPerNode;
   o.domain_id = rmw::reserved_domain();
