@@ -545,15 +545,25 @@ class ExternalMeterSource : public PowerSource {
   }
 
  private:
+  // Runs the command; its standard output goes to `output`, and on failure `error` says why,
+  // with the last line the meter wrote to its standard error (which is kept off the terminal:
+  // a failing meter is one line of robotperf's).
   bool run(std::string& output, std::string& error) {
-    int pipe_fds[2];
-    if (pipe2(pipe_fds, O_CLOEXEC) != 0) {
+    int out_fds[2], err_fds[2];
+    if (pipe2(out_fds, O_CLOEXEC) != 0) {
       error = std::string("pipe: ") + std::strerror(errno);
+      return false;
+    }
+    if (pipe2(err_fds, O_CLOEXEC) != 0) {
+      error = std::string("pipe: ") + std::strerror(errno);
+      ::close(out_fds[0]);
+      ::close(out_fds[1]);
       return false;
     }
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDOUT_FILENO);
+    posix_spawn_file_actions_adddup2(&actions, out_fds[1], STDOUT_FILENO);
+    posix_spawn_file_actions_adddup2(&actions, err_fds[1], STDERR_FILENO);
     posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
     // Its own process group, so that a timeout kills the shell's children too.
     posix_spawnattr_t attributes;
@@ -566,32 +576,49 @@ class ExternalMeterSource : public PowerSource {
     const int rc = posix_spawn(&pid, argv[0], &actions, &attributes, argv, environ);
     posix_spawn_file_actions_destroy(&actions);
     posix_spawnattr_destroy(&attributes);
-    ::close(pipe_fds[1]);
+    ::close(out_fds[1]);
+    ::close(err_fds[1]);
     if (rc != 0) {
-      ::close(pipe_fds[0]);
+      ::close(out_fds[0]);
+      ::close(err_fds[0]);
       error = "cannot start /bin/sh for the power meter: " + std::string(std::strerror(rc));
       return false;
     }
     const auto deadline =
         std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s_);
     bool timed_out = false;
-    while (true) {
+    std::string diagnostics;
+    pollfd fds[2] = {{out_fds[0], POLLIN, 0}, {err_fds[0], POLLIN, 0}};
+    std::string* into[2] = {&output, &diagnostics};
+    // Reads what fds[i] has; closes it at its end (poll ignores a negative descriptor).
+    const auto take = [&](int i) {
+      char buffer[256];
+      const ssize_t n = ::read(fds[i].fd, buffer, sizeof buffer);
+      if (n < 0 && errno == EINTR) return;
+      if (n <= 0) {
+        ::close(fds[i].fd);
+        fds[i].fd = -1;
+      } else if (into[i]->size() < 4096) {
+        into[i]->append(buffer, static_cast<std::size_t>(n));
+      }
+    };
+    while (fds[0].fd >= 0) {  // until the standard output ends
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
           deadline - std::chrono::steady_clock::now());
       if (left.count() <= 0) {
         timed_out = true;
         break;
       }
-      pollfd fd{pipe_fds[0], POLLIN, 0};
-      const int ready = ::poll(&fd, 1, static_cast<int>(left.count()));
-      if (ready < 0 && errno == EINTR) continue;
-      if (ready <= 0) continue;
-      char buffer[256];
-      const ssize_t n = ::read(pipe_fds[0], buffer, sizeof buffer);
-      if (n <= 0) break;
-      if (output.size() < 4096) output.append(buffer, static_cast<std::size_t>(n));
+      if (::poll(fds, 2, static_cast<int>(left.count())) <= 0) continue;  // EINTR, or the deadline
+      for (int i = 0; i < 2; ++i) {
+        if (fds[i].fd >= 0 && fds[i].revents != 0) take(i);
+      }
     }
-    ::close(pipe_fds[0]);
+    // Then what the standard error holds already: a child the meter left running may keep it open.
+    while (!timed_out && fds[1].fd >= 0 && ::poll(&fds[1], 1, 0) > 0) take(1);
+    for (const pollfd& fd : fds) {
+      if (fd.fd >= 0) ::close(fd.fd);
+    }
     if (timed_out) ::kill(-pid, SIGKILL);
     int status = 0;
     while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
@@ -605,10 +632,22 @@ class ExternalMeterSource : public PowerSource {
       error = "power meter '" + command_ + "' failed (" +
               (WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
                                  : "killed by signal " + std::to_string(WTERMSIG(status))) +
-              ")";
+              ")" + last_line(diagnostics);
       return false;
     }
     return true;
+  }
+
+  // ": LINE" with the last non-empty line of `text` (shortened), or nothing.
+  static std::string last_line(const std::string& text) {
+    std::string line;
+    std::istringstream lines(text);
+    for (std::string l; std::getline(lines, l);) {
+      if (!trim(l).empty()) line = trim(l);
+    }
+    if (line.empty()) return "";
+    if (line.size() > 160) line = line.substr(0, 157) + "...";
+    return ": " + line;
   }
 
   std::string command_;

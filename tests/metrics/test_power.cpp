@@ -400,6 +400,13 @@ TEST_F(ExternalMeter, BrokenCommandsAreClearErrors) {
             std::string::npos);
   EXPECT_NE(message("exit 3").find("exit status 3"), std::string::npos);
   EXPECT_NE(message("sleep 5").find("did not finish within"), std::string::npos);
+  // What the meter said on its standard error ends the one line (its last line), instead of going
+  // to the terminal as a second one.
+  EXPECT_EQ(message("echo first >&2; echo 'no such sensor' >&2; exit 1"),
+            "power meter 'echo first >&2; echo 'no such sensor' >&2; exit 1' failed (exit status "
+            "1): no such sensor");
+  // A child left running with the standard error open does not hold the reading up.
+  EXPECT_EQ(message("(sleep 3 >/dev/null &); echo 5"), "no error");
 }
 
 TEST(PowerSampler, EndWithoutBeginSaysTheWindowNeverStarted) {
