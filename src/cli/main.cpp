@@ -786,6 +786,13 @@ struct TraceArgs {
 // `trace analyze`: the grey-box analysis of any CTF trace folder.
 int analyze(const TraceArgs& a) {
   const auto analysis = tracing::analyze_trace(a.dir, {.run_pid = a.pid, .extra_processes = {}});
+  // A process the trace has no run of is a wrong --pid, not an invalid run.
+  if (a.pid != 0 && !analysis.run) {
+    throw std::invalid_argument(tracing::missing_run(analysis, a.pid) +
+                                (analysis.run_pids.empty()
+                                     ? ": leave --pid out to analyse the trace's other events"
+                                     : ": give --pid one of those, or leave it out for the first"));
+  }
   std::cout << tracing::analysis_summary(analysis);
   if (!a.json.empty()) {
     nlohmann::json j = tracing::to_json(analysis);

@@ -1123,14 +1123,29 @@ void callback_durations(TraceAnalysis& a, const Collected& c, const std::optiona
   }
 }
 
+}  // namespace
+
+std::string missing_run(const TraceAnalysis& a, int run_pid) {
+  if (run_pid == 0 || a.run_pids.empty()) {
+    return "no robotperf run in the trace (robotperf:run_begin)";
+  }
+  std::string pids;
+  for (const int pid : a.run_pids) pids += (pids.empty() ? "" : ", ") + std::to_string(pid);
+  return "no robotperf run of process " + std::to_string(run_pid) +
+         " in the trace (it holds the run" + (a.run_pids.size() > 1 ? "s" : "") + " of process" +
+         (a.run_pids.size() > 1 ? "es " : " ") + pids + ")";
+}
+
+namespace {
+
 // Why each table the trace cannot fill is empty, from the events it lacks.
-void explain_missing_tables(TraceAnalysis& a, const Collected& c) {
+void explain_missing_tables(TraceAnalysis& a, const Collected& c, int run_pid) {
   if (a.hops.empty()) {
     a.unavailable.push_back(
         a.run ? "per-hop breakdown: no robotperf:publish / callback_entry / kernel events of the "
                 "run's nodes"
-              : "per-hop breakdown and end-to-end latency: no robotperf run in the trace "
-                "(robotperf:run_begin); they need a graph run by robotperf");
+              : "per-hop breakdown and end-to-end latency: " + missing_run(a, run_pid) +
+                    "; they need a graph run by robotperf");
   }
   if (a.callbacks.empty()) {
     a.unavailable.push_back(
@@ -1341,6 +1356,7 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
   if (!c.runs.empty()) {
     std::sort(c.runs.begin(), c.runs.end(),
               [](const auto& x, const auto& y) { return x.first < y.first; });
+    for (const auto& [ts, r] : c.runs) a.run_pids.push_back(r.pid);
     const RunInfo* chosen = &c.runs.front().second;
     if (options.run_pid != 0) {
       chosen = nullptr;
@@ -1376,7 +1392,7 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
     breakdown(a, c, *a.run, lookup);
   }
   tables.get();
-  explain_missing_tables(a, c);
+  explain_missing_tables(a, c, options.run_pid);
 
   if (a.discarded_events > 0) {
     a.invalid_reasons.insert(
@@ -1388,10 +1404,7 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
     a.invalid_reasons.insert(a.invalid_reasons.begin(),
                              "the tracer lost " + std::to_string(a.lost_packets) + " packets");
   }
-  if (!a.run && options.run_pid != 0) {
-    a.invalid_reasons.push_back("no robotperf run of process " + std::to_string(options.run_pid) +
-                                " in the trace");
-  }
+  if (!a.run && options.run_pid != 0) a.invalid_reasons.push_back(missing_run(a, options.run_pid));
   a.valid = a.invalid_reasons.empty();
   a.read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return a;

@@ -506,6 +506,27 @@ TEST(Analyzer, TraceWithoutRobotperfRunStillGivesCallbacksAndTopics) {
   EXPECT_NE(analysis_summary(a).find("no robotperf run"), std::string::npos);
 }
 
+// A process whose run the trace does not hold: no run is taken instead, and the reasons name the
+// processes whose runs it holds.
+TEST(Analyzer, ARunOfAnotherProcessIsNamedNotTaken) {
+  TempDir dir("other-pid");
+  CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
+  write_run(w);
+  EXPECT_EQ(analyze_trace(dir.path(), {.run_pid = kRunPid, .extra_processes = {}}).run_pids,
+            std::vector<int>{kRunPid});
+  const TraceAnalysis a =
+      analyze_trace(dir.path(), {.run_pid = kRunPid + 1, .extra_processes = {}});
+  EXPECT_FALSE(a.run.has_value());
+  EXPECT_FALSE(a.valid);
+  const std::string expected = "no robotperf run of process " + std::to_string(kRunPid + 1) +
+                               " in the trace (it holds the run of process " +
+                               std::to_string(kRunPid) + ")";
+  EXPECT_EQ(missing_run(a, kRunPid + 1), expected);
+  EXPECT_EQ(a.invalid_reasons, std::vector<std::string>{expected});
+  EXPECT_NE(breakdown_table(a).find("end-to-end latency: " + expected), std::string::npos)
+      << breakdown_table(a);
+}
+
 // ros2_tracing's rclcpp_callback_register names callbacks; a Humble trace (rmw_publish without a
 // timestamp) cannot pair publishes with takes, and the analysis says so instead of dropping the
 // table silently.

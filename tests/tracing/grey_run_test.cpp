@@ -444,6 +444,15 @@ TEST_F(GreyRun, CommandLineRunsGreyAndAnalysesTheTrace) {
   EXPECT_EQ(a["run"]["latency_ms"]["from_scheduled"]["p50"],
             j["latency_ms"]["from_scheduled"]["p50"]);
 
+  // A process whose run the trace does not hold is a wrong argument, named on one line.
+  const Outcome other = robotperf_cli("trace analyze " + trace.string() + " --pid 1");
+  EXPECT_EQ(other.exit_code, 2) << other.out;
+  EXPECT_EQ(std::count(other.out.begin(), other.out.end(), '\n'), 1) << other.out;
+  EXPECT_NE(other.out.find("no robotperf run of process 1 in the trace (it holds the run of "
+                           "process "),
+            std::string::npos)
+      << other.out;
+
   const Outcome missing = robotperf_cli("trace analyze " + (dir_ / "no-such-trace").string());
   EXPECT_EQ(missing.exit_code, 2) << missing.out;
   EXPECT_EQ(std::count(missing.out.begin(), missing.out.end(), '\n'), 1) << missing.out;

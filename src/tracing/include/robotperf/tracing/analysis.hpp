@@ -90,8 +90,10 @@ struct TraceAnalysis {
   int64_t first_ns = 0, last_ns = 0;
   double read_seconds = 0;  // wall time of the analysis
 
-  // The robotperf run, when the trace holds one.
+  // The robotperf run, when the trace holds one (of the process AnalysisOptions::run_pid names).
   std::optional<RunInfo> run;
+  // The processes whose robotperf runs the trace holds, the first begun first.
+  std::vector<int> run_pids;
   std::vector<MessageTimes> messages;  // by index
   std::size_t sent = 0, measured = 0, matched = 0, lost = 0, duplicates = 0, unknown = 0;
   // Measured messages without an output event while the tracer discarded events or lost packets:
@@ -141,5 +143,9 @@ std::string breakdown_table(const TraceAnalysis& analysis);
 
 // The full report of `robotperf trace analyze`: run summary (when there is a run) + breakdown.
 std::string analysis_summary(const TraceAnalysis& analysis);
+
+// Why `analysis` has no run: the trace holds none, or none of process `run_pid` (0: any), naming
+// the processes whose runs it holds.
+std::string missing_run(const TraceAnalysis& analysis, int run_pid);
 
 }  // namespace robotperf::tracing
