@@ -231,6 +231,14 @@ int describe_benchmark(const Roots& roots, const std::string& id) {
   if (const auto* d = plugin::registry().find_dataset(s.dataset)) {
     std::cout << " — " << d->info.description << " (from " << d->origin << ")";
   }
+  if (!s.workload.empty()) {
+    std::cout << "\nworkload: ";
+    const char* separator = " ";
+    for (const auto& [key, value] : s.workload) {
+      std::cout << separator << key << " = " << value;
+      separator = ", ";
+    }
+  }
   std::cout << "\nrate:      " << s.rate_hz << " Hz, "
             << (s.count ? std::to_string(s.count) : "dataset-length") << " messages, warm-up "
             << s.warmup << ", drain " << s.drain_s << " s\n";

@@ -131,6 +131,8 @@ void describe_node(std::ostream& out, const harness::NodeSpec& node) {
       out << "      param " << p.name << " = " << given->second << "\n";
     } else if (p.default_value) {
       out << "      param " << p.name << " = " << *p.default_value << " (default)\n";
+    } else {
+      out << "      param " << p.name << " computed: " << p.doc << "\n";
     }
   }
 }

@@ -386,6 +386,16 @@ TEST_F(Cli, RunA3AndA4OnEveryTransport) {
   EXPECT_NE(d.out.find("threshold bad1 <= 0.05"), std::string::npos) << d.out;
 }
 
+// describe shows the dataset's workload and the parameters a kernel computes, which a run
+// depends on as much as on those given.
+TEST_F(Cli, DescribeShowsTheWorkloadAndComputedParameters) {
+  const Outcome d = robotperf_cli("describe d1");
+  ASSERT_EQ(d.exit_code, 0) << d.out;
+  EXPECT_NE(d.out.find("\nworkload:  requests = 40, seed = 1\n"), std::string::npos) << d.out;
+  EXPECT_NE(d.out.find("param seed computed: OMPL's seed"), std::string::npos) << d.out;
+  EXPECT_EQ(robotperf_cli("describe a1").out.find("workload:"), std::string::npos);
+}
+
 // d1-d6 end to end on intra, short: valid, functional checks passed, the workload seed recorded.
 TEST_F(Cli, RunManipulationBenchmarks) {
   // A plan takes 0.1 s here, several times that on a loaded machine: at 4 Hz the queue of queries
