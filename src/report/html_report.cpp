@@ -51,40 +51,6 @@ std::string table_html(const Table& t) {
   return s.str();
 }
 
-// Characters as a terminal shows them: UTF-8 continuation bytes take no column.
-std::size_t columns(const std::string& text) {
-  return static_cast<std::size_t>(std::ranges::count_if(
-      text, [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
-}
-
-// A table as aligned plain text: numeric columns to the right, the last column unpadded.
-std::string table_text(const Table& t) {
-  std::vector<std::size_t> width(t.header.size(), 0);
-  auto measure = [&](const std::vector<std::string>& row) {
-    for (std::size_t c = 0; c < row.size() && c < width.size(); ++c)
-      width[c] = std::max(width[c], columns(row[c]));
-  };
-  measure(t.header);
-  for (const auto& row : t.rows) measure(row);
-  std::ostringstream s;
-  auto line = [&](const std::vector<std::string>& row) {
-    for (std::size_t c = 0; c < row.size() && c < width.size(); ++c) {
-      const std::string pad(width[c] - columns(row[c]), ' ');
-      const bool last = c + 1 == row.size();
-      if (c > 0) s << "  ";
-      if (c < t.numeric.size() && t.numeric[c]) {
-        s << pad << row[c];
-      } else {
-        s << row[c] << (last ? "" : pad);
-      }
-    }
-    s << "\n";
-  };
-  line(t.header);
-  for (const auto& row : t.rows) line(row);
-  return s.str();
-}
-
 constexpr const char* kSignificanceNote =
     "Significance: with six or more runs per side, the medians' distribution-free 95 % "
     "intervals; with two to five, Welch's t-test at the 5 % level over the per-run values; with "

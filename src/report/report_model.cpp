@@ -626,7 +626,7 @@ detail::Comparison compare(const std::string& a_sel, const std::string& b_sel,
         const std::string list = joined(configurations, "; ");
         throw ReportError("'" + selector + "' selects " + std::to_string(configurations.size()) +
                           " configurations of " + id + " (" + list +
-                          "): name one series, or narrow it with fields, e.g. --compare "
+                          "): name one series, or narrow the side with fields, e.g. "
                           "'hardware=...,rmw=fastdds,processes=single,mode=black,rate=30'");
       }
     }
@@ -1032,6 +1032,39 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
                   std::to_string(flagged_rows) + " flagged). robotperf " + build_info::kVersion +
                   ".";
   return model;
+}
+
+// Characters as a terminal shows them: UTF-8 continuation bytes take no column.
+static std::size_t columns(const std::string& text) {
+  return static_cast<std::size_t>(std::ranges::count_if(
+      text, [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+}
+
+std::string table_text(const Table& t) {
+  std::vector<std::size_t> width(t.header.size(), 0);
+  auto measure = [&](const std::vector<std::string>& row) {
+    for (std::size_t c = 0; c < row.size() && c < width.size(); ++c)
+      width[c] = std::max(width[c], columns(row[c]));
+  };
+  measure(t.header);
+  for (const auto& row : t.rows) measure(row);
+  std::ostringstream s;
+  auto line = [&](const std::vector<std::string>& row) {
+    for (std::size_t c = 0; c < row.size() && c < width.size(); ++c) {
+      const std::string pad(width[c] - columns(row[c]), ' ');
+      const bool last = c + 1 == row.size();
+      if (c > 0) s << "  ";
+      if (c < t.numeric.size() && t.numeric[c]) {
+        s << pad << row[c];
+      } else {
+        s << row[c] << (last ? "" : pad);
+      }
+    }
+    s << "\n";
+  };
+  line(t.header);
+  for (const auto& row : t.rows) line(row);
+  return s.str();
 }
 
 }  // namespace detail

@@ -18,6 +18,10 @@ struct Table {
   std::vector<bool> row_warning;  // rows to highlight (invalid runs, flagged rows)
 };
 
+// A table as aligned plain text for a terminal: each column as wide as its widest cell, numeric
+// columns to the right, the last column unpadded.
+std::string table_text(const Table& table);
+
 // One radar plot: axes = benchmarks of a category, one polygon per hardware series.
 struct Radar {
   std::string category, metric, unit;

@@ -8,6 +8,8 @@
 #include <set>
 #include <sstream>
 
+#include "report_model.hpp"
+
 namespace robotperf::report {
 namespace {
 
@@ -485,25 +487,20 @@ std::string format_fixed(double value, int decimals) {
 }
 
 std::string runs_table(const std::vector<StoredRun>& runs) {
-  std::ostringstream out;
-  char line[512];
-  std::snprintf(line, sizeof line, "%-36s %-5s %-5s %-32s %-14s %-19s %9s %9s %9s %8s %s\n", "file",
-                "bench", "type", "hardware", "transport", "date (UTC)", "lat max", "lat p50",
-                "thr Hz", "power W", "validity");
-  out << line;
+  detail::Table t;
+  t.header = {"file",    "bench",   "type",   "hardware", "transport", "date (UTC)",
+              "lat max", "lat p50", "thr Hz", "power W",  "validity"};
+  t.numeric = {false, false, false, false, false, false, true, true, true, true, false};
   for (const auto& r : runs) {
-    std::string hardware = r.hardware.size() > 32 ? r.hardware.substr(0, 31) + "~" : r.hardware;
     std::string validity = r.valid ? "valid" : "INVALID";
     if (!r.valid && !r.invalid_reasons.empty()) validity += ": " + r.invalid_reasons.front();
-    std::snprintf(line, sizeof line, "%-36s %-5s %-5s %-32s %-14s %-19s %9s %9s %9s %8s %s\n",
-                  r.stem().c_str(), r.benchmark_id.c_str(), r.type.c_str(), hardware.c_str(),
-                  (r.rmw + (r.processes == "per-node" ? "/per-node" : "")).c_str(),
-                  r.timestamp().c_str(), format_fixed(r.latency.max, 3).c_str(),
-                  format_fixed(r.latency.p50, 3).c_str(), format_fixed(r.throughput_hz, 2).c_str(),
-                  r.power_w ? format_fixed(*r.power_w, 2).c_str() : "-", validity.c_str());
-    out << line;
+    t.rows.push_back({r.stem(), r.benchmark_id, r.type, r.hardware,
+                      r.rmw + (r.processes == "per-node" ? "/per-node" : ""), r.timestamp(),
+                      format_fixed(r.latency.max, 3), format_fixed(r.latency.p50, 3),
+                      format_fixed(r.throughput_hz, 2),
+                      r.power_w ? format_fixed(*r.power_w, 2) : "-", validity});
   }
-  return out.str();
+  return detail::table_text(t);
 }
 
 namespace {

@@ -4,11 +4,13 @@
 #include <algorithm>
 #include <fstream>
 #include <regex>
+#include <sstream>
 
 #include "../shared_data.hpp"
 #include "robotperf/report/histogram.hpp"
 #include "robotperf/report/readme.hpp"
 #include "robotperf/report/report.hpp"
+#include "robotperf/report/run_store.hpp"
 #include "robotperf/report/significance.hpp"
 #include "sample_runs.hpp"
 
@@ -76,6 +78,47 @@ TEST(Significance, WelchMatchesKnownValues) {
   EXPECT_EQ(welch_test(4, 0, 3, 4, 0, 3).p_value, 1.0);
   EXPECT_EQ(welch_test(4, 0, 3, 5, 0, 3).p_value, 0.0);
   EXPECT_THROW(welch_test(std::vector<double>{1}, b), std::invalid_argument);
+}
+
+// results list: every column as wide as its widest cell (a per-node transport, a long hardware
+// name), and a long INVALID reason whole, on its own line.
+TEST(RunsTable, ColumnsFitTheirWidestCellAndLongReasonsStayWhole) {
+  std::vector<StoredRun> runs(3);
+  runs[0].path = "results/a1-intra-20261126T142921174Z.json";
+  runs[0].rmw = "intra";
+  runs[0].hardware = "AMD EPYC";
+  runs[0].valid = true;
+  runs[1].path = "results/a1-cyclonedds-20261126T142942891Z.json";
+  runs[1].rmw = "cyclonedds";
+  runs[1].processes = "per-node";
+  runs[1].hardware = "Intel(R) Xeon(R) Platinum 8480+ + NVIDIA H100 80GB HBM3";
+  runs[1].valid = true;
+  runs[2].path = "results/a1-fastdds-20261126T143000000Z.json";
+  runs[2].rmw = "fastdds";
+  runs[2].hardware = "AMD EPYC";
+  runs[2].invalid_reasons = {std::string(600, 'x')};
+  for (auto& r : runs) {
+    r.benchmark_id = "a1";
+    r.type = "black";
+    r.started_utc = "2026-11-26T14:29:21Z";
+    r.latency.max = 4.77;
+    r.latency.p50 = 3.08;
+    r.throughput_hz = 30.02;
+  }
+  const std::string table = runs_table(runs);
+  std::vector<std::string> lines;
+  std::istringstream in(table);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 4u) << table;
+  const std::size_t date = lines[0].find("date (UTC)");
+  const std::size_t validity = lines[0].find("validity");
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    EXPECT_EQ(lines[i].find("2026-11-26 14:29:21"), date) << table;
+    EXPECT_EQ(lines[i].find(i == 3 ? "INVALID" : "valid"), validity) << table;
+  }
+  EXPECT_NE(lines[2].find("cyclonedds/per-node"), std::string::npos) << table;
+  EXPECT_NE(lines[2].find(runs[1].hardware), std::string::npos) << table;
+  EXPECT_TRUE(lines[3].ends_with("INVALID: " + std::string(600, 'x'))) << table;
 }
 
 TEST(Histogram, CountsEverySampleAndReadsBack) {
