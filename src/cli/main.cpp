@@ -1156,8 +1156,9 @@ int main(int argc, char** argv) {
                    "per-node layout)")
       ->check(CLI::IsMember({"intra", "fastdds", "cyclonedds"}));
   run_cmd->add_option("--backend", ra.backend,
-                      "run every node whose kernel has this backend on it (cpu, opencl, or a "
-                      "plug-in's); the others stay on theirs (see robotperf list kernels)");
+                      "run every node whose kernel has this backend on it (cpu, opencl, cuda in a "
+                      "build with the CUDA toolkit, or a plug-in's); the others stay on theirs "
+                      "(see robotperf list kernels)");
   run_cmd->add_flag("--device-resident", ra.device_resident,
                     "keep images on the device between nodes that can hand them over there "
                     "(type adaptation, as NITROS; e.g. a1 with --backend cuda): a configuration "
