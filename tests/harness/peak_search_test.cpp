@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../sanitized_build.hpp"
 #include "test_package.hpp"
 
 namespace robotperf::harness {
@@ -28,8 +29,9 @@ TEST(PeakSearch, FindsTheServiceLimitOfARelay) {
   EXPECT_EQ(peak.throughput_kind, "peak");
   ASSERT_TRUE(peak.peak_search.has_value());
   EXPECT_EQ(seen, found.record.steps.size());
-  // 1 / (10 ms + the relay's own overhead): a little below 100 Hz.
-  EXPECT_GT(peak.rate_hz, 90.0);
+  // 1 / (10 ms + the relay's own overhead): a little below 100 Hz (the overhead is larger in a
+  // sanitized build).
+  EXPECT_GT(peak.rate_hz, test_rate(90, 80));
   EXPECT_LT(peak.rate_hz, 101.0);
   EXPECT_NEAR(peak.throughput_hz, peak.rate_hz, 0.05 * peak.rate_hz);
   EXPECT_TRUE(peak.valid) << (peak.invalid_reasons.empty() ? "" : peak.invalid_reasons[0]);
