@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "robotperf/plugin/registry.hpp"
+#include "robotperf/report/run_store.hpp"
 
 namespace robotperf::cli {
 namespace {
@@ -41,15 +42,13 @@ std::string origin(const std::string& where) {
 int list_kernels(std::ostream& out) {
   for (const auto* k : plugin::registry().kernels()) {
     const auto& i = k->info;
-    std::string backends;
-    for (const auto& b : i.backends) backends += (backends.empty() ? "" : ", ") + b;
+    const std::string backends = report::joined(i.backends, ", ");
     out << i.name << "  (" << origin(k->origin) << "; backends: " << backends << ")\n";
     out << "  " << i.description << "\n";
     out << "  in:  " << ports(i.inputs) << "\n";
     out << "  out: " << ports(i.outputs) << "\n";
     if (!i.device_resident_backends.empty()) {
-      std::string on, handed;
-      for (const auto& b : i.device_resident_backends) on += (on.empty() ? "" : ", ") + b;
+      std::string handed;
       for (const auto* list : {&i.inputs, &i.outputs}) {
         for (const auto& p : *list) {
           if (p.device_resident)
@@ -57,7 +56,8 @@ int list_kernels(std::ostream& out) {
                       (list == &i.inputs ? "in " : "out ") + p.name;
         }
       }
-      out << "  device-resident on " << on << ": " << handed << " (run --device-resident)\n";
+      out << "  device-resident on " << report::joined(i.device_resident_backends, ", ") << ": "
+          << handed << " (run --device-resident)\n";
     }
     if (i.control_loop) {
       out << "  runs a control loop at parameter " << i.control_loop->rate_parameter
