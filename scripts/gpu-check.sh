@@ -7,7 +7,9 @@
 #      (results.tar);
 #   4. bench_backends: cpu against cuda (and opencl where the machine has a driver for it),
 #      p50 / p99, the upload / compute / download split and issue #19's targets;
-#   5. the CLI's cuda test (each benchmark's answers on the GPU, in one process and per node).
+#   5. the opencl backend on the GPU's own OpenCL driver, where the NVIDIA driver has one: its
+#      kernel tests, and a3 (its own OpenCL block matcher) end to end;
+#   6. the CLI's cuda test (each benchmark's answers on the GPU, in one process and per node).
 # Run it from the repository's root. Each step's output goes to a file in OUT_DIR (default $OUT,
 # else ./gpu-check), with summary.txt listing each step's outcome. The steps share one deadline
 # (GPU_CHECK_SECONDS, default 480) so that the whole check ends within a lease's command limit;
@@ -106,6 +108,9 @@ step kernels 120 bash -c "./tests/kernels/kernels_image_proc_test --gtest_filter
 step runs 150 bash -c "for b in a1 a2 a3 a4 a5; do
   ./robotperf run \$b --backend cuda --output '$out/results' || exit; done &&
   ./robotperf run a1 --backend cuda --device-resident --output '$out/results'"
+step opencl_kernels 45 bash -c "./tests/kernels/kernels_image_proc_test --gtest_filter='*OpenCl*' &&
+  ./tests/kernels/kernels_stereo_depth_test --gtest_filter='*OpenCl*'"
+step opencl_a3 60 ./robotperf run a3 --backend opencl --connect-timeout 45 --output "$out/results"
 step bench_backends 300 ./bench/backends/bench_backends
 step cli 200 ./tests/cli/cli_test --gtest_filter='*Cuda*'
 # The results as one file: a lent machine hands back few files.

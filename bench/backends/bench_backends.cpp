@@ -6,7 +6,11 @@
 // grey-box run in which each stage waits for its device (LTTng; the latency comes from the
 // first run, which does not wait). With a CUDA device it first prints the floor under those
 // stages: the same bytes moved with no kernel (perception::cuda_transfer_floor).
-// Run on demand: ./build/bench/backends/bench_backends [--count N] [a1 a2 a3 a4 a5]
+// Run on demand: ./build/bench/backends/bench_backends [--count N] [--backends opencl,cuda]
+//                 [a1 a2 a3 a4 a5]
+// (cpu, the baseline, is always measured). A benchmark or backend that fails is a row saying why,
+// and the others are still measured. Exit status: 0, 1 when an answer failed its functional
+// checks, 2 when a run failed.
 // a3 is in the default list only where a CUDA device is: on a CPU OpenCL device (pocl) its block
 // matcher takes about 150 ms a pair and cannot keep up with a3's 30 Hz, so the figure would be
 // queueing.
@@ -157,10 +161,13 @@ int main(int argc, char** argv) {
   categories::register_builtin_categories();
   std::size_t count = 300;
   std::vector<std::string> ids;
+  std::optional<std::string> chosen;  // comma-separated device backends; all found when absent
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--count" && i + 1 < argc) {
       count = std::strtoul(argv[++i], nullptr, 10);
+    } else if (a == "--backends" && i + 1 < argc) {
+      chosen = "," + std::string(argv[++i]) + ",";
     } else {
       ids.push_back(a);
     }
@@ -185,6 +192,12 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::printf("cuda: %s\n", e.what());
   }
+  if (chosen) {
+    std::erase_if(backends, [&](const std::string& b) {
+      return chosen->find("," + b + ",") == std::string::npos;
+    });
+    cuda = std::find(backends.begin(), backends.end(), "cuda") != backends.end();
+  }
   if (cuda) {
     try {
       print_cuda_transfer_floor();
@@ -206,43 +219,56 @@ int main(int argc, char** argv) {
   std::printf("%-4s %-8s %9s %9s %9s  %-10s %8s %8s %8s  %s\n", "id", "backend", "p50", "p99",
               "speed-up", "functional", "upload", "compute", "download",
               "target (issue #19, cuda)");
+  // A benchmark or backend that fails is a row saying why; the others are still measured.
   int status = 0;
-  try {
-    for (const auto& id : ids) {
-      const auto spec = harness::find_benchmark(ROBOTPERF_BENCHMARKS_DIR, id);
-      const Measured cpu = measure(spec, "cpu", count, false);
-      std::printf("%-4s %-8s %9.3f %9.3f %9s  %-10s\n", id.c_str(), "cpu", cpu.p50_ms, cpu.p99_ms,
-                  "1.00x", cpu.functional_ok ? "ok" : "INVALID");
-      if (!cpu.functional_ok) status = 1;
-      // cuda also device-resident where the graph can keep images on the device (a1): its own
-      // configuration, for information beside the host-memory baseline the targets are about.
-      std::vector<std::pair<std::string, bool>> rows;
-      for (const auto& b : backends) {
-        rows.emplace_back(b, false);
-        if (b == "cuda" && can_stay_on_device(spec)) rows.emplace_back(b, true);
-      }
-      for (const auto& [b, resident] : rows) {
-        const Measured m = measure(spec, b, count, resident);
-        const std::optional<StageSplit> s = split(spec, b, split_count, resident);
-        const auto ms = [&](double StageSplit::*stage) {
-          char text[32] = "-";
-          if (s) std::snprintf(text, sizeof text, "%.3f", (*s).*stage);
-          return std::string(text);
-        };
-        const std::string name = resident ? b + "-res" : b;
-        std::printf("%-4s %-8s %9.3f %9.3f %8.2fx  %-10s %8s %8s %8s  %s\n", id.c_str(),
-                    name.c_str(), m.p50_ms, m.p99_ms, cpu.p50_ms / m.p50_ms,
-                    m.functional_ok ? "ok" : "INVALID", ms(&StageSplit::upload_ms).c_str(),
-                    ms(&StageSplit::compute_ms).c_str(), ms(&StageSplit::download_ms).c_str(),
-                    b == "cuda" && !resident ? target(id, cpu, m).c_str()
-                    : resident               ? "device-resident: information"
-                                             : "-");
-        if (!m.functional_ok) status = 1;
-      }
+  const auto failed = [&](const std::string& id, const std::string& name, const char* why) {
+    std::printf("%-4s %-8s  failed: %s\n", id.c_str(), name.c_str(), why);
+    status = 2;
+  };
+  for (const auto& id : ids) {
+    std::optional<harness::BenchmarkSpec> spec;
+    Measured cpu;
+    try {
+      spec = harness::find_benchmark(ROBOTPERF_BENCHMARKS_DIR, id);
+      cpu = measure(*spec, "cpu", count, false);
+    } catch (const std::exception& e) {
+      failed(id, "cpu", e.what());
+      continue;
     }
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_backends: %s\n", e.what());
-    return 2;
+    std::printf("%-4s %-8s %9.3f %9.3f %9s  %-10s\n", id.c_str(), "cpu", cpu.p50_ms, cpu.p99_ms,
+                "1.00x", cpu.functional_ok ? "ok" : "INVALID");
+    if (!cpu.functional_ok && status == 0) status = 1;
+    // cuda also device-resident where the graph can keep images on the device (a1): its own
+    // configuration, for information beside the host-memory baseline the targets are about.
+    std::vector<std::pair<std::string, bool>> rows;
+    for (const auto& b : backends) {
+      rows.emplace_back(b, false);
+      if (b == "cuda" && can_stay_on_device(*spec)) rows.emplace_back(b, true);
+    }
+    for (const auto& [b, resident] : rows) {
+      const std::string name = resident ? b + "-res" : b;
+      Measured m;
+      try {
+        m = measure(*spec, b, count, resident);
+      } catch (const std::exception& e) {
+        failed(id, name, e.what());
+        continue;
+      }
+      const std::optional<StageSplit> s = split(*spec, b, split_count, resident);
+      const auto ms = [&](double StageSplit::*stage) {
+        char text[32] = "-";
+        if (s) std::snprintf(text, sizeof text, "%.3f", (*s).*stage);
+        return std::string(text);
+      };
+      std::printf("%-4s %-8s %9.3f %9.3f %8.2fx  %-10s %8s %8s %8s  %s\n", id.c_str(), name.c_str(),
+                  m.p50_ms, m.p99_ms, cpu.p50_ms / m.p50_ms, m.functional_ok ? "ok" : "INVALID",
+                  ms(&StageSplit::upload_ms).c_str(), ms(&StageSplit::compute_ms).c_str(),
+                  ms(&StageSplit::download_ms).c_str(),
+                  b == "cuda" && !resident ? target(id, cpu, m).c_str()
+                  : resident               ? "device-resident: information"
+                                           : "-");
+      if (!m.functional_ok && status == 0) status = 1;
+    }
   }
   return status;
 }
