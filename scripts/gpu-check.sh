@@ -10,6 +10,10 @@
 #   5. the opencl backend on the GPU's own OpenCL driver, where the NVIDIA driver has one: its
 #      kernel tests, and a3 (its own OpenCL block matcher) end to end;
 #   6. the CLI's cuda test (each benchmark's answers on the GPU, in one process and per node).
+# Two more steps run only when named in GPU_CHECK_STEPS, for whoever speeds the backend up:
+#   grey: a1 and a5 on cuda, and a5 on cpu, grey-box (the per-hop breakdown around the kernels);
+#   kernel_times: the GPU time of each kernel a3 runs on cuda, by Nsight Compute (ncu).
+# GPU_CHECK_STEPS (names separated by spaces) runs only the steps it names.
 # Run it from the repository's root. Each step's output goes to a file in OUT_DIR (default $OUT,
 # else ./gpu-check), with summary.txt listing each step's outcome. The steps share one deadline
 # (GPU_CHECK_SECONDS, default 480) so that the whole check ends within a lease's command limit;
@@ -81,6 +85,10 @@ fi
 step() {
   local name=$1 limit=$2
   shift 2
+  if [[ -n "${GPU_CHECK_STEPS:-}" && " $GPU_CHECK_STEPS " != *" $name "* ]] ||
+    [[ -z "${GPU_CHECK_STEPS:-}" && "$name" =~ ^(grey|kernel_times)$ ]]; then
+    return
+  fi
   local left=$((deadline - SECONDS))
   if ((left < 10)); then
     echo "$name: not run (the deadline was reached)" | tee -a "$summary"
@@ -113,6 +121,14 @@ step opencl_kernels 45 bash -c "./tests/kernels/kernels_image_proc_test --gtest_
 step opencl_a3 60 ./robotperf run a3 --backend opencl --connect-timeout 45 --output "$out/results"
 step bench_backends 300 ./bench/backends/bench_backends
 step cli 200 ./tests/cli/cli_test --gtest_filter='*Cuda*'
+step grey 60 bash -c "./robotperf run a1 --backend cuda --mode grey --count 150 --output '$out/results' &&
+  ./robotperf run a5 --backend cuda --mode grey --count 150 --output '$out/results' &&
+  ./robotperf run a5 --mode grey --count 150 --output '$out/results'"
+# One metric, one pass per kernel; past the warm-up (a3 launches 12 kernels a message).
+# ncu with its own libraries, not the bundle's.
+step kernel_times 80 env -u LD_LIBRARY_PATH PATH="$PATH:/usr/local/cuda/bin" ncu \
+  --metrics gpu__time_duration.sum --launch-skip 240 --launch-count 36 \
+  env LD_LIBRARY_PATH="$LD_LIBRARY_PATH" ./robotperf run a3 --backend cuda --count 40 --connect-timeout 60 --output /tmp/robotperf-ncu
 # The results as one file: a lent machine hands back few files.
 if [[ -d "$out/results" ]]; then
   tar -C "$out" -cf "$out/results.tar" results && rm -rf "$out/results"
