@@ -377,6 +377,10 @@ void Monitor::keep_outputs(const std::vector<uint64_t>& ids) {
 }
 
 void Monitor::keep_observed_truth(const std::string& topic, const msgs::TypeSupport& type) {
+  {
+    std::lock_guard lock(mutex_);
+    observing_truth_ = true;
+  }
   rmw::QoS qos;
   qos.history = rmw::History::kKeepAll;
   node_->create_generic_subscription(
@@ -386,7 +390,10 @@ void Monitor::keep_observed_truth(const std::string& topic, const msgs::TypeSupp
         if (isolation_ != nullptr && isolation_->foreign(info.sender, stamp, id.has_value()))
           return;
         std::lock_guard lock(mutex_);
-        if (id && !keep_.empty() && keep_[*id]) tally_.observed_truth[*id] = std::move(m);
+        if (id && !keep_.empty() && keep_[*id]) {
+          tally_.observed_truth[*id] = std::move(m);
+          cv_.notify_all();
+        }
       });
 }
 
@@ -394,7 +401,16 @@ bool Monitor::wait_for(std::size_t expected, int64_t deadline_ns) {
   std::unique_lock lock(mutex_);
   const auto deadline =
       std::chrono::steady_clock::time_point(std::chrono::nanoseconds(deadline_ns));
-  return cv_.wait_until(lock, deadline, [&] { return tally_.received_measured >= expected; });
+  // A kept output whose observed truth has not come yet: with a node's second output (b3's poses
+  // after its detections) the last one is often still on its way when the first has arrived.
+  const auto truth_complete = [&] {
+    if (!observing_truth_) return true;
+    return std::all_of(tally_.kept.begin(), tally_.kept.end(), [&](const auto& kept) {
+      return tally_.observed_truth.contains(kept.first);
+    });
+  };
+  return cv_.wait_until(lock, deadline,
+                        [&] { return tally_.received_measured >= expected && truth_complete(); });
 }
 
 Monitor::Tally Monitor::tally() const {

@@ -116,7 +116,8 @@ class Monitor {
   // frame k mod `frames`. Before the run; the evaluator outlives it.
   void evaluate_on_arrival(plugin::FunctionalEvaluator& evaluator, std::size_t frames);
 
-  // Waits until `expected` measured messages arrived or `deadline_ns` passes.
+  // Waits until `expected` measured messages arrived, and the observed truth of every kept one
+  // (a node's second output follows its first), or `deadline_ns` passes.
   bool wait_for(std::size_t expected, int64_t deadline_ns);
 
   struct Tally {
@@ -146,6 +147,7 @@ class Monitor {
   bool state_;
   std::vector<bool> keep_;               // per id
   std::vector<std::size_t> kept_index_;  // per id: where in tally_.kept, or SIZE_MAX
+  bool observing_truth_ = false;         // keep_observed_truth was called
   plugin::FunctionalEvaluator* on_arrival_ = nullptr;
   std::size_t on_arrival_frames_ = 1;
   std::size_t evaluations_pending_ = 0;  // outputs received whose add() has not returned yet

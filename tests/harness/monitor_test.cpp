@@ -10,7 +10,9 @@
 #include "robotperf/graph/executor.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/run.hpp"
+#include "robotperf/msgs/geometry_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/msgs/type_support.hpp"
 #include "robotperf/plugin/evaluator.hpp"
 #include "test_package.hpp"
 
@@ -48,6 +50,41 @@ TEST(Monitor, KeepsACopyOfAnOutputSharedWithTheGraphOverIntra) {
   EXPECT_EQ(kept->header.stamp.to_ns(), ids.stamp_ns(1));
   EXPECT_EQ(kept->data, published->data);
   EXPECT_EQ(published.use_count(), 1) << "the Monitor still holds the graph's message";
+}
+
+// A node's second output (b3's poses) follows its first: the wait for the outputs is not over
+// while a kept output's observed truth is still on its way, or the evaluation would find it
+// missing.
+TEST(Monitor, WaitsForTheObservedTruthOfTheOutputsItKeeps) {
+  graph::Context context(rmw::make_transport("intra", {}));
+  const BoundaryTopic output{"/out", "sensor_msgs/msg/Image", "", rmw::QoS{}};
+  const MessageIds ids{1'000'000'000, 100'000'000, 3};
+  Monitor monitor(context, output, ids, 0);
+  monitor.keep_outputs({1});
+  monitor.keep_observed_truth("/poses", msgs::type_support<msgs::PoseArray>());
+  graph::Executor executor(1);
+  executor.add_node(monitor.node());
+  graph::Node graph_node(context, "graph");
+  auto images = graph_node.create_publisher<msgs::Image>("/out");
+  auto poses = graph_node.create_publisher<msgs::PoseArray>("/poses");
+  executor.start();
+
+  auto image = std::make_shared<msgs::Image>();
+  image->header.stamp = msgs::Time::from_ns(ids.stamp_ns(1));
+  images->publish(std::shared_ptr<const msgs::Image>(image));
+  EXPECT_FALSE(monitor.wait_for(1, rmw::steady_now_ns() + 200'000'000))
+      << "the output's poses have not been published";
+  auto pose = std::make_shared<msgs::PoseArray>();
+  pose->header.stamp = msgs::Time::from_ns(ids.stamp_ns(1));
+  pose->poses.resize(2);
+  poses->publish(std::shared_ptr<const msgs::PoseArray>(pose));
+  EXPECT_TRUE(monitor.wait_for(1, rmw::steady_now_ns() + 10'000'000'000));
+  executor.stop();
+
+  const Monitor::Tally tally = monitor.tally();
+  ASSERT_EQ(tally.observed_truth.count(1), 1u);
+  EXPECT_EQ(static_cast<const msgs::PoseArray*>(tally.observed_truth.at(1).get())->poses.size(),
+            2u);
 }
 
 // An evaluator that records what it was given.
