@@ -51,12 +51,21 @@ struct StageSplit {
   double upload_ms = 0, compute_ms = 0, download_ms = 0;
 };
 
-Measured measure(const harness::BenchmarkSpec& spec, const std::string& backend, std::size_t count,
-                 bool resident) {
+// The options of a run of `spec` on `backend`. A device's warm-up (its programs built, its
+// memory first touched) is not timed but may take long: on the H100 machine a3's first OpenCL
+// run once answered nothing within run's default 15 s, and ran when tried again.
+harness::RunOptions options(std::size_t count, const std::string& backend, bool resident) {
   harness::RunOptions o;
   o.count = count;
   o.backend = backend;
   o.device_resident = resident;
+  if (backend != "cpu") o.connect_timeout_s = 60;
+  return o;
+}
+
+Measured measure(const harness::BenchmarkSpec& spec, const std::string& backend, std::size_t count,
+                 bool resident) {
+  const harness::RunOptions o = options(count, backend, resident);
   const harness::RunResult r = harness::run_benchmark(spec, o);
   Measured m;
   m.p50_ms = r.latency_from_sent.p50 / 1e6;
@@ -69,10 +78,7 @@ Measured measure(const harness::BenchmarkSpec& spec, const std::string& backend,
 // (the reason printed).
 std::optional<StageSplit> split(const harness::BenchmarkSpec& spec, const std::string& backend,
                                 std::size_t count, bool resident) {
-  harness::RunOptions o;
-  o.count = count;
-  o.backend = backend;
-  o.device_resident = resident;
+  harness::RunOptions o = options(count, backend, resident);
   o.mode = harness::RunMode::kGrey;
   o.trace_dir = std::filesystem::temp_directory_path() /
                 ("bench_backends-" + std::to_string(getpid()) + "-" + spec.id + "-" + backend);
