@@ -124,11 +124,14 @@ step cli 200 ./tests/cli/cli_test --gtest_filter='*Cuda*'
 step grey 60 bash -c "./robotperf run a1 --backend cuda --mode grey --count 150 --output '$out/results' &&
   ./robotperf run a5 --backend cuda --mode grey --count 150 --output '$out/results' &&
   ./robotperf run a5 --mode grey --count 150 --output '$out/results'"
-# One metric, one pass per kernel; past the warm-up (a3 launches 12 kernels a message).
-# ncu with its own libraries, not the bundle's.
-step kernel_times 80 env -u LD_LIBRARY_PATH PATH="$PATH:/usr/local/cuda/bin" ncu \
-  --metrics gpu__time_duration.sum --launch-skip 240 --launch-count 36 \
-  env LD_LIBRARY_PATH="$LD_LIBRARY_PATH" ./robotperf run a3 --backend cuda --count 40 --connect-timeout 60 --output /tmp/robotperf-ncu
+# One metric, one pass per kernel; past the warm-up (a3 launches 12 kernels a message). ncu with
+# its own libraries, not the bundle's. Profiled, the graph falls behind its rate: the run is
+# invalid (exit status 3), the kernels' times are what this step is for.
+# shellcheck disable=SC2016 # expanded by the inner shell
+step kernel_times 80 env -u LD_LIBRARY_PATH PATH="$PATH:/usr/local/cuda/bin" \
+  LIBRARIES="$LD_LIBRARY_PATH" bash -c 'ncu --metrics gpu__time_duration.sum --launch-skip 240 \
+  --launch-count 36 env LD_LIBRARY_PATH="$LIBRARIES" ./robotperf run a3 --backend cuda --count 40 \
+  --connect-timeout 60 --output /tmp/robotperf-ncu; status=$?; ((status == 0 || status == 3))'
 # The results as one file: a lent machine hands back few files.
 if [[ -d "$out/results" ]]; then
   tar -C "$out" -cf "$out/results.tar" results && rm -rf "$out/results"
