@@ -183,10 +183,12 @@ rmw::MessagePtr Playback::Input::copy_with_stamp(std::size_t frame, int64_t stam
 
 bool DeviceWarmup::ready_after_round(std::size_t answers_so_far) {
   const std::size_t previous_round = answers_in_round_;
+  const bool answered_before = answers_before_ > 0;
   answers_in_round_ = answers_so_far - answers_before_;
   answers_before_ = answers_so_far;
   return answers_in_round_ >= per_round_ ||
-         (answers_in_round_ > 0 && answers_in_round_ <= previous_round);
+         (answers_in_round_ > 0 && answers_in_round_ <= previous_round) ||
+         (answers_in_round_ == 0 && answered_before);
 }
 
 std::size_t Playback::run(std::vector<MessageRecord>& records,

@@ -39,7 +39,9 @@ std::vector<int64_t> arrival_schedule(const ArrivalPattern& pattern, int64_t per
 // messages sent meanwhile queue up. Given the graph's answers so far at the end of each round of
 // the warm-up, it is ready when it answers at its steady pace: as many answers in a round as
 // messages sent in it (it keeps up), or some but no more than in the round before (it is slower
-// than the rate, which the measurement will show).
+// than the rate, which the measurement will show). Or none after some: a graph that pairs its
+// inputs by exact time (a3's disparity) drops the repeated warm-up, whose stamps are older than
+// the sets it has emitted, so once its backlog is answered it falls silent, idle and warm.
 class DeviceWarmup {
  public:
   explicit DeviceWarmup(std::size_t messages_per_round) : per_round_(messages_per_round) {}

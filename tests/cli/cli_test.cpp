@@ -1029,6 +1029,18 @@ TEST_F(Cli, BackendRunsTheKernelsThatHaveItAndRecordsTheDevice) {
     }
   }
 
+  // a3 with its own warm-up of 5 at 3 Hz: pocl builds the block matcher at the first pair, the
+  // warm-up is repeated meanwhile, and the disparity node's exact-time pairing drops the
+  // repeats (stamps older than its last set). Its falling silent is the device being ready, not
+  // a device that never answers (exit 2 after --connect-timeout); measured, pocl cannot keep up
+  // with 3 Hz (exit 3).
+  const Outcome warm = robotperf_cli(
+      "run a3 --backend opencl --rate 3 --count 10 --quiet "
+      "--connect-timeout 60 --output " +
+      (out_ / "warm-a3").string());
+  EXPECT_EQ(warm.exit_code, 3) << warm.out;
+  EXPECT_EQ(warm.out.find("answered none"), std::string::npos) << warm.out;
+
   // Per-node children build their node on the backend too, and report their device.
   const fs::path per_node = out_ / "per-node";
   const Outcome p = robotperf_cli(

@@ -209,6 +209,16 @@ TEST(DeviceWarmup, ReadyOnceTheGraphAnswersAtItsSteadyPace) {
     EXPECT_FALSE(w.ready_after_round(7));
     EXPECT_TRUE(w.ready_after_round(11));
   }
+  // A graph that pairs by exact time drops the repeated warm-up (stamps older than its last set):
+  // the first round's answers come in over two rounds, rising, then none. Silent after answering,
+  // it is idle and warm (on pocl, a3 at 3 Hz waited here for its whole --connect-timeout).
+  {
+    DeviceWarmup w(5);
+    EXPECT_FALSE(w.ready_after_round(0));
+    EXPECT_FALSE(w.ready_after_round(2));
+    EXPECT_FALSE(w.ready_after_round(5));
+    EXPECT_TRUE(w.ready_after_round(5));
+  }
 }
 
 TEST(Playback, AGraphThatNeverDeliversIsRefusedAtTheDeadline) {
