@@ -52,8 +52,8 @@ struct StageSplit {
 };
 
 // The options of a run of `spec` on `backend`. A device's warm-up (its programs built, its
-// memory first touched) is not timed but may take long: on the H100 machine a3's first OpenCL
-// run once answered nothing within run's default 15 s, and ran when tried again.
+// memory first touched) is not timed but may take longer than run's default 15 s on a slow
+// device.
 harness::RunOptions options(std::size_t count, const std::string& backend, bool resident) {
   harness::RunOptions o;
   o.count = count;
