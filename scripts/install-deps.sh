@@ -24,6 +24,7 @@ packages=(
   libsqlite3-dev ros2-test-interface-files
   libzstd-dev liblz4-dev libdeflate-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libboost-context-dev  # fibers: the cuda emulation's kernels whose threads wait for each other
   liblttng-ust-dev lttng-tools babeltrace2
   chromium  # headless, for the report rendering test
   liborocos-kdl-dev liburdfdom-dev libfcl-dev libbullet-dev libompl-dev libeigen3-dev  # manipulation (d1-d6)

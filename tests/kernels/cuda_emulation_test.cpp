@@ -14,10 +14,61 @@ __global__ void add_one(const int32_t* in, int32_t* out, int n) {
   if (i < n) out[i] = in[i] + 1;
 }
 
+// Each block reverses its part of `in` through shared memory; with `barrier` false a thread reads
+// its partner's slot without waiting for the partner to write it.
+__global__ void reverse_blocks(const int32_t* in, int32_t* out, bool barrier) {
+  int32_t* slots = static_cast<int32_t*>(robotperf::cuda_emulation::dynamic_shared_memory());
+  const unsigned i = blockIdx.x * blockDim.x + threadIdx.x;
+  slots[threadIdx.x] = in[i];
+  if (barrier) __syncthreads();
+  out[i] = slots[blockDim.x - 1 - threadIdx.x];
+}
+
+// Per thread of a block of two warps: the lanes of its warp whose value is odd, and those whose
+// value is its own.
+__global__ void warp_votes(const int32_t* in, int32_t* odd, int32_t* same) {
+  const unsigned i = blockIdx.x * blockDim.x + threadIdx.x;
+  odd[i] = static_cast<int32_t>(__ballot_sync(0xffffffffu, in[i] % 2));
+  same[i] = static_cast<int32_t>(__match_any_sync(0xffffffffu, in[i]));
+}
+
+__global__ void barrier_in_a_plain_launch(int32_t* out) {
+  __syncthreads();
+  out[threadIdx.x] = 1;
+}
+
+// Lane 0 ends before the vote that names it.
+__global__ void vote_without_lane_zero(int32_t* out) {
+  if (threadIdx.x == 0) return;
+  out[threadIdx.x] = static_cast<int32_t>(__ballot_sync(0xffffffffu, 1));
+}
+
 class CudaEmulation : public ::testing::Test {
  protected:
   void SetUp() override { ASSERT_EQ(cudaStreamCreateWithFlags(&stream_, 0), cudaSuccess); }
   void TearDown() override { EXPECT_EQ(cudaStreamDestroy(stream_), cudaSuccess); }
+  // `in` up, `kernel` run by `launch` on the device copies (in, then `outs` outputs of in's size),
+  // and the outputs down.
+  template <class Launch>
+  std::vector<std::vector<int32_t>> run(const std::vector<int32_t>& in, int outs, Launch launch) {
+    const std::size_t bytes = in.size() * sizeof(int32_t);
+    std::vector<int32_t*> device(static_cast<std::size_t>(outs) + 1);
+    for (int32_t*& d : device)
+      EXPECT_EQ(cudaMalloc(reinterpret_cast<void**>(&d), bytes), cudaSuccess);
+    EXPECT_EQ(cudaMemcpyAsync(device[0], in.data(), bytes, cudaMemcpyHostToDevice, stream_),
+              cudaSuccess);
+    launch(device);
+    EXPECT_EQ(cudaGetLastError(), cudaSuccess);
+    std::vector<std::vector<int32_t>> out(static_cast<std::size_t>(outs), in);
+    for (int i = 0; i < outs; ++i) {
+      EXPECT_EQ(
+          cudaMemcpyAsync(out[i].data(), device[i + 1], bytes, cudaMemcpyDeviceToHost, stream_),
+          cudaSuccess);
+    }
+    for (int32_t* d : device) EXPECT_EQ(cudaFree(d), cudaSuccess);
+    return out;
+  }
+
   cudaStream_t stream_ = nullptr;
 };
 
@@ -78,6 +129,42 @@ TEST_F(CudaEmulation, RefusesAKernelAHostPointer) {
   EXPECT_EQ(cudaGetLastError(), cudaSuccess) << "the error is reported once";
 }
 
+TEST_F(CudaEmulation, ThreadsOfABlockWaitForEachOtherAtABarrier) {
+  std::vector<int32_t> in(256);
+  for (std::size_t i = 0; i < in.size(); ++i) in[i] = static_cast<int32_t>(i);
+  const auto reversed = [&](bool barrier) {
+    return run(in, 1, [&](const std::vector<int32_t*>& d) {
+      robotperf::cuda_emulation::launch_synchronising(
+          reverse_blocks, dim3(2), dim3(128), 128 * sizeof(int32_t), stream_,
+          static_cast<const int32_t*>(d[0]), d[1], barrier);
+    })[0];
+  };
+  const std::vector<int32_t> with_barrier = reversed(true);
+  for (int i = 0; i < 256; ++i) ASSERT_EQ(with_barrier[i], i / 128 * 128 + 127 - i % 128) << i;
+  // Without the barrier the first threads read slots not yet written, as they may on a GPU: the
+  // emulation's order makes that a wrong answer rather than a lucky one.
+  EXPECT_NE(reversed(false), with_barrier);
+}
+
+TEST_F(CudaEmulation, AnswersWarpVotesOverTheLanesOfEachWarp) {
+  std::vector<int32_t> in(128);
+  for (std::size_t i = 0; i < in.size(); ++i) in[i] = static_cast<int32_t>(i % 3 + (i / 32) * 10);
+  const auto out = run(in, 2, [&](const std::vector<int32_t*>& d) {
+    robotperf::cuda_emulation::launch_synchronising(warp_votes, dim3(2), dim3(64), 0, stream_,
+                                                    static_cast<const int32_t*>(d[0]), d[1], d[2]);
+  });
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    const std::size_t warp = i / 32 * 32;
+    unsigned odd = 0, same = 0;
+    for (unsigned lane = 0; lane < 32; ++lane) {
+      odd |= in[warp + lane] % 2 != 0 ? 1u << lane : 0u;
+      same |= in[warp + lane] == in[i] ? 1u << lane : 0u;
+    }
+    ASSERT_EQ(static_cast<unsigned>(out[0][i]), odd) << i;
+    ASSERT_EQ(static_cast<unsigned>(out[1][i]), same) << i;
+  }
+}
+
 using CudaEmulationDeathTest = CudaEmulation;
 
 TEST_F(CudaEmulationDeathTest, HostCodeCannotTouchDeviceMemory) {
@@ -102,6 +189,32 @@ TEST_F(CudaEmulationDeathTest, AKernelCannotReadPastItsAllocation) {
       },
       "");
   EXPECT_EQ(cudaFree(in), cudaSuccess);
+  EXPECT_EQ(cudaFree(out), cudaSuccess);
+}
+
+TEST_F(CudaEmulationDeathTest, ABarrierNeedsTheSynchronisingLaunch) {
+  int32_t* out = nullptr;
+  ASSERT_EQ(cudaMalloc(reinterpret_cast<void**>(&out), 4 * 32), cudaSuccess);
+  EXPECT_DEATH(
+      {
+        robotperf::cuda_emulation::launch(barrier_in_a_plain_launch, dim3(1), dim3(32), stream_,
+                                          out);
+        static_cast<void>(cudaStreamSynchronize(stream_));
+      },
+      "__syncthreads in a kernel launched with launch\\(\\)");
+  EXPECT_EQ(cudaFree(out), cudaSuccess);
+}
+
+TEST_F(CudaEmulationDeathTest, AWarpVoteALaneNeverReachesEndsTheTest) {
+  int32_t* out = nullptr;
+  ASSERT_EQ(cudaMalloc(reinterpret_cast<void**>(&out), 4 * 32), cudaSuccess);
+  EXPECT_DEATH(
+      {
+        robotperf::cuda_emulation::launch_synchronising(vote_without_lane_zero, dim3(1), dim3(32),
+                                                        0, stream_, out);
+        static_cast<void>(cudaStreamSynchronize(stream_));
+      },
+      "a lane a warp collective names has ended");
   EXPECT_EQ(cudaFree(out), cudaSuccess);
 }
 

@@ -2,6 +2,9 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
+#include <boost/context/fiber.hpp>
 #include <cstdio>
 #include <cstring>
 #include <deque>
@@ -12,6 +15,11 @@
 #include <vector>
 
 #include "cuda_runtime.h"
+
+#if defined(__SANITIZE_ADDRESS__)
+#include <sanitizer/asan_interface.h>
+#include <sanitizer/common_interface_defs.h>
+#endif
 
 struct CUstream_st {
   std::deque<std::function<void()>> work;
@@ -113,6 +121,234 @@ void run_all(State& s) {
   for (CUstream_st* stream : s.streams) run(s, *stream);
 }
 
+// What a waiting thread waits for.
+enum class Wait { kNone, kBlock, kBallot, kMatchAny, kDone };
+
+// One GPU thread of a block running as a fiber.
+struct Fiber {
+  boost::context::fiber context;    // the thread's, while it waits
+  boost::context::fiber scheduler;  // the scheduler's, while the thread runs
+  std::byte* stack = nullptr;
+  uint3 thread;
+  unsigned lane = 0;
+  Wait wait = Wait::kNone;
+  unsigned mask = 0;           // of a warp collective
+  int value = 0;               // its argument
+  unsigned result = 0;         // its answer
+  void* fake_stack = nullptr;  // AddressSanitizer's, while switched out
+};
+
+// Hands a fiber the stack its grid keeps for its thread.
+struct ThreadStack {
+  std::byte* bottom = nullptr;
+  std::size_t bytes = 0;
+  boost::context::stack_context allocate() const {
+    boost::context::stack_context stack;
+    stack.size = bytes;
+    stack.sp = bottom + bytes;
+    return stack;
+  }
+  void deallocate(boost::context::stack_context& /*stack*/) const noexcept {}
+};
+
+[[noreturn]] void deadlock(const std::string& why) {
+  std::fprintf(stderr, "cuda emulation: block (%u, %u, %u): %s\n", blockIdx.x, blockIdx.y,
+               blockIdx.z, why.c_str());
+  std::abort();
+}
+
+// Runs blocks of a kernel launched with launch_synchronising(): every thread of a block as a
+// fiber of its own stack, taking turns until each waits or ends, in an order reversed every turn.
+class SynchronisingGrid {
+ public:
+  static constexpr std::size_t kStackBytes = 256 * 1024;
+
+  SynchronisingGrid(dim3 block, std::size_t shared_bytes, const std::function<void()>& thread)
+      : block_(block), thread_(thread), shared_(shared_bytes) {
+    const std::size_t n = std::size_t{block.x} * block.y * block.z;
+    stacks_bytes_ = n * kStackBytes;
+    void* stacks = mmap(nullptr, stacks_bytes_, PROT_READ | PROT_WRITE,
+                        MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+    if (stacks == MAP_FAILED) deadlock("no memory for the stacks of its threads' fibers");
+    stacks_ = static_cast<std::byte*>(stacks);
+    fibers_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      Fiber& f = fibers_[i];
+      f.stack = stacks_ + i * kStackBytes;
+      f.thread = {static_cast<unsigned>(i % block.x), static_cast<unsigned>(i / block.x % block.y),
+                  static_cast<unsigned>(i / (std::size_t{block.x} * block.y))};
+      f.lane = static_cast<unsigned>(i % 32);
+    }
+  }
+  ~SynchronisingGrid() {
+    unpoison_stacks();
+    munmap(stacks_, stacks_bytes_);
+  }
+  SynchronisingGrid(const SynchronisingGrid&) = delete;
+  SynchronisingGrid& operator=(const SynchronisingGrid&) = delete;
+
+  void run_block() {
+    std::fill(shared_.begin(), shared_.end(), std::byte{0xa5});
+    unpoison_stacks();
+    for (Fiber& f : fibers_) {
+      f.wait = Wait::kNone;
+      f.context = boost::context::fiber(std::allocator_arg, ThreadStack{f.stack, kStackBytes},
+                                        [this, &f](boost::context::fiber&& scheduler) {
+                                          return run_thread(f, std::move(scheduler));
+                                        });
+    }
+    bool forward = true;
+    while (true) {
+      for (std::size_t i = 0; i < fibers_.size(); ++i) {
+        Fiber& f = fibers_[forward ? i : fibers_.size() - 1 - i];
+        if (f.wait == Wait::kNone) resume(f);
+      }
+      forward = !forward;
+      if (release_warps()) continue;
+      std::size_t done = 0, at_barrier = 0;
+      for (const Fiber& f : fibers_) {
+        done += f.wait == Wait::kDone ? 1 : 0;
+        at_barrier += f.wait == Wait::kBlock ? 1 : 0;
+      }
+      if (done == fibers_.size()) return;
+      if (done + at_barrier < fibers_.size())
+        deadlock("threads wait at a warp collective that lanes it names never reach");
+      for (Fiber& f : fibers_)
+        if (f.wait == Wait::kBlock) f.wait = Wait::kNone;
+    }
+  }
+
+  // The running fiber waits for `wait` (the scheduler resumes it when its wait is over).
+  unsigned wait(Wait wait, unsigned mask = 0, int value = 0) {
+    Fiber& f = *running_;
+    f.wait = wait;
+    f.mask = mask;
+    f.value = value;
+    switch_to_scheduler(f);
+    return f.result;
+  }
+
+  void* shared_memory() { return shared_.data(); }
+
+  static SynchronisingGrid* current() { return current_; }
+  static void set_current(SynchronisingGrid* grid) { current_ = grid; }
+
+ private:
+  // AddressSanitizer marks the frames of a fiber's stack as it marks any stack's; the marks
+  // outlive the fiber, and would fault a new fiber there or memory mapped there after the munmap.
+  void unpoison_stacks() {
+#if defined(__SANITIZE_ADDRESS__)
+    ASAN_UNPOISON_MEMORY_REGION(stacks_, stacks_bytes_);
+#endif
+  }
+
+  boost::context::fiber run_thread(Fiber& f, boost::context::fiber&& scheduler) {
+    f.scheduler = std::move(scheduler);
+#if defined(__SANITIZE_ADDRESS__)
+    __sanitizer_finish_switch_fiber(nullptr, &scheduler_stack_, &scheduler_stack_bytes_);
+#endif
+    thread_();
+    f.wait = Wait::kDone;
+#if defined(__SANITIZE_ADDRESS__)
+    __sanitizer_start_switch_fiber(nullptr, scheduler_stack_, scheduler_stack_bytes_);
+#endif
+    return std::move(f.scheduler);
+  }
+
+  void resume(Fiber& f) {
+    running_ = &f;
+    threadIdx = f.thread;
+#if defined(__SANITIZE_ADDRESS__)
+    void* fake_stack = nullptr;
+    __sanitizer_start_switch_fiber(&fake_stack, f.stack, kStackBytes);
+#endif
+    f.context = std::move(f.context).resume();
+#if defined(__SANITIZE_ADDRESS__)
+    __sanitizer_finish_switch_fiber(fake_stack, nullptr, nullptr);
+#endif
+    running_ = nullptr;
+  }
+
+  void switch_to_scheduler(Fiber& f) {
+#if defined(__SANITIZE_ADDRESS__)
+    __sanitizer_start_switch_fiber(&f.fake_stack, scheduler_stack_, scheduler_stack_bytes_);
+#endif
+    f.scheduler = std::move(f.scheduler).resume();
+#if defined(__SANITIZE_ADDRESS__)
+    __sanitizer_finish_switch_fiber(f.fake_stack, nullptr, nullptr);
+#endif
+  }
+
+  // Answers every warp collective whose lanes have all reached it; whether any was.
+  bool release_warps() {
+    bool released = false;
+    for (std::size_t first = 0; first < fibers_.size(); first += 32) {
+      const std::size_t end = std::min(first + 32, fibers_.size());
+      const Fiber* caller = nullptr;
+      for (std::size_t i = first; i < end && caller == nullptr; ++i) {
+        const Wait w = fibers_[i].wait;
+        if (w == Wait::kBallot || w == Wait::kMatchAny) caller = &fibers_[i];
+      }
+      if (caller == nullptr) continue;
+      const unsigned mask = caller->mask;
+      const Wait kind = caller->wait;
+      bool all_there = true;
+      for (std::size_t i = first; i < end; ++i) {
+        const Fiber& f = fibers_[i];
+        if ((mask >> f.lane & 1u) == 0) continue;
+        if (f.wait == Wait::kDone) deadlock("a lane a warp collective names has ended");
+        if (f.wait == kind && f.mask != mask)
+          deadlock("the lanes of a warp collective disagree on its mask");
+        all_there = all_there && f.wait == kind;
+      }
+      if (end - first < 32 && mask >> (end - first) != 0)
+        deadlock("a warp collective names lanes past the block's last thread");
+      if (!all_there) continue;
+      for (std::size_t i = first; i < end; ++i) {
+        Fiber& f = fibers_[i];
+        if ((mask >> f.lane & 1u) == 0 || f.wait != kind) continue;
+        unsigned answer = 0;
+        for (std::size_t j = first; j < end; ++j) {
+          const Fiber& g = fibers_[j];
+          if ((mask >> g.lane & 1u) == 0) continue;
+          const bool counted = kind == Wait::kBallot ? g.value != 0 : g.value == f.value;
+          answer |= counted ? 1u << g.lane : 0u;
+        }
+        f.result = answer;
+      }
+      for (std::size_t i = first; i < end; ++i)
+        if ((mask >> fibers_[i].lane & 1u) != 0) fibers_[i].wait = Wait::kNone;
+      released = true;
+    }
+    return released;
+  }
+
+  static thread_local SynchronisingGrid* current_;
+  dim3 block_;
+  const std::function<void()>& thread_;
+  std::vector<std::byte> shared_;
+  std::byte* stacks_ = nullptr;
+  std::size_t stacks_bytes_ = 0;
+  std::vector<Fiber> fibers_;
+  Fiber* running_ = nullptr;
+  const void* scheduler_stack_ = nullptr;
+  std::size_t scheduler_stack_bytes_ = 0;
+};
+
+thread_local SynchronisingGrid* SynchronisingGrid::current_ = nullptr;
+
+SynchronisingGrid& synchronising_grid(const char* what) {
+  SynchronisingGrid* grid = SynchronisingGrid::current();
+  if (grid == nullptr) {
+    std::fprintf(stderr,
+                 "cuda emulation: %s in a kernel launched with launch(): launch it with "
+                 "launch_synchronising()\n",
+                 what);
+    std::abort();
+  }
+  return *grid;
+}
+
 }  // namespace
 
 cudaError_t enqueue(cudaStream_t stream, std::function<void()> work) {
@@ -132,6 +368,31 @@ bool device_argument(const void* pointer, const char* kernel_name) {
   last_error = refuse(cudaErrorIllegalAddress,
                       std::string(kernel_name) + " was given a pointer outside device memory");
   return false;
+}
+
+void run_grid(dim3 grid, dim3 block, bool synchronising, std::size_t shared_bytes,
+              const std::function<void()>& thread) {
+  gridDim = grid;
+  blockDim = block;
+  if (!synchronising) {
+    for (blockIdx.z = 0; blockIdx.z < grid.z; ++blockIdx.z)
+      for (blockIdx.y = 0; blockIdx.y < grid.y; ++blockIdx.y)
+        for (blockIdx.x = 0; blockIdx.x < grid.x; ++blockIdx.x)
+          for (threadIdx.z = 0; threadIdx.z < block.z; ++threadIdx.z)
+            for (threadIdx.y = 0; threadIdx.y < block.y; ++threadIdx.y)
+              for (threadIdx.x = 0; threadIdx.x < block.x; ++threadIdx.x) thread();
+    return;
+  }
+  SynchronisingGrid blocks(block, shared_bytes, thread);
+  SynchronisingGrid::set_current(&blocks);
+  for (blockIdx.z = 0; blockIdx.z < grid.z; ++blockIdx.z)
+    for (blockIdx.y = 0; blockIdx.y < grid.y; ++blockIdx.y)
+      for (blockIdx.x = 0; blockIdx.x < grid.x; ++blockIdx.x) blocks.run_block();
+  SynchronisingGrid::set_current(nullptr);
+}
+
+void* dynamic_shared_memory() {
+  return synchronising_grid("dynamic shared memory").shared_memory();
 }
 
 }  // namespace robotperf::cuda_emulation
@@ -306,4 +567,16 @@ cudaError_t cudaMemcpyAsync(void* to, const void* from, std::size_t bytes, cudaM
   }
   if (pageable_to) run(s, *queue);
   return cudaSuccess;
+}
+
+void __syncthreads() {
+  synchronising_grid("__syncthreads").wait(Wait::kBlock);
+}
+
+unsigned __ballot_sync(unsigned mask, int predicate) {
+  return synchronising_grid("__ballot_sync").wait(Wait::kBallot, mask, predicate);
+}
+
+unsigned __match_any_sync(unsigned mask, int value) {
+  return synchronising_grid("__match_any_sync").wait(Wait::kMatchAny, mask, value);
 }
