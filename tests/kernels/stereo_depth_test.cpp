@@ -608,6 +608,30 @@ TEST(DisparityCuda, HasStereoBmWithoutNegativeDisparitiesOnly) {
   }
 }
 
+// A block takes its tile's windows into shared memory: a window and range too wide for it are
+// refused in one line, whatever the machine, where the backend is built.
+TEST(DisparityCuda, RefusesAWindowAndRangeItsTilesCannotHold) {
+  if (!cuda_backend_built()) GTEST_SKIP() << "this robotperf is built without CUDA";
+  StereoParams wide;
+  wide.correlation_window_size = 121;
+  wide.disparity_range = 256;
+  try {
+    DisparityProcessor(wide, ImageBackend::kCuda);
+    ADD_FAILURE() << "a window of 121 px with 256 disparities was accepted on cuda";
+  } catch (const std::invalid_argument& e) {
+    const std::string line = e.what();
+    EXPECT_NE(line.find("shared memory"), std::string::npos) << line;
+    EXPECT_NE(line.find("121 px"), std::string::npos) << line;
+    EXPECT_EQ(line.find('\n'), std::string::npos) << line;
+  }
+  StereoParams a3_like;
+  a3_like.correlation_window_size = 15;
+  a3_like.disparity_range = 64;
+  if (without_cuda().empty()) {
+    EXPECT_NO_THROW(DisparityProcessor(a3_like, ImageBackend::kCuda));
+  }
+}
+
 TEST(DisparityCuda, WithoutItsBuildOrDeviceIsOneLine) {
   if (without_cuda().empty()) GTEST_SKIP() << "a CUDA device is there: " << cuda_device().name;
   expect_cuda_missing_line([] { DisparityProcessor({}, ImageBackend::kCuda); },

@@ -57,7 +57,7 @@ DisparityProcessor::DisparityProcessor(const StereoParams& params, ImageBackend 
             "stereo_algorithm 1 (StereoSGBM) has no " + name + " backend; use 0 (StereoBM)");
     require(params_.min_disparity >= 0, "the " + name + " backend needs min_disparity >= 0");
   }
-  if (backend_ == ImageBackend::kCuda) cuda_ = cuda::make_block_matcher();
+  if (backend_ == ImageBackend::kCuda) cuda_ = cuda::make_block_matcher(params_);
   if (params_.algorithm == StereoAlgorithm::kBlockMatching) {
     auto bm = cv::StereoBM::create(params_.disparity_range, params_.correlation_window_size);
     bm->setPreFilterSize(params_.prefilter_size);

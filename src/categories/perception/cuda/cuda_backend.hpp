@@ -71,6 +71,8 @@ class BlockMatcher {
 std::unique_ptr<Remapper> make_remapper();
 std::unique_ptr<ImageResizer> make_resizer();
 std::unique_ptr<PointCloudMaker> make_point_cloud_maker();
-std::unique_ptr<BlockMatcher> make_block_matcher();
+// Also throws std::invalid_argument, saying why, for a window and range the device's tiles
+// cannot take (checked before the device is asked for).
+std::unique_ptr<BlockMatcher> make_block_matcher(const StereoParams& params);
 
 }  // namespace robotperf::perception::cuda

@@ -47,19 +47,22 @@ void xyzrgb(DeviceImage depth, const uint8_t* colour, const XyzrgbModel& model, 
 // StereoBM's device part on a rectified mono8 pair (shape.rows x shape.cols each): the x-Sobel
 // pre-filter, the cost of every window and disparity, the texture and uniqueness checks and the
 // sub-pixel fit, into `disparity` (1/16 px, filtered pixels (min_disparity - 1) * 16) and
-// `best_cost` (each pixel's best window cost, 0 where filtered).
+// `best_cost` (each pixel's best window cost, 0 where filtered). Throws std::invalid_argument for
+// a window and range whose tiles do not fit a block's shared memory.
 struct BlockMatchingBuffers {
   const uint8_t* left = nullptr;
   const uint8_t* right = nullptr;
   uint8_t* filtered_left = nullptr;  // rows x cols each
   uint8_t* filtered_right = nullptr;
-  int32_t* row_costs = nullptr;  // (disparities + 1) x rows x cols each: the last plane texture
-  int32_t* costs = nullptr;
   int16_t* disparity = nullptr;  // rows x cols
   int32_t* best_cost = nullptr;  // rows x cols
 };
 void block_match(const BlockMatchingShape& shape, const BlockMatchingBuffers& buffers,
                  cudaStream_t stream);
+
+// Throws std::invalid_argument, saying why, where block_match cannot take windows of `radius`
+// with `disparities` disparities.
+void check_block_matching(int radius, int disparities);
 
 // StereoBM's steps after block_match, in place on its `disparity`, with the answer of
 // cv::validateDisparity(disparity, best_cost, min_disparity, disparities, disp12_max_diff) then

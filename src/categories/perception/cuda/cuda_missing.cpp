@@ -44,7 +44,7 @@ std::unique_ptr<PointCloudMaker> make_point_cloud_maker() {
   not_built();
 }
 
-std::unique_ptr<BlockMatcher> make_block_matcher() {
+std::unique_ptr<BlockMatcher> make_block_matcher(const StereoParams& /*params*/) {
   not_built();
 }
 

@@ -21,13 +21,9 @@ class CudaBlockMatcher final : public BlockMatcher {
       throw std::logic_error("cuda: block matching takes a mono8 pair of one size");
     const BlockMatchingShape s = block_matching_shape(left.rows, left.cols, params);
     const std::size_t pixels = left.total();
-    // The cost volume: a plane of window costs per disparity, and one for the texture.
-    const std::size_t volume = pixels * static_cast<std::size_t>(s.disparities + 1);
     BlockMatchingBuffers b;
     b.filtered_left = filtered_left_.reserve_for<uint8_t>(pixels);
     b.filtered_right = filtered_right_.reserve_for<uint8_t>(pixels);
-    b.row_costs = row_costs_.reserve_for<int32_t>(volume);
-    b.costs = costs_.reserve_for<int32_t>(volume);
     b.disparity = static_cast<int16_t*>(disparity_.reserve(s.rows, s.cols, CV_16SC1).data);
     b.best_cost = best_cost_.reserve_for<int32_t>(pixels);
     DisparityFilterBuffers f;
@@ -54,7 +50,7 @@ class CudaBlockMatcher final : public BlockMatcher {
   Stream stream_;
   StagedImage left_, right_, disparity_;
   Buffer filtered_left_{Memory::kDevice}, filtered_right_{Memory::kDevice};
-  Buffer row_costs_{Memory::kDevice}, costs_{Memory::kDevice}, best_cost_{Memory::kDevice};
+  Buffer best_cost_{Memory::kDevice};
   Buffer right_match_{Memory::kDevice}, labels_{Memory::kDevice}, region_sizes_{Memory::kDevice};
 };
 
@@ -68,7 +64,8 @@ DisparityFilter disparity_filter(const StereoParams& params) {
   return f;
 }
 
-std::unique_ptr<BlockMatcher> make_block_matcher() {
+std::unique_ptr<BlockMatcher> make_block_matcher(const StereoParams& params) {
+  check_block_matching(params.correlation_window_size / 2, params.disparity_range);
   cuda_device();
   return std::make_unique<CudaBlockMatcher>();
 }

@@ -1,8 +1,9 @@
 // StereoBM's device part, the stages of robotperf's OpenCL StereoBM (stereo_bm_opencl.cpp) with
-// the same integer arithmetic: the x-Sobel pre-filter, the window costs of every disparity (the
-// cost volume kept on the device), the texture and uniqueness checks and the sub-pixel fit. Each
-// window sum is taken whole by its own thread rather than slid along a row as the OpenCL kernels
-// do: integer sums, the same values, and a thread for every cost instead of one per row.
+// the same integer arithmetic: the x-Sobel pre-filter, the window costs of every disparity, the
+// texture and uniqueness checks and the sub-pixel fit. A block matches a tile of pixels with the
+// column sums of its windows in shared memory and each pixel's search in registers, so that no
+// cost volume goes through device memory (a separate pass per sum and a volume of 80 MB for a3
+// took 0.73 of its 0.94 ms of compute on an H100).
 #include <algorithm>
 #include <climits>
 #include <cstddef>
@@ -37,86 +38,164 @@ __global__ void prefilter_kernel(const uint8_t* src, uint8_t* dst, int rows, int
   *out = static_cast<uint8_t>(min(max(d, -cap), cap) + cap);
 }
 
-// The cost of pixel column c for disparity index k (disparity = right_offset - k), the columns
-// clamped as OpenCV clamps them; index `disparities` is the texture, |L - cap|.
-__device__ int column_cost(const uint8_t* l, const uint8_t* r, int c, int k,
-                           const BlockMatchingShape& s) {
-  const int lc = min(max(c, 0), s.cols - 1);
-  if (k == s.disparities) return abs(static_cast<int>(l[lc]) - s.prefilter_cap);
-  return abs(static_cast<int>(l[lc]) -
-             static_cast<int>(r[min(max(c - s.right_offset, 0) + k, s.cols - 1)]));
+// The matcher's tile: the pixels of a block, a warp along each of 8 rows.
+constexpr int kTileCols = 32, kTileRows = 8, kTileThreads = kTileCols * kTileRows;
+
+// A matcher block's shared memory: the column sums of a batch of disparity indices (uint16_t:
+// at most (2 radius + 1) * 2 cap, 255 * 126), then the pre-filtered left and right pixels the
+// tile's windows cover (rows first), clamped to the image.
+struct MatchTiles {
+  int halo_cols = 0;   // the tile's columns and a window radius either side
+  int halo_rows = 0;   // the same for rows
+  int right_cols = 0;  // the right image's columns the windows reach: halo_cols + disparities - 1
+  int batch = 0;       // disparity indices a turn
+};
+
+std::size_t shared_bytes(const MatchTiles& t) {
+  return sizeof(uint16_t) * static_cast<std::size_t>(t.batch) * kTileRows * t.halo_cols +
+         static_cast<std::size_t>(t.halo_rows) * (t.halo_cols + t.right_cols);
 }
 
-// Per pixel and disparity index (blockIdx.z): the window's sum along the row.
-__global__ void row_costs_kernel(const uint8_t* left, const uint8_t* right, int32_t* row_costs,
-                                 BlockMatchingShape s) {
-  const int x = blockIdx.x * blockDim.x + threadIdx.x;
-  const int y = blockIdx.y * blockDim.y + threadIdx.y;
-  const int k = blockIdx.z;
-  if (x >= s.cols || y >= s.rows || k > s.disparities) return;
-  const uint8_t* l = left + static_cast<size_t>(y) * s.cols;
-  const uint8_t* r = right + static_cast<size_t>(y) * s.cols;
-  int sum = 0;
-  for (int c = x - s.radius; c <= x + s.radius; ++c) sum += column_cost(l, r, c, k, s);
-  row_costs[(static_cast<size_t>(k) * s.rows + y) * s.cols + x] = sum;
+// A pixel's search in disparity order, in registers: the least cost (the first of equals, as
+// OpenCV keeps it) with the costs either side for the sub-pixel fit, and the four least costs,
+// among which is the least outside the best and its two neighbours, all that the uniqueness
+// check needs.
+struct Search {
+  int best = INT_MAX, best_k = 0, before = 0, after = 0, last = 0;
+  int least[4] = {INT_MAX, INT_MAX, INT_MAX, INT_MAX};
+  int least_k[4] = {-1, -1, -1, -1};
+
+  __device__ void add(int k, int cost) {
+    if (k == best_k + 1) after = cost;
+    if (cost < best) {
+      best = cost;
+      best_k = k;
+      before = last;
+    }
+    last = cost;
+    if (cost >= least[3]) return;
+    least[3] = cost;
+    least_k[3] = k;
+    for (int i = 3; i > 0; --i) {
+      if (least[i] < least[i - 1]) {
+        const int c = least[i], j = least_k[i];
+        least[i] = least[i - 1];
+        least_k[i] = least_k[i - 1];
+        least[i - 1] = c;
+        least_k[i - 1] = j;
+      }
+    }
+  }
+
+  // Whether a disparity other than the best and its neighbours costs within the uniqueness
+  // ratio of the best.
+  __device__ bool ambiguous(int ratio) const {
+    const int limit = best + best * ratio / 100;
+    for (int i = 0; i < 4; ++i) {
+      if (least_k[i] >= 0 && (least_k[i] < best_k - 1 || least_k[i] > best_k + 1) &&
+          least[i] <= limit) {
+        return true;
+      }
+    }
+    return false;
+  }
+};
+
+__device__ int clamped(int v, int low, int high) {
+  return min(max(v, low), high);
 }
 
-// Per pixel and disparity index: the window's sum of the row sums down the column, the rows
-// clamped at the top and bottom.
-__global__ void window_costs_kernel(const int32_t* row_costs, int32_t* costs,
-                                    BlockMatchingShape s) {
-  const int x = blockIdx.x * blockDim.x + threadIdx.x;
-  const int y = blockIdx.y * blockDim.y + threadIdx.y;
-  const int k = blockIdx.z;
-  if (x >= s.cols || y >= s.rows || k > s.disparities) return;
-  const int32_t* in = row_costs + static_cast<size_t>(k) * s.rows * s.cols + x;
-  int sum = 0;
-  for (int j = y - s.radius; j <= y + s.radius; ++j)
-    sum += in[static_cast<size_t>(min(max(j, 0), s.rows - 1)) * s.cols];
-  costs[(static_cast<size_t>(k) * s.rows + y) * s.cols + x] = sum;
-}
-
-// Per pixel: inside the valid region, the best disparity, the texture and uniqueness checks, and
-// the fixed-point (1/16 px) disparity with OpenCV's sub-pixel fit of the costs on either side;
-// the best cost for the left-right check (0 where filtered).
-__global__ void choose_kernel(const int32_t* costs, int16_t* disparity, int32_t* best_cost,
-                              BlockMatchingShape s) {
-  const int x = blockIdx.x * blockDim.x + threadIdx.x;
-  const int y = blockIdx.y * blockDim.y + threadIdx.y;
-  if (x >= s.cols || y >= s.rows) return;
-  const size_t plane = static_cast<size_t>(s.rows) * s.cols,
-               at = static_cast<size_t>(y) * s.cols + x;
+// A block per tile of the valid region: its windows' pixels into shared memory, then, a batch of
+// disparity indices at a time, the column sums of every tile row and halo column, and from them
+// each pixel's window costs; then the texture and uniqueness checks and the fixed-point (1/16
+// px) disparity with OpenCV's sub-pixel fit; the best cost for the left-right check (0 where
+// filtered). Index `disparities` is the texture, |L - cap|. Inside the valid region no window
+// column or row is clamped (min_disparity >= 0), so the clamping of the tiles only keeps the
+// tile's part past that region inside the image.
+__global__ void match_kernel(const uint8_t* left, const uint8_t* right, int16_t* disparity,
+                             int32_t* best_cost, BlockMatchingShape s, MatchTiles t) {
+  const int tx = static_cast<int>(threadIdx.x), ty = static_cast<int>(threadIdx.y);
+  const int id = ty * kTileCols + tx;
+  const int tile_x = s.x0 + static_cast<int>(blockIdx.x) * kTileCols;
+  const int tile_y = s.y0 + static_cast<int>(blockIdx.y) * kTileRows;
+  const int window = 2 * s.radius + 1;
+  uint16_t* column_sums = dynamic_shared<uint16_t>();
+  uint8_t* left_tile = reinterpret_cast<uint8_t*>(column_sums + static_cast<std::size_t>(t.batch) *
+                                                                    kTileRows * t.halo_cols);
+  uint8_t* right_tile = left_tile + t.halo_rows * t.halo_cols;
+  for (int i = id; i < t.halo_rows * t.halo_cols; i += kTileThreads) {
+    const int y = clamped(tile_y - s.radius + i / t.halo_cols, 0, s.rows - 1);
+    const int x = clamped(tile_x - s.radius + i % t.halo_cols, 0, s.cols - 1);
+    left_tile[i] = left[static_cast<std::size_t>(y) * s.cols + x];
+  }
+  for (int i = id; i < t.halo_rows * t.right_cols; i += kTileThreads) {
+    const int y = clamped(tile_y - s.radius + i / t.right_cols, 0, s.rows - 1);
+    const int x = clamped(tile_x - s.radius - s.right_offset + i % t.right_cols, 0, s.cols - 1);
+    right_tile[i] = right[static_cast<std::size_t>(y) * s.cols + x];
+  }
+  __syncthreads();
+  Search search;
+  int texture = 0;
+  for (int k0 = 0; k0 <= s.disparities; k0 += t.batch) {
+    const int count = min(t.batch, s.disparities + 1 - k0);
+    for (int i = id; i < count * kTileRows * t.halo_cols; i += kTileThreads) {
+      const int c = i % t.halo_cols, row = i / t.halo_cols % kTileRows;
+      const int k = k0 + i / (t.halo_cols * kTileRows);
+      const uint8_t* l = left_tile + row * t.halo_cols + c;
+      int sum = 0;
+      if (k == s.disparities) {
+        for (int j = 0; j < window; ++j)
+          sum += abs(static_cast<int>(l[j * t.halo_cols]) - s.prefilter_cap);
+      } else {
+        const uint8_t* r = right_tile + row * t.right_cols + c + k;
+        for (int j = 0; j < window; ++j)
+          sum += abs(static_cast<int>(l[j * t.halo_cols]) - static_cast<int>(r[j * t.right_cols]));
+      }
+      column_sums[i] = static_cast<uint16_t>(sum);
+    }
+    __syncthreads();
+    for (int b = 0; b < count; ++b) {
+      const uint16_t* sums = column_sums + (b * kTileRows + ty) * t.halo_cols + tx;
+      int cost = 0;
+      for (int j = 0; j < window; ++j) cost += sums[j];
+      if (k0 + b == s.disparities) {
+        texture = cost;
+      } else {
+        search.add(k0 + b, cost);
+      }
+    }
+    __syncthreads();
+  }
+  const int x = tile_x + tx, y = tile_y + ty;
+  if (x >= s.x1 || y >= s.y1) return;
+  const std::size_t at = static_cast<std::size_t>(y) * s.cols + x;
   const int16_t filtered = static_cast<int16_t>((s.min_disparity - 1) * 16);
-  disparity[at] = filtered;
-  best_cost[at] = 0;
-  if (x < s.x0 || x >= s.x1 || y < s.y0 || y >= s.y1 ||
-      costs[s.disparities * plane + at] < s.texture_threshold) {
+  if (texture < s.texture_threshold ||
+      (s.uniqueness_ratio > 0 && search.ambiguous(s.uniqueness_ratio))) {
+    disparity[at] = filtered;
+    best_cost[at] = 0;
     return;
   }
-  int best = INT_MAX, best_k = 0;
-  for (int k = 0; k < s.disparities; ++k) {
-    const int c = costs[k * plane + at];
-    if (c < best) {
-      best = c;
-      best_k = k;
-    }
-  }
-  if (s.uniqueness_ratio > 0) {
-    const int limit = best + best * s.uniqueness_ratio / 100;
-    for (int k = 0; k < s.disparities; ++k) {
-      if ((k < best_k - 1 || k > best_k + 1) && costs[k * plane + at] <= limit) return;
-    }
-  }
-  best_cost[at] = best;
-  const int whole = s.disparities - best_k - 1 + s.min_disparity;
-  if (best_k == 0 || best_k == s.disparities - 1) {
+  best_cost[at] = search.best;
+  const int whole = s.disparities - search.best_k - 1 + s.min_disparity;
+  if (search.best_k == 0 || search.best_k == s.disparities - 1) {
     disparity[at] = static_cast<int16_t>(whole * 16);
     return;
   }
-  const int p = costs[(best_k + 1) * plane + at];
-  const int n = costs[(best_k - 1) * plane + at];
-  const int d = p + n - 2 * best + abs(p - n);
+  const int p = search.after, n = search.before;
+  const int d = p + n - 2 * search.best + abs(p - n);
   disparity[at] = static_cast<int16_t>((whole * 256 + (d != 0 ? (p - n) * 256 / d : 0) + 15) >> 4);
+}
+
+// Every pixel outside the valid region: filtered, its best cost 0.
+__global__ void mark_unmatched_kernel(int16_t* disparity, int32_t* best_cost,
+                                      BlockMatchingShape s) {
+  const int x = blockIdx.x * blockDim.x + threadIdx.x;
+  const int y = blockIdx.y * blockDim.y + threadIdx.y;
+  if (x >= s.cols || y >= s.rows || (x >= s.x0 && x < s.x1 && y >= s.y0 && y < s.y1)) return;
+  const std::size_t at = static_cast<std::size_t>(y) * s.cols + x;
+  disparity[at] = static_cast<int16_t>((s.min_disparity - 1) * 16);
+  best_cost[at] = 0;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -189,9 +268,10 @@ __global__ void left_right_check_kernel(int16_t* disparity, const unsigned long 
 
 // ---------------------------------------------------------------------------------------------
 // The speckle filter (cv::filterSpeckles): regions of 4-neighbours whose values differ by at most
-// speckle_range, found by union-find with atomicMin (Playne and Hawick's GPU labelling); a region
-// of at most speckle_size pixels becomes invalid. The regions, and so the answer, are OpenCV's
-// whatever the order the threads run in.
+// speckle_range, found by union-find with atomicMin (Playne and Hawick's GPU labelling) after the
+// runs along each warp's part of a row are labelled at once; a region of at most speckle_size
+// pixels becomes invalid. The regions, and so the answer, are OpenCV's whatever the order the
+// threads run in.
 // ---------------------------------------------------------------------------------------------
 
 __device__ int find_root(const int32_t* labels, int i) {
@@ -218,40 +298,67 @@ __device__ void unite(int32_t* labels, int a, int b) {
   }
 }
 
-__global__ void init_regions_kernel(const int16_t* disparity, int32_t* labels,
-                                    int32_t* region_sizes, int rows, int cols, int invalid) {
-  const int x = blockIdx.x * blockDim.x + threadIdx.x;
-  const int y = blockIdx.y * blockDim.y + threadIdx.y;
-  if (x >= cols || y >= rows) return;
-  const int at = y * cols + x;
-  labels[at] = disparity[at] != invalid ? at : -1;
-  region_sizes[at] = 0;
+// Whether 4-neighbours a and b (both inside the image) join one region.
+__device__ bool joined(const int16_t* disparity, int a, int b, int invalid, int max_diff) {
+  const int da = disparity[a], db = disparity[b];
+  return da != invalid && db != invalid && abs(da - db) <= max_diff;
 }
 
-__global__ void join_regions_kernel(const int16_t* disparity, int32_t* labels, int rows, int cols,
+// Labels from the runs of joined pixels along a warp's 32 columns of a row (image_block(): a warp
+// is a row of its block), each pixel pointing at its run's first: the unions along a row found
+// at once, without atomics. Invalid pixels get -1.
+__global__ void init_regions_kernel(const int16_t* disparity, int32_t* labels,
+                                    int32_t* region_sizes, int rows, int cols, int invalid,
                                     int max_diff) {
   const int x = blockIdx.x * blockDim.x + threadIdx.x;
   const int y = blockIdx.y * blockDim.y + threadIdx.y;
-  if (x >= cols || y >= rows) return;
+  const bool inside = x < cols && y < rows;
   const int at = y * cols + x;
-  if (labels[at] < 0) return;
-  const int d = disparity[at];
-  // The right and lower neighbours: every 4-neighbour pair once.
-  if (x + 1 < cols && labels[at + 1] >= 0 && abs(d - disparity[at + 1]) <= max_diff)
-    unite(labels, at, at + 1);
-  if (y + 1 < rows && labels[at + cols] >= 0 && abs(d - disparity[at + cols]) <= max_diff)
-    unite(labels, at, at + cols);
+  const bool valid = inside && disparity[at] != invalid;
+  const unsigned lane = lane_id();
+  // A run starts at a valid pixel its left neighbour in the warp does not join.
+  const bool starts = valid && (lane == 0 || !joined(disparity, at - 1, at, invalid, max_diff));
+  const unsigned starts_here_or_before = __ballot_sync(0xffffffffu, starts) & ((2u << lane) - 1u);
+  if (!inside) return;
+  labels[at] =
+      valid ? at - static_cast<int>(lane) + (31 - __clz(static_cast<int>(starts_here_or_before)))
+            : -1;
+  region_sizes[at] = 0;
 }
 
-__global__ void count_regions_kernel(int32_t* labels, int32_t* region_sizes, int rows, int cols) {
+// Joins the regions the runs leave apart: a run's last pixel and its right neighbour in the next
+// warp, and a pixel and the one below it, but for a pair whose left neighbours are a joined pair
+// below each other and joined to them (the regions are joined there already).
+__global__ void join_regions_kernel(const int16_t* disparity, int32_t* labels, int rows, int cols,
+                                    int invalid, int max_diff) {
   const int x = blockIdx.x * blockDim.x + threadIdx.x;
   const int y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= cols || y >= rows) return;
   const int at = y * cols + x;
   if (labels[at] < 0) return;
-  const int root = find_root(labels, at);
-  labels[at] = root;
-  atomicAdd(&region_sizes[root], 1);
+  if (lane_id() == 31 && x + 1 < cols && joined(disparity, at, at + 1, invalid, max_diff))
+    unite(labels, at, at + 1);
+  if (y + 1 >= rows || !joined(disparity, at, at + cols, invalid, max_diff)) return;
+  const bool left_joined_too = x > 0 && joined(disparity, at - 1, at, invalid, max_diff) &&
+                               joined(disparity, at - 1 + cols, at + cols, invalid, max_diff) &&
+                               joined(disparity, at - 1, at - 1 + cols, invalid, max_diff);
+  if (!left_joined_too) unite(labels, at, at + cols);
+}
+
+// Every pixel's root, and its region's size: the lanes of a warp in one region add their count
+// once (a large region fills whole warps, whose atomics on its one counter would queue).
+__global__ void count_regions_kernel(int32_t* labels, int32_t* region_sizes, int rows, int cols) {
+  const int x = blockIdx.x * blockDim.x + threadIdx.x;
+  const int y = blockIdx.y * blockDim.y + threadIdx.y;
+  const int at = y * cols + x;
+  int root = -1;
+  if (x < cols && y < rows && labels[at] >= 0) {
+    root = find_root(labels, at);
+    labels[at] = root;
+  }
+  const unsigned same = __match_any_sync(0xffffffffu, root);
+  if (root >= 0 && lane_id() == static_cast<unsigned>(__ffs(static_cast<int>(same)) - 1))
+    atomicAdd(&region_sizes[root], __popc(same));
 }
 
 __global__ void remove_speckles_kernel(int16_t* disparity, const int32_t* labels,
@@ -265,7 +372,33 @@ __global__ void remove_speckles_kernel(int16_t* disparity, const int32_t* labels
     disparity[at] = static_cast<int16_t>(invalid);
 }
 
+// A block's shared memory at most: what every device gives without asking.
+constexpr std::size_t kSharedLimit = 48 * 1024;
+
+// The tiles of windows of `radius` and `disparities` indices, with the largest batch (at most 32)
+// whose shared memory fits; throws where not even one disparity a turn fits.
+MatchTiles match_tiles(int radius, int disparities) {
+  MatchTiles t;
+  t.halo_cols = kTileCols + 2 * radius;
+  t.halo_rows = kTileRows + 2 * radius;
+  t.right_cols = t.halo_cols + disparities - 1;
+  t.batch = 32;
+  while (t.batch > 1 && shared_bytes(t) > kSharedLimit) t.batch /= 2;
+  if (radius < 0 || disparities <= 0 || shared_bytes(t) > kSharedLimit) {
+    throw std::invalid_argument(
+        "cuda: block matching with a window of " + std::to_string(2 * radius + 1) + " px and " +
+        std::to_string(disparities) + " disparities needs " + std::to_string(shared_bytes(t)) +
+        " bytes of shared memory a block, more than the 48 KiB it may take; use a smaller window "
+        "or range, or the opencl or cpu backend");
+  }
+  return t;
+}
+
 }  // namespace
+
+void check_block_matching(int radius, int disparities) {
+  match_tiles(radius, disparities);
+}
 
 void filter_disparity(const BlockMatchingShape& s, const DisparityFilter& f,
                       const DisparityFilterBuffers& b, cudaStream_t stream) {
@@ -290,13 +423,15 @@ void filter_disparity(const BlockMatchingShape& s, const DisparityFilter& f,
     check_launch("left_right_check_kernel");
   }
   if (f.speckle_size > 0 && f.speckle_range >= 0) {
-    launch(init_regions_kernel, pixels, block, stream, static_cast<const int16_t*>(b.disparity),
-           b.labels, b.region_sizes, s.rows, s.cols, invalid);
+    launch_synchronising(init_regions_kernel, pixels, block, 0, stream,
+                         static_cast<const int16_t*>(b.disparity), b.labels, b.region_sizes, s.rows,
+                         s.cols, invalid, f.speckle_range);
     check_launch("init_regions_kernel");
     launch(join_regions_kernel, pixels, block, stream, static_cast<const int16_t*>(b.disparity),
-           b.labels, s.rows, s.cols, f.speckle_range);
+           b.labels, s.rows, s.cols, invalid, f.speckle_range);
     check_launch("join_regions_kernel");
-    launch(count_regions_kernel, pixels, block, stream, b.labels, b.region_sizes, s.rows, s.cols);
+    launch_synchronising(count_regions_kernel, pixels, block, 0, stream, b.labels, b.region_sizes,
+                         s.rows, s.cols);
     check_launch("count_regions_kernel");
     launch(remove_speckles_kernel, pixels, block, stream, b.disparity,
            static_cast<const int32_t*>(b.labels), static_cast<const int32_t*>(b.region_sizes),
@@ -306,12 +441,10 @@ void filter_disparity(const BlockMatchingShape& s, const DisparityFilter& f,
 }
 
 void block_match(const BlockMatchingShape& s, const BlockMatchingBuffers& b, cudaStream_t stream) {
-  // gridDim.y and gridDim.z are at most 65535.
-  if (s.rows <= 0 || s.cols <= 0 || s.disparities <= 0 || s.disparities >= 65535 ||
-      s.rows > 65535 * 8) {
+  const MatchTiles t = match_tiles(s.radius, s.disparities);
+  if (s.rows <= 0 || s.cols <= 0 || s.rows > 65535 * kTileRows) {  // gridDim.y <= 65535
     throw std::invalid_argument("cuda: block matching: " + std::to_string(s.cols) + "x" +
-                                std::to_string(s.rows) + " images with " +
-                                std::to_string(s.disparities) + " disparities do not fit");
+                                std::to_string(s.rows) + " images do not fit");
   }
   const dim3 block = image_block(), pixels = image_grid(s.cols, s.rows);
   launch(prefilter_kernel, pixels, block, stream, b.left, b.filtered_left, s.rows, s.cols,
@@ -320,14 +453,16 @@ void block_match(const BlockMatchingShape& s, const BlockMatchingBuffers& b, cud
   launch(prefilter_kernel, pixels, block, stream, b.right, b.filtered_right, s.rows, s.cols,
          s.prefilter_cap);
   check_launch("prefilter_kernel");
-  const dim3 volume = image_grid(s.cols, s.rows, s.disparities + 1);
-  launch(row_costs_kernel, volume, block, stream, b.filtered_left, b.filtered_right, b.row_costs,
-         s);
-  check_launch("row_costs_kernel");
-  launch(window_costs_kernel, volume, block, stream, b.row_costs, b.costs, s);
-  check_launch("window_costs_kernel");
-  launch(choose_kernel, pixels, block, stream, b.costs, b.disparity, b.best_cost, s);
-  check_launch("choose_kernel");
+  launch(mark_unmatched_kernel, pixels, block, stream, b.disparity, b.best_cost, s);
+  check_launch("mark_unmatched_kernel");
+  if (s.x1 <= s.x0 || s.y1 <= s.y0) return;
+  const dim3 tiles((s.x1 - s.x0 + kTileCols - 1) / kTileCols,
+                   (s.y1 - s.y0 + kTileRows - 1) / kTileRows);
+  launch_synchronising(match_kernel, tiles, dim3(kTileCols, kTileRows), shared_bytes(t), stream,
+                       static_cast<const uint8_t*>(b.filtered_left),
+                       static_cast<const uint8_t*>(b.filtered_right), b.disparity, b.best_cost, s,
+                       t);
+  check_launch("match_kernel");
 }
 
 }  // namespace robotperf::perception::cuda
