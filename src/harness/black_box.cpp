@@ -218,7 +218,7 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
       repeating = !gate->delivering();
       if (repeating) {
         if (rmw::steady_now_ns() > gate->deadline_ns)
-          throw GraphNotConnected(gate->timeout_message);
+          throw GraphNotConnected(gate->timeout_message());
         shift_ns += offset(gate->warmup);
         if (repeated_ns != nullptr) *repeated_ns += offset(gate->warmup);
         first = 0;

@@ -70,8 +70,8 @@ class Playback {
   struct DeliveryGate {
     std::size_t warmup = 0;
     std::function<bool()> delivering;
-    int64_t deadline_ns = 0;  // steady clock; past it, GraphNotConnected with `timeout_message`
-    std::string timeout_message;
+    int64_t deadline_ns = 0;  // steady clock; past it, GraphNotConnected with timeout_message()
+    std::function<std::string()> timeout_message;  // asked at the deadline, what happened by then
   };
 
   // Sends ids.count messages, message k at start + k·period or start + schedule_ns[k] (absolute

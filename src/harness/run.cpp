@@ -730,16 +730,27 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   if (spec.external()) {
     gate = Playback::DeliveryGate{
         r.warmup, [&] { return monitor.received() > 0; }, gate_deadline,
-        "the graph matched every endpoint but delivered no output to its warm-up messages "
-        "before --connect-timeout: is it running, and does it publish the output topic?"};
+        [] {
+          return std::string(
+              "the graph matched every endpoint but delivered no output to its warm-up messages "
+              "before --connect-timeout: is it running, and does it publish the output topic?");
+        }};
   } else if (on_device) {
     gate = Playback::DeliveryGate{
         r.warmup, [&] { return device_warmup.ready_after_round(monitor.received()); },
         gate_deadline,
-        "the graph's nodes on a device answered none of the warm-up messages within "
-        "--connect-timeout (" +
-            number_text(options.connect_timeout_s) +
-            " s): is the device working? a slow one needs a longer --connect-timeout"};
+        [&] {
+          const std::size_t answers = monitor.received();
+          const std::string within =
+              " within --connect-timeout (" + number_text(options.connect_timeout_s) + " s)";
+          if (answers == 0) {
+            return "the graph's nodes on a device answered none of the warm-up messages" + within +
+                   ": is the device working? a slow one needs a longer --connect-timeout";
+          }
+          return "the graph's nodes on a device answered " + std::to_string(answers) +
+                 " warm-up messages, more every round, and were still not keeping up" + within +
+                 ": a device this slow to warm up needs a longer --connect-timeout";
+        }};
   }
   int64_t repeated_ns = 0;
   playback.run(
