@@ -88,7 +88,8 @@ __kernel void window_costs(__global const int* rows_cost, __global int* costs, i
 
 // Per pixel of the region where the window and the search range fit ([x0, x1) x [y0, y1), as
 // OpenCV's valid disparity ROI): the best disparity, the texture and uniqueness checks, and the
-// fixed-point (1/16 px) disparity with OpenCV's sub-pixel fit of the costs on either side.
+// fixed-point (1/16 px) disparity with OpenCV's sub-pixel fit of the costs on either side; the
+// best cost for the left-right check, 0 where filtered.
 __kernel void choose(__global const int* costs, __global short* disp, int disp_step,
                      int disp_offset, __global int* best_cost, int best_step, int best_offset,
                      int rows, int cols, int ndisp, int lofs, int mindisp,
@@ -98,6 +99,8 @@ __kernel void choose(__global const int* costs, __global short* disp, int disp_s
   __global short* out = (__global short*)((__global uchar*)disp + disp_offset + y * disp_step) + x;
   const short filtered = (short)((mindisp - 1) * 16);
   const size_t plane = (size_t)rows * cols, at = (size_t)y * cols + x;
+  __global int* best_out = (__global int*)((__global uchar*)best_cost + best_offset + y * best_step) + x;
+  *best_out = 0;
   if (x < x0 || x >= x1 || y < y0 || y >= y1 || costs[ndisp * plane + at] < texture_threshold) {
     *out = filtered;
     return;
@@ -119,7 +122,7 @@ __kernel void choose(__global const int* costs, __global short* disp, int disp_s
       }
     }
   }
-  *(__global int*)((__global uchar*)best_cost + best_offset + y * best_step + x * 4) = best;
+  *best_out = best;
   if (best_k == 0 || best_k == ndisp - 1) {
     *out = (short)((ndisp - best_k - 1 + mindisp) * 16);
     return;
@@ -149,60 +152,60 @@ void run(cv::ocl::Kernel& kernel, std::size_t x, std::size_t y) {
 
 }  // namespace
 
-void stereo_bm_opencl(const cv::Mat& left, const cv::Mat& right, const StereoParams& p,
-                      cv::Mat& disparity16) {
+void OpenClBlockMatcher::compute(const cv::Mat& left, const cv::Mat& right, const StereoParams& p,
+                                 cv::Mat& disparity16) {
   if (p.algorithm != StereoAlgorithm::kBlockMatching)
     throw std::invalid_argument("disparity: the opencl backend has StereoBM only");
   if (p.min_disparity < 0)
     throw std::invalid_argument("disparity: the opencl backend needs min_disparity >= 0");
   const BlockMatchingShape s = block_matching_shape(left.rows, left.cols, p);
   const int rows = s.rows, cols = s.cols;
-  cv::UMat device_left, device_right;
-  cv::Mat best_cost;
   {
     DeviceStage upload("upload", left.total() + right.total(), opencl_queue());
-    left.copyTo(device_left);
-    right.copyTo(device_right);
+    left.copyTo(left_);
+    right.copyTo(right_);
   }
-  cv::UMat filtered_left(rows, cols, CV_8UC1), filtered_right(rows, cols, CV_8UC1);
-  cv::UMat rows_cost(1, (s.disparities + 1) * rows * cols, CV_32SC1);
-  cv::UMat costs(1, (s.disparities + 1) * rows * cols, CV_32SC1);
-  cv::UMat device_disparity(rows, cols, CV_16SC1);
-  // The best window cost of each pixel, for the left-right check.
-  cv::UMat device_best_cost(rows, cols, CV_32SC1, cv::Scalar(0));
+  filtered_left_.create(rows, cols, CV_8UC1);
+  filtered_right_.create(rows, cols, CV_8UC1);
+  row_costs_.create(1, (s.disparities + 1) * rows * cols, CV_32SC1);
+  costs_.create(1, (s.disparities + 1) * rows * cols, CV_32SC1);
+  disparity_.create(rows, cols, CV_16SC1);
+  best_cost_.create(rows, cols, CV_32SC1);  // the best window cost of each pixel
+  if (choose_.empty()) {
+    prefilter_ = build("prefilter");
+    row_kernel_ = build("row_costs");
+    window_kernel_ = build("window_costs");
+    choose_ = build("choose");
+  }
   {
     DeviceStage stage("compute", 0, opencl_queue());
-    cv::ocl::Kernel prefilter = build("prefilter");
-    for (auto [in, out] :
-         {std::pair{&device_left, &filtered_left}, {&device_right, &filtered_right}}) {
-      prefilter.args(cv::ocl::KernelArg::ReadOnlyNoSize(*in),
-                     cv::ocl::KernelArg::WriteOnlyNoSize(*out), rows, cols, s.prefilter_cap);
-      run(prefilter, static_cast<std::size_t>(cols), static_cast<std::size_t>(rows));
+    for (auto [in, out] : {std::pair{&left_, &filtered_left_}, {&right_, &filtered_right_}}) {
+      prefilter_.args(cv::ocl::KernelArg::ReadOnlyNoSize(*in),
+                      cv::ocl::KernelArg::WriteOnlyNoSize(*out), rows, cols, s.prefilter_cap);
+      run(prefilter_, static_cast<std::size_t>(cols), static_cast<std::size_t>(rows));
     }
-    cv::ocl::Kernel row_costs = build("row_costs");
-    row_costs.args(cv::ocl::KernelArg::ReadOnlyNoSize(filtered_left),
-                   cv::ocl::KernelArg::ReadOnlyNoSize(filtered_right),
-                   cv::ocl::KernelArg::PtrWriteOnly(rows_cost), rows, cols, s.disparities,
-                   s.right_offset, s.radius, s.prefilter_cap);
-    run(row_costs, static_cast<std::size_t>(rows), static_cast<std::size_t>(s.disparities + 1));
-    cv::ocl::Kernel window_costs = build("window_costs");
-    window_costs.args(cv::ocl::KernelArg::PtrReadOnly(rows_cost),
-                      cv::ocl::KernelArg::PtrWriteOnly(costs), rows, cols, s.disparities, s.radius);
-    run(window_costs, static_cast<std::size_t>(cols), static_cast<std::size_t>(s.disparities + 1));
-    cv::ocl::Kernel choose = build("choose");
-    choose.args(cv::ocl::KernelArg::PtrReadOnly(costs),
-                cv::ocl::KernelArg::WriteOnlyNoSize(device_disparity),
-                cv::ocl::KernelArg::WriteOnlyNoSize(device_best_cost), rows, cols, s.disparities,
-                s.right_offset, s.min_disparity, s.texture_threshold, s.uniqueness_ratio, s.x0,
-                s.x1, s.y0, s.y1);
-    run(choose, static_cast<std::size_t>(cols), static_cast<std::size_t>(rows));
+    row_kernel_.args(cv::ocl::KernelArg::ReadOnlyNoSize(filtered_left_),
+                     cv::ocl::KernelArg::ReadOnlyNoSize(filtered_right_),
+                     cv::ocl::KernelArg::PtrWriteOnly(row_costs_), rows, cols, s.disparities,
+                     s.right_offset, s.radius, s.prefilter_cap);
+    run(row_kernel_, static_cast<std::size_t>(rows), static_cast<std::size_t>(s.disparities + 1));
+    window_kernel_.args(cv::ocl::KernelArg::PtrReadOnly(row_costs_),
+                        cv::ocl::KernelArg::PtrWriteOnly(costs_), rows, cols, s.disparities,
+                        s.radius);
+    run(window_kernel_, static_cast<std::size_t>(cols),
+        static_cast<std::size_t>(s.disparities + 1));
+    choose_.args(
+        cv::ocl::KernelArg::PtrReadOnly(costs_), cv::ocl::KernelArg::WriteOnlyNoSize(disparity_),
+        cv::ocl::KernelArg::WriteOnlyNoSize(best_cost_), rows, cols, s.disparities, s.right_offset,
+        s.min_disparity, s.texture_threshold, s.uniqueness_ratio, s.x0, s.x1, s.y0, s.y1);
+    run(choose_, static_cast<std::size_t>(cols), static_cast<std::size_t>(rows));
   }
   {
     DeviceStage download("download", static_cast<uint64_t>(rows) * cols * (2 + 4), opencl_queue());
-    device_disparity.copyTo(disparity16);
-    device_best_cost.copyTo(best_cost);
+    disparity_.copyTo(disparity16);
+    best_cost_.copyTo(best_cost_on_host_);
   }
-  filter_on_host(disparity16, best_cost, p);
+  filter_on_host(disparity16, best_cost_on_host_, p);
 }
 
 }  // namespace robotperf::perception

@@ -58,6 +58,7 @@ DisparityProcessor::DisparityProcessor(const StereoParams& params, ImageBackend 
     require(params_.min_disparity >= 0, "the " + name + " backend needs min_disparity >= 0");
   }
   if (backend_ == ImageBackend::kCuda) cuda_ = cuda::make_block_matcher(params_);
+  if (backend_ == ImageBackend::kOpenCl) opencl_ = std::make_unique<OpenClBlockMatcher>();
   if (params_.algorithm == StereoAlgorithm::kBlockMatching) {
     auto bm = cv::StereoBM::create(params_.disparity_range, params_.correlation_window_size);
     bm->setPreFilterSize(params_.prefilter_size);
@@ -100,7 +101,7 @@ void DisparityProcessor::compute(const msgs::Image& left, const msgs::Image& rig
   to_mono8(left, "disparity: left image", left_mono_);
   to_mono8(right, "disparity: right image", right_mono_);
   if (backend_ == ImageBackend::kOpenCl) {
-    stereo_bm_opencl(left_mono_, right_mono_, params_, disparity16_);
+    opencl_->compute(left_mono_, right_mono_, params_, disparity16_);
   } else if (backend_ == ImageBackend::kCuda) {
     cuda_->compute(left_mono_, right_mono_, params_, disparity16_);
   } else {

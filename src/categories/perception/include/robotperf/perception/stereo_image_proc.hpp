@@ -16,6 +16,7 @@ namespace robotperf::perception {
 namespace cuda {
 class BlockMatcher;
 }  // namespace cuda
+class OpenClBlockMatcher;
 
 enum class StereoAlgorithm {
   kBlockMatching = 0,  // cv::StereoBM
@@ -81,6 +82,7 @@ class DisparityProcessor {
   ImageBackend backend_;
   cv::Ptr<cv::StereoMatcher> matcher_;
   std::unique_ptr<cuda::BlockMatcher> cuda_;
+  std::unique_ptr<OpenClBlockMatcher> opencl_;
   cv::Mat left_mono_, right_mono_, disparity16_;
 };
 
