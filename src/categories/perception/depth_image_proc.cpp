@@ -160,30 +160,29 @@ __kernel void xyzrgb(__global const uchar* depth, int depth_step, int depth_offs
 )CL";
 
 void convert_on_opencl(const cv::Mat& depth, const cv::Mat& colour, const XyzrgbModel& m,
-                       msgs::PointCloud2& cloud) {
+                       OpenClCloudBuffers& device, msgs::PointCloud2& cloud) {
   static const cv::ocl::ProgramSource source(kXyzrgbSource);
   cv::ocl::Kernel kernel("xyzrgb", source);
   if (kernel.empty())
     throw std::runtime_error("point_cloud_xyzrgb: the OpenCL kernel did not build");
-  cv::UMat device_depth, device_colour;
   {
     DeviceStage upload("upload",
                        depth.total() * depth.elemSize() + colour.total() * colour.elemSize(),
                        opencl_queue());
-    depth.copyTo(device_depth);
-    colour.copyTo(device_colour);
+    depth.copyTo(device.depth);
+    colour.copyTo(device.colour);
   }
-  cv::UMat device_cloud(depth.rows, static_cast<int>(cloud.row_step), CV_8UC1);
+  device.cloud.create(depth.rows, static_cast<int>(cloud.row_step), CV_8UC1);
   {
     DeviceStage stage("compute", 0, opencl_queue());
-    if (device_colour.size() != device_depth.size()) {
-      cv::UMat resized;
-      cv::resize(device_colour, resized, device_depth.size(), 0, 0, cv::INTER_LINEAR);
-      device_colour = resized;
+    const cv::UMat* pixel_colours = &device.colour;
+    if (device.colour.size() != device.depth.size()) {
+      cv::resize(device.colour, device.resized_colour, device.depth.size(), 0, 0, cv::INTER_LINEAR);
+      pixel_colours = &device.resized_colour;
     }
-    kernel.args(cv::ocl::KernelArg::ReadOnlyNoSize(device_depth),
-                cv::ocl::KernelArg::ReadOnlyNoSize(device_colour),
-                cv::ocl::KernelArg::WriteOnlyNoSize(device_cloud), depth.rows, depth.cols,
+    kernel.args(cv::ocl::KernelArg::ReadOnlyNoSize(device.depth),
+                cv::ocl::KernelArg::ReadOnlyNoSize(*pixel_colours),
+                cv::ocl::KernelArg::WriteOnlyNoSize(device.cloud), depth.rows, depth.cols,
                 static_cast<int>(m.metres), m.cx, m.cy, m.constant_x, m.constant_y,
                 static_cast<int>(m.fill_invalid), m.fill, m.red, m.green, m.blue, m.colour_bytes);
     size_t global[2] = {static_cast<size_t>(depth.cols), static_cast<size_t>(depth.rows)};
@@ -193,7 +192,7 @@ void convert_on_opencl(const cv::Mat& depth, const cv::Mat& colour, const Xyzrgb
   cv::Mat out(depth.rows, static_cast<int>(cloud.row_step), CV_8UC1, cloud.data.data());
   {
     DeviceStage download("download", cloud.data.size(), opencl_queue());
-    device_cloud.copyTo(out);
+    device.cloud.copyTo(out);
   }
   if (out.data != cloud.data.data())
     throw std::logic_error("point_cloud_xyzrgb: the device's cloud has another size");
@@ -268,7 +267,7 @@ void PointCloudXyzrgbProcessor::compute(const msgs::Image& depth, const msgs::Im
   if (depth_view.empty()) return;
   if (backend_ == ImageBackend::kOpenCl) {
     convert_on_opencl(depth_view, colour_view,
-                      device_model(is_float, model, params.range_max, layout), cloud);
+                      device_model(is_float, model, params.range_max, layout), opencl_, cloud);
     return;
   }
   if (backend_ == ImageBackend::kCuda) {

@@ -537,8 +537,7 @@ void Resizer::resize(const msgs::Image& image, const msgs::CameraInfo& info, msg
     }
   };
   if (backend_ == ImageBackend::kOpenCl) {
-    cv::UMat device_in, device_out;
-    on_device(in_view, device_in, device_out, out_view, compute);
+    on_device(in_view, device_in_, device_out_, out_view, compute);
   } else if (backend_ == ImageBackend::kCuda) {
     // The inverse scales cv::resize computes with: those given, or the sizes' ratios.
     const double inv_scale_x =

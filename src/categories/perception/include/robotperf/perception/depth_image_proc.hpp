@@ -54,6 +54,11 @@ void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
 // point_cloud_xyzrgb() keeping what a node keeps from message to message on its backend (with
 // ImageBackend::kCuda: its stream and buffers; the free function's are for its call only). Not
 // thread-safe: one per node.
+// The opencl backend's images on the device (OpenCV's transparent API).
+struct OpenClCloudBuffers {
+  cv::UMat depth, colour, resized_colour, cloud;
+};
+
 class PointCloudXyzrgbProcessor {
  public:
   // With kCuda, throws std::invalid_argument without its device (cuda_device()).
@@ -67,6 +72,9 @@ class PointCloudXyzrgbProcessor {
 
  private:
   ImageBackend backend_;
+  // kOpenCl: the depth, colour (and resized colour) and cloud on the device, kept from one
+  // message to the next.
+  OpenClCloudBuffers opencl_;
   std::unique_ptr<cuda::PointCloudMaker> cuda_;
 };
 

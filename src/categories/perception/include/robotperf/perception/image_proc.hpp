@@ -217,6 +217,8 @@ class Resizer {
  private:
   ResizeParams params_;
   ImageBackend backend_;
+  // kOpenCl: the input and output images on the device, kept from one message to the next.
+  cv::UMat device_in_, device_out_;
   std::unique_ptr<cuda::ImageResizer> cuda_;
 };
 
