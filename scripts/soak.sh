@@ -50,6 +50,8 @@ if [ "$analyse_only" = 0 ]; then
   descendants() {
     local pid=$1 child
     echo "$pid"
+    # The children files hold pids separated by spaces: split on words.
+    # shellcheck disable=SC2013
     for child in $(cat /proc/"$pid"/task/*/children 2>/dev/null); do descendants "$child"; done
   }
 
@@ -74,7 +76,7 @@ if [ "$analyse_only" = 0 ]; then
   [ "$status" -eq 0 ] || echo "soak: robotperf exited $status"
 fi
 
-result=$(ls "$dir"/results/*.json 2>/dev/null | head -n 1)
+result=$(find "$dir/results" -maxdepth 1 -name '*.json' 2>/dev/null | sort | head -n 1)
 [ -n "$result" ] || {
   echo "soak: FAILED, no result written"
   exit 1
