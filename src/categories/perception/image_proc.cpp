@@ -430,8 +430,16 @@ void Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& info,
                         msgs::Image& rectified) {
   if (!prepare(raw, info, rectified)) return;
   const cv::Mat raw_view = image_view(raw);
-  cv::Mat rectified_view = prepare_image(rectified, raw.header, raw.encoding,
-                                         static_cast<int>(raw.width), static_cast<int>(raw.height));
+  const auto make_output = [&] {
+    return prepare_image(rectified, raw.header, raw.encoding, static_cast<int>(raw.width),
+                         static_cast<int>(raw.height));
+  };
+  if (backend_ == ImageBackend::kCuda) {
+    // The output message is made while the device works.
+    cuda_->remap(raw_view, make_output);
+    return;
+  }
+  cv::Mat rectified_view = make_output();
   // Float images get NaN outside the field of view (no data), as image_geometry does.
   const bool is_float = raw_view.depth() == CV_32F || raw_view.depth() == CV_64F;
   const cv::Scalar border =
@@ -442,10 +450,6 @@ void Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& info,
                 cv::remap(in, out, device_map_xy_, device_map_fraction_, interpolation_,
                           cv::BORDER_CONSTANT, border);
               });
-    return;
-  }
-  if (backend_ == ImageBackend::kCuda) {
-    cuda_->remap(raw_view, rectified_view);
     return;
   }
   cv::remap(raw_view, rectified_view, map_xy_, map_fraction_, interpolation_, cv::BORDER_CONSTANT,
@@ -527,8 +531,11 @@ void Resizer::resize(const msgs::Image& image, const msgs::CameraInfo& info, msg
   }
   if (out_size.empty()) throw std::invalid_argument("resize: output would be empty");
 
-  cv::Mat out_view =
-      prepare_image(out, image.header, image.encoding, out_size.width, out_size.height);
+  cv::Mat out_view;
+  const auto make_output = [&] {
+    out_view = prepare_image(out, image.header, image.encoding, out_size.width, out_size.height);
+    return out_view;
+  };
   auto compute = [&](cv::InputArray in, cv::OutputArray to) {
     if (params.use_scale) {
       cv::resize(in, to, cv::Size(), scale_x, scale_y, params.interpolation);
@@ -537,19 +544,22 @@ void Resizer::resize(const msgs::Image& image, const msgs::CameraInfo& info, msg
     }
   };
   if (backend_ == ImageBackend::kOpenCl) {
+    make_output();
     on_device(in_view, device_in_, device_out_, out_view, compute);
   } else if (backend_ == ImageBackend::kCuda) {
-    // The inverse scales cv::resize computes with: those given, or the sizes' ratios.
+    // The inverse scales cv::resize computes with: those given, or the sizes' ratios. The output
+    // message is made while the device works.
     const double inv_scale_x =
         params.use_scale ? scale_x : static_cast<double>(out_size.width) / in_size.width;
     const double inv_scale_y =
         params.use_scale ? scale_y : static_cast<double>(out_size.height) / in_size.height;
     if (pixels != nullptr) {
-      cuda_->resize(*pixels, out_view, inv_scale_x, inv_scale_y);
+      cuda_->resize(*pixels, out_size, inv_scale_x, inv_scale_y, make_output);
     } else {
-      cuda_->resize(in_view, out_view, inv_scale_x, inv_scale_y);
+      cuda_->resize(in_view, out_size, inv_scale_x, inv_scale_y, make_output);
     }
   } else {
+    make_output();
     compute(in_view, out_view);
   }
   if (out_view.data != out.data.data()) {

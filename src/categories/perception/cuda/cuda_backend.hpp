@@ -11,6 +11,7 @@
 // the next on the device (ResidentPixels). Not thread-safe: one object per node.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <opencv2/core.hpp>
 
@@ -28,22 +29,27 @@ class Remapper {
   // The fixed-point maps (CV_16SC2 source pixels, CV_16UC1 interpolation-table indices) to the
   // device: once per camera model, not per message.
   virtual void set_maps(const cv::Mat& map_xy, const cv::Mat& map_fraction) = 0;
-  // `out` has the maps' size and `in`'s type (written in place). Images: 8-bit, 16-bit unsigned or
-  // 32-bit float with 1 to 4 channels, else std::invalid_argument.
-  virtual void remap(const cv::Mat& in, cv::Mat& out) = 0;
+  // The output is what `make_output` returns, of the maps' size and `in`'s type (written in
+  // place): it is called once the device has its work, so that the host makes the output message
+  // meanwhile. Images: 8-bit, 16-bit unsigned or 32-bit float with 1 to 4 channels, else
+  // std::invalid_argument.
+  virtual void remap(const cv::Mat& in, const std::function<cv::Mat()>& make_output) = 0;
   // As remap(), into device memory of the output's own, finished on return, with no download.
   virtual ResidentPixels remap_to_device(const cv::Mat& in) = 0;
 };
 
-// cv::resize(in, out, out's size, INTER_LINEAR) where cv::resize would take `inv_scale_x` and
-// `inv_scale_y` (the scales it was given, or out's size over in's). Images as Remapper's.
+// cv::resize(in, out, out_size, INTER_LINEAR) where cv::resize would take `inv_scale_x` and
+// `inv_scale_y` (the scales it was given, or out's size over in's). The output is what
+// `make_output` returns, of out_size and in's type, made while the device works (as Remapper's).
+// Images as Remapper's.
 class ImageResizer {
  public:
   virtual ~ImageResizer() = default;
-  virtual void resize(const cv::Mat& in, cv::Mat& out, double inv_scale_x, double inv_scale_y) = 0;
+  virtual void resize(const cv::Mat& in, cv::Size out_size, double inv_scale_x, double inv_scale_y,
+                      const std::function<cv::Mat()>& make_output) = 0;
   // As resize(), from pixels another node left on the device (no upload).
-  virtual void resize(const ResidentPixels& in, cv::Mat& out, double inv_scale_x,
-                      double inv_scale_y) = 0;
+  virtual void resize(const ResidentPixels& in, cv::Size out_size, double inv_scale_x,
+                      double inv_scale_y, const std::function<cv::Mat()>& make_output) = 0;
 };
 
 // point_cloud_xyzrgb's points of `depth` (32FC1 or 16UC1, as model.metres) and its 8-bit `colour`

@@ -106,13 +106,9 @@ class CudaRemapper final : public Remapper {
     stream_.synchronize();
   }
 
-  void remap(const cv::Mat& in, cv::Mat& out) override {
-    if (out.type() != in.type() || out.cols != map_xy_on_device_.width ||
-        out.rows != map_xy_on_device_.height) {
-      throw std::logic_error("cuda: remap's output is not of the maps' size and the input's type");
-    }
-    remap_into(in, out_.reserve(out.rows, out.cols, out.type()));
-    download(stream_, {{out_, out}});
+  void remap(const cv::Mat& in, const std::function<cv::Mat()>& make_output) override {
+    remap_into(in, out_.reserve(map_xy_on_device_.height, map_xy_on_device_.width, in.type()));
+    download_overlapped(stream_, out_, make_output);
   }
 
   ResidentPixels remap_to_device(const cv::Mat& in) override {
@@ -150,31 +146,33 @@ class CudaRemapper final : public Remapper {
 
 class CudaResizer final : public ImageResizer {
  public:
-  void resize(const cv::Mat& in, cv::Mat& out, double inv_scale_x, double inv_scale_y) override {
+  void resize(const cv::Mat& in, cv::Size out_size, double inv_scale_x, double inv_scale_y,
+              const std::function<cv::Mat()>& make_output) override {
     DeviceImage src;
     {
       DeviceStage upload("upload", in.total() * in.elemSize(), stream_);
       src = in_.upload(in, stream_.get());
     }
-    resize_from(src, in.size(), in.type(), out, inv_scale_x, inv_scale_y);
+    resize_from(src, in.size(), in.type(), out_size, inv_scale_x, inv_scale_y, make_output);
   }
 
-  void resize(const ResidentPixels& in, cv::Mat& out, double inv_scale_x,
-              double inv_scale_y) override {
-    resize_from({in.memory.get(), in.cols, in.rows}, cv::Size(in.cols, in.rows), in.type, out,
-                inv_scale_x, inv_scale_y);
+  void resize(const ResidentPixels& in, cv::Size out_size, double inv_scale_x, double inv_scale_y,
+              const std::function<cv::Mat()>& make_output) override {
+    resize_from({in.memory.get(), in.cols, in.rows}, cv::Size(in.cols, in.rows), in.type, out_size,
+                inv_scale_x, inv_scale_y, make_output);
   }
 
  private:
-  // Resizes `src` (on the device: in_size, of `type`) into `out`, and downloads it.
-  void resize_from(DeviceImage src, cv::Size in_size, int type, cv::Mat& out, double inv_scale_x,
-                   double inv_scale_y) {
+  // Resizes `src` (on the device: in_size, of `type`) to out_size, and downloads it into the
+  // output make_output makes meanwhile.
+  void resize_from(DeviceImage src, cv::Size in_size, int type, cv::Size out_size,
+                   double inv_scale_x, double inv_scale_y,
+                   const std::function<cv::Mat()>& make_output) {
     const PixelDepth depth = pixel_depth(type, "resize");
-    if (out.type() != type) throw std::logic_error("cuda: resize's output has another type");
     // cv::resize copies an image to its own size.
-    const bool copy = out.size() == in_size;
-    if (!copy) taps_.prepare(in_size, out.size(), inv_scale_x, inv_scale_y, stream_);
-    const DeviceImage dst = out_.reserve(out.rows, out.cols, out.type());
+    const bool copy = out_size == in_size;
+    if (!copy) taps_.prepare(in_size, out_size, inv_scale_x, inv_scale_y, stream_);
+    const DeviceImage dst = out_.reserve(out_size.height, out_size.width, type);
     {
       DeviceStage compute("compute", 0, stream_);
       if (copy) {
@@ -186,7 +184,7 @@ class CudaResizer final : public ImageResizer {
                       stream_.get());
       }
     }
-    download(stream_, {{out_, out}});
+    download_overlapped(stream_, out_, make_output);
   }
 
   Stream stream_;

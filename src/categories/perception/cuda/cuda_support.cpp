@@ -145,6 +145,15 @@ void StagedImage::copy_to(cv::Mat& out) const {
   host_copy(cv::Mat(rows_, cols_, type_, pinned_data_), out);
 }
 
+void download_overlapped(Stream& stream, StagedImage& from,
+                         const std::function<cv::Mat()>& make_output) {
+  from.queue_download(stream.get());
+  cv::Mat out = make_output();
+  DeviceStage stage("download", from.bytes(), stream);
+  stream.synchronize();
+  from.copy_to(out);
+}
+
 void download(Stream& stream, std::initializer_list<Download> downloads) {
   uint64_t bytes = 0;
   for (const Download& d : downloads) bytes += d.from.bytes();

@@ -5,6 +5,7 @@
 #include <cuda_runtime.h>
 
 #include <cstddef>
+#include <functional>
 #include <initializer_list>
 #include <memory>
 #include <mutex>
@@ -116,6 +117,14 @@ struct Download {
 // A message's "download" stage: queues each download on `stream`, waits for it, and copies each
 // into its output.
 void download(Stream& stream, std::initializer_list<Download> downloads);
+
+// download() of one image into an output the host makes while the device works: queues the
+// download, calls `make_output` (a message's buffer, allocated and zeroed meanwhile), then, in
+// the "download" stage, waits and copies into the image it returned (of `from`'s size and type,
+// else std::logic_error). Where stages are recorded, the earlier stages have waited for their
+// work; the DMA may overlap `make_output`, and the stage has what is left of it.
+void download_overlapped(Stream& stream, StagedImage& from,
+                         const std::function<cv::Mat()>& make_output);
 
 // The StereoBM parameters of the steps after the block matching (filter_disparity).
 DisparityFilter disparity_filter(const StereoParams& params);
