@@ -138,20 +138,26 @@ __global__ void match_kernel(const uint8_t* left, const uint8_t* right, int16_t*
   int texture = 0;
   for (int k0 = 0; k0 <= s.disparities; k0 += t.batch) {
     const int count = min(t.batch, s.disparities + 1 - k0);
-    for (int i = id; i < count * kTileRows * t.halo_cols; i += kTileThreads) {
-      const int c = i % t.halo_cols, row = i / t.halo_cols % kTileRows;
-      const int k = k0 + i / (t.halo_cols * kTileRows);
-      const uint8_t* l = left_tile + row * t.halo_cols + c;
+    // A thread per disparity index and halo column: its window's first sum whole, then slid down
+    // the tile's rows.
+    for (int i = id; i < count * t.halo_cols; i += kTileThreads) {
+      const int c = i % t.halo_cols, b = i / t.halo_cols, k = k0 + b;
+      const uint8_t* l = left_tile + c;
+      const uint8_t* r = right_tile + c + k;
+      // |L - R| at tile row j of this column, or the texture's |L - cap|.
+      const auto cost_at = [&](int j) {
+        const int lj = l[j * t.halo_cols];
+        return abs(lj -
+                   (k == s.disparities ? s.prefilter_cap : static_cast<int>(r[j * t.right_cols])));
+      };
       int sum = 0;
-      if (k == s.disparities) {
-        for (int j = 0; j < window; ++j)
-          sum += abs(static_cast<int>(l[j * t.halo_cols]) - s.prefilter_cap);
-      } else {
-        const uint8_t* r = right_tile + row * t.right_cols + c + k;
-        for (int j = 0; j < window; ++j)
-          sum += abs(static_cast<int>(l[j * t.halo_cols]) - static_cast<int>(r[j * t.right_cols]));
+      for (int j = 0; j < window; ++j) sum += cost_at(j);
+      uint16_t* out = column_sums + b * kTileRows * t.halo_cols + c;
+      out[0] = static_cast<uint16_t>(sum);
+      for (int row = 1; row < kTileRows; ++row) {
+        sum += cost_at(row + window - 1) - cost_at(row - 1);
+        out[row * t.halo_cols] = static_cast<uint16_t>(sum);
       }
-      column_sums[i] = static_cast<uint16_t>(sum);
     }
     __syncthreads();
     for (int b = 0; b < count; ++b) {
