@@ -100,18 +100,23 @@ void DisparityProcessor::compute(const msgs::Image& left, const msgs::Image& rig
 
   to_mono8(left, "disparity: left image", left_mono_);
   to_mono8(right, "disparity: right image", right_mono_);
-  if (backend_ == ImageBackend::kOpenCl) {
-    opencl_->compute(left_mono_, right_mono_, params_, disparity16_);
-  } else if (backend_ == ImageBackend::kCuda) {
-    cuda_->compute(left_mono_, right_mono_, params_, disparity16_);
-  } else {
-    matcher_->compute(left_mono_, right_mono_, disparity16_);
-  }
-
   const int width = static_cast<int>(left.width);
   const int height = static_cast<int>(left.height);
-  out.header = left_info.header;
-  cv::Mat disparity = prepare_image(out.image, left_info.header, "32FC1", width, height);
+  cv::Mat disparity;
+  const auto make_output = [&] {
+    out.header = left_info.header;
+    disparity = prepare_image(out.image, left_info.header, "32FC1", width, height);
+  };
+  if (backend_ == ImageBackend::kOpenCl) {
+    opencl_->compute(left_mono_, right_mono_, params_, disparity16_);
+    make_output();
+  } else if (backend_ == ImageBackend::kCuda) {
+    // The output message is made while the device works.
+    cuda_->compute(left_mono_, right_mono_, params_, disparity16_, make_output);
+  } else {
+    matcher_->compute(left_mono_, right_mono_, disparity16_);
+    make_output();
+  }
   // Principal points of a rectified pair may differ in x; disparities are relative to them.
   const double cx_offset = left_info.p[2] - right_info.p[2];
   disparity16_.convertTo(disparity, CV_32F, 1.0 / kDisparitiesPerPixel, -cx_offset);

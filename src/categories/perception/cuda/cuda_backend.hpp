@@ -64,12 +64,13 @@ class PointCloudMaker {
 
 // StereoBM (params.algorithm block matching, min_disparity >= 0) on a rectified mono8 pair: the
 // fixed-point disparity (1/16 px, filtered pixels (min_disparity - 1) * 16) into `disparity16`,
-// after the left-right check and the speckle filter, all on the device.
+// after the left-right check and the speckle filter, all on the device. `meanwhile` runs on the
+// host once the device has the work (the node makes its output message then).
 class BlockMatcher {
  public:
   virtual ~BlockMatcher() = default;
   virtual void compute(const cv::Mat& left, const cv::Mat& right, const StereoParams& params,
-                       cv::Mat& disparity16) = 0;
+                       cv::Mat& disparity16, const std::function<void()>& meanwhile) = 0;
 };
 
 // Each throws std::invalid_argument with cuda_device()'s one line when there is no device or no

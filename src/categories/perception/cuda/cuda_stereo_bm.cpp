@@ -16,7 +16,7 @@ namespace {
 class CudaBlockMatcher final : public BlockMatcher {
  public:
   void compute(const cv::Mat& left, const cv::Mat& right, const StereoParams& params,
-               cv::Mat& disparity16) override {
+               cv::Mat& disparity16, const std::function<void()>& meanwhile) override {
     if (left.type() != CV_8UC1 || right.type() != CV_8UC1 || left.size() != right.size())
       throw std::logic_error("cuda: block matching takes a mono8 pair of one size");
     const BlockMatchingShape s = block_matching_shape(left.rows, left.cols, params);
@@ -42,8 +42,11 @@ class CudaBlockMatcher final : public BlockMatcher {
       block_match(s, b, stream_.get());
       filter_disparity(s, disparity_filter(params), f, stream_.get());
     }
-    disparity16.create(s.rows, s.cols, CV_16SC1);
-    download(stream_, {{disparity_, disparity16}});
+    download_overlapped(stream_, disparity_, [&] {
+      meanwhile();
+      disparity16.create(s.rows, s.cols, CV_16SC1);
+      return disparity16;
+    });
   }
 
  private:
