@@ -164,7 +164,7 @@ class SynchronisingGrid {
   static constexpr std::size_t kStackBytes = 256 * 1024;
 
   SynchronisingGrid(dim3 block, std::size_t shared_bytes, const std::function<void()>& thread)
-      : block_(block), thread_(thread), shared_(shared_bytes) {
+      : thread_(thread), shared_(shared_bytes) {
     const std::size_t n = std::size_t{block.x} * block.y * block.z;
     stacks_bytes_ = n * kStackBytes;
     void* stacks = mmap(nullptr, stacks_bytes_, PROT_READ | PROT_WRITE,
@@ -324,7 +324,6 @@ class SynchronisingGrid {
   }
 
   static thread_local SynchronisingGrid* current_;
-  dim3 block_;
   const std::function<void()>& thread_;
   std::vector<std::byte> shared_;
   std::byte* stacks_ = nullptr;

@@ -12,13 +12,11 @@ inline dim3 image_block() {
   return dim3(32, 8);
 }
 
-// Enough blocks of image_block() to give a thread to each of width x height pixels, `planes`
-// times over (gridDim.z).
-inline dim3 image_grid(int width, int height, int planes = 1) {
+// Enough blocks of image_block() to give a thread to each of width x height pixels.
+inline dim3 image_grid(int width, int height) {
   const dim3 block = image_block();
   return dim3((static_cast<unsigned>(width) + block.x - 1) / block.x,
-              (static_cast<unsigned>(height) + block.y - 1) / block.y,
-              static_cast<unsigned>(planes));
+              (static_cast<unsigned>(height) + block.y - 1) / block.y);
 }
 
 // Queues `kernel` on `stream` with `grid` x `block` threads. Every launch goes through here so

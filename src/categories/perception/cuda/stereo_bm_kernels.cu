@@ -18,6 +18,10 @@
 namespace robotperf::perception::cuda {
 namespace {
 
+__device__ int clamped(int v, int low, int high) {
+  return min(max(v, low), high);
+}
+
 // x-Sobel of rows y-1, y, y+1 (mirrored at the top and bottom rows), clipped and offset to
 // [0, 2 cap]; the first and last columns read cap.
 __global__ void prefilter_kernel(const uint8_t* src, uint8_t* dst, int rows, int cols, int cap) {
@@ -35,7 +39,7 @@ __global__ void prefilter_kernel(const uint8_t* src, uint8_t* dst, int rows, int
   const uint8_t* r1 = src + static_cast<size_t>(y) * cols;
   const uint8_t* r2 = src + static_cast<size_t>(down) * cols;
   const int d = (r0[x + 1] - r0[x - 1]) + 2 * (r1[x + 1] - r1[x - 1]) + (r2[x + 1] - r2[x - 1]);
-  *out = static_cast<uint8_t>(min(max(d, -cap), cap) + cap);
+  *out = static_cast<uint8_t>(clamped(d, -cap, cap) + cap);
 }
 
 // The matcher's tile: the pixels of a block, a warp along each of 8 rows.
@@ -100,10 +104,6 @@ struct Search {
     return false;
   }
 };
-
-__device__ int clamped(int v, int low, int high) {
-  return min(max(v, low), high);
-}
 
 // A block per tile of the valid region: its windows' pixels into shared memory, then, a batch of
 // disparity indices at a time, the column sums of every tile row and halo column, and from them
