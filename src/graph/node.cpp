@@ -173,11 +173,22 @@ std::vector<EndpointStatus> Node::endpoints() const {
   return out;
 }
 
-void Node::set_wake_signal(std::shared_ptr<WakeSignal> signal) {
+void ExecutorLink::join(std::shared_ptr<WakeSignal> signal) {
+  std::lock_guard lock(mutex_);
+  signal_ = std::move(signal);
+}
+
+void ExecutorLink::notify() {
+  std::shared_ptr<WakeSignal> signal;
   {
     std::lock_guard lock(mutex_);
-    signal_ = std::move(signal);
+    signal = signal_;
   }
+  if (signal) signal->notify();
+}
+
+void Node::set_wake_signal(std::shared_ptr<WakeSignal> signal) {
+  executor_->join(std::move(signal));
   notify();  // data may have arrived before the node joined an executor
 }
 
@@ -187,12 +198,7 @@ std::vector<std::shared_ptr<Entity>> Node::entities() const {
 }
 
 void Node::notify() {
-  std::shared_ptr<WakeSignal> signal;
-  {
-    std::lock_guard lock(mutex_);
-    signal = signal_;
-  }
-  if (signal) signal->notify();
+  executor_->notify();
 }
 
 std::shared_ptr<GenericPublisher> Node::create_generic_publisher(const std::string& topic,
@@ -210,7 +216,7 @@ std::shared_ptr<GenericSubscription> Node::create_generic_subscription(
   const std::type_info& callable_or_held = callable ? *callable : callable_type(callback);
   auto sub = std::make_shared<GenericSubscription>(topic, type, name_, std::move(callback));
   sub->attach(context_.transport().create_subscription(
-      topic, type, qos, [this] { notify(); }, ros_name()));
+      topic, type, qos, [executor = executor_] { executor->notify(); }, ros_name()));
   // One object stands for both of ROS 2's layers: rcl handle = rclcpp subscription.
   lttng_ust_tracepoint(ros2, rcl_subscription_init, sub.get(), this, sub->rmw_handle(),
                        topic.c_str(), qos.depth);

@@ -192,5 +192,61 @@ TEST(Executor, OnlyASpinningExecutorKeepsACoreBusyWhileIdle) {
   }
 }
 
+// A transport whose subscriptions, like a DDS reader's listener thread, signal data until their
+// handle is gone: here once more, from the handle's destructor.
+class LateSignallingTransport final : public rmw::Transport {
+ public:
+  explicit LateSignallingTransport(std::shared_ptr<std::atomic<int>> signalled)
+      : signalled_(std::move(signalled)) {}
+  std::string name() const override { return "late"; }
+  std::unique_ptr<rmw::PublisherHandle> create_publisher(const std::string&,
+                                                         const msgs::TypeSupport&, const QoS&,
+                                                         const rmw::NodeName&) override {
+    throw rmw::TransportError("late: no publishers");
+  }
+  std::unique_ptr<rmw::SubscriptionHandle> create_subscription(const std::string&,
+                                                               const msgs::TypeSupport&, const QoS&,
+                                                               std::function<void()> on_ready,
+                                                               const rmw::NodeName&) override {
+    return std::make_unique<Handle>(std::move(on_ready), signalled_);
+  }
+
+ private:
+  class Handle final : public rmw::SubscriptionHandle {
+   public:
+    Handle(std::function<void()> on_ready, std::shared_ptr<std::atomic<int>> signalled)
+        : on_ready_(std::move(on_ready)), signalled_(std::move(signalled)) {}
+    ~Handle() override {
+      on_ready_();
+      ++*signalled_;
+    }
+    rmw::MessagePtr take(MessageInfo*) override { return nullptr; }
+    std::size_t matched_publishers() const override { return 0; }
+
+   private:
+    std::function<void()> on_ready_;
+    std::shared_ptr<std::atomic<int>> signalled_;
+  };
+  std::shared_ptr<std::atomic<int>> signalled_;
+};
+
+// A subscription signalled while its node is destroyed must reach a live executor signal, even
+// when the node held the last reference to it (under ASan, a destroyed one is a use after free;
+// two runs on one Fast DDS domain crashed on it at shutdown).
+TEST(Node, ASubscriptionSignalledWhileItsNodeIsDestroyedReachesALiveSignal) {
+  auto signalled = std::make_shared<std::atomic<int>>(0);
+  Context ctx(std::make_unique<LateSignallingTransport>(signalled));
+  std::weak_ptr<WakeSignal> weak;
+  {
+    Node node(ctx, "late");
+    node.create_subscription<Image>("/late", QoS{}, [](std::shared_ptr<const Image>) {});
+    auto signal = std::make_shared<WakeSignal>();
+    weak = signal;
+    node.set_wake_signal(std::move(signal));
+  }
+  EXPECT_EQ(signalled->load(), 1);
+  EXPECT_TRUE(weak.expired());  // nothing keeps the signal once node and handle are gone
+}
+
 }  // namespace
 }  // namespace robotperf::graph

@@ -66,6 +66,19 @@ class WakeSignal {
 
 class Node;
 
+// The signal of the executor a node has joined, if any. A node's subscriptions share it with
+// their transports, whose threads may call notify() until a subscription's handle is gone: that
+// can be while the node itself is being destroyed, so the link outlives the node as needed.
+class ExecutorLink {
+ public:
+  void join(std::shared_ptr<WakeSignal> signal);
+  void notify();
+
+ private:
+  std::mutex mutex_;
+  std::shared_ptr<WakeSignal> signal_;
+};
+
 // A publisher, subscription or timer: something an executor runs.
 class Entity {
  public:
@@ -246,10 +259,10 @@ class Node {
 
   Context& context_;
   std::string name_;
-  mutable std::mutex mutex_;  // guards the lists and the signal
+  mutable std::mutex mutex_;  // guards the lists
   std::vector<std::shared_ptr<GenericPublisher>> publishers_;
   std::vector<std::shared_ptr<Entity>> entities_;
-  std::shared_ptr<WakeSignal> signal_;
+  const std::shared_ptr<ExecutorLink> executor_ = std::make_shared<ExecutorLink>();
   std::mutex callback_mutex_;
 };
 
