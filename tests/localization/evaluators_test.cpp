@@ -128,5 +128,24 @@ TEST(LocalizationEvaluators, AnAnswerInAnotherFrameIsADefect) {
   EXPECT_NE(e->problems().begin()->find("pose frame is 'odom', expected 'map'"), std::string::npos);
 }
 
+// The medians are those of the answers: for an even count, the mean of the two middle errors.
+TEST(LocalizationEvaluators, MediansOfAnEvenCountAreTheMeanOfTheMiddleTwo) {
+  const Streams data = generate("localization/map_scans");
+  auto e = evaluator("map_localization", {{"pose", &data["pose_truth"]}});
+  const double offsets_m[] = {0.0, 0.01, 0.03, 0.2};
+  for (std::size_t k = 0; k < std::size(offsets_m); ++k) {
+    const auto& truth =
+        *static_cast<const msgs::PoseStamped*>(data["pose_truth"].messages[k].get());
+    msgs::PoseWithCovarianceStamped out;
+    out.header = truth.header;
+    out.pose.pose = truth.pose;
+    out.pose.pose.position.x += offsets_m[k];
+    e->add(&out, k);
+  }
+  ASSERT_TRUE(e->problems().empty());
+  EXPECT_NEAR(e->metrics().at("position_error_median_m"), 0.02, 1e-9);
+  EXPECT_NEAR(e->metrics().at("yaw_error_median_deg"), 0.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace robotperf::localization

@@ -21,11 +21,13 @@ using plugin::FunctionalEvaluator;
 
 const double kNaN = std::nan("");
 
+// The middle value; for an even count, the mean of the two middle ones.
 double median(std::vector<double> v) {
   if (v.empty()) return kNaN;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
+  const auto upper = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), upper, v.end());
+  if (v.size() % 2 == 1) return *upper;
+  return (*std::max_element(v.begin(), upper) + *upper) / 2.0;
 }
 
 // Detections against the true tags of their frame. A detection is correct when a true tag of
