@@ -51,14 +51,14 @@ void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
                         const msgs::CameraInfo& info, const PointCloudXyzrgbParams& params,
                         msgs::PointCloud2& cloud, ImageBackend backend = ImageBackend::kCpu);
 
-// point_cloud_xyzrgb() keeping what a node keeps from message to message on its backend (with
-// ImageBackend::kCuda: its stream and buffers; the free function's are for its call only). Not
-// thread-safe: one per node.
 // The opencl backend's images on the device (OpenCV's transparent API).
 struct OpenClCloudBuffers {
   cv::UMat depth, colour, resized_colour, cloud;
 };
 
+// point_cloud_xyzrgb() keeping what a node keeps from message to message on its backend (with
+// ImageBackend::kCuda its stream and buffers, with kOpenCl its device images; the free
+// function's are for its call only). Not thread-safe: one per node.
 class PointCloudXyzrgbProcessor {
  public:
   // With kCuda, throws std::invalid_argument without its device (cuda_device()).
