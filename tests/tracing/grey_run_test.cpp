@@ -484,8 +484,12 @@ TEST_F(GreyRun, SessionOfOneProcessLeavesOtherProcessesOut) {
     so.output_dir = dir_ / (only_this_process ? "alone.trace" : "all.trace");
     if (only_this_process) so.only_processes = {getpid()};
     tracing::RecordingSession session(so);
+    // The other run's point is its events, not its rate: 10 Hz and a5's own warm-up (5 of the
+    // 35 messages), so that a stall of a few hundred ms on a loaded machine stays within the
+    // queues (KEEP_LAST 10); at 30 Hz with no warm-up, one lost 6 of 30 messages after a 0.55 s
+    // stall in a parallel ctest.
     const Outcome other =
-        robotperf_cli("run a5 --count 30 --warmup 0 --quiet --output " + (dir_ / "other").string());
+        robotperf_cli("run a5 --count 35 --rate 10 --quiet --output " + (dir_ / "other").string());
     ASSERT_EQ(other.exit_code, 0) << other.out;
     RunOptions o;
     o.count = 40;
