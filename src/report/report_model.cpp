@@ -471,7 +471,12 @@ struct FieldSelector {
   bool matches(const StoredRun& r) const {
     for (const auto& [key, want] : fields) {
       if (key == "rate") {
-        if (!same_rate(r.rate_hz, want)) return false;
+        // A control benchmark's run is named by its input rate (its series) and by its
+        // controller loop's (its notes, as published rows state theirs): either picks it. Two
+        // configurations that one rate picks are refused as a pool, as any others.
+        if (!same_rate(r.rate_hz, want) &&
+            !(r.update_rate_hz && same_rate(*r.update_rate_hz, want)))
+          return false;
         continue;
       }
       const std::string have = key == "hardware"    ? r.hardware
@@ -743,9 +748,10 @@ Table machines_table(const std::vector<StoredRun>& runs) {
     auto mhz = [](const nlohmann::json& khz) {
       return khz.is_number() ? std::to_string(khz.get<std::uint64_t>() / 1000) : std::string("?");
     };
-    std::string frequency = freq.contains("min_khz") && freq["min_khz"].is_number()
-                                ? mhz(freq["min_khz"]) + "–" + mhz(freq["max_khz"])
-                                : "-";
+    std::string frequency =
+        freq.contains("min_khz") && freq["min_khz"].is_number()
+            ? mhz(freq["min_khz"]) + "–" + mhz(freq.value("max_khz", nlohmann::json()))
+            : "-";
     std::string governors;
     for (const auto& g : freq.value("governors", nlohmann::json::array()))
       governors += (governors.empty() ? "" : ", ") + g.get<std::string>();

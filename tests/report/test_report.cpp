@@ -547,6 +547,34 @@ TEST_F(Report, CompareSelectsByFieldsAndRefusesToPoolConfigurations) {
   EXPECT_THROW(render_markdown(input, options), ReportError);
 }
 
+// A control benchmark's run goes at its input rate with its controller loop at another (c3: 50
+// and 100 Hz); the notes name the loop's, as published rows do, so rate= picks it by either.
+TEST_F(Report, CompareRateSelectsAControlRunByItsLoopRateToo) {
+  const auto path = testing::write_sample(dir_, {});
+  auto j = nlohmann::json::parse(read_text(path));
+  j["control_loops"] = {{{"node", "controller_manager"}, {"update_rate_hz", 100.0}}};
+  std::ofstream(path) << j.dump();
+  const auto input = load_report_inputs({dir_});
+  ReportOptions options;
+  options.compare = std::pair{"rate=100", "rate=30"};
+  const std::string md = render_markdown(input, options);
+  EXPECT_NE(md.find("A = rate=100: 1 local runs"), std::string::npos) << md;
+  EXPECT_NE(md.find("B = rate=30: 1 local runs"), std::string::npos) << md;
+  options.compare = std::pair{"rate=100", "rate=50"};
+  EXPECT_THROW(render_markdown(input, options), ReportError);
+}
+
+// A results file from elsewhere may hold part of what ours do: a CPU frequency range without its
+// top is shown open, not read past the end of the object.
+TEST_F(Report, AFrequencyRangeWithoutItsMaximumIsShownOpen) {
+  const auto path = testing::write_sample(dir_, {});
+  auto j = nlohmann::json::parse(read_text(path));
+  j["machine"]["cpu"]["frequency"] = {{"min_khz", 800000}};
+  std::ofstream(path) << j.dump();
+  const std::string md = render_markdown(load_report_inputs({dir_}), {});
+  EXPECT_NE(md.find("| 800–? |"), std::string::npos) << md.substr(0, 3000);
+}
+
 // Local runs and published rows on one axis that cannot be the same measurement are said to be
 // so beside the plot: another type, or medians orders of magnitude apart.
 TEST_F(Report, UnalikeLocalAndPublishedValuesAreNamedBesideThePlot) {
