@@ -376,6 +376,12 @@ TEST(PointCloudXyzrgb, InvalidDepthGivesNanOrRangeMax) {
   EXPECT_TRUE(std::isnan(point_at(c, 1, 0).y));
   point_cloud_xyzrgb(f.depth, f.colour, f.info, {5.0}, c);
   EXPECT_FLOAT_EQ(point_at(c, 1, 0).z, 5.0f);
+  // 16UC1 fills with range_max in whole millimetres, rounded as depth_image_proc rounds, and no
+  // further than the encoding reaches.
+  point_cloud_xyzrgb(t.depth, t.colour, t.info, {2.01}, c);
+  EXPECT_EQ(point_at(c, 0, 0).z, 2010 * 0.001f);
+  point_cloud_xyzrgb(t.depth, t.colour, t.info, {100.0}, c);
+  EXPECT_EQ(point_at(c, 0, 0).z, 65535 * 0.001f);
 }
 
 TEST(PointCloudXyzrgb, RejectsWhatDepthImageProcRejects) {

@@ -1,5 +1,6 @@
 #include "robotperf/perception/depth_image_proc.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -43,7 +44,11 @@ template <>
 struct DepthTraits<uint16_t> {
   static bool valid(uint16_t d) { return d != 0; }
   static float to_metres(uint16_t d) { return d * 0.001f; }
-  static uint16_t from_metres(double m) { return static_cast<uint16_t>(m * 1000.0); }
+  // Rounded to the nearest millimetre in float, as depth_image_proc's fromMeters (2.01 m is 2010,
+  // not 2009); a range beyond the encoding's 65.535 m saturates instead of wrapping.
+  static uint16_t from_metres(double m) {
+    return static_cast<uint16_t>(std::min(static_cast<float>(m) * 1000.0f + 0.5f, 65535.0f));
+  }
 };
 
 struct Pinhole {
