@@ -817,6 +817,7 @@ int analyze(const TraceArgs& a) {
           {"lost", analysis.lost},
           {"unobserved", analysis.unobserved},
           {"duplicates", analysis.duplicates},
+          {"repeats", analysis.repeats},
           {"unknown", analysis.unknown},
           {"latency_ms",
            {{"from_scheduled", metrics::to_json(analysis.latency_from_scheduled, 1e-6, "ms")},

@@ -71,6 +71,7 @@ void GreyBoxRecording::finish(RunResult& r) {
   r.lost = a.lost;
   r.loss_percent = a.loss_percent;
   r.duplicates = a.duplicates;
+  r.repeats = a.repeats;
   r.unknown = a.unknown;
   r.unobserved = a.unobserved;
   r.latency_from_scheduled = a.latency_from_scheduled;
@@ -93,7 +94,8 @@ void GreyBoxRecording::finish(RunResult& r) {
 
 void trace_run_begin(const BenchmarkSpec& spec, const RunResult& r, int64_t period_ns) {
   lttng_ust_tracepoint(robotperf, run_begin, spec.id.c_str(), r.rmw.c_str(), r.count, r.warmup,
-                       period_ns, spec.min_samples, spec.max_loss_percent);
+                       period_ns, spec.min_samples, spec.max_loss_percent,
+                       spec.output.state ? 1 : 0);
 }
 
 void trace_run_end(std::size_t sent) {

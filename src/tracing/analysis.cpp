@@ -68,8 +68,8 @@ enum class Handler : uint8_t {
 
 struct Dispatch {
   Handler handler = Handler::kIgnore;
-  int f[7] = {-1, -1, -1, -1, -1, -1, -1};  // payload field indices, per handler
-  int vpid = -1, vtid = -1;                 // stream context indices
+  int f[8] = {-1, -1, -1, -1, -1, -1, -1, -1};  // payload field indices, per handler
+  int vpid = -1, vtid = -1;                     // stream context indices
 };
 
 Dispatch dispatch_for(const ctf::EventClass& ec, const ctf::Trace& trace) {
@@ -81,7 +81,8 @@ Dispatch dispatch_for(const ctf::EventClass& ec, const ctf::Trace& trace) {
   static const std::vector<Spec> specs = {
       {"robotperf:run_begin",
        Handler::kRunBegin,
-       {"benchmark", "rmw", "count", "warmup", "period_ns", "min_samples", "max_loss_percent"}},
+       {"benchmark", "rmw", "count", "warmup", "period_ns", "min_samples", "max_loss_percent",
+        "state_output"}},
       {"robotperf:run_join", Handler::kRunJoin, {"run_pid"}},
       {"robotperf:run_end", Handler::kRunEnd, {"sent"}},
       {"robotperf:input", Handler::kInput, {"message_id", "index", "scheduled_ns"}},
@@ -131,7 +132,9 @@ Dispatch dispatch_for(const ctf::EventClass& ec, const ctf::Trace& trace) {
       d.f[i] = ec.field_index(s.fields[i]);
       // Older ros2_tracing versions lack some fields (rmw_publish's timestamp):
       // such events cannot be used, the rest of the analysis still can.
+      // robotperf's own traces before state_output lack it.
       const bool optional = std::string_view(s.fields[i]) == "namespace" ||
+                            std::string_view(s.fields[i]) == "state_output" ||
                             (s.handler == Handler::kRmwTake && i == 2);
       if (d.f[i] < 0 && !optional) return d;
     }
@@ -462,6 +465,7 @@ void collect(StreamPart& part) {
         r.max_loss_percent = field(6).tag == Value::Tag::kFloat
                                  ? field(6).f
                                  : static_cast<double>(field(6).as_int());
+        r.state_output = d->f[7] >= 0 && field(7).as_int() != 0;
         r.pid = vpid;
         c.runs.emplace_back(ts, std::move(r));
         break;
@@ -843,7 +847,9 @@ MessageLookup summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo&
     from_sent.push_back(static_cast<double>(m.received_ns - m.sent_ns));
     receptions.push_back(m.received_ns);
   }
-  a.duplicates = receptions_of_measured - a.matched;
+  // A state stream's further receptions are the state it keeps publishing (the Monitor counts
+  // them as repeats, too).
+  (run.state_output ? a.repeats : a.duplicates) = receptions_of_measured - a.matched;
   a.sent = a.messages.size();
   // Trace loss is never message loss: with events discarded, a missing output event says nothing.
   if (a.discarded_events > 0 || a.lost_packets > 0) a.unobserved = a.measured - a.matched;
@@ -972,19 +978,31 @@ void breakdown(TraceAnalysis& a, const Collected& c, const RunInfo& run,
     for (std::size_t i = lo; i < hi; ++i) {
       const IdSite& e = site(i);
       const int64_t ts = ev[i]->ts;
+      // One sample per hop and message, as end to end takes the first reception: a node that
+      // keeps publishing a state with this ID (a controller manager) publishes it again, and its
+      // subscribers take it again.
       if (e.kind == IdKind::kEntry) {
-        // Transport: the latest publish of this message on this topic before the take.
-        for (std::size_t j = i; j-- > lo;) {
-          if (site(j).kind == IdKind::kPublish && site(j).what == e.what) {
-            add(0, e.node, site(j).node, e.what, ev[j]->ts, ts, sent);
-            break;
-          }
+        // Transport: the node's first take of this message on this topic, from the latest
+        // publish on the topic before it.
+        std::size_t publish = hi;
+        bool taken_before = false;
+        for (std::size_t j = i; j-- > lo && !taken_before;) {
+          const IdSite& s = site(j);
+          taken_before =
+              s.kind == IdKind::kEntry && s.node == e.node && s.vpid == e.vpid && s.what == e.what;
+          if (publish == hi && s.kind == IdKind::kPublish && s.what == e.what) publish = j;
         }
+        if (!taken_before && publish != hi)
+          add(0, e.node, site(publish).node, e.what, ev[publish]->ts, ts, sent);
       } else if (e.kind == IdKind::kPublish) {
-        // Node: from the node's latest callback start on this message to its publish.
+        // Node: from the node's latest callback start on this message to its first publish on
+        // this topic after it.
         for (std::size_t j = i; j-- > lo;) {
-          if (site(j).kind == IdKind::kEntry && site(j).node == e.node && site(j).vpid == e.vpid) {
-            add(1, e.node, site(j).what, e.what, ev[j]->ts, ts, sent);
+          const IdSite& s = site(j);
+          if (s.node != e.node || s.vpid != e.vpid) continue;
+          if (s.kind == IdKind::kPublish && s.what == e.what) break;
+          if (s.kind == IdKind::kEntry) {
+            add(1, e.node, s.what, e.what, ev[j]->ts, ts, sent);
             break;
           }
         }
@@ -1526,6 +1544,7 @@ std::string analysis_summary(const TraceAnalysis& a) {
         << ", matched " << a.matched << ", lost " << a.lost << " (" << fixed(a.loss_percent, 2)
         << " %)";
     if (a.duplicates) out << ", duplicates " << a.duplicates;
+    if (a.repeats) out << ", state repeats " << a.repeats;
     if (a.unknown) out << ", unknown " << a.unknown;
     if (a.unobserved) out << ", unobserved " << a.unobserved << " (trace events discarded)";
     out << "\n\n";

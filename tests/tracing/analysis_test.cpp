@@ -56,9 +56,15 @@ uint64_t sent_of(uint64_t k) {
 // With `repeated_outputs`, the Monitor takes frame 0 (warm-up, as when the Playback repeats the
 // warm-up) and frame 1 (measured) a second time after the last frame. `declared_period` is the
 // period the run_begin event gives (the IDs are kPeriod apart whatever it says).
+// How the output is declared: a plain topic, or a state stream (the relay publishes frame 1's
+// state twice more after the last frame and the Monitor takes it each time), recorded as such or
+// in a trace from before run_begin recorded it.
+enum class OutputKind { kPlain, kState, kStateUnrecorded };
 void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool device_stages = false,
-               bool repeated_outputs = false, int64_t declared_period = kPeriod) {
-  testing::define_robotperf_events(w);
+               bool repeated_outputs = false, int64_t declared_period = kPeriod,
+               OutputKind output = OutputKind::kPlain) {
+  testing::define_robotperf_events(w, testing::Ros2Layout::kJazzy,
+                                   output != OutputKind::kStateUnrecorded);
   const std::string play = "robotperf_playback", relay = "relay", mon = "robotperf_monitor";
   const uint64_t t0 = kStart - 1'000'000;
   // Initialisation: node, subscription + callback, timer, publisher of /in.
@@ -82,9 +88,12 @@ void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool devic
   w.event(0, "ros2:rcl_publisher_init", t0 + 8, kRunPid, 1,
           {V(uint64_t{0x70}), V(uint64_t{0x11}), V(uint64_t{0x80}), V(std::string("/in")),
            V(uint64_t{10})});
-  w.event(0, "robotperf:run_begin", t0 + 9, kRunPid, 1,
-          {V(std::string("t1")), V(std::string("intra")), V(uint64_t{4}), V(uint64_t{1}),
-           V(declared_period), V(uint64_t{1}), V(50.0)});
+  std::vector<V> run_begin = {
+      V(std::string("t1")), V(std::string("intra")), V(uint64_t{4}), V(uint64_t{1}),
+      V(declared_period),   V(uint64_t{1}),          V(50.0)};
+  if (output != OutputKind::kStateUnrecorded)
+    run_begin.push_back(V(int64_t{output == OutputKind::kState ? 1 : 0}));
+  w.event(0, "robotperf:run_begin", t0 + 9, kRunPid, 1, run_begin);
 
   for (uint64_t k = 0; k < 4; ++k) {
     const int64_t id = id_of(k);
@@ -143,6 +152,17 @@ void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool devic
               {V(mon), V(std::string("/out")), V(id_of(k)), V(uint64_t{100})});
     }
   }
+  if (output != OutputKind::kPlain) {
+    for (uint64_t r = 0; r < 2; ++r) {
+      const uint64_t t = sent_of(3) + 8'600'000 + 100'000 * r;
+      w.event(1, "robotperf:publish", t, kRunPid, 2,
+              {V(relay), V(std::string("/out")), V(id_of(1)), V(uint64_t{100})});
+      w.event(1, "robotperf:callback_entry", t + 5000, kRunPid, 3,
+              {V(mon), V(std::string("/out")), V(id_of(1)), V(uint64_t{100})});
+      w.event(1, "robotperf:output", t + 5005, kRunPid, 3,
+              {V(mon), V(std::string("/out")), V(id_of(1)), V(uint64_t{100})});
+    }
+  }
   // Another run's process receiving one of our IDs: not ours, not counted.
   w.event(1, "robotperf:output", sent_of(3) + 9'000'000, 99, 99,
           {V(mon), V(std::string("/out")), V(id_of(3)), V(uint64_t{100})});
@@ -184,6 +204,44 @@ TEST(Analyzer, ARepeatedWarmupIsNoDuplicate) {
   EXPECT_EQ(a.duplicates, 1u);
   EXPECT_EQ(a.matched, 2u);
   EXPECT_EQ(a.unknown, 0u);
+}
+
+// A state stream (control benchmarks) keeps publishing the newest command's ID: its further
+// receptions are repeats, as the Monitor counts them, and each hop takes one sample per message,
+// from the first publish and the first take. A trace from before run_begin said so counts them
+// as duplicates, as robotperf did then.
+TEST(Analyzer, AStateStreamsRepeatsAreNeitherDuplicatesNorHopSamples) {
+  auto analysed = [](const std::string& name, OutputKind output) {
+    TempDir dir(name);
+    CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
+    write_run(w, 0, false, false, kPeriod, output);
+    return analyze_trace(dir.path());
+  };
+  const TraceAnalysis plain = analysed("plain-output", OutputKind::kPlain);
+  const TraceAnalysis state = analysed("state-output", OutputKind::kState);
+  ASSERT_TRUE(state.run.has_value());
+  EXPECT_TRUE(state.run->state_output);
+  EXPECT_FALSE(plain.run->state_output);
+  EXPECT_EQ(state.matched, 2u);
+  EXPECT_EQ(state.duplicates, 0u);
+  EXPECT_EQ(state.repeats, 2u);
+  EXPECT_TRUE(state.valid) << (state.invalid_reasons.empty() ? "" : state.invalid_reasons[0]);
+  EXPECT_DOUBLE_EQ(state.latency_from_sent.max, plain.latency_from_sent.max);
+  ASSERT_EQ(state.hops.size(), plain.hops.size());
+  for (std::size_t i = 0; i < plain.hops.size(); ++i) {
+    EXPECT_EQ(state.hops[i].label(), plain.hops[i].label());
+    EXPECT_EQ(state.hops[i].duration.count, plain.hops[i].duration.count) << plain.hops[i].label();
+    EXPECT_DOUBLE_EQ(state.hops[i].duration.max, plain.hops[i].duration.max)
+        << plain.hops[i].label();
+  }
+
+  const TraceAnalysis unrecorded = analysed("state-unrecorded", OutputKind::kStateUnrecorded);
+  ASSERT_TRUE(unrecorded.run.has_value());
+  EXPECT_FALSE(unrecorded.run->state_output);
+  EXPECT_EQ(unrecorded.matched, 2u);
+  EXPECT_EQ(unrecorded.duplicates, 2u);
+  EXPECT_EQ(unrecorded.repeats, 0u);
+  EXPECT_FALSE(unrecorded.valid);
 }
 
 TEST(CtfReader, DecodesCompactAndExtendedHeadersWithClockWrap) {
@@ -373,7 +431,7 @@ void write_long_run(CtfWriter& w, uint64_t frames) {
   const std::string play = "robotperf_playback", mon = "robotperf_monitor";
   w.event(0, "robotperf:run_begin", kStart - 10, kRunPid, 1,
           {V(std::string("t1")), V(std::string("intra")), V(frames), V(uint64_t{2}), V(kPeriod),
-           V(uint64_t{1}), V(50.0)});
+           V(uint64_t{1}), V(50.0), V(int64_t{0})});
   // A subscription of node 0x10 with callback 0x40: the callback table names the node.
   w.event(1, "ros2:rcl_subscription_init", kStart - 9, kRunPid, 1,
           {V(uint64_t{0x20}), V(uint64_t{0x10}), V(uint64_t{0x30}), V(std::string("/in")),

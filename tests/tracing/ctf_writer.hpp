@@ -365,16 +365,17 @@ struct event_header_large {
 enum class Ros2Layout { kJazzy, kHumble };
 
 // The robotperf and ros2 event classes robotperf's analysis reads, with the
-// field layout of src/tracing/tracepoints.
-inline void define_robotperf_events(CtfWriter& w, Ros2Layout layout = Ros2Layout::kJazzy) {
+// field layout of src/tracing/tracepoints; `state_output_field` false: run_begin as robotperf
+// wrote it before it recorded whether the output is a state stream.
+inline void define_robotperf_events(CtfWriter& w, Ros2Layout layout = Ros2Layout::kJazzy,
+                                    bool state_output_field = true) {
   using K = FieldKind;
-  w.define("robotperf:run_begin", {{"benchmark", K::kString},
-                                   {"rmw", K::kString},
-                                   {"count", K::kU64},
-                                   {"warmup", K::kU64},
-                                   {"period_ns", K::kI64},
-                                   {"min_samples", K::kU64},
-                                   {"max_loss_percent", K::kF64}});
+  std::vector<FieldDef> run_begin = {{"benchmark", K::kString},    {"rmw", K::kString},
+                                     {"count", K::kU64},           {"warmup", K::kU64},
+                                     {"period_ns", K::kI64},       {"min_samples", K::kU64},
+                                     {"max_loss_percent", K::kF64}};
+  if (state_output_field) run_begin.push_back({"state_output", K::kI32});
+  w.define("robotperf:run_begin", std::move(run_begin));
   w.define("robotperf:run_join", {{"run_pid", K::kI32}});
   w.define("robotperf:run_end", {{"sent", K::kU64}});
   w.define("robotperf:input", {{"node", K::kString},

@@ -26,6 +26,9 @@ struct RunInfo {
   int64_t period_ns = 0;
   uint64_t min_samples = 0;
   double max_loss_percent = 0;
+  // The output is a state stream: later receptions of an ID are repeats, not duplicates (false
+  // in traces from before robotperf recorded it).
+  bool state_output = false;
   int pid = 0;              // the process that ran it (Playback and Monitor)
   std::set<int> processes;  // it and its per-node children
   bool ended = false;       // robotperf:run_end seen
@@ -96,6 +99,7 @@ struct TraceAnalysis {
   std::vector<int> run_pids;
   std::vector<MessageTimes> messages;  // by index
   std::size_t sent = 0, measured = 0, matched = 0, lost = 0, duplicates = 0, unknown = 0;
+  std::size_t repeats = 0;  // a state output's further receptions of measured IDs (no error)
   // Measured messages without an output event while the tracer discarded events or lost packets:
   // the output may have been delivered and its event discarded, so they are not counted as lost
   // (the discard alone makes the result invalid).

@@ -17,12 +17,14 @@
 #include <stdint.h>
 
 /* Once per run, before the first input: the run's configuration, so that a
- * trace can be analysed on its own with the run's validity rules. */
+ * trace can be analysed on its own with the run's validity rules. state_output
+ * is 1 when the output is a state stream (control benchmarks: several outputs
+ * carry one ID, and the later ones are repeats, not duplicates). */
 LTTNG_UST_TRACEPOINT_EVENT(
     robotperf, run_begin,
     LTTNG_UST_TP_ARGS(const char *, benchmark_arg, const char *, rmw_arg, uint64_t, count_arg,
                       uint64_t, warmup_arg, int64_t, period_ns_arg, uint64_t, min_samples_arg,
-                      double, max_loss_percent_arg),
+                      double, max_loss_percent_arg, int, state_output_arg),
     LTTNG_UST_TP_FIELDS(
         lttng_ust_field_string(benchmark, benchmark_arg)
         lttng_ust_field_string(rmw, rmw_arg)
@@ -30,7 +32,8 @@ LTTNG_UST_TRACEPOINT_EVENT(
         lttng_ust_field_integer(uint64_t, warmup, warmup_arg)
         lttng_ust_field_integer(int64_t, period_ns, period_ns_arg)
         lttng_ust_field_integer(uint64_t, min_samples, min_samples_arg)
-        lttng_ust_field_float(double, max_loss_percent, max_loss_percent_arg)))
+        lttng_ust_field_float(double, max_loss_percent, max_loss_percent_arg)
+        lttng_ust_field_integer(int, state_output, state_output_arg)))
 
 /* A per-node child process of the run of process run_pid starts: the
  * analysis counts its events as part of that run. */
