@@ -48,9 +48,11 @@ GreyBoxRecording::GreyBoxRecording(const BenchmarkSpec& spec, const RunOptions& 
                        ? options.trace_subbuf_bytes
                        : tracing::subbuffer_bytes_for(result.rate_hz * events_per_frame(spec) +
                                                       control_loop_events_per_second(spec));
-  // Processes of the graph that are spawned later (per-node) start tracing before they could be
-  // added to a tracker, so only a single-process run is recorded alone.
-  if (options.processes == ProcessLayout::kSingle) s.only_processes = {getpid()};
+  // Processes of the graph that are spawned later (per-node, an external graph's `launch:`)
+  // start tracing before they could be added to a tracker, so only a single-process run of
+  // robotperf's own nodes is recorded alone.
+  if (options.processes == ProcessLayout::kSingle && spec.launch.empty())
+    s.only_processes = {getpid()};
   session_ = std::make_unique<tracing::RecordingSession>(s);
   result.trace_dir = session_->output_dir();
   result.trace_subbuf_bytes = session_->subbuf_bytes();
@@ -62,6 +64,9 @@ void GreyBoxRecording::finish(RunResult& r) {
   ao.run_pid = getpid();
   for (const auto& n : r.nodes) {
     if (n.pid > 0) ao.extra_processes.insert(n.pid);
+  }
+  for (const auto& l : r.launched) {
+    if (l.pid > 0) ao.extra_processes.insert(l.pid);
   }
   tracing::TraceAnalysis a = tracing::analyze_trace(r.trace_dir, ao);
 

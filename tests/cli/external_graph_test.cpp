@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 
 #include "../command_line.hpp"
@@ -115,6 +116,22 @@ TEST_F(ExternalGraph, LaunchedNodeIsMeasuredAndStoppedByAnInterrupt) {
     for (const auto& p : j["resources"]["processes"]) sampled = sampled || p["label"] == "echo";
     EXPECT_TRUE(sampled) << j["resources"].dump();
   }
+}
+
+// Grey-box: the launched node's own ros2:* events go into the run's trace and count as the run's
+// (echo_peer announces itself as a node built with tracetools does), so the publish-to-take table
+// has both of its topics.
+TEST_F(ExternalGraph, GreyRunTracesTheLaunchedNodesOwnEvents) {
+  const Outcome o = run_echo("until-signal", "fastdds", "/pong", " --mode grey");
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  const auto j = result();
+  EXPECT_EQ(j["counts"]["matched"], 120);
+  std::set<std::string> rows;
+  for (const auto& t : j["grey"]["topics"])
+    rows.insert(t["topic"].get<std::string>() + ": " + t["publisher"].get<std::string>() + " -> " +
+                t["subscriber"].get<std::string>());
+  EXPECT_TRUE(rows.contains("/ping: robotperf_playback -> echo_peer")) << j["grey"].dump();
+  EXPECT_TRUE(rows.contains("/pong: echo_peer -> robotperf_monitor")) << j["grey"].dump();
 }
 
 TEST_F(ExternalGraph, NodeDyingMidRunEndsTheRunWithItsLogKept) {

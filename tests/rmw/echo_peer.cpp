@@ -22,6 +22,7 @@
 #include "inbox.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/rmw/transport.hpp"
+#include "robotperf/tracing/tracepoints.hpp"
 
 namespace rmw = robotperf::rmw;
 namespace msgs = robotperf::msgs;
@@ -57,6 +58,15 @@ int run(const std::string& transport_name, int domain_id, const std::string& in_
   auto publisher = transport->create_publisher(out_topic, type, rmw::QoS::ros_default(), node);
   auto subscription = transport->create_subscription(in_topic, type, rmw::QoS::ros_default(),
                                                      inbox.on_ready(), node);
+  // As a ROS 2 node with ros2_tracing's tracetools announces itself (its transport's rmw_publish
+  // and rmw_take events are robotperf's own): a grey-box run of an external graph names it.
+  static const char node_handle = 0, publisher_handle = 0, subscription_handle = 0;
+  lttng_ust_tracepoint(ros2, rcl_node_init, &node_handle, transport.get(), node.name.c_str(),
+                       node.namespace_.c_str());
+  lttng_ust_tracepoint(ros2, rcl_publisher_init, &publisher_handle, &node_handle, publisher.get(),
+                       out_topic.c_str(), std::size_t{10});
+  lttng_ust_tracepoint(ros2, rcl_subscription_init, &subscription_handle, &node_handle,
+                       subscription.get(), in_topic.c_str(), std::size_t{10});
 
   if (mode.until_signal) {
     std::signal(SIGINT, on_signal);
