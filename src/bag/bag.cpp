@@ -110,7 +110,7 @@ BagInfo read_metadata(const fs::path& dir) {
   info.message_count = get<uint64_t>(m, "message_count", 0, file);
   if (const YAML::Node topics = m["topics_with_message_count"]; topics && topics.IsSequence()) {
     for (const auto& entry : topics) {
-      const YAML::Node t = entry["topic_metadata"];
+      const YAML::Node t = entry.IsMap() ? entry["topic_metadata"] : YAML::Node();
       if (!t || !t.IsMap()) {
         throw BagError(file.string() + ": line " + std::to_string(entry.Mark().line + 1) +
                        ": topic entry without topic_metadata");
@@ -127,11 +127,23 @@ BagInfo read_metadata(const fs::path& dir) {
   }
   std::vector<std::string> paths;
   if (const YAML::Node p = m["relative_file_paths"]; p && p.IsSequence()) {
-    for (const auto& e : p) paths.push_back(e.as<std::string>());
+    for (const auto& e : p) {
+      if (!e.IsScalar()) {
+        throw BagError(file.string() + ": line " + std::to_string(e.Mark().line + 1) +
+                       ": an entry of 'relative_file_paths' is not a file name; list each "
+                       "storage file by its path in the bag directory");
+      }
+      paths.push_back(e.Scalar());
+    }
   }
   std::map<std::string, FileInfo> file_details;
   if (const YAML::Node f = m["files"]; f && f.IsSequence()) {
     for (const auto& e : f) {
+      if (!e.IsMap()) {
+        throw BagError(file.string() + ": line " + std::to_string(e.Mark().line + 1) +
+                       ": an entry of 'files' is not a map of path, starting_time, duration "
+                       "and message_count");
+      }
       FileInfo fi;
       fi.path = get<std::string>(e, "path", "", file);
       fi.starting_time_ns = nested_ns(e, "starting_time", "nanoseconds_since_epoch", file);
@@ -308,41 +320,33 @@ BagInfo read_info(const fs::path& path) {
 Reader::Reader(const fs::path& path, ReadOptions options)
     : info_(read_info(path)), options_(std::move(options)) {
   for (const auto& f : info_.files) files_.push_back(storage_path(info_, f));
-  // Types, definitions and hashes come from the storage when metadata.yaml lacks them.
-  if (info_.metadata_version > 0 && !files_.empty() && !file_compressed(info_)) {
-    const auto first = open_storage(files_.front(), options_);
-    for (const auto& t : first->topics()) {
-      auto it = std::find_if(info_.topics.begin(), info_.topics.end(),
-                             [&](const TopicInfo& m) { return m.name == t.name; });
-      if (it == info_.topics.end()) {
-        info_.topics.push_back(t);
-        continue;
-      }
-      if (it->definition.empty()) {
-        it->definition = t.definition;
-        it->definition_encoding = t.definition_encoding;
-      }
-      if (it->type_description_hash.empty()) it->type_description_hash = t.type_description_hash;
-      if (it->offered_qos_profiles.empty()) it->offered_qos_profiles = t.offered_qos_profiles;
+  // The first file is opened now, decompressed if need be, so that its definitions, hashes and
+  // QoS complete metadata.yaml's topics before anyone asks for them.
+  if (info_.metadata_version > 0) {
+    try {
+      open_next_file();
+    } catch (...) {
+      close_file();  // no destructor runs after a throwing constructor
+      throw;
     }
   }
 }
 
 Reader::~Reader() {
-  current_.reset();
-  if (!decompressed_.empty()) {
-    std::error_code ec;
-    fs::remove(decompressed_, ec);
-  }
+  close_file();
 }
 
-bool Reader::open_next_file() {
+void Reader::close_file() {
   current_.reset();
   if (!decompressed_.empty()) {
     std::error_code ec;
     fs::remove(decompressed_, ec);
     decompressed_.clear();
   }
+}
+
+bool Reader::open_next_file() {
+  close_file();
   if (next_file_ >= files_.size()) return false;
   fs::path file = files_[next_file_++];
   if (file_compressed(info_)) {
@@ -358,6 +362,13 @@ bool Reader::open_next_file() {
       info_.topics.push_back(t);
       it = info_.topics.end() - 1;
     }
+    // Definitions, hashes and QoS come from the storage where metadata.yaml lacks them.
+    if (it->definition.empty()) {
+      it->definition = t.definition;
+      it->definition_encoding = t.definition_encoding;
+    }
+    if (it->type_description_hash.empty()) it->type_description_hash = t.type_description_hash;
+    if (it->offered_qos_profiles.empty()) it->offered_qos_profiles = t.offered_qos_profiles;
     topic_map_.push_back(static_cast<std::size_t>(it - info_.topics.begin()));
   }
   return true;

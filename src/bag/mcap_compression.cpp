@@ -1,4 +1,6 @@
 #include <lz4frame.h>
+// For ZSTD_decompressBound (zstd 1.4 and later).
+#define ZSTD_STATIC_LINKING_ONLY
 #include <zstd.h>
 
 #include <algorithm>
@@ -18,16 +20,26 @@ LZ4F_dctx* new_lz4_context() {
   return LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION)) ? nullptr : ctx;
 }
 
+// The most `in` can decompress to. zstd frames say it in their headers: no fixed ratio bounds
+// them (a run of zero bytes compresses about 32000:1). lz4 expands at most about 255x per input
+// byte; an unknown codec, refused later, gets the same allowance.
+uint64_t most_decompressed(const std::string& compression, std::span<const uint8_t> in) {
+  if (compression != "zstd") return (in.size() + 64) * 256;
+  const unsigned long long bound = ZSTD_decompressBound(in.data(), in.size());
+  if (bound == ZSTD_CONTENTSIZE_ERROR)
+    throw FormatError("zstd chunk does not decompress: not whole zstd frames (cut short?)");
+  return bound;
+}
+
 }  // namespace
 
 void decompress(const std::string& compression, std::span<const uint8_t> in,
                 uint64_t uncompressed_size, std::vector<uint8_t>& out, uint32_t* crc) {
-  // A forged uncompressed_size must not make us allocate without bound: no
-  // supported codec expands more than about 255x (lz4) per input byte.
-  if (compression != "" && uncompressed_size > (in.size() + 64) * 256) {
+  // A forged uncompressed_size must not make us allocate without bound.
+  if (!compression.empty() && uncompressed_size > most_decompressed(compression, in)) {
     throw FormatError("chunk claims " + std::to_string(uncompressed_size) +
                       " uncompressed bytes from " + std::to_string(in.size()) +
-                      " compressed ones; corrupt");
+                      " compressed ones, more than they can hold; corrupt");
   }
   if (compression.empty()) {
     if (in.size() != uncompressed_size) {

@@ -195,8 +195,9 @@ class McapReader final : public StorageReader {
   }
 
   // Reads schemas, channels, statistics and chunk indexes. False when the
-  // summary cannot locate every message (no chunk indexes), so a linear scan
-  // is needed.
+  // summary cannot locate every message (no chunk indexes) or, without
+  // statistics, cannot count them (no message indexes), so a linear scan is
+  // needed.
   bool read_summary(uint64_t summary_start, uint32_t summary_crc) {
     // The CRC covers the summary and the footer up to its crc field.
     file_.read(summary_start, footer_offset_ + mcap::kFooterRecordSize - 4 - summary_start,
@@ -206,6 +207,8 @@ class McapReader final : public StorageReader {
     Cursor records(std::span<const uint8_t>(buffer_).first(footer_offset_ - summary_start));
     bool have_statistics = false;
     uint64_t statistics_messages = 0;
+    std::vector<uint64_t> message_indexes;  // offsets of the message index records of all chunks
+    bool every_chunk_indexed = true;
     while (!records.done()) {
       const uint8_t op = records.u8();
       Cursor r(records.bytes64());
@@ -241,10 +244,11 @@ class McapReader final : public StorageReader {
           u.length = r.u64();
           // Which channels the chunk holds: skip it when none is selected.
           Cursor channels(r.bytes32());
+          every_chunk_indexed = every_chunk_indexed && !channels.done();
           bool wanted = false;
           while (!channels.done()) {
             const uint16_t channel = channels.u16();
-            channels.u64();
+            message_indexes.push_back(channels.u64());
             wanted = wanted || channel_selected_by_name(channel);
           }
           if (!wanted || outside_window(u.start_time, end_time)) break;
@@ -260,9 +264,41 @@ class McapReader final : public StorageReader {
     }
     std::stable_sort(units_.begin(), units_.end(),
                      [](const Unit& a, const Unit& b) { return a.start_time < b.start_time; });
-    if (!units_.empty() || (have_statistics && statistics_messages == 0)) return true;
-    units_.clear();
-    return false;
+    if (units_.empty() && !(have_statistics && statistics_messages == 0)) return false;
+    if (!have_statistics) {
+      if (!every_chunk_indexed) return false;
+      count_indexed_messages(message_indexes);
+    }
+    return true;
+  }
+
+  // Without a Statistics record (it is optional): the counts and the first and
+  // last log times from the message index records, which list every message of
+  // their chunk with its log time.
+  void count_indexed_messages(const std::vector<uint64_t>& message_indexes) {
+    bool first = true;
+    for (const uint64_t offset : message_indexes) {
+      if (offset > footer_offset_ || footer_offset_ - offset < mcap::kRecordPrefix)
+        fail("chunk index points to a message index outside the data section");
+      Cursor prefix(file_.view(offset, mcap::kRecordPrefix));
+      const uint8_t op = prefix.u8();
+      const uint64_t length = prefix.u64();
+      if (op != mcap::kMessageIndex) {
+        fail("chunk index points to a record of opcode " + std::to_string(op) + " at offset " +
+             std::to_string(offset) + ", not a message index");
+      }
+      Cursor r(file_.view(offset + mcap::kRecordPrefix, length));
+      const uint16_t channel = r.u16();
+      Cursor entries(r.bytes32());
+      while (!entries.done()) {
+        const uint64_t log_time = entries.u64();
+        entries.u64();  // offset of the message in the chunk
+        ++counts_[channel];
+        start_ = first ? log_time : std::min(start_, log_time);
+        end_ = first ? log_time : std::max(end_, log_time);
+        first = false;
+      }
+    }
   }
 
   // Without a usable summary: walk every record of the data section, reading

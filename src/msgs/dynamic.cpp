@@ -583,14 +583,17 @@ std::size_t TypeRegistry::add_directory(const fs::path& dir, const std::string& 
                                 ? canonical.parent_path().filename().string()
                                 : canonical.filename().string();
   std::size_t n = 0;
-  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator();
+       ++it) {
+    const fs::directory_entry& entry = *it;
     const std::string extension = entry.path().extension().string();
     if (!entry.is_regular_file() ||
         (extension != ".msg" && extension != ".srv" && extension != ".action"))
       continue;
     const std::string kind = extension.substr(1);
     const fs::path parent = entry.path().parent_path();
-    const bool flat = parent == dir;
+    // By depth, not by comparing paths: "a/msg/" (as shell completion gives it) is "a/msg" too.
+    const bool flat = it.depth() == 0;
     const std::string pkg =
         parent.filename() == kind && !flat ? parent.parent_path().filename().string() : guess;
     std::ifstream in(entry.path());

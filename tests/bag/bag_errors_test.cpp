@@ -35,6 +35,7 @@ std::vector<uint8_t> talker() {
 // The only chunk of talker.mcap starts at offset 45: prefix (9), start and
 // end times (16), uncompressed size (8), then the crc (4) and the compression.
 constexpr std::size_t kChunk = 45;
+constexpr std::size_t kChunkUncompressedSize = kChunk + 9 + 16;
 constexpr std::size_t kChunkCrc = kChunk + 9 + 24;
 constexpr std::size_t kChunkCompression = kChunkCrc + 4 + 4;
 
@@ -101,6 +102,17 @@ TEST(BagErrors, UnknownChunkCompression) {
   expect_error(dir / "c.mcap", "c.mcap", "unknown compression 'zxxd'");
 }
 
+// A forged uncompressed size must not make the reader allocate it: more than the zstd frame
+// can hold is refused up front.
+TEST(BagErrors, ChunkClaimsMoreThanItsFrameHolds) {
+  ScratchDir dir;
+  auto bytes = talker();
+  const uint64_t claim = uint64_t{1} << 40;
+  std::memcpy(bytes.data() + kChunkUncompressedSize, &claim, sizeof(claim));
+  write_file(dir / "bomb.mcap", bytes);
+  expect_error(dir / "bomb.mcap", "bomb.mcap", "claims 1099511627776 uncompressed bytes");
+}
+
 TEST(BagErrors, MissingMetadataYaml) {
   ScratchDir dir;
   fs::create_directories(dir / "bag");
@@ -114,6 +126,31 @@ TEST(BagErrors, MalformedMetadataYaml) {
   write_file(dir / "bag" / "metadata.yaml",
              {'r', 'o', 's', 'b', 'a', 'g', ':', ' ', '[', 'x', '\n'});
   expect_error(dir / "bag", "metadata.yaml", "malformed YAML");
+}
+
+// An entry of the wrong kind in one of metadata.yaml's lists is one line naming the file and
+// the line, as a field of the wrong type is.
+TEST(BagErrors, MetadataListEntryOfTheWrongKind) {
+  ScratchDir dir;
+  const auto reference = read_file(reference_bag("sqlite3_cdr_test") / "metadata.yaml");
+  const std::string original(reference.begin(), reference.end());
+  struct WrongEntry {
+    std::string list, entry, says;
+  };
+  const WrongEntry entries[] = {
+      {"relative_file_paths:\n", "    - {a: b}\n", "line 27: an entry of 'relative_file_paths'"},
+      {"files:\n", "    - cdr_test_0.db3\n", "line 29: an entry of 'files'"},
+      {"topics_with_message_count:\n", "    - /test_topic\n", "line 10: topic entry without"}};
+  for (const auto& [list, entry, says] : entries) {
+    SCOPED_TRACE(list);
+    const fs::path bag = dir / list.substr(0, list.find(':'));
+    fs::create_directories(bag);
+    fs::copy_file(reference_bag("sqlite3_cdr_test") / "cdr_test_0.db3", bag / "cdr_test_0.db3");
+    std::string text = original;
+    text.insert(text.find(list) + list.size(), entry);
+    write_file(bag / "metadata.yaml", {text.begin(), text.end()});
+    expect_error(bag, "metadata.yaml", says);
+  }
 }
 
 TEST(BagErrors, MetadataListsAMissingFile) {

@@ -1,6 +1,8 @@
 // Reading the real ROS 2 bags of ../shared/data/rosbag2: sqlite3_cdr_test
 // (schema 4 with message_definitions, metadata v7) and mcap_talker (zstd
 // chunks, ros2msg schemas, metadata v4).
+#include <zstd.h>
+
 #include <algorithm>
 #include <cstring>
 
@@ -100,6 +102,43 @@ TEST(SqliteReader, TopicFilterAndTimeWindow) {
   EXPECT_EQ(middle, std::vector<Recorded>(all.begin() + 2, all.begin() + 5));
 }
 
+// rosbag2's file compression zstd-compresses each storage file whole: the definitions are in
+// the compressed storage only, and must come out of it as from the plain one.
+TEST(SqliteReader, FileCompressedBagKeepsItsDefinitions) {
+  ScratchDir dir;
+  const fs::path plain = reference_bag("sqlite3_cdr_test");
+  const auto db = read_file(plain / "cdr_test_0.db3");
+  std::vector<uint8_t> compressed(ZSTD_compressBound(db.size()));
+  compressed.resize(ZSTD_compress(compressed.data(), compressed.size(), db.data(), db.size(), 1));
+  fs::create_directories(dir / "bag");
+  write_file(dir / "bag" / "cdr_test_0.db3.zstd", compressed);
+  const auto yaml = read_file(plain / "metadata.yaml");
+  std::string text(yaml.begin(), yaml.end());
+  for (const auto& [from, to] :
+       {std::pair<std::string, std::string>{"compression_format: \"\"", "compression_format: zstd"},
+        {"compression_mode: \"\"", "compression_mode: FILE"},
+        {"- cdr_test_0.db3\n", "- cdr_test_0.db3.zstd\n"},
+        {"path: cdr_test_0.db3\n", "path: cdr_test_0.db3.zstd\n"}}) {
+    ASSERT_NE(text.find(from), std::string::npos) << from;
+    text.replace(text.find(from), from.size(), to);
+  }
+  write_file(dir / "bag" / "metadata.yaml", {text.begin(), text.end()});
+
+  EXPECT_EQ(read_all(dir / "bag"), read_all(plain));
+  const Reader uncompressed(plain);
+  const Reader reader(dir / "bag");
+  for (const auto& t : reader.topics()) {
+    EXPECT_FALSE(t.definition.empty()) << t.name;
+    EXPECT_EQ(t.definition, topic_named(uncompressed.topics(), t.name).definition) << t.name;
+  }
+  convert(dir / "bag", dir / "mcap", {Storage::kMcap, Compression::kZstd});
+  const Reader converted(dir / "mcap");
+  for (const auto& t : converted.topics()) {
+    EXPECT_EQ(t.definition_encoding, "ros2msg") << t.name;
+    EXPECT_EQ(t.definition, topic_named(uncompressed.topics(), t.name).definition) << t.name;
+  }
+}
+
 std::string cdr_string(const std::vector<uint8_t>& payload) {
   std::string s;
   msgs::CdrReader r(payload);
@@ -170,6 +209,30 @@ TEST(McapReader, LinearScanWithoutSummary) {
   const auto via_scan = read_all(dir / "nosummary.mcap");
   EXPECT_EQ(via_scan, read_all(reference_bag("mcap_talker") / "talker.mcap"));
   EXPECT_EQ(read_info(dir / "nosummary.mcap").message_count, 20u);
+}
+
+// A summary may hold chunk indexes without a Statistics record (it is optional): the counts
+// and times then come from the message indexes, the same as the Statistics give.
+TEST(McapReader, SummaryWithoutStatistics) {
+  ScratchDir dir;
+  const fs::path original = reference_bag("mcap_talker") / "talker.mcap";
+  auto bytes = read_file(original);
+  constexpr std::size_t kStatistics = 12567;
+  ASSERT_EQ(bytes[kStatistics], 0x0B);
+  bytes[kStatistics] = 0x80;  // a private opcode: readers skip the record
+  const std::size_t footer = bytes.size() - 8 - 29;
+  std::memset(bytes.data() + footer + 9 + 16, 0, 4);  // summary CRC 0: not computed
+  write_file(dir / "nostats.mcap", bytes);
+
+  const BagInfo info = read_info(dir / "nostats.mcap");
+  const BagInfo expected = read_info(original);
+  EXPECT_EQ(info.message_count, 20u);
+  EXPECT_EQ(info.starting_time_ns, expected.starting_time_ns);
+  EXPECT_EQ(info.duration_ns, expected.duration_ns);
+  ASSERT_EQ(info.topics.size(), expected.topics.size());
+  for (const auto& t : expected.topics)
+    EXPECT_EQ(topic_named(info.topics, t.name).message_count, t.message_count) << t.name;
+  EXPECT_EQ(read_all(dir / "nostats.mcap"), read_all(original));
 }
 
 TEST(McapReader, TopicFilter) {

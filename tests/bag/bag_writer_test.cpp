@@ -191,6 +191,22 @@ TEST(Writer, McapOutOfOrderTimestampsReadBackSorted) {
   EXPECT_EQ(times, (std::vector<int64_t>{5, 10, 20, 30, 40, 50, 60}));
 }
 
+// A run of zero bytes compresses about 32000:1 with zstd, far past what lz4 can reach: such a
+// chunk must read back all the same.
+TEST(Writer, McapZstdChunkOfZerosReadsBack) {
+  ScratchDir dir;
+  std::vector<Recorded> written;
+  {
+    Writer w(dir / "zeros", {Storage::kMcap, Compression::kZstd});
+    const auto id = w.add_topic(jazzy_topic());
+    for (int64_t t = 1; t <= 3; ++t) {
+      written.push_back({"/chatter", t, std::vector<uint8_t>(1 << 20, 0)});
+      w.write(id, t, written.back().data);
+    }
+  }
+  EXPECT_EQ(read_all(dir / "zeros"), written);
+}
+
 TEST(Writer, RefusesANonEmptyDirectory) {
   ScratchDir dir;
   write_file(dir / "x", {1});

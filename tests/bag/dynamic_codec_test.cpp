@@ -83,6 +83,14 @@ TEST(DynamicCodec, FlatMsgFolderIsAdoptedAndComposesSchemas) {
   check_cdr_test_bag(composed);
 }
 
+// Shell completion ends a folder's name with '/': the folder is just as flat.
+TEST(DynamicCodec, FlatMsgFolderGivenWithATrailingSlash) {
+  dyn::TypeRegistry flat;
+  EXPECT_GE(flat.add_directory("/usr/share/test_interface_files/msg/"), 10u);
+  EXPECT_GE(flat.adopt("test_msgs/msg/Arrays"), 2u);
+  check_cdr_test_bag(flat);
+}
+
 // std_msgs/msg/Empty's definition is empty; rosidl gives it one uint8 member, which CDR carries.
 TEST(DynamicCodec, ATypeWithoutFieldsHasItsPlaceholderMember) {
   dyn::TypeRegistry registry;

@@ -118,6 +118,7 @@ class Reader {
 
  private:
   bool open_next_file();
+  void close_file();  // and removes its decompressed copy
 
   BagInfo info_;
   ReadOptions options_;
