@@ -190,7 +190,17 @@ RecordingSession::RecordingSession(SessionOptions options) : options_(std::move(
     throw TracingError("trace folder " + options_.output_dir.string() + " already exists");
   options_.output_dir = fs::absolute(options_.output_dir);
   started_daemon_ = ensure_session_daemon();
+  try {
+    start();
+  } catch (...) {
+    // No destructor runs after a throwing constructor: a daemon started for this session ends
+    // with it here.
+    if (started_daemon_) stop_daemon_when_idle();
+    throw;
+  }
+}
 
+void RecordingSession::start() {
   // A process that started before the daemon registers with it in the
   // background; its events would be missed until then.
   const auto deadline =

@@ -41,6 +41,18 @@ class GreyRun : public ::testing::Test {
   }
   static inline bool started_daemon_ = false;
 
+  static bool daemon_running() {
+    return robotperf::test_support::shell("pgrep -x lttng-sessiond").exit_code == 0;
+  }
+  // Stops the daemon this suite started, for a test of starting one; false when the daemon
+  // running is someone else's.
+  static bool stop_the_suites_daemon() {
+    if (!started_daemon_) return false;
+    robotperf::test_support::shell("pkill -x lttng-sessiond");
+    return robotperf::test_support::eventually([] { return !daemon_running(); },
+                                               std::chrono::seconds(10));
+  }
+
   void SetUp() override {
     // A parameterised test's name holds a '/': one folder, not a folder left behind in another.
     std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
@@ -397,18 +409,27 @@ TEST_F(GreyRun, AnInterruptedRunDestroysItsSessionAndKeepsItsTrace) {
 // A grey run that had to start the LTTng session daemon stops it again, so that it does not
 // outlive the run (and later black-box runs do not find tracing active).
 TEST_F(GreyRun, ADaemonTheRunStartedIsStoppedAfterIt) {
-  auto daemon_running = [] {
-    return robotperf::test_support::shell("pgrep -x lttng-sessiond").exit_code == 0;
-  };
-  if (!started_daemon_) GTEST_SKIP() << "a session daemon this test did not start is running";
-  robotperf::test_support::shell("pkill -x lttng-sessiond");
-  ASSERT_TRUE(robotperf::test_support::eventually([&] { return !daemon_running(); },
-                                                  std::chrono::seconds(10)));
+  if (!stop_the_suites_daemon())
+    GTEST_SKIP() << "a session daemon this test did not start is running";
   const auto run = robotperf_cli("run a2 --mode grey --count 40 --quiet --output " +
                                  (dir_ / "results").string());
   const bool left_running = daemon_running();
   started_daemon_ = tracing::ensure_session_daemon();  // for the tests that follow
   EXPECT_EQ(run.exit_code, 0) << run.out;
+  EXPECT_FALSE(left_running);
+}
+
+// So does a session that fails to start after starting the daemon (here LTTng refuses to track
+// a negative process ID).
+TEST_F(GreyRun, ADaemonStartedForASessionThatFailsIsStoppedToo) {
+  if (!stop_the_suites_daemon())
+    GTEST_SKIP() << "a session daemon this test did not start is running";
+  tracing::SessionOptions options;
+  options.output_dir = dir_ / "trace";
+  options.only_processes = {-5};
+  EXPECT_THROW(tracing::RecordingSession{options}, tracing::TracingError);
+  const bool left_running = daemon_running();
+  started_daemon_ = tracing::ensure_session_daemon();  // for the tests that follow
   EXPECT_FALSE(left_running);
 }
 

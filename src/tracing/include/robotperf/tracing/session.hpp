@@ -56,6 +56,9 @@ class RecordingSession {
   std::size_t subbuf_bytes() const { return options_.subbuf_bytes; }
 
  private:
+  // Waits for this process to register, then creates, configures and starts the session.
+  void start();
+
   SessionOptions options_;
   std::string name_;
   bool started_daemon_ = false;
