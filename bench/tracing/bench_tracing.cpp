@@ -153,7 +153,7 @@ int main(int argc, char** argv) {
   {
     tracing::RecordingSession s(session_options(trace, {"robotperf:*", "ros2:*"}));
     lttng_ust_tracepoint(robotperf, run_begin, "bench", "intra", frames, uint64_t{0}, period_ns,
-                         uint64_t{1}, 0.0);
+                         uint64_t{1}, 0.0, 0);
     for (uint64_t k = 0; k < frames; ++k) {
       emit_frame(k, period_ns);
       if (k % 2000 == 1999) std::this_thread::sleep_for(std::chrono::milliseconds(3));
