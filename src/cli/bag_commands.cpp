@@ -102,7 +102,12 @@ int bag_echo(const std::string& path, const EchoOptions& options) {
   for (const auto& t : reader.topics()) {
     // An empty ros2msg text is a definition too: a type without fields (std_msgs/msg/Empty).
     if (t.definition_encoding == "ros2msg") {
-      registry.add_ros2msg(t.type, t.definition);
+      try {
+        registry.add_ros2msg(t.type, t.definition);
+      } catch (const msgs::dynamic::DefinitionError& e) {
+        throw bag::BagError(path + ": the definition of " + t.name +
+                            "'s type stored in the bag: " + e.what());
+      }
     } else if (auto builtin = msgs::ros2msg_schema(t.type); builtin && !registry.contains(t.type)) {
       registry.add_ros2msg(t.type, *builtin);
     }

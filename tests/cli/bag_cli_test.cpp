@@ -203,6 +203,18 @@ TEST_F(BagCli, ADefinitionThatLeavesBytesOverIsWarnedOnce) {
   EXPECT_EQ(o.out.find("accounts for", at + warning.size()), std::string::npos) << "warned twice";
 }
 
+// A definition the bag stores that does not parse is named with the bag and the topic.
+TEST_F(BagCli, AMalformedStoredDefinitionNamesTheBagAndTopic) {
+  const std::string bag =
+      bag_of("malformed", "demo_msgs/msg/Levels", "cdr", "uint8[3 levels\n", {0, 1, 0, 0, 1, 2, 3});
+  const Outcome o = robotperf_cli("bag echo " + bag);
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_NE(o.out.find(bag + ": the definition of /t's type stored in the bag: "
+                             "demo_msgs/msg/Levels line 1:"),
+            std::string::npos)
+      << o.out;
+}
+
 TEST_F(BagCli, SerializationFormatsOtherThanCdrAreRefused) {
   const std::string bag =
       bag_of("proto", "std_msgs/msg/String", "protobuf", "string data\n", {1, 2, 3, 4});
