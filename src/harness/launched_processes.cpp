@@ -106,11 +106,15 @@ LaunchedProcesses::LaunchedProcesses(const BenchmarkSpec& spec, const std::strin
     posix_spawn_file_actions_destroy(&actions);
     if (rc != 0) {
       stop(0.5);
+      g_launched_group = 0;
       throw std::runtime_error("launch '" + launch.name + "': cannot start '" + p.command +
                                "' in " + cwd.string() + ": " + strerror(rc));
     }
     p.pidfd = static_cast<int>(syscall(SYS_pidfd_open, p.pid, 0));
-    if (group_ == 0) group_ = p.pid;
+    if (group_ == 0) {
+      group_ = p.pid;
+      g_launched_group = group_;
+    }
     processes_.push_back(std::move(p));
   }
   supervisor_ = std::thread([this] { supervise(); });
@@ -118,6 +122,7 @@ LaunchedProcesses::LaunchedProcesses(const BenchmarkSpec& spec, const std::strin
 
 LaunchedProcesses::~LaunchedProcesses() {
   stop(2.0);
+  g_launched_group = 0;
   close(wake_pipe_[0]);
   close(wake_pipe_[1]);
 }

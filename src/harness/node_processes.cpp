@@ -49,8 +49,11 @@ std::atomic<pid_t> g_children_group{0};
 
 }  // namespace
 
+std::atomic<pid_t> g_launched_group{0};
+
 void kill_node_processes() noexcept {
-  if (const pid_t group = g_children_group.load(); group > 0) kill(-group, SIGKILL);
+  for (const pid_t group : {g_children_group.load(), g_launched_group.load()})
+    if (group > 0) kill(-group, SIGKILL);
 }
 
 nlohmann::json this_host_identity() {

@@ -18,6 +18,10 @@
 
 namespace robotperf::harness {
 
+// The process group of an external graph's launched processes under way (0: none), which
+// kill_node_processes() kills too.
+extern std::atomic<pid_t> g_launched_group;
+
 // A waitpid() status as results say it: "ok", "exited with status N", "killed by signal ...".
 std::string describe_exit_status(int status);
 

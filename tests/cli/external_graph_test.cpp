@@ -5,9 +5,12 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <string>
@@ -32,18 +35,22 @@ class ExternalGraph : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  // Writes package `id` with `graph` as its graph.yaml and runs it on `rmw`.
-  Outcome run_package(const std::string& id, const std::string& graph, const std::string& rmw,
-                      const std::string& extra = "") {
+  // Writes package `id` with `graph` as its graph.yaml; returns the arguments that run it on
+  // `rmw`.
+  std::string package_run(const std::string& id, const std::string& graph, const std::string& rmw) {
     const fs::path package = dir_ / "benchmarks" / "external" / id;
     fs::create_directories(package);
     std::ofstream(package / "benchmark.yaml")
         << "id: " << id << "\nname: " << id << "\nshort: test\ndescription: test\nresults: []\n";
     std::ofstream(package / "graph.yaml") << graph;
-    return robotperf_cli("--benchmarks " + (dir_ / "benchmarks").string() + " run " + id +
-                         " --rmw " + rmw + " --quiet --domain " +
-                         std::to_string(robotperf::rmw::reserved_domain()) + " --output " +
-                         (dir_ / "results").string() + extra);
+    return "--benchmarks " + (dir_ / "benchmarks").string() + " run " + id + " --rmw " + rmw +
+           " --quiet --domain " + std::to_string(robotperf::rmw::reserved_domain()) + " --output " +
+           (dir_ / "results").string();
+  }
+  // Writes package `id` with `graph` as its graph.yaml and runs it on `rmw`.
+  Outcome run_package(const std::string& id, const std::string& graph, const std::string& rmw,
+                      const std::string& extra = "") {
+    return robotperf_cli(package_run(id, graph, rmw) + extra);
   }
 
   // Runs x1: 130 payloads at 50 Hz through echo_peer in `mode` (see echo_peer.cpp).
@@ -132,6 +139,50 @@ TEST_F(ExternalGraph, GreyRunTracesTheLaunchedNodesOwnEvents) {
                 t["subscriber"].get<std::string>());
   EXPECT_TRUE(rows.contains("/ping: robotperf_playback -> echo_peer")) << j["grey"].dump();
   EXPECT_TRUE(rows.contains("/pong: echo_peer -> robotperf_monitor")) << j["grey"].dump();
+}
+
+// A second Ctrl-C ends robotperf at once, and the launched processes with it: here one that
+// ignores the first, so that the run is still waiting for it to stop.
+TEST_F(ExternalGraph, ASecondInterruptStopsTheLaunchedProcessesToo) {
+  const std::string stubborn = "613." + std::to_string(getpid());  // sleep's seconds: ours alone
+  const fs::path readings = dir_ / "readings";
+  const std::string run_args =
+      package_run("x1",
+                  "dataset: middleware/payload\nrate_hz: 50\ncount: 100000\nwarmup: 10\n"
+                  "inputs:\n  - {topic: /ping, type: sensor_msgs/msg/Image, stream: payload}\n"
+                  "output: {topic: /pong, type: sensor_msgs/msg/Image}\n"
+                  "launch:\n  - name: echo\n    command: [" ROBOTPERF_ECHO_PEER
+                  ", '${rmw}', '${domain}', /ping, /pong, until-signal]\n"
+                  "  - name: stubborn\n    command: [sh, -c, \"trap '' INT TERM; exec sleep " +
+                      stubborn + "\"]\n",
+                  "fastdds");
+  robotperf::test_support::Background run(std::string(ROBOTPERF_EXECUTABLE) + " " + run_args +
+                                              " --power-meter 'echo x >> " + readings.string() +
+                                              "; echo 5'",
+                                          dir_ / "log");
+  auto readings_taken = [&] {
+    std::ifstream in(readings);
+    return std::count(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>(), '\n');
+  };
+  // The meter's second reading: the run is under way.
+  ASSERT_TRUE(robotperf::test_support::eventually([&] { return readings_taken() >= 2; },
+                                                  std::chrono::seconds(60)))
+      << run.output();
+  auto stubborn_left = [&] {
+    // The brackets keep pgrep's own shell, whose command line holds the pattern, out.
+    return robotperf::test_support::shell("pgrep -f '[s]leep " + stubborn + "'").exit_code == 0;
+  };
+  ASSERT_TRUE(stubborn_left());
+  run.signal(SIGINT);
+  ASSERT_TRUE(robotperf::test_support::eventually(
+      [&] { return run.output().find("interrupted: ending") != std::string::npos; },
+      std::chrono::seconds(30)))
+      << run.output();
+  run.signal(SIGINT);
+  EXPECT_EQ(run.wait(std::chrono::seconds(30)), 130) << run.output();
+  EXPECT_TRUE(robotperf::test_support::eventually([&] { return !stubborn_left(); },
+                                                  std::chrono::seconds(10)));
+  robotperf::test_support::shell("pkill -KILL -f '[s]leep " + stubborn + "'");
 }
 
 TEST_F(ExternalGraph, NodeDyingMidRunEndsTheRunWithItsLogKept) {

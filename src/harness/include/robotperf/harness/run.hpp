@@ -348,8 +348,8 @@ class RunInterrupted : public std::runtime_error {
 // `errors`, with what was measured until then.
 RunResult run_benchmark(const BenchmarkSpec& spec, const RunOptions& options);
 
-// Kills the node processes of a per-node run under way at once; async-signal-safe, for a process
-// that must end now (a second Ctrl-C).
+// Kills the node processes of a per-node run under way, and an external graph's launched
+// processes, at once; async-signal-safe, for a process that must end now (a second Ctrl-C).
 void kill_node_processes() noexcept;
 
 // The per-node child side: builds one node of `spec`, reports "ready" on
