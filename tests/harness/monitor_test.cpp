@@ -182,6 +182,36 @@ TEST(Playback, RepeatsTheWarmupUntilTheGraphDelivers) {
   executor.stop();
 }
 
+// In bursts of 4, a warm-up of 5 ends inside the second burst: the gate is still asked before the
+// first measured message, which goes out at that burst's deadline after it.
+TEST(Playback, AsksTheGateInsideABurst) {
+  testing::TestPackage package("gate_burst", testing::relay_graph("none"));
+  const BenchmarkSpec spec = load_benchmark(package.dir());
+  graph::Context context(rmw::make_transport("intra", {}));
+  const MessageIds ids{1'000'000'000, 1'000'000, 12};
+  std::vector<int64_t> schedule;
+  for (int64_t k = 0; k < 12; ++k) schedule.push_back(k / 4 * 4'000'000);
+  Playback playback(context, spec, load_dataset(spec.dataset), ids, false, schedule);
+  std::vector<std::size_t> sent_when_asked;
+  std::size_t sent = 0;
+  const Playback::DeliveryGate gate{5,
+                                    [&] {
+                                      sent_when_asked.push_back(sent);
+                                      return true;
+                                    },
+                                    rmw::steady_now_ns() + 10'000'000'000,
+                                    [] { return std::string("never reached"); }};
+  std::vector<MessageRecord> records;
+  EXPECT_EQ(playback.run(
+                records, [] { return false; }, [&](std::size_t n) { sent = n; }, &gate),
+            12u);
+  EXPECT_EQ(sent_when_asked, std::vector<std::size_t>{5}) << "asked once, after the warm-up";
+  ASSERT_EQ(records.size(), 12u);
+  EXPECT_EQ(records[5].scheduled_ns, records[4].scheduled_ns) << "one burst, in two parts";
+  EXPECT_EQ(records[7].scheduled_ns, records[5].scheduled_ns);
+  EXPECT_EQ(records[8].scheduled_ns - records[5].scheduled_ns, 4'000'000);
+}
+
 // A device graph's warm-up, 5 messages a round: its answers so far at the end of each round.
 TEST(DeviceWarmup, ReadyOnceTheGraphAnswersAtItsSteadyPace) {
   // Compiling for three rounds, then the backlog and the round's own answers: ready at once.
