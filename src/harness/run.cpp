@@ -294,8 +294,8 @@ void add_peers(std::vector<rmw::PeerParticipant>& seen, std::vector<rmw::PeerPar
 
 void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& tally) {
   std::vector<double> from_scheduled, from_sent, lateness;
-  std::vector<int64_t> receptions;
-  int64_t first_measured_send = -1;
+  std::vector<metrics::TimedEvent> sends, receptions;
+  int64_t first_measured_send = -1, last_reception = -1;
   for (auto& rec : r.records) {
     rec.received_ns = tally.received_ns[rec.id];
     rec.warmup = rec.id < r.warmup;
@@ -303,11 +303,13 @@ void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& ta
     if (rec.warmup) continue;
     ++r.measured;
     if (first_measured_send < 0) first_measured_send = rec.sent_ns;
+    sends.push_back({rec.scheduled_ns, rec.sent_ns});
     if (rec.received_ns < 0) continue;
     ++r.matched;
     from_scheduled.push_back(static_cast<double>(rec.received_ns - rec.scheduled_ns));
     from_sent.push_back(static_cast<double>(rec.received_ns - rec.sent_ns));
-    receptions.push_back(rec.received_ns);
+    receptions.push_back({rec.scheduled_ns, rec.received_ns});
+    last_reception = std::max(last_reception, rec.received_ns);
   }
   r.sent = r.records.size();
   r.lost = r.measured - r.matched;
@@ -319,21 +321,10 @@ void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& ta
   r.latency_from_sent = metrics::compute_stats(from_sent);
   r.send_lateness = metrics::compute_stats(lateness);
 
-  // N receptions span N-1 intervals: (N-1)/span gives f for N messages at f Hz.
-  if (receptions.size() >= 2) {
-    std::ranges::sort(receptions);
-    const double span = static_cast<double>(receptions.back() - receptions.front()) * 1e-9;
-    if (span > 0) r.throughput_hz = static_cast<double>(receptions.size() - 1) / span;
-    r.window_s = static_cast<double>(receptions.back() - first_measured_send) * 1e-9;
-  }
-  std::vector<int64_t> sends;
-  for (const auto& rec : r.records) {
-    if (!rec.warmup) sends.push_back(rec.sent_ns);
-  }
-  if (sends.size() >= 2) {
-    r.offered_rate_hz = static_cast<double>(sends.size() - 1) /
-                        (static_cast<double>(sends.back() - sends.front()) * 1e-9);
-  }
+  r.throughput_hz = metrics::event_rate_hz(receptions);
+  r.offered_rate_hz = metrics::event_rate_hz(sends);
+  if (receptions.size() >= 2)
+    r.window_s = static_cast<double>(last_reception - first_measured_send) * 1e-9;
 
   auto invalid = [&](std::string why) { r.invalid_reasons.push_back(std::move(why)); };
   for (const auto& e : r.errors) invalid("run ended early: " + e);
@@ -762,6 +753,8 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
       gate ? &*gate : nullptr, &repeated_ns);
   r.warmup_repeated_s = static_cast<double>(repeated_ns) * 1e-9;
   trace_run_end(r.records.size());
+  if (r.interrupted && r.records.size() <= r.warmup)
+    throw RunInterrupted(stop_now + " before timing started: nothing was measured");
 
   // Drain: wait for the outstanding outputs, at most drain_s after the last send.
   // A state output keeps reporting after the first reception of each ID: wait the whole drain.

@@ -1,5 +1,6 @@
 #include "robotperf/metrics/delivery_validity.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace robotperf::metrics {
@@ -29,6 +30,33 @@ std::vector<std::string> delivery_invalid_reasons(const DeliveryCounts& c, std::
   if (c.unknown > 0)
     out.push_back(std::to_string(c.unknown) + " receptions with unknown message IDs");
   return out;
+}
+
+double event_rate_hz(std::span<const TimedEvent> events) {
+  std::vector<int64_t> deadlines, times;
+  deadlines.reserve(events.size());
+  times.reserve(events.size());
+  for (const TimedEvent& e : events) {
+    deadlines.push_back(e.deadline_ns);
+    times.push_back(e.time_ns);
+  }
+  std::ranges::sort(deadlines);
+  // The events of each deadline: the first's, the last's, and a whole burst's (the most).
+  std::size_t first_group = 0, last_group = 0, whole_group = 0;
+  for (std::size_t i = 0; i < deadlines.size();) {
+    std::size_t j = i;
+    while (j < deadlines.size() && deadlines[j] == deadlines[i]) ++j;
+    if (i == 0) first_group = j;
+    last_group = j - i;
+    whole_group = std::max(whole_group, j - i);
+    i = j;
+  }
+  if (times.size() <= last_group) return 0;
+  std::ranges::sort(times);
+  const std::size_t before = times.size() - last_group;
+  const int64_t span = times[before] - times.front();
+  const std::size_t counted = before + (whole_group - first_group);
+  return span > 0 ? static_cast<double>(counted) / (static_cast<double>(span) * 1e-9) : 0;
 }
 
 }  // namespace robotperf::metrics

@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <functional>
@@ -35,6 +36,25 @@ std::string trim(std::string text) {
   if (first == std::string::npos) return {};
   const auto last = text.find_last_not_of(" \t\r\n");
   return text.substr(first, last - first + 1);
+}
+
+// `text` for a one-line message: line breaks and other control characters written as escapes.
+std::string one_line(const std::string& text) {
+  std::string line;
+  for (const char c : text) {
+    if (c == '\n') {
+      line += "\\n";
+    } else if (c == '\r') {
+      line += "\\r";
+    } else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+      char escape[5];
+      std::snprintf(escape, sizeof escape, "\\x%02x", static_cast<unsigned char>(c));
+      line += escape;
+    } else {
+      line += c;
+    }
+  }
+  return line;
 }
 
 // A sysfs value: the trimmed first line. Nullopt with `error` set when unreadable.
@@ -536,9 +556,9 @@ class ExternalMeterSource : public PowerSource {
     tokens >> first;
     const auto watts = parse_number(first);
     if (!watts || !(*watts >= 0) || *watts > kMaxPhysicalWatts) {
-      error = "power meter '" + command_ + "' printed '" + trim(output).substr(0, 60) +
-              "', expected watts (a number from 0 to " + std::to_string(int(kMaxPhysicalWatts)) +
-              ") as its first word";
+      error = "power meter '" + one_line(command_) + "' printed '" +
+              one_line(trim(output).substr(0, 60)) + "', expected watts (a number from 0 to " +
+              std::to_string(int(kMaxPhysicalWatts)) + ") as its first word";
       return std::nullopt;
     }
     return *watts;
@@ -624,12 +644,12 @@ class ExternalMeterSource : public PowerSource {
     while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
     }
     if (timed_out) {
-      error = "power meter '" + command_ + "' did not finish within " + std::to_string(timeout_s_) +
-              " s";
+      error = "power meter '" + one_line(command_) + "' did not finish within " +
+              std::to_string(timeout_s_) + " s";
       return false;
     }
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-      error = "power meter '" + command_ + "' failed (" +
+      error = "power meter '" + one_line(command_) + "' failed (" +
               (WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
                                  : "killed by signal " + std::to_string(WTERMSIG(status))) +
               ")" + last_line(diagnostics);

@@ -831,21 +831,22 @@ MessageLookup summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo&
   }
 
   Samples from_scheduled, from_sent, lateness;
-  BigVector<int64_t> receptions, sends;
+  BigVector<metrics::TimedEvent> receptions, sends;
   for (auto* v : {&from_scheduled, &from_sent, &lateness}) v->reserve(a.messages.size());
   for (auto* v : {&receptions, &sends}) v->reserve(a.messages.size());
-  int64_t first_measured_send = -1;
+  int64_t first_measured_send = -1, last_reception = -1;
   for (const auto& m : a.messages) {
     lateness.push_back(static_cast<double>(m.sent_ns - m.scheduled_ns));
     if (m.warmup) continue;
     ++a.measured;
-    sends.push_back(m.sent_ns);
+    sends.push_back({m.scheduled_ns, m.sent_ns});
     if (first_measured_send < 0) first_measured_send = m.sent_ns;
     if (m.received_ns < 0) continue;
     ++a.matched;
     from_scheduled.push_back(static_cast<double>(m.received_ns - m.scheduled_ns));
     from_sent.push_back(static_cast<double>(m.received_ns - m.sent_ns));
-    receptions.push_back(m.received_ns);
+    receptions.push_back({m.scheduled_ns, m.received_ns});
+    last_reception = std::max(last_reception, m.received_ns);
   }
   // A state stream's further receptions are the state it keeps publishing (the Monitor counts
   // them as repeats, too).
@@ -863,16 +864,10 @@ MessageLookup summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo&
     a.latency_from_scheduled = scheduled.get();
     a.latency_from_sent = sent.get();
   }
-  if (receptions.size() >= 2) {
-    std::sort(receptions.begin(), receptions.end());
-    const double span = static_cast<double>(receptions.back() - receptions.front()) * 1e-9;
-    if (span > 0) a.throughput_hz = static_cast<double>(receptions.size() - 1) / span;
-    a.window_s = static_cast<double>(receptions.back() - first_measured_send) * 1e-9;
-  }
-  if (sends.size() >= 2) {
-    a.offered_rate_hz = static_cast<double>(sends.size() - 1) /
-                        (static_cast<double>(sends.back() - sends.front()) * 1e-9);
-  }
+  a.throughput_hz = metrics::event_rate_hz(receptions);
+  a.offered_rate_hz = metrics::event_rate_hz(sends);
+  if (receptions.size() >= 2)
+    a.window_s = static_cast<double>(last_reception - first_measured_send) * 1e-9;
 
   auto invalid = [&](std::string why) { a.invalid_reasons.push_back(std::move(why)); };
   if (!run.ended) {

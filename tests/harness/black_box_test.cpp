@@ -1,6 +1,8 @@
 // The harness against graphs whose behaviour is known exactly.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <csignal>
 #include <functional>
 #include <limits>
 #include <set>
@@ -122,6 +124,25 @@ TEST(BlackBox, FailingNodeEndsTheRunEarlyAndKeepsWhatWasMeasured) {
   EXPECT_EQ(r.nodes[0].exit_status, "its callback threw during the run");
 }
 
+// An interrupt during the warm-up ends the run before timing started: nothing to keep, so no
+// result (the command line then writes none), whatever the warm-up sent.
+TEST(BlackBox, AnInterruptDuringTheWarmupMeasuresNothing) {
+  RunOptions o = with_count(40, 100);
+  o.warmup = 20;
+  std::atomic<int> interrupted{0};
+  o.interrupted = &interrupted;
+  o.progress = [&](std::size_t sent, std::size_t, std::size_t) {
+    if (sent == 3) interrupted = SIGINT;
+  };
+  try {
+    run_package("warmup_interrupted", relay_graph(""), o);
+    ADD_FAILURE() << "an interrupt during the warm-up gave a result";
+  } catch (const RunInterrupted& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "interrupted by SIGINT before timing started: nothing was measured");
+  }
+}
+
 TEST(BlackBox, FastDdsInOneProcessLosesNothing) {
   RunOptions o = with_count(40, 100);
   o.rmw = "fastdds";
@@ -205,6 +226,8 @@ TEST(BlackBox, BurstsAreSentBackToBackAtTheirDeadline) {
   EXPECT_EQ(r.matched, 40u);
   EXPECT_EQ(r.timeline, "burst");
   EXPECT_EQ(r.burst, 4u);
+  // The mean rate, though its last burst's messages go out at once ((n-1)/span gave 106 Hz).
+  EXPECT_NEAR(r.offered_rate_hz, 100.0, 2.0);
   ASSERT_EQ(r.records.size(), 40u);
   for (std::size_t k = 0; k < 40; ++k) {
     EXPECT_EQ(r.records[k].scheduled_ns, r.records[k / 4 * 4].scheduled_ns) << k;

@@ -1,8 +1,10 @@
-// The rules DESIGN.md §3.5-3.6 set on a run's message counts, shared by black-box results and the
-// grey-box trace analysis so that both call a run invalid for the same reasons in the same words.
+// The rules DESIGN.md §3.5-3.6 set on a run's message counts, and its rates, shared by black-box
+// results and the grey-box trace analysis so that both judge and count a run alike.
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -18,5 +20,20 @@ struct DeliveryCounts {
 // One reason per broken rule: too few samples, loss above the bound, duplicates, unknown IDs.
 std::vector<std::string> delivery_invalid_reasons(const DeliveryCounts& counts,
                                                   std::size_t min_samples, double max_loss_percent);
+
+// A send or reception of a measured message: when, and its input's deadline (the messages of a
+// burst share one).
+struct TimedEvent {
+  int64_t deadline_ns;
+  int64_t time_ns;
+};
+
+// The rate of a run's sends or receptions, in Hz. With the last deadline's k events last in
+// time, the n - k others over the time from the first event to the first of those k: f for
+// messages at f Hz one by one ((n - 1) / span) or in bursts of any size (where (n - 1) / span
+// would count the last burst's time as none), and the rate of a graph that cannot keep up. A
+// first burst cut short (the warm-up ended inside it) counts as whole, as its time does. 0 when
+// that spans no time.
+double event_rate_hz(std::span<const TimedEvent> events);
 
 }  // namespace robotperf::metrics
