@@ -10,9 +10,29 @@ endif()
 set(ROBOTPERF_COMPILER "${CMAKE_CXX_COMPILER_ID} ${CMAKE_CXX_COMPILER_VERSION}")
 string(TOUPPER "${CMAKE_BUILD_TYPE}" _bt)
 set(ROBOTPERF_CXX_FLAGS "${CMAKE_CXX_FLAGS} ${CMAKE_CXX_FLAGS_${_bt}}")
-# Options added with add_compile_options() (warnings, sanitizers) are part of the flags too.
+# Options added with add_compile_options() (warnings, sanitizers) are part of the flags too. They
+# are generator expressions, unexpanded here: $<$<COMPILE_LANGUAGE:...>:FLAGS> is recorded as
+# FLAGS where the languages include CXX and left out otherwise; any other kind stops the
+# configuration rather than being recorded as written.
 get_directory_property(_robotperf_compile_options COMPILE_OPTIONS)
 list(JOIN _robotperf_compile_options " " _robotperf_compile_options)
+set(_robotperf_language_genex "\\$<\\$<COMPILE_LANGUAGE:([^>]*)>:([^>]*)>")
+string(REGEX MATCHALL "${_robotperf_language_genex}" _robotperf_genexes
+       "${_robotperf_compile_options}")
+foreach(_genex IN LISTS _robotperf_genexes)
+  string(REGEX REPLACE "^${_robotperf_language_genex}$" "\\1" _languages "${_genex}")
+  string(REPLACE "," ";" _languages "${_languages}")
+  set(_flags "")
+  if("CXX" IN_LIST _languages)
+    string(REGEX REPLACE "^${_robotperf_language_genex}$" "\\2" _flags "${_genex}")
+  endif()
+  string(REPLACE "${_genex}" "${_flags}" _robotperf_compile_options "${_robotperf_compile_options}")
+endforeach()
+string(REGEX REPLACE "  +" " " _robotperf_compile_options "${_robotperf_compile_options}")
+if(_robotperf_compile_options MATCHES "\\$<")
+  message(FATAL_ERROR "cmake/Version.cmake cannot record the compile options "
+                      "'${_robotperf_compile_options}': expand their generator expressions there")
+endif()
 set(ROBOTPERF_CXX_FLAGS "${ROBOTPERF_CXX_FLAGS} ${_robotperf_compile_options}")
 string(STRIP "${ROBOTPERF_CXX_FLAGS}" ROBOTPERF_CXX_FLAGS)
 if(ROBOTPERF_SANITIZE)

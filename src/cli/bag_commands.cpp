@@ -1,10 +1,13 @@
 #include "bag_commands.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <iostream>
 #include <set>
+#include <sstream>
+#include <stdexcept>
 
 #include "robotperf/bag/bag.hpp"
 #include "robotperf/bag/qos.hpp"
@@ -154,7 +157,17 @@ int bag_convert(const std::string& in, const std::string& out, const ConvertOpti
   w.storage = bag::storage_from_string(options.storage);
   w.compression = bag::compression_from_string(options.compression);
   w.chunk_size = options.chunk_size;
-  w.max_file_bytes = static_cast<uint64_t>(options.max_file_mib * 1024 * 1024);
+  // 2^44 MiB is 2^64 bytes, beyond the writer's byte count; NaN fails both comparisons.
+  constexpr double kMaxFileMib = 17592186044416.0;
+  if (!(options.max_file_mib >= 0 && options.max_file_mib < kMaxFileMib)) {
+    std::ostringstream got;
+    got << options.max_file_mib;
+    throw std::invalid_argument(
+        "--max-file-size: must be a number of MiB, 0 (one file) or more, under 2^44 (got " +
+        got.str() + ")");
+  }
+  // Rounded up, so that a size below a byte still splits rather than meaning one file.
+  w.max_file_bytes = static_cast<uint64_t>(std::ceil(options.max_file_mib * 1024 * 1024));
   // Topics the bag carries no definition for get robotperf's, or one from --msg-dir, so that the
   // converted bag can be decoded; those for which none is found are named.
   msgs::dynamic::TypeRegistry registry;

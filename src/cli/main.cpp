@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
+#include <charconv>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -13,6 +14,7 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -74,6 +76,62 @@ CLI::Validator number_check(bool zero_allowed) {
 }
 const CLI::Validator kPositive = number_check(false);
 const CLI::Validator kNonNegative = number_check(true);
+
+// A whole number as written: decimal digits only (no sign, space or 0x); nullopt for anything
+// else and beyond 64 bits.
+std::optional<std::uint64_t> decimal_value(const std::string& text) {
+  std::uint64_t value = 0;
+  const char* end = text.data() + text.size();
+  const auto [stop, error] = std::from_chars(text.data(), end, value);
+  if (error != std::errc() || stop != end) return std::nullopt;
+  return value;
+}
+
+// A whole-number option's check. CLI11 2.1.2 converts integers with strtoll/strtoull in base 0
+// (0x10 is 16, 010 is 8, and -1 an unsigned 2^64-1), so only decimal digits pass, and they are
+// rewritten without leading zeros, which that conversion then reads as decimal: options take it
+// with transform(), as check() would discard the rewrite.
+CLI::Validator whole_number(std::uint64_t min,
+                            std::uint64_t max = std::numeric_limits<std::uint64_t>::max()) {
+  const bool unbounded = max == std::numeric_limits<std::uint64_t>::max();
+  const std::string range = unbounded ? std::to_string(min) + " or more"
+                                      : std::to_string(min) + " to " + std::to_string(max);
+  const std::string wanted = unbounded ? ", " + range : " from " + range;
+  return CLI::Validator(
+      [min, max, wanted](std::string& text) -> std::string {
+        const auto value = decimal_value(text);
+        if (!value || *value < min || *value > max)
+          return "must be a whole number" + wanted + " (got " + text + ")";
+        text = std::to_string(*value);
+        return "";
+      },
+      range);
+}
+
+// The largest DDS domain id whose RTPS ports still fit in 16 bits.
+constexpr std::uint64_t kMaxDomainId = 232;
+
+// A DDS domain id as written, the one reading of it for every --domain.
+std::optional<int> domain_id(const std::string& text) {
+  const auto value = decimal_value(text);
+  if (!value || *value > kMaxDomainId) return std::nullopt;
+  return static_cast<int>(*value);
+}
+
+// A --domain option's check, rewritten and taken with transform() as whole_number's is.
+CLI::Validator domain_id_check(bool auto_allowed) {
+  const std::string range = "0 to " + std::to_string(kMaxDomainId);
+  const std::string wanted = "a DDS domain id from " + range + (auto_allowed ? ", or auto" : "");
+  return CLI::Validator(
+      [auto_allowed, wanted](std::string& text) -> std::string {
+        if (auto_allowed && text == "auto") return "";
+        const auto id = domain_id(text);
+        if (!id) return "must be " + wanted + " (got " + text + ")";
+        text = std::to_string(*id);
+        return "";
+      },
+      auto_allowed ? range + ", or auto" : range);
+}
 
 // Power and scheduling options shared by `run`, `sysinfo` and `node`.
 struct PowerArgs {
@@ -139,7 +197,7 @@ void add_scheduling_options(CLI::App* command, SchedulingArgs& a) {
   command
       ->add_option("--rt-priority", a.rt_priority,
                    "run the graph with SCHED_FIFO at this priority (1-99)")
-      ->check(CLI::Range(1, 99));
+      ->transform(whole_number(1, 99));
   command->add_flag("--mlock", a.lock_memory, "lock the graph's memory (mlockall)");
 }
 
@@ -721,7 +779,7 @@ int run(const Roots& roots, const RunArgs& a) {
     o.domain_id = rmw::find_quiet_domain(o.rmw);
     if (!a.quiet) std::fprintf(stderr, "robotperf: --domain auto: domain %d\n", o.domain_id);
   } else {
-    o.domain_id = std::stoi(*a.domain);
+    o.domain_id = domain_id(*a.domain).value();  // checked when parsed
   }
   o.processes =
       processes == "per-node" ? harness::ProcessLayout::kPerNode : harness::ProcessLayout::kSingle;
@@ -1121,7 +1179,7 @@ int main(int argc, char** argv) {
       ->add_option("--repeat", ra.repeat,
                    "run N times, each with a fresh graph, and summarise the series: the median of "
                    "each headline figure with its 95 % interval and the run-to-run spread")
-      ->check(CLI::Range(std::size_t{1}, std::size_t{10000}));
+      ->transform(whole_number(1, 10000));
   run_cmd->add_option("--repeat-pause", ra.repeat_pause, "with --repeat: seconds between runs")
       ->check(CLI::Range(0.0, 3600.0));
   run_cmd->add_option("--workload", ra.workload,
@@ -1135,21 +1193,23 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--arrival", ra.arrival,
                       "when messages are sent at the rate: fixed (default), poisson (random "
                       "intervals of mean 1/rate) or burst:N (N back to back every N/rate)");
-  run_cmd->add_option("--arrival-seed", ra.arrival_seed,
-                      "with --arrival poisson: the schedule's seed (default 1)");
+  run_cmd
+      ->add_option("--arrival-seed", ra.arrival_seed,
+                   "with --arrival poisson: the schedule's seed (default 1)")
+      ->transform(whole_number(0));
   run_cmd
       ->add_option("--monitor-wait", ra.monitor_wait,
                    "how the Monitor waits for outputs: sleep (default; each latency includes a "
                    "thread wake-up) or spin (no wake-up; keeps one core busy during the run)")
       ->check(CLI::IsMember({"sleep", "spin"}));
   auto* count_opt = run_cmd->add_option("--count", ra.count, "messages to send, warm-up included")
-                        ->check(kPositive);
+                        ->transform(whole_number(1));
   find_peak_flag->excludes(count_opt);
   run_cmd->add_option("--duration", ra.duration, "seconds to send for (count = rate x duration)")
       ->excludes(count_opt);
   run_cmd
       ->add_option("--warmup", ra.warmup, "first messages not counted (default: the benchmark's)")
-      ->check(kNonNegative);
+      ->transform(whole_number(0));
   run_cmd->add_option("--drain", ra.drain, "seconds to wait for outputs after the last send");
   run_cmd
       ->add_option("--rmw", ra.rmw,
@@ -1172,7 +1232,7 @@ int main(int argc, char** argv) {
       ->add_option("--domain", ra.domain,
                    "DDS domain id, or 'auto': one no other participant uses (default: "
                    "ROS_DOMAIN_ID or 0)")
-      ->check(CLI::Range(0, 232) | CLI::IsMember({"auto"}));
+      ->transform(domain_id_check(true));
   run_cmd
       ->add_option("--host", ra.hosts,
                    "NAME=COMMAND: how to start a process on a host graph.yaml names (default: "
@@ -1279,8 +1339,10 @@ int main(int argc, char** argv) {
                    "black (Playback/Monitor) or grey (also record an LTTng trace and take the "
                    "results from it)")
       ->check(CLI::IsMember({"black", "grey"}));
-  run_cmd->add_option("--trace-subbuf-size", ra.trace_subbuf,
-                      "grey: per-CPU LTTng sub-buffer bytes (default: sized for the workload)");
+  run_cmd
+      ->add_option("--trace-subbuf-size", ra.trace_subbuf,
+                   "grey: per-CPU LTTng sub-buffer bytes (default: sized for the workload)")
+      ->transform(whole_number(0));
 
   std::string compare_a, compare_b;
   std::vector<std::string> compare_results;
@@ -1305,8 +1367,10 @@ int main(int argc, char** argv) {
   analyze_cmd->add_option("dir", ta.dir, "the trace folder (searched for CTF metadata)")
       ->required();
   analyze_cmd->add_option("--json", ta.json, "also write the analysis as JSON to this file");
-  analyze_cmd->add_option("--pid", ta.pid,
-                          "analyse the robotperf run of this process (default: the first)");
+  analyze_cmd
+      ->add_option("--pid", ta.pid,
+                   "analyse the robotperf run of this process (default: the first)")
+      ->transform(whole_number(0, std::numeric_limits<int>::max()));
 
   auto* bag_cmd = app.add_subcommand("bag", "inspect, print and convert rosbag2 bags");
   bag_cmd->require_subcommand(1);
@@ -1317,12 +1381,14 @@ int main(int argc, char** argv) {
   auto* bag_echo_cmd = bag_cmd->add_subcommand("echo", "print messages as YAML");
   bag_echo_cmd->add_option("bag", bag_path, "bag directory, .db3 or .mcap file")->required();
   bag_echo_cmd->add_option("--topic", echo.topics, "only this topic (repeatable)");
-  bag_echo_cmd->add_option("--limit", echo.limit, "print at most N messages");
+  bag_echo_cmd->add_option("--limit", echo.limit, "print at most N messages")
+      ->transform(whole_number(0));
   bag_echo_cmd->add_option("--msg-dir", echo.msg_dirs,
                            "folder of .msg files (<pkg>/msg/*.msg, or flat) for types the bag "
                            "has no definition of");
-  bag_echo_cmd->add_option("--max-array", echo.max_array,
-                           "summarise arrays longer than this (default 64)");
+  bag_echo_cmd
+      ->add_option("--max-array", echo.max_array, "summarise arrays longer than this (default 64)")
+      ->transform(whole_number(0));
   cli::ConvertOptions convert;
   std::string convert_out;
   auto* bag_convert_cmd = bag_cmd->add_subcommand("convert", "write a bag in another storage");
@@ -1333,7 +1399,8 @@ int main(int argc, char** argv) {
   bag_convert_cmd
       ->add_option("--compression", convert.compression, "MCAP chunks: zstd, lz4 or none")
       ->check(CLI::IsMember({"zstd", "lz4", "none"}));
-  bag_convert_cmd->add_option("--chunk-size", convert.chunk_size, "MCAP chunk size in bytes");
+  bag_convert_cmd->add_option("--chunk-size", convert.chunk_size, "MCAP chunk size in bytes")
+      ->transform(whole_number(0));
   bag_convert_cmd->add_option("--max-file-size", convert.max_file_mib,
                               "split into files of about this many MiB (0 = one file)");
   bag_convert_cmd->add_option(
@@ -1374,7 +1441,7 @@ int main(int argc, char** argv) {
   node_cmd->add_option("package", node_package)->required();
   node_cmd->add_option("--node", node_name)->required();
   node_cmd->add_option("--rmw", node_rmw);
-  node_cmd->add_option("--domain", node_domain);
+  node_cmd->add_option("--domain", node_domain)->transform(domain_id_check(false));
   std::optional<double> node_update_rate;
   node_cmd->add_option("--update-rate", node_update_rate);
   std::optional<std::string> node_backend;
@@ -1394,7 +1461,7 @@ int main(int argc, char** argv) {
   graph_cmd->add_option("--rmw", graph_options.rmw, "fastdds (default) or cyclonedds")
       ->check(CLI::IsMember({"fastdds", "cyclonedds"}));
   graph_cmd->add_option("--domain", graph_options.domain, "DDS domain (default: ROS_DOMAIN_ID)")
-      ->check(CLI::Range(0, 232));
+      ->transform(domain_id_check(false));
   graph_cmd
       ->add_option("--listen", graph_options.listen_s,
                    "seconds to listen to discovery before listing (default 3)")

@@ -505,11 +505,15 @@ TEST_F(Cli, BadOptionIsOneClearLine) {
 // range up to DBL_MAX, three hundred digits long).
 TEST_F(Cli, NumberOutOfItsBoundsIsOneShortLine) {
   for (const auto& [args, says] : std::vector<std::pair<std::string, std::string>>{
-           {"run a1 --count 0", "--count: must be a number greater than 0 (got 0)"},
-           {"run a1 --count -3", "--count: must be a number greater than 0 (got -3)"},
+           {"run a1 --count 0", "--count: must be a whole number, 1 or more (got 0)"},
+           {"run a1 --count -3", "--count: must be a whole number, 1 or more (got -3)"},
            {"run a1 --callback-timeout 0", "must be a number greater than 0 (got 0)"},
            {"run a1 --rate-scale x", "must be a number greater than 0 (got x)"},
-           {"run a1 --warmup -1", "--warmup: must be a number, 0 or more (got -1)"}}) {
+           {"run a1 --warmup -1", "--warmup: must be a whole number, 0 or more (got -1)"},
+           {"run a1 --repeat 10001",
+            "--repeat: must be a whole number from 1 to 10000 (got 10001)"},
+           {"run a1 --domain 233",
+            "--domain: must be a DDS domain id from 0 to 232, or auto (got 233)"}}) {
     const Outcome o = robotperf_cli(args);
     EXPECT_EQ(o.exit_code, 2) << args << "\n" << o.out;
     EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << args << "\n" << o.out;
@@ -625,6 +629,26 @@ TEST_F(Cli, PinnedRunIsRecorded) {
   EXPECT_NE(bad.out.find("bad CPU list '1-x'"), std::string::npos) << bad.out;
 }
 
+// A meter that fails with output over several lines is still one line of robotperf's.
+TEST_F(Cli, PowerMeterPrintingSeveralLinesIsOneLine) {
+  const Outcome o =
+      robotperf_cli("sysinfo --power-meter \"printf 'abc\\ndef'\" --power-sources external");
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_EQ(std::ranges::count(o.out, '\n'), 1) << o.out;
+  EXPECT_NE(o.out.find("printed 'abc\\ndef'"), std::string::npos) << o.out;
+}
+
+// The flags recorded are those the compiler got: add_compile_options' generator expressions
+// ($<$<COMPILE_LANGUAGE:C,CXX>:-Wall;-Wextra>) expanded.
+TEST_F(Cli, SysinfoRecordsTheCompilerFlagsExpanded) {
+  const Outcome o = robotperf_cli("sysinfo --power-sources rapl --sysfs-root " + out_.string());
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  const auto flags = nlohmann::json::parse(o.out)["software"]["cxx_flags"].get<std::string>();
+  EXPECT_EQ(flags.find("$<"), std::string::npos) << flags;
+  EXPECT_EQ(flags.find(';'), std::string::npos) << flags;
+  EXPECT_NE(flags.find("-Wall -Wextra"), std::string::npos) << flags;
+}
+
 TEST_F(Cli, SysinfoShowsMachineSoftwareAndPowerSources) {
   const fs::path zone = out_ / "sys/class/powercap/intel-rapl:0";
   fs::create_directories(zone);
@@ -716,6 +740,63 @@ TEST_F(Cli, BadBagIsOneClearLine) {
     EXPECT_EQ(o.exit_code, 2) << args << ": " << o.out;
     EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << args << ": " << o.out;
   }
+}
+
+// A split size the byte count cannot hold is refused before anything is written; 0 is one file.
+TEST_F(Cli, BagConvertMaxFileSizeIsAFiniteNumberZeroOrMore) {
+  for (const char* size : {"-1", "nan", "inf", "1e300"}) {
+    const Outcome o = robotperf_cli("bag convert " + shared_bag("mcap_talker") + " " +
+                                    (out_ / "x").string() + " --max-file-size " + size);
+    EXPECT_EQ(o.exit_code, 2) << size << ": " << o.out;
+    EXPECT_EQ(std::ranges::count(o.out, '\n'), 1) << size << ": " << o.out;
+    EXPECT_NE(o.out.find("--max-file-size: must be a number of MiB"), std::string::npos)
+        << size << ": " << o.out;
+    EXPECT_FALSE(fs::exists(out_ / "x")) << size;
+  }
+  const Outcome o = robotperf_cli("bag convert " + shared_bag("mcap_talker") + " " +
+                                  (out_ / "x").string() + " --max-file-size 0");
+  EXPECT_EQ(o.exit_code, 0) << o.out;
+}
+
+// Whole numbers are decimal digits: CLI11 reads integers with strtoll/strtoull in base 0, so
+// 0x10 was 16, 010 was 8, and -1 an unsigned 2^64-1 (every message, the largest chunk), while a
+// run's --domain was range-checked in base 0 and then read in decimal (0x10 ran on domain 0).
+// The runs end before any benchmark starts, should the option be taken: 5 messages, warm-up 5.
+TEST_F(Cli, WholeNumberOptionsTakeDecimalDigitsOnly) {
+  const std::string run = "run a2 --quiet --output " + out_.string() + " ";
+  const std::string stops = " --count 5 --warmup 5";
+  const std::string bag = shared_bag("mcap_talker");
+  for (const auto& [args, option] : std::vector<std::pair<std::string, std::string>>{
+           {run + "--count 0x10 --warmup 16", "--count"},
+           {run + "--count 5 --warmup 0x10", "--warmup"},
+           {run + "--count 1e1 --warmup 10", "--count"},
+           {run + "--repeat 0x10 --find-peak", "--repeat"},
+           {run + "--rt-priority 0x10" + stops, "--rt-priority"},
+           {run + "--arrival-seed -1" + stops, "--arrival-seed"},
+           {run + "--trace-subbuf-size -1" + stops, "--trace-subbuf-size"},
+           {run + "--domain 0x10" + stops, "--domain"},
+           {run + "--domain 0300" + stops, "--domain"},
+           {run + "--domain +7" + stops, "--domain"},
+           {"graph --listen 0.1 --domain 0x10", "--domain"},
+           {"node no/such --node x --domain 0x10", "--domain"},
+           {"node no/such --node x --rt-priority 0x10", "--rt-priority"},
+           {"trace analyze " + out_.string() + " --pid -1", "--pid"},
+           {"bag echo " + bag + " --limit -1", "--limit"},
+           {"bag echo " + bag + " --max-array -1", "--max-array"},
+           {"bag convert " + bag + " " + (out_ / "x").string() + " --chunk-size -1",
+            "--chunk-size"}}) {
+    const Outcome o = robotperf_cli(args);
+    EXPECT_EQ(o.exit_code, 2) << args << "\n" << o.out;
+    EXPECT_EQ(std::ranges::count(o.out, '\n'), 1) << args << "\n" << o.out;
+    EXPECT_TRUE(o.out.starts_with("robotperf: " + option + ": must be ")) << args << "\n" << o.out;
+  }
+  EXPECT_FALSE(fs::exists(out_ / "x"));
+  // Leading zeros are decimal, not octal: 010 is ten.
+  const Outcome o = robotperf_cli(run + "--count 010 --warmup 010");
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_NE(o.out.find("warm-up (10) must be smaller than the message count (10)"),
+            std::string::npos)
+      << o.out;
 }
 
 TEST_F(Cli, WithoutACommandItListsTheCommands) {

@@ -405,6 +405,11 @@ TEST_F(ExternalMeter, BrokenCommandsAreClearErrors) {
   EXPECT_EQ(message("echo first >&2; echo 'no such sensor' >&2; exit 1"),
             "power meter 'echo first >&2; echo 'no such sensor' >&2; exit 1' failed (exit status "
             "1): no such sensor");
+  // Output over several lines, or a command that spans them, stays in the one line.
+  EXPECT_EQ(message("printf 'abc\\ndef'"),
+            "power meter 'printf 'abc\\ndef'' printed 'abc\\ndef', expected watts (a number from "
+            "0 to 100000) as its first word");
+  EXPECT_EQ(message("exit 4\n"), "power meter 'exit 4\\n' failed (exit status 4)");
   // A child left running with the standard error open does not hold the reading up.
   EXPECT_EQ(message("(sleep 3 >/dev/null &); echo 5"), "no error");
 }
