@@ -371,12 +371,17 @@ QosPtr endpoint_qos(const QoS& qos, const std::string& user_data) {
   dds_qset_durability(out.get(), qos.durability == Durability::kTransientLocal
                                      ? DDS_DURABILITY_TRANSIENT_LOCAL
                                      : DDS_DURABILITY_VOLATILE);
-  if (qos.history == History::kKeepLast) {
-    // ROS 2 reads depth 0 as "system default", which is 1 in Cyclone DDS.
-    dds_qset_history(out.get(), DDS_HISTORY_KEEP_LAST,
-                     static_cast<int32_t>(qos.depth == 0 ? 1 : qos.depth));
-  } else {
-    dds_qset_history(out.get(), DDS_HISTORY_KEEP_ALL, DDS_LENGTH_UNLIMITED);
+  const bool keep_last = qos.history == History::kKeepLast;
+  const dds_history_kind_t history = keep_last ? DDS_HISTORY_KEEP_LAST : DDS_HISTORY_KEEP_ALL;
+  // ROS 2 reads depth 0 as "system default", which is 1 in Cyclone DDS.
+  const int32_t depth =
+      keep_last ? static_cast<int32_t>(qos.depth == 0 ? 1 : qos.depth) : DDS_LENGTH_UNLIMITED;
+  dds_qset_history(out.get(), history, depth);
+  if (qos.durability == Durability::kTransientLocal) {
+    // Cyclone keeps for late joiners what the durability service's history says (KEEP_LAST 1 by
+    // default), not the writer's: the same as the history, as rmw_cyclonedds sets it.
+    dds_qset_durability_service(out.get(), 0, history, depth, DDS_LENGTH_UNLIMITED,
+                                DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
   }
   const dds_data_representation_id_t xcdr1 = DDS_DATA_REPRESENTATION_XCDR1;
   dds_qset_data_representation(out.get(), 1, &xcdr1);
@@ -401,28 +406,30 @@ class PeerDirectory {
 
   // Those announced so far but `self`, including those that have left since.
   std::vector<PeerParticipant> peers(const ParticipantId& self) {
-    take_all<dds_builtintopic_participant_t>(participants_.get(), [&](const auto& p, bool valid) {
-      if (!valid) {  // it left: only its key is known
-        table_.announce(participant_id(p.key));
-        return;
-      }
-      table_.announce(participant_id(p.key), [&](PeerParticipant& peer) {
-        void* bytes = nullptr;
-        std::size_t size = 0;
-        if (dds_qget_userdata(p.qos, &bytes, &size) && bytes != nullptr) {
-          peer.user_data.assign(static_cast<const char*>(bytes), size);
-        }
-        dds_free(bytes);
-        char* name = nullptr;
-        if (dds_qget_entity_name(p.qos, &name) && name != nullptr) peer.name = name;
-        dds_free(name);
-      });
-    });
+    take_all<dds_builtintopic_participant_t>(
+        participants_.get(), [&](const auto& p, const auto& info) {
+          if (!info.valid_data) {  // it left: only its key is known
+            table_.announce(participant_id(p.key));
+            return;
+          }
+          table_.announce(participant_id(p.key), [&](PeerParticipant& peer) {
+            void* bytes = nullptr;
+            std::size_t size = 0;
+            if (dds_qget_userdata(p.qos, &bytes, &size) && bytes != nullptr) {
+              peer.user_data.assign(static_cast<const char*>(bytes), size);
+            }
+            dds_free(bytes);
+            char* name = nullptr;
+            if (dds_qget_entity_name(p.qos, &name) && name != nullptr) peer.name = name;
+            dds_free(name);
+          });
+        });
     for (dds_entity_t reader : {publications_.get(), subscriptions_.get()}) {
-      take_all<dds_builtintopic_endpoint_t>(reader, [&](const auto& e, bool valid) {
-        // An endpoint's GUID starts with its participant's prefix; one that left has only its key.
+      take_all<dds_builtintopic_endpoint_t>(reader, [&](const auto& e, const auto& info) {
+        // An endpoint's GUID starts with its participant's prefix; one that left has only its key,
+        // or, when its announcement was still unread, that announcement in a non-alive instance.
         const ParticipantId participant = participant_id(e.key);
-        if (!valid) {
+        if (!info.valid_data || info.instance_state != DDS_IST_ALIVE) {
           table_.remove_endpoint(participant, gid_of(e.key));
         } else if (e.topic_name != nullptr) {
           table_.add_endpoint(participant, describe(e, reader == publications_.get()));
@@ -470,7 +477,7 @@ class PeerDirectory {
       const dds_return_t n = dds_take(reader, samples.data(), infos.data(), kBatch, kBatch);
       if (n <= 0) return;
       for (dds_return_t i = 0; i < n; ++i) {
-        visit(*static_cast<const Sample*>(samples[i]), infos[i].valid_data);
+        visit(*static_cast<const Sample*>(samples[i]), infos[i]);
       }
       dds_return_loan(reader, samples.data(), n);
     }

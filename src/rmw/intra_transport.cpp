@@ -45,7 +45,10 @@ class IntraSubscription final : public SubscriptionHandle {
       : registry_(std::move(registry)),
         topic_(std::move(topic)),
         qos_(qos),
-        on_ready_(std::move(on_ready)) {}
+        on_ready_(std::move(on_ready)) {
+    // ROS 2 reads depth 0 as "system default", which both DDS transports take as 1.
+    if (qos_.depth == 0) qos_.depth = 1;
+  }
 
   ~IntraSubscription() override {
     std::lock_guard lock(registry_->mutex);

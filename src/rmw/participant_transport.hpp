@@ -7,6 +7,7 @@
 
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -98,6 +99,10 @@ class ParticipantTransport final : public Transport {
                                           std::move(on_ready), node);
   }
   std::vector<PeerParticipant> peers() const override {
+    // Callers on several threads (a Monitor's executor and the main thread) read the discovery
+    // data one at a time: taking it is not thread-safe on every vendor, and two samples of one
+    // participant must be applied in the order they were taken.
+    std::lock_guard lock(peers_mutex_);
     // The nodes the others announced since last asked, each participant's latest kept.
     MessageInfo info;
     while (MessagePtr sample = discovery_reader_->take(&info)) {
@@ -119,6 +124,7 @@ class ParticipantTransport final : public Transport {
   std::shared_ptr<Participant> participant_;
   std::unique_ptr<Publisher> discovery_writer_;
   std::unique_ptr<Subscription> discovery_reader_;
+  mutable std::mutex peers_mutex_;
 };
 
 }  // namespace robotperf::rmw

@@ -1,9 +1,12 @@
 // Every DDS transport (fastdds, cyclonedds) against the same expectations: round trips in one
-// process and across two, large messages, QoS, type clashes, discovery, and handle lifetimes.
+// process and across two, large messages, QoS, type clashes, discovery, and handle lifetimes; and
+// intra where it follows them.
 #include "robotperf/rmw/transport.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -27,6 +30,31 @@ class DdsTransport : public ::testing::TestWithParam<std::string> {
  protected:
   std::unique_ptr<Transport> make(std::string user_data = {}) {
     return make_transport(GetParam(), test_options(std::move(user_data)));
+  }
+
+  // The widths of the CameraInfos a subscription gets from a TRANSIENT_LOCAL publisher of `depth`
+  // that published widths 1 to `published` before the subscription existed, up to `depth` of them.
+  std::vector<uint32_t> late_subscriber_receives(std::size_t depth, uint32_t published) {
+    auto transport = make();
+    const QoS latched{History::kKeepLast, depth, Reliability::kReliable,
+                      Durability::kTransientLocal};
+    const std::string topic = test_topic("latched_" + std::to_string(depth));
+    auto pub = transport->create_publisher(topic, msgs::type_support<CameraInfo>(), latched);
+    CameraInfo info = make_camera_info();
+    for (uint32_t width = 1; width <= published; ++width) {
+      info.width = width;
+      pub->publish(share(info));
+    }
+    Inbox inbox;
+    auto sub = transport->create_subscription(topic, msgs::type_support<CameraInfo>(), latched,
+                                              inbox.on_ready());
+    std::vector<uint32_t> widths;
+    while (widths.size() < depth) {
+      MessagePtr got = inbox.take(*sub);
+      if (got == nullptr) break;
+      widths.push_back(as<CameraInfo>(got).width);
+    }
+    return widths;
   }
 };
 
@@ -104,22 +132,14 @@ TEST_P(DdsTransport, AcceptsEveryQosCombination) {
 }
 
 TEST_P(DdsTransport, TransientLocalDeliversToLateSubscriber) {
-  auto transport = make();
-  const QoS latched{History::kKeepLast, 1, Reliability::kReliable, Durability::kTransientLocal};
-  const std::string topic = test_topic("latched");
-  auto pub = transport->create_publisher(topic, msgs::type_support<CameraInfo>(), latched);
-  CameraInfo old_info = make_camera_info();
-  old_info.width = 1;
-  pub->publish(share(old_info));
-  const CameraInfo last_info = make_camera_info();
-  pub->publish(share(last_info));
+  EXPECT_EQ(late_subscriber_receives(1, 2), std::vector<uint32_t>{2})
+      << "depth 1 keeps only the last message";
+}
 
-  Inbox inbox;
-  auto sub = transport->create_subscription(topic, msgs::type_support<CameraInfo>(), latched,
-                                            inbox.on_ready());
-  MessagePtr got = inbox.take(*sub);
-  ASSERT_NE(got, nullptr);
-  EXPECT_EQ(as<CameraInfo>(got), last_info) << "depth 1 keeps only the last message";
+// Cyclone DDS keeps for late joiners what the DURABILITY_SERVICE history says (1 by default),
+// not the writer's depth.
+TEST_P(DdsTransport, TransientLocalDeliversItsDepthToLateSubscriber) {
+  EXPECT_EQ(late_subscriber_receives(5, 7), (std::vector<uint32_t>{3, 4, 5, 6, 7}));
 }
 
 TEST_P(DdsTransport, SecondTypeOnATopicIsATransportError) {
@@ -246,6 +266,56 @@ TEST_P(DdsTransport, DiscoversPeersAndTheSenderOfEachSample) {
   EXPECT_EQ(info.sender, peers[0].id);
 }
 
+// Cyclone DDS tells of an endpoint that left before its announcement was read only by the state
+// of that announcement, without a sample of its own.
+TEST_P(DdsTransport, PeersDoNotListAnEndpointThatLeftBeforeTheyWereRead) {
+  auto transport = make();
+  auto other = make();
+  const std::string topic = test_topic("left");
+  const auto& type = msgs::type_support<Image>();
+  Inbox inbox;
+  auto sub = transport->create_subscription(topic, type, QoS{}, inbox.on_ready());
+  auto pub = other->create_publisher(topic, type, QoS{});
+  ASSERT_TRUE(wait_until([&] { return sub->matched_publishers() == 1; }));
+  pub.reset();
+  ASSERT_TRUE(wait_until([&] { return sub->matched_publishers() == 0; }));
+  std::vector<PeerParticipant> peers;
+  EXPECT_TRUE(wait_until([&] {
+    peers = transport->peers();
+    return peers.size() == 1 && std::ranges::none_of(peers[0].endpoints, [&](const auto& e) {
+             return e.topic == topic;
+           });
+  })) << "the publisher is still listed";
+}
+
+// The Monitor's executor and the main thread both ask for the peers, while newcomers announce
+// their nodes from writers not seen before. Most telling under a sanitizer.
+TEST_P(DdsTransport, PeersMayBeReadFromTwoThreadsAtOnce) {
+  auto transport = make();
+  std::atomic<bool> stop = false;
+  auto read_peers = [&] {
+    while (!stop) transport->peers();
+  };
+  std::thread first(read_peers), second(read_peers);
+  std::vector<std::unique_ptr<Transport>> newcomers;
+  std::vector<std::unique_ptr<PublisherHandle>> pubs;
+  for (int i = 0; i < 6; ++i) {
+    newcomers.push_back(make());
+    pubs.push_back(newcomers.back()->create_publisher(test_topic("crowd"),
+                                                      msgs::type_support<Image>(), QoS{},
+                                                      NodeName{"node" + std::to_string(i)}));
+  }
+  const bool all_nodes_seen = wait_until([&] {
+    const std::vector<PeerParticipant> peers = transport->peers();
+    return peers.size() == newcomers.size() &&
+           std::ranges::all_of(peers, [](const auto& p) { return p.nodes.size() == 1; });
+  });
+  stop = true;
+  first.join();
+  second.join();
+  EXPECT_TRUE(all_nodes_seen);
+}
+
 // A newcomer sees a participant that was already there within the time --domain auto listens
 // (usually at once: the existing one answers the newcomer's first announcements; at the latest
 // at its next periodic announcement, every 3 s by default).
@@ -297,6 +367,22 @@ TEST_P(DdsTransport, RoundTripAcrossProcesses) {
     EXPECT_FALSE(info.from_intra_process);
   }
   EXPECT_EQ(peer.finish(), 0);
+}
+
+// ROS 2 reads depth 0 as the system default, which both DDS transports take as 1.
+TEST(IntraTransport, KeepLastDepthZeroKeepsTheLastMessage) {
+  auto transport = make_transport("intra");
+  const QoS depth_zero{History::kKeepLast, 0, Reliability::kReliable, Durability::kVolatile};
+  Pair<CameraInfo> infos(*transport, test_topic("depth_zero"), depth_zero);
+  CameraInfo info = make_camera_info();
+  for (uint32_t width : {1u, 2u}) {
+    info.width = width;
+    infos.pub->publish(share(info));
+  }
+  MessagePtr got = infos.sub->take(nullptr);
+  ASSERT_NE(got, nullptr);
+  EXPECT_EQ(as<CameraInfo>(got).width, 2u);
+  EXPECT_EQ(infos.sub->take(nullptr), nullptr);
 }
 
 INSTANTIATE_TEST_SUITE_P(Dds, DdsTransport, ::testing::Values("fastdds", "cyclonedds"),
