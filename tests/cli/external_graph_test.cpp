@@ -130,9 +130,17 @@ TEST_F(ExternalGraph, LaunchedNodeIsMeasuredAndStoppedByAnInterrupt) {
 // has both of its topics.
 TEST_F(ExternalGraph, GreyRunTracesTheLaunchedNodesOwnEvents) {
   const Outcome o = run_echo("until-signal", "fastdds", "/pong", " --mode grey");
-  ASSERT_EQ(o.exit_code, 0) << o.out;
   const auto j = result();
-  EXPECT_EQ(j["counts"]["matched"], 120);
+  ASSERT_TRUE(j.is_object()) << o.out;
+  // Every process of the user is recorded, so other tests' runs meanwhile share the tracer's
+  // buffers: where they made it discard events or lose packets the run is INVALID (3).
+  const auto& trace = j["grey"]["trace"];
+  if (trace["discarded_events"] == 0 && trace["lost_packets"] == 0) {
+    EXPECT_EQ(o.exit_code, 0) << o.out;
+    EXPECT_EQ(j["counts"]["matched"], 120);
+  } else {
+    EXPECT_EQ(o.exit_code, 3) << o.out;
+  }
   std::set<std::string> rows;
   for (const auto& t : j["grey"]["topics"])
     rows.insert(t["topic"].get<std::string>() + ": " + t["publisher"].get<std::string>() + " -> " +
