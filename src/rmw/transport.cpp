@@ -106,8 +106,9 @@ int domain_id_from_environment() {
   if (value == nullptr || *value == '\0') return 0;
   char* end = nullptr;
   const long id = std::strtol(value, &end, 10);
-  // 232 is the largest domain whose RTPS ports still fit in 16 bits.
-  if (*end != '\0' || id < 0 || id > 232) {
+  // Digits only, as the --domain options take them (strtol alone allows spaces and a sign); 232
+  // is the largest domain whose RTPS ports still fit in 16 bits.
+  if (!std::isdigit(static_cast<unsigned char>(*value)) || *end != '\0' || id > 232) {
     throw std::invalid_argument(std::string("ROS_DOMAIN_ID='") + value +
                                 "' is not a domain id between 0 and 232");
   }

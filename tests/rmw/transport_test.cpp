@@ -9,9 +9,12 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <cstdlib>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "robotperf/msgs/cdr.hpp"
@@ -367,6 +370,27 @@ TEST_P(DdsTransport, RoundTripAcrossProcesses) {
     EXPECT_FALSE(info.from_intra_process);
   }
   EXPECT_EQ(peer.finish(), 0);
+}
+
+// ROS_DOMAIN_ID is a domain id in decimal digits, as --domain takes it: strtol alone read " +7"
+// as 7.
+TEST(DomainFromEnvironment, IsDecimalDigitsFrom0To232) {
+  const char* before = std::getenv("ROS_DOMAIN_ID");
+  const std::string kept = before != nullptr ? before : "";
+  for (const auto& [value, id] : std::vector<std::pair<std::string, int>>{
+           {"", 0}, {"0", 0}, {"7", 7}, {"007", 7}, {"232", 232}}) {
+    setenv("ROS_DOMAIN_ID", value.c_str(), 1);
+    EXPECT_EQ(domain_id_from_environment(), id) << value;
+  }
+  for (const std::string bad : {" 7", "+7", "-1", "7 ", "0x7", "233", "99999999999999999999"}) {
+    setenv("ROS_DOMAIN_ID", bad.c_str(), 1);
+    EXPECT_THROW(domain_id_from_environment(), std::invalid_argument) << bad;
+  }
+  if (before != nullptr) {
+    setenv("ROS_DOMAIN_ID", kept.c_str(), 1);
+  } else {
+    unsetenv("ROS_DOMAIN_ID");
+  }
 }
 
 // ROS 2 reads depth 0 as the system default, which both DDS transports take as 1.
