@@ -295,21 +295,18 @@ void add_peers(std::vector<rmw::PeerParticipant>& seen, std::vector<rmw::PeerPar
 void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& tally) {
   std::vector<double> from_scheduled, from_sent, lateness;
   std::vector<metrics::TimedEvent> sends, receptions;
-  int64_t first_measured_send = -1, last_reception = -1;
   for (auto& rec : r.records) {
     rec.received_ns = tally.received_ns[rec.id];
     rec.warmup = rec.id < r.warmup;
     lateness.push_back(static_cast<double>(rec.sent_ns - rec.scheduled_ns));
     if (rec.warmup) continue;
     ++r.measured;
-    if (first_measured_send < 0) first_measured_send = rec.sent_ns;
     sends.push_back({rec.scheduled_ns, rec.sent_ns});
     if (rec.received_ns < 0) continue;
     ++r.matched;
     from_scheduled.push_back(static_cast<double>(rec.received_ns - rec.scheduled_ns));
     from_sent.push_back(static_cast<double>(rec.received_ns - rec.sent_ns));
     receptions.push_back({rec.scheduled_ns, rec.received_ns});
-    last_reception = std::max(last_reception, rec.received_ns);
   }
   r.sent = r.records.size();
   r.lost = r.measured - r.matched;
@@ -321,10 +318,10 @@ void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& ta
   r.latency_from_sent = metrics::compute_stats(from_sent);
   r.send_lateness = metrics::compute_stats(lateness);
 
-  r.throughput_hz = metrics::event_rate_hz(receptions);
-  r.offered_rate_hz = metrics::event_rate_hz(sends);
-  if (receptions.size() >= 2)
-    r.window_s = static_cast<double>(last_reception - first_measured_send) * 1e-9;
+  const metrics::DeliveryRates rates = metrics::delivery_rates(sends, receptions);
+  r.throughput_hz = rates.output_hz;
+  r.offered_rate_hz = rates.offered_hz;
+  r.window_s = rates.window_s;
 
   auto invalid = [&](std::string why) { r.invalid_reasons.push_back(std::move(why)); };
   for (const auto& e : r.errors) invalid("run ended early: " + e);

@@ -59,4 +59,16 @@ double event_rate_hz(std::span<const TimedEvent> events) {
   return span > 0 ? static_cast<double>(counted) / (static_cast<double>(span) * 1e-9) : 0;
 }
 
+DeliveryRates delivery_rates(std::span<const TimedEvent> sends,
+                             std::span<const TimedEvent> receptions) {
+  DeliveryRates rates;
+  rates.offered_hz = event_rate_hz(sends);
+  rates.output_hz = event_rate_hz(receptions);
+  if (receptions.size() >= 2 && !sends.empty()) {
+    const int64_t last = std::ranges::max(receptions, {}, &TimedEvent::time_ns).time_ns;
+    rates.window_s = static_cast<double>(last - sends.front().time_ns) * 1e-9;
+  }
+  return rates;
+}
+
 }  // namespace robotperf::metrics

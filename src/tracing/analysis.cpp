@@ -834,19 +834,16 @@ MessageLookup summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo&
   BigVector<metrics::TimedEvent> receptions, sends;
   for (auto* v : {&from_scheduled, &from_sent, &lateness}) v->reserve(a.messages.size());
   for (auto* v : {&receptions, &sends}) v->reserve(a.messages.size());
-  int64_t first_measured_send = -1, last_reception = -1;
   for (const auto& m : a.messages) {
     lateness.push_back(static_cast<double>(m.sent_ns - m.scheduled_ns));
     if (m.warmup) continue;
     ++a.measured;
     sends.push_back({m.scheduled_ns, m.sent_ns});
-    if (first_measured_send < 0) first_measured_send = m.sent_ns;
     if (m.received_ns < 0) continue;
     ++a.matched;
     from_scheduled.push_back(static_cast<double>(m.received_ns - m.scheduled_ns));
     from_sent.push_back(static_cast<double>(m.received_ns - m.sent_ns));
     receptions.push_back({m.scheduled_ns, m.received_ns});
-    last_reception = std::max(last_reception, m.received_ns);
   }
   // A state stream's further receptions are the state it keeps publishing (the Monitor counts
   // them as repeats, too).
@@ -864,10 +861,10 @@ MessageLookup summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo&
     a.latency_from_scheduled = scheduled.get();
     a.latency_from_sent = sent.get();
   }
-  a.throughput_hz = metrics::event_rate_hz(receptions);
-  a.offered_rate_hz = metrics::event_rate_hz(sends);
-  if (receptions.size() >= 2)
-    a.window_s = static_cast<double>(last_reception - first_measured_send) * 1e-9;
+  const metrics::DeliveryRates rates = metrics::delivery_rates(sends, receptions);
+  a.throughput_hz = rates.output_hz;
+  a.offered_rate_hz = rates.offered_hz;
+  a.window_s = rates.window_s;
 
   auto invalid = [&](std::string why) { a.invalid_reasons.push_back(std::move(why)); };
   if (!run.ended) {

@@ -56,5 +56,20 @@ TEST(EventRate, NoRateWithoutTwoDeadlinesOrTime) {
   EXPECT_EQ(event_rate_hz(std::vector<TimedEvent>{{0, 5}, {1, 5}}), 0.0) << "no time between";
 }
 
+// The window runs from the first measured send to the last reception, whichever came last.
+TEST(DeliveryRates, WindowFromTheFirstSendToTheLastReception) {
+  const std::vector<TimedEvent> sent = sends(11, 10, 1, 0);
+  std::vector<TimedEvent> received = sent;
+  for (auto& e : received) e.time_ns += 5'000'000;
+  std::swap(received[2].time_ns, received[10].time_ns);
+  const DeliveryRates rates = delivery_rates(sent, received);
+  EXPECT_DOUBLE_EQ(rates.offered_hz, 10.0);
+  EXPECT_NEAR(rates.window_s, 1.005, 1e-12);
+  EXPECT_EQ(delivery_rates(sent, std::vector<TimedEvent>(received.begin(), received.begin() + 1))
+                .window_s,
+            0.0)
+      << "one reception: no window";
+}
+
 }  // namespace
 }  // namespace robotperf::metrics

@@ -36,4 +36,15 @@ struct TimedEvent {
 // that spans no time.
 double event_rate_hz(std::span<const TimedEvent> events);
 
+// A run's rates (event_rate_hz of its sends and of its receptions) and the window it measured
+// them over: from the first measured send to the last reception, once two have come (else 0).
+struct DeliveryRates {
+  double offered_hz = 0;
+  double output_hz = 0;
+  double window_s = 0;
+};
+// `sends` in message order.
+DeliveryRates delivery_rates(std::span<const TimedEvent> sends,
+                             std::span<const TimedEvent> receptions);
+
 }  // namespace robotperf::metrics
