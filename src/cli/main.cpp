@@ -108,24 +108,14 @@ CLI::Validator whole_number(std::uint64_t min,
       range);
 }
 
-// The largest DDS domain id whose RTPS ports still fit in 16 bits.
-constexpr std::uint64_t kMaxDomainId = 232;
-
-// A DDS domain id as written, the one reading of it for every --domain.
-std::optional<int> domain_id(const std::string& text) {
-  const auto value = decimal_value(text);
-  if (!value || *value > kMaxDomainId) return std::nullopt;
-  return static_cast<int>(*value);
-}
-
 // A --domain option's check, rewritten and taken with transform() as whole_number's is.
 CLI::Validator domain_id_check(bool auto_allowed) {
-  const std::string range = "0 to " + std::to_string(kMaxDomainId);
+  const std::string range = "0 to " + std::to_string(rmw::kMaxDomainId);
   const std::string wanted = "a DDS domain id from " + range + (auto_allowed ? ", or auto" : "");
   return CLI::Validator(
       [auto_allowed, wanted](std::string& text) -> std::string {
         if (auto_allowed && text == "auto") return "";
-        const auto id = domain_id(text);
+        const auto id = rmw::parse_domain_id(text);
         if (!id) return "must be " + wanted + " (got " + text + ")";
         text = std::to_string(*id);
         return "";
@@ -779,7 +769,7 @@ int run(const Roots& roots, const RunArgs& a) {
     o.domain_id = rmw::find_quiet_domain(o.rmw);
     if (!a.quiet) std::fprintf(stderr, "robotperf: --domain auto: domain %d\n", o.domain_id);
   } else {
-    o.domain_id = domain_id(*a.domain).value();  // checked when parsed
+    o.domain_id = rmw::parse_domain_id(*a.domain).value();  // checked when parsed
   }
   o.processes =
       processes == "per-node" ? harness::ProcessLayout::kPerNode : harness::ProcessLayout::kSingle;

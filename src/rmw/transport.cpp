@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cctype>
+#include <charconv>
 #include <chrono>
 #include <cstdlib>
 #include <random>
@@ -101,18 +102,25 @@ std::string to_text(const Gid& gid) {
   return out;
 }
 
+std::optional<int> parse_domain_id(std::string_view text) {
+  unsigned id = 0;
+  const char* end = text.data() + text.size();
+  const auto [stop, error] = std::from_chars(text.data(), end, id);
+  if (error != std::errc() || stop != end || id > static_cast<unsigned>(kMaxDomainId))
+    return std::nullopt;
+  return static_cast<int>(id);
+}
+
 int domain_id_from_environment() {
   const char* value = std::getenv("ROS_DOMAIN_ID");
   if (value == nullptr || *value == '\0') return 0;
-  char* end = nullptr;
-  const long id = std::strtol(value, &end, 10);
-  // Digits only, as the --domain options take them (strtol alone allows spaces and a sign); 232
-  // is the largest domain whose RTPS ports still fit in 16 bits.
-  if (!std::isdigit(static_cast<unsigned char>(*value)) || *end != '\0' || id > 232) {
+  const std::optional<int> id = parse_domain_id(value);
+  if (!id) {
     throw std::invalid_argument(std::string("ROS_DOMAIN_ID='") + value +
-                                "' is not a domain id between 0 and 232");
+                                "' is not a domain id between 0 and " +
+                                std::to_string(kMaxDomainId));
   }
-  return static_cast<int>(id);
+  return *id;
 }
 
 namespace {

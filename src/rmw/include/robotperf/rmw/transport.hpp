@@ -207,6 +207,13 @@ struct TransportOptions {
 std::unique_ptr<Transport> make_transport(const std::string& name,
                                           const TransportOptions& options = {});
 
+// The largest DDS domain id whose RTPS ports still fit in 16 bits.
+inline constexpr int kMaxDomainId = 232;
+
+// A domain id as written: decimal digits only (no sign, space or 0x), 0 to kMaxDomainId; nullopt
+// otherwise. The one reading of ROS_DOMAIN_ID and of every --domain.
+std::optional<int> parse_domain_id(std::string_view text);
+
 // Reads ROS_DOMAIN_ID (0 when unset); throws std::invalid_argument when malformed.
 int domain_id_from_environment();
 
