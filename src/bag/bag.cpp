@@ -6,6 +6,8 @@
 #include <zstd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -189,14 +191,23 @@ bool file_compressed(const BagInfo& info) {
          (info.compression_mode == "file" || info.compression_mode == "FILE");
 }
 
-// Decompresses a zstd-compressed storage file into a temporary file.
+// Decompresses a zstd-compressed storage file into a temporary file of its own: two readers in
+// one process, of one bag or of two bags whose files share a name, must not write each other's.
 fs::path decompress_file(const fs::path& compressed) {
   std::ifstream in(compressed, std::ios::binary);
   if (!in) throw BagError(compressed.string() + ": cannot open");
-  fs::path out_path = fs::temp_directory_path() / ("robotperf-" + std::to_string(::getpid()) + "-" +
-                                                   compressed.stem().filename().string());
+  std::string name = (fs::temp_directory_path() /
+                      ("robotperf-" + compressed.stem().filename().string() + "-XXXXXX"))
+                         .string();
+  const int fd = ::mkstemp(name.data());
+  if (fd < 0) throw BagError(name + ": cannot create a temporary file: " + std::strerror(errno));
+  ::close(fd);
+  const fs::path out_path = name;
   std::ofstream out(out_path, std::ios::binary | std::ios::trunc);
-  if (!out) throw BagError(out_path.string() + ": cannot create a temporary file");
+  if (!out) {
+    fs::remove(out_path);
+    throw BagError(out_path.string() + ": cannot write a temporary file");
+  }
   ZSTD_DCtx* ctx = ZSTD_createDCtx();
   std::vector<char> src(ZSTD_DStreamInSize()), dst(ZSTD_DStreamOutSize());
   std::size_t last = 0;
@@ -218,6 +229,10 @@ fs::path decompress_file(const fs::path& compressed) {
   if (last != 0) {
     fs::remove(out_path);
     throw BagError(compressed.string() + ": truncated zstd file");
+  }
+  if (!out.flush()) {
+    fs::remove(out_path);
+    throw BagError(out_path.string() + ": cannot write a temporary file (is the disk full?)");
   }
   return out_path;
 }

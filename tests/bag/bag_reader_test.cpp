@@ -102,27 +102,43 @@ TEST(SqliteReader, TopicFilterAndTimeWindow) {
   EXPECT_EQ(middle, std::vector<Recorded>(all.begin() + 2, all.begin() + 5));
 }
 
+// Turns the one-file sqlite3 bag at `bag` into what rosbag2's file compression writes: its
+// storage file zstd-compressed whole as <file>.zstd, and metadata.yaml saying so.
+void compress_bag_file(const fs::path& bag) {
+  std::string text;
+  {
+    const auto yaml = read_file(bag / "metadata.yaml");
+    text.assign(yaml.begin(), yaml.end());
+  }
+  const BagInfo info = read_info(bag);
+  ASSERT_EQ(info.files.size(), 1u);
+  const std::string name = info.files[0].path.string();
+  const auto db = read_file(bag / name);
+  std::vector<uint8_t> compressed(ZSTD_compressBound(db.size()));
+  compressed.resize(ZSTD_compress(compressed.data(), compressed.size(), db.data(), db.size(), 1));
+  write_file(bag / (name + ".zstd"), compressed);
+  fs::remove(bag / name);
+  for (const auto& [from, to] :
+       {std::pair<std::string, std::string>{"compression_format: \"\"", "compression_format: zstd"},
+        {"compression_mode: \"\"", "compression_mode: FILE"}}) {
+    ASSERT_NE(text.find(from), std::string::npos) << from;
+    text.replace(text.find(from), from.size(), to);
+  }
+  for (auto at = text.find(name); at != std::string::npos; at = text.find(name, at)) {
+    text.insert(at + name.size(), ".zstd");
+    at += name.size();
+  }
+  write_file(bag / "metadata.yaml", {text.begin(), text.end()});
+}
+
 // rosbag2's file compression zstd-compresses each storage file whole: the definitions are in
 // the compressed storage only, and must come out of it as from the plain one.
 TEST(SqliteReader, FileCompressedBagKeepsItsDefinitions) {
   ScratchDir dir;
   const fs::path plain = reference_bag("sqlite3_cdr_test");
-  const auto db = read_file(plain / "cdr_test_0.db3");
-  std::vector<uint8_t> compressed(ZSTD_compressBound(db.size()));
-  compressed.resize(ZSTD_compress(compressed.data(), compressed.size(), db.data(), db.size(), 1));
-  fs::create_directories(dir / "bag");
-  write_file(dir / "bag" / "cdr_test_0.db3.zstd", compressed);
-  const auto yaml = read_file(plain / "metadata.yaml");
-  std::string text(yaml.begin(), yaml.end());
-  for (const auto& [from, to] :
-       {std::pair<std::string, std::string>{"compression_format: \"\"", "compression_format: zstd"},
-        {"compression_mode: \"\"", "compression_mode: FILE"},
-        {"- cdr_test_0.db3\n", "- cdr_test_0.db3.zstd\n"},
-        {"path: cdr_test_0.db3\n", "path: cdr_test_0.db3.zstd\n"}}) {
-    ASSERT_NE(text.find(from), std::string::npos) << from;
-    text.replace(text.find(from), from.size(), to);
-  }
-  write_file(dir / "bag" / "metadata.yaml", {text.begin(), text.end()});
+  fs::copy(plain, dir / "bag");
+  compress_bag_file(dir / "bag");
+  ASSERT_TRUE(fs::exists(dir / "bag" / "cdr_test_0.db3.zstd"));
 
   EXPECT_EQ(read_all(dir / "bag"), read_all(plain));
   const Reader uncompressed(plain);
@@ -137,6 +153,38 @@ TEST(SqliteReader, FileCompressedBagKeepsItsDefinitions) {
     EXPECT_EQ(t.definition_encoding, "ros2msg") << t.name;
     EXPECT_EQ(t.definition, topic_named(uncompressed.topics(), t.name).definition) << t.name;
   }
+}
+
+// Each reader decompresses into a file of its own: two bags whose storage files share a name,
+// open at once, each read their own messages.
+TEST(SqliteReader, TwoFileCompressedBagsWithOneFileNameOpenAtOnce) {
+  ScratchDir dir;
+  fs::copy(reference_bag("sqlite3_cdr_test"), dir / "first");
+  compress_bag_file(dir / "first");
+  fs::create_directories(dir / "second");
+  {
+    Writer writer(dir / "second" / "cdr_test", {});
+    TopicInfo topic;
+    topic.name = "/other";
+    topic.type = "std_msgs/msg/String";
+    const std::vector<uint8_t> payload = {0, 1, 0, 0, 3, 0, 0, 0, 'h', 'i', 0};
+    writer.write(writer.add_topic(topic), 42, payload);
+  }
+  compress_bag_file(dir / "second" / "cdr_test");
+  ASSERT_TRUE(fs::exists(dir / "second" / "cdr_test" / "cdr_test_0.db3.zstd"));
+
+  const auto expected = read_all(reference_bag("sqlite3_cdr_test"));
+  Reader first(dir / "first");
+  Reader second(dir / "second" / "cdr_test");
+  std::vector<Recorded> from_first;
+  Message m;
+  while (first.next(m))
+    from_first.push_back({first.topics()[m.topic].name, m.timestamp_ns, m.data});
+  EXPECT_EQ(from_first, expected);
+  ASSERT_TRUE(second.next(m));
+  EXPECT_EQ(second.topics()[m.topic].name, "/other");
+  EXPECT_EQ(m.timestamp_ns, 42);
+  EXPECT_FALSE(second.next(m));
 }
 
 std::string cdr_string(const std::vector<uint8_t>& payload) {

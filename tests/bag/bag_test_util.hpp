@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -25,8 +26,11 @@ class ScratchDir {
  public:
   ScratchDir() {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() / ("robotperf-bag-" + std::to_string(::getpid()) + "-" +
-                                         info->test_suite_name() + "-" + info->name());
+    // Parameterised tests are named "Prefix/Suite" and "Test/N": one directory, not two levels.
+    std::string name = std::string(info->test_suite_name()) + "-" + info->name();
+    std::replace(name.begin(), name.end(), '/', '-');
+    path_ =
+        fs::temp_directory_path() / ("robotperf-bag-" + std::to_string(::getpid()) + "-" + name);
     fs::remove_all(path_);
     fs::create_directories(path_);
   }
