@@ -60,16 +60,24 @@ constexpr int kExitUsage = 2;
 constexpr int kExitInvalidResult = 3;
 constexpr int kExitRefused = 4;
 
+// A number as written in decimal, all of the text (digits, point, exponent; also inf and nan,
+// which the callers bound): nullopt for anything else, a hexadecimal float or spaces included.
+std::optional<double> decimal_number(const std::string& text) {
+  double value = 0;
+  const char* end = text.data() + text.size();
+  const auto [stop, error] = std::from_chars(text.data(), end, value);
+  if (error != std::errc() || stop != end) return std::nullopt;
+  return value;
+}
+
 // A number option's bound in words: CLI11's PositiveNumber and NonNegativeNumber print the range
 // up to DBL_MAX, three hundred digits long.
 CLI::Validator number_check(bool zero_allowed) {
   const char* wanted = zero_allowed ? "a number, 0 or more" : "a number greater than 0";
   return CLI::Validator(
       [zero_allowed, wanted](std::string& text) -> std::string {
-        char* end = nullptr;
-        const double value = std::strtod(text.c_str(), &end);
-        const bool number = !text.empty() && end == text.c_str() + text.size();
-        if (number && (zero_allowed ? value >= 0 : value > 0)) return "";
+        const auto value = decimal_number(text);
+        if (value && (zero_allowed ? *value >= 0 : *value > 0)) return "";
         return std::string("must be ") + wanted + " (got " + text + ")";
       },
       zero_allowed ? "NONNEGATIVE" : "POSITIVE");
@@ -460,19 +468,6 @@ std::optional<fs::path> write_result_files(const fs::path& base,
 }
 
 // "--remap from:=to" and "--window START:END" (seconds, either may be empty).
-// The number `text` is, all of it (std::stod's syntax), or nothing.
-std::optional<double> whole_number(const std::string& text) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    return std::nullopt;
-  }
-  if (used == 0 || used != text.size()) return std::nullopt;
-  return v;
-}
-
 harness::BagSelection bag_selection(const RunArgs& a) {
   harness::BagSelection bag;
   bag.path = *a.dataset;
@@ -486,7 +481,7 @@ harness::BagSelection bag_selection(const RunArgs& a) {
     const auto sep = a.window->find(':');
     auto seconds = [&](const std::string& text) -> std::optional<double> {
       if (text.empty()) return std::nullopt;
-      const std::optional<double> v = whole_number(text);
+      const std::optional<double> v = decimal_number(text);
       if (!v || !(*v >= 0))
         throw std::invalid_argument("--window " + *a.window + ": expected START:END in seconds");
       return v;
@@ -662,8 +657,8 @@ harness::PeakSearchOptions peak_search_options(const RunArgs& a) {
     const auto colon = a.rate_range->find(':');
     std::optional<double> low, high;
     if (colon != std::string::npos) {
-      low = whole_number(a.rate_range->substr(0, colon));
-      high = whole_number(a.rate_range->substr(colon + 1));
+      low = decimal_number(a.rate_range->substr(0, colon));
+      high = decimal_number(a.rate_range->substr(colon + 1));
     }
     if (!low || !high || !(*low > 0) || !(*high >= *low) || !std::isfinite(*high))
       throw std::invalid_argument("--rate-range " + *a.rate_range +
@@ -731,7 +726,7 @@ int run(const Roots& roots, const RunArgs& a) {
     o.bag_timeline = true;
     o.rate_scale = a.rate_scale;
   } else if (a.rate) {
-    o.rate_hz = whole_number(*a.rate);
+    o.rate_hz = decimal_number(*a.rate);
     if (!o.rate_hz)
       throw std::invalid_argument("--rate " + *a.rate + ": expected a rate in Hz or 'bag'");
   }

@@ -509,6 +509,8 @@ TEST_F(Cli, NumberOutOfItsBoundsIsOneShortLine) {
            {"run a1 --count -3", "--count: must be a whole number, 1 or more (got -3)"},
            {"run a1 --callback-timeout 0", "must be a number greater than 0 (got 0)"},
            {"run a1 --rate-scale x", "must be a number greater than 0 (got x)"},
+           {"run a1 --callback-timeout 0x10", "must be a number greater than 0 (got 0x10)"},
+           {"run a1 --rate 0x10", "--rate 0x10: expected a rate in Hz or 'bag'"},
            {"run a1 --warmup -1", "--warmup: must be a whole number, 0 or more (got -1)"},
            {"run a1 --repeat 10001",
             "--repeat: must be a whole number from 1 to 10000 (got 10001)"},
