@@ -172,6 +172,20 @@ void write_hwmon(const FixtureRoot& root, int gpu_w, int acpi_w, uint64_t energy
   root.write("sys/class/hwmon/hwmon10/energy1_label", "Esocket0\n");
 }
 
+// Two devices of one driver (two GPUs here) keep names of their own, with their hwmon folder.
+TEST(Hwmon, TwoDevicesOfOneDriverAreToldApart) {
+  FixtureRoot root;
+  write_hwmon(root, 10, 50, 7'000'000);
+  root.write("sys/class/hwmon/hwmon3/name", "amdgpu\n");
+  root.write("sys/class/hwmon/hwmon3/power1_average", "20000000\n");
+  const auto found = discover_power_sources(options_for(root, {"hwmon"}));
+  std::vector<std::string> names;
+  for (const auto& s : found.sources) names.push_back(s->info().name);
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"hwmon:amdgpu[hwmon0]/power1", "hwmon:power_meter/system",
+                                      "hwmon:amdgpu[hwmon3]/power1", "hwmon:amd_energy/Esocket0"}));
+}
+
 TEST(Hwmon, GaugesAreIntegratedAndCountersDifferenced) {
   FixtureRoot root;
   write_hwmon(root, 10, 50, 7'000'000);
