@@ -154,15 +154,20 @@ class DiffDriveControllerNode final : public ControlNode {
     controller_->set_publishers(realtime_publisher<msgs::Odometry>(config, "odom"),
                                 realtime_publisher<msgs::TFMessage>(config, "tf"));
     manager().add_controller(controller_);
-    // Ground truth of the simulated base, after the hardware moved it, in the cycles the
-    // odometry goes out and with the same ID (as Gazebo's p3d plugin would report it).
+    // Ground truth of the simulated base in the cycles the odometry goes out and with the same
+    // ID (as Gazebo's p3d plugin would report it), at the instant the odometry describes:
+    // open-loop odometry integrates the cycle's command, which write() has just applied;
+    // closed-loop odometry is of the wheel positions read() gave before it, the pose after the
+    // previous cycle's write.
     if (auto truth = realtime_publisher<msgs::Odometry>(config, "ground_truth")) {
       truth->msg().header.frame_id = "odom";
       truth->msg().child_frame_id = "base_link";
       truth_ = std::move(truth);
-      manager().set_after_write([this](const control::UpdateContext& ctx) {
+      manager().set_after_write([this, open_loop = c.open_loop](const control::UpdateContext& ctx) {
+        const control::BasePose& moved = *manager().hardware().base_pose();
+        const control::BasePose pose = open_loop ? moved : pose_at_read_;
+        pose_at_read_ = moved;
         if (!controller_->published_last_update() || !truth_->try_lock()) return;
-        const control::BasePose& pose = *manager().hardware().base_pose();
         auto& m = truth_->msg();
         m.header.stamp.sec = static_cast<int32_t>(ctx.observed_command / 1'000'000'000);
         m.header.stamp.nanosec = static_cast<uint32_t>(ctx.observed_command % 1'000'000'000);
@@ -210,6 +215,7 @@ class DiffDriveControllerNode final : public ControlNode {
 
   std::shared_ptr<control::DiffDriveController> controller_;
   std::unique_ptr<control::RealtimePublisher<msgs::Odometry>> truth_;
+  control::BasePose pose_at_read_;  // the loop thread's alone
   std::shared_ptr<graph::GenericSubscription> subscription_;
 };
 
