@@ -127,6 +127,64 @@ TEST(JointTrajectoryController, RejectsMalformedGoals) {
   EXPECT_NE(logged[0].find("joint2 missing"), std::string::npos) << logged[0];
 }
 
+// Past its end a goal's reference is its last point as given: a position-only (linear) goal
+// leaves no velocity behind, so a next goal to the same place starts at rest and stays there.
+TEST(JointTrajectoryController, LinearGoalEndsAtRest) {
+  HardwareConfig hw;
+  hw.position_time_constant_s = 0.0;
+  Rig rig(hw);
+  JointTrajectoryControllerConfig c;
+  c.goal_tolerance = {0.01, 0.01};
+  auto jtc = std::make_shared<JointTrajectoryController>("jtc", c, [](std::string_view) {});
+  rig.manager.add_controller(jtc);
+  rig.run(0.05);
+  ASSERT_TRUE(jtc->command(goal(1.0, 1.0, false), 1));
+  rig.run(3.0);
+  EXPECT_EQ(jtc->goals_succeeded(), 1u);
+  EXPECT_EQ(jtc->reference()[1].position, 1.0);
+  EXPECT_EQ(jtc->reference()[1].velocity, 0.0);
+  ASSERT_TRUE(jtc->command(goal(1.0, 1.0), 2));
+  double furthest = 0;
+  for (int i = 0; i < 150; ++i) {
+    rig.run(0.01);
+    furthest = std::max(furthest, std::abs(jtc->reference()[1].position - 1.0));
+  }
+  EXPECT_LT(furthest, 1e-9);
+  EXPECT_EQ(jtc->goals_succeeded(), 2u);
+}
+
+// A velocity or acceleration that is not finite is refused with the goal: kept, it made the
+// reference NaN, which the robot ignores, and every later goal started from NaN.
+TEST(JointTrajectoryController, RejectsNonFiniteRates) {
+  JointTrajectoryController jtc("jtc", {}, [](std::string_view) {});
+  auto nan_velocity = goal(1.0, 1.0);
+  nan_velocity.points[0].velocities[0] = std::nan("");
+  EXPECT_FALSE(jtc.command(nan_velocity, 1));
+  auto infinite_acceleration = goal(1.0, 1.0);
+  infinite_acceleration.points[0].accelerations[1] = INFINITY;
+  EXPECT_FALSE(jtc.command(infinite_acceleration, 2));
+  EXPECT_EQ(jtc.goals_rejected(), 2u);
+  EXPECT_EQ(jtc.goals_accepted(), 0u);
+}
+
+// stopped_velocity_tolerance 0 is "not checked", as the other tolerances' 0 (and as in
+// ros2_controllers), not "exactly still": a lagging joint still creeping at the goal reaches it.
+TEST(JointTrajectoryController, ZeroStoppedVelocityToleranceIsNotChecked) {
+  HardwareConfig hw;  // first-order lag: the joints approach the goal without ever stopping
+  Rig rig(hw);
+  JointTrajectoryControllerConfig c;
+  c.goal_tolerance = {0.01, 0.01};
+  c.goal_time_s = 1.0;
+  c.stopped_velocity_tolerance = 0.0;
+  auto jtc = std::make_shared<JointTrajectoryController>("jtc", c, [](std::string_view) {});
+  rig.manager.add_controller(jtc);
+  rig.run(0.05);
+  ASSERT_TRUE(jtc->command(goal(0.785, 1.0), 1));
+  rig.run(2.0);
+  EXPECT_EQ(jtc->goals_succeeded(), 1u);
+  EXPECT_EQ(jtc->goals_aborted(), 0u);
+}
+
 TEST(SpeedLimits, AccelerationThenVelocity) {
   SpeedLimits l{true, -1.0, 1.0, true, -1.0, 1.0};
   EXPECT_DOUBLE_EQ(l.limit(5.0, 0.0, 0.1), 0.1);   // +1 m/s^2 over 0.1 s

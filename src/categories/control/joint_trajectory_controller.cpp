@@ -119,7 +119,9 @@ bool JointTrajectoryController::command(const msgs::JointTrajectory& goal, int64
       samples[j].position = p.positions[index[j]];
       if (vel) samples[j].velocity = p.velocities[index[j]];
       if (acc) samples[j].acceleration = p.accelerations[index[j]];
-      if (!std::isfinite(samples[j].position)) return reject("a position is not finite");
+      if (!std::isfinite(samples[j].position) || !std::isfinite(samples[j].velocity) ||
+          !std::isfinite(samples[j].acceleration))
+        return reject("a position, velocity or acceleration is not finite");
     }
     prepared->times_s.push_back(t);
     prepared->points.push_back(std::move(samples));
@@ -220,12 +222,15 @@ int64_t JointTrajectoryController::update(const UpdateContext& ctx) {
     std::size_t i = 0;
     while (i + 1 < goal.times_s.size() && t > goal.times_s[i]) ++i;
     const bool before_first = t <= goal.times_s[0] || i == 0;
+    const double end_s = goal.times_s.back();
     for (std::size_t j = 0; j < n; ++j) {
-      reference_[j] = before_first ? first_segment_[j].sample(t)
-                                   : goal.segments[i][j].sample(t - goal.times_s[i - 1]);
+      // From the end on, the last point as given (a linear segment's slope is no velocity
+      // there), as ros2_controllers samples past the end.
+      reference_[j] = t >= end_s     ? goal.points.back()[j]
+                      : before_first ? first_segment_[j].sample(t)
+                                     : goal.segments[i][j].sample(t - goal.times_s[i - 1]);
     }
     have_reference_ = true;
-    const double end_s = goal.times_s.back();
     if (t < end_s) {
       for (std::size_t j = 0; j < n; ++j) {
         const double tol = config_.path_tolerance[j];
@@ -241,8 +246,9 @@ int64_t JointTrajectoryController::update(const UpdateContext& ctx) {
       for (std::size_t j = 0; j < n; ++j) {
         const double tol = config_.goal_tolerance[j];
         const double target = goal.points.back()[j].position;
+        const double stopped = config_.stopped_velocity_tolerance;
         if ((tol > 0 && std::abs(target - feedback_position_[j]) > tol) ||
-            std::abs(feedback_velocity_[j]) > config_.stopped_velocity_tolerance) {
+            (stopped > 0 && std::abs(feedback_velocity_[j]) > stopped)) {
           reached = false;
         }
       }

@@ -41,6 +41,7 @@ struct JointTrajectoryControllerConfig {
   std::vector<double> goal_tolerance;
   // A goal not within tolerance this long after its last point's time is aborted (0: no limit).
   double goal_time_s = 0.0;
+  // rad/s a joint may still move at when its goal counts as reached (0: not checked).
   double stopped_velocity_tolerance = 0.01;
 };
 
