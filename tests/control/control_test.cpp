@@ -309,7 +309,8 @@ TEST(ControllerManager, LoopRunsAtAbsoluteDeadlinesAndStops) {
       const int64_t step = c.deadline_ns - r.records[k - 1].deadline_ns;
       EXPECT_EQ(step % 1000000, 0) << step;
       EXPECT_GE(step, 1000000);
-      EXPECT_LE(c.deadline_ns, r.records[k - 1].wake_ns + 1000000) << "not skipped: not overslept";
+      EXPECT_LE(c.deadline_ns, r.records[k - 1].write_end_ns + 1000000)
+          << "not skipped: not overrun";
       skipped += static_cast<uint64_t>(step / 1000000 - 1);
     }
   }
@@ -317,6 +318,45 @@ TEST(ControllerManager, LoopRunsAtAbsoluteDeadlinesAndStops) {
   ASSERT_EQ(r.writes.size(), 1u);
   EXPECT_EQ(r.writes[0].command_id, 5);
   EXPECT_DOUBLE_EQ(*manager.hardware().state_interface("joint2/position"), 0.2);
+}
+
+// A controller whose update takes `stall_ms` in cycle `stall_cycle`.
+class StallingController final : public Controller {
+ public:
+  StallingController(uint64_t stall_cycle, int stall_ms)
+      : stall_cycle_(stall_cycle), stall_ms_(stall_ms) {}
+  const std::string& name() const override { return name_; }
+  std::vector<std::string> command_interfaces() const override { return {}; }
+  std::vector<std::string> state_interfaces() const override { return {}; }
+  void activate(SimulatedHardware&) override {}
+  int64_t update(const UpdateContext& ctx) override {
+    if (ctx.cycle == stall_cycle_)
+      std::this_thread::sleep_for(std::chrono::milliseconds(stall_ms_));
+    return kNoCommand;
+  }
+
+ private:
+  std::string name_ = "stall";
+  uint64_t stall_cycle_;
+  int stall_ms_;
+};
+
+// A cycle woken on time whose own work overruns the next deadline skips the periods it ran over,
+// as ros2_control's loop does: the next cycle is not run at once for a deadline already passed.
+TEST(ControllerManager, OverrunningCycleSkipsThePeriodsItRanOver) {
+  constexpr int64_t kPeriod = 10'000'000;  // 100 Hz
+  ControllerManager manager(make_hardware({}), LoopConfig{"loop", 100.0, -1, 0, 1000});
+  manager.add_controller(std::make_shared<StallingController>(3, 25));
+  manager.start();
+  std::this_thread::sleep_for(std::chrono::milliseconds(150));
+  manager.stop();
+  const LoopReport r = manager.report();
+  ASSERT_GT(r.records.size(), 4u);
+  const auto& stalled = r.records[3];
+  ASSERT_GE(stalled.write_end_ns - stalled.wake_ns, 25'000'000);
+  // Ended at least 25 ms after its deadline: the two deadlines it ran over are not run.
+  EXPECT_GE(r.records[4].deadline_ns, stalled.deadline_ns + 3 * kPeriod);
+  EXPECT_GE(r.deadline_misses, 3u);  // the late cycle and the two periods skipped
 }
 
 TEST(ControllerManager, BadLoopSettingsAreRefused) {

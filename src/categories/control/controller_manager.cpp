@@ -112,14 +112,14 @@ void ControllerManager::loop(int64_t start_ns) {
   int64_t deadline = start_ns;
   while (!stop_.load(std::memory_order_relaxed)) {
     sleep_until(deadline);
-    const int64_t now = monotonic_ns();
-    run_cycle(deadline, now);
+    const int64_t done = run_cycle(deadline, monotonic_ns());
     deadline += period_ns_;
-    // Woken after the next deadline had passed: the periods already over are skipped and counted
-    // as missed, rather than run back to back with a near-zero period (as ros2_control's loop
-    // does on an overrun); the grid, and so the phase, is kept.
-    if (now >= deadline) {
-      const int64_t skipped = (now - deadline) / period_ns_ + 1;
+    // A cycle that ended after the next deadline had passed, woken late or overrunning: the
+    // periods already over are skipped and counted as missed, rather than run back to back with
+    // a near-zero period (as ros2_control's loop does, checking the clock after the cycle); the
+    // grid, and so the phase, is kept.
+    if (done >= deadline) {
+      const int64_t skipped = (done - deadline) / period_ns_ + 1;
       deadline += skipped * period_ns_;
       misses_ += static_cast<uint64_t>(skipped);
     }
@@ -130,7 +130,7 @@ void ControllerManager::cycle(int64_t now_ns) {
   run_cycle(now_ns, now_ns);
 }
 
-void ControllerManager::run_cycle(int64_t deadline_ns, int64_t now_ns) {
+int64_t ControllerManager::run_cycle(int64_t deadline_ns, int64_t now_ns) {
   UpdateContext ctx;
   ctx.now_ns = now_ns;
   ctx.period_s = previous_now_ns_ < 0 ? static_cast<double>(period_ns_) * 1e-9
@@ -167,6 +167,7 @@ void ControllerManager::run_cycle(int64_t deadline_ns, int64_t now_ns) {
     records_[record_count_++] = {deadline_ns, now_ns, read_end, update_end, write_end};
   }
   ++cycles_;
+  return write_end;
 }
 
 LoopReport ControllerManager::report() const {

@@ -61,7 +61,8 @@ class ControllerManager {
 
  private:
   void loop(int64_t start_ns);
-  void run_cycle(int64_t deadline_ns, int64_t now_ns);
+  // Returns when the hardware write ended.
+  int64_t run_cycle(int64_t deadline_ns, int64_t now_ns);
 
   std::unique_ptr<SimulatedHardware> hardware_;
   LoopConfig config_;
