@@ -5,6 +5,7 @@
 #include <cstring>
 #include <iostream>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "cuda_test_support.hpp"
 #include "robotperf/perception/camera_model.hpp"
@@ -235,6 +236,28 @@ TEST_F(Disparity, SwappedImagesGiveGarbage) {
   bm.compute(f.right, f.left, f.left_info, f.right_info, out);
   const auto [bad1, valid] = accuracy(out, f.truth);
   EXPECT_LT(valid, 0.5);
+}
+
+// A mono8 pair then an rgb8 pair on one processor: the grey conversion of the second goes into
+// a buffer of its own, not into the first pair's messages, which the processor had viewed.
+TEST_F(Disparity, ColourPairAfterAMonoPairLeavesTheMonoMessagesAlone) {
+  auto grey = [](const msgs::Image& rgb) {
+    msgs::Image out;
+    cv::cvtColor(image_view(rgb), prepare_image(out, rgb.header, "mono8", 640, 480),
+                 cv::COLOR_RGB2GRAY);
+    return out;
+  };
+  const auto& first = (*frames_)[0];
+  const auto& second = (*frames_)[1];
+  ASSERT_EQ(second.left.encoding, "rgb8");
+  const msgs::Image mono_left = grey(first.left), mono_right = grey(first.right);
+  const msgs::Image left_before = mono_left, right_before = mono_right;
+  DisparityProcessor bm;
+  msgs::DisparityImage out;
+  bm.compute(mono_left, mono_right, first.left_info, first.right_info, out);
+  bm.compute(second.left, second.right, second.left_info, second.right_info, out);
+  EXPECT_EQ(mono_left.data, left_before.data);
+  EXPECT_EQ(mono_right.data, right_before.data);
 }
 
 TEST_F(Disparity, RejectsBadParametersAndInputs) {

@@ -170,6 +170,9 @@ cv::Mat image_view(const msgs::Image& image) {
 
 void to_mono8(const msgs::Image& image, const std::string& what, cv::Mat& mono) {
   const cv::Mat view = image_view(image);
+  // A view of an earlier mono8 message is let go: converting into it would write the grey pixels
+  // into that message, const and shared, or freed by now.
+  if (mono.u == nullptr) mono.release();
   if (image.encoding == "mono8" || image.encoding == "8UC1") {
     mono = view;
   } else if (image.encoding == "rgb8") {

@@ -50,7 +50,8 @@ cv::Mat prepare_image(msgs::Image& image, const msgs::Header& header, std::strin
                       int width, int height);
 
 // cv_bridge's conversion to mono8 of the 8-bit encodings mono8 (8UC1; `mono` is then a view of
-// the image), rgb8, bgr8, rgba8 and bgra8 (converted into `mono`). Throws std::invalid_argument
+// the image), rgb8, bgr8, rgba8 and bgra8 (converted into `mono`, which a view left by an
+// earlier call is never: it gets a buffer of its own). Throws std::invalid_argument
 // for another encoding, naming it after `what` ("disparity: left image").
 void to_mono8(const msgs::Image& image, const std::string& what, cv::Mat& mono);
 
