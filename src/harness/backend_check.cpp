@@ -75,6 +75,11 @@ double cloud_share(const msgs::PointCloud2& a, const msgs::PointCloud2& b) {
         const std::size_t at = f.offset + c * size;
         if (at + size > a.point_step) {
           same = false;
+        } else if ((f.name == "rgb" || f.name == "rgba") && size == 4) {
+          // Packed colour bytes, whatever the declared type (PCL's is FLOAT32, whose bytes read
+          // as a float are tiny or denormal and would always agree): one level per channel, as
+          // for images.
+          same = share_close<uint8_t>(x + at, y + at, size, 1.0) == 1.0;
         } else if (f.datatype == msgs::PointField::kFloat32) {
           same = share_close<float>(x + at, y + at, size, 1e-6) == 1.0;
         } else if (f.datatype == msgs::PointField::kFloat64) {

@@ -66,12 +66,34 @@ TEST(BackendCheck, PointCloudsAgreeWithinAMicrometreAndNanOnlyWithNan) {
   std::memcpy(other.data.data() + 4, &off, 4);  // the first point's y, 2 um off
   EXPECT_EQ(share(type, &other, &cpu), 0.5);
   other = cpu;
-  other.data[12] = 1;  // the first point's colour
+  other.data[12] = 1;  // the first point's blue one level off: as images, within the tolerance
+  EXPECT_EQ(share(type, &other, &cpu), 1.0);
+  other.data[13] = 2;  // and its green two
   EXPECT_EQ(share(type, &other, &cpu), 0.5);
   other = cpu;
   const float zero = 0.0f;
   std::memcpy(other.data.data() + 16, &zero, 4);  // a point where the cpu has none
   EXPECT_EQ(share(type, &other, &cpu), 0.5);
+}
+
+// PCL's rgb field is FLOAT32 holding the bytes b, g, r, 0: compared as a float, any two colours
+// (tiny or denormal numbers) agreed within 1e-6; they are compared channel by channel.
+TEST(BackendCheck, PointCloudColourDeclaredFloatIsComparedByChannel) {
+  msgs::PointCloud2 cpu;
+  cpu.width = 1;
+  cpu.height = 1;
+  cpu.point_step = 16;
+  cpu.fields = {{"x", 0, msgs::PointField::kFloat32, 1},
+                {"y", 4, msgs::PointField::kFloat32, 1},
+                {"z", 8, msgs::PointField::kFloat32, 1},
+                {"rgb", 12, msgs::PointField::kFloat32, 1}};
+  cpu.data.assign(16, 0);
+  const uint8_t bgr0[4] = {10, 200, 30, 0};
+  std::memcpy(cpu.data.data() + 12, bgr0, 4);
+  msgs::PointCloud2 swapped = cpu;
+  const uint8_t rgb0[4] = {30, 200, 10, 0};  // red and blue exchanged
+  std::memcpy(swapped.data.data() + 12, rgb0, 4);
+  EXPECT_EQ(share("sensor_msgs/msg/PointCloud2", &swapped, &cpu), 0.0);
 }
 
 TEST(BackendCheck, DisparitiesAgreeWithinOnePixelWhereTheCpuHasOne) {
