@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <iostream>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -203,6 +204,35 @@ TEST_F(Disparity, FillsTheDisparityImageAsStereoImageProc) {
   const auto [bad1, valid] = accuracy(out, f.truth);
   EXPECT_LT(bad1, 0.05);
   EXPECT_GT(valid, 0.85);
+}
+
+// StereoBM as stereo_image_proc sets it up: its parameters, and no left-right check
+// (disp12_max_diff is given to its StereoSGBM only), so OpenCV's default of -1.
+TEST_F(Disparity, BlockMatchingIsStereoImageProcsStereoBm) {
+  const auto& f = (*frames_)[0];
+  StereoParams with_check;
+  with_check.disp12_max_diff = 1;
+  DisparityProcessor bm, bm_given_a_check(with_check);
+  msgs::DisparityImage out, out_given_a_check;
+  bm.compute(f.left, f.right, f.left_info, f.right_info, out);
+  bm_given_a_check.compute(f.left, f.right, f.left_info, f.right_info, out_given_a_check);
+
+  auto matcher = cv::StereoBM::create(64, 15);
+  matcher->setPreFilterSize(9);
+  matcher->setPreFilterCap(31);
+  matcher->setTextureThreshold(10);
+  matcher->setUniquenessRatio(15);
+  matcher->setSpeckleWindowSize(100);
+  matcher->setSpeckleRange(4);
+  matcher->setMinDisparity(0);
+  ASSERT_EQ(matcher->getDisp12MaxDiff(), -1);
+  cv::Mat left, right, fixed, expected;
+  cv::cvtColor(image_view(f.left), left, cv::COLOR_RGB2GRAY);
+  cv::cvtColor(image_view(f.right), right, cv::COLOR_RGB2GRAY);
+  matcher->compute(left, right, fixed);
+  fixed.convertTo(expected, CV_32F, 1.0 / 16);
+  EXPECT_EQ(cv::countNonZero(image_view(out.image) != expected), 0);
+  EXPECT_EQ(out.image.data, out_given_a_check.image.data);
 }
 
 TEST_F(Disparity, SubtractsThePrincipalPointOffset) {

@@ -23,11 +23,7 @@ BlockMatchingShape block_matching_shape(int rows, int cols, const StereoParams& 
   return s;
 }
 
-void filter_on_host(cv::Mat& disparity16, const cv::Mat& best_cost, const StereoParams& p) {
-  if (p.disp12_max_diff >= 0) {
-    cv::validateDisparity(disparity16, best_cost, p.min_disparity, p.disparity_range,
-                          p.disp12_max_diff);
-  }
+void filter_on_host(cv::Mat& disparity16, const StereoParams& p) {
   if (p.speckle_size > 0 && p.speckle_range >= 0) {
     cv::filterSpeckles(disparity16, (p.min_disparity - 1) * 16, p.speckle_size, p.speckle_range);
   }

@@ -12,10 +12,9 @@ namespace robotperf::perception {
 // StereoBM's shape for a rows x cols pair under `params` (block matching, min_disparity >= 0).
 BlockMatchingShape block_matching_shape(int rows, int cols, const StereoParams& params);
 
-// StereoBM's steps after the device's, on the downloaded fixed-point disparity in place, with
-// OpenCV's own functions: the left-right check (disp12_max_diff >= 0; `best_cost` holds each
-// pixel's best window cost, 0 where filtered) and the speckle filter (connected components,
-// sequential).
-void filter_on_host(cv::Mat& disparity16, const cv::Mat& best_cost, const StereoParams& params);
+// StereoBM's step after the device's, on the downloaded fixed-point disparity in place, with
+// OpenCV's own function: the speckle filter (connected components, sequential). StereoBM makes no
+// left-right check (disp12_max_diff is StereoSGBM's).
+void filter_on_host(cv::Mat& disparity16, const StereoParams& params);
 
 }  // namespace robotperf::perception

@@ -1,9 +1,9 @@
 // StereoBM on an OpenCL device: OpenCV's block matcher as its documentation and source define it
 // (x-Sobel pre-filter clipped to [-cap, cap], sum of absolute differences over the window,
 // texture and uniqueness checks, sub-pixel fit of the three costs around the best, the valid
-// region), which OpenCV's own OpenCL StereoBM does only without the texture check. The left-right
-// check (disp12_max_diff) and the speckle filter (connected components, sequential) run on the
-// host after the download, with OpenCV's own functions, as part of the kernel's time.
+// region), which OpenCV's own OpenCL StereoBM does only without the texture check. The speckle
+// filter (connected components, sequential) runs on the host after the download, with OpenCV's
+// own function, as part of the kernel's time.
 #include "stereo_bm_opencl.hpp"
 
 #include <algorithm>
@@ -88,19 +88,15 @@ __kernel void window_costs(__global const int* rows_cost, __global int* costs, i
 
 // Per pixel of the region where the window and the search range fit ([x0, x1) x [y0, y1), as
 // OpenCV's valid disparity ROI): the best disparity, the texture and uniqueness checks, and the
-// fixed-point (1/16 px) disparity with OpenCV's sub-pixel fit of the costs on either side; the
-// best cost for the left-right check, 0 where filtered.
+// fixed-point (1/16 px) disparity with OpenCV's sub-pixel fit of the costs on either side.
 __kernel void choose(__global const int* costs, __global short* disp, int disp_step,
-                     int disp_offset, __global int* best_cost, int best_step, int best_offset,
-                     int rows, int cols, int ndisp, int lofs, int mindisp,
+                     int disp_offset, int rows, int cols, int ndisp, int lofs, int mindisp,
                      int texture_threshold, int uniqueness, int x0, int x1, int y0, int y1) {
   const int x = get_global_id(0), y = get_global_id(1);
   if (x >= cols || y >= rows) return;
   __global short* out = (__global short*)((__global uchar*)disp + disp_offset + y * disp_step) + x;
   const short filtered = (short)((mindisp - 1) * 16);
   const size_t plane = (size_t)rows * cols, at = (size_t)y * cols + x;
-  __global int* best_out = (__global int*)((__global uchar*)best_cost + best_offset + y * best_step) + x;
-  *best_out = 0;
   if (x < x0 || x >= x1 || y < y0 || y >= y1 || costs[ndisp * plane + at] < texture_threshold) {
     *out = filtered;
     return;
@@ -122,7 +118,6 @@ __kernel void choose(__global const int* costs, __global short* disp, int disp_s
       }
     }
   }
-  *best_out = best;
   if (best_k == 0 || best_k == ndisp - 1) {
     *out = (short)((ndisp - best_k - 1 + mindisp) * 16);
     return;
@@ -170,7 +165,6 @@ void OpenClBlockMatcher::compute(const cv::Mat& left, const cv::Mat& right, cons
   row_costs_.create(1, (s.disparities + 1) * rows * cols, CV_32SC1);
   costs_.create(1, (s.disparities + 1) * rows * cols, CV_32SC1);
   disparity_.create(rows, cols, CV_16SC1);
-  best_cost_.create(rows, cols, CV_32SC1);  // the best window cost of each pixel
   if (choose_.empty()) {
     prefilter_ = build("prefilter");
     row_kernel_ = build("row_costs");
@@ -194,18 +188,17 @@ void OpenClBlockMatcher::compute(const cv::Mat& left, const cv::Mat& right, cons
                         s.radius);
     run(window_kernel_, static_cast<std::size_t>(cols),
         static_cast<std::size_t>(s.disparities + 1));
-    choose_.args(
-        cv::ocl::KernelArg::PtrReadOnly(costs_), cv::ocl::KernelArg::WriteOnlyNoSize(disparity_),
-        cv::ocl::KernelArg::WriteOnlyNoSize(best_cost_), rows, cols, s.disparities, s.right_offset,
-        s.min_disparity, s.texture_threshold, s.uniqueness_ratio, s.x0, s.x1, s.y0, s.y1);
+    choose_.args(cv::ocl::KernelArg::PtrReadOnly(costs_),
+                 cv::ocl::KernelArg::WriteOnlyNoSize(disparity_), rows, cols, s.disparities,
+                 s.right_offset, s.min_disparity, s.texture_threshold, s.uniqueness_ratio, s.x0,
+                 s.x1, s.y0, s.y1);
     run(choose_, static_cast<std::size_t>(cols), static_cast<std::size_t>(rows));
   }
   {
-    DeviceStage download("download", static_cast<uint64_t>(rows) * cols * (2 + 4), opencl_queue());
+    DeviceStage download("download", static_cast<uint64_t>(rows) * cols * 2, opencl_queue());
     disparity_.copyTo(disparity16);
-    best_cost_.copyTo(best_cost_on_host_);
   }
-  filter_on_host(disparity16, best_cost_on_host_, p);
+  filter_on_host(disparity16, p);
 }
 
 }  // namespace robotperf::perception

@@ -19,9 +19,7 @@ class OpenClBlockMatcher {
                cv::Mat& disparity16);
 
  private:
-  cv::UMat left_, right_, filtered_left_, filtered_right_, row_costs_, costs_, disparity_,
-      best_cost_;
-  cv::Mat best_cost_on_host_;
+  cv::UMat left_, right_, filtered_left_, filtered_right_, row_costs_, costs_, disparity_;
   cv::ocl::Kernel prefilter_, row_kernel_, window_kernel_, choose_;
 };
 

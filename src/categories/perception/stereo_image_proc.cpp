@@ -51,6 +51,9 @@ void validate(const StereoParams& p) {
 DisparityProcessor::DisparityProcessor(const StereoParams& params, ImageBackend backend)
     : params_(params), backend_(backend) {
   validate(params_);
+  // stereo_image_proc gives disp12_max_diff to its StereoSGBM only: its StereoBM keeps OpenCV's
+  // -1, no left-right check (on every backend, which all follow the cpu's StereoBM).
+  if (params_.algorithm == StereoAlgorithm::kBlockMatching) params_.disp12_max_diff = -1;
   if (backend_ != ImageBackend::kCpu) {
     const std::string name = image_backend_name(backend_);
     require(params_.algorithm == StereoAlgorithm::kBlockMatching,

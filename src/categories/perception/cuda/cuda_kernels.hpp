@@ -46,16 +46,14 @@ void xyzrgb(DeviceImage depth, const uint8_t* colour, const XyzrgbModel& model, 
 
 // StereoBM's device part on a rectified mono8 pair (shape.rows x shape.cols each): the x-Sobel
 // pre-filter, the cost of every window and disparity, the texture and uniqueness checks and the
-// sub-pixel fit, into `disparity` (1/16 px, filtered pixels (min_disparity - 1) * 16) and
-// `best_cost` (each pixel's best window cost, 0 where filtered). Throws std::invalid_argument for
-// a window and range whose tiles do not fit a block's shared memory.
+// sub-pixel fit, into `disparity` (1/16 px, filtered pixels (min_disparity - 1) * 16). Throws
+// std::invalid_argument for a window and range whose tiles do not fit a block's shared memory.
 struct BlockMatchingBuffers {
   const uint8_t* left = nullptr;
   const uint8_t* right = nullptr;
   uint8_t* filtered_left = nullptr;  // rows x cols each
   uint8_t* filtered_right = nullptr;
   int16_t* disparity = nullptr;  // rows x cols
-  int32_t* best_cost = nullptr;  // rows x cols
 };
 void block_match(const BlockMatchingShape& shape, const BlockMatchingBuffers& buffers,
                  cudaStream_t stream);
@@ -64,21 +62,16 @@ void block_match(const BlockMatchingShape& shape, const BlockMatchingBuffers& bu
 // with `disparities` disparities.
 void check_block_matching(int radius, int disparities);
 
-// StereoBM's steps after block_match, in place on its `disparity`, with the answer of
-// cv::validateDisparity(disparity, best_cost, min_disparity, disparities, disp12_max_diff) then
+// StereoBM's step after block_match, in place on its `disparity`, with the answer of
 // cv::filterSpeckles(disparity, (min_disparity - 1) * 16, speckle_size, speckle_range), as
-// filter_on_host() runs them: the left-right check where disp12_max_diff >= 0, the speckle filter
-// where speckle_size > 0 and speckle_range >= 0.
+// filter_on_host() runs it, where speckle_size > 0 and speckle_range >= 0.
 struct DisparityFilter {
-  int disp12_max_diff = -1;
   int speckle_size = 0, speckle_range = -1;
 };
 struct DisparityFilterBuffers {
-  int16_t* disparity = nullptr;               // rows x cols, block_match's
-  const int32_t* best_cost = nullptr;         // rows x cols, block_match's
-  unsigned long long* right_match = nullptr;  // rows x cols
-  int32_t* labels = nullptr;                  // rows x cols
-  int32_t* region_sizes = nullptr;            // rows x cols
+  int16_t* disparity = nullptr;     // rows x cols, block_match's
+  int32_t* labels = nullptr;        // rows x cols
+  int32_t* region_sizes = nullptr;  // rows x cols
 };
 void filter_disparity(const BlockMatchingShape& shape, const DisparityFilter& filter,
                       const DisparityFilterBuffers& buffers, cudaStream_t stream);

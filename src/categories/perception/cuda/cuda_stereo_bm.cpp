@@ -1,7 +1,6 @@
 // The cuda backend's StereoBM on a node's own stream: the pair up, the block matching and the
-// steps after it (the left-right check and the speckle filter) on the device
-// (stereo_bm_kernels.cu), the disparity down. The opencl backend runs those last steps on the
-// host (filter_on_host); these give their answer.
+// speckle filter after it on the device (stereo_bm_kernels.cu), the disparity down. The opencl
+// backend runs that filter on the host (filter_on_host); this gives its answer.
 #include <cstdint>
 #include <stdexcept>
 
@@ -25,11 +24,8 @@ class CudaBlockMatcher final : public BlockMatcher {
     b.filtered_left = filtered_left_.reserve_for<uint8_t>(pixels);
     b.filtered_right = filtered_right_.reserve_for<uint8_t>(pixels);
     b.disparity = static_cast<int16_t*>(disparity_.reserve(s.rows, s.cols, CV_16SC1).data);
-    b.best_cost = best_cost_.reserve_for<int32_t>(pixels);
     DisparityFilterBuffers f;
     f.disparity = b.disparity;
-    f.best_cost = b.best_cost;
-    f.right_match = right_match_.reserve_for<unsigned long long>(pixels);
     f.labels = labels_.reserve_for<int32_t>(pixels);
     f.region_sizes = region_sizes_.reserve_for<int32_t>(pixels);
     {
@@ -53,15 +49,13 @@ class CudaBlockMatcher final : public BlockMatcher {
   Stream stream_;
   StagedImage left_, right_, disparity_;
   Buffer filtered_left_{Memory::kDevice}, filtered_right_{Memory::kDevice};
-  Buffer best_cost_{Memory::kDevice};
-  Buffer right_match_{Memory::kDevice}, labels_{Memory::kDevice}, region_sizes_{Memory::kDevice};
+  Buffer labels_{Memory::kDevice}, region_sizes_{Memory::kDevice};
 };
 
 }  // namespace
 
 DisparityFilter disparity_filter(const StereoParams& params) {
   DisparityFilter f;
-  f.disp12_max_diff = params.disp12_max_diff;
   f.speckle_size = params.speckle_size;
   f.speckle_range = params.speckle_range;
   return f;

@@ -108,12 +108,11 @@ struct Search {
 // A block per tile of the valid region: its windows' pixels into shared memory, then, a batch of
 // disparity indices at a time, the column sums of every tile row and halo column, and from them
 // each pixel's window costs; then the texture and uniqueness checks and the fixed-point (1/16
-// px) disparity with OpenCV's sub-pixel fit; the best cost for the left-right check (0 where
-// filtered). Index `disparities` is the texture, |L - cap|. Inside the valid region no window
-// column or row is clamped (min_disparity >= 0), so the clamping of the tiles only keeps the
-// tile's part past that region inside the image.
+// px) disparity with OpenCV's sub-pixel fit. Index `disparities` is the texture, |L - cap|. Inside
+// the valid region no window column or row is clamped (min_disparity >= 0), so the clamping of the
+// tiles only keeps the tile's part past that region inside the image.
 __global__ void match_kernel(const uint8_t* left, const uint8_t* right, int16_t* disparity,
-                             int32_t* best_cost, BlockMatchingShape s, MatchTiles t) {
+                             BlockMatchingShape s, MatchTiles t) {
   const int tx = static_cast<int>(threadIdx.x), ty = static_cast<int>(threadIdx.y);
   const int id = ty * kTileCols + tx;
   const int tile_x = s.x0 + static_cast<int>(blockIdx.x) * kTileCols;
@@ -179,10 +178,8 @@ __global__ void match_kernel(const uint8_t* left, const uint8_t* right, int16_t*
   if (texture < s.texture_threshold ||
       (s.uniqueness_ratio > 0 && search.ambiguous(s.uniqueness_ratio))) {
     disparity[at] = filtered;
-    best_cost[at] = 0;
     return;
   }
-  best_cost[at] = search.best;
   const int whole = s.disparities - search.best_k - 1 + s.min_disparity;
   if (search.best_k == 0 || search.best_k == s.disparities - 1) {
     disparity[at] = static_cast<int16_t>(whole * 16);
@@ -193,83 +190,13 @@ __global__ void match_kernel(const uint8_t* left, const uint8_t* right, int16_t*
   disparity[at] = static_cast<int16_t>((whole * 256 + (d != 0 ? (p - n) * 256 / d : 0) + 15) >> 4);
 }
 
-// Every pixel outside the valid region: filtered, its best cost 0.
-__global__ void mark_unmatched_kernel(int16_t* disparity, int32_t* best_cost,
-                                      BlockMatchingShape s) {
+// Every pixel outside the valid region: filtered.
+__global__ void mark_unmatched_kernel(int16_t* disparity, BlockMatchingShape s) {
   const int x = blockIdx.x * blockDim.x + threadIdx.x;
   const int y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= s.cols || y >= s.rows || (x >= s.x0 && x < s.x1 && y >= s.y0 && y < s.y1)) return;
   const std::size_t at = static_cast<std::size_t>(y) * s.cols + x;
   disparity[at] = static_cast<int16_t>((s.min_disparity - 1) * 16);
-  best_cost[at] = 0;
-}
-
-// ---------------------------------------------------------------------------------------------
-// The left-right check (cv::validateDisparity)
-// ---------------------------------------------------------------------------------------------
-
-// Each right-image pixel's best match among the left pixels of its row, packed so that atomicMin
-// keeps what OpenCV's scan keeps: the least cost, then the leftmost column (its scan replaces a
-// match only by a strictly cheaper one); the match's disparity rides in the low bits.
-constexpr unsigned long long kNoMatch = ~0ull;
-
-__device__ unsigned long long pack_match(int cost, int x, int disparity) {
-  const unsigned cost_order = static_cast<unsigned>(cost) ^ 0x80000000u;  // signed order
-  return static_cast<unsigned long long>(cost_order) << 32 |
-         static_cast<unsigned long long>(static_cast<unsigned>(x)) << 16 |
-         static_cast<uint16_t>(disparity);
-}
-
-__device__ int matched_disparity(unsigned long long match) {
-  return static_cast<int16_t>(match & 0xffff);
-}
-
-__global__ void clear_matches_kernel(unsigned long long* right_match, int rows, int cols) {
-  const int x = blockIdx.x * blockDim.x + threadIdx.x;
-  const int y = blockIdx.y * blockDim.y + threadIdx.y;
-  if (x < cols && y < rows) right_match[static_cast<size_t>(y) * cols + x] = kNoMatch;
-}
-
-// The columns OpenCV checks, [max(min_disparity + disparities, 0), cols + min(min_disparity, 0)).
-struct CheckedColumns {
-  int first = 0, end = 0;
-};
-
-__global__ void right_match_kernel(const int16_t* disparity, const int32_t* best_cost,
-                                   unsigned long long* right_match, int rows, int cols,
-                                   CheckedColumns columns, int invalid) {
-  const int x = blockIdx.x * blockDim.x + threadIdx.x;
-  const int y = blockIdx.y * blockDim.y + threadIdx.y;
-  if (x < columns.first || x >= columns.end || y >= rows) return;
-  const size_t at = static_cast<size_t>(y) * cols + x;
-  const int d = disparity[at], cost = best_cost[at];
-  // A cost of INT_MAX never replaces OpenCV's initial INT_MAX.
-  if (d == invalid || cost == INT_MAX) return;
-  const int x2 = x - ((d + 8) >> 4);
-  if (x2 < 0 || x2 >= cols) return;
-  atomicMin(&right_match[static_cast<size_t>(y) * cols + x2], pack_match(cost, x, d));
-}
-
-// Invalid where the disparity rounded down and rounded up both disagree by more than max_diff
-// (1/16 px) with the right pixel's best match; a right pixel without one, or whose match is not
-// above the invalid value (OpenCV's test), agrees.
-__global__ void left_right_check_kernel(int16_t* disparity, const unsigned long long* right_match,
-                                        int rows, int cols, CheckedColumns columns, int invalid,
-                                        int max_diff) {
-  const int x = blockIdx.x * blockDim.x + threadIdx.x;
-  const int y = blockIdx.y * blockDim.y + threadIdx.y;
-  if (x < columns.first || x >= columns.end || y >= rows) return;
-  const size_t at = static_cast<size_t>(y) * cols + x;
-  const int d = disparity[at];
-  if (d == invalid) return;
-  const unsigned long long* row = right_match + static_cast<size_t>(y) * cols;
-  const auto disagrees = [&](int x2) {
-    return x2 >= 0 && x2 < cols && row[x2] != kNoMatch && matched_disparity(row[x2]) > invalid &&
-           abs(matched_disparity(row[x2]) - d) > max_diff;
-  };
-  if (disagrees(x - (d >> 4)) && disagrees(x - ((d + 15) >> 4))) {
-    disparity[at] = static_cast<int16_t>(invalid);
-  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -408,26 +335,13 @@ void check_block_matching(int radius, int disparities) {
 
 void filter_disparity(const BlockMatchingShape& s, const DisparityFilter& f,
                       const DisparityFilterBuffers& b, cudaStream_t stream) {
-  // The packed matches keep a column in 16 bits; the labels are pixel indices in an int.
-  if (s.cols > 65535 || static_cast<long long>(s.rows) * s.cols > INT_MAX) {
+  // The labels are pixel indices in an int.
+  if (static_cast<long long>(s.rows) * s.cols > INT_MAX) {
     throw std::invalid_argument("cuda: disparity filter: " + std::to_string(s.cols) + "x" +
                                 std::to_string(s.rows) + " images do not fit");
   }
   const dim3 block = image_block(), pixels = image_grid(s.cols, s.rows);
   const int invalid = (s.min_disparity - 1) * 16;
-  if (f.disp12_max_diff >= 0) {
-    const CheckedColumns columns{std::max(s.min_disparity + s.disparities, 0),
-                                 s.cols + std::min(s.min_disparity, 0)};
-    launch(clear_matches_kernel, pixels, block, stream, b.right_match, s.rows, s.cols);
-    check_launch("clear_matches_kernel");
-    launch(right_match_kernel, pixels, block, stream, static_cast<const int16_t*>(b.disparity),
-           b.best_cost, b.right_match, s.rows, s.cols, columns, invalid);
-    check_launch("right_match_kernel");
-    launch(left_right_check_kernel, pixels, block, stream, b.disparity,
-           static_cast<const unsigned long long*>(b.right_match), s.rows, s.cols, columns, invalid,
-           f.disp12_max_diff * 16);
-    check_launch("left_right_check_kernel");
-  }
   if (f.speckle_size > 0 && f.speckle_range >= 0) {
     launch_synchronising(init_regions_kernel, pixels, block, 0, stream,
                          static_cast<const int16_t*>(b.disparity), b.labels, b.region_sizes, s.rows,
@@ -459,15 +373,14 @@ void block_match(const BlockMatchingShape& s, const BlockMatchingBuffers& b, cud
   launch(prefilter_kernel, pixels, block, stream, b.right, b.filtered_right, s.rows, s.cols,
          s.prefilter_cap);
   check_launch("prefilter_kernel");
-  launch(mark_unmatched_kernel, pixels, block, stream, b.disparity, b.best_cost, s);
+  launch(mark_unmatched_kernel, pixels, block, stream, b.disparity, s);
   check_launch("mark_unmatched_kernel");
   if (s.x1 <= s.x0 || s.y1 <= s.y0) return;
   const dim3 tiles((s.x1 - s.x0 + kTileCols - 1) / kTileCols,
                    (s.y1 - s.y0 + kTileRows - 1) / kTileRows);
   launch_synchronising(match_kernel, tiles, dim3(kTileCols, kTileRows), shared_bytes(t), stream,
                        static_cast<const uint8_t*>(b.filtered_left),
-                       static_cast<const uint8_t*>(b.filtered_right), b.disparity, b.best_cost, s,
-                       t);
+                       static_cast<const uint8_t*>(b.filtered_right), b.disparity, s, t);
   check_launch("match_kernel");
 }
 

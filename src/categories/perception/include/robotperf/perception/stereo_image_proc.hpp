@@ -35,7 +35,7 @@ struct StereoParams {
   int speckle_size = 100;
   int speckle_range = 4;
   int uniqueness_ratio = 15;
-  // SGBM only.
+  // SGBM only (StereoBM, as stereo_image_proc's, makes no left-right check).
   int p1 = 200;
   int p2 = 400;
   int disp12_max_diff = 0;
