@@ -116,6 +116,18 @@ TEST(Functional, SwappedLeftAndRightIsFunctionallyInvalid) {
   EXPECT_NE(reasons(*r.functional).find("valid_fraction"), std::string::npos);
 }
 
+// A matcher that searches fewer disparities than the scene holds misses the nearer pixels: they
+// count against its valid_fraction, not left out because the output says it did not look.
+TEST(Functional, NarrowSearchRangeCountsTheDisparitiesItMisses) {
+  const PackageCopy narrow("a3_stereo_image_proc", "x3", [](std::string g) {
+    return replace_all(g, "disparity_range: 64", "disparity_range: 16");
+  });
+  const RunResult r = run_benchmark(narrow.spec(), quick(6, 10));
+  ASSERT_TRUE(r.functional);
+  EXPECT_FALSE(metric(*r.functional, "valid_fraction").passed);
+  EXPECT_FALSE(r.functional->valid);
+}
+
 TEST(Functional, A4PointCloudMeetsItsAccuracyFromMetresAndMillimetres) {
   const BenchmarkSpec spec = load_benchmark(kBenchmarks / "a4_depth_image_proc");
   const RunResult metres = run_benchmark(spec, quick(10, 15));

@@ -451,6 +451,29 @@ TEST(PointCloudXyzrgb, RejectsWhatDepthImageProcRejects) {
   msgs::CameraInfo uncalibrated = t.info;
   uncalibrated.p = {};
   EXPECT_THROW(point_cloud_xyzrgb(t.depth, t.colour, uncalibrated, {}, c), std::invalid_argument);
+  msgs::Image empty;
+  prepare_image(empty, t.depth.header, "rgb8", 0, 0);
+  EXPECT_THROW(point_cloud_xyzrgb(t.depth, empty, t.info, {}, c), std::invalid_argument);
+}
+
+// depth_image_proc's constant of x is the unit in double over the focal length in double, then
+// a float: with a4's fx that is one ulp from the unit over the focal length in float.
+TEST(PointCloudXyzrgb, ScalesByDepthImageProcsConstants) {
+  Tiny t("32FC1", "rgb8");
+  const double fx = 528.4338, fy = 529.1;
+  t.info.p[0] = fx;
+  t.info.p[5] = fy;
+  t.info.p[2] = 2.0;
+  t.info.p[6] = 1.0;
+  image_view(t.depth).at<float>(2, 3) = 1.0f;  // (u - cx) = (v - cy) = 1 at depth 1 m
+  const float constant_x = static_cast<float>(1.0 / fx);
+  const float constant_y = static_cast<float>(1.0 / fy);
+  ASSERT_NE(constant_x, 1.0f / static_cast<float>(fx));
+  msgs::PointCloud2 c;
+  point_cloud_xyzrgb(t.depth, t.colour, t.info, {}, c);
+  const Point p = point_at(c, 3, 2);
+  EXPECT_EQ(p.x, constant_x);
+  EXPECT_EQ(p.y, constant_y);
 }
 
 TEST(PointCloudXyzrgb, ScenePointsMatchTheTruth) {

@@ -51,17 +51,26 @@ struct DepthTraits<uint16_t> {
   }
 };
 
+// As depth_image_proc takes it from image_geometry: the principal point in float, the focal
+// lengths in double.
 struct Pinhole {
-  float cx, cy, fx, fy;
+  float cx, cy;
+  double fx, fy;
 };
+
+// depth_image_proc's constant of x (or y): the depth unit, a float widened to double, over the
+// focal length in double, then narrowed; a division in float is one ulp off for some lengths.
+float unit_over(float unit, double focal_length) {
+  return static_cast<float>(static_cast<double>(unit) / focal_length);
+}
 
 template <class T>
 void convert_depth(const cv::Mat& depth, const Pinhole& model, double range_max,
                    msgs::PointCloud2& cloud) {
   using Traits = DepthTraits<T>;
   const float unit = Traits::to_metres(T(1));
-  const float constant_x = unit / model.fx;
-  const float constant_y = unit / model.fy;
+  const float constant_x = unit_over(unit, model.fx);
+  const float constant_y = unit_over(unit, model.fy);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const bool fill_invalid = range_max != 0.0;
   const T fill = Traits::from_metres(range_max);
@@ -106,8 +115,8 @@ XyzrgbModel device_model(bool is_float, const Pinhole& model, double range_max,
       is_float ? DepthTraits<float>::to_metres(1.0f) : DepthTraits<uint16_t>::to_metres(1);
   m.cx = model.cx;
   m.cy = model.cy;
-  m.constant_x = unit / model.fx;
-  m.constant_y = unit / model.fy;
+  m.constant_x = unit_over(unit, model.fx);
+  m.constant_y = unit_over(unit, model.fy);
   m.fill_invalid = range_max != 0.0;
   m.fill = is_float ? DepthTraits<float>::from_metres(range_max)
                     : static_cast<float>(DepthTraits<uint16_t>::from_metres(range_max));
@@ -236,16 +245,21 @@ void PointCloudXyzrgbProcessor::compute(const msgs::Image& depth, const msgs::Im
                                 "' is not supported (32FC1 metres, 16UC1 millimetres)");
   }
   const ColourLayout layout = colour_layout(colour.encoding);
+  if (colour.width == 0 || colour.height == 0) {
+    throw std::invalid_argument("point_cloud_xyzrgb: the colour image is empty (" +
+                                std::to_string(colour.width) + "x" + std::to_string(colour.height) +
+                                ")");
+  }
   const cv::Mat depth_view = image_view(depth);
   cv::Mat colour_view = image_view(colour);
 
-  Pinhole model{static_cast<float>(info.p[2]), static_cast<float>(info.p[6]),
-                static_cast<float>(info.p[0]), static_cast<float>(info.p[5])};
+  Pinhole model{static_cast<float>(info.p[2]), static_cast<float>(info.p[6]), info.p[0], info.p[5]};
   if (colour.width != depth.width || colour.height != depth.height) {
-    // The camera model belongs to the colour image: scale it to the depth image.
-    const double ratio = static_cast<double>(depth.width) / colour.width;
+    // The camera model belongs to the colour image: scaled to the depth image by a ratio in
+    // float, as depth_image_proc scales it.
+    const float ratio = static_cast<float>(depth.width) / static_cast<float>(colour.width);
     model = {static_cast<float>(info.p[2] * ratio), static_cast<float>(info.p[6] * ratio),
-             static_cast<float>(info.p[0] * ratio), static_cast<float>(info.p[5] * ratio)};
+             info.p[0] * ratio, info.p[5] * ratio};
     if (backend_ == ImageBackend::kCpu) {
       cv::Mat resized;
       cv::resize(colour_view, resized, depth_view.size(), 0, 0, cv::INTER_LINEAR);

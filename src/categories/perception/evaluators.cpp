@@ -67,8 +67,9 @@ class StereoDisparityEvaluator final : public FunctionalEvaluator {
       const float* gt_row = gt.ptr<float>(static_cast<int>(v));
       for (uint32_t u = w.x_offset; u < w.x_offset + w.width; ++u) {
         const float g = gt_row[u];
-        // Only pixels whose true disparity the matcher could have found.
-        if (std::isnan(g) || g < out.min_disparity || g > out.max_disparity) continue;
+        // Every pixel with a true disparity: a search range narrower than the scene's (the
+        // output says which it searched) misses those beyond it rather than leaving them out.
+        if (std::isnan(g)) continue;
         ++evaluated_;
         const float x = d_row[u];
         if (!std::isfinite(x) || x < out.min_disparity || x > out.max_disparity) continue;

@@ -5,6 +5,7 @@
 #include "category.hpp"
 #include "device_node.hpp"
 #include "robotperf/perception/image_proc.hpp"
+#include "skipping_node.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -21,12 +22,18 @@ int interpolation_parameter(const KernelConfig& config) {
   return static_cast<int>(v);
 }
 
-// Subscribes `image` and `camera_info` and hands exact-time pairs to process().
-class CameraNode : public graph::Node {
+// Subscribes `image` and `camera_info` and hands exact-time pairs to process(); a pair the kernel
+// refuses (an uncalibrated camera, an image of another size than its CameraInfo) is skipped.
+class CameraNode : public SkippingNode {
+ public:
+  std::map<std::string, uint64_t> counters() const override {
+    return {{"rejected_sets", rejected_}};
+  }
+
  protected:
   CameraNode(graph::Context& context, const KernelConfig& config)
-      : Node(context, config.node_name),
-        sync_([this](const auto& img, const auto& info) { process(img, info); }) {
+      : SkippingNode(context, config.node_name),
+        sync_([this](const auto& img, const auto& info) { guarded([&] { process(img, info); }); }) {
     image_sub_ = create_subscription<msgs::Image>(
         config.topic("image"), config.qos,
         [this](std::shared_ptr<const msgs::Image> m) { sync_.add(std::move(m)); });

@@ -1,12 +1,12 @@
 // stereo_image_proc/disparity and depth_image_proc/point_cloud_xyzrgb as graph nodes.
 #include <cmath>
-#include <iostream>
 #include <stdexcept>
 
 #include "category.hpp"
 #include "device_node.hpp"
 #include "robotperf/perception/depth_image_proc.hpp"
 #include "robotperf/perception/stereo_image_proc.hpp"
+#include "skipping_node.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -54,23 +54,6 @@ class OutputPool {
 
  private:
   std::shared_ptr<T> last_;
-};
-
-// Inputs rejected by the kernel (a bad image, mismatched frames) are skipped and counted, as the
-// ROS nodes log and skip them: the frame shows as lost at the Monitor.
-class SkippingNode : public graph::Node, public plugin::NodeCounters {
- protected:
-  using graph::Node::Node;
-  template <class F>
-  void guarded(F&& f) {
-    try {
-      f();
-    } catch (const std::invalid_argument& e) {
-      if (rejected_++ == 0)
-        std::cerr << "robotperf node " << name() << ": skipping input: " << e.what() << "\n";
-    }
-  }
-  uint64_t rejected_ = 0;
 };
 
 class DisparityNode final : public SkippingNode, public ImageDeviceNode {

@@ -1,0 +1,95 @@
+// The perception kernels as graph nodes: an input the kernel cannot use is skipped and counted, as
+// the ROS nodes log and drop it, and the node goes on with the next.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "../node_test_support.hpp"
+#include "category.hpp"
+#include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/msgs/stereo_msgs.hpp"
+#include "robotperf/perception/image_proc.hpp"
+#include "robotperf/perception/synthetic_stereo.hpp"
+
+namespace robotperf::perception {
+namespace {
+
+const testing::CategoryUnderTest& category() {
+  static const testing::CategoryUnderTest c{register_image_proc_kernels,
+                                            register_stereo_depth_kernels};
+  return c;
+}
+
+const StereoFrame& frame() {
+  static const StereoFrame f = [] {
+    SyntheticStereoConfig c;
+    c.frames = 1;
+    return generate_stereo_sequence(c).front();
+  }();
+  return f;
+}
+
+template <class T>
+T stamped(T message, int32_t sec) {
+  message.header.stamp = {sec, 0};
+  return message;
+}
+
+template <class T>
+bool has_stamp(const std::vector<T>& messages, int32_t sec) {
+  for (const auto& m : messages)
+    if (m.header.stamp.sec == sec) return true;
+  return false;
+}
+
+// An uncalibrated camera (K[0] = 0), which image_proc's rectify refuses, then a calibrated one.
+TEST(RectifyNode, SkipsAnUncalibratedCameraAndGoesOn) {
+  testing::NodeUnderTest node(category(), "image_proc/rectify");
+  auto& rectified = node.output<msgs::Image>("image_rect");
+  auto image = node.input<msgs::Image>("image");
+  auto info = node.input<msgs::CameraInfo>("camera_info");
+  node.start();
+  msgs::CameraInfo uncalibrated = frame().left_info;
+  uncalibrated.k[0] = 0;
+  info->publish(stamped(uncalibrated, 1));
+  image->publish(stamped(frame().left, 1));
+  info->publish(stamped(frame().left_info, 2));
+  image->publish(stamped(frame().left, 2));
+  EXPECT_TRUE(rectified.wait([](const auto& so_far) { return has_stamp(so_far, 2); }));
+  node.stop();
+  EXPECT_EQ(rectified.messages().size(), 1u);
+  EXPECT_EQ(node.counters().at("rejected_sets"), 1u);
+}
+
+// A pair smaller than the correlation window, which OpenCV's StereoBM refuses with a cv::Exception,
+// then a pair it can match.
+TEST(DisparityNode, SkipsAPairOpenCvRefusesAndGoesOn) {
+  testing::NodeUnderTest node(category(), "stereo_image_proc/disparity");
+  auto& disparity = node.output<msgs::DisparityImage>("disparity");
+  auto left = node.input<msgs::Image>("left_image");
+  auto right = node.input<msgs::Image>("right_image");
+  auto left_info = node.input<msgs::CameraInfo>("left_camera_info");
+  auto right_info = node.input<msgs::CameraInfo>("right_camera_info");
+  node.start();
+  msgs::Image tiny;
+  prepare_image(tiny, {}, "mono8", 12, 12);
+  msgs::CameraInfo tiny_left = frame().left_info, tiny_right = frame().right_info;
+  tiny_left.width = tiny_right.width = 12;
+  tiny_left.height = tiny_right.height = 12;
+  left->publish(stamped(tiny, 1));
+  right->publish(stamped(tiny, 1));
+  left_info->publish(stamped(tiny_left, 1));
+  right_info->publish(stamped(tiny_right, 1));
+  left->publish(stamped(frame().left, 2));
+  right->publish(stamped(frame().right, 2));
+  left_info->publish(stamped(frame().left_info, 2));
+  right_info->publish(stamped(frame().right_info, 2));
+  EXPECT_TRUE(disparity.wait([](const auto& so_far) { return has_stamp(so_far, 2); }));
+  node.stop();
+  EXPECT_EQ(disparity.messages().size(), 1u);
+  EXPECT_EQ(node.counters().at("rejected_sets"), 1u);
+}
+
+}  // namespace
+}  // namespace robotperf::perception
