@@ -2,12 +2,16 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <atomic>
 #include <cmath>
+#include <latch>
 #include <random>
+#include <thread>
 
 #include "../shared_data.hpp"
 #include "robotperf/manipulation/collision.hpp"
 #include "robotperf/manipulation/kinematics.hpp"
+#include "robotperf/manipulation/manipulation_requests.hpp"
 #include "robotperf/manipulation/planning.hpp"
 
 namespace robotperf::manipulation {
@@ -53,6 +57,57 @@ TEST(RobotModel, BadUrdfIsOneClearError) {
   }
 }
 
+// Fixed joints before the first moving joint (a base mount), between two and after the last (a
+// tool): each counts once in the KDL chain, as in the transform chain.
+TEST(RobotModel, FixedJointsCountOnceInTheKdlChain) {
+  const char* const urdf = R"(<robot name="mounted">
+    <link name="base"/><link name="mount"/><link name="l1"/><link name="wrist"/><link name="l2"/>
+    <link name="tool"/>
+    <joint name="base_mount" type="fixed"><parent link="base"/><child link="mount"/>
+      <origin xyz="0 0 0.1" rpy="0 0 0.3"/></joint>
+    <joint name="j1" type="revolute"><parent link="mount"/><child link="l1"/>
+      <origin xyz="0.2 0 0"/><axis xyz="0 0 1"/>
+      <limit lower="-3" upper="3" velocity="1" effort="1"/></joint>
+    <joint name="wrist_mount" type="fixed"><parent link="l1"/><child link="wrist"/>
+      <origin xyz="0 0.05 0.1" rpy="0.4 0 0"/></joint>
+    <joint name="j2" type="revolute"><parent link="wrist"/><child link="l2"/>
+      <origin xyz="0.3 0 0" rpy="0 0.2 0"/><axis xyz="0 1 0"/>
+      <limit lower="-3" upper="3" velocity="1" effort="1"/></joint>
+    <joint name="tool_mount" type="fixed"><parent link="l2"/><child link="tool"/>
+      <origin xyz="0.1 0 0" rpy="0 0 0.5"/></joint>
+  </robot>)";
+  const RobotModel m = RobotModel::from_urdf(urdf, "base", "tool", 1.0);
+  ASSERT_EQ(m.dof(), 2u);
+  ForwardKinematics fk(m);
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 50; ++i) {
+    const double q[2] = {std::uniform_real_distribution<double>(-3, 3)(rng),
+                         std::uniform_real_distribution<double>(-3, 3)(rng)};
+    const Eigen::Isometry3d kdl = fk.tip_pose(q), eigen = m.tip_pose(q);
+    ASSERT_LT((kdl.matrix() - eigen.matrix()).cwiseAbs().maxCoeff(), 1e-12) << "state " << i;
+  }
+}
+
+TEST(RobotModel, InModelOrderMapsJointsByName) {
+  const auto& names = arm().joint_names();
+  const std::vector<double> q{0.1, 0.2, 0.3, 0.4, 0.5, 0.6};
+  EXPECT_EQ(in_model_order(arm(), {}, q, "positions"), q);
+  // Another order, and a joint the arm does not have (a gripper's), which is ignored.
+  const std::vector<std::string> shuffled{names[5], names[4], "gripper", names[3],
+                                          names[2], names[1], names[0]};
+  EXPECT_EQ(in_model_order(arm(), shuffled, {0.6, 0.5, 9.0, 0.4, 0.3, 0.2, 0.1}, "positions"), q);
+  EXPECT_THROW(in_model_order(arm(), {}, {0.1, 0.2}, "positions"), std::invalid_argument);
+  EXPECT_THROW(in_model_order(arm(), shuffled, q, "positions"), std::invalid_argument);
+  std::vector<std::string> missing = names;
+  missing[2] = "elbow";
+  EXPECT_THROW(in_model_order(arm(), missing, q, "positions"), std::invalid_argument);
+  std::vector<double> nan = q;
+  nan[3] = std::nan("");
+  EXPECT_THROW(in_model_order(arm(), names, nan, "positions"), std::invalid_argument);
+  nan[3] = INFINITY;
+  EXPECT_THROW(in_model_order(arm(), {}, nan, "velocities"), std::invalid_argument);
+}
+
 TEST(ForwardKinematics, HandComputedPoses) {
   ForwardKinematics fk(arm());
   // q = 0: joint2..6 offsets along the published origins put the flange at x = 0.0535 + 0.0775
@@ -90,6 +145,40 @@ TEST(ForwardKinematics, KdlAgreesWithTheIndependentTransformChain) {
     EXPECT_LT(dp, 1e-12);
     EXPECT_LT(dr, 1e-6);
   }
+}
+
+// Two nodes of one process run their solvers in two threads: each solver on its own copy of the
+// chain (KDL's joints cache their last pose), so neither sees the other's joint angles.
+TEST(ForwardKinematics, SolversInTwoThreadsAgreeWithTheTransformChain) {
+  std::atomic<int> mismatches{0}, wrong_solutions{0}, solved{0};
+  std::latch ready(2);  // both solvers built, then both run at once
+  auto work = [&](uint64_t seed) {
+    ForwardKinematics fk(arm());
+    IkOptions options;
+    options.seed = seed;
+    InverseKinematics ik(arm(), options);
+    std::mt19937_64 rng(seed);
+    const std::vector<double> zero(6, 0.0);
+    ready.arrive_and_wait();
+    for (int i = 0; i < 100000; ++i) {
+      const auto q = random_state(rng);
+      double dp, dr;
+      pose_error(fk.tip_pose(q.data()), arm().tip_pose(q.data()), dp, dr);
+      mismatches += dp > 1e-12 || dr > 1e-6;
+      if (i % 1000 != 0) continue;
+      const IkResult r = ik.solve(arm().tip_pose(q.data()), zero);
+      if (!r.success) continue;
+      ++solved;
+      pose_error(arm().tip_pose(r.q.data()), arm().tip_pose(q.data()), dp, dr);
+      wrong_solutions += dp > 1e-4 || dr > 1e-4;
+    }
+  };
+  std::thread a(work, 1), b(work, 2);
+  a.join();
+  b.join();
+  EXPECT_EQ(mismatches.load(), 0);
+  EXPECT_EQ(wrong_solutions.load(), 0);
+  EXPECT_GT(solved.load(), 150);
 }
 
 // LMA's eps bounds the weighted error with KDL's default weights (orientation 0.01), so its
@@ -203,8 +292,8 @@ TEST(Planning, PathAroundTheBoxIsValidAtAFineStep) {
   const Scene scene = default_scene();
   PlanOptions options;
   options.planning_time_s = 5.0;
-  // As d1 plans: links padded by more than any point of the arm moves between two motion checks
-  // (0.0005 of the extent, 0.0065 rad, moves it up to about 3.5 mm).
+  // As d1 plans: links padded by more than any state between two motion checks is from the
+  // nearer of them (0.0005 of the extent, 0.0065 rad, moves a point up to about 7 mm: 3.5 mm).
   options.longest_valid_segment_fraction = 0.0005;
   Planner planner(arm(), make_fcl_checker(arm(), scene, 0.005), options);
   // Either side of the pillar, the flange low: the straight joint-space line goes through it.
@@ -246,6 +335,23 @@ TEST(Planning, PathAroundTheBoxIsValidAtAFineStep) {
   EXPECT_GT(e.max_tracking_error, 0.0);
   EXPECT_LT(e.max_tracking_error, 0.1);
   EXPECT_LT(e.final_error, 1e-3);
+}
+
+// Near and far states alternate in the share asked for, so that a run of fewer frames than the
+// dataset (--count) measures the same mix.
+TEST(ManipulationRequests, CollisionStatesInterleaveNearAndFar) {
+  ManipulationWorkload w;
+  w.requests = 40;
+  w.near_fraction = 0.25;
+  const CollisionRequests r = generate_collision_requests(w);
+  ASSERT_EQ(r.states.size(), 40u);
+  const Shape& box = default_scene().objects.front().shape;
+  std::size_t near = 0;
+  for (std::size_t k = 0; k < r.states.size(); ++k) {
+    const Eigen::Vector3d tip = arm().tip_pose(r.states[k].position.data()).translation();
+    near += signed_distance(box, box.origin.inverse() * tip) < 0.15;
+    EXPECT_EQ(near, (k + 1 + 3) / 4) << "the first " << k + 1 << " states";
+  }
 }
 
 }  // namespace

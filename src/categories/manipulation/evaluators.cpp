@@ -2,9 +2,12 @@
 // computations independent of the kernel under test: FK and IK against the URDF's own transform
 // chain (Eigen, not KDL), collision answers against the sampled ground truth and against both
 // FCL and Bullet, plans by re-checking every interpolated state with FCL and Bullet without the
-// planner's link padding.
+// planner's link padding and their timing by finite differences of their positions.
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "category.hpp"
 #include "robotperf/manipulation/collision.hpp"
@@ -22,17 +25,15 @@ using plugin::FunctionalEvaluator;
 
 const double kNaN = std::nan("");
 
-// The positions of a JointState in the model's order, or empty when they do not fit.
-std::vector<double> positions(const RobotModel& m, const msgs::JointState& s) {
-  if (s.position.size() != m.dof()) return {};
-  if (s.name.empty()) return s.position;
-  std::vector<double> q(m.dof());
-  for (std::size_t j = 0; j < m.dof(); ++j) {
-    auto it = std::find(s.name.begin(), s.name.end(), m.joint_names()[j]);
-    if (it == s.name.end()) return {};
-    q[j] = s.position[static_cast<std::size_t>(it - s.name.begin())];
+// The positions of a JointState in the model's order (in_model_order), or empty with `why` set
+// when they do not fit.
+std::vector<double> positions(const RobotModel& m, const msgs::JointState& s, std::string& why) {
+  try {
+    return in_model_order(m, s.name, s.position, "positions");
+  } catch (const std::invalid_argument& e) {
+    why = e.what();
+    return {};
   }
-  return q;
 }
 
 class ForwardKinematicsEvaluator final : public FunctionalEvaluator {
@@ -74,9 +75,10 @@ class InverseKinematicsEvaluator final : public FunctionalEvaluator {
     const auto& target = *static_cast<const msgs::PoseStamped*>(target_.messages[frame].get());
     ++n_;
     if (out.position.empty()) return;  // no solution found
-    const auto q = positions(m, out);
+    std::string why;
+    const auto q = positions(m, out, why);
     if (q.empty()) {
-      problem("solution is not a joint state of the arm's " + std::to_string(m.dof()) + " joints");
+      problem("a solution is not a state of the arm: " + why);
       return;
     }
     if (!m.within_limits(q.data(), 1e-9)) problem("a solution is outside the joint limits");
@@ -116,7 +118,12 @@ class CollisionEvaluator final : public FunctionalEvaluator {
     const auto& out = *static_cast<const msgs::CollisionResult*>(output);
     const auto& truth = *static_cast<const msgs::CollisionResult*>(truth_.messages[frame].get());
     const auto& state = *static_cast<const msgs::JointState*>(states_.messages[frame].get());
-    const auto q = positions(RobotModel::xarm6(), state);
+    std::string why;
+    const auto q = positions(RobotModel::xarm6(), state, why);
+    if (q.empty()) {
+      problem("a dataset state is not a state of the arm: " + why);
+      return;
+    }
     ++n_;
     agree_truth_ += out.in_collision == truth.in_collision;
     const auto a = fcl_->check(q.data());
@@ -142,6 +149,10 @@ class CollisionEvaluator final : public FunctionalEvaluator {
   std::size_t n_ = 0, agree_truth_ = 0, agree_backends_ = 0, agree_kernel_ = 0, colliding_ = 0;
 };
 
+// A trajectory is judged by what its positions and times say, not by the figures reported with
+// it: its joints' speeds between points (finite differences) against the velocity limits, its
+// reported velocities against those speeds, and its path length summed from its positions. The
+// tracking error is the executor's own figure (the evaluator does not see the arm's states).
 class PlanExecutionEvaluator final : public FunctionalEvaluator {
  public:
   explicit PlanExecutionEvaluator(const DatasetStream& queries)
@@ -158,31 +169,78 @@ class PlanExecutionEvaluator final : public FunctionalEvaluator {
     ++n_;
     if (!out.success || out.trajectory.points.empty()) return;
     ++succeeded_;
-    manipulation::JointPath path;
-    for (const auto& p : out.trajectory.points) path.push_back(p.positions);
+    // The trajectory and the query in the model's joint order.
+    const auto& names = out.trajectory.joint_names;
+    manipulation::JointPath path, velocities, accelerations;
+    std::vector<double> times;
+    std::vector<double> start, goal;
+    try {
+      for (const auto& p : out.trajectory.points) {
+        path.push_back(in_model_order(m, names, p.positions, "positions"));
+        velocities.push_back(p.velocities.empty()
+                                 ? std::vector<double>{}
+                                 : in_model_order(m, names, p.velocities, "velocities"));
+        accelerations.push_back(p.accelerations.empty()
+                                    ? std::vector<double>{}
+                                    : in_model_order(m, names, p.accelerations, "accelerations"));
+        times.push_back(p.time_from_start.sec + p.time_from_start.nanosec * 1e-9);
+      }
+    } catch (const std::invalid_argument& e) {
+      problem(std::string("a trajectory point is not a state of the arm: ") + e.what());
+      return;
+    }
+    try {
+      if (query.points.empty()) throw std::invalid_argument("it has no points");
+      start = in_model_order(m, query.joint_names, query.points.front().positions, "positions");
+      goal = in_model_order(m, query.joint_names, query.points.back().positions, "positions");
+    } catch (const std::invalid_argument& e) {
+      problem(std::string("a query is not a pair of states of the arm: ") + e.what());
+      return;
+    }
     auto close = [](const std::vector<double>& a, const std::vector<double>& b) {
-      if (a.size() != b.size()) return false;
       for (std::size_t j = 0; j < a.size(); ++j)
         if (std::abs(a[j] - b[j]) > 1e-6) return false;
       return true;
     };
-    const bool ends = close(path.front(), query.points.front().positions) &&
-                      close(path.back(), query.points.back().positions);
+    const bool ends = close(path.front(), start) && close(path.back(), goal);
     if (!ends) problem("a trajectory does not start at the query's start or end at its goal");
-    bool limits_ok = true;
-    for (const auto& p : out.trajectory.points) {
-      for (std::size_t j = 0; j < m.dof() && j < p.velocities.size(); ++j) {
-        limits_ok &= std::abs(p.velocities[j]) <= m.limits()[j].max_velocity * (1 + 1e-9);
-        if (j < p.accelerations.size())
-          limits_ok &= std::abs(p.accelerations[j]) <= m.limits()[j].max_acceleration * (1 + 1e-9);
+    const bool timing_ok = std::adjacent_find(times.begin(), times.end(), [](double a, double b) {
+                             return !(b > a);
+                           }) == times.end();
+    if (!timing_ok) problem("a trajectory's times do not increase");
+    bool limits_ok = true, velocities_ok = true;
+    for (std::size_t k = 0; k < path.size(); ++k) {
+      for (std::size_t j = 0; j < m.dof(); ++j) {
+        const JointLimits& lim = m.limits()[j];
+        if (!velocities[k].empty())
+          limits_ok &= std::abs(velocities[k][j]) <= lim.max_velocity * (1 + 1e-9);
+        if (!accelerations[k].empty())
+          limits_ok &= std::abs(accelerations[k][j]) <= lim.max_acceleration * (1 + 1e-9);
+        if (k == 0 || !timing_ok) continue;
+        // Times have a resolution of 1 ns: an interval may be up to 1 ns longer than it reads.
+        const double dt = times[k] - times[k - 1], dq = path[k][j] - path[k - 1][j];
+        limits_ok &= std::abs(dq) <= lim.max_velocity * (1 + 1e-6) * (dt + 1e-9);
+        if (velocities[k].empty() || velocities[k - 1].empty()) continue;
+        const double v0 = velocities[k - 1][j], v1 = velocities[k][j];
+        limits_ok &= std::abs(v1 - v0) <= lim.max_acceleration * (1 + 1e-6) * (dt + 1e-9);
+        // With |acceleration| <= a, the mean velocity over an interval (dq / dt) is within a dt / 4
+        // of the mean of its end velocities (the trapezoidal rule's error bound), whatever the
+        // profile.
+        velocities_ok &= std::abs(dq / dt - (v0 + v1) / 2) <=
+                         lim.max_acceleration * dt / 4 + lim.max_velocity * (1e-6 + 1e-9 / dt);
       }
     }
     if (!limits_ok) problem("a trajectory exceeds the velocity or acceleration limits");
+    if (!velocities_ok) problem("a trajectory's velocities do not match its positions and times");
     // Both backends without padding, finer than the planner's own motion checks.
-    valid_ += ends && limits_ok && manipulation::path_valid(m, *fcl_, path, kRecheckStep) &&
+    valid_ += ends && timing_ok && limits_ok && velocities_ok &&
+              manipulation::path_valid(m, *fcl_, path, kRecheckStep) &&
               manipulation::path_valid(m, *bullet_, path, kRecheckStep);
-    length_sum_ += out.path_length;
-    tracking_ = std::max(tracking_, out.max_tracking_error);
+    length_sum_ += manipulation::path_length(path);
+    if (!(out.max_tracking_error >= 0) || !std::isfinite(out.max_tracking_error))
+      problem("an execution result's tracking error is not a finite figure >= 0");
+    else
+      tracking_ = std::max(tracking_, out.max_tracking_error);
   }
   std::map<std::string, double> metrics() const override {
     const double n = static_cast<double>(n_), s = static_cast<double>(succeeded_);
@@ -243,17 +301,20 @@ void register_evaluators(plugin::Registrar& registrar) {
       });
   registrar.add_evaluator(
       {.name = "plan_execution",
-       .description = "plans re-checked with FCL and Bullet at 0.005 rad steps, limits, ends, "
-                      "and execution tracking",
+       .description = "plans re-checked with FCL and Bullet at 0.005 rad steps, joint speeds "
+                      "between points against the limits, reported velocities against them, "
+                      "ends, and execution tracking",
        .output_type = "robotperf_msgs/msg/PlanExecutionResult",
        .truth_roles = {"query"},
        .metrics = {{"success_rate", "fraction", "queries planned and executed"},
                    {"valid_fraction", "fraction",
-                    "plans from start to goal, within the limits and collision-free (FCL and "
-                    "Bullet, no padding) at every 0.005 rad"},
-                   {"path_length_mean_rad", "rad", "mean joint-space path length"},
+                    "plans from start to goal, within the limits (reported and between points), "
+                    "velocities matching the positions, and collision-free (FCL and Bullet, no "
+                    "padding) at every 0.005 rad"},
+                   {"path_length_mean_rad", "rad",
+                    "mean joint-space length of the trajectories' positions"},
                    {"tracking_error_max_rad", "rad",
-                    "largest |desired - actual| while executing"}}},
+                    "largest |desired - actual| while executing, as the executor reports it"}}},
       [](const plugin::TruthStreams& t, const plugin::Parameters&) {
         return std::make_unique<PlanExecutionEvaluator>(t["query"]);
       });

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <kdl/chain.hpp>
 #include <kdl/chainfksolverpos_recursive.hpp>
 #include <kdl/chainiksolverpos_lma.hpp>
 #include <kdl/chainiksolvervel_pinv.hpp>
@@ -21,8 +22,12 @@ void pose_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double& 
   orientation_rad = Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
 }
 
+// Each solver owns a copy of the model's chain: KDL::Joint::pose caches its last angle and
+// rotation in the joint (orocos_kinematics_dynamics issue #373), so solvers on one chain in two
+// threads (two nodes of one process) read each other's rotations.
 struct ForwardKinematics::Impl {
-  explicit Impl(const RobotModel& m) : solver(m.chain()), q(m.chain().getNrOfJoints()) {}
+  explicit Impl(const RobotModel& m) : chain(m.chain()), solver(chain), q(chain.getNrOfJoints()) {}
+  KDL::Chain chain;
   KDL::ChainFkSolverPos_recursive solver;
   KDL::JntArray q;
   KDL::Frame out;
@@ -45,18 +50,19 @@ struct InverseKinematics::Impl {
   Impl(const RobotModel& m, const IkOptions& o)
       : model(m),
         options(o),
-        n(m.chain().getNrOfJoints()),
+        chain(m.chain()),
+        n(chain.getNrOfJoints()),
         q_min(n),
         q_max(n),
-        fk(m.chain()),
-        vel(m.chain()),
+        fk(chain),
+        vel(chain),
         rng(o.seed) {
     for (unsigned i = 0; i < n; ++i) {
       q_min(i) = m.limits()[i].lower;
       q_max(i) = m.limits()[i].upper;
     }
     if (o.solver == IkSolver::kLevenbergMarquardt) {
-      lma = std::make_unique<KDL::ChainIkSolverPos_LMA>(m.chain(), o.eps,
+      lma = std::make_unique<KDL::ChainIkSolverPos_LMA>(chain, o.eps,
                                                         static_cast<int>(o.max_iterations));
     }
   }
@@ -121,6 +127,7 @@ struct InverseKinematics::Impl {
 
   const RobotModel& model;
   IkOptions options;
+  KDL::Chain chain;  // its own, as ForwardKinematics's
   unsigned n;
   KDL::JntArray q_min, q_max;
   KDL::ChainFkSolverPos_recursive fk;

@@ -1,8 +1,10 @@
 // The manipulation kernels (d1-d6) as graph nodes: one request message in, one answer out, the
 // request's header (and so its message ID) copied to the answer.
 #include <Eigen/Geometry>
+#include <cmath>
 #include <iostream>
 #include <stdexcept>
+#include <string>
 
 #include "category.hpp"
 #include "robotperf/manipulation/collision.hpp"
@@ -26,28 +28,11 @@ double positive(const KernelConfig& c, const std::string& name) {
   return v;
 }
 
-// The request's joint positions in the model's joint order: by name when the message names its
-// joints, else positionally. Throws std::invalid_argument for a state that does not fit.
+// The request's joint positions in the model's joint order (in_model_order): throws
+// std::invalid_argument for a state that does not fit or is not finite.
 std::vector<double> model_positions(const RobotModel& m, const std::vector<std::string>& names,
                                     const std::vector<double>& position) {
-  if (names.empty()) {
-    if (position.size() != m.dof())
-      throw std::invalid_argument("joint state has " + std::to_string(position.size()) +
-                                  " positions, the arm " + std::to_string(m.dof()) + " joints");
-    return position;
-  }
-  if (names.size() != position.size())
-    throw std::invalid_argument("joint state has " + std::to_string(names.size()) + " names but " +
-                                std::to_string(position.size()) + " positions");
-  std::vector<double> q(m.dof());
-  for (std::size_t j = 0; j < m.dof(); ++j) {
-    std::size_t k = 0;
-    while (k < names.size() && names[k] != m.joint_names()[j]) ++k;
-    if (k == names.size())
-      throw std::invalid_argument("joint state has no joint '" + m.joint_names()[j] + "'");
-    q[j] = position[k];
-  }
-  return q;
+  return in_model_order(m, names, position, "positions");
 }
 
 // A node that answers each request; requests it cannot use are skipped and counted (the frame
@@ -128,13 +113,22 @@ class InverseKinematicsNode final : public RequestNode<msgs::PoseStamped, msgs::
 
  private:
   void respond(const msgs::PoseStamped& request, msgs::JointState& answer) override {
+    const RobotModel& m = RobotModel::xarm6();
+    // The solver works in the base frame; no transforms are known here to bring others into it.
+    if (!request.header.frame_id.empty() && request.header.frame_id != m.base_link()) {
+      throw std::invalid_argument("target pose is in frame '" + request.header.frame_id +
+                                  "', not the arm's base '" + m.base_link() + "'");
+    }
     const auto& p = request.pose;
+    if (!std::isfinite(p.position.x) || !std::isfinite(p.position.y) ||
+        !std::isfinite(p.position.z))
+      throw std::invalid_argument("target position is not finite");
     const Eigen::Quaterniond r(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
     if (!(std::abs(r.norm() - 1.0) < 1e-3))
       throw std::invalid_argument("target orientation is not a unit quaternion");
     const Eigen::Isometry3d target = msgs::isometry_of(p);
     const manipulation::IkResult result = ik_.solve(target, seed_state_);
-    answer.name = RobotModel::xarm6().joint_names();
+    answer.name = m.joint_names();
     if (result.success) answer.position = result.q;
   }
   manipulation::InverseKinematics ik_;
@@ -228,16 +222,24 @@ class PlanNode final : public RequestNode<msgs::JointTrajectory, msgs::JointTraj
 };
 
 // Executes a trajectory on a simulated position-controlled arm in simulated time: publishes the
-// arm's JointState every control step on `joint_states`, then the result.
+// arm's JointState every control step on `joint_states`, then the result. The result's
+// planning_time stays 0: the trajectory does not say how long planning took.
 class ExecuteNode final : public RequestNode<msgs::JointTrajectory, msgs::PlanExecutionResult> {
  public:
+  // Bounds the work of one request: a trajectory (or settle_s) whose execution takes more
+  // control steps is rejected (at 100 Hz, 10000 s).
+  static constexpr double kMaxControlSteps = 1e6;
+
   ExecuteNode(graph::Context& context, const KernelConfig& config)
       : RequestNode(context, config, "trajectory", "result") {
     options_.control_rate_hz = positive(config, "control_rate_hz");
     options_.lag_s = positive(config, "lag_s");
     options_.settle_s = config.parameters.get_double("settle_s");
-    if (!(options_.settle_s >= 0))
-      throw std::invalid_argument("node '" + config.node_name + "': settle_s must be >= 0");
+    if (!(options_.settle_s >= 0) ||
+        !(options_.settle_s * options_.control_rate_hz <= kMaxControlSteps)) {
+      throw std::invalid_argument("node '" + config.node_name +
+                                  "': settle_s must be >= 0 and at most 1e6 control steps");
+    }
     states_ = create_publisher<msgs::JointState>(config.topic("joint_states"), config.qos);
   }
 
@@ -250,14 +252,22 @@ class ExecuteNode final : public RequestNode<msgs::JointTrajectory, msgs::PlanEx
     std::vector<manipulation::TrajectorySample> samples;
     manipulation::JointPath path;
     for (const auto& p : trajectory.points) {
-      const auto q = model_positions(m, trajectory.joint_names, p.positions);
-      if (p.velocities.size() != q.size())
-        throw std::invalid_argument("trajectory points need velocities");
+      auto q = model_positions(m, trajectory.joint_names, p.positions);
+      if (p.velocities.empty()) throw std::invalid_argument("trajectory points need velocities");
+      auto v = in_model_order(m, trajectory.joint_names, p.velocities, "velocities");
+      std::vector<double> a;
+      if (!p.accelerations.empty())
+        a = in_model_order(m, trajectory.joint_names, p.accelerations, "accelerations");
       const double t = p.time_from_start.sec + p.time_from_start.nanosec * 1e-9;
       if (!samples.empty() && !(t > samples.back().time_s))
         throw std::invalid_argument("trajectory times must increase");
-      samples.push_back({t, q, p.velocities, {}});
       path.push_back(q);
+      samples.push_back({t, std::move(q), std::move(v), std::move(a)});
+    }
+    const double end_s = samples.back().time_s + options_.settle_s;
+    if (!(end_s * options_.control_rate_hz <= kMaxControlSteps)) {
+      throw std::invalid_argument("trajectory ends at " + std::to_string(samples.back().time_s) +
+                                  " s: executing it would take more than 1e6 control steps");
     }
     const auto result = manipulation::execute(samples, options_, [&](const auto& step) {
       auto state = std::make_shared<msgs::JointState>();

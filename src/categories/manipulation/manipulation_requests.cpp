@@ -70,7 +70,10 @@ CollisionRequests generate_collision_requests(const ManipulationWorkload& w) {
     auto q = random_state(m, rng);
     const Eigen::Vector3d tip = m.tip_pose(q.data()).translation();
     const bool is_near = manipulation::signed_distance(box, box.origin.inverse() * tip) < 0.15;
-    const bool want_near = near < near_wanted;
+    // Near and far states interleaved, so that every prefix (a run of fewer frames) has about
+    // the near share: the next state is near when, were it far, the share of near ones up to it
+    // would fall below near_wanted / requests.
+    const bool want_near = near * w.requests < near_wanted * (out.states.size() + 1);
     if (want_near != is_near) continue;
     const auto truth = manipulation::sampled_ground_truth(m, scene, q.data());
     if (truth.truth == manipulation::GroundTruth::kUncertain) continue;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <kdl/chain.hpp>
 #include <stdexcept>
+#include <string>
 
 #include "kdl_frame.hpp"
 
@@ -95,7 +96,9 @@ RobotModel RobotModel::from_urdf(const std::string& urdf_xml, const std::string&
   RobotModel m;
   m.name_ = urdf->getName();
   m.tip_link_ = tip_link;
-  // Fixed joints fold into the frame of the last moving joint (or the base).
+  // In the Eigen transform chain fixed joints fold into the next moving joint's origin (after the
+  // last one, into tip_offset_); the KDL chain gets a segment for every joint, as kdl_parser
+  // builds it.
   Eigen::Isometry3d fixed = Eigen::Isometry3d::Identity();
   for (std::size_t i = 0; i < path.size(); ++i) {
     const auto& link = path[i];
@@ -122,7 +125,8 @@ RobotModel RobotModel::from_urdf(const std::string& urdf_xml, const std::string&
         m.joints_.push_back({fixed * origin, axis});
         m.joint_names_.push_back(j.name);
         m.limits_.push_back(lim);
-        const KDL::Frame f = to_kdl(fixed * origin);
+        // Relative to the KDL segments of the fixed joints before it, not folding them in again.
+        const KDL::Frame f = to_kdl(origin);
         m.chain_->addSegment(
             KDL::Segment(link->name,
                          KDL::Joint(j.name, f.p, f.M * KDL::Vector(axis.x(), axis.y(), axis.z()),
@@ -195,6 +199,37 @@ Eigen::Isometry3d RobotModel::tip_pose(const double* q) const {
   for (std::size_t i = 0; i < joints_.size(); ++i)
     t = t * joints_[i].origin * Eigen::AngleAxisd(q[i], joints_[i].axis);
   return t * tip_offset_;
+}
+
+std::vector<double> in_model_order(const RobotModel& model, const std::vector<std::string>& names,
+                                   const std::vector<double>& values, const char* what) {
+  std::vector<double> q;
+  if (names.empty()) {
+    if (values.size() != model.dof()) {
+      throw std::invalid_argument("joint state has " + std::to_string(values.size()) + " " + what +
+                                  ", the arm " + std::to_string(model.dof()) + " joints");
+    }
+    q = values;
+  } else {
+    if (names.size() != values.size()) {
+      throw std::invalid_argument("joint state has " + std::to_string(names.size()) +
+                                  " names but " + std::to_string(values.size()) + " " + what);
+    }
+    q.resize(model.dof());
+    for (std::size_t j = 0; j < model.dof(); ++j) {
+      const auto it = std::find(names.begin(), names.end(), model.joint_names()[j]);
+      if (it == names.end())
+        throw std::invalid_argument("joint state has no joint '" + model.joint_names()[j] + "'");
+      q[j] = values[static_cast<std::size_t>(it - names.begin())];
+    }
+  }
+  for (std::size_t j = 0; j < q.size(); ++j) {
+    if (!std::isfinite(q[j])) {
+      throw std::invalid_argument("joint state's " + std::string(what) + " hold a value for '" +
+                                  model.joint_names()[j] + "' that is not finite");
+    }
+  }
+  return q;
 }
 
 double signed_distance(const Shape& shape, const Eigen::Vector3d& p) {

@@ -37,7 +37,7 @@ struct MessageTraits<CollisionResult> {
 struct PlanExecutionResult {
   Header header;
   bool success = false;
-  double planning_time = 0;       // s, planner and simplification
+  double planning_time = 0;       // s, planner and simplification (0 from the built-in executor)
   JointTrajectory trajectory;     // empty when planning failed
   double path_length = 0;         // rad, joint space
   uint32_t execution_steps = 0;   // JointStates published while executing

@@ -12,7 +12,8 @@
 
 namespace robotperf::manipulation {
 
-// The tip pose by KDL::ChainFkSolverPos_recursive. Not thread-safe (keeps its buffers).
+// The tip pose by KDL::ChainFkSolverPos_recursive. Not thread-safe (keeps its buffers); solvers
+// of one model may run in different threads (each has its own copy of the chain).
 class ForwardKinematics {
  public:
   explicit ForwardKinematics(const RobotModel& model);
@@ -54,7 +55,8 @@ void pose_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double& 
 
 // Solves for a joint state whose tip pose is the target: one attempt from the seed state, then
 // attempts from uniformly random states within the joint limits until one converges within the
-// limits or the timeout passes, as MoveIt's KDL plugin does. Not thread-safe.
+// limits or the timeout passes, as MoveIt's KDL plugin does. Not thread-safe; solvers of one
+// model may run in different threads, as ForwardKinematics.
 class InverseKinematics {
  public:
   InverseKinematics(const RobotModel& model, const IkOptions& options);

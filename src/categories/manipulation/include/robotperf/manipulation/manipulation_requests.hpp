@@ -29,7 +29,8 @@ struct KinematicsRequests {
 KinematicsRequests generate_kinematics_requests(const ManipulationWorkload& workload);
 
 // Joint states near and far from the box whose answer the sampled ground truth knows for certain,
-// and that answer.
+// and that answer. Near and far are interleaved: the first k states hold ceil(k * near / requests)
+// near ones, `near` being near_fraction * requests rounded.
 struct CollisionRequests {
   std::vector<msgs::JointState> states;
   std::vector<msgs::CollisionResult> truth;

@@ -73,6 +73,7 @@ class RobotModel {
   const std::vector<Link>& links() const { return links_; }
   const std::string& base_link() const { return links_.front().name; }
   const std::string& tip_link() const { return tip_link_; }
+  // KDL's joints cache their last pose (not thread-safe): a solver works on a copy of its own.
   const KDL::Chain& chain() const { return *chain_; }
 
   bool collision_allowed(std::size_t link_a, std::size_t link_b) const {
@@ -106,5 +107,12 @@ class RobotModel {
 
 // Signed distance from a point (in the shape's frame) to a primitive: negative inside.
 double signed_distance(const Shape& shape, const Eigen::Vector3d& p);
+
+// One field of a JointState or JointTrajectoryPoint (`what`: "positions", "velocities", ...) in
+// the model's joint order: by name when `names` is not empty (joints the model does not have are
+// ignored, as a JointState may carry a gripper's), else positionally. Throws
+// std::invalid_argument naming what does not fit: a size, a missing joint, a value not finite.
+std::vector<double> in_model_order(const RobotModel& model, const std::vector<std::string>& names,
+                                   const std::vector<double>& values, const char* what);
 
 }  // namespace robotperf::manipulation
