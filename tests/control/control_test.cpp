@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <numbers>
 #include <string>
 #include <thread>
@@ -229,6 +230,32 @@ TEST(DiffDriveController, WheelCommandsOdometryAndTimeout) {
   rig.run(0.5);  // no new command for longer than the timeout
   EXPECT_EQ(dd->timeouts(), 1u);
   EXPECT_DOUBLE_EQ(*h.command_interface("left_wheel_joint/velocity"), 0.0);
+}
+
+// Settings that would leave the robot unable to stop, or make the timeout undefined in
+// nanoseconds, are refused when the controller is made.
+TEST(DiffDriveController, RefusesLimitsAndTimeoutsItCannotHonour) {
+  auto make = [](const std::function<void(DiffDriveControllerConfig&)>& change) {
+    DiffDriveControllerConfig c;
+    change(c);
+    return DiffDriveController("dd", c);
+  };
+  EXPECT_NO_THROW(make([](auto&) {}));
+  EXPECT_THROW(make([](auto& c) {
+                 c.linear.has_acceleration_limits = true;
+                 c.linear.min_acceleration = 0.5;  // the speed could only ever grow
+                 c.linear.max_acceleration = 1.0;
+               }),
+               std::invalid_argument);
+  EXPECT_THROW(make([](auto& c) {
+                 c.angular.has_velocity_limits = true;
+                 c.angular.max_velocity = std::nan("");
+               }),
+               std::invalid_argument);
+  for (const double timeout : {-1.0, std::nan(""), 1e300}) {
+    EXPECT_THROW(make([&](auto& c) { c.cmd_vel_timeout_s = timeout; }), std::invalid_argument)
+        << timeout;
+  }
 }
 
 std::shared_ptr<msgs::Float64MultiArray> array_command(std::vector<double> data, int64_t id) {

@@ -61,12 +61,21 @@ DiffDriveController::DiffDriveController(std::string name, DiffDriveControllerCo
     : name_(std::move(name)), config_(std::move(config)) {
   if (!(config_.wheel_separation > 0) || !(config_.wheel_radius > 0))
     throw std::invalid_argument(name_ + ": wheel_separation and wheel_radius must be positive");
-  if (!(config_.publish_rate_hz > 0))
-    throw std::invalid_argument(name_ + ": publish_rate must be positive");
+  if (!(config_.publish_rate_hz > 0) || !std::isfinite(config_.publish_rate_hz))
+    throw std::invalid_argument(name_ + ": publish_rate must be a positive number");
+  // In nanoseconds, it must fit an int64.
+  if (!(config_.cmd_vel_timeout_s >= 0) || !(config_.cmd_vel_timeout_s <= 1e9))
+    throw std::invalid_argument(name_ + ": cmd_vel_timeout must be from 0 to 1e9 s");
+  timeout_ns_ = static_cast<int64_t>(config_.cmd_vel_timeout_s * 1e9);
   for (const SpeedLimits* l : {&config_.linear, &config_.angular}) {
-    if ((l->has_velocity_limits && l->min_velocity > l->max_velocity) ||
-        (l->has_acceleration_limits && l->min_acceleration > l->max_acceleration))
-      throw std::invalid_argument(name_ + ": a speed limit's minimum is above its maximum");
+    if (l->has_velocity_limits && !(l->min_velocity <= l->max_velocity))
+      throw std::invalid_argument(name_ + ": a velocity limit's minimum is above its maximum");
+    // An acceleration range without 0 would never let the speed settle (ros2_controllers'
+    // speed limiter refuses a positive min_acceleration).
+    if (l->has_acceleration_limits && !(l->min_acceleration <= 0 && 0 <= l->max_acceleration))
+      throw std::invalid_argument(name_ +
+                                  ": acceleration limits must hold 0 (min_acceleration <= 0 <= "
+                                  "max_acceleration)");
   }
 }
 
@@ -115,8 +124,7 @@ int64_t DiffDriveController::update(const UpdateContext& ctx) {
     timed_out_ = false;
   }
   double linear = 0, angular = 0;
-  if (current_ &&
-      ctx.now_ns - current_->received_ns <= static_cast<int64_t>(config_.cmd_vel_timeout_s * 1e9)) {
+  if (current_ && ctx.now_ns - current_->received_ns <= timeout_ns_) {
     linear = current_->linear;
     angular = current_->angular;
   } else if (current_ && !timed_out_) {

@@ -104,6 +104,7 @@ class DiffDriveController final : public Controller {
   Odometry odometry_;
   double last_linear_ = 0, last_angular_ = 0;
   int64_t next_publish_ns_ = 0;
+  int64_t timeout_ns_ = 0;  // cmd_vel_timeout
   bool published_ = false;
   bool timed_out_ = false;
   uint64_t timeouts_ = 0;
