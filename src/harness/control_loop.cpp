@@ -111,7 +111,10 @@ ControlLoopResult control_loop_from_wire(const json& wire, const MessageIds& ids
   std::vector<plugin::CommandWrite> writes;
   for (const auto& w : wire.at("writes"))
     writes.push_back({w.at(0).get<int64_t>(), w.at(1).get<int64_t>()});
-  c.command_to_write = command_to_write(writes, ids, records, warmup);
+  // The writes are times of the child's CLOCK_MONOTONIC: against the runner's send times only on
+  // the runner's machine (another machine's clock counts from its own boot).
+  if (wire.value("same_machine", true))
+    c.command_to_write = command_to_write(writes, ids, records, warmup);
   return c;
 }
 

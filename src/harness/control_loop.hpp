@@ -26,7 +26,9 @@ metrics::SampleStats command_to_write(const std::vector<plugin::CommandWrite>& w
 // The child's side: the timing (nanoseconds) and the raw command writes.
 nlohmann::json control_loop_to_wire(const plugin::LoopReport& loop);
 
-// The runner's side; throws nlohmann::json::exception on a malformed message.
+// The runner's side; throws nlohmann::json::exception on a malformed message. The command ->
+// write latency is left empty when `wire` says ("same_machine": false) the loop ran on another
+// machine, whose monotonic clock is not the runner's.
 ControlLoopResult control_loop_from_wire(const nlohmann::json& wire, const MessageIds& ids,
                                          const std::vector<MessageRecord>& records,
                                          std::size_t warmup);

@@ -295,7 +295,9 @@ std::vector<nlohmann::json> NodeProcesses::control_loops() const {
   std::lock_guard lock(mutex_);
   std::vector<nlohmann::json> out;
   for (const auto& c : children_) {
-    if (!c.control_loop.is_null()) out.push_back(c.control_loop);
+    if (c.control_loop.is_null()) continue;
+    out.push_back(c.control_loop);
+    out.back()["same_machine"] = c.report.same_machine;
   }
   return out;
 }

@@ -61,7 +61,7 @@ class NodeProcesses {
   // kills those that do not exit within `grace_s`.
   std::vector<NodeReport> shutdown(double grace_s);
   // After shutdown(): the control loop reports the children sent (see control_loop.hpp), in the
-  // order of the graph's nodes.
+  // order of the graph's nodes, each with "same_machine": whether its child ran on this one.
   std::vector<nlohmann::json> control_loops() const;
 
  private:
