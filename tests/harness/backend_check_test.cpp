@@ -47,16 +47,22 @@ TEST(BackendCheck, ImagesAgreeWithinOneGreyLevelPerChannel) {
   EXPECT_EQ(share(type, &bgr, &cpu), 0.0);
 }
 
+// `points` zero points of x, y, z and a packed colour declared `rgb_type`, 16 bytes each.
+msgs::PointCloud2 xyz_rgb_cloud(uint32_t points, uint8_t rgb_type) {
+  msgs::PointCloud2 c;
+  c.width = points;
+  c.height = 1;
+  c.point_step = 16;
+  c.fields = {{"x", 0, msgs::PointField::kFloat32, 1},
+              {"y", 4, msgs::PointField::kFloat32, 1},
+              {"z", 8, msgs::PointField::kFloat32, 1},
+              {"rgb", 12, rgb_type, 1}};
+  c.data.assign(16 * points, 0);
+  return c;
+}
+
 TEST(BackendCheck, PointCloudsAgreeWithinAMicrometreAndNanOnlyWithNan) {
-  msgs::PointCloud2 cpu;
-  cpu.width = 2;
-  cpu.height = 1;
-  cpu.point_step = 16;
-  cpu.fields = {{"x", 0, msgs::PointField::kFloat32, 1},
-                {"y", 4, msgs::PointField::kFloat32, 1},
-                {"z", 8, msgs::PointField::kFloat32, 1},
-                {"rgb", 12, msgs::PointField::kUint32, 1}};
-  cpu.data.assign(32, 0);
+  msgs::PointCloud2 cpu = xyz_rgb_cloud(2, msgs::PointField::kUint32);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::memcpy(cpu.data.data() + 16, &nan, 4);
   msgs::PointCloud2 other = cpu;
@@ -79,15 +85,7 @@ TEST(BackendCheck, PointCloudsAgreeWithinAMicrometreAndNanOnlyWithNan) {
 // PCL's rgb field is FLOAT32 holding the bytes b, g, r, 0: compared as a float, any two colours
 // (tiny or denormal numbers) agreed within 1e-6; they are compared channel by channel.
 TEST(BackendCheck, PointCloudColourDeclaredFloatIsComparedByChannel) {
-  msgs::PointCloud2 cpu;
-  cpu.width = 1;
-  cpu.height = 1;
-  cpu.point_step = 16;
-  cpu.fields = {{"x", 0, msgs::PointField::kFloat32, 1},
-                {"y", 4, msgs::PointField::kFloat32, 1},
-                {"z", 8, msgs::PointField::kFloat32, 1},
-                {"rgb", 12, msgs::PointField::kFloat32, 1}};
-  cpu.data.assign(16, 0);
+  msgs::PointCloud2 cpu = xyz_rgb_cloud(1, msgs::PointField::kFloat32);
   const uint8_t bgr0[4] = {10, 200, 30, 0};
   std::memcpy(cpu.data.data() + 12, bgr0, 4);
   msgs::PointCloud2 swapped = cpu;
