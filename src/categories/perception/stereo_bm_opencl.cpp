@@ -20,14 +20,15 @@ namespace {
 // the texture): sliding sums along the rows, then along the columns.
 const char* const kStereoBmSource = R"CL(
 // x-Sobel of rows y-1, y, y+1 (mirrored at the top and bottom rows), clipped and offset to
-// [0, 2 cap]; the first and last columns read cap.
+// [0, 2 cap]; the first and last columns read cap, and so does the last row of an odd height
+// (OpenCV filters rows in pairs and fills a row left over with cap).
 __kernel void prefilter(__global const uchar* src, int src_step, int src_offset,
                         __global uchar* dst, int dst_step, int dst_offset, int rows, int cols,
                         int cap) {
   const int x = get_global_id(0), y = get_global_id(1);
   if (x >= cols || y >= rows) return;
   __global uchar* out = dst + dst_offset + y * dst_step + x;
-  if (x == 0 || x == cols - 1) {
+  if (x == 0 || x == cols - 1 || (rows % 2 == 1 && y == rows - 1)) {
     *out = (uchar)cap;
     return;
   }

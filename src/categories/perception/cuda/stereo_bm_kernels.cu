@@ -23,13 +23,14 @@ __device__ int clamped(int v, int low, int high) {
 }
 
 // x-Sobel of rows y-1, y, y+1 (mirrored at the top and bottom rows), clipped and offset to
-// [0, 2 cap]; the first and last columns read cap.
+// [0, 2 cap]; the first and last columns read cap, and so does the last row of an odd height
+// (OpenCV filters rows in pairs and fills a row left over with cap).
 __global__ void prefilter_kernel(const uint8_t* src, uint8_t* dst, int rows, int cols, int cap) {
   const int x = blockIdx.x * blockDim.x + threadIdx.x;
   const int y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= cols || y >= rows) return;
   uint8_t* out = dst + static_cast<size_t>(y) * cols + x;
-  if (x == 0 || x == cols - 1) {
+  if (x == 0 || x == cols - 1 || (rows % 2 == 1 && y == rows - 1)) {
     *out = static_cast<uint8_t>(cap);
     return;
   }
