@@ -258,6 +258,14 @@ TEST(Functional, EchoEvaluatorFindsAChangedPayloadByte) {
   EXPECT_EQ(metric(bad, "identical_fraction").value, 0.5);
 
   EXPECT_THROW(load_dataset("middleware/payload", {{"payload_bytes", "0"}}), std::invalid_argument);
+  // 256 MiB payloads in the default 100 frames would be 25 GiB held: refused before any is made,
+  // naming the frames that fit.
+  try {
+    load_dataset("middleware/payload", {{"payload_bytes", "268435456"}});
+    ADD_FAILURE() << "25 GiB of payloads were accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--workload frames=4"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Functional, SampleIdsAreSpreadOverTheMeasuredMessages) {

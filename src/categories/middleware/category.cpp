@@ -19,6 +19,8 @@ using plugin::DatasetStream;
 
 constexpr double kRateHz = 100.0;
 constexpr int64_t kMaxPayloadBytes = int64_t{256} << 20;
+// Every frame's payload is held in memory for the run.
+constexpr int64_t kMaxDatasetBytes = int64_t{1} << 30;
 
 std::vector<DatasetStream> payload_streams(const plugin::Parameters& p) {
   const int64_t bytes = p.get_int("payload_bytes");
@@ -26,6 +28,13 @@ std::vector<DatasetStream> payload_streams(const plugin::Parameters& p) {
   if (bytes < 1 || bytes > kMaxPayloadBytes)
     throw std::invalid_argument("payload_bytes must be 1 to " + std::to_string(kMaxPayloadBytes));
   if (frames < 1 || frames > 100000) throw std::invalid_argument("frames must be 1 to 100000");
+  if (bytes * frames > kMaxDatasetBytes) {
+    throw std::invalid_argument(
+        "payload_bytes x frames is " + std::to_string((bytes * frames) >> 20) +
+        " MiB of payloads held in memory, above the " + std::to_string(kMaxDatasetBytes >> 20) +
+        " MiB bound: give fewer frames (--workload frames=" +
+        std::to_string(std::max<int64_t>(1, kMaxDatasetBytes / bytes)) + ")");
+  }
   std::mt19937_64 random(static_cast<uint64_t>(p.get_int("seed")));
   auto stream = plugin::make_stream<msgs::Image>("payload", "/ping");
   for (int64_t i = 0; i < frames; ++i) {
@@ -95,7 +104,8 @@ void register_category(plugin::Registrar& registrar) {
        .workload = {plugin::int_parameter("payload_bytes", 64,
                                           "bytes of payload (the Image's data), 1 to 256 MiB"),
                     plugin::int_parameter("frames", 100,
-                                          "distinct payloads (the run loops over them)"),
+                                          "distinct payloads (the run loops over them); "
+                                          "payload_bytes x frames at most 1 GiB"),
                     plugin::int_parameter("seed", 1, "seed of the payload bytes")}},
       payload_streams);
   registrar.add_evaluator(
