@@ -18,12 +18,13 @@ class RelayNode final : public graph::Node {
  public:
   RelayNode(graph::Context& context, const KernelConfig& config) : Node(context, config.node_name) {
     const std::string type = config.parameters.get_string("type");
-    delay_ = std::chrono::microseconds(
-        static_cast<int64_t>(config.parameters.get_double("delay_ms") * 1000.0));
+    // Bounded before it becomes an integer (an hour: a relay that never answers is fail_after's).
+    const double delay_ms = config.parameters.get_double("delay_ms");
+    if (!(delay_ms >= 0 && delay_ms <= 3.6e6))
+      throw std::invalid_argument("node '" + name() + "': delay_ms must be from 0 to 3600000");
+    delay_ = std::chrono::microseconds(static_cast<int64_t>(delay_ms * 1000.0));
     drop_every_ = config.parameters.get_int("drop_every");
     fail_after_ = config.parameters.get_int("fail_after");
-    if (delay_.count() < 0)
-      throw std::invalid_argument("node '" + name() + "': delay_ms must be >= 0");
     if (drop_every_ < 0)
       throw std::invalid_argument("node '" + name() + "': drop_every must be >= 0");
     if (fail_after_ < 0)
