@@ -1547,11 +1547,15 @@ int main(int argc, char** argv) {
     }
     if (*security_init_cmd) {
       if (keystore_enclaves.empty()) keystore_enclaves.push_back(rmw::kDefaultEnclave);
-      rmw::create_keystore(keystore_dir, keystore_enclaves);
-      std::cout << "keystore: " << fs::absolute(keystore_dir).string() << "\n";
+      // Named absolutely before it is made, whatever becomes of the current folder.
+      const fs::path keystore = fs::absolute(keystore_dir);
+      rmw::create_keystore(keystore, keystore_enclaves);
+      fs::path shown = keystore.lexically_normal();
+      if (!shown.has_filename()) shown = shown.parent_path();  // "dir/." is "dir/"
+      std::cout << "keystore: " << shown.string() << "\n";
       for (const auto& enclave : keystore_enclaves) {
         std::cout << "  enclave " << enclave << ": "
-                  << rmw::describe(rmw::enclave_files(keystore_dir, enclave)) << "\n";
+                  << rmw::describe(rmw::enclave_files(keystore, enclave)) << "\n";
       }
       std::cout << "use it with: robotperf run n4 --netns --security " << keystore_dir << "\n";
       return kExitOk;

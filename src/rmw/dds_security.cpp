@@ -165,9 +165,13 @@ struct CertificateRequest {
   EVP_PKEY* key = nullptr;         // its public key's pair
   X509* issuer = nullptr;          // null: self-signed
   EVP_PKEY* issuer_key = nullptr;  // null: self-signed
-  std::time_t not_before = 0;
+  // Valid from a day before it is issued, as SROS2's certificates are (a host whose clock lags
+  // accepts it), to validity_days after.
+  std::time_t issued = 0;
   int validity_days = 0;
 };
+
+constexpr std::time_t kDay = 24 * 60 * 60;
 
 Certificate new_certificate(const CertificateRequest& request) {
   const bool is_ca = request.issuer == nullptr;
@@ -179,11 +183,11 @@ Certificate new_certificate(const CertificateRequest& request) {
       BN_to_ASN1_INTEGER(serial.get(), X509_get_serialNumber(cert.get())) == nullptr) {
     throw openssl_error("making a serial number");
   }
-  std::time_t not_before = request.not_before;
+  std::time_t issued = request.issued;
   X509_NAME* subject = X509_get_subject_name(cert.get());
   if (X509_set_version(cert.get(), X509_VERSION_3) != 1 ||
-      X509_time_adj_ex(X509_getm_notBefore(cert.get()), 0, 0, &not_before) == nullptr ||
-      X509_time_adj_ex(X509_getm_notAfter(cert.get()), request.validity_days, 0, &not_before) ==
+      X509_time_adj_ex(X509_getm_notBefore(cert.get()), -1, 0, &issued) == nullptr ||
+      X509_time_adj_ex(X509_getm_notAfter(cert.get()), request.validity_days, 0, &issued) ==
           nullptr ||
       X509_set_pubkey(cert.get(), request.key) != 1 ||
       X509_NAME_add_entry_by_txt(
@@ -333,8 +337,30 @@ void write_file(const fs::path& path, const std::string& bytes, mode_t mode = 06
     if (n < 0 && errno != EINTR) error = errno;
     if (n > 0) written += static_cast<std::size_t>(n);
   }
+  // On disk before it is renamed into the keystore: the CA's key cannot be made again.
+  if (error == 0 && fsync(fd) != 0) error = errno;
   if (close(fd) != 0 && error == 0) error = errno;
   if (error != 0) throw file_error("write", path, error);
+}
+
+// Flushes a folder's entries to disk (the files renamed into it, the folders made in it).
+void sync_folder(const fs::path& path) {
+  const int fd = open(path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) throw file_error("open", path, errno);
+  const int error = fsync(fd) == 0 ? 0 : errno;
+  close(fd);
+  if (error != 0) throw file_error("sync", path, error);
+}
+
+// sync_folder of `root` and every folder in it.
+void sync_folders(const fs::path& root) {
+  std::error_code error;
+  for (auto it = fs::recursive_directory_iterator(root, error);
+       !error && it != fs::recursive_directory_iterator(); it.increment(error)) {
+    if (it->is_directory(error) && !it->is_symlink(error)) sync_folder(it->path());
+  }
+  if (error) throw SecurityError("keystore: cannot list " + root.string() + ": " + error.message());
+  sync_folder(root);
 }
 
 std::string read_file(const fs::path& path) {
@@ -434,7 +460,7 @@ Authority new_authority(std::time_t now, int validity_days) {
   ca.key = new_key();
   ca.certificate = new_certificate({.common_name = "robotperf keystore CA",
                                     .key = ca.key.get(),
-                                    .not_before = now,
+                                    .issued = now,
                                     .validity_days = validity_days});
   ca.certificate_pem = certificate_pem(ca.certificate.get());
   ca.governance_p7s = sign(governance_xml(), ca.certificate.get(), ca.key.get());
@@ -473,11 +499,10 @@ void write_enclave(const fs::path& folder, const std::string& enclave, const Aut
                                       .key = key.get(),
                                       .issuer = ca.certificate.get(),
                                       .issuer_key = ca.key.get(),
-                                      .not_before = now,
+                                      .issued = now,
                                       .validity_days = validity_days});
   // Written in UTC, but Fast DDS reads them as local time (mktime): starting a day early keeps a
   // new keystore valid at once in every time zone.
-  constexpr std::time_t kDay = 24 * 60 * 60;
   const std::string permissions =
       permissions_xml(enclave, subject_of(cert.get()), now - kDay, now + validity_days * kDay);
   write_file(folder / kPrivateKey, key_pem(key.get()), 0600);
@@ -525,20 +550,38 @@ void add_enclaves(const fs::path& keystore, const std::vector<std::string>& encl
     make_folder(scratch.path() / std::to_string(i));
     write_enclave(scratch.path() / std::to_string(i), missing[i], ca, now, validity_days);
   }
-  for (std::size_t i = 0; i < missing.size(); ++i) {
-    const fs::path built = scratch.path() / std::to_string(i);
-    const fs::path target = enclave_folder(keystore, missing[i]);
-    std::error_code ignored;
-    if (!fs::exists(target, ignored)) {
-      make_folder(target.parent_path());
-      move(built, target);
-    } else {
-      // The folder exists as the parent of a nested enclave ("/robot" of "/robot/camera").
-      for (const auto& file : fs::directory_iterator(built)) {
-        move(file.path(), target / file.path().filename());
+  sync_folders(scratch.path());
+  // Every place is made ready before anything moves; a move that fails puts the ones before it
+  // back.
+  for (const std::string& enclave : missing)
+    make_folder(enclave_folder(keystore, enclave).parent_path());
+  std::vector<std::pair<fs::path, fs::path>> moved;  // from, to
+  try {
+    for (std::size_t i = 0; i < missing.size(); ++i) {
+      const fs::path built = scratch.path() / std::to_string(i);
+      const fs::path target = enclave_folder(keystore, missing[i]);
+      std::error_code ignored;
+      if (!fs::exists(target, ignored)) {
+        move(built, target);
+        moved.emplace_back(built, target);
+      } else {
+        // The folder exists as the parent of a nested enclave ("/robot" of "/robot/camera").
+        for (const auto& file : fs::directory_iterator(built)) {
+          const fs::path to = target / file.path().filename();
+          move(file.path(), to);
+          moved.emplace_back(file.path(), to);
+        }
       }
     }
+  } catch (const SecurityError&) {
+    for (auto it = moved.rbegin(); it != moved.rend(); ++it) {
+      std::error_code ignored;
+      fs::rename(it->second, it->first, ignored);
+    }
+    throw;
   }
+  for (const std::string& enclave : missing)
+    sync_folder(enclave_folder(keystore, enclave).parent_path());
 }
 
 }  // namespace
@@ -589,9 +632,13 @@ void create_keystore(const fs::path& dir, const std::vector<std::string>& enclav
     throw SecurityError("keystore: " + target.string() +
                         " exists and is neither a keystore nor an empty folder");
   }
-  // Built next to its place and renamed into it, so that it appears whole or not at all.
+  // Built next to its place and renamed into it, so that it appears whole or not at all. An
+  // existing empty folder is kept (it may be a shell's current folder, which a rename over it
+  // would delete): the keystore is built inside it and its three folders renamed into it.
+  const bool into_folder = fs::exists(target, error);
   make_folder(target.parent_path());
-  ScratchFolder scratch(target.parent_path(), "." + target.filename().string() + ".new");
+  ScratchFolder scratch(into_folder ? target : target.parent_path(),
+                        into_folder ? ".new" : "." + target.filename().string() + ".new");
   const fs::path& root = scratch.path();
   const std::time_t now = std::time(nullptr);
   const Authority ca = new_authority(now, validity_days);
@@ -611,11 +658,18 @@ void create_keystore(const fs::path& dir, const std::vector<std::string>& enclav
     make_folder(enclave_folder(root, enclave));
     write_enclave(enclave_folder(root, enclave), enclave, ca, now, validity_days);
   }
+  sync_folders(root);
+  if (into_folder) {
+    // public/ last: its CA certificate is what makes a folder a keystore.
+    for (const char* part : {"enclaves", "private", "public"}) move(root / part, target / part);
+    sync_folder(target);
+    return;
+  }
   // mkdtemp made it private; the keys are, in private/.
   set_permissions(root, kPublicFolder);
-  // Over an empty folder too: rename(2) replaces one.
   move(root, target);
   scratch.keep();
+  sync_folder(target.parent_path());
 }
 
 std::string describe(const SecurityFiles& files) {

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -215,6 +216,62 @@ TEST(SecurityKeystore, DocumentsAreSignedAndTheIdentityIssuedByItsCa) {
   EXPECT_EQ(describe(files),
             "authentication PKI-DH, access control (governance: rtps SIGN, discovery ENCRYPT, data "
             "ENCRYPT), crypto AES-GCM-GMAC, enclave /robotperf");
+}
+
+// Valid from a day before they were made, as SROS2's: a host whose clock is behind the one that
+// made the keystore (n3, n4 on two machines) accepts them at once.
+TEST(SecurityKeystore, CertificatesAreValidFromADayBefore) {
+  const std::time_t an_hour_ago = std::time(nullptr) - 3600;
+  const std::time_t in_a_year = std::time(nullptr) + 365 * 24 * 3600;
+  const SecurityFiles files = enclave_files(Keystores::main());
+  for (const fs::path& pem : {files.identity_ca, files.certificate}) {
+    Certificate cert = load_certificate(pem);
+    ASSERT_TRUE(cert) << pem;
+    std::time_t at = an_hour_ago;
+    EXPECT_LT(X509_cmp_time(X509_get0_notBefore(cert.get()), &at), 0) << pem;
+    at = in_a_year;
+    EXPECT_GT(X509_cmp_time(X509_get0_notAfter(cert.get()), &at), 0) << pem;
+  }
+}
+
+// `security init .` in an empty folder: the keystore is made in that folder, which stays the
+// same folder (a rename over it would leave the shell in a deleted one).
+TEST(SecurityKeystore, AnEmptyCurrentFolderBecomesTheKeystoreInPlace) {
+  TempFolder folder;
+  const fs::path here = folder.path() / "here";
+  fs::create_directories(here);
+  struct stat before {};
+  ASSERT_EQ(stat(here.c_str(), &before), 0);
+  const fs::path previous = fs::current_path();
+  fs::current_path(here);
+  try {
+    create_keystore(".", {"/robotperf"});
+  } catch (...) {
+    fs::current_path(previous);
+    throw;
+  }
+  const bool made_here = fs::exists("public/ca.cert.pem") && fs::exists("enclaves/robotperf");
+  fs::current_path(previous);
+  EXPECT_TRUE(made_here);
+  struct stat after {};
+  ASSERT_EQ(stat(here.c_str(), &after), 0);
+  EXPECT_EQ(after.st_ino, before.st_ino);
+  EXPECT_NO_THROW(enclave_files(here));
+  std::vector<std::string> left;
+  for (const auto& entry : fs::directory_iterator(here)) left.push_back(entry.path().filename());
+  std::ranges::sort(left);
+  EXPECT_EQ(left, (std::vector<std::string>{"enclaves", "private", "public"}));
+}
+
+// Enclaves added to a keystore all arrive or none does.
+TEST(SecurityKeystore, EnclavesThatCannotAllBeAddedLeaveTheKeystoreAsItWas) {
+  TempFolder folder;
+  const fs::path keystore = folder.path() / "keystore";
+  create_keystore(keystore, {"/robotperf"});
+  std::ofstream(keystore / "enclaves" / "zzz") << "a file where an enclave's parent would go";
+  EXPECT_THROW(create_keystore(keystore, {"/aaa", "/zzz/camera"}), SecurityError);
+  EXPECT_FALSE(fs::exists(keystore / "enclaves" / "aaa"));
+  EXPECT_NO_THROW(enclave_files(keystore, "/robotperf"));
 }
 
 // One line naming the file (or the folder) and saying how to make it.
