@@ -230,6 +230,19 @@ TEST(GlobalLocalizer, BadInputIsOneClearError) {
   expect_invalid([&] { localizer.localize(no_increment); }, "angle_increment");
 }
 
+// The search's tables grow with the yaw steps of a turn: a step so fine that they could not be
+// held (or their count would overflow an int) is refused when the localizer is built, while the
+// finest allowed one builds.
+TEST(GlobalLocalizer, AnAngularStepTooFineIsOneClearError) {
+  const GridMap good = map_of(room(), 120, 100, -1.0, 2.0);
+  for (const double step : {1e-9, 1e-12, 2.0 * kPi / 300000.0}) {
+    expect_invalid([&] { GlobalLocalizer(good, {.angular_step_rad = step}); },
+                   "angular_step_rad must be 0 (derived) or in [2 pi / 262144, pi]");
+  }
+  EXPECT_NO_THROW(GlobalLocalizer(good, {.angular_step_rad = 2.0 * kPi / 262144.0}));
+  EXPECT_NO_THROW(GlobalLocalizer(good, {.angular_step_rad = kPi}));
+}
+
 TEST(SyntheticScans, SameConfigSameBytes) {
   const SyntheticScanDataset a = generate_scan_dataset({.scans = 20});
   const SyntheticScanDataset b = generate_scan_dataset({.scans = 20});

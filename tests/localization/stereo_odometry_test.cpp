@@ -192,6 +192,11 @@ TEST(StereoOdometryInput, RejectsBadIntrinsicsAndOptions) {
   EXPECT_THROW(StereoOdometry(500, 500, 320, std::numeric_limits<double>::infinity(), 0.12),
                std::invalid_argument);
   EXPECT_THROW(StereoOdometry(500, 500, 320, 240, 0.0), std::invalid_argument);
+  // A calibration's right principal point left out is NaN, and refused.
+  EXPECT_THROW(StereoOdometry({.fx = 500, .fy = 500, .cx = 320, .cy = 240, .baseline_m = 0.12}),
+               std::invalid_argument);
+  EXPECT_NO_THROW(StereoOdometry(
+      {.fx = 500, .fy = 500, .cx = 320, .cy = 240, .right_cx = 312, .baseline_m = 0.12}));
   auto expect_invalid = [](auto change) {
     StereoOdometryOptions options;
     change(options);

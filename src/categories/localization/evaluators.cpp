@@ -2,6 +2,7 @@
 // ground truth.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <vector>
 
@@ -20,14 +21,25 @@ using plugin::DatasetStream;
 using plugin::FunctionalEvaluator;
 
 const double kNaN = std::nan("");
+const double kInfinity = std::numeric_limits<double>::infinity();
 
-// The middle value; for an even count, the mean of the two middle ones.
+// The middle value; for an even count, the mean of the two middle ones. A NaN error (an answer
+// holding a NaN) counts as +inf, as wrong as an answer can be: it fails a threshold once most
+// answers are, and keeps the order nth_element needs (NaN compares false with everything).
 double median(std::vector<double> v) {
   if (v.empty()) return kNaN;
+  for (double& x : v) x = std::isnan(x) ? kInfinity : x;
   const auto upper = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
   std::nth_element(v.begin(), upper, v.end());
   if (v.size() % 2 == 1) return *upper;
   return (*std::max_element(v.begin(), upper) + *upper) / 2.0;
+}
+
+// The distance between two points, NaN when either holds one. Not std::hypot's three-argument
+// form: libstdc++'s (GCC 12) gives 0 for (0, NaN, 0), a perfect answer.
+double distance(const msgs::Point& a, const msgs::Point& b) {
+  const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
+  return std::sqrt(dx * dx + dy * dy + dz * dz);
 }
 
 // Detections against the true tags of their frame. A detection is correct when a true tag of
@@ -92,10 +104,11 @@ class AprilTagEvaluator final : public FunctionalEvaluator {
       if (poses != nullptr) {
         const msgs::Pose& p = poses->poses[i];
         const msgs::Pose& q = true_poses.poses[best];
-        translation_errors_.push_back(std::hypot(
-            p.position.x - q.position.x, p.position.y - q.position.y, p.position.z - q.position.z));
-        rotation_errors_.push_back(rotation_angle_between(p.orientation, q.orientation) * 180.0 /
-                                   std::numbers::pi);
+        translation_errors_.push_back(distance(p.position, q.position));
+        // Normalised: a pose message may round its quaternion, or scale it.
+        rotation_errors_.push_back(
+            rotation_angle_between(normalized(p.orientation), normalized(q.orientation)) * 180.0 /
+            std::numbers::pi);
       }
     }
   }
@@ -150,8 +163,10 @@ class MapLocalizationEvaluator final : public FunctionalEvaluator {
               "'");
     const double dx = out.pose.pose.position.x - truth.pose.position.x;
     const double dy = out.pose.pose.position.y - truth.pose.position.y;
+    // Normalised: a pose message may round its quaternion, or scale it.
     const double dyaw = std::remainder(
-        yaw_of(out.pose.pose.orientation) - yaw_of(truth.pose.orientation), 2.0 * std::numbers::pi);
+        yaw_of(normalized(out.pose.pose.orientation)) - yaw_of(normalized(truth.pose.orientation)),
+        2.0 * std::numbers::pi);
     const double position = std::hypot(dx, dy);
     positions_.push_back(position);
     yaws_.push_back(std::abs(dyaw) / kDegree);
@@ -170,7 +185,10 @@ class MapLocalizationEvaluator final : public FunctionalEvaluator {
  private:
   static constexpr double kDegree = std::numbers::pi / 180.0;
 
-  // e^T C^-1 e <= 11.345 (chi-square, 3 degrees of freedom, 99 %) over (x, y, yaw).
+  // e^T C^-1 e <= 11.345 (chi-square, 3 degrees of freedom, 99 %) over (x, y, yaw). A
+  // covariance that is not positive definite bounds nothing (an indefinite one has a positive
+  // determinant with two negative eigenvalues, and negative distances along them): every
+  // leading principal minor must be positive (Sylvester's criterion).
   static bool inside_99_percent(const msgs::Covariance6& c, double dx, double dy, double dyaw) {
     const std::size_t index[3] = {0, 1, 5};
     double m[3][3];
@@ -180,7 +198,8 @@ class MapLocalizationEvaluator final : public FunctionalEvaluator {
     const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
                        m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
                        m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    if (!(det > 0.0)) return false;
+    const double minor2 = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    if (!(m[0][0] > 0.0 && minor2 > 0.0 && det > 0.0)) return false;
     const double inv[3][3] = {{(m[1][1] * m[2][2] - m[1][2] * m[2][1]) / det,
                                (m[0][2] * m[2][1] - m[0][1] * m[2][2]) / det,
                                (m[0][1] * m[1][2] - m[0][2] * m[1][1]) / det},
@@ -220,7 +239,15 @@ class VisualOdometryEvaluator final : public FunctionalEvaluator {
     if (out.header.frame_id != truth.header.frame_id)
       problem("odometry frame is '" + out.header.frame_id + "', expected '" +
               truth.header.frame_id + "'");
-    estimate_.push_back(msgs::isometry_of(out.pose.pose));
+    Eigen::Isometry3d estimate = msgs::isometry_of(out.pose.pose);
+    // A quaternion of norm zero or not finite names no rotation (Eigen would take a zero one for
+    // the identity): the drift over the segments through it cannot be computed.
+    if (std::isnan(normalized(out.pose.pose.orientation).w)) {
+      problem(
+          "an odometry orientation is no rotation (its quaternion's norm is zero or not finite)");
+      estimate.linear().setConstant(kNaN);
+    }
+    estimate_.push_back(estimate);
     truth_poses_.push_back(msgs::isometry_of(truth.pose));
   }
 

@@ -1,4 +1,5 @@
 // The localization kernels as graph nodes.
+#include <cmath>
 #include <iostream>
 #include <stdexcept>
 
@@ -276,29 +277,40 @@ StereoOdometryOptions odometry_options(const KernelConfig& c) {
   return o;
 }
 
-// The camera a rectified pair's CameraInfos describe: the left P's intrinsics and the baseline
-// from the right P (P[3] = -fx * baseline), as stereo_image_proc reads them.
-struct StereoIntrinsics {
-  double fx, fy, cx, cy, baseline;
-  friend bool operator==(const StereoIntrinsics&, const StereoIntrinsics&) = default;
-};
-
-StereoIntrinsics stereo_intrinsics(const msgs::CameraInfo& left, const msgs::CameraInfo& right) {
+// The camera a rectified pair's CameraInfos describe, as image_geometry's StereoCameraModel
+// reads them: the left P's intrinsics, the right P's principal point column (P[2]; a
+// rectification may put it elsewhere than the left's) and the baseline from the right P
+// (P[3] = -fx * baseline). The rows of a rectified pair are the same rows, seen with the same
+// focal length: a pair whose fx, fy or cy differ is no rectified pair, and is refused.
+StereoCalibration stereo_calibration(const msgs::CameraInfo& left, const msgs::CameraInfo& right) {
   if (left.p[0] == 0.0 || right.p[0] == 0.0)
     throw std::invalid_argument("stereo_odometry: camera is not calibrated (P[0] = 0)");
-  const StereoIntrinsics s{left.p[0], left.p[5], left.p[2], left.p[6], -right.p[3] / right.p[0]};
-  if (!(s.baseline > 0.0)) {
+  constexpr double kTolerancePx = 1e-3;
+  if (!(std::abs(left.p[0] - right.p[0]) <= kTolerancePx &&
+        std::abs(left.p[5] - right.p[5]) <= kTolerancePx &&
+        std::abs(left.p[6] - right.p[6]) <= kTolerancePx)) {
+    throw std::invalid_argument(
+        "stereo_odometry: the left and right P differ in fx, fy or cy (P[0], P[5], P[6]); "
+        "the images must be a rectified pair");
+  }
+  const StereoCalibration c{.fx = left.p[0],
+                            .fy = left.p[5],
+                            .cx = left.p[2],
+                            .cy = left.p[6],
+                            .right_cx = right.p[2],
+                            .baseline_m = -right.p[3] / right.p[0]};
+  if (!(c.baseline_m > 0.0)) {
     throw std::invalid_argument(
         "stereo_odometry: the right CameraInfo gives no baseline "
         "(P[3] = -fx * baseline must be negative)");
   }
-  return s;
+  return c;
 }
 
 // Stereo visual odometry, the SLAM front end (as Isaac ROS Visual SLAM's odometry output): the
 // left camera's pose in the odometry frame, which is the first frame's left camera, and its
-// velocity between the last two frames in the camera's own frame. The covariance is not
-// estimated (all zero). A new calibration starts a new odometry frame.
+// velocity between the last two frames in the camera's frame at the later one (child_frame_id).
+// The covariance is not estimated (all zero). A new calibration starts a new odometry frame.
 class StereoOdometryNode final : public SyncedNode<4> {
  public:
   enum Input { kLeftImage, kLeftInfo, kRightImage, kRightInfo };
@@ -326,14 +338,13 @@ class StereoOdometryNode final : public SyncedNode<4> {
   void process(const MessageSync<4>::Set& set) override {
     const auto& left = input<msgs::Image>(set[kLeftImage]);
     const auto& right = input<msgs::Image>(set[kRightImage]);
-    const StereoIntrinsics camera = stereo_intrinsics(input<msgs::CameraInfo>(set[kLeftInfo]),
-                                                      input<msgs::CameraInfo>(set[kRightInfo]));
+    const StereoCalibration camera = stereo_calibration(input<msgs::CameraInfo>(set[kLeftInfo]),
+                                                        input<msgs::CameraInfo>(set[kRightInfo]));
     plugin::trace_kernel_init(*this, kKernel, left.header.stamp.to_ns(), left, right);
     perception::to_mono8(left, "stereo_odometry: left image", left_mono_);
     perception::to_mono8(right, "stereo_odometry: right image", right_mono_);
     if (!odometry_ || camera != camera_) {
-      odometry_ = std::make_unique<StereoOdometry>(camera.fx, camera.fy, camera.cx, camera.cy,
-                                                   camera.baseline, options_);
+      odometry_ = std::make_unique<StereoOdometry>(camera, options_);
       camera_ = camera;
       have_previous_ = false;
     }
@@ -349,9 +360,12 @@ class StereoOdometryNode final : public SyncedNode<4> {
     const int64_t stamp_ns = left.header.stamp.to_ns();
     if (have_previous_ && stamp_ns > previous_ns_) {
       const double dt = static_cast<double>(stamp_ns - previous_ns_) * 1e-9;
+      // nav_msgs/Odometry's twist is in child_frame_id, the camera at this stamp: the step's
+      // translation is in the previous camera's frame, and turns into this one's. Its rotation
+      // axis is the same in both.
       const Eigen::Isometry3d step = previous_.inverse() * r.pose;
       const Eigen::AngleAxisd turn(step.rotation());
-      const Eigen::Vector3d v = step.translation() / dt;
+      const Eigen::Vector3d v = step.rotation().transpose() * step.translation() / dt;
       const Eigen::Vector3d w = turn.axis() * (turn.angle() / dt);
       out->twist.twist.linear = {v.x(), v.y(), v.z()};
       out->twist.twist.angular = {w.x(), w.y(), w.z()};
@@ -367,7 +381,7 @@ class StereoOdometryNode final : public SyncedNode<4> {
   StereoOdometryOptions options_;
   std::string odom_frame_;
   std::unique_ptr<StereoOdometry> odometry_;
-  StereoIntrinsics camera_{};
+  StereoCalibration camera_{};
   cv::Mat left_mono_, right_mono_;
   Eigen::Isometry3d previous_ = Eigen::Isometry3d::Identity();
   int64_t previous_ns_ = 0;
@@ -420,8 +434,9 @@ void register_kernels(plugin::Registrar& registrar) {
                                      "score (mean likelihood of the scan's hits) for a pose"),
             plugin::int_parameter("branch_and_bound_depth", map.branch_and_bound_depth,
                                   "levels of the search tree (1..10)"),
-            plugin::double_parameter("angular_step", map.angular_step_rad,
-                                     "yaw lattice step, rad; 0 = one cell at the farthest point"),
+            plugin::double_parameter(
+                "angular_step", map.angular_step_rad,
+                "yaw lattice step, rad, 2 pi / 262144 .. pi; 0 = one cell at the farthest point"),
             plugin::int_parameter("max_points", static_cast<int64_t>(map.max_points),
                                   "scan points scored, thinned along the contour"),
             plugin::double_parameter("likelihood_sigma", map.likelihood_sigma_m,

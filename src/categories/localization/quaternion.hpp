@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "robotperf/msgs/geometry_msgs.hpp"
 #include "robotperf/perception/camera_model.hpp"
@@ -58,9 +59,23 @@ inline double yaw_of(const msgs::Quaternion& q) {
   return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
 }
 
-// The angle (rad, 0..pi) of the rotation from unit quaternion a to b.
+// `q` scaled to unit length: a message may hold any non-zero multiple of a rotation's
+// quaternion. All NaN when its norm is zero or not finite, for it names no rotation: what is
+// computed from it is NaN too.
+inline msgs::Quaternion normalized(const msgs::Quaternion& q) {
+  const double norm = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+  if (!(norm > 0.0) || !std::isfinite(norm)) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {nan, nan, nan, nan};
+  }
+  return {q.x / norm, q.y / norm, q.z / norm, q.w / norm};
+}
+
+// The angle (rad, 0..pi) of the rotation from unit quaternion a to b; NaN when either holds a
+// NaN or an infinity (std::min would take a NaN for 1, a perfect match).
 inline double rotation_angle_between(const msgs::Quaternion& a, const msgs::Quaternion& b) {
   const double dot = std::abs(a.x * b.x + a.y * b.y + a.z * b.z + a.w * b.w);
+  if (!std::isfinite(dot)) return std::numeric_limits<double>::quiet_NaN();
   return 2.0 * std::acos(std::min(1.0, dot));
 }
 

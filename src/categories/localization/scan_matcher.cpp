@@ -26,6 +26,10 @@ constexpr double kNoObstacle = 1e30;
 // Limits that keep the free-cell counts and the score sums (255 per point) within 32 bits.
 constexpr uint32_t kMaxCellsASide = 16384;
 constexpr std::size_t kMaxPoints = 100000;
+// Yaw steps a turn, at most: the search's tables grow with them (and their count must fit an
+// int). The derived step, about 1 / r for the farthest point r cells away, stays under it: r is
+// at most the map's width + height, 32768 cells: 205888 steps.
+constexpr int kMaxAngles = 1 << 18;
 
 double wrap_angle(double a) {
   a = std::remainder(a, 2.0 * kPi);
@@ -494,8 +498,11 @@ void validate(const GridMap& map, const GlobalLocalizerOptions& o) {
     throw std::invalid_argument("localizer min_score must be in [0, 1]");
   if (o.branch_and_bound_depth < 1 || o.branch_and_bound_depth > kMaxDepth)
     throw std::invalid_argument("localizer branch_and_bound_depth must be 1 .. 10");
-  if (!(o.angular_step_rad >= 0.0 && o.angular_step_rad <= kPi))
-    throw std::invalid_argument("localizer angular_step_rad must be in [0, pi] (0: derived)");
+  if (!(o.angular_step_rad == 0.0 ||
+        (o.angular_step_rad >= 2.0 * kPi / kMaxAngles && o.angular_step_rad <= kPi)))
+    throw std::invalid_argument("localizer angular_step_rad must be 0 (derived) or in [2 pi / " +
+                                std::to_string(kMaxAngles) + ", pi] (at most " +
+                                std::to_string(kMaxAngles) + " yaw steps a turn)");
   if (o.max_points < 1 || o.max_points > kMaxPoints)
     throw std::invalid_argument("localizer max_points must be 1 .. 100000");
   if (!(o.likelihood_sigma_m > 0.0) || !std::isfinite(o.likelihood_sigma_m))

@@ -129,15 +129,16 @@ int block_ssd(const cv::Mat& left, const cv::Mat& right, int u, int v, int dispa
   return sum;
 }
 
-void validate(double fx, double fy, double cx, double cy, double baseline_m,
-              const StereoOdometryOptions& o) {
+void validate(const StereoCalibration& c, const StereoOdometryOptions& o) {
   auto require = [](bool ok, const char* what) {
     if (!ok) throw std::invalid_argument(std::string("stereo odometry: ") + what);
   };
-  require(std::isfinite(fx) && fx > 0.0, "fx must be positive and finite");
-  require(std::isfinite(fy) && fy > 0.0, "fy must be positive and finite");
-  require(std::isfinite(cx) && std::isfinite(cy), "cx and cy must be finite");
-  require(std::isfinite(baseline_m) && baseline_m > 0.0, "baseline_m must be positive and finite");
+  require(std::isfinite(c.fx) && c.fx > 0.0, "fx must be positive and finite");
+  require(std::isfinite(c.fy) && c.fy > 0.0, "fy must be positive and finite");
+  require(std::isfinite(c.cx) && std::isfinite(c.cy) && std::isfinite(c.right_cx),
+          "cx, cy and right_cx must be finite");
+  require(std::isfinite(c.baseline_m) && c.baseline_m > 0.0,
+          "baseline_m must be positive and finite");
   require(o.max_features > 0, "max_features must be positive");
   require(o.grid_columns > 0 && o.grid_rows > 0, "grid_columns and grid_rows must be positive");
   require(o.fast_threshold >= 1 && o.fast_threshold <= 255, "fast_threshold must be in 1 .. 255");
@@ -187,6 +188,8 @@ struct StereoOdometry::State {
   };
 
   double fx, fy, cx, cy, baseline_m;
+  // What a left pixel's column less its match's is at infinite depth: cx - right_cx.
+  double disparity_offset_px;
   StereoOdometryOptions options;
   cv::Ptr<cv::ORB> orb;
   cv::Mat camera_matrix;
@@ -198,8 +201,14 @@ struct StereoOdometry::State {
   Eigen::Isometry3d velocity = Eigen::Isometry3d::Identity();  // T_previous_current
   bool velocity_known = false;  // false: search with the unpredicted radius, then again
 
-  State(double fx_, double fy_, double cx_, double cy_, double baseline, StereoOdometryOptions o)
-      : fx(fx_), fy(fy_), cx(cx_), cy(cy_), baseline_m(baseline), options(o) {
+  State(const StereoCalibration& c, StereoOdometryOptions o)
+      : fx(c.fx),
+        fy(c.fy),
+        cx(c.cx),
+        cy(c.cy),
+        baseline_m(c.baseline_m),
+        disparity_offset_px(c.cx - c.right_cx),
+        options(o) {
     // Upright descriptors on one level: keypoints come from our own FAST with angle 0.
     orb = cv::ORB::create(options.max_features, 1.2f, 1, kBorderPx, 0, 2, cv::ORB::HARRIS_SCORE, 31,
                           options.fast_threshold);
@@ -289,7 +298,7 @@ struct StereoOdometry::State {
              k < row_start[static_cast<std::size_t>(r) + 1]; ++k) {
           const int j = by_row[static_cast<std::size_t>(k)];
           const cv::Point2f q = right.keypoints[static_cast<std::size_t>(j)].pt;
-          const double disparity = p.x - q.x;
+          const double disparity = p.x - q.x - disparity_offset_px;
           if (disparity < options.min_disparity_px || disparity > options.max_disparity_px ||
               std::abs(p.y - q.y) > options.max_row_offset_px) {
             continue;
@@ -309,11 +318,13 @@ struct StereoOdometry::State {
       const int j = choice[i];
       if (j < 0 || owner[static_cast<std::size_t>(j)] != static_cast<int>(i)) continue;
       const cv::Point2f p = left.keypoints[i].pt;
+      // In the images' columns until refined, then as it is triangulated.
       double disparity = p.x - right.keypoints[static_cast<std::size_t>(j)].pt.x;
       if (options.subpixel && !refine_disparity(left_image, right_image, cvRound(p.x), cvRound(p.y),
                                                 cvRound(disparity), disparity)) {
         continue;
       }
+      disparity -= disparity_offset_px;
       if (disparity < options.min_disparity_px || disparity > options.max_disparity_px) continue;
       const double z = fx * baseline_m / disparity;
       matched.push_back(static_cast<int>(i));
@@ -522,11 +533,15 @@ struct StereoOdometry::State {
   }
 };
 
-StereoOdometry::StereoOdometry(double fx, double fy, double cx, double cy, double baseline_m,
+StereoOdometry::StereoOdometry(const StereoCalibration& calibration,
                                const StereoOdometryOptions& options) {
-  validate(fx, fy, cx, cy, baseline_m, options);
-  state_ = std::make_unique<State>(fx, fy, cx, cy, baseline_m, options);
+  validate(calibration, options);
+  state_ = std::make_unique<State>(calibration, options);
 }
+
+StereoOdometry::StereoOdometry(double fx, double fy, double cx, double cy, double baseline_m,
+                               const StereoOdometryOptions& options)
+    : StereoOdometry(StereoCalibration{fx, fy, cx, cy, cx, baseline_m}, options) {}
 
 StereoOdometry::~StereoOdometry() = default;
 StereoOdometry::StereoOdometry(StereoOdometry&&) noexcept = default;

@@ -46,8 +46,9 @@ struct GlobalLocalizerOptions {
   // Levels of the search tree below its roots: a root spans 2^depth cells a side and 2^depth
   // angular steps, and every level halves both. 1 .. 10.
   int branch_and_bound_depth = 7;
-  // Angular lattice step (rad). 0: derived from the farthest point used, at r, as the rotation
-  // that moves it by one cell, acos(1 - resolution^2 / (2 r^2)), as Cartographer does.
+  // Angular lattice step (rad), 2 pi / 262144 .. pi (at most 262144 steps a turn). 0: derived
+  // from the farthest point used, at r, as the rotation that moves it by one cell,
+  // acos(1 - resolution^2 / (2 r^2)), as Cartographer does.
   double angular_step_rad = 0.0;
   // The search scores the scan thinned evenly along its contour (a point is kept once it is a
   // spacing away from the last one kept, the spacing chosen for) to at most this many points;

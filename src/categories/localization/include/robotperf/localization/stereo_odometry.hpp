@@ -6,7 +6,8 @@
 //   they cover the image), with upright ORB (rBRIEF) descriptors;
 // - stereo matches along rows (|dy| <= max_row_offset_px, disparity in range, Hamming distance
 //   with a ratio test), the disparity refined to a fraction of a pixel by SSD block matching
-//   and a parabola, triangulated as Z = fx * baseline / d;
+//   and a parabola, triangulated as Z = fx * baseline / (d - (cx - right_cx)), as
+//   image_geometry's StereoCameraModel does;
 // - tracking: the keyframe's 3-D points are projected with a constant-velocity prediction and
 //   matched to the current left features near their prediction; the pose comes from
 //   cv::solvePnPRansac and is refined on the inliers (cv::solvePnPRefineLM), then once more on
@@ -17,10 +18,27 @@
 // a bad frame never throws.
 
 #include <Eigen/Geometry>
+#include <limits>
 #include <memory>
 #include <opencv2/core.hpp>
 
 namespace robotperf::localization {
+
+// A rectified pair, as its CameraInfos' P matrices give it (pixels, m): both cameras have fx, fy
+// and cy; the right one sits baseline_m along the left's +x axis, with the same orientation, and
+// its principal point may lie at another column, right_cx (a rectification that keeps all of
+// both images may move the two apart): a point at depth Z is then seen at
+// u_left - u_right = fx * baseline_m / Z + (cx - right_cx). Every field must be given: one left
+// out is NaN, and refused.
+struct StereoCalibration {
+  double fx = std::numeric_limits<double>::quiet_NaN();
+  double fy = std::numeric_limits<double>::quiet_NaN();
+  double cx = std::numeric_limits<double>::quiet_NaN();
+  double cy = std::numeric_limits<double>::quiet_NaN();
+  double right_cx = std::numeric_limits<double>::quiet_NaN();
+  double baseline_m = std::numeric_limits<double>::quiet_NaN();
+  friend bool operator==(const StereoCalibration&, const StereoCalibration&) = default;
+};
 
 struct StereoOdometryOptions {
   // Features (per image).
@@ -65,9 +83,12 @@ struct StereoOdometryResult {
 // Not thread-safe: one instance per stream.
 class StereoOdometry {
  public:
-  // Rectified pinhole intrinsics (pixels) shared by both cameras and the baseline (m) along the
-  // left camera's +x. Throws std::invalid_argument for fx, fy or baseline_m not positive and
-  // finite, cx or cy not finite, or an option out of its range (the message names it).
+  // Throws std::invalid_argument for fx, fy or baseline_m not positive and finite, cx, cy or
+  // right_cx not finite, or an option out of its range (the message names it).
+  explicit StereoOdometry(const StereoCalibration& calibration,
+                          const StereoOdometryOptions& options = {});
+  // Rectified pinhole intrinsics (pixels) shared by both cameras, principal point included, and
+  // the baseline (m) along the left camera's +x.
   StereoOdometry(double fx, double fy, double cx, double cy, double baseline_m,
                  const StereoOdometryOptions& options = {});
   ~StereoOdometry();
