@@ -24,8 +24,10 @@ case $target in
       { cat "$package/benchmark.yaml" && printf '\n---8<---\n' && cat "$graph"; } \
         >"$corpus/$(basename "$package").yaml"
     done
-    find "$data/robotperf" -name benchmark.yaml 2>/dev/null | while read -r published; do
-      cp "$published" "$corpus/published-$(basename "$(dirname "$published")").yaml"
-    done
+    if [ -d "$data/robotperf" ]; then
+      find "$data/robotperf" -name benchmark.yaml | while read -r published; do
+        cp "$published" "$corpus/published-$(basename "$(dirname "$published")").yaml"
+      done
+    fi
     ;;
 esac

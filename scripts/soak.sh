@@ -44,6 +44,8 @@ if [ "$analyse_only" = 0 ]; then
     --domain "$domain" --output "$dir/results" --quiet >"$dir/run.log" 2>&1 &
   run_pid=$!
   trap 'kill -INT "$run_pid" 2>/dev/null || true' INT TERM
+  # Should this script end early, the run ends with it.
+  trap 'kill -INT "$run_pid" 2>/dev/null || true' EXIT
 
   # The run and every process below it (node processes run in their own process groups, but stay
   # robotperf's children).
@@ -62,9 +64,10 @@ if [ "$analyse_only" = 0 ]; then
     for pid in $(descendants "$run_pid"); do
       rss=$(awk '/^VmRSS:/ {print $2}' /proc/"$pid"/status 2>/dev/null) || continue
       [ -n "$rss" ] || continue
-      name=$(tr '\0' ' ' </proc/"$pid"/cmdline 2>/dev/null | awk '{
+      # The process may end between the two reads: it is skipped then.
+      name=$({ tr '\0' ' ' </proc/"$pid"/cmdline; } 2>/dev/null | awk '{
         for (i = 1; i <= NF; ++i) if ($i == "--node") { print "node:" $(i + 1); exit }
-        print "robotperf" }')
+        print "robotperf" }') || continue
       echo "$now,$pid,$name,$rss" >>"$samples"
     done
     sleep "$period" &
@@ -72,6 +75,7 @@ if [ "$analyse_only" = 0 ]; then
   done
   status=0
   wait "$run_pid" || status=$?
+  trap - EXIT
   cat "$dir/run.log"
   [ "$status" -eq 0 ] || echo "soak: robotperf exited $status"
 fi

@@ -53,13 +53,17 @@ OverheadVerdict judge_overhead(const std::vector<OverheadRound>& rounds, double 
   v.floor_ratio = (p10(graph) - reference_floor) / reference_floor;
   v.defect =
       std::isfinite(v.band) && v.ratio < -v.band && v.floor_ratio < -v.band && every_round_faster;
-  v.met = !v.defect && v.ratio <= target_ratio;
+  if (!v.defect) {
+    v.met = v.ratio + v.band <= target_ratio;
+    v.undecided = !v.met && !(v.ratio - v.band > target_ratio);
+  }
   return v;
 }
 
 std::string verdict_text(const OverheadVerdict& v, bool target_applies) {
   if (v.defect) return "(BENCH DEFECT: the graph is faster than its reference beyond the noise)";
   if (!target_applies) return "(information)";
+  if (v.undecided) return "(undecided: the noise band holds the target)";
   return v.met ? "(met)" : "(NOT met)";
 }
 
@@ -108,11 +112,21 @@ bool confirm_defect(const std::vector<std::string>& command, int processes) {
   return true;
 }
 
-std::vector<std::string> confirming_command(int argc, char** argv) {
+std::vector<std::string> confirming_command(const BenchOptions& options, const std::string& id) {
   std::vector<std::string> command = {"/proc/self/exe"};
-  for (int i = 1; i < argc; ++i) command.emplace_back(argv[i]);
+  if (options.smoke) command.emplace_back("--smoke");
+  command.push_back(id);
   command.emplace_back("--confirm");
   return command;
+}
+
+bool confirm_defects(const BenchOptions& options, const std::vector<std::string>& suspected) {
+  bool confirmed = false;
+  for (const std::string& id : suspected) {
+    std::printf("%s: ", id.c_str());
+    confirmed = confirm_defect(confirming_command(options, id)) || confirmed;
+  }
+  return confirmed;
 }
 
 }  // namespace robotperf::bench

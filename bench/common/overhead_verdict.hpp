@@ -25,7 +25,10 @@ struct OverheadVerdict {
   double floor_ratio = 0;
   // Faster than the reference beyond the band at p50 and at the floor, and in every round.
   bool defect = false;
-  bool met = false;  // ratio <= the target
+  // Judged against the target with the band: met when the whole band is at or below it, not met
+  // when the whole band is above it, undecided when the band holds it (or has no end).
+  bool met = false;
+  bool undecided = false;
 };
 
 // One round: the reference's and the graph's samples, taken in turns.
@@ -35,7 +38,7 @@ struct OverheadRound {
 
 OverheadVerdict judge_overhead(const std::vector<OverheadRound>& rounds, double target_ratio);
 
-// "(met)", "(NOT met)", "(information)" or "(BENCH DEFECT: ...)".
+// "(met)", "(NOT met)", "(undecided: ...)", "(information)" or "(BENCH DEFECT: ...)".
 std::string verdict_text(const OverheadVerdict& v, bool target_applies);
 
 // Benches registered as CTest smoke tests take --smoke (fewer samples) and exit 1 when a
@@ -44,7 +47,7 @@ std::string verdict_text(const OverheadVerdict& v, bool target_applies);
 struct BenchOptions {
   bool smoke = false;
   bool confirming = false;        // --confirm
-  std::vector<std::string> args;  // the others
+  std::vector<std::string> args;  // the others: the benchmark ids
 };
 BenchOptions parse_bench_options(int argc, char** argv);
 
@@ -57,8 +60,13 @@ BenchOptions parse_bench_options(int argc, char** argv);
 // std::runtime_error when one fails otherwise.
 bool confirm_defect(const std::vector<std::string>& command, int processes = 2);
 
-// The command that runs this bench again as a confirming process: /proc/self/exe, the same
-// arguments, and --confirm.
-std::vector<std::string> confirming_command(int argc, char** argv);
+// The command that runs this bench again as a confirming process for one benchmark:
+// /proc/self/exe, the same options (--smoke), `id` alone, and --confirm.
+std::vector<std::string> confirming_command(const BenchOptions& options, const std::string& id);
+
+// Each of `suspected` (benchmark ids whose comparison came out as a defect) confirmed on its own
+// (confirm_defect of its confirming_command): a defect that fresh processes find in another
+// benchmark confirms none. Returns whether any was confirmed.
+bool confirm_defects(const BenchOptions& options, const std::vector<std::string>& suspected);
 
 }  // namespace robotperf::bench

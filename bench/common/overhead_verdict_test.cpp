@@ -47,6 +47,18 @@ TEST(OverheadVerdict, AnOverheadIsJudgedAgainstTheTarget) {
   EXPECT_EQ(verdict_text(large, true), "(NOT met)");
 }
 
+// An overhead under the target whose band reaches over it is neither met nor not met: rounds of
+// +2 % and +14 % (band 6 %) put the overhead at about +8 %, which may be +14 %.
+TEST(OverheadVerdict, ABandThatHoldsTheTargetIsUndecided) {
+  const auto v = judge_overhead({{around(10), around(10.2)}, {around(10), around(11.4)}}, 0.10);
+  EXPECT_FALSE(v.defect);
+  EXPECT_LT(v.ratio, 0.10);
+  EXPECT_GT(v.ratio + v.band, 0.10);
+  EXPECT_FALSE(v.met);
+  EXPECT_TRUE(v.undecided);
+  EXPECT_EQ(verdict_text(v, true), "(undecided: the noise band holds the target)");
+}
+
 // A kernel running in two modes (its second thread placed well or badly): the graph caught more
 // often in the fast one has a lower p50, but the same floor: no defect.
 TEST(OverheadVerdict, AModeMixIsNoDefectWhenTheFloorsAgree) {
@@ -83,14 +95,17 @@ TEST(ConfirmDefect, OnlyADefectEveryFreshProcessFindsIsConfirmed) {
   EXPECT_THROW(confirm_defect({"/nonexistent/bench"}), std::runtime_error);
 }
 
-TEST(ConfirmDefect, TheConfirmingRunIsTheSameBenchWithConfirm) {
-  char a0[] = "bench_x", a1[] = "--smoke", a2[] = "b3";
-  char* argv[] = {a0, a1, a2, nullptr};
-  EXPECT_EQ(confirming_command(3, argv),
-            (std::vector<std::string>{"/proc/self/exe", "--smoke", "b3", "--confirm"}));
-  const BenchOptions o = parse_bench_options(3, argv);
+// The confirming run measures the suspected benchmark alone: a defect in another one, which the
+// whole bench run again would find, confirms nothing.
+TEST(ConfirmDefect, TheConfirmingRunIsTheSameBenchOnTheSuspectedBenchmarkAlone) {
+  char a0[] = "bench_x", a1[] = "--smoke", a2[] = "b3", a3[] = "b1";
+  char* argv[] = {a0, a1, a2, a3, nullptr};
+  const BenchOptions o = parse_bench_options(4, argv);
   EXPECT_TRUE(o.smoke);
   EXPECT_FALSE(o.confirming);
+  EXPECT_EQ(o.args, (std::vector<std::string>{"b3", "b1"}));
+  EXPECT_EQ(confirming_command(o, "b3"),
+            (std::vector<std::string>{"/proc/self/exe", "--smoke", "b3", "--confirm"}));
   char c[] = "--confirm";
   char* with[] = {a0, a2, c, nullptr};
   const BenchOptions confirming = parse_bench_options(3, with);

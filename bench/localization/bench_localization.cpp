@@ -9,7 +9,7 @@
 // >= 0.99 and corner RMS <= 0.5 px on unoccluded tags, b2 success >= 0.98, b1 translational
 // drift <= 2 %. A graph faster than its reference
 // beyond the noise, in every round, is a bench defect (exit status 1) when two fresh processes
-// find it too (bench::confirm_defect); CTest runs --smoke.
+// of it alone find it too (bench::confirm_defects); CTest runs --smoke.
 // The graph runs at 10 Hz so that no frame queues behind the previous one; both sides run OpenCV
 // (and libapriltag) on one thread, as the benchmarks configure them.
 #include <cstdio>
@@ -118,9 +118,11 @@ int main(int argc, char** argv) {
   std::printf("%-34s %10s %10s %10s %10s\n", "kernel", "reference", "graph", "overhead", "share");
   bool defect = false;
   try {
-    for (const auto& id : ids) defect = compare(id, frames, rounds) || defect;
-    if (defect && !options.confirming)
-      defect = bench::confirm_defect(bench::confirming_command(argc, argv));
+    std::vector<std::string> suspected;
+    for (const auto& id : ids)
+      if (compare(id, frames, rounds)) suspected.push_back(id);
+    defect = !suspected.empty();
+    if (defect && !options.confirming) defect = bench::confirm_defects(options, suspected);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_localization: %s\n", e.what());
     return 2;

@@ -8,8 +8,9 @@
 //    <= 10 % for d2-d5, judged on p50 over the rounds; d6 (FK, a few microseconds) is for
 //    information. A graph faster than its reference beyond the noise, in every round, is a bench
 //    defect (exit status 1; CTest runs --smoke) when two fresh processes find it too
-//    (bench::confirm_defect). With LTTng the node's own time in the graph
-//    (grey-box: its callback, from input to published answer) is printed beside, for information.
+//    (bench::confirm_defects, each suspected benchmark alone). The rounds are black-box (a tracing
+//    session would load both sides); with LTTng a grey-box run of its own gives the node's own time
+//    in the graph (its callback, from input to published answer), printed beside for information.
 // 2. FCL and Bullet answer the collision dataset's states in a tight loop: time per query (mean,
 //    p50, p99), and how often they agree with each other and with the sampled ground truth.
 #include <unistd.h>
@@ -60,41 +61,27 @@ double mean(const std::vector<double>& v) {
   return sum / static_cast<double>(v.size());
 }
 
-// One round: the graph (grey-box where LTTng records, else black-box) and, half a period after
-// each of its sends, the same request through the reference, built afresh as the graph is, so that
-// each round draws both sides' thread placement anew. Microseconds.
-bench::OverheadRound measure_round(const harness::BenchmarkSpec& spec,
-                                   const harness::Dataset& dataset, std::size_t requests, bool grey,
-                                   std::vector<double>& node_us) {
-  bench::NodeReference reference(spec, dataset);
+harness::RunOptions run_options(std::size_t requests) {
   harness::RunOptions o;
   o.rate_hz = kRateHz;
   o.count = kWarmup + requests;
   o.warmup = kWarmup;
-  o.mode = grey ? harness::RunMode::kGrey : harness::RunMode::kBlack;
-  o.trace_dir = fs::temp_directory_path() /
-                ("robotperf-bench-manipulation-" + std::to_string(getpid()) + "-" + spec.id);
+  return o;
+}
+
+// One round, black-box: the graph and, half a period after each of its sends, the same request
+// through the reference, built afresh as the graph is, so that each round draws both sides'
+// thread placement anew. Microseconds.
+bench::OverheadRound measure_round(const harness::BenchmarkSpec& spec,
+                                   const harness::Dataset& dataset, std::size_t requests) {
+  bench::NodeReference reference(spec, dataset);
   bench::OverheadRound round;
   std::vector<double> reference_ms;
   const harness::RunResult r = reference.run_beside(
-      o,
-      [&](const harness::RunOptions& with) {
-        try {
-          return harness::run_benchmark(spec, with);
-        } catch (const std::exception& e) {
-          // No LTTng here (the run fails before its first send): black-box only.
-          if (with.mode != harness::RunMode::kGrey) throw;
-          std::fprintf(stderr, "%s: grey-box run failed (%s); black-box only\n", spec.id.c_str(),
-                       e.what());
-          harness::RunOptions black = with;
-          black.mode = harness::RunMode::kBlack;
-          return harness::run_benchmark(spec, black);
-        }
-      },
+      run_options(requests),
+      [&](const harness::RunOptions& with) { return harness::run_benchmark(spec, with); },
       reference_ms);
   for (double ms : reference_ms) round.reference.push_back(ms * 1e3);
-  std::error_code ignored;
-  fs::remove_all(o.trace_dir, ignored);
   if (r.matched + 5 < requests)
     std::fprintf(stderr, "%s: only %zu of %zu outputs matched\n", spec.id.c_str(), r.matched,
                  requests);
@@ -102,11 +89,29 @@ bench::OverheadRound measure_round(const harness::BenchmarkSpec& spec,
     if (!rec.warmup && rec.received_ns >= 0)
       round.graph.push_back(static_cast<double>(rec.received_ns - rec.sent_ns) / 1e3);
   }
-  if (r.grey) {
-    for (const auto& hop : r.grey->hops)
-      if (hop.kind == "node") node_us.push_back(hop.duration.p50 / 1e3);
-  }
   return round;
+}
+
+// The kernel node's own time in the graph (p50 of its callback, microseconds) from a grey-box run
+// of its own; nullopt where LTTng does not record.
+std::optional<double> node_time_us(const harness::BenchmarkSpec& spec, std::size_t requests) {
+  harness::RunOptions o = run_options(requests);
+  o.mode = harness::RunMode::kGrey;
+  o.trace_dir = fs::temp_directory_path() /
+                ("robotperf-bench-manipulation-" + std::to_string(getpid()) + "-" + spec.id);
+  std::optional<double> node;
+  try {
+    const harness::RunResult r = harness::run_benchmark(spec, o);
+    if (r.grey) {
+      for (const auto& hop : r.grey->hops)
+        if (hop.kind == "node") node = hop.duration.p50 / 1e3;
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: no grey-box run (%s)\n", spec.id.c_str(), e.what());
+  }
+  std::error_code ignored;
+  fs::remove_all(o.trace_dir, ignored);
+  return node;
 }
 
 std::vector<double> positions(const harness::DatasetStream& states, std::size_t k) {
@@ -114,9 +119,9 @@ std::vector<double> positions(const harness::DatasetStream& states, std::size_t 
       ->position;
 }
 
-// Returns whether a comparison came out as a bench defect.
-bool kernel_overheads(const std::vector<std::string>& ids, std::size_t requests, std::size_t rounds,
-                      bool grey) {
+// Returns the ids whose comparison came out as a bench defect.
+std::vector<std::string> kernel_overheads(const std::vector<std::string>& ids, std::size_t requests,
+                                          std::size_t rounds, bool grey) {
   std::printf(
       "Kernel latency in the graph (intra, p50 from send) vs its reference (p50), %zu rounds of "
       "%zu requests at %.0f Hz, microseconds\n"
@@ -127,7 +132,7 @@ bool kernel_overheads(const std::vector<std::string>& ids, std::size_t requests,
       rounds, requests, kRateHz);
   std::printf("%-36s %9s %9s %9s %8s  %-22s %s\n", "kernel", "reference", "graph", "overhead",
               "noise", "target <= 10 %", "node (grey)");
-  bool defect = false;
+  std::vector<std::string> suspected;
   for (const std::string& id : ids) {
     const harness::BenchmarkSpec spec = harness::find_benchmark(ROBOTPERF_BENCHMARKS_DIR, id);
     const std::string kernel = spec.nodes.front().kernel;
@@ -137,23 +142,22 @@ bool kernel_overheads(const std::vector<std::string>& ids, std::size_t requests,
       throw std::invalid_argument(id + " is not one of d2-d6 (its kernel is " + kernel + ")");
     const harness::Dataset d = harness::load_dataset(spec.dataset, spec.workload);
     std::vector<bench::OverheadRound> measured;
-    std::vector<double> node_us;
-    for (std::size_t i = 0; i < rounds; ++i)
-      measured.push_back(measure_round(spec, d, requests, grey, node_us));
+    for (std::size_t i = 0; i < rounds; ++i) measured.push_back(measure_round(spec, d, requests));
+    const std::optional<double> node_us = grey ? node_time_us(spec, requests) : std::nullopt;
     const bench::OverheadVerdict v = bench::judge_overhead(measured, kTargetRatio);
     const bool target_applies = id != "d6";
     const std::string label = id + " " + kernel;
     std::printf("%-36s %9.1f %9.1f %8.1f %% %7.1f %%  %-22s ", label.c_str(), v.reference_p50,
                 v.graph_p50, 100 * v.ratio, 100 * v.band,
                 bench::verdict_text(v, target_applies).c_str());
-    if (node_us.empty()) {
-      std::printf("-\n");
+    if (node_us) {
+      std::printf("%.1f\n", *node_us);
     } else {
-      std::printf("%.1f\n", percentile(node_us, 0.5));
+      std::printf("-\n");
     }
-    defect = defect || v.defect;
+    if (v.defect) suspected.push_back(id);
   }
-  return defect;
+  return suspected;
 }
 
 void fcl_vs_bullet() {
@@ -221,10 +225,11 @@ int main(int argc, char** argv) {
   if (ids.empty()) ids = {"d2", "d3", "d4", "d5", "d6"};
   bool defect = false;
   try {
-    // The smoke test runs black-box: an LTTng session per run would be most of its time.
-    defect = kernel_overheads(ids, options.smoke ? 60 : 150, options.smoke ? 2 : 3, !options.smoke);
-    if (defect && !options.confirming)
-      defect = bench::confirm_defect(bench::confirming_command(argc, argv));
+    // The smoke test skips the grey-box run: an LTTng session would be most of its time.
+    const std::vector<std::string> suspected =
+        kernel_overheads(ids, options.smoke ? 60 : 150, options.smoke ? 2 : 3, !options.smoke);
+    defect = !suspected.empty();
+    if (defect && !options.confirming) defect = bench::confirm_defects(options, suspected);
     if (!options.smoke && !options.confirming) fcl_vs_bullet();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_manipulation: %s\n", e.what());

@@ -3,18 +3,21 @@
 // reference: the benchmark's own nodes, built as the run builds them, on an executor of their own,
 // fed the same frames the same way, timed from their first callback to their answer
 // (bench/common/node_reference.hpp).
-// Run on demand: ./build/bench/perception/bench_perception [--smoke]
+// Run on demand: ./build/bench/perception/bench_perception [--smoke] [a3 a4]
 //
 // Target (issue #7): graph overhead <= 10 % of the kernel time on intra, judged on p50. A graph
 // faster than its reference beyond the noise, in every round, is a bench defect (exit status 1)
-// when two fresh processes find it too (bench::confirm_defect); CTest runs --smoke (four short
-// rounds) to catch one.
+// when two fresh processes of it alone find it too (bench::confirm_defects); CTest runs --smoke
+// (four short rounds) to catch one.
+//
 // The graph runs at 10 Hz so that no frame queues behind the previous one, and the reference runs
 // in the same process between its frames, half a period after each send: both sides meet the
 // same load from other processes, which on a shared machine comes and goes within seconds.
+//
 // Each round builds both sides afresh (new nodes, new executor threads), so that where the
 // scheduler happens to put a side's threads is drawn anew per round for both, not once for the
 // reference and per round for the graph.
+//
 // Both sides run OpenCV on one thread: with its worker pool on a 2-core machine, a calling
 // thread's StereoBM time moves by up to 50 % from one round to the next with where the scheduler
 // puts the pool's worker beside it (seen with two plain threads calling StereoBM in turn, no
@@ -59,7 +62,7 @@ bench::OverheadRound measure_round(const harness::BenchmarkSpec& spec,
 }
 
 // Returns whether the comparison came out as a bench defect.
-bool compare(const char* id, std::size_t frames, std::size_t rounds) {
+bool compare(const std::string& id, std::size_t frames, std::size_t rounds) {
   const auto spec = harness::find_benchmark(ROBOTPERF_BENCHMARKS_DIR, id);
   const harness::Dataset dataset = harness::load_dataset(spec.dataset, spec.workload);
   std::vector<bench::OverheadRound> measured;
@@ -67,7 +70,7 @@ bool compare(const char* id, std::size_t frames, std::size_t rounds) {
   for (std::size_t i = 0; i < rounds; ++i)
     measured.push_back(measure_round(spec, dataset, frames, other_load));
   const bench::OverheadVerdict v = bench::judge_overhead(measured, kTargetRatio);
-  const std::string label = std::string(id) + " " + spec.nodes.front().kernel;
+  const std::string label = id + " " + spec.nodes.front().kernel;
   std::printf(
       "%-34s %10.3f %10.3f %10.3f %9.1f %%   noise +-%.1f %% (rounds %+.1f..%+.1f %%, p10 "
       "%+.1f %%)   target <= %.0f %%: ratio %.2f %s\n",
@@ -105,11 +108,15 @@ int main(int argc, char** argv) {
       "moves a kernel's time per round with thread placement, which is not graph overhead)\n",
       rounds, frames);
   std::printf("%-34s %10s %10s %10s %10s\n", "kernel", "reference", "graph", "overhead", "share");
+  std::vector<std::string> ids = options.args;
+  if (ids.empty()) ids = {"a3", "a4"};
   bool defect = false;
   try {
-    for (const char* id : {"a3", "a4"}) defect = compare(id, frames, rounds) || defect;
-    if (defect && !options.confirming)
-      defect = bench::confirm_defect(bench::confirming_command(argc, argv));
+    std::vector<std::string> suspected;
+    for (const auto& id : ids)
+      if (compare(id, frames, rounds)) suspected.push_back(id);
+    defect = !suspected.empty();
+    if (defect && !options.confirming) defect = bench::confirm_defects(options, suspected);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_perception: %s\n", e.what());
     return 2;
