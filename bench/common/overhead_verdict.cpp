@@ -63,7 +63,7 @@ OverheadVerdict judge_overhead(const std::vector<OverheadRound>& rounds, double 
 std::string verdict_text(const OverheadVerdict& v, bool target_applies) {
   if (v.defect) return "(BENCH DEFECT: the graph is faster than its reference beyond the noise)";
   if (!target_applies) return "(information)";
-  if (v.undecided) return "(undecided: the noise band holds the target)";
+  if (v.undecided) return "(undecided)";  // the band holds the target
   return v.met ? "(met)" : "(NOT met)";
 }
 

@@ -38,7 +38,7 @@ struct OverheadRound {
 
 OverheadVerdict judge_overhead(const std::vector<OverheadRound>& rounds, double target_ratio);
 
-// "(met)", "(NOT met)", "(undecided: ...)", "(information)" or "(BENCH DEFECT: ...)".
+// "(met)", "(NOT met)", "(undecided)", "(information)" or "(BENCH DEFECT: ...)".
 std::string verdict_text(const OverheadVerdict& v, bool target_applies);
 
 // Benches registered as CTest smoke tests take --smoke (fewer samples) and exit 1 when a
