@@ -586,6 +586,78 @@ void add_enclaves(const fs::path& keystore, const std::vector<std::string>& encl
 
 }  // namespace
 
+namespace {
+
+std::string asn1_time_text(const ASN1_TIME* time) {
+  Bio out = memory_bio();
+  ASN1_TIME_print(out.get(), time);
+  return bio_text(out.get());
+}
+
+// The enclave's files as the DDS libraries will read them, each named where it fails: the
+// certificate and key (PEM, a pair), the certificate issued by the identity CA and valid now, and
+// the governance and permissions signed by the permissions CA. The libraries' own errors name
+// no file.
+void check_enclave_files(const SecurityFiles& files, const std::string& hint) {
+  ERR_clear_error();
+  auto broken = [&](const fs::path& file, const std::string& why) {
+    ERR_clear_error();
+    return SecurityError("security keystore file " + file.string() + " " + why + "; " + hint);
+  };
+  auto certificate = [&](const fs::path& file) {
+    const std::string text = read_file(file);  // outlives the BIO over it
+    Bio in = memory_bio(text);
+    Certificate cert(PEM_read_bio_X509(in.get(), nullptr, nullptr, nullptr));
+    if (!cert) throw broken(file, "is not a PEM certificate");
+    return cert;
+  };
+  const Certificate cert = certificate(files.certificate);
+  const Certificate identity_ca = certificate(files.identity_ca);
+  const Certificate permissions_ca = certificate(files.permissions_ca);
+  const std::string key_text = read_file(files.private_key);
+  Bio key_in = memory_bio(key_text);
+  const Key key(PEM_read_bio_PrivateKey(key_in.get(), nullptr, nullptr, nullptr));
+  if (!key) throw broken(files.private_key, "is not a PEM private key");
+  if (X509_check_private_key(cert.get(), key.get()) != 1)
+    throw broken(files.private_key, "is not the key of " + files.certificate.filename().string());
+
+  auto store_of = [](X509* ca) {
+    std::unique_ptr<X509_STORE, Freer<X509_STORE_free>> store(X509_STORE_new());
+    if (!store || X509_STORE_add_cert(store.get(), ca) != 1)
+      throw openssl_error("making a trust store");
+    return store;
+  };
+  const auto identity = store_of(identity_ca.get());
+  std::unique_ptr<X509_STORE_CTX, Freer<X509_STORE_CTX_free>> context(X509_STORE_CTX_new());
+  if (!context || X509_STORE_CTX_init(context.get(), identity.get(), cert.get(), nullptr) != 1)
+    throw openssl_error("checking a certificate");
+  if (X509_verify_cert(context.get()) != 1) {
+    const int error = X509_STORE_CTX_get_error(context.get());
+    throw broken(files.certificate, std::string("does not check against ") +
+                                        files.identity_ca.filename().string() + ": " +
+                                        X509_verify_cert_error_string(error) + " (valid from " +
+                                        asn1_time_text(X509_get0_notBefore(cert.get())) + " to " +
+                                        asn1_time_text(X509_get0_notAfter(cert.get())) + ")");
+  }
+  const auto permissions = store_of(permissions_ca.get());
+  for (const fs::path* document : {&files.governance, &files.permissions}) {
+    const std::string text = read_file(*document);
+    Bio in = memory_bio(text);
+    BIO* detached = nullptr;
+    const Pkcs7 signature(SMIME_read_PKCS7(in.get(), &detached));
+    const Bio content(detached);
+    const Bio out = memory_bio();
+    if (!signature || !content ||
+        PKCS7_verify(signature.get(), nullptr, permissions.get(), content.get(), out.get(),
+                     PKCS7_TEXT) != 1) {
+      throw broken(*document,
+                   "is not a document signed by " + files.permissions_ca.filename().string());
+    }
+  }
+}
+
+}  // namespace
+
 SecurityFiles enclave_files(const fs::path& keystore, const std::string& enclave) {
   check_enclave_name(enclave);
   const fs::path root = keystore_path(keystore);
@@ -610,6 +682,7 @@ SecurityFiles enclave_files(const fs::path& keystore, const std::string& enclave
                           hint);
     }
   }
+  check_enclave_files(files, hint);
   return files;
 }
 

@@ -309,6 +309,38 @@ TEST(SecurityKeystore, EnclaveFilesNamesWhatIsMissing) {
   EXPECT_THROW(enclave_files(Keystores::main(), "robotperf"), SecurityError);
 }
 
+// A file that is there but broken is named too, with what is wrong with it (the DDS libraries
+// say only that the participant could not be made).
+TEST(SecurityKeystore, EnclaveFilesNamesABrokenFile) {
+  TempFolder folder;
+  const fs::path keystore = folder.path() / "keystore";
+  create_keystore(keystore, {"/robotperf", "/other"});
+  const fs::path enclave = keystore / "enclaves" / "robotperf";
+  const fs::path other = keystore / "enclaves" / "other";
+  auto expect_broken = [&](const fs::path& file, const std::string& replacement,
+                           const std::string& says) {
+    const std::string kept = read_text(file);
+    fs::remove(file);
+    std::ofstream(file) << replacement;
+    try {
+      enclave_files(keystore);
+      ADD_FAILURE() << file << " was taken";
+    } catch (const SecurityError& e) {
+      expect_names(e, file.filename().string());
+      EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << e.what();
+    }
+    fs::remove(file);
+    std::ofstream(file) << kept;
+  };
+  expect_broken(enclave / "cert.pem", "garbage", "is not a PEM certificate");
+  expect_broken(enclave / "key.pem", "garbage", "is not a PEM private key");
+  expect_broken(enclave / "key.pem", read_text(other / "key.pem"), "is not the key of cert.pem");
+  expect_broken(enclave / "identity_ca.cert.pem",
+                read_text(enclave_files(Keystores::other()).identity_ca), "does not check against");
+  expect_broken(enclave / "permissions.p7s", "garbage", "is not a document signed by");
+  EXPECT_NO_THROW(enclave_files(keystore));
+}
+
 TEST(SecurityKeystore, IsCreatedOnceAndThenOnlyGainsEnclaves) {
   TempFolder folder;
   const fs::path keystore = folder.path() / "keystore";
