@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <limits>
 #include <stdexcept>
 #include <system_error>
 
@@ -142,6 +143,15 @@ bool Parameters::get_bool(const std::string& name) const {
 int64_t Parameters::get_int(const std::string& name) const {
   return read<int64_t>(text(name, ParameterType::kInt), owner_, name,
                        [](const std::string& t) { return parse_number<int64_t>(t, "an integer"); });
+}
+
+int Parameters::get_int32(const std::string& name) const {
+  const int64_t v = get_int(name);
+  if (v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max()) {
+    throw std::invalid_argument(owner_ + ": parameter '" + name + "' is " + std::to_string(v) +
+                                ", beyond a 32-bit integer");
+  }
+  return static_cast<int>(v);
 }
 
 double Parameters::get_double(const std::string& name) const {

@@ -35,6 +35,21 @@ TEST(Parameters, GivenValuesWin) {
   EXPECT_TRUE(p.has("count"));
 }
 
+// An integer read into an int is refused beyond int's range, named, rather than wrapped (a cast
+// made 4294967303 threads 7).
+TEST(Parameters, AnIntBeyondThirtyTwoBitsIsRefusedNotWrapped) {
+  EXPECT_EQ(Parameters(declared(), {{"count", "-2147483648"}}, "node 'n'").get_int32("count"),
+            -2147483648LL);
+  const Parameters p(declared(), {{"count", "4294967303"}}, "node 'n'");
+  EXPECT_EQ(p.get_int("count"), 4294967303LL);
+  try {
+    (void)p.get_int32("count");
+    ADD_FAILURE() << "4294967303 was read into an int";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "node 'n': parameter 'count' is 4294967303, beyond a 32-bit integer");
+  }
+}
+
 TEST(Parameters, UnknownNameIsRefusedListingTheKnownOnes) {
   try {
     Parameters(declared(), {{"scael", "2"}}, "node 'resize'");

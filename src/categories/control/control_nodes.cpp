@@ -27,8 +27,8 @@ control::LoopConfig loop_config(const KernelConfig& config) {
   control::LoopConfig c;
   c.name = config.node_name;
   c.update_rate_hz = p.get_double("update_rate");
-  c.cpu = static_cast<int>(p.get_int("cpu"));
-  c.rt_priority = static_cast<int>(p.get_int("rt_priority"));
+  c.cpu = p.get_int32("cpu");
+  c.rt_priority = p.get_int32("rt_priority");
   const int64_t capacity = p.get_int("cycle_capacity");
   if (capacity < 1)
     throw std::invalid_argument("node '" + config.node_name + "': cycle_capacity must be >= 1");

@@ -85,10 +85,10 @@ AprilTagParams apriltag_params(const KernelConfig& c) {
   AprilTagParams out;
   out.family = p.get_string("family");
   out.size = p.get_double("size");
-  out.max_hamming = static_cast<int>(p.get_int("max_hamming"));
+  out.max_hamming = p.get_int32("max_hamming");
   out.decimate = p.get_double("decimate");
   out.blur = p.get_double("blur");
-  out.threads = static_cast<int>(p.get_int("threads"));
+  out.threads = p.get_int32("threads");
   out.refine_edges = p.get_bool("refine_edges");
   out.sharpening = p.get_double("sharpening");
   out.rectify = p.get_bool("rectify");
@@ -180,12 +180,12 @@ class MapLocalizationNode final : public graph::Node, public plugin::NodeCounter
     GlobalLocalizerOptions o;
     o.max_range_m = p.get_double("max_range");
     o.min_score = p.get_double("min_score");
-    o.branch_and_bound_depth = static_cast<int>(p.get_int("branch_and_bound_depth"));
+    o.branch_and_bound_depth = p.get_int32("branch_and_bound_depth");
     o.angular_step_rad = p.get_double("angular_step");
     o.max_points = static_cast<std::size_t>(std::max<int64_t>(0, p.get_int("max_points")));
     o.likelihood_sigma_m = p.get_double("likelihood_sigma");
     o.ambiguity_ratio = p.get_double("ambiguity_ratio");
-    o.refinement_iterations = static_cast<int>(p.get_int("refinement_iterations"));
+    o.refinement_iterations = p.get_int32("refinement_iterations");
     o.threads = static_cast<unsigned>(std::max<int64_t>(0, p.get_int("threads")));
     // Checked here, once, so that a bad value is one line when the graph is built.
     try {
@@ -259,16 +259,16 @@ class MapLocalizationNode final : public graph::Node, public plugin::NodeCounter
 StereoOdometryOptions odometry_options(const KernelConfig& c) {
   const auto& p = c.parameters;
   StereoOdometryOptions o;
-  o.max_features = static_cast<int>(p.get_int("max_features"));
-  o.fast_threshold = static_cast<int>(p.get_int("fast_threshold"));
+  o.max_features = p.get_int32("max_features");
+  o.fast_threshold = p.get_int32("fast_threshold");
   o.max_disparity_px = p.get_double("max_disparity");
   o.ratio = p.get_double("ratio");
   o.search_radius_px = p.get_double("search_radius");
   o.ransac_reprojection_px = p.get_double("ransac_reprojection");
-  o.ransac_iterations = static_cast<int>(p.get_int("ransac_iterations"));
-  o.min_inliers = static_cast<int>(p.get_int("min_inliers"));
+  o.ransac_iterations = p.get_int32("ransac_iterations");
+  o.min_inliers = p.get_int32("min_inliers");
   o.keyframe_inlier_fraction = p.get_double("keyframe_inlier_fraction");
-  o.keyframe_min_inliers = static_cast<int>(p.get_int("keyframe_min_inliers"));
+  o.keyframe_min_inliers = p.get_int32("keyframe_min_inliers");
   try {
     StereoOdometry check(500.0, 500.0, 320.0, 240.0, 0.1, o);
   } catch (const std::invalid_argument& e) {

@@ -111,8 +111,8 @@ class ResizeNode final : public CameraNode, public ImageDeviceNode {
     params.use_scale = p.get_bool("use_scale");
     params.scale_height = p.get_double("scale_height");
     params.scale_width = p.get_double("scale_width");
-    params.height = static_cast<int>(p.get_int("height"));
-    params.width = static_cast<int>(p.get_int("width"));
+    params.height = p.get_int32("height");
+    params.width = p.get_int32("width");
     params.interpolation = interpolation_parameter(config);
     return params;
   }

@@ -16,14 +16,6 @@ using plugin::MessageSync;
 using plugin::SyncOptions;
 using plugin::SyncPolicy;
 
-int int_value(const KernelConfig& config, const std::string& name) {
-  const int64_t v = config.parameters.get_int(name);
-  if (v < INT32_MIN || v > INT32_MAX) {
-    throw std::invalid_argument("node '" + config.node_name + "': " + name + " is out of range");
-  }
-  return static_cast<int>(v);
-}
-
 SyncOptions sync_options(const KernelConfig& config, bool approximate) {
   SyncOptions o;
   o.policy = approximate ? SyncPolicy::kApproximate : SyncPolicy::kExact;
@@ -83,25 +75,25 @@ class DisparityNode final : public SkippingNode, public ImageDeviceNode {
  private:
   static StereoParams params_from(const KernelConfig& c) {
     StereoParams p;
-    const int algorithm = int_value(c, "stereo_algorithm");
+    const int algorithm = c.parameters.get_int32("stereo_algorithm");
     if (algorithm != 0 && algorithm != 1) {
       throw std::invalid_argument("node '" + c.node_name +
                                   "': stereo_algorithm must be 0 (StereoBM) or 1 (StereoSGBM)");
     }
     p.algorithm = static_cast<StereoAlgorithm>(algorithm);
-    p.prefilter_size = int_value(c, "prefilter_size");
-    p.prefilter_cap = int_value(c, "prefilter_cap");
-    p.correlation_window_size = int_value(c, "correlation_window_size");
-    p.min_disparity = int_value(c, "min_disparity");
-    p.disparity_range = int_value(c, "disparity_range");
-    p.texture_threshold = int_value(c, "texture_threshold");
-    p.speckle_size = int_value(c, "speckle_size");
-    p.speckle_range = int_value(c, "speckle_range");
-    p.uniqueness_ratio = int_value(c, "uniqueness_ratio");
-    p.p1 = int_value(c, "P1");
-    p.p2 = int_value(c, "P2");
-    p.disp12_max_diff = int_value(c, "disp12_max_diff");
-    p.sgbm_mode = int_value(c, "sgbm_mode");
+    p.prefilter_size = c.parameters.get_int32("prefilter_size");
+    p.prefilter_cap = c.parameters.get_int32("prefilter_cap");
+    p.correlation_window_size = c.parameters.get_int32("correlation_window_size");
+    p.min_disparity = c.parameters.get_int32("min_disparity");
+    p.disparity_range = c.parameters.get_int32("disparity_range");
+    p.texture_threshold = c.parameters.get_int32("texture_threshold");
+    p.speckle_size = c.parameters.get_int32("speckle_size");
+    p.speckle_range = c.parameters.get_int32("speckle_range");
+    p.uniqueness_ratio = c.parameters.get_int32("uniqueness_ratio");
+    p.p1 = c.parameters.get_int32("P1");
+    p.p2 = c.parameters.get_int32("P2");
+    p.disp12_max_diff = c.parameters.get_int32("disp12_max_diff");
+    p.sgbm_mode = c.parameters.get_int32("sgbm_mode");
     try {
       validate(p);
     } catch (const std::invalid_argument& e) {
@@ -215,7 +207,7 @@ plugin::ParameterInfo queue_size_declaration() {
 
 void register_stereo_depth_kernels(plugin::Registrar& registrar) {
   const StereoParams d;
-  using plugin::int_parameter;  // the declarations, not int_value()
+  using plugin::int_parameter;
   registrar.add_kernel(
       {.name = "stereo_image_proc/disparity",
        .description = "disparity of a rectified stereo pair (StereoBM, or StereoSGBM), as "

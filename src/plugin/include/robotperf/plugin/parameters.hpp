@@ -51,6 +51,9 @@ class Parameters {
   int64_t get_int(const std::string& name) const;
   double get_double(const std::string& name) const;
   std::string get_string(const std::string& name) const;
+  // An integer parameter read into an int: a value beyond int's range throws
+  // std::invalid_argument naming it (a cast would wrap 4294967303 to 7).
+  int get_int32(const std::string& name) const;
 
   // For parameters declared with computed_parameter(): the value given, else `fallback`.
   bool get_bool(const std::string& name, bool fallback) const;
