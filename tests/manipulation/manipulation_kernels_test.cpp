@@ -345,7 +345,8 @@ TEST(ManipulationRequests, CollisionStatesInterleaveNearAndFar) {
   w.near_fraction = 0.25;
   const CollisionRequests r = generate_collision_requests(w);
   ASSERT_EQ(r.states.size(), 40u);
-  const Shape& box = default_scene().objects.front().shape;
+  const auto scene = default_scene();  // kept: the box is a reference into it
+  const Shape& box = scene.objects.front().shape;
   std::size_t near = 0;
   for (std::size_t k = 0; k < r.states.size(); ++k) {
     const Eigen::Vector3d tip = arm().tip_pose(r.states[k].position.data()).translation();
