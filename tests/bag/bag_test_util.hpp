@@ -4,13 +4,13 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
 
 #include "../shared_data.hpp"
+#include "../test_file_name.hpp"
 #include "robotperf/bag/bag.hpp"
 
 namespace robotperf::bag::testing {
@@ -25,12 +25,8 @@ inline fs::path reference_bag(const std::string& name) {
 class ScratchDir {
  public:
   ScratchDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    // Parameterised tests are named "Prefix/Suite" and "Test/N": one directory, not two levels.
-    std::string name = std::string(info->test_suite_name()) + "-" + info->name();
-    std::replace(name.begin(), name.end(), '/', '-');
-    path_ =
-        fs::temp_directory_path() / ("robotperf-bag-" + std::to_string(::getpid()) + "-" + name);
+    path_ = fs::temp_directory_path() / ("robotperf-bag-" + std::to_string(::getpid()) + "-" +
+                                         ::robotperf::testing::current_test_file_name());
     fs::remove_all(path_);
     fs::create_directories(path_);
   }

@@ -15,6 +15,7 @@
 #include "../command_line.hpp"
 #include "../sanitized_build.hpp"
 #include "../shared_data.hpp"
+#include "../test_file_name.hpp"
 #include "robotperf/rmw/transport.hpp"
 
 namespace {
@@ -27,9 +28,8 @@ using robotperf::test_support::robotperf_cli;
 class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
-    out_ = fs::temp_directory_path() /
-           ("robotperf-cli-" + std::to_string(getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    out_ = fs::temp_directory_path() / ("robotperf-cli-" + std::to_string(getpid()) + "-" +
+                                        robotperf::testing::current_test_file_name());
     fs::remove_all(out_);
   }
   void TearDown() override { fs::remove_all(out_); }

@@ -14,6 +14,7 @@
 
 #include "../command_line.hpp"
 #include "../sanitized_build.hpp"
+#include "../test_file_name.hpp"
 #include "device_hops.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/perception/opencl_device.hpp"
@@ -54,10 +55,8 @@ class GreyRun : public ::testing::Test {
   }
 
   void SetUp() override {
-    // A parameterised test's name holds a '/': one folder, not a folder left behind in another.
-    std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    std::replace(name.begin(), name.end(), '/', '_');
-    dir_ = fs::temp_directory_path() / ("robotperf-grey-" + std::to_string(getpid()) + "-" + name);
+    dir_ = fs::temp_directory_path() / ("robotperf-grey-" + std::to_string(getpid()) + "-" +
+                                        robotperf::testing::current_test_file_name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
