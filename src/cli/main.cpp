@@ -60,10 +60,12 @@ constexpr int kExitUsage = 2;
 constexpr int kExitInvalidResult = 3;
 constexpr int kExitRefused = 4;
 
-// A number as written in decimal, all of the text (digits, point, exponent; also inf and nan,
-// which the callers bound): nullopt for anything else, a hexadecimal float or spaces included.
-std::optional<double> decimal_number(const std::string& text) {
-  double value = 0;
+// All of `text` as std::from_chars reads a T in decimal, or nothing: a double's digits, point and
+// exponent (also inf and nan, which the callers bound), an unsigned's digits alone (no sign,
+// space or 0x); nullopt for anything else and beyond T's range.
+template <class T>
+std::optional<T> decimal(const std::string& text) {
+  T value{};
   const char* end = text.data() + text.size();
   const auto [stop, error] = std::from_chars(text.data(), end, value);
   if (error != std::errc() || stop != end) return std::nullopt;
@@ -76,7 +78,7 @@ CLI::Validator number_check(bool zero_allowed) {
   const char* wanted = zero_allowed ? "a number, 0 or more" : "a number greater than 0";
   return CLI::Validator(
       [zero_allowed, wanted](std::string& text) -> std::string {
-        const auto value = decimal_number(text);
+        const auto value = decimal<double>(text);
         if (value && (zero_allowed ? *value >= 0 : *value > 0)) return "";
         return std::string("must be ") + wanted + " (got " + text + ")";
       },
@@ -84,16 +86,6 @@ CLI::Validator number_check(bool zero_allowed) {
 }
 const CLI::Validator kPositive = number_check(false);
 const CLI::Validator kNonNegative = number_check(true);
-
-// A whole number as written: decimal digits only (no sign, space or 0x); nullopt for anything
-// else and beyond 64 bits.
-std::optional<std::uint64_t> decimal_value(const std::string& text) {
-  std::uint64_t value = 0;
-  const char* end = text.data() + text.size();
-  const auto [stop, error] = std::from_chars(text.data(), end, value);
-  if (error != std::errc() || stop != end) return std::nullopt;
-  return value;
-}
 
 // A whole-number option's check. CLI11 2.1.2 converts integers with strtoll/strtoull in base 0
 // (0x10 is 16, 010 is 8, and -1 an unsigned 2^64-1), so only decimal digits pass, and they are
@@ -107,7 +99,7 @@ CLI::Validator whole_number(std::uint64_t min,
   const std::string wanted = unbounded ? ", " + range : " from " + range;
   return CLI::Validator(
       [min, max, wanted](std::string& text) -> std::string {
-        const auto value = decimal_value(text);
+        const auto value = decimal<std::uint64_t>(text);
         if (!value || *value < min || *value > max)
           return "must be a whole number" + wanted + " (got " + text + ")";
         text = std::to_string(*value);
@@ -481,7 +473,7 @@ harness::BagSelection bag_selection(const RunArgs& a) {
     const auto sep = a.window->find(':');
     auto seconds = [&](const std::string& text) -> std::optional<double> {
       if (text.empty()) return std::nullopt;
-      const std::optional<double> v = decimal_number(text);
+      const std::optional<double> v = decimal<double>(text);
       if (!v || !(*v >= 0))
         throw std::invalid_argument("--window " + *a.window + ": expected START:END in seconds");
       return v;
@@ -657,8 +649,8 @@ harness::PeakSearchOptions peak_search_options(const RunArgs& a) {
     const auto colon = a.rate_range->find(':');
     std::optional<double> low, high;
     if (colon != std::string::npos) {
-      low = decimal_number(a.rate_range->substr(0, colon));
-      high = decimal_number(a.rate_range->substr(colon + 1));
+      low = decimal<double>(a.rate_range->substr(0, colon));
+      high = decimal<double>(a.rate_range->substr(colon + 1));
     }
     if (!low || !high || !(*low > 0) || !(*high >= *low) || !std::isfinite(*high))
       throw std::invalid_argument("--rate-range " + *a.rate_range +
@@ -726,7 +718,7 @@ int run(const Roots& roots, const RunArgs& a) {
     o.bag_timeline = true;
     o.rate_scale = a.rate_scale;
   } else if (a.rate) {
-    o.rate_hz = decimal_number(*a.rate);
+    o.rate_hz = decimal<double>(*a.rate);
     if (!o.rate_hz)
       throw std::invalid_argument("--rate " + *a.rate + ": expected a rate in Hz or 'bag'");
   }
