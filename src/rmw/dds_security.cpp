@@ -371,6 +371,19 @@ std::string read_file(const fs::path& path) {
   return bytes.str();
 }
 
+// The PEM certificate or private key in `path`; null when it holds none.
+Certificate read_certificate(const fs::path& path) {
+  const std::string text = read_file(path);  // outlives the BIO over it
+  Bio in = memory_bio(text);
+  return Certificate(PEM_read_bio_X509(in.get(), nullptr, nullptr, nullptr));
+}
+
+Key read_private_key(const fs::path& path) {
+  const std::string text = read_file(path);
+  Bio in = memory_bio(text);
+  return Key(PEM_read_bio_PrivateKey(in.get(), nullptr, nullptr, nullptr));
+}
+
 constexpr fs::perms kPublicFolder = fs::perms::owner_all | fs::perms::group_read |
                                     fs::perms::group_exec | fs::perms::others_read |
                                     fs::perms::others_exec;
@@ -479,11 +492,8 @@ Authority load_authority(const fs::path& dir) {
   Authority ca;
   ca.certificate_pem = read_file(ca_certificate_path(dir));
   ca.governance_p7s = read_file(governance_path(dir));
-  Bio cert_bio = memory_bio(ca.certificate_pem);
-  ca.certificate.reset(PEM_read_bio_X509(cert_bio.get(), nullptr, nullptr, nullptr));
-  const std::string key_text = read_file(ca_key_path(dir));
-  Bio key_bio = memory_bio(key_text);
-  ca.key.reset(PEM_read_bio_PrivateKey(key_bio.get(), nullptr, nullptr, nullptr));
+  ca.certificate = read_certificate(ca_certificate_path(dir));
+  ca.key = read_private_key(ca_key_path(dir));
   if (!ca.certificate || !ca.key ||
       X509_check_private_key(ca.certificate.get(), ca.key.get()) != 1) {
     throw openssl_error("reading the CA of keystore " + dir.string());
@@ -605,18 +615,14 @@ void check_enclave_files(const SecurityFiles& files, const std::string& hint) {
     return SecurityError("security keystore file " + file.string() + " " + why + "; " + hint);
   };
   auto certificate = [&](const fs::path& file) {
-    const std::string text = read_file(file);  // outlives the BIO over it
-    Bio in = memory_bio(text);
-    Certificate cert(PEM_read_bio_X509(in.get(), nullptr, nullptr, nullptr));
+    Certificate cert = read_certificate(file);
     if (!cert) throw broken(file, "is not a PEM certificate");
     return cert;
   };
   const Certificate cert = certificate(files.certificate);
   const Certificate identity_ca = certificate(files.identity_ca);
   const Certificate permissions_ca = certificate(files.permissions_ca);
-  const std::string key_text = read_file(files.private_key);
-  Bio key_in = memory_bio(key_text);
-  const Key key(PEM_read_bio_PrivateKey(key_in.get(), nullptr, nullptr, nullptr));
+  const Key key = read_private_key(files.private_key);
   if (!key) throw broken(files.private_key, "is not a PEM private key");
   if (X509_check_private_key(cert.get(), key.get()) != 1)
     throw broken(files.private_key, "is not the key of " + files.certificate.filename().string());
