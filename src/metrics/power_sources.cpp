@@ -262,22 +262,20 @@ void discover_rapl(const fs::path& root, PowerDiscovery& out) {
 void discover_hwmon(const fs::path& root, bool rapl_found, PowerDiscovery& out) {
   const fs::path hwmon = root / "sys/class/hwmon";
   const std::size_t before = out.sources.size();
-  const std::vector<fs::path> devices = entries(hwmon);
-  // Older drivers keep their name and attributes in device/.
-  std::vector<std::optional<std::string>> names;
-  std::vector<fs::path> bases;
-  for (const auto& dev : devices) {
-    const auto device_name = read_text(dev / "name");
-    names.push_back(device_name ? device_name : read_text(dev / "device/name"));
-    bases.push_back(!device_name && names.back() ? dev / "device" : dev);
+  struct Device {
+    fs::path dir, base;  // its attributes in base: dir, or dir/device for older drivers
+    std::optional<std::string> name;
+  };
+  std::vector<Device> devices;
+  for (const auto& dir : entries(hwmon)) {
+    const auto own = read_text(dir / "name");
+    const auto name = own ? own : read_text(dir / "device/name");
+    devices.push_back({dir, !own && name ? dir / "device" : dir, name});
   }
-  for (std::size_t d = 0; d < devices.size(); ++d) {
-    const fs::path& dev = devices[d];
-    const fs::path& base = bases[d];
-    const auto& name = names[d];
+  for (const auto& [dev, base, name] : devices) {
     // Two devices of one driver (two GPUs, two INA chips) are told apart by their hwmon folder.
     std::string label_prefix = "hwmon:" + name.value_or(dev.filename().string());
-    if (name && std::count(names.begin(), names.end(), name) > 1)
+    if (name && std::ranges::count(devices, name, &Device::name) > 1)
       label_prefix += "[" + dev.filename().string() + "]";
     // CPU energy drivers repeat what RAPL already counts.
     const bool repeats_rapl = rapl_found && name && (*name == "amd_energy" || *name == "zenpower");
