@@ -1,5 +1,7 @@
 #include "robotperf/plugin/kernel.hpp"
 
+#include <cctype>
+#include <iostream>
 #include <stdexcept>
 
 #include "robotperf/plugin/control_loop.hpp"
@@ -25,6 +27,14 @@ std::string KernelConfig::topic(const std::string& port) const {
 }
 
 NodeCounters::~NodeCounters() = default;
+
+void SkippedInputs::note(const std::string& node, std::string reason) {
+  if (count_++ != 0) return;
+  // OpenCV's messages end in a newline.
+  while (!reason.empty() && std::isspace(static_cast<unsigned char>(reason.back())))
+    reason.pop_back();
+  std::cerr << "robotperf node " << node << ": skipping " << what_ << ": " << reason << "\n";
+}
 DeviceNode::~DeviceNode() = default;
 ControlLoopSource::~ControlLoopSource() = default;
 

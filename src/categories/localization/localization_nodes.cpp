@@ -1,6 +1,5 @@
 // The localization kernels as graph nodes.
 #include <cmath>
-#include <iostream>
 #include <stdexcept>
 
 #include "category.hpp"
@@ -21,23 +20,13 @@ namespace {
 using plugin::KernelConfig;
 using plugin::MessageSync;
 
-// Inputs the kernel rejected (a bad image, a map it cannot use): skipped and counted, as the ROS
-// nodes log and skip them; the frame shows as lost at the Monitor. The first one is said.
-struct RejectedInputs {
-  uint64_t count = 0;
-  void note(const std::string& node, const std::invalid_argument& e) {
-    if (count++ == 0)
-      std::cerr << "robotperf node " << node << ": skipping input: " << e.what() << "\n";
-  }
-};
-
 // Inputs paired by exact stamps (as the ROS nodes' message_filters do).
 template <std::size_t N>
 class SyncedNode : public graph::Node, public plugin::NodeCounters {
  public:
   std::map<std::string, uint64_t> counters() const override {
     std::map<std::string, uint64_t> out{{"sets_processed", sync_.emitted()},
-                                        {"rejected_sets", rejected_.count}};
+                                        {"rejected_sets", rejected_.count()}};
     for (std::size_t i = 0; i < N; ++i) out["unpaired_" + port_names_[i]] = sync_.dropped()[i];
     return out;
   }
@@ -65,13 +54,13 @@ class SyncedNode : public graph::Node, public plugin::NodeCounters {
     try {
       process(set);
     } catch (const std::invalid_argument& e) {
-      rejected_.note(name(), e);
+      rejected_.note(name(), e.what());
     }
   }
 
   std::array<std::string, N> port_names_;
   MessageSync<N> sync_;
-  RejectedInputs rejected_;
+  plugin::SkippedInputs rejected_;
   std::vector<std::shared_ptr<graph::GenericSubscription>> subscriptions_;
 };
 
@@ -170,7 +159,7 @@ class MapLocalizationNode final : public graph::Node, public plugin::NodeCounter
   std::map<std::string, uint64_t> counters() const override {
     return {{"maps_built", maps_built_},
             {"scans_without_map", scans_without_map_},
-            {"rejected_inputs", rejected_.count},
+            {"rejected_inputs", rejected_.count()},
             {"not_found", not_found_}};
   }
 
@@ -206,7 +195,7 @@ class MapLocalizationNode final : public graph::Node, public plugin::NodeCounter
       map_frame_ = grid.header.frame_id;
       ++maps_built_;
     } catch (const std::invalid_argument& e) {
-      rejected_.note(name(), e);
+      rejected_.note(name(), e.what());
     }
   }
 
@@ -240,7 +229,7 @@ class MapLocalizationNode final : public graph::Node, public plugin::NodeCounter
       plugin::trace_kernel_fini(*this, kKernel, *out);
       output_->publish(std::shared_ptr<const msgs::PoseWithCovarianceStamped>(std::move(out)));
     } catch (const std::invalid_argument& e) {
-      rejected_.note(name(), e);
+      rejected_.note(name(), e.what());
     }
   }
 
@@ -250,7 +239,7 @@ class MapLocalizationNode final : public graph::Node, public plugin::NodeCounter
   msgs::MapMetaData map_info_;
   std::vector<int8_t> map_data_;
   std::string map_frame_;
-  RejectedInputs rejected_;
+  plugin::SkippedInputs rejected_;
   uint64_t maps_built_ = 0, scans_without_map_ = 0, not_found_ = 0;
   std::shared_ptr<graph::Publisher<msgs::PoseWithCovarianceStamped>> output_;
   std::shared_ptr<graph::GenericSubscription> map_sub_, scan_sub_;

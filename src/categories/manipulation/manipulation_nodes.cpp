@@ -2,7 +2,6 @@
 // request's header (and so its message ID) copied to the answer.
 #include <Eigen/Geometry>
 #include <cmath>
-#include <iostream>
 #include <stdexcept>
 #include <string>
 
@@ -52,14 +51,12 @@ class RequestNode : public graph::Node, public plugin::NodeCounters {
             ++answered_;
             output_->publish(std::shared_ptr<const Answer>(std::move(answer)));
           } catch (const std::invalid_argument& e) {
-            if (rejected_++ == 0)
-              std::cerr << "robotperf node " << name() << ": skipping request: " << e.what()
-                        << "\n";
+            rejected_.note(name(), e.what());
           }
         });
   }
   std::map<std::string, uint64_t> counters() const override {
-    return {{"requests_answered", answered_}, {"requests_rejected", rejected_}};
+    return {{"requests_answered", answered_}, {"requests_rejected", rejected_.count()}};
   }
 
  protected:
@@ -69,7 +66,7 @@ class RequestNode : public graph::Node, public plugin::NodeCounters {
  private:
   std::shared_ptr<graph::GenericSubscription> input_;
   uint64_t answered_ = 0;
-  uint64_t rejected_ = 0;
+  plugin::SkippedInputs rejected_{"request"};
 };
 
 class ForwardKinematicsNode final : public RequestNode<msgs::JointState, msgs::PoseStamped> {

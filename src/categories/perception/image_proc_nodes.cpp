@@ -27,7 +27,7 @@ int interpolation_parameter(const KernelConfig& config) {
 class CameraNode : public SkippingNode {
  public:
   std::map<std::string, uint64_t> counters() const override {
-    return {{"rejected_sets", rejected_}};
+    return {{"rejected_sets", rejected_.count()}};
   }
 
  protected:

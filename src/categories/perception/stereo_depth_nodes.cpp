@@ -69,7 +69,7 @@ class DisparityNode final : public SkippingNode, public ImageDeviceNode {
     const auto& d = sync_.dropped();
     return {{"sets_processed", sync_.emitted()},           {"unpaired_left_image", d[kLeftImage]},
             {"unpaired_left_camera_info", d[kLeftInfo]},   {"unpaired_right_image", d[kRightImage]},
-            {"unpaired_right_camera_info", d[kRightInfo]}, {"rejected_sets", rejected_}};
+            {"unpaired_right_camera_info", d[kRightInfo]}, {"rejected_sets", rejected_.count()}};
   }
 
  private:
@@ -160,7 +160,7 @@ class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
             {"unpaired_depth", d[kDepth]},
             {"unpaired_image", d[kImage]},
             {"unpaired_camera_info", d[kInfo]},
-            {"rejected_sets", rejected_}};
+            {"rejected_sets", rejected_.count()}};
   }
 
  private:

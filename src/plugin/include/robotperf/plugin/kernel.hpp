@@ -9,6 +9,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "robotperf/graph/node.hpp"
@@ -80,6 +81,22 @@ class NodeCounters {
  public:
   virtual ~NodeCounters();
   virtual std::map<std::string, uint64_t> counters() const = 0;
+};
+
+// Inputs a kernel node could not use (a malformed image, frames of different sizes, a map it
+// cannot read): as the ROS nodes log and skip them, the node skips and counts them, the frame
+// shows as lost at the Monitor and the run goes on. The first one is said on stderr, naming the
+// node, so that a run that loses every frame says why.
+class SkippedInputs {
+ public:
+  // `what` is the input's kind as the line says it ("input", "request").
+  explicit SkippedInputs(std::string what = "input") : what_(std::move(what)) {}
+  void note(const std::string& node, std::string reason);
+  uint64_t count() const { return count_; }
+
+ private:
+  std::string what_;
+  uint64_t count_ = 0;
 };
 
 // The device a kernel computes on when its backend is not the host CPU, as results record it.
