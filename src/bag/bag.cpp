@@ -1,6 +1,7 @@
 // Bags as directories (metadata.yaml + storage files) and single storage files.
 #include "robotperf/bag/bag.hpp"
 
+#include <fcntl.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 #include <zstd.h>
@@ -9,10 +10,12 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <fstream>
 #include <map>
 #include <sstream>
 
+#include "mcap_format.hpp"
 #include "robotperf/bag/qos.hpp"
 
 namespace robotperf::bag {
@@ -395,17 +398,18 @@ bool Reader::next(Message& out) {
   }
   out.topic = topic_map_.at(out.topic);
   if (message_compressed(info_)) {
+    // rosbag2 compresses each message as one zstd frame that says its size.
+    const auto where = [&] {
+      return files_[next_file_ - 1].string() + ": a message on " + info_.topics[out.topic].name;
+    };
     const unsigned long long size = ZSTD_getFrameContentSize(out.data.data(), out.data.size());
-    if (size == ZSTD_CONTENTSIZE_ERROR || size == ZSTD_CONTENTSIZE_UNKNOWN || size > (1ull << 32)) {
-      throw BagError(files_[next_file_ - 1].string() + ": a message on " +
-                     info_.topics[out.topic].name + " is not a zstd frame");
-    }
-    std::vector<uint8_t> plain(size);
-    const std::size_t n =
-        ZSTD_decompress(plain.data(), plain.size(), out.data.data(), out.data.size());
-    if (ZSTD_isError(n) || n != size) {
-      throw BagError(files_[next_file_ - 1].string() + ": a message on " +
-                     info_.topics[out.topic].name + " does not decompress");
+    if (size == ZSTD_CONTENTSIZE_ERROR || size == ZSTD_CONTENTSIZE_UNKNOWN)
+      throw BagError(where() + " is not a zstd frame that says its size");
+    std::vector<uint8_t> plain;
+    try {
+      mcap::decompress("zstd", out.data, size, plain);
+    } catch (const mcap::FormatError& e) {
+      throw BagError(where() + " does not decompress: " + e.what());
     }
     out.data = std::move(plain);
   }
@@ -414,10 +418,33 @@ bool Reader::next(Message& out) {
 
 namespace {
 
+// The topic's QoS in the integer encoding Humble reads; text that is not QoS profiles is the bag's
+// error, naming `where` and the topic.
+std::string integer_qos(const TopicInfo& topic, const fs::path& where) {
+  try {
+    return qos_with_integer_enums(topic.offered_qos_profiles);
+  } catch (const std::invalid_argument& e) {
+    throw BagError(where.string() + ": topic " + topic.name + ": " + e.what());
+  }
+}
+
+// Makes what was written to a file, or which entries a directory has, reach the disk.
+void sync_to_disk(const fs::path& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw BagError(path.string() + ": cannot open to sync: " + std::strerror(errno));
+  const int result = ::fsync(fd);
+  const int error = errno;
+  ::close(fd);
+  // EINVAL: a file system that cannot sync directories; there is nothing more to do.
+  if (result != 0 && error != EINVAL)
+    throw BagError(path.string() + ": cannot sync to the disk: " + std::strerror(error));
+}
+
 // metadata.yaml version 5: the fields ROS 2 Humble reads; Iron and Jazzy read it too. Written
-// beside and renamed: a crash never leaves a half-written metadata.yaml.
+// beside, synced and renamed: a crash never leaves a half-written metadata.yaml.
 void write_metadata_file(const fs::path& dir, Storage storage, const std::vector<TopicInfo>& topics,
                          const std::vector<FileInfo>& files) {
+  const fs::path target = dir / kMetadataFile;
   int64_t start = 0;
   int64_t end = 0;
   uint64_t count = 0;
@@ -441,8 +468,7 @@ void write_metadata_file(const fs::path& dir, Storage storage, const std::vector
       << "        name: " << quoted(t.name) << "\n"
       << "        type: " << quoted(t.type) << "\n"
       << "        serialization_format: " << quoted(t.serialization_format) << "\n"
-      << "        offered_qos_profiles: " << quoted(qos_with_integer_enums(t.offered_qos_profiles))
-      << "\n"
+      << "        offered_qos_profiles: " << quoted(integer_qos(t, target)) << "\n"
       << "      message_count: " << t.message_count << "\n";
   }
   y << "  compression_format: \"\"\n"
@@ -456,17 +482,18 @@ void write_metadata_file(const fs::path& dir, Storage storage, const std::vector
       << "      duration:\n        nanoseconds: " << f.duration_ns << "\n"
       << "      message_count: " << f.message_count << "\n";
   }
-  const fs::path target = dir / kMetadataFile;
   const fs::path tmp = dir / (std::string(kMetadataFile) + ".tmp");
   {
     std::ofstream out(tmp, std::ios::trunc);
     out << y.str();
-    out.flush();
+    out.close();
     if (!out) throw BagError(tmp.string() + ": write failed");
   }
+  sync_to_disk(tmp);
   std::error_code ec;
   fs::rename(tmp, target, ec);
   if (ec) throw BagError(target.string() + ": cannot write: " + ec.message());
+  sync_to_disk(dir);
 }
 
 }  // namespace
@@ -477,17 +504,26 @@ class Writer::Impl {
     if (fs::exists(dir) && !(fs::is_directory(dir) && fs::is_empty(dir)))
       throw BagError(dir.string() +
                      ": already exists and is not empty; choose a new bag directory");
+    // The folders this writer makes, innermost first: discard() removes them again.
+    for (fs::path p = dir; !p.empty() && !fs::exists(p); p = p.parent_path()) created_.push_back(p);
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec) throw BagError(dir.string() + ": cannot create: " + ec.message());
-    open_file();
+    try {
+      open_file();
+    } catch (...) {
+      discard();
+      throw;
+    }
   }
 
   std::size_t add_topic(const TopicInfo& topic) {
+    // metadata.yaml will need the QoS in Humble's encoding: bad QoS is refused now, not at close.
+    integer_qos(topic, dir_);
     TopicInfo t = topic;
     t.message_count = 0;
-    topics_.push_back(t);
-    current_->add_topic(topics_.size() - 1, t);
+    current_->add_topic(topics_.size(), t);
+    topics_.push_back(std::move(t));
     return topics_.size() - 1;
   }
 
@@ -516,15 +552,45 @@ class Writer::Impl {
     if (closed_) return;
     closed_ = true;
     current_->close();
+    // The storage files reach the disk before the metadata.yaml that says they are whole.
+    for (const auto& f : files_) sync_to_disk(dir_ / f.path);
     write_metadata();
+    complete_ = true;
+  }
+
+  // For ~Writer: finishes the bag, unless an exception is unwinding the stack through it (a
+  // conversion that failed half-way). Then, or when finishing fails, what was written goes: a
+  // bag that looks complete but is not would mislead.
+  void finish() noexcept {
+    if (std::uncaught_exceptions() == exceptions_at_start_) {
+      try {
+        close();
+      } catch (...) {  // destructors must not throw; close() reports errors to its callers
+      }
+    }
+    if (!complete_) discard();
   }
 
  private:
+  // Removes the files this writer wrote and the folders it made (a folder that was there before
+  // stays, empty, as it was).
+  void discard() noexcept {
+    current_.reset();
+    std::error_code ec;
+    for (const auto& f : files_) fs::remove(dir_ / f.path, ec);
+    fs::remove(dir_ / kMetadataFile, ec);
+    fs::remove(dir_ / (std::string(kMetadataFile) + ".tmp"), ec);
+    for (const auto& d : created_) fs::remove(d, ec);  // only while empty
+  }
+
   void open_file() {
     const std::string ext = options_.storage == Storage::kMcap ? ".mcap" : ".db3";
+    // Named after the bag's folder, as rosbag2 names them; "out/" and "." name their folder too.
+    const fs::path folder = fs::absolute(dir_).lexically_normal();
+    std::string name = (folder.has_filename() ? folder : folder.parent_path()).filename().string();
+    if (name.empty()) name = "bag";
     FileInfo f;
-    f.path = dir_.filename().string() + "_" + std::to_string(files_.size()) + ext;
-    if (f.path == ext) f.path = "bag_" + std::to_string(files_.size()) + ext;
+    f.path = name + "_" + std::to_string(files_.size()) + ext;
     const fs::path full = dir_ / f.path;
     current_ = options_.storage == Storage::kMcap
                    ? create_mcap(full, options_.compression, options_.chunk_size)
@@ -540,17 +606,17 @@ class Writer::Impl {
   std::vector<FileInfo> files_;
   int64_t file_end_ns_ = 0;
   std::unique_ptr<StorageWriter> current_;
+  std::vector<fs::path> created_;
+  const int exceptions_at_start_ = std::uncaught_exceptions();
   bool closed_ = false;
+  bool complete_ = false;  // closed, and metadata.yaml written
 };
 
 Writer::Writer(const fs::path& dir, WriteOptions options)
     : impl_(std::make_unique<Impl>(dir, options)) {}
 
 Writer::~Writer() {
-  try {
-    close();
-  } catch (const BagError&) {  // destructors must not throw; close() reports errors
-  }
+  impl_->finish();
 }
 
 std::size_t Writer::add_topic(const TopicInfo& topic) {

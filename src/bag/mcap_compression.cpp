@@ -21,13 +21,14 @@ LZ4F_dctx* new_lz4_context() {
 }
 
 // The most `in` can decompress to. zstd frames say it in their headers: no fixed ratio bounds
-// them (a run of zero bytes compresses about 32000:1). lz4 expands at most about 255x per input
-// byte; an unknown codec, refused later, gets the same allowance.
+// them (a run of zero bytes compresses about 32000:1), and a header can lie, which only decoding
+// finds out. lz4 expands at most about 255x per input byte; an unknown codec, refused later, gets
+// the same allowance.
 uint64_t most_decompressed(const std::string& compression, std::span<const uint8_t> in) {
   if (compression != "zstd") return (in.size() + 64) * 256;
   const unsigned long long bound = ZSTD_decompressBound(in.data(), in.size());
   if (bound == ZSTD_CONTENTSIZE_ERROR)
-    throw FormatError("zstd chunk does not decompress: not whole zstd frames (cut short?)");
+    throw FormatError("zstd: not whole zstd frames (cut short?)");
   return bound;
 }
 
@@ -35,7 +36,8 @@ uint64_t most_decompressed(const std::string& compression, std::span<const uint8
 
 void decompress(const std::string& compression, std::span<const uint8_t> in,
                 uint64_t uncompressed_size, std::vector<uint8_t>& out, uint32_t* crc) {
-  // A forged uncompressed_size must not make us allocate without bound.
+  // A forged uncompressed_size must not make us allocate without bound. What zstd frame headers
+  // claim is not allocated either: zstd output grows as it comes.
   if (!compression.empty() && uncompressed_size > most_decompressed(compression, in)) {
     throw FormatError("chunk claims " + std::to_string(uncompressed_size) +
                       " uncompressed bytes from " + std::to_string(in.size()) +
@@ -50,7 +52,6 @@ void decompress(const std::string& compression, std::span<const uint8_t> in,
     if (crc != nullptr) *crc = crc32(out);
     return;
   }
-  out.resize(static_cast<std::size_t>(uncompressed_size));
   uint32_t running_crc = 0;
   auto produced = [&](std::size_t from, std::size_t to) {
     if (crc != nullptr && to > from)
@@ -61,17 +62,40 @@ void decompress(const std::string& compression, std::span<const uint8_t> in,
     thread_local const std::unique_ptr<ZSTD_DCtx, decltype(&ZSTD_freeDCtx)> context(
         ZSTD_createDCtx(), &ZSTD_freeDCtx);
     if (!context) throw FormatError("cannot create a zstd decompression context");
-    // In one call: zstd's streaming decoder would copy through its own window
-    // buffer, costing more than a separate pass for the CRC.
-    const std::size_t n =
-        ZSTD_decompressDCtx(context.get(), out.data(), out.size(), in.data(), in.size());
-    if (ZSTD_isError(n))
-      throw FormatError(std::string("zstd chunk does not decompress: ") + ZSTD_getErrorName(n));
-    if (n != uncompressed_size) {
-      throw FormatError("zstd chunk decompresses to " + std::to_string(n) + " bytes, not " +
-                        std::to_string(uncompressed_size));
+    ZSTD_DCtx* ctx = context.get();
+    // A chunk that failed may have left it mid-frame.
+    ZSTD_DCtx_reset(ctx, ZSTD_reset_session_only);
+    // Streamed into an output that grows as the bytes come: a frame header may claim gigabytes
+    // that its blocks never hold, and zstd finds that out only at the frame's end. A piece at a
+    // time, so that each is checksummed while still in cache. The output is reused from the last
+    // chunk as far as it goes.
+    out.resize(static_cast<std::size_t>(
+        std::min<uint64_t>(uncompressed_size, std::max(out.size(), kPiece))));
+    ZSTD_inBuffer input{in.data(), in.size(), 0};
+    std::size_t out_pos = 0;
+    std::size_t left = 0;  // 0 when the frames read so far are whole
+    do {
+      if (out_pos == out.size() && out_pos < uncompressed_size)
+        out.resize(static_cast<std::size_t>(std::min<uint64_t>(uncompressed_size, 2 * out_pos)));
+      ZSTD_outBuffer output{out.data(), std::min(out.size(), out_pos + kPiece), out_pos};
+      const std::size_t in_pos = input.pos;
+      left = ZSTD_decompressStream(ctx, &output, &input);
+      if (ZSTD_isError(left)) throw FormatError(std::string("zstd: ") + ZSTD_getErrorName(left));
+      produced(out_pos, output.pos);
+      const bool progress = output.pos != out_pos || input.pos != in_pos;
+      out_pos = output.pos;
+      // No progress: the input ends inside a frame, or the output is as large as the chunk
+      // claims and the frames hold more.
+      if (!progress) break;
+    } while (left != 0 || input.pos < input.size);
+    if (left != 0 || out_pos != uncompressed_size) {
+      const std::string claimed = " the " + std::to_string(uncompressed_size) + " bytes claimed";
+      throw FormatError(
+          left == 0 ? "zstd frames hold " + std::to_string(out_pos) + " bytes, not" + claimed
+          : out_pos == uncompressed_size ? "zstd frames hold more than" + claimed
+                                         : "zstd frames end after " + std::to_string(out_pos) +
+                                               " of" + claimed + " (cut short?)");
     }
-    produced(0, n);
     if (crc != nullptr) *crc = running_crc;
     return;
   }
@@ -83,6 +107,7 @@ void decompress(const std::string& compression, std::span<const uint8_t> in,
     if (!context) throw FormatError("cannot create an lz4 decompression context");
     LZ4F_dctx* ctx = context.get();
     LZ4F_resetDecompressionContext(ctx);  // a chunk that failed may have left it mid-frame
+    out.resize(static_cast<std::size_t>(uncompressed_size));
     // The output stays where it is between calls: lz4 then decodes linked blocks against it
     // instead of first saving the last 64 KB of every piece in its own buffer.
     LZ4F_decompressOptions_t options{};

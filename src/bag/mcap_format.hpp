@@ -1,5 +1,6 @@
 // Private to the bag piece: MCAP record layout (https://mcap.dev/spec), the
-// little-endian primitives it is made of, and chunk (de)compression.
+// little-endian primitives it is made of, and chunk (de)compression (which
+// rosbag2's per-message compression shares).
 #pragma once
 
 #include <cstdint>
@@ -146,9 +147,11 @@ class Builder {
 
 uint32_t crc32(std::span<const uint8_t> bytes, uint32_t crc = 0);
 
-// Decompresses a chunk's records; throws FormatError for an unknown
-// compression or corrupt data. With `crc`, also returns the CRC-32 of the
-// output there, computed piece by piece while each piece is still in cache.
+// Decompresses a chunk's records (or a rosbag2 message compressed on its own), which must come
+// to exactly `uncompressed_size` bytes; throws FormatError for an unknown compression or corrupt
+// data. Memory grows with the bytes actually decoded, never to a size only claimed. With `crc`,
+// also returns the CRC-32 of the output there, computed piece by piece while each piece is still
+// in cache.
 void decompress(const std::string& compression, std::span<const uint8_t> in,
                 uint64_t uncompressed_size, std::vector<uint8_t>& out, uint32_t* crc = nullptr);
 // Compresses `in` with "zstd" or "lz4" (frame format).

@@ -31,7 +31,9 @@ template <std::size_t N>
 int parse_enum(const YAML::Node& node, const char* key, const std::array<EnumName, N>& names) {
   const YAML::Node v = node[key];
   if (!v) return 0;
-  const std::string text = v.as<std::string>();
+  if (!v.IsScalar())
+    throw std::invalid_argument(std::string("QoS ") + key + " is not a name or a number");
+  const std::string& text = v.Scalar();
   for (const auto& e : names) {
     if (text == e.name || text == std::to_string(e.value)) return e.value;
   }
@@ -128,7 +130,8 @@ bool qos_uses_integer_enums(const std::string& yaml) {
   for (const auto& node : root) {
     if (!node.IsMap()) return false;
     for (const char* key : {"history", "reliability", "durability", "liveliness"}) {
-      if (node[key] && !is_integer(node[key].as<std::string>())) return false;
+      const YAML::Node v = node[key];
+      if (v && !(v.IsScalar() && is_integer(v.Scalar()))) return false;
     }
   }
   return true;

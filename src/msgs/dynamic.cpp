@@ -5,7 +5,6 @@
 #include <charconv>
 #include <cstring>
 #include <fstream>
-#include <functional>
 #include <set>
 #include <sstream>
 
@@ -163,15 +162,18 @@ class Decoder {
       }
       n = count;
     }
+    // Each element takes at least a byte; checked before anything is allocated for them.
+    if (n > reader_.remaining())
+      throw CdrError("CDR array of " + std::to_string(n) + " elements exceeds payload");
     if (byte_like(t.primitive)) {
       Bytes bytes(n);
       for (auto& b : bytes) reader_(b);
       return Value{std::move(bytes)};
     }
-    if (n > reader_.remaining())
-      throw CdrError("CDR array of " + std::to_string(n) + " elements exceeds payload");
+    // A Value is larger than most elements on the wire: the list grows as they decode, so a
+    // forged count costs no more memory than the payload holds.
     List list;
-    list.reserve(n);
+    list.reserve(std::min(n, reader_.remaining() / sizeof(Value)));
     for (std::size_t i = 0; i < n; ++i) list.push_back(single(t, depth));
     return Value{std::move(list)};
   }
@@ -647,37 +649,51 @@ const MessageDefinition& TypeRegistry::get(const std::string& type) const {
   return it->second;
 }
 
+// The walks over a type's dependencies keep their own stacks: a schema can chain types deeper than
+// the call stack goes (decode() refuses more than 64 levels, but only after these walks).
 void TypeRegistry::check_complete(const std::string& type) const {
   std::set<std::string> seen;
-  std::function<void(const std::string&, const std::string&)> visit =
-      [&](const std::string& t, const std::string& needed_by) {
-        if (!seen.insert(t).second) return;
-        if (!contains(t)) {
-          throw DefinitionError("no definition of " + t +
-                                (needed_by.empty() ? "" : " (used by " + needed_by + ")"));
-        }
-        for (const Field& f : get(t).fields) {
-          if (f.type.primitive == Primitive::kMessage) visit(f.type.message_type, t);
-        }
-      };
-  visit(normalize_type_name(type), "");
+  std::vector<std::pair<std::string, std::string>> todo{{normalize_type_name(type), ""}};
+  while (!todo.empty()) {
+    const auto [t, needed_by] = std::move(todo.back());
+    todo.pop_back();
+    if (!seen.insert(t).second) continue;
+    if (!contains(t)) {
+      throw DefinitionError("no definition of " + t +
+                            (needed_by.empty() ? "" : " (used by " + needed_by + ")"));
+    }
+    // Pushed last field first, so that the first field's types are checked first.
+    const auto& fields = get(t).fields;
+    for (auto f = fields.rbegin(); f != fields.rend(); ++f) {
+      if (f->type.primitive == Primitive::kMessage) todo.emplace_back(f->type.message_type, t);
+    }
+  }
 }
 
 std::string TypeRegistry::ros2msg_schema(const std::string& type) const {
   check_complete(type);
   const std::string root = normalize_type_name(type);
-  std::vector<std::string> order;  // dependencies, depth first, each once
-  std::function<void(const std::string&)> visit = [&](const std::string& t) {
-    for (const Field& f : get(t).fields) {
-      const std::string& dep = f.type.message_type;
-      if (f.type.primitive != Primitive::kMessage || dep == root ||
-          std::find(order.begin(), order.end(), dep) != order.end())
-        continue;
-      order.push_back(dep);
-      visit(dep);
-    }
+  // Dependencies depth first, in field order, each once: a type's own first, then the next
+  // field's.
+  std::vector<std::string> order;
+  std::set<std::string> listed{root};
+  struct Visit {
+    const MessageDefinition* def;
+    std::size_t next_field;
   };
-  visit(root);
+  std::vector<Visit> stack{{&get(root), 0}};
+  while (!stack.empty()) {
+    Visit& v = stack.back();
+    if (v.next_field == v.def->fields.size()) {
+      stack.pop_back();
+      continue;
+    }
+    const FieldType& field = v.def->fields[v.next_field++].type;
+    if (field.primitive != Primitive::kMessage || !listed.insert(field.message_type).second)
+      continue;
+    order.push_back(field.message_type);
+    stack.push_back({&get(field.message_type), 0});
+  }
   std::string out = get(root).text;
   for (const std::string& dep : order) {
     if (!out.empty() && out.back() != '\n') out += '\n';

@@ -94,12 +94,18 @@ void append_individual(std::string& out, const dynamic::MessageDefinition& def) 
   out += "]}";
 }
 
+// With a stack of its own: a schema can chain types deeper than the call stack goes.
 void collect_referenced(const dynamic::TypeRegistry& registry, const std::string& type,
                         std::set<std::string>& found) {
-  for (const auto& field : registry.get(type).fields) {
-    if (field.type.primitive == Primitive::kMessage &&
-        found.insert(field.type.message_type).second) {
-      collect_referenced(registry, field.type.message_type, found);
+  std::vector<std::string> todo{type};
+  while (!todo.empty()) {
+    const std::string t = std::move(todo.back());
+    todo.pop_back();
+    for (const auto& field : registry.get(t).fields) {
+      if (field.type.primitive == Primitive::kMessage &&
+          found.insert(field.type.message_type).second) {
+        todo.push_back(field.type.message_type);
+      }
     }
   }
 }

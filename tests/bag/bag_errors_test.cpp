@@ -3,7 +3,9 @@
 
 #include <cstring>
 
+#include "allocation_limit.hpp"
 #include "bag_test_util.hpp"
+#include "mcap_format.hpp"
 
 namespace robotperf::bag {
 namespace {
@@ -111,6 +113,103 @@ TEST(BagErrors, ChunkClaimsMoreThanItsFrameHolds) {
   std::memcpy(bytes.data() + kChunkUncompressedSize, &claim, sizeof(claim));
   write_file(dir / "bomb.mcap", bytes);
   expect_error(dir / "bomb.mcap", "bomb.mcap", "claims 1099511627776 uncompressed bytes");
+}
+
+// A zstd frame whose header claims `claimed` bytes, single segment, but whose one block (raw,
+// the last) holds a single byte.
+std::vector<uint8_t> lying_zstd_frame(uint64_t claimed) {
+  std::vector<uint8_t> frame = {0x28, 0xb5, 0x2f, 0xfd, 0xe0};
+  for (int i = 0; i < 8; ++i) frame.push_back(static_cast<uint8_t>(claimed >> (8 * i)));
+  frame.insert(frame.end(), {0x09, 0x00, 0x00, 0x00});
+  return frame;
+}
+
+// An MCAP file, without summary, of one std_msgs/String channel and one zstd chunk holding
+// `compressed` and claiming `uncompressed_size` bytes.
+std::vector<uint8_t> one_chunk_mcap(const std::vector<uint8_t>& compressed,
+                                    uint64_t uncompressed_size) {
+  mcap::Builder b;
+  b.raw(mcap::kMagic, sizeof(mcap::kMagic));
+  b.begin_record(mcap::kHeader);
+  b.string("ros2");
+  b.string("test");
+  b.finish_record();
+  b.begin_record(mcap::kSchema);
+  b.u16(1);
+  b.string("std_msgs/msg/String");
+  b.string("ros2msg");
+  b.string("string data\n");
+  b.finish_record();
+  b.begin_record(mcap::kChannel);
+  b.u16(1);
+  b.u16(1);
+  b.string("/t");
+  b.string("cdr");
+  b.string_map({});
+  b.finish_record();
+  b.begin_record(mcap::kChunk);
+  b.u64(1);
+  b.u64(1);
+  b.u64(uncompressed_size);
+  b.u32(0);
+  b.string("zstd");
+  b.u64(compressed.size());
+  b.raw(compressed.data(), compressed.size());
+  b.finish_record();
+  b.begin_record(mcap::kDataEnd);
+  b.u32(0);
+  b.finish_record();
+  b.begin_record(mcap::kFooter);
+  b.u64(0);
+  b.u64(0);
+  b.u32(0);
+  b.finish_record();
+  b.raw(mcap::kMagic, sizeof(mcap::kMagic));
+  return b.bytes();
+}
+
+// Sizes a frame header claims, each refused in its own way: decoded to the frame's end (100 MiB),
+// past the window zstd accepts (4 and 6 GiB), beyond any memory (1 TiB).
+constexpr uint64_t kClaims[] = {uint64_t{100} << 20, uint64_t{4} << 30, uint64_t{6} << 30,
+                                uint64_t{1} << 40};
+
+// A chunk that claims what its zstd frame header claims passes the size check; reading it must
+// still not allocate the claim before the bytes come (zstd finds the frame short only at its
+// end): the reader's own error, not bad_alloc nor gigabytes of zeros.
+TEST(BagErrors, ChunkWhoseZstdFrameClaimsGigabytesItDoesNotHold) {
+  ScratchDir dir;
+  for (const uint64_t claim : kClaims) {
+    SCOPED_TRACE(claim);
+    write_file(dir / "bomb.mcap", one_chunk_mcap(lying_zstd_frame(claim), claim));
+    const robotperf::testing::AllocationLimit limit(16 << 20);
+    expect_error(dir / "bomb.mcap", "bomb.mcap", "zstd");
+  }
+}
+
+// rosbag2's message compression: each message one zstd frame, whose header says its size.
+TEST(BagErrors, CompressedMessageWhoseFrameClaimsGigabytesItDoesNotHold) {
+  ScratchDir dir;
+  for (const uint64_t claim : kClaims) {
+    SCOPED_TRACE(claim);
+    const fs::path bag = dir / std::to_string(claim);
+    {
+      Writer w(bag, {Storage::kSqlite3, Compression::kNone});
+      TopicInfo topic;
+      topic.name = "/t";
+      topic.type = "std_msgs/msg/String";
+      w.write(w.add_topic(topic), 5, lying_zstd_frame(claim));
+    }
+    const auto yaml = read_file(bag / "metadata.yaml");
+    std::string text(yaml.begin(), yaml.end());
+    for (const std::string key : {"compression_format: ", "compression_mode: "}) {
+      const auto at = text.find(key + "\"\"");
+      ASSERT_NE(at, std::string::npos) << key;
+      text.replace(at, key.size() + 2, key + (key == "compression_format: " ? "zstd" : "message"));
+    }
+    write_file(bag / "metadata.yaml", {text.begin(), text.end()});
+    const robotperf::testing::AllocationLimit limit(16 << 20);
+    expect_error(bag, std::to_string(claim) + "_0.db3", "a message on /t does not decompress");
+  }
 }
 
 TEST(BagErrors, MissingMetadataYaml) {

@@ -218,5 +218,80 @@ TEST(Writer, RefusesANonEmptyDirectory) {
   }
 }
 
+// QoS text that is not QoS profiles is refused when the topic is added, naming it and the bag; the
+// bag goes on without that topic and closes as the writer goes out of scope.
+TEST(Writer, RefusesATopicWhoseQosIsNotQosProfiles) {
+  ScratchDir dir;
+  for (const Storage storage : {Storage::kSqlite3, Storage::kMcap}) {
+    SCOPED_TRACE(to_string(storage));
+    const fs::path bag = dir / to_string(storage);
+    {
+      Writer w(bag, {storage, Compression::kNone});
+      for (const char* qos : {"- reliability: sometimes", "- history: [3]", "- [unclosed"}) {
+        TopicInfo bad = jazzy_topic();
+        bad.name = "/bad";
+        bad.offered_qos_profiles = qos;
+        try {
+          w.add_topic(bad);
+          ADD_FAILURE() << qos << " was accepted";
+        } catch (const BagError& e) {
+          const std::string what = e.what();
+          EXPECT_NE(what.find("topic /bad"), std::string::npos) << what;
+          EXPECT_NE(what.find(bag.string()), std::string::npos) << what;
+          EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+        }
+      }
+      w.write(w.add_topic(jazzy_topic()), 100, payload(0));
+    }
+    const BagInfo info = read_info(bag);
+    ASSERT_EQ(info.topics.size(), 1u);
+    EXPECT_EQ(info.topics[0].name, "/chatter");
+    EXPECT_EQ(read_all(bag).size(), 1u);
+  }
+}
+
+// rosbag2 names the files after the folder however it is written: "b/" holds b_0.mcap.
+TEST(Writer, AFolderGivenWithATrailingSlashNamesItsFilesAfterIt) {
+  ScratchDir dir;
+  {
+    Writer w(dir.path() / "b" / "", {Storage::kMcap, Compression::kNone});
+    w.write(w.add_topic(jazzy_topic()), 100, payload(0));
+  }
+  EXPECT_TRUE(fs::is_regular_file(dir / "b" / "b_0.mcap"));
+  EXPECT_EQ(read_info(dir / "b").files.at(0).path, "b_0.mcap");
+  EXPECT_EQ(read_all(dir / "b").size(), 1u);
+}
+
+// A bag folder whose second file is cut short: its conversion fails after the first file's
+// messages were written, and must leave nothing that looks like a complete bag behind.
+TEST(Writer, AFailedConversionLeavesNoBagBehind) {
+  ScratchDir dir;
+  const fs::path source = dir / "two_files";
+  fs::create_directories(source);
+  const auto talker = read_file(reference_bag("mcap_talker") / "talker.mcap");
+  write_file(source / "a.mcap", talker);
+  write_file(source / "b.mcap", {talker.begin(), talker.begin() + 5000});
+  const auto yaml = read_file(reference_bag("mcap_talker") / "metadata.yaml");
+  std::string text(yaml.begin(), yaml.end());
+  const std::string listed = "  - talker.mcap\n";
+  ASSERT_NE(text.find(listed), std::string::npos);
+  text.replace(text.find(listed), listed.size(), "  - a.mcap\n  - b.mcap\n");
+  write_file(source / "metadata.yaml", {text.begin(), text.end()});
+  ASSERT_EQ(read_info(source).files.size(), 2u);
+
+  for (const Storage storage : {Storage::kMcap, Storage::kSqlite3}) {
+    SCOPED_TRACE(to_string(storage));
+    const fs::path out = dir / ("out_" + to_string(storage));
+    EXPECT_THROW(convert(source, out, {storage, Compression::kZstd}), BagError);
+    EXPECT_FALSE(fs::exists(out / "metadata.yaml"));
+    EXPECT_FALSE(fs::exists(out));  // the writer made it, so it goes
+    // A folder that was there before stays, as empty as it was.
+    fs::create_directories(out);
+    EXPECT_THROW(convert(source, out, {storage, Compression::kZstd}), BagError);
+    EXPECT_TRUE(fs::is_directory(out));
+    EXPECT_TRUE(fs::is_empty(out));
+  }
+}
+
 }  // namespace
 }  // namespace robotperf::bag

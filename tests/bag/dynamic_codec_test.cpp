@@ -1,9 +1,11 @@
 // The .msg-driven codec on the real ROS 2 bags: definitions from the bags'
 // own schemas, from the test_msgs .msg files and from ../shared/data/msg.
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
 #include "../shared_data.hpp"
+#include "allocation_limit.hpp"
 #include "bag_test_util.hpp"
 #include "robotperf/msgs/cdr.hpp"
 #include "robotperf/msgs/definitions.hpp"
@@ -251,6 +253,44 @@ TEST(DynamicCodec, ClearErrors) {
   registry.add_msg("p/U", "string s\n");
   EXPECT_THROW(dyn::decode(registry, "p/U", std::vector<uint8_t>{0, 1, 0, 0, 200, 0, 0, 0}),
                msgs::CdrError);
+}
+
+// A schema can chain more types than the call stack holds: the checks and the schema walk them
+// with stacks of their own, and decode() refuses more than 64 levels of nesting.
+TEST(DynamicCodec, AChainOfTypesDeeperThanTheStackIsADefinitionError) {
+  constexpr int kDepth = 50000;
+  std::string schema = "p/T1 x\n";
+  for (int i = 1; i <= kDepth; ++i) {
+    schema += std::string(80, '=') + "\nMSG: p/T" + std::to_string(i) + "\n" +
+              (i < kDepth ? "p/T" + std::to_string(i + 1) + " x\n" : "uint8 y\n");
+  }
+  dyn::TypeRegistry registry;
+  registry.add_ros2msg("p/msg/T0", schema);
+  EXPECT_THROW(dyn::decode(registry, "p/msg/T0", std::vector<uint8_t>{0, 1, 0, 0, 1}),
+               dyn::DefinitionError);
+  const std::string back = registry.ros2msg_schema("p/msg/T0");
+  EXPECT_EQ(back.size(), schema.size());
+  EXPECT_NE(back.find("MSG: p/T50000\nuint8 y\n"), std::string::npos);
+}
+
+// Elements the payload cannot hold are refused before anything is allocated for them, and a
+// count it could hold at a byte each costs no more memory up front than the payload's size.
+TEST(DynamicCodec, ForgedArraySizesAllocateNoMoreThanThePayloadHolds) {
+  dyn::TypeRegistry registry;
+  registry.add_msg("p/Big", "uint8[1073741824] data\n");
+  registry.add_msg("p/Four", "float64 a\nfloat64 b\nfloat64 c\nfloat64 d\n");
+  registry.add_msg("p/Many", "p/Four[] items\n");
+  {
+    const robotperf::testing::AllocationLimit limit(1 << 20);
+    EXPECT_THROW(dyn::decode(registry, "p/Big", std::vector<uint8_t>{0, 1, 0, 0, 1, 2, 3, 4}),
+                 msgs::CdrError);
+  }
+  constexpr uint32_t n = 1 << 20;
+  std::vector<uint8_t> payload(8 + n, 0);
+  payload[1] = 1;
+  std::memcpy(payload.data() + 4, &n, sizeof(n));
+  const robotperf::testing::AllocationLimit limit(8 * payload.size());
+  EXPECT_THROW(dyn::decode(registry, "p/Many", payload), msgs::CdrError);
 }
 
 // Bags robotperf writes carry these schemas: each must decode and re-encode

@@ -43,5 +43,15 @@ TEST(Qos, EmptyAndMalformed) {
   EXPECT_THROW(parse_qos_profiles("- [unclosed"), std::invalid_argument);
 }
 
+// A policy given as a list or a map is not QoS: the same std::invalid_argument as any other bad
+// value, from each function, never yaml-cpp's own exception.
+TEST(Qos, APolicyThatIsNeitherANameNorANumberIsMalformed) {
+  for (const char* qos : {"- history: [3]", "- reliability: {a: 1}"}) {
+    EXPECT_THROW(parse_qos_profiles(qos), std::invalid_argument) << qos;
+    EXPECT_FALSE(qos_uses_integer_enums(qos)) << qos;
+    EXPECT_THROW(qos_with_integer_enums(qos), std::invalid_argument) << qos;
+  }
+}
+
 }  // namespace
 }  // namespace robotperf::bag

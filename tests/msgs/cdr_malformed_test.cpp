@@ -10,9 +10,11 @@
 #include <string>
 #include <vector>
 
+#include "allocation_limit.hpp"
 #include "robotperf/msgs/cdr.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/msgs/std_msgs.hpp"
+#include "robotperf/msgs/tf2_msgs.hpp"
 
 namespace robotperf::msgs {
 namespace {
@@ -206,6 +208,26 @@ TEST(CdrMalformed, Float64SequenceLengthBeyondPayloadThrows) {
     // At most one element per payload byte may have been reserved.
     EXPECT_LE(back.d.capacity(), payload.size()) << n;
   }
+}
+
+// A count of elements that take far more memory than their bytes on the wire, as many as the
+// payload has bytes: decoded as far as the bytes go, never allocated up front.
+TEST(CdrMalformed, ForgedCountOfTransformsAllocatesNoMoreThanAFewTimesThePayload) {
+  constexpr uint32_t n = 1 << 20;
+  Bytes payload(4 + 4 + n, 0);
+  payload[1] = 1;
+  PutU32(payload, 0, n);
+  const testing::AllocationLimit limit(4 * payload.size());
+  EXPECT_THROW(from_cdr<TFMessage>(payload), CdrError);
+}
+
+TEST(CdrMalformed, ForgedCountOfDoublesIsRefusedBeforeAllocating) {
+  Bytes payload = to_cdr(SampleCameraInfo());
+  constexpr uint32_t n = 1 << 20;
+  PutU32(payload, 40, n);  // the count of d (see Float64SequenceLengthBeyondPayloadThrows)
+  payload.resize(payload.size() + n);
+  const testing::AllocationLimit limit(4 * payload.size());
+  EXPECT_THROW(from_cdr<CameraInfo>(payload), CdrError);
 }
 
 TEST(CdrMalformed, HeaderOnlyAndTinyPayloads) {

@@ -91,6 +91,18 @@ TEST(TypeHash, BuiltinTypesHashAsTheRos2MsgFiles) {
   EXPECT_FALSE(builtin_type_hash("no_msgs/msg/Unknown").has_value());
 }
 
+// The referenced types are gathered with a stack of their own: a chain of types deeper than the
+// call stack goes is described, to its last type, like any other.
+TEST(TypeHash, AChainOfTypesDeeperThanTheStackIsDescribedWhole) {
+  constexpr int kDepth = 200000;
+  dyn::TypeRegistry registry;
+  for (int i = 0; i < kDepth; ++i)
+    registry.add_msg("p/msg/T" + std::to_string(i), "p/T" + std::to_string(i + 1) + " x\n");
+  registry.add_msg("p/msg/T" + std::to_string(kDepth), "uint8 y\n");
+  const std::string json = type_description_json(registry, "p/msg/T0");
+  EXPECT_NE(json.find("{\"type_name\": \"p/msg/T200000\""), std::string::npos);
+}
+
 TEST(TypeHash, UnknownNestedTypeIsAnError) {
   dyn::TypeRegistry registry;
   registry.add_msg("a_msgs/msg/A", "b_msgs/B inner\n");

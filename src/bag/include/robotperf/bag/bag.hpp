@@ -143,7 +143,9 @@ struct WriteOptions {
 // Writes a bag directory: `<dir>/<dir name>_<n>.<ext>` and metadata.yaml
 // (version 5, what ROS 2 Humble reads; Iron and Jazzy read it too). The
 // directory must not exist yet or be empty. Files are complete only after
-// close() (also called by the destructor, which swallows errors).
+// close(), which the destructor calls too (swallowing its errors). A writer
+// destroyed by an exception, or whose close() failed, removes what it wrote
+// and the directory if it made it: no half-written bag is left looking whole.
 class Writer {
  public:
   Writer(const std::filesystem::path& dir, WriteOptions options);
@@ -151,7 +153,8 @@ class Writer {
   Writer(const Writer&) = delete;
   Writer& operator=(const Writer&) = delete;
 
-  // Returns the topic's index for write(). Topics keep their QoS and definition.
+  // Returns the topic's index for write(). Topics keep their QoS and definition;
+  // QoS text that is not QoS profiles is a BagError naming the topic.
   std::size_t add_topic(const TopicInfo& topic);
   void write(std::size_t topic, int64_t timestamp_ns, std::span<const uint8_t> data);
   void close();
@@ -170,6 +173,7 @@ BagInfo reindex(const std::filesystem::path& dir);
 // Copies every message, topic, QoS and definition of the bag at `in` into a
 // new bag at `out`; returns the number of messages copied. `complete`, when
 // given, sees each topic before it is written (to add a missing definition).
+// When it fails, `out` is left as it was (see Writer).
 uint64_t convert(const std::filesystem::path& in, const std::filesystem::path& out,
                  const WriteOptions& options, const std::function<void(TopicInfo&)>& complete = {});
 

@@ -5,6 +5,7 @@
 // reading (CdrReader), so the three can never disagree.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <concepts>
@@ -217,9 +218,18 @@ class CdrReader {
       const auto* first = reinterpret_cast<const T*>(data_ + offset_);
       seq.assign(first, first + n);
       offset_ += n;
-    } else {
+    } else if constexpr (CdrPrimitive<T>) {
+      if (n > remaining() / sizeof(T))
+        throw CdrError("CDR sequence length " + std::to_string(n) + " exceeds payload");
       seq.resize(n);
       elements(seq.data(), n);
+    } else {
+      // An element in memory can be far larger than its least bytes on the wire (a
+      // TransformStamped: 128 bytes against at least 72): elements are added as they decode, so a
+      // forged count costs no more memory than the payload holds.
+      seq.clear();
+      seq.reserve(std::min<std::size_t>(n, remaining() / sizeof(T)));
+      for (uint32_t i = 0; i < n; ++i) (*this)(seq.emplace_back());
     }
   }
   template <class T, std::size_t N>
