@@ -6,6 +6,7 @@
 #include <condition_variable>
 #include <cstring>
 #include <mutex>
+#include <stdexcept>
 
 #include "robotperf/graph/executor.hpp"
 #include "robotperf/graph/node.hpp"
@@ -183,6 +184,12 @@ std::optional<BackendCheck> check_backend_answers(
   for (const auto& n : spec.nodes) {
     if (n.backend != "cpu" && check.backend.find(n.backend) == std::string::npos)
       check.backend += (check.backend.empty() ? "" : ", ") + n.backend;
+    // A kernel may come on a vendor's backend alone (a plug-in): nothing to compare it with.
+    if (std::ranges::count(kernel_of(n).info.backends, "cpu") == 0) {
+      throw std::runtime_error("node '" + n.name + "' (kernel " + n.kernel +
+                               ") has no cpu backend, so there is no reference for its " +
+                               n.backend + " answers");
+    }
   }
   check.output_type = spec.output.type;
 

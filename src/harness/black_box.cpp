@@ -300,6 +300,7 @@ Monitor::Monitor(graph::Context& context, const BoundaryTopic& output, MessageId
 
 void Monitor::on_message(const rmw::MessagePtr& msg, const graph::MessageInfo& info,
                          int64_t now_ns) {
+  if (now_ns > closed_at_ns_.load(std::memory_order_relaxed)) return;
   const int64_t stamp = type_->stamp_ns(msg.get());
   const auto id = ids_.id_of(stamp);
   if (isolation_ != nullptr && isolation_->foreign(info.sender, stamp, id.has_value())) {
@@ -344,21 +345,34 @@ void Monitor::on_message(const rmw::MessagePtr& msg, const graph::MessageInfo& i
         kept_index_[*id] = tally_.kept.size();
         tally_.kept.emplace_back(*id, std::move(kept));
       }
-      evaluate = chosen && on_arrival_ != nullptr;
+      evaluate = chosen && on_arrival_ != nullptr && tally_.evaluation_error.empty();
       if (evaluate) ++evaluations_pending_;
     }
   }
   cv_.notify_all();
   if (evaluate) {
-    // After the reception time was taken: the check is not part of the latency.
+    // After the reception time was taken: the check is not part of the latency. An evaluator
+    // (a plug-in's code) that throws fails the functional check, not the measurement; and the
+    // pending count must come down whatever it does, or tally() would wait for it forever.
+    std::string error;
     {
       std::lock_guard lock(evaluate_mutex_);
-      on_arrival_->add(msg.get(), static_cast<std::size_t>(*id % on_arrival_frames_));
+      try {
+        on_arrival_->add(msg.get(), static_cast<std::size_t>(*id % on_arrival_frames_));
+      } catch (const std::exception& e) {
+        error = e.what();
+      } catch (...) {
+        error = "an exception that is not a std::exception";
+      }
     }
     {
       std::lock_guard lock(mutex_);
       --evaluations_pending_;
-      ++tally_.evaluated_on_arrival;
+      if (error.empty()) {
+        ++tally_.evaluated_on_arrival;
+      } else if (tally_.evaluation_error.empty()) {
+        tally_.evaluation_error = std::move(error);
+      }
     }
     cv_.notify_all();
   }
@@ -389,6 +403,7 @@ void Monitor::keep_observed_truth(const std::string& topic, const msgs::TypeSupp
   qos.history = rmw::History::kKeepAll;
   node_->create_generic_subscription(
       topic, type, qos, [this, &type](rmw::MessagePtr m, const graph::MessageInfo& info) {
+        if (rmw::steady_now_ns() > closed_at_ns_.load(std::memory_order_relaxed)) return;
         const int64_t stamp = type.stamp_ns(m.get());
         const auto id = ids_.id_of(stamp);
         if (isolation_ != nullptr && isolation_->foreign(info.sender, stamp, id.has_value()))
@@ -415,6 +430,10 @@ bool Monitor::wait_for(std::size_t expected, int64_t deadline_ns) {
   };
   return cv_.wait_until(lock, deadline,
                         [&] { return tally_.received_measured >= expected && truth_complete(); });
+}
+
+void Monitor::close() {
+  closed_at_ns_.store(rmw::steady_now_ns(), std::memory_order_relaxed);
 }
 
 Monitor::Tally Monitor::tally() const {

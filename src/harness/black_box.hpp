@@ -2,6 +2,7 @@
 // under test (DESIGN.md §3).
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
@@ -9,6 +10,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -121,6 +123,9 @@ class Monitor {
   // Waits until `expected` measured messages arrived, and the observed truth of every kept one
   // (a node's second output follows its first), or `deadline_ns` passes.
   bool wait_for(std::size_t expected, int64_t deadline_ns);
+  // The end of the drain: whatever arrives from now on is ignored (not counted, kept, evaluated
+  // or traced), being lost by the run's rules however long the run takes to finish.
+  void close();
 
   struct Tally {
     std::vector<int64_t> received_ns;  // per id, -1 when never received
@@ -133,6 +138,8 @@ class Monitor {
     std::size_t repeats = 0;
     std::map<uint64_t, rmw::MessagePtr> observed_truth;  // by keep_observed_truth
     std::size_t evaluated_on_arrival = 0;                // by evaluate_on_arrival
+    // What the on-arrival evaluator threw, after which it was given nothing more; empty if none.
+    std::string evaluation_error;
   };
   Tally tally() const;
   std::size_t received() const;
@@ -153,6 +160,7 @@ class Monitor {
   plugin::FunctionalEvaluator* on_arrival_ = nullptr;
   std::size_t on_arrival_frames_ = 1;
   std::size_t evaluations_pending_ = 0;  // outputs received whose add() has not returned yet
+  std::atomic<int64_t> closed_at_ns_{INT64_MAX};  // by close(): later receptions are ignored
   mutable std::mutex mutex_;
   std::mutex evaluate_mutex_;  // one add() at a time, outside mutex_
   mutable std::condition_variable cv_;

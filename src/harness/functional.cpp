@@ -87,6 +87,17 @@ FunctionalResult evaluate_functional(const FunctionalSpec& spec, const Dataset& 
   return judge_functional(spec, *evaluator, kept.size(), requested);
 }
 
+FunctionalResult functional_failure(const FunctionalSpec& spec, std::size_t requested,
+                                    std::size_t evaluated, std::string why) {
+  FunctionalResult r;
+  r.evaluator = spec.evaluator;
+  r.on_arrival = evaluator_entry(spec.evaluator).info.on_arrival;
+  r.requested = requested;
+  r.evaluated = evaluated;
+  r.reasons.push_back(std::move(why));
+  return r;
+}
+
 FunctionalResult judge_functional(const FunctionalSpec& spec,
                                   const plugin::FunctionalEvaluator& evaluator,
                                   std::size_t evaluated, std::size_t requested) {

@@ -16,6 +16,7 @@
 #include <stdexcept>
 
 #include "node_processes.hpp"
+#include "process_table.hpp"
 
 extern char** environ;
 
@@ -127,9 +128,9 @@ LaunchedProcesses::~LaunchedProcesses() {
   close(wake_pipe_[1]);
 }
 
-void LaunchedProcesses::reap(Process& p) {
+void LaunchedProcesses::reap(Process& p, bool wait) {
   int status = 0;
-  if (!p.ended && waitpid(p.pid, &status, WNOHANG) == p.pid) {
+  if (!p.ended && waitpid(p.pid, &status, wait ? 0 : WNOHANG) == p.pid) {
     p.ended = true;
     p.exit_status = describe_exit_status(status);
     if (p.pidfd >= 0) close(p.pidfd);
@@ -137,28 +138,32 @@ void LaunchedProcesses::reap(Process& p) {
   }
 }
 
-// Waits for any process to end (its pidfd becomes readable), until stop() wakes it.
+// Waits for any process to end (its pidfd becomes readable), until stop() wakes it. A process
+// without a pidfd (pidfd_open fails before Linux 5.3, or with no descriptor left) is looked at
+// every kPollMs instead.
 void LaunchedProcesses::supervise() {
+  constexpr int kPollMs = 100;
   while (true) {
     std::vector<pollfd> fds{{wake_pipe_[0], POLLIN, 0}};
-    std::vector<Process*> owners{nullptr};
+    bool polling = false;
     {
       std::lock_guard lock(mutex_);
       if (stopping_) return;
       for (auto& p : processes_) {
-        if (!p.ended && p.pidfd >= 0) {
+        if (p.ended) continue;
+        if (p.pidfd >= 0) {
           fds.push_back({p.pidfd, POLLIN, 0});
-          owners.push_back(&p);
+        } else {
+          polling = true;
         }
       }
     }
-    if (fds.size() == 1) return;
-    if (poll(fds.data(), fds.size(), -1) < 0 && errno != EINTR) return;
+    if (fds.size() == 1 && !polling) return;
+    if (poll(fds.data(), fds.size(), polling ? kPollMs : -1) < 0 && errno != EINTR) return;
     if (fds[0].revents & POLLIN) return;
     std::lock_guard lock(mutex_);
-    for (std::size_t i = 1; i < fds.size(); ++i) {
-      if (!(fds[i].revents & POLLIN)) continue;
-      Process& p = *owners[i];
+    for (auto& p : processes_) {
+      if (p.ended) continue;
       reap(p);
       if (p.ended && !stopping_ && failure_.empty()) {
         const std::string tail = log_tail(p.log, 5);
@@ -207,25 +212,25 @@ std::vector<LaunchedReport> LaunchedProcesses::stop(double grace_s) {
     }
     return all;
   };
+  // Until the whole group is over, not only the processes we started: the node under `ros2 run`
+  // or a wrapper script is their child, and may ignore the first signals.
+  auto all_over = [&] { return all_ended() && !group_running(group_); };
   // As `ros2 launch` does: an interrupt first, so that nodes shut down cleanly.
   for (const auto& [signal_number, name] :
        {std::pair{SIGINT, "SIGINT"}, std::pair{SIGTERM, "SIGTERM"},
         std::pair{SIGKILL, "SIGKILL"}}) {
-    if (all_ended() || group_ == 0) break;
+    if (group_ == 0 || all_over()) break;
     sent = name;
     kill(-group_, signal_number);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(grace_s);
-    while (!all_ended() && std::chrono::steady_clock::now() < deadline)
+    while (!all_over() && std::chrono::steady_clock::now() < deadline)
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   std::vector<LaunchedReport> out;
   for (auto& p : processes_) {
     if (!p.ended) {
       // Not even SIGKILL within the grace: wait for it, it cannot run on.
-      int status = 0;
-      waitpid(p.pid, &status, 0);
-      p.ended = true;
-      p.exit_status = describe_exit_status(status);
+      reap(p, true);
       p.stopped_by = "stopped by SIGKILL";
     }
     if (p.stopped_by.empty()) p.stopped_by = "ended during the run";

@@ -33,7 +33,8 @@ class LaunchedProcesses {
   std::string failure() const;
   // Pid and name of every process.
   std::vector<std::pair<int, std::string>> processes() const;
-  // Stops them all (the whole group), at most `grace_s` per signal, and reports each.
+  // Stops them all (the whole group, with what they started), at most `grace_s` per signal, and
+  // reports each.
   std::vector<LaunchedReport> stop(double grace_s);
 
  private:
@@ -48,7 +49,8 @@ class LaunchedProcesses {
     std::string stopped_by;  // how it came to end
   };
   void supervise();
-  void reap(Process& p);
+  // Collects its exit status once it ended; with `wait`, waits for it to end.
+  void reap(Process& p, bool wait = false);
 
   std::vector<Process> processes_;
   pid_t group_ = 0;

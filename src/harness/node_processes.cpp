@@ -78,6 +78,28 @@ NodeProcesses::NodeProcesses(
   make_pipe(wake_pipe_);
   // A child that dies must not kill the runner with SIGPIPE when we write to it.
   signal(SIGPIPE, SIG_IGN);
+  try {
+    start(spec, command, rmw, domain_id, extra, host_launchers);
+    supervisor_ = std::thread([this] { supervise(); });
+  } catch (...) {
+    // The children started before the one that failed go with it, and what they started.
+    if (group_ > 0) kill(-group_, SIGKILL);
+    for (auto& c : children_) {
+      close(c.to_child);
+      close(c.from_child);
+      waitpid(c.pid, nullptr, 0);
+    }
+    g_children_group = 0;
+    close(wake_pipe_[0]);
+    close(wake_pipe_[1]);
+    throw;
+  }
+}
+
+void NodeProcesses::start(const BenchmarkSpec& spec, const std::vector<std::string>& command,
+                          const std::string& rmw, int domain_id,
+                          const std::vector<std::string>& extra,
+                          const std::map<std::string, std::vector<std::string>>& host_launchers) {
   for (const auto& node : spec.nodes) {
     Child c;
     c.name = node.name;
@@ -86,7 +108,13 @@ NodeProcesses::NodeProcesses(
                 {},        node.host,   "", true,      node.backend, {}};
     int in[2], out[2];
     make_pipe(in);
-    make_pipe(out);
+    try {
+      make_pipe(out);
+    } catch (...) {
+      close(in[0]);
+      close(in[1]);
+      throw;
+    }
     std::vector<std::string> args;
     if (!node.host.empty()) {
       args = host_launcher(node.host, host_launchers);
@@ -131,7 +159,6 @@ NodeProcesses::NodeProcesses(
     }
     children_.push_back(std::move(c));
   }
-  supervisor_ = std::thread([this] { supervise(); });
 }
 
 NodeProcesses::~NodeProcesses() {
@@ -323,12 +350,10 @@ std::vector<NodeReport> NodeProcesses::shutdown(double grace_s) {
       return true;
     };
     if (!cv_.wait_until(lock, deadline, all_done)) {
-      for (auto& c : children_) {
-        if (!c.eof && c.pid > 0) {
-          kill(c.pid, SIGKILL);
-          c.killed = true;
-        }
-      }
+      for (auto& c : children_) c.killed = !c.eof && c.pid > 0;
+      // The whole group: what a child started may hold its stdout open, and the supervisor
+      // reads every stdout to its end.
+      kill(-group_, SIGKILL);
     }
   }
   if (supervisor_.joinable()) {

@@ -58,7 +58,7 @@ class NodeProcesses {
   // reported itself, so that a launcher in between does not count instead of the node).
   std::vector<std::pair<int, std::string>> processes() const;
   // Asks every child to finish (closes its stdin), collects its report, and
-  // kills those that do not exit within `grace_s`.
+  // kills those that do not exit within `grace_s` (with the processes they started).
   std::vector<NodeReport> shutdown(double grace_s);
   // After shutdown(): the control loop reports the children sent (see control_loop.hpp), in the
   // order of the graph's nodes, each with "same_machine": whether its child ran on this one.
@@ -82,6 +82,10 @@ class NodeProcesses {
     std::string boot_id;          // of the machine it runs on, as it reported
     std::string launcher;         // what started it on its host; empty: started here
   };
+  // Starts a child for every node of `spec` (the constructor's arguments).
+  void start(const BenchmarkSpec& spec, const std::vector<std::string>& command,
+             const std::string& rmw, int domain_id, const std::vector<std::string>& extra,
+             const std::map<std::string, std::vector<std::string>>& host_launchers);
   void supervise();
   void on_line(Child& child, const std::string& line);
   void reap(Child& child, bool wait);

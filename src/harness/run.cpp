@@ -238,9 +238,24 @@ void check_run_options(const RunOptions& o) {
   }
 }
 
-// The run as derived (rate from a bag, count from a duration): its schedule must fit in time
-// and its records in memory.
-void check_run_size(const RunResult& r) {
+// The most bytes one frame of `dataset` takes over `spec`'s inputs together: what the Playback
+// copies for each message.
+double largest_frame_bytes(const BenchmarkSpec& spec, const Dataset& dataset) {
+  double bytes = 0;
+  for (const auto& input : spec.inputs) {
+    const DatasetStream& stream = dataset.stream(input.stream);
+    std::size_t largest = 0;
+    for (const auto& m : stream.messages)
+      largest = std::max(largest, stream.type->serialized_size(m.get()));
+    bytes += static_cast<double>(largest);
+  }
+  return bytes;
+}
+
+// The run as derived (rate from a bag, count from a duration): its schedule must fit in time,
+// and in memory its records and the copies of a burst's messages, all prepared before their
+// deadline (`frame_bytes` each).
+void check_run_size(const RunResult& r, double frame_bytes) {
   const double span_s = static_cast<double>(r.count) / r.rate_hz;
   if (span_s > kMaxSpanS) {
     throw std::invalid_argument(std::to_string(r.count) + " messages at " + number_text(r.rate_hz) +
@@ -255,6 +270,15 @@ void check_run_size(const RunResult& r) {
         std::to_string(r.count) + " messages need " + number_text(bytes / (1 << 30)) +
         " GiB for their per-message records, more than a quarter of this machine's " +
         number_text(memory / (1 << 30)) + " GiB; give a smaller --count or --duration");
+  }
+  const std::size_t at_once = r.timeline == "burst" ? std::min(r.burst, r.count) : 1;
+  if (const double burst_bytes = static_cast<double>(at_once) * frame_bytes;
+      burst_bytes > memory / 4) {
+    throw std::invalid_argument(
+        "--arrival burst:" + std::to_string(r.burst) + " prepares " + std::to_string(at_once) +
+        " messages of up to " + number_text(frame_bytes / (1 << 20)) + " MiB at once, " +
+        number_text(burst_bytes / (1 << 30)) + " GiB, more than a quarter of this machine's " +
+        number_text(memory / (1 << 30)) + " GiB; give a smaller burst");
   }
 }
 
@@ -494,7 +518,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
                                 ") must be smaller than the message count (" +
                                 std::to_string(r.count) + derived + ")");
   }
-  check_run_size(r);
+  check_run_size(r, r.timeline == "burst" ? largest_frame_bytes(spec, dataset) : 0);
   r.drain_s = options.drain_s.value_or(spec.drain_s);
   check_seconds(r.drain_s, options.drain_s ? "--drain" : "the benchmark's drain_s", true,
                 kMaxWaitS);
@@ -647,10 +671,15 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
                                              ? "robotperf (Playback, Monitor)"
                                              : "robotperf (graph, Playback, Monitor)"});
   }
+  // A launched command's own children (`ros2 run`'s node, a wrapper script's program) are its.
+  std::vector<pid_t> with_descendants;
   if (launched) {
-    for (const auto& [pid, name] : launched->processes()) graph_processes.push_back({pid, name});
+    for (const auto& [pid, name] : launched->processes()) {
+      graph_processes.push_back({pid, name});
+      with_descendants.push_back(pid);
+    }
   }
-  WindowMeasurement measurement(options, graph_processes);
+  WindowMeasurement measurement(options, graph_processes, with_descendants);
   std::optional<NetworkLink::Counters> link_before;
   if (options.network_link) link_before = options.network_link->counters();
 
@@ -764,6 +793,9 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   while (!monitor.wait_for(expected, std::min(drain_end, rmw::steady_now_ns() + kWatchPeriodNs))) {
     if (rmw::steady_now_ns() >= drain_end || !must_stop().empty()) break;
   }
+  // What has not arrived by now is lost, though the window's last readings (an external power
+  // meter may take seconds) come before the tally.
+  monitor.close();
   measurement.end(r);
   if (link_before) {
     r.network_link = RunResult::LinkUse{options.network_link->description(),
@@ -835,8 +867,18 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   r.completed = r.records.size() == r.count && r.errors.empty();
   summarise(r, spec, tally);
   r.repeats = tally.repeats;
-  // Grey-box: counts, latencies and validity come from the trace.
-  if (grey) grey->finish(r);
+  // Grey-box: counts, latencies and validity come from the trace; a trace that cannot be read
+  // leaves the Playback's and Monitor's, and says so.
+  if (grey) {
+    try {
+      grey->finish(r);
+    } catch (const std::exception& e) {
+      r.invalid_reasons.push_back("grey-box: the trace in " + r.trace_dir.string() +
+                                  " could not be analysed (" + e.what() +
+                                  "); the figures are the Playback's and Monitor's");
+      r.valid = false;
+    }
+  }
   r.foreign = tally.foreign;
   add_peers(r.domain_peers, isolation.others());
   if (r.foreign > 0) {
@@ -863,15 +905,35 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
       r.valid = false;
     }
   }
-  // After timing: the evaluation costs nothing the run measured.
-  if (on_arrival) {
-    r.functional = judge_functional(*spec.functional, *on_arrival, tally.evaluated_on_arrival,
-                                    functional_ids.size());
-  } else if (evaluate_outputs) {
-    r.functional = evaluate_functional(*spec.functional, dataset, tally.kept, functional_ids.size(),
-                                       tally.observed_truth);
+  // After timing: the evaluation costs nothing the run measured. These checks call a plug-in's
+  // code (its evaluator, its kernels on cpu): one that fails leaves the measured result as it
+  // is, saying what could not be checked.
+  std::string evaluator_failed = tally.evaluation_error;
+  if (evaluate_outputs && evaluator_failed.empty()) {
+    try {
+      r.functional = on_arrival
+                         ? judge_functional(*spec.functional, *on_arrival,
+                                            tally.evaluated_on_arrival, functional_ids.size())
+                         : evaluate_functional(*spec.functional, dataset, tally.kept,
+                                               functional_ids.size(), tally.observed_truth);
+    } catch (const std::exception& e) {
+      evaluator_failed = e.what();
+    }
   }
-  r.backend_check = check_backend_answers(spec, dataset, tally.kept);
+  if (!evaluator_failed.empty()) {
+    r.functional =
+        functional_failure(*spec.functional, functional_ids.size(), tally.evaluated_on_arrival,
+                           "the evaluator failed: " + evaluator_failed);
+    r.warnings.push_back({"functional", "outputs not checked for accuracy (" +
+                                            spec.functional->evaluator +
+                                            "): its evaluator failed: " + evaluator_failed});
+  }
+  try {
+    r.backend_check = check_backend_answers(spec, dataset, tally.kept);
+  } catch (const std::exception& e) {
+    r.warnings.push_back(
+        {"backend_check", std::string("answers not compared with cpu's: ") + e.what()});
+  }
   if (r.backend_check && !r.backend_check->passed) {
     // A backend that computes another answer is functionally invalid, ground truth or not.
     if (!r.functional) {
@@ -947,10 +1009,12 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
   int code = 0;
   try {
     // Matching happens in the transport's threads; messages that arrive
-    // before spin() wait in the subscriptions' queues.
-    wait_connected({node}, wiring_of(spec), rmw::steady_now_ns() + 60'000'000'000);
-    std::cout << "ready" << std::endl;
-    executor.spin();  // until the watcher cancels it, or a callback throws
+    // before spin() wait in the subscriptions' queues. The runner's --connect-timeout bounds the
+    // wait: when it gives up, it closes our stdin.
+    if (wait_connected({node}, wiring_of(spec), INT64_MAX, [&] { return stdin_closed.load(); })) {
+      std::cout << "ready" << std::endl;
+      executor.spin();  // until the watcher cancels it, or a callback throws
+    }
   } catch (const std::exception& e) {
     std::cerr << "robotperf node " << node_name << ": " << e.what() << "\n";
     // The runner records it with the node's exit status (one line on the wire).

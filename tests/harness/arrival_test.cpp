@@ -5,6 +5,8 @@
 #include <cmath>
 
 #include "black_box.hpp"
+#include "robotperf/harness/peak_search.hpp"
+#include "robotperf/metrics/delivery_validity.hpp"
 #include "run_isolation.hpp"
 
 namespace robotperf::harness {
@@ -66,6 +68,43 @@ TEST(ArrivalSchedule, FixedAndBurstKeepTheMeanRate) {
   EXPECT_EQ(fixed, (std::vector<int64_t>{0, 10, 20, 30, 40}));
   const auto burst = arrival_schedule(ArrivalPattern::parse("burst:3"), 10, 7);
   EXPECT_EQ(burst, (std::vector<int64_t>{0, 0, 0, 30, 30, 30, 60}));
+}
+
+// A peak-search step whose Playback sent every message at its deadline on `schedule`, the graph
+// answering each 1 ms later; sent_stretch > 1 draws the sends out: a Playback falling behind.
+RunResult step_on(const std::vector<int64_t>& schedule, double rate_hz, double sent_stretch) {
+  RunResult r;
+  r.rate_hz = rate_hz;
+  std::vector<metrics::TimedEvent> sends, receptions;
+  for (std::size_t k = 0; k < schedule.size(); ++k) {
+    const int64_t deadline = 1'000'000'000 + schedule[k];
+    const int64_t sent =
+        1'000'000'000 + std::llround(static_cast<double>(schedule[k]) * sent_stretch);
+    r.records.push_back({k, deadline, sent, sent + 1'000'000, false});
+    sends.push_back({deadline, sent});
+    receptions.push_back({deadline, sent + 1'000'000});
+  }
+  r.sent = r.measured = r.matched = schedule.size();
+  const metrics::DeliveryRates rates = metrics::delivery_rates(sends, receptions);
+  r.offered_rate_hz = rates.offered_hz;
+  r.throughput_hz = rates.output_hz;
+  return r;
+}
+
+// A Poisson schedule's own mean rate is not the nominal one (seed 17's 155 messages at 30 Hz
+// come at under 28.5 Hz): a Playback that met every deadline kept the rate asked of it.
+TEST(PeakStep, APlaybackThatKeptItsPoissonScheduleIsNotTheLimit) {
+  ArrivalPattern poisson = ArrivalPattern::parse("poisson");
+  poisson.seed = 17;
+  const auto schedule = arrival_schedule(poisson, 1'000'000'000 / 30, 155);
+  BenchmarkSpec spec;
+  spec.min_samples = 5;
+  const RunResult kept = step_on(schedule, 30, 1.0);
+  ASSERT_LT(kept.offered_rate_hz, 0.95 * 30) << "the seed no longer shows the difference";
+  EXPECT_EQ(peak_step_failure(kept, spec, {}, 1.0), "");
+  // One that fell a fifth behind its schedule is.
+  const std::string behind = peak_step_failure(step_on(schedule, 30, 1.25), spec, {}, 1.0);
+  EXPECT_NE(behind.find("the Playback sent at only"), std::string::npos) << behind;
 }
 
 TEST(MessageIds, EachRunHasItsOwnRandomBaseNearTheWallClock) {

@@ -218,6 +218,43 @@ TEST(BlackBox, OutOfRangeValuesAreRejectedWithTheOptionNamed) {
   }
 }
 
+// Every message of a burst is copied before their common deadline: a burst of large frames that
+// would not fit in memory is refused in one line before anything runs.
+TEST(BlackBox, ABurstThatWouldNotFitInMemoryIsRefusedBeforeTiming) {
+  RunOptions o = with_count(1'000'000, 100'000);
+  // 640x480 RGB frames: about 0.9 TB at once.
+  o.arrival = ArrivalPattern::parse("burst:1000000");
+  try {
+    run_package("huge_burst", relay_graph(""), o);
+    ADD_FAILURE() << "accepted";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("--arrival burst:1000000 prepares 1000000 messages"), std::string::npos)
+        << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+}
+
+// What has not arrived by the end of the drain is lost (DESIGN.md §3.4), however long the run then
+// takes to end: here the external power meter's last reading takes over a second, in which the
+// outputs a relay held back arrive.
+TEST(BlackBox, OutputsArrivingAfterTheDrainAreNotCounted) {
+  RunOptions o = with_count(2, 100);
+  o.drain_s = 0;
+  o.power.types = {"external"};
+  o.power.meter_command = "sleep 1.2; echo 10";
+  const RunResult r = run_package("cut_off", relay_graph("delay_ms: 300"), o);
+  expect_sane(r);
+  ASSERT_EQ(r.records.size(), 2u);
+  // The drain ends at the last send; the relay answers 300 ms after each.
+  const int64_t cut_off = r.records.back().sent_ns + 150'000'000;
+  for (const auto& rec : r.records) {
+    EXPECT_TRUE(rec.received_ns < 0 || rec.received_ns <= cut_off)
+        << "message " << rec.id << " counted, received "
+        << (rec.received_ns - r.records.back().sent_ns) / 1e6 << " ms after the last send";
+  }
+}
+
 TEST(BlackBox, BurstsAreSentBackToBackAtTheirDeadline) {
   RunOptions o = with_count(40, 100);
   o.arrival = ArrivalPattern::parse("burst:4");

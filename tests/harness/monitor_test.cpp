@@ -4,7 +4,10 @@
 
 #include <chrono>
 #include <condition_variable>
+#include <future>
 #include <mutex>
+#include <stdexcept>
+#include <thread>
 
 #include "black_box.hpp"
 #include "robotperf/graph/executor.hpp"
@@ -128,6 +131,83 @@ TEST(Monitor, GivesChosenOutputsToAnOnArrivalEvaluatorOnceEach) {
   EXPECT_EQ(tally.duplicates, 1u);
   EXPECT_EQ(evaluator.frames, (std::vector<std::size_t>{1, 2, 1}));  // id 4 is frame 4 mod 3
   EXPECT_EQ(evaluator.bytes, (std::vector<uint8_t>{1, 2, 4}));
+}
+
+// An evaluator (a plug-in's code) that throws on an output.
+class ThrowingEvaluator final : public plugin::FunctionalEvaluator {
+ public:
+  void add(const void*, std::size_t) override { throw std::runtime_error("evaluator bug"); }
+  std::map<std::string, double> metrics() const override { return {}; }
+};
+
+// An on-arrival check that throws is a failure of the check, said in the tally; the tally, which
+// waits for the checks under way, still comes.
+TEST(Monitor, AnOnArrivalEvaluatorThatThrowsIsReportedAndTheTallyStillComes) {
+  // Held by the thread that waits for the tally: if it never comes, the test fails and the
+  // thread keeps what it waits on.
+  struct Setup {
+    graph::Context context{rmw::make_transport("intra", {})};
+    MessageIds ids{1'000'000'000, 100'000'000, 3};
+    Monitor monitor{context, BoundaryTopic{"/out", "sensor_msgs/msg/Image", "", rmw::QoS{}}, ids,
+                    0};
+    ThrowingEvaluator evaluator;
+    graph::Executor executor{1};
+    graph::Node graph_node{context, "graph"};
+  };
+  auto setup = std::make_shared<Setup>();
+  setup->monitor.keep_outputs({1});
+  setup->monitor.evaluate_on_arrival(setup->evaluator, 3);
+  setup->executor.add_node(setup->monitor.node());
+  auto publisher = setup->graph_node.create_publisher<msgs::Image>("/out");
+  setup->executor.start();
+  auto m = std::make_shared<msgs::Image>();
+  m->header.stamp = msgs::Time::from_ns(setup->ids.stamp_ns(1));
+  publisher->publish(std::shared_ptr<const msgs::Image>(m));
+  ASSERT_TRUE(setup->monitor.wait_for(1, rmw::steady_now_ns() + 10'000'000'000));
+
+  auto tallied = std::make_shared<std::promise<Monitor::Tally>>();
+  std::future<Monitor::Tally> tally = tallied->get_future();
+  std::thread([setup, tallied] { tallied->set_value(setup->monitor.tally()); }).detach();
+  ASSERT_EQ(tally.wait_for(std::chrono::seconds(20)), std::future_status::ready)
+      << "the tally waits for a check that threw";
+  const Monitor::Tally t = tally.get();
+  EXPECT_EQ(t.received_measured, 1u);
+  EXPECT_EQ(t.evaluated_on_arrival, 0u);
+  EXPECT_EQ(t.evaluation_error, "evaluator bug");
+  EXPECT_FALSE(setup->executor.error()) << "the Monitor's own callback did not fail";
+  setup->executor.stop();
+}
+
+// The end of the drain: what arrives after it is not counted, however long the run then takes to
+// finish (an external power meter's last reading takes seconds).
+TEST(Monitor, IgnoresWhatArrivesAfterItWasClosed) {
+  graph::Context context(rmw::make_transport("intra", {}));
+  const BoundaryTopic output{"/out", "sensor_msgs/msg/Image", "", rmw::QoS{}};
+  const MessageIds ids{1'000'000'000, 100'000'000, 3};
+  Monitor monitor(context, output, ids, 0);
+  graph::Executor executor(1);
+  executor.add_node(monitor.node());
+  graph::Node graph_node(context, "graph");
+  auto publisher = graph_node.create_publisher<msgs::Image>("/out");
+  executor.start();
+  auto publish = [&](uint64_t id) {
+    auto m = std::make_shared<msgs::Image>();
+    m->header.stamp = msgs::Time::from_ns(ids.stamp_ns(id));
+    publisher->publish(std::shared_ptr<const msgs::Image>(m));
+  };
+  publish(0);
+  ASSERT_TRUE(monitor.wait_for(1, rmw::steady_now_ns() + 10'000'000'000));
+  monitor.close();
+  publish(1);
+  publish(1'000);  // an unknown ID, were it counted
+  // Counted, the later message would be there well within this (it is, before the close).
+  EXPECT_FALSE(monitor.wait_for(2, rmw::steady_now_ns() + 1'000'000'000));
+  executor.stop();
+  const Monitor::Tally tally = monitor.tally();
+  EXPECT_EQ(tally.received_measured, 1u);
+  EXPECT_GE(tally.received_ns[0], 0);
+  EXPECT_EQ(tally.received_ns[1], -1);
+  EXPECT_EQ(tally.unknown, 0u);
 }
 
 // The warm-up is sent again while the gate says the graph does not deliver yet; measured messages

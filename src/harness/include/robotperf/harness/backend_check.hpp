@@ -50,7 +50,8 @@ bool uses_other_backend(const BenchmarkSpec& spec);
 // Feeds the frames of `kept` (message ID, output) through the benchmark's own nodes built on
 // `cpu`, on an intra transport of their own, one frame at a time in ID order, and compares each
 // answer with the kept output. nullopt when every node ran on cpu, nothing was kept or the output
-// type has no comparison.
+// type has no comparison. Throws when the check cannot be made: std::runtime_error for a node
+// whose kernel has no cpu backend (no reference), or whatever building the nodes on cpu throws.
 std::optional<BackendCheck> check_backend_answers(
     const BenchmarkSpec& spec, const Dataset& dataset,
     const std::vector<std::pair<uint64_t, rmw::MessagePtr>>& kept);

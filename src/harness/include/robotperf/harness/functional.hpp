@@ -80,6 +80,11 @@ FunctionalResult judge_functional(const FunctionalSpec& spec,
                                   const plugin::FunctionalEvaluator& evaluator,
                                   std::size_t evaluated, std::size_t requested);
 
+// An evaluation that could not be completed (its evaluator threw): invalid for `why`, with no
+// metrics, after `evaluated` of the `requested` outputs.
+FunctionalResult functional_failure(const FunctionalSpec& spec, std::size_t requested,
+                                    std::size_t evaluated, std::string why);
+
 // Evaluates the kept outputs (message ID, output) against the dataset.
 FunctionalResult evaluate_functional(
     const FunctionalSpec& spec, const Dataset& dataset,

@@ -12,10 +12,10 @@ namespace robotperf::harness {
 
 struct PeakSearchOptions {
   // A rate is sustained when the run completes without duplicates or unknown IDs, the Playback
-  // kept the rate, at most this share of the measured messages is lost (default: the benchmark's
-  // max_loss_percent, so that the run at the peak is valid by the benchmark's own rules), the
-  // outputs came out at least 95 % as fast as the inputs went in, and (when given) the latency
-  // percentile is within its bound.
+  // kept the rate its schedule asked for, at most this share of the measured messages is lost
+  // (default: the benchmark's max_loss_percent, so that the run at the peak is valid by the
+  // benchmark's own rules), the outputs came out at least 95 % as fast as the inputs went in, and
+  // (when given) the latency percentile is within its bound.
   std::optional<double> loss_bound_percent;
   std::optional<double> latency_bound_ms;
   double latency_percentile = 99.0;  // of the latency from the scheduled send

@@ -354,10 +354,12 @@ void kill_node_processes() noexcept;
 
 // The per-node child side: builds one node of `spec`, reports "ready" on
 // stdout once its endpoints are matched, runs until stdin closes, then prints
-// a final "stats" line. Returns the process exit code. A callback stuck longer than
-// `callback_timeout_s` is reported on a "hung" line, and the process ends at once.
-// `run_token` marks its participant as one of the runner's run (RunResult::run_token).
-// `keystore`: DDS Security as RunOptions::keystore; `ros_distro` as RunOptions::ros_distro.
+// a final "stats" line. It waits for its peers as long as the runner does (its
+// --connect-timeout): until they are matched or stdin closes. Returns the process exit code. A
+// callback stuck longer than `callback_timeout_s` is reported on a "hung" line, and the process
+// ends at once. `run_token` marks its participant as one of the runner's run
+// (RunResult::run_token). `keystore`: DDS Security as RunOptions::keystore; `ros_distro` as
+// RunOptions::ros_distro.
 int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
                      const std::string& rmw, int domain_id,
                      const SchedulingOptions& scheduling = {}, double callback_timeout_s = 30.0,
