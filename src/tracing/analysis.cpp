@@ -768,6 +768,22 @@ class MessageLookup {
   std::vector<int64_t> repeated_;
 };
 
+// The first `warmup` messages are sent but not measured (DESIGN: measurement rules): every table
+// of the run tells them by this.
+bool is_warmup(const Input& in, const RunInfo& run) {
+  return in.index < run.warmup;
+}
+
+// When the run's measurement begins: the send of its first measured message (INT64_MAX when it
+// has none). Events without a message ID (rmw_publish) are measured from then on.
+int64_t measurement_start(const Collected& c, const RunInfo& run) {
+  int64_t start = INT64_MAX;
+  for (const auto& in : c.inputs) {
+    if (run.processes.contains(in.vpid) && !is_warmup(in, run)) start = std::min(start, in.ts);
+  }
+  return start;
+}
+
 // The black-box statistics and validity rules (harness/run.cpp), from the trace.
 // Fills a.messages and returns the lookup of their IDs.
 MessageLookup summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo& run) {
@@ -778,7 +794,7 @@ MessageLookup summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo&
     m.index = in.index;
     m.scheduled_ns = in.scheduled;
     m.sent_ns = in.ts;
-    m.warmup = in.index < run.warmup;
+    m.warmup = is_warmup(in, run);
     return m;
   };
   // The messages in order of their index. Where the indices are 0..n-1 (robotperf's own runs,
@@ -1181,6 +1197,8 @@ void explain_missing_tables(TraceAnalysis& a, const Collected& c, int run_pid) {
       why =
           "no ros2:rcl_publisher_init / rcl_subscription_init events to name the topics "
           "(tracing started after the nodes were created)";
+    } else if (a.run && a.measured == 0) {
+      why = "the run measured no message (the warm-up's publishes are not counted)";
     } else {
       why = "no rmw_take's source_timestamp equals an rmw_publish timestamp of its topic";
     }
@@ -1219,8 +1237,10 @@ void controller_update_durations(TraceAnalysis& a, const Collected& c,
   for (auto& [k, d] : acc) a.controller_updates.push_back({k.first, k.second, stats_of(d)});
 }
 
-// rmw_publish -> rmw_take latencies, matched by topic and source timestamp.
+// rmw_publish -> rmw_take latencies, matched by topic and source timestamp; in a run, of the
+// publishes from its measurement's start on (the warm-up's are not counted).
 void topic_latencies(TraceAnalysis& a, const Collected& c, const std::optional<RunInfo>& run) {
+  const int64_t since = run ? measurement_start(c, *run) : INT64_MIN;
   struct PubKey {
     uint32_t topic;
     int64_t stamp;
@@ -1243,7 +1263,7 @@ void topic_latencies(TraceAnalysis& a, const Collected& c, const std::optional<R
   std::unordered_map<PubKey, std::pair<int64_t, uint32_t>, PubHash> pubs;
   pubs.reserve(c.rmw_publishes.size());
   for (const auto& p : c.rmw_publishes) {
-    if (run && !run->processes.contains(p.vpid)) continue;
+    if (p.ts < since || (run && !run->processes.contains(p.vpid))) continue;
     auto ep = c.publishers_by_rmw.find({p.vpid, p.handle});
     if (ep == c.publishers_by_rmw.end()) continue;
     pubs.try_emplace({ep->second.topic, p.stamp}, p.ts,

@@ -222,17 +222,19 @@ class Parser {
       expect(";");
     } else if (word == "clock") {
       ClockClass clock;
+      int64_t freq = static_cast<int64_t>(clock.freq);
       block(
           [&](const std::string& key, const std::vector<Token>& value) {
             if (value.empty()) return;
             if (key == "name") clock.name = value[0].text;
-            if (key == "freq")
-              clock.freq = static_cast<uint64_t>(parse_number(value[0].text, value[0].line));
+            if (key == "freq") freq = parse_number(value[0].text, value[0].line);
             if (key == "offset") clock.offset = parse_number(value[0].text, value[0].line);
             if (key == "offset_s") clock.offset_s = parse_number(value[0].text, value[0].line);
           },
           [](const std::string&, TypePtr) {});
-      if (clock.freq == 0) fail("clock with frequency 0");
+      // Event times are divided by it.
+      if (freq <= 0) fail("clock '" + clock.name + "' with frequency " + std::to_string(freq));
+      clock.freq = static_cast<uint64_t>(freq);
       md_.clocks.push_back(clock);
       expect(";");
     } else if (word == "stream") {

@@ -80,8 +80,10 @@ bool compile_flat(const Type& t, bool trace_big_endian,
         break;
       case Kind::kArray: {
         const Type& e = *ft.element;
+        // A length whose count of bytes overflows is left to the general decoder, which
+        // refuses it.
         if (e.kind != Kind::kInteger || e.size_bits % 8 != 0 || e.align_bits > e.size_bits ||
-            e.align_bits < 8)
+            e.align_bits < 8 || ft.length > UINT64_MAX / (e.size_bits / 8))
           return false;
         out.ops.push_back({e.is_text && !skip ? FlatOp::kText : FlatOp::kSkip, 0,
                            std::max(8u, e.align_bits), ft.length * (e.size_bits / 8)});
@@ -285,12 +287,21 @@ class Decoder {
     return {reinterpret_cast<const char*>(data_ + start), len};
   }
 
+  // Steps over `count` items of `item_bits` (1 or more) bits each. The count comes from the trace:
+  // it is compared with what is left of the packet before it is multiplied, so that no product
+  // wraps around and moves the reader backwards.
+  void skip(uint64_t count, uint64_t item_bits, const char* what) {
+    const uint64_t left = end_bits_ > pos_ ? end_bits_ - pos_ : 0;
+    if (count > left / item_bits) fail(std::string(what) + " runs past the end of its packet");
+    pos_ += count * item_bits;
+  }
+
   // Text stored as a fixed array or a sequence of 8-bit characters: up to the first NUL.
   std::string_view read_text(uint64_t count) {
     align(8);
-    if (pos_ + count * 8 > end_bits_) fail("text runs past the end of its packet");
-    const uint8_t* p = data_ + pos_ / 8;
-    pos_ += count * 8;
+    const uint64_t start = pos_ / 8;
+    skip(count, 8, "text");
+    const uint8_t* p = data_ + start;
     return {reinterpret_cast<const char*>(p), nul_offset(p, count)};
   }
 
@@ -343,13 +354,16 @@ class Decoder {
     if (e.kind == Kind::kInteger && (e.size_bits % 8) == 0 && e.align_bits <= e.size_bits) {
       // Plain integer arrays (gids, uuids): skip in one step.
       align(t.align_bits);
-      const uint64_t bits = count * e.size_bits;
-      if (pos_ + bits > end_bits_) fail("array runs past the end of its packet");
-      pos_ += bits;
+      skip(count, e.size_bits, "array");
       return {};
     }
     align(t.align_bits);
-    for (uint64_t i = 0; i < count; ++i) decode(e, id_out, false);
+    for (uint64_t i = 0; i < count; ++i) {
+      // Elements that take no bits (empty structs) would be decoded `count` times, up to 2^64.
+      const uint64_t before = pos_;
+      decode(e, id_out, false);
+      if (pos_ == before) fail("array of elements that take no bits");
+    }
     return {};
   }
 
@@ -423,8 +437,7 @@ class Decoder {
           v.s = read_text(op.count);
           break;
         case FlatOp::kSkip:
-          if (pos_ + op.count * 8 > end_bits_) fail("event runs past the end of its packet");
-          pos_ += op.count * 8;
+          skip(op.count, 8, "event");
           v.tag = Value::Tag::kNone;
           v.u = 0;
           break;
@@ -545,6 +558,22 @@ class Decoder {
   bool clock_updates_ = true;
 };
 
+constexpr uint64_t kNsPerSecond = 1'000'000'000;
+
+// The frequency of the clock the event times count in. Times are read as integers mapped to a
+// clock, without the clock's name: a trace whose clocks run at different frequencies is refused.
+uint64_t clock_freq(const Metadata& md, const fs::path& dir) {
+  if (md.clocks.empty()) return kNsPerSecond;
+  for (const ClockClass& c : md.clocks) {
+    if (c.freq != md.clocks.front().freq) {
+      throw CtfError(dir.string() + "/metadata: clocks '" + md.clocks.front().name + "' (" +
+                     std::to_string(md.clocks.front().freq) + " Hz) and '" + c.name + "' (" +
+                     std::to_string(c.freq) + " Hz) differ in frequency");
+    }
+  }
+  return md.clocks.front().freq;
+}
+
 int index_of(const TypePtr& t, std::string_view name) {
   if (!t) return -1;
   for (std::size_t i = 0; i < t->fields.size(); ++i) {
@@ -557,6 +586,7 @@ int index_of(const TypePtr& t, std::string_view name) {
 
 Trace::Trace(const fs::path& dir) : dir_(dir) {
   metadata_ = read_metadata(dir / "metadata");
+  clock_freq_ = clock_freq(metadata_, dir);
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     if (!entry.is_regular_file()) continue;
@@ -668,7 +698,9 @@ StreamIndex Trace::index_stream(std::size_t index) const {
         last_seq = v->u;
       }
     }
-    if (packet_bits == 0 || content_bits > packet_bits || packet_start + packet_bits > file_bits)
+    // Compared with what is left of the file: a size near 2^64 would wrap packet_start + size
+    // back to an earlier packet, and indexing would never end.
+    if (packet_bits == 0 || content_bits > packet_bits || packet_bits > file_bits - packet_start)
       d.fail("packet size " + std::to_string(packet_bits / 8) + " bytes does not fit the file");
     p.start_bits = packet_start;
     p.events_bits = d.pos();
@@ -722,6 +754,15 @@ uint64_t Trace::read_packets(std::size_t index, std::span<const Packet> packets,
   HeaderShape shape = HeaderShape::kGeneral;
   const FlatLayout* context_layout = nullptr;
   uint64_t events = 0;
+  // Clock cycles to nanoseconds, which every reader of event times counts in (LTTng's clocks
+  // count nanoseconds; LTTNG_UST_CLOCK_PLUGIN and other producers may not).
+  const uint64_t freq = clock_freq_;
+  auto ns_of = [&](uint64_t cycles) {
+    if (freq == kNsPerSecond) return cycles;
+    const unsigned __int128 ns = static_cast<unsigned __int128>(cycles) * kNsPerSecond / freq;
+    if (ns > UINT64_MAX) d.fail("event time overflows 64 bits of nanoseconds");
+    return static_cast<uint64_t>(ns);
+  };
 
   for (const Packet& p : packets) {
     const StreamClass* sc = p.stream_class;
@@ -786,7 +827,7 @@ uint64_t Trace::read_packets(std::size_t index, std::span<const Packet> packets,
                "' takes no bits: its metadata gives it no header and no fields");
       Event ev;
       ev.cls = ec;
-      ev.timestamp = d.clock();
+      ev.timestamp = ns_of(d.clock());
       ev.cpu_id = p.cpu_id;
       ev.fields = payload;
       ev.stream_context = event_context;

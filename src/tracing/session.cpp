@@ -120,9 +120,12 @@ fs::path daemon_pid_file() {
 // it), so that a daemon robotperf started does not outlive its run.
 void stop_daemon_when_idle() {
   const CommandResult sessions = run_command({"lttng", "list"});
-  if (sessions.exit_code != 0 ||
-      sessions.output.find("Currently no available recording session") == std::string::npos)
-    return;
+  // lttng-tools 2.13 says "recording session", earlier versions "tracing session".
+  const bool idle =
+      sessions.exit_code == 0 &&
+      (sessions.output.find("Currently no available recording session") != std::string::npos ||
+       sessions.output.find("Currently no available tracing session") != std::string::npos);
+  if (!idle) return;
   std::ifstream in(daemon_pid_file());
   pid_t pid = 0;
   if (!(in >> pid) || pid <= 0 || kill(pid, SIGTERM) != 0) return;
@@ -249,14 +252,16 @@ RecordingSession::~RecordingSession() {
 
 void RecordingSession::stop() {
   if (!active_) return;
-  active_ = false;
+  // The session stays active until it is destroyed: if destroying it fails here, the destructor
+  // tries again (and a daemon started for it is stopped only once no session is left).
   try {
     lttng({"stop", name_});
   } catch (...) {
-    run_command({"lttng", "destroy", name_});
+    if (run_command({"lttng", "destroy", name_}).exit_code == 0) active_ = false;
     throw;
   }
   lttng({"destroy", name_});
+  active_ = false;
 }
 
 }  // namespace robotperf::tracing

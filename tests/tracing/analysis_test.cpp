@@ -59,10 +59,13 @@ uint64_t sent_of(uint64_t k) {
 // How the output is declared: a plain topic, or a state stream (the relay publishes frame 1's
 // state twice more after the last frame and the Monitor takes it each time), recorded as such or
 // in a trace from before run_begin recorded it.
+// With `slow_warmup_take`, the relay takes frame 0 (warm-up) from the middleware kSlowWarmupTake
+// after its rmw_publish instead of 500 ns.
 enum class OutputKind { kPlain, kState, kStateUnrecorded };
+constexpr int64_t kSlowWarmupTake = 10'000'000;
 void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool device_stages = false,
                bool repeated_outputs = false, int64_t declared_period = kPeriod,
-               OutputKind output = OutputKind::kPlain) {
+               OutputKind output = OutputKind::kPlain, bool slow_warmup_take = false) {
   testing::define_robotperf_events(w, testing::Ros2Layout::kJazzy,
                                    output != OutputKind::kStateUnrecorded);
   const std::string play = "robotperf_playback", relay = "relay", mon = "robotperf_monitor";
@@ -105,8 +108,16 @@ void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool devic
             {V(play), V(std::string("/in")), V(id), V(uint64_t{100})});
     w.event(0, "ros2:rmw_publish", sent + 20, kRunPid, 1,
             {V(uint64_t{0x80}), V(uint64_t{0x999}), V(static_cast<int64_t>(sent))});
-    w.event(1, "ros2:rmw_take", sent + 520, kRunPid, 2,
-            {V(uint64_t{0x30}), V(uint64_t{0x999}), V(static_cast<int64_t>(sent)), V(int64_t{1})});
+    if (slow_warmup_take && k == 1) {
+      w.event(1, "ros2:rmw_take", sent_of(0) + 20 + kSlowWarmupTake, kRunPid, 2,
+              {V(uint64_t{0x30}), V(uint64_t{0x999}), V(static_cast<int64_t>(sent_of(0))),
+               V(int64_t{1})});
+    }
+    if (!slow_warmup_take || k != 0) {
+      w.event(
+          1, "ros2:rmw_take", sent + 520, kRunPid, 2,
+          {V(uint64_t{0x30}), V(uint64_t{0x999}), V(static_cast<int64_t>(sent)), V(int64_t{1})});
+    }
     w.event(1, "ros2:callback_start", sent + 990, kRunPid, 2, {V(uint64_t{0x40}), V(int64_t{1})});
     w.event(1, "robotperf:callback_entry", sent + 1000, kRunPid, 2,
             {V(relay), V(std::string("/in")), V(id), V(uint64_t{100})});
@@ -501,6 +512,20 @@ TEST(Analyzer, DecodingInPartsGivesTheResultOfOneThread) {
   }
 }
 
+// The publish -> take table counts the messages the hop table does: not the warm-up's, however
+// long their transport took.
+TEST(Analyzer, PublishToTakeLeavesTheWarmupOut) {
+  TempDir dir("warmup-take");
+  CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
+  write_run(w, 0, false, false, kPeriod, OutputKind::kPlain, true);
+  const TraceAnalysis a = analyze_trace(dir.path());
+  ASSERT_EQ(a.topics.size(), 1u);
+  EXPECT_EQ(a.topics[0].topic, "/in");
+  EXPECT_EQ(a.topics[0].latency.count, a.measured);
+  EXPECT_LT(a.topics[0].latency.max, static_cast<double>(kSlowWarmupTake));
+  EXPECT_DOUBLE_EQ(a.topics[0].latency.mean, 500.0);
+}
+
 // A kernel on a device: its upload, compute and download stages are hops of their own, beside
 // the kernel's.
 TEST(Analyzer, DeviceStagesAreHopsOfTheirOwn) {
@@ -617,6 +642,125 @@ TEST(Analyzer, CallbackSymbolsAndWhyATableIsMissing) {
       << table;
   EXPECT_EQ(to_json(a)["callbacks"][0]["symbol"], symbol);
   EXPECT_EQ(to_json(a)["unavailable"].size(), a.unavailable.size());
+}
+
+// Event times count nanoseconds whatever the clock's frequency: its cycles are converted.
+TEST(CtfReader, EventTimesAreNanosecondsOfAClockOfAnyFrequency) {
+  TempDir dir("clock-freq");
+  CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false);
+  w.clock_frequency(1'000'000);  // 1 MHz: a cycle is 1 us
+  testing::define_robotperf_events(w);
+  w.event(0, "ros2:rcl_timer_init", 100, 7, 7, {V(uint64_t{2}), V(int64_t{500'000'000})});
+  w.event(0, "ros2:rclcpp_timer_callback_added", 110, 7, 7, {V(uint64_t{2}), V(uint64_t{3})});
+  w.event(0, "ros2:callback_start", 1000, 7, 7, {V(uint64_t{3}), V(int64_t{0})});
+  w.event(0, "ros2:callback_end", 1700, 7, 7, {V(uint64_t{3})});
+  w.finish();
+  const TraceAnalysis a = analyze_trace(dir.path());
+  ASSERT_EQ(a.callbacks.size(), 1u);
+  EXPECT_DOUBLE_EQ(a.callbacks[0].duration.mean, 700'000.0);
+  ctf::Trace trace(dir.path());
+  std::vector<uint64_t> times;
+  trace.read_stream(0, [&](const ctf::Event& e) { times.push_back(e.timestamp); });
+  EXPECT_EQ(times, (std::vector<uint64_t>{100'000, 110'000, 1'000'000, 1'700'000}));
+
+  // A frequency that is not one is refused, naming the clock.
+  std::string metadata;
+  {
+    std::ifstream in(dir.path() / "metadata");
+    metadata.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const auto at = metadata.find("freq = 1000000;");
+  ASSERT_NE(at, std::string::npos);
+  std::ofstream(dir.path() / "metadata") << metadata.replace(at, 15, "freq = -1000000;");
+  try {
+    analyze_trace(dir.path());
+    FAIL() << "a negative clock frequency accepted";
+  } catch (const ctf::CtfError& e) {
+    EXPECT_NE(std::string(e.what()).find("clock 'monotonic'"), std::string::npos) << e.what();
+  }
+}
+
+// Writes two events of class "t:e" with u64 fields `fields` ("sent" first), the second's sent
+// being `second_sent`, in a trace whose metadata declares `declaration` after `after`.
+void write_declared(const fs::path& dir, const std::vector<std::string>& fields,
+                    uint64_t second_sent, const std::string& after,
+                    const std::string& declaration) {
+  CtfWriter w(dir, CtfWriter::Header::kCompact, false);
+  std::vector<testing::FieldDef> defs;
+  for (const auto& f : fields) defs.push_back({f, testing::FieldKind::kU64});
+  w.define("t:e", defs);
+  w.event(0, "t:e", 1000, 1, 1, std::vector<V>(fields.size(), V(uint64_t{0})));
+  w.event(0, "t:e", 1001, 1, 1, std::vector<V>(fields.size(), V(second_sent)));
+  w.finish();
+  std::string metadata;
+  {
+    std::ifstream in(dir / "metadata");
+    metadata.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const auto at = metadata.find(after);
+  ASSERT_NE(at, std::string::npos);
+  std::ofstream(dir / "metadata") << metadata.replace(at, after.size(), declaration);
+}
+
+// Every event of the trace in `dir`, or the reader's error; an endless stream of events is cut.
+uint64_t read_events(const fs::path& dir) {
+  ctf::Trace trace(dir);
+  const ctf::StreamIndex index = trace.index_stream(0);
+  uint64_t events = 0;
+  return trace.read_packets(0, index.packets, [&](const ctf::Event&) {
+    if (++events > 1000) throw std::runtime_error("endless events from a trace of two");
+  });
+}
+
+// A length read from the trace whose count of bits overflows 64 bits (2^61 - 74 bytes: the
+// product wraps 74 bytes back, to the first event) is past the end of the packet, not a step
+// back into events already read; so is a length from the metadata whose bytes overflow.
+// Elements that take no bits are refused before being decoded 2^40 times.
+TEST(CtfReader, LengthsBeyondThePacketAreErrorsNotStepsBack) {
+  TempDir dir("lengths");
+  const uint64_t wraps_back = (uint64_t{1} << 61) - 74;
+  const std::pair<uint64_t, std::string> sequences[] = {
+      {wraps_back, "_sent;\n\t\tuint8_t _blob[_sent];"},
+      {wraps_back,
+       "_sent;\n\t\tinteger { size = 8; align = 8; signed = 0; encoding = UTF8; } _text[_sent];"},
+      {uint64_t{1} << 40, "_sent;\n\t\tstruct { } _empty[_sent];"}};
+  for (const auto& [sent, declaration] : sequences) {
+    fs::remove_all(dir.path());
+    write_declared(dir.path(), {"sent"}, sent, "_sent;", declaration);
+    EXPECT_THROW(read_events(dir.path()), ctf::CtfError) << declaration;
+  }
+  // 2^61 + 1 elements of 8 bytes: as many bytes as 8 once the product wraps, which the second
+  // field's 8 bytes would hold.
+  fs::remove_all(dir.path());
+  write_declared(dir.path(), {"sent", "pad"}, 0, "_pad;", "_pad[2305843009213693953];");
+  EXPECT_THROW(read_events(dir.path()), ctf::CtfError);
+}
+
+// A packet size near 2^64 does not wrap the next packet's start back to an earlier packet: it
+// does not fit the file.
+TEST(CtfReader, APacketSizeNear2To64DoesNotFitTheFile) {
+  TempDir dir("packet-size");
+  CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false);
+  testing::define_robotperf_events(w);
+  w.event(0, "robotperf:run_end", 1000, 1, 1, {V(uint64_t{4})});
+  w.end_packet(0);
+  w.event(0, "robotperf:run_end", 2000, 1, 1, {V(uint64_t{4})});
+  w.finish();
+  const fs::path stream = dir.path() / "channel0_0";
+  const uint64_t second = ctf::Trace(dir.path()).index_stream(0).packets.at(1).start_bits / 8;
+  // packet_size follows the 32-byte packet header, timestamp_begin, timestamp_end and
+  // content_size: 2^64 - second * 8 bits would take packet_start back to 0.
+  const uint64_t size = uint64_t{0} - second * 8;
+  std::fstream(stream, std::ios::in | std::ios::out | std::ios::binary)
+      .seekp(static_cast<std::streamoff>(second + 56))
+      .write(reinterpret_cast<const char*>(&size), sizeof size);
+  try {
+    analyze_trace(dir.path());
+    FAIL() << "a packet larger than its file accepted";
+  } catch (const ctf::CtfError& e) {
+    EXPECT_NE(std::string(e.what()).find(stream.string() + ": packet size"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(CtfReader, CorruptTracesGiveClearErrors) {

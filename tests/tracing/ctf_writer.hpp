@@ -34,6 +34,9 @@ class CtfWriter {
         packetized_(packetized_metadata),
         streams_(streams) {}
 
+  // The frequency of the trace's clock: timestamps given to event() count its cycles.
+  void clock_frequency(uint64_t hz) { clock_freq_ = hz; }
+
   uint32_t define(const std::string& name, std::vector<FieldDef> fields) {
     defs_.push_back({name, std::move(fields)});
     return static_cast<uint32_t>(defs_.size() - 1);
@@ -274,7 +277,9 @@ clock {
 	name = "monotonic";
 	uuid = "22222222-2222-2222-2222-222222222222";
 	description = "Monotonic Clock";
-	freq = 1000000000; /* Frequency, in Hz */
+	freq = )";
+    m += std::to_string(clock_freq_);
+    m += R"(; /* Frequency, in Hz */
 	/* clock value offset from Epoch is: offset * (1/freq) */
 	offset = 1700000000000000000;
 };
@@ -356,6 +361,7 @@ struct event_header_large {
   Header header_;
   bool packetized_;
   int streams_;
+  uint64_t clock_freq_ = 1'000'000'000;
   std::vector<Def> defs_;
   std::map<int, Stream> s_;
 };

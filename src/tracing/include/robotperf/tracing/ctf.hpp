@@ -127,7 +127,10 @@ struct Value {
 
 struct Event {
   const EventClass* cls = nullptr;
-  uint64_t timestamp = 0;  // clock cycles (ns for LTTng's monotonic clock)
+  // Nanoseconds of the trace's clock: its cycles divided by its frequency. The clock's offset
+  // (from the epoch) is not added: event times compare with the traced programs' own readings of
+  // that clock (CLOCK_MONOTONIC for LTTng).
+  uint64_t timestamp = 0;
   uint32_t cpu_id = 0;
   std::span<const Value> fields;          // top-level payload fields, in declaration order
   std::span<const Value> stream_context;  // top-level stream event-context fields
@@ -208,6 +211,7 @@ class Trace {
   struct Mapped;
   std::filesystem::path dir_;
   Metadata metadata_;
+  uint64_t clock_freq_ = 0;  // Hz, of the clock the event times count in
   std::vector<std::filesystem::path> stream_files_;
   std::vector<std::unique_ptr<Mapped>> mapped_;
 };
