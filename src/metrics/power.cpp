@@ -144,8 +144,17 @@ PowerReport PowerMeter::report() const {
     if (loads_[i].readings > 0) s.load = loads_[i];
     if (s.available && s.info.in_total) {
       r.available = true;
-      r.total_energy_j += s.energy_j;
+      // Each source's energy over its own first-to-last good reading would add up spans of
+      // different lengths: the total is over the window, as the messages per joule are.
+      r.total_energy_j += s.average_w * r.window_s;
       r.total_average_w += s.average_w;
+      if (s.span_s < r.window_s) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf,
+                      "%s read for %.3f s of the %.3f s window (its average taken for the rest)",
+                      s.info.name.c_str(), s.span_s, r.window_s);
+        r.estimated.push_back(buf);
+      }
     }
     if (!s.available) {
       failures += (failures.empty() ? "" : "; ") + s.info.name + ": " + s.unavailable_reason;
@@ -246,6 +255,7 @@ nlohmann::json to_json(const PowerReport& report, std::size_t messages, double t
         {"description", s.info.description},
         {"kind", kind_name(s.info.kind)},
         {"in_total", s.info.in_total},
+        {"whole_machine", s.info.whole_machine},
         {"available", s.available},
         {"unavailable_reason", s.available ? json(nullptr) : json(s.unavailable_reason)},
         {"average_w", number_or_null(s.available, s.average_w)},
@@ -273,7 +283,8 @@ nlohmann::json to_json(const PowerReport& report, std::size_t messages, double t
              {"throughput_per_watt", throughput_hz > 0 && report.total_average_w > 0
                                          ? json(throughput_hz / report.total_average_w)
                                          : json(nullptr)},
-             {"sources", in_total}};
+             {"sources", in_total},
+             {"estimated", report.estimated}};
   }
   return {
       {"available", report.available},
@@ -297,7 +308,8 @@ nlohmann::json sources_to_json(const PowerDiscovery& discovery) {
                        {"location", i.location},
                        {"description", i.description},
                        {"kind", kind_name(i.kind)},
-                       {"in_total", i.in_total}});
+                       {"in_total", i.in_total},
+                       {"whole_machine", i.whole_machine}});
   }
   return {{"sources", sources}, {"notes", discovery.notes}};
 }

@@ -284,6 +284,8 @@ void discover_hwmon(const fs::path& root, bool rapl_found, PowerDiscovery& out) 
       PowerSourceInfo info;
       info.type = "hwmon";
       info.in_total = !repeats_rapl;
+      // The ACPI power meter reads the machine's input power, of which the rest is a part.
+      info.whole_machine = name == "power_meter";
       fs::path file;
       double scale = 1e-6;
       // Prefer the energy counter of a channel over its power reading.
@@ -682,6 +684,28 @@ class ExternalMeterSource : public PowerSource {
   double timeout_s_;
 };
 
+// A meter of the whole machine already includes every other source: adding them would count
+// them twice, so the total is that meter alone (the external one, which the user gave, before an
+// ACPI one). The others stay listed with their own readings.
+void count_whole_machine_alone(PowerDiscovery& out) {
+  const auto whole = [](const std::unique_ptr<PowerSource>& s) { return s->info().whole_machine; };
+  auto counted = std::ranges::find_if(
+      out.sources, [&](const auto& s) { return whole(s) && s->info().type == "external"; });
+  if (counted == out.sources.end()) counted = std::ranges::find_if(out.sources, whole);
+  if (counted == out.sources.end()) return;
+  std::string others;
+  for (auto& s : out.sources) {
+    if (s == *counted || !s->info().in_total) continue;
+    s->leave_out_of_total();
+    others += (others.empty() ? "" : ", ") + s->info().name;
+  }
+  if (!others.empty()) {
+    out.notes.push_back("total: " + (*counted)->info().name +
+                        " measures the whole machine, so the total is it alone; " + others +
+                        " are part of it (listed, not added)");
+  }
+}
+
 }  // namespace
 
 PowerDiscovery discover_power_sources(const PowerOptions& options) {
@@ -709,6 +733,7 @@ PowerDiscovery discover_power_sources(const PowerOptions& options) {
       info.name = "external:meter";
       info.location = options.meter_command;
       info.kind = PowerSourceKind::kPowerGauge;
+      info.whole_machine = true;
       auto meter = std::make_unique<ExternalMeterSource>(std::move(info), options.meter_command,
                                                          options.meter_timeout_s);
       // The user asked for this meter: one that does not work is an error, not a note.
@@ -717,6 +742,7 @@ PowerDiscovery discover_power_sources(const PowerOptions& options) {
       out.sources.push_back(std::move(meter));
     }
   }
+  count_whole_machine_alone(out);
   return out;
 }
 

@@ -7,11 +7,13 @@
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
+#include <map>
 #include <optional>
 #include <random>
 #include <stdexcept>
 #include <string>
 #include <system_error>
+#include <vector>
 
 namespace robotperf::report {
 namespace {
@@ -101,24 +103,21 @@ void sync_directory(const fs::path& directory, const fs::path& path) {
   }
 }
 
-}  // namespace
-
-void write_file_atomically(const fs::path& path, std::string_view content) {
+// The directory `path` goes into, created when missing.
+fs::path directory_for(const fs::path& path) {
   if (!path.has_filename()) fail(path, "the path names no file", EINVAL);
   const fs::path directory = path.has_parent_path() ? path.parent_path() : fs::path(".");
-
   std::error_code error;
   fs::create_directories(directory, error);
   if (error) fail(path, "creating directory " + directory.string(), error.value());
+  return directory;
+}
 
-  std::optional<mode_t> existing_mode;
-  struct stat existing {};
-  if (::lstat(path.c_str(), &existing) == 0 && S_ISREG(existing.st_mode)) {
-    existing_mode = existing.st_mode & 07777;
-  }
-
-  TemporaryFile file = create_temporary_file(path);
-  if (existing_mode && ::fchmod(file.descriptor(), *existing_mode) != 0) {
+// Fills `file`, the temporary file beside `path`, with all of `content`, syncs and closes it:
+// ready to be put in place. `mode`, when given, is set on it.
+void fill_temporary(TemporaryFile& file, const fs::path& path, std::string_view content,
+                    std::optional<mode_t> mode) {
+  if (mode && ::fchmod(file.descriptor(), *mode) != 0) {
     fail(path, "setting the mode of " + file.path().string(), errno);
   }
   write_all(file.descriptor(), path, file.path().string(), content);
@@ -126,11 +125,75 @@ void write_file_atomically(const fs::path& path, std::string_view content) {
   if (const int close_error = file.close(); close_error != 0) {
     fail(path, "closing " + file.path().string(), close_error);
   }
+}
+
+// Puts `file` at `path` unless something is there already (then false, `file` untouched): a
+// rename that refuses to replace, or, where the file system has none, a hard link (the
+// temporary name is then removed with `file`).
+bool place_without_replacing(TemporaryFile& file, const fs::path& path) {
+  if (::renameat2(AT_FDCWD, file.path().c_str(), AT_FDCWD, path.c_str(), RENAME_NOREPLACE) == 0) {
+    file.keep();
+    return true;
+  }
+  if (errno == EEXIST) return false;
+  if (errno != EINVAL && errno != ENOSYS) fail(path, "renaming " + file.path().string(), errno);
+  if (::link(file.path().c_str(), path.c_str()) == 0) return true;
+  if (errno == EEXIST) return false;
+  fail(path, "linking " + file.path().string() + " to it", errno);
+}
+
+}  // namespace
+
+void write_file_atomically(const fs::path& path, std::string_view content) {
+  const fs::path directory = directory_for(path);
+  std::optional<mode_t> existing_mode;
+  struct stat existing {};
+  if (::lstat(path.c_str(), &existing) == 0 && S_ISREG(existing.st_mode)) {
+    existing_mode = existing.st_mode & 07777;
+  }
+  TemporaryFile file = create_temporary_file(path);
+  fill_temporary(file, path, content, existing_mode);
   if (::rename(file.path().c_str(), path.c_str()) != 0) {
     fail(path, "renaming " + file.path().string() + " over it", errno);
   }
   file.keep();
   sync_directory(directory, path);
+}
+
+bool write_new_file_atomically(const fs::path& path, std::string_view content) {
+  const fs::path directory = directory_for(path);
+  TemporaryFile file = create_temporary_file(path);
+  fill_temporary(file, path, content, std::nullopt);
+  if (!place_without_replacing(file, path)) return false;
+  sync_directory(directory, path);
+  return true;
+}
+
+fs::path write_new_files(const fs::path& base, const std::map<std::string, std::string>& files) {
+  constexpr int kNames = 1000;
+  for (int n = 1; n <= kNames; ++n) {
+    const fs::path candidate = n == 1 ? base : fs::path(base.string() + "-" + std::to_string(n));
+    std::vector<fs::path> placed;
+    bool taken = false;
+    try {
+      for (const auto& [suffix, content] : files) {
+        const fs::path path = candidate.string() + suffix;
+        if (!write_new_file_atomically(path, content)) {
+          taken = true;
+          break;
+        }
+        placed.push_back(path);
+      }
+    } catch (...) {
+      // A set is written whole or not at all.
+      for (const auto& path : placed) ::unlink(path.c_str());
+      throw;
+    }
+    if (!taken) return candidate;
+    // Another writer's file (or a stray one) holds a name of the set: the set moves on whole.
+    for (const auto& path : placed) ::unlink(path.c_str());
+  }
+  fail(base, "every name up to -" + std::to_string(kNames) + " is taken", EEXIST);
 }
 
 bool is_standard_output(const fs::path& path) {

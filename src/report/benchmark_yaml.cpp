@@ -342,11 +342,15 @@ std::vector<PublishedResult> export_entries(const StoredRun& run, const ExportOp
   base.datasource = run.dataset;
   const std::string lost = "lost " + format_fixed(run.loss_percent, 2) + " % (" +
                            std::to_string(run.lost) + " of " + std::to_string(run.measured) + ")";
-  const nlohmann::json software = run.json.value("software", nlohmann::json::object());
-  std::string context = format_fixed(run.rate_hz, 1) + " Hz input, rmw " + run.rmw + ", " +
-                        run.processes + (run.processes == "single" ? " process" : " processes") +
-                        ", robotperf " + software.value("robotperf_version", std::string("?")) +
-                        " (" + software.value("git_revision", std::string("?")) + ")";
+  // Worded as check_published reads a rate back ("input rate 30.0 Hz"), so that an exported row
+  // is matched on its rate as RobotPerf's own are. A peak search states no rate it was fed at.
+  const bool peak = run.throughput_kind == "peak";
+  std::string context = (peak ? "peak search (the highest input rate that met its bounds: " +
+                                    format_fixed(run.rate_hz, 1) + " Hz)"
+                              : "input rate " + format_fixed(run.rate_hz, 1) + " Hz") +
+                        ", rmw " + run.rmw + ", " + run.processes +
+                        (run.processes == "single" ? " process" : " processes") + ", robotperf " +
+                        run.robotperf_version + " (" + run.git_revision + ")";
   if (!run.valid) {
     std::string why;
     for (const auto& r : run.invalid_reasons) why += (why.empty() ? "" : "; ") + r;
@@ -370,8 +374,10 @@ std::vector<PublishedResult> export_entries(const StoredRun& run, const ExportOp
     e.metric = "throughput";
     e.metric_unit = "fps";
     e.value = run.throughput_hz;
-    e.note =
-        "output rate, offered " + format_fixed(run.offered_hz, 3) + " Hz, " + lost + ", " + context;
+    // DESIGN.md §3.5: a throughput says whether it is offered-bounded or a peak.
+    e.note = (peak ? "peak output rate" : "offered-bounded output rate") +
+             std::string(", offered ") + format_fixed(run.offered_hz, 3) + " Hz, " + lost + ", " +
+             context;
     out.push_back(std::move(e));
   }
   if (run.power_w) {
@@ -562,7 +568,7 @@ nlohmann::json to_json(const PublishedBenchmark& b) {
 }
 
 PublishedBenchmark published_from_json(const nlohmann::json& j, const fs::path& from) {
-  if (!j.is_object() || j.value("schema", "") != kPublishedSchema)
+  if (!j.is_object() || !j.contains("schema") || j.at("schema") != kPublishedSchema)
     throw ReportError(from.string() + ": not an imported benchmark file (expected \"schema\": \"" +
                       kPublishedSchema + "\")");
   try {

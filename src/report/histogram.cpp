@@ -3,6 +3,9 @@
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
+#include <string>
+
+#include "robotperf/report/run_store.hpp"
 
 namespace robotperf::report {
 namespace {
@@ -64,18 +67,23 @@ nlohmann::json to_json(const LogHistogram& h) {
 }
 
 std::optional<LogHistogram> log_histogram_from_json(const nlohmann::json& j) {
-  if (!j.is_object() || j.value("scale", "") != "log10") return std::nullopt;
-  try {
-    LogHistogram h;
-    h.bins_per_decade = j.at("bins_per_decade").get<int>();
-    h.first_index = j.at("first_index").get<int>();
-    h.counts = j.at("counts").get<std::vector<std::uint64_t>>();
-    h.nonpositive = j.value("nonpositive", std::uint64_t{0});
-    if (h.bins_per_decade < 1) return std::nullopt;
-    return h;
-  } catch (const nlohmann::json::exception&) {
-    return std::nullopt;
+  if (j.is_null()) return std::nullopt;
+  if (j.at("scale") != "log10")
+    throw ReportError("histogram scale " + j.at("scale").dump() + ", expected \"log10\"");
+  LogHistogram h;
+  h.bins_per_decade = j.at("bins_per_decade").get<int>();
+  h.first_index = j.at("first_index").get<int>();
+  h.counts = j.at("counts").get<std::vector<std::uint64_t>>();
+  if (const auto it = j.find("nonpositive"); it != j.end())
+    h.nonpositive = it->get<std::uint64_t>();
+  if (h.bins_per_decade < 1) throw ReportError("histogram bins_per_decade must be >= 1");
+  // Edges outside double's range would put infinities on the report's axes.
+  if (!h.counts.empty() &&
+      !(h.lower_edge(0) > 0 && std::isfinite(h.upper_edge(h.counts.size() - 1)))) {
+    throw ReportError("histogram bins from 10^(" + std::to_string(h.first_index) + "/" +
+                      std::to_string(h.bins_per_decade) + ") are beyond the range of a double");
   }
+  return h;
 }
 
 }  // namespace robotperf::report

@@ -117,7 +117,8 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
                     "local runs, median of valid runs; pale and dashed: published RobotPerf rows, "
                     "median of the rows that pass the measurement rules)."
                   : "<figcaption>Each axis is one benchmark with its own scale (written at its "
-                    "end; logarithmic when the values span more than 20x); one polygon per series "
+                    "end; logarithmic where that axis's values span more than 20x, else linear "
+                    "from 0); one polygon per series "
                     "(solid: local runs, median of valid runs; dashed: published RobotPerf rows, "
                     "median of the rows that pass the measurement rules).");
         for (const auto& note : radar.notes) {

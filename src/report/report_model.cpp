@@ -9,6 +9,7 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "robotperf/build_info.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
@@ -94,8 +95,8 @@ std::vector<Observation> observations(const ReportInput& in) {
   for (const auto& b : in.published) {
     for (const auto& row : b.results) {
       if (!row.flags.empty() || !std::isfinite(row.value)) continue;
-      out.push_back({b.id, b.category, detail::published_series(row.hardware), row.metric, false,
-                     row.value, nullptr, row.type, row.stated_rate()});
+      out.push_back({b.id, b.category, detail::published_series(row), row.metric, false, row.value,
+                     nullptr, row.type, row.stated_rate()});
     }
   }
   return out;
@@ -393,6 +394,7 @@ Table peak_search_table_for(const std::vector<const StoredRun*>& runs) {
 void published_tables(const PublishedBenchmark& b, Table& summary, Table& flagged) {
   summary.css_class = "published";
   summary.header = {"hardware",
+                    "type",
                     "category",
                     "rows",
                     "latency ms (median)",
@@ -400,29 +402,33 @@ void published_tables(const PublishedBenchmark& b, Table& summary, Table& flagge
                     "power W (median)",
                     "rates stated",
                     "flagged rows"};
-  summary.numeric = {false, false, true, true, true, true, false, true};
-  std::vector<std::string> order;
-  std::map<std::string, std::map<std::string, std::vector<double>>> values;
-  std::map<std::string, std::size_t> rows, flags;
-  std::map<std::string, std::set<std::string>> categories, rates;
+  summary.numeric = {false, false, false, true, true, true, true, false, true};
+  // Per hardware and type: black- and grey-box rows are two measurements, never one median.
+  using Key = std::pair<std::string, std::string>;
+  std::vector<Key> order;
+  std::map<Key, std::map<std::string, std::vector<double>>> values;
+  std::map<Key, std::size_t> rows, flags;
+  std::map<Key, std::set<std::string>> categories, rates;
   for (const auto& r : b.results) {
-    if (!rows.contains(r.hardware)) order.push_back(r.hardware);
-    ++rows[r.hardware];
-    categories[r.hardware].insert(r.category);
-    if (const auto rate = r.stated_rate(); !rate.empty()) rates[r.hardware].insert(rate);
+    const Key key{r.hardware, r.type};
+    if (!rows.contains(key)) order.push_back(key);
+    ++rows[key];
+    categories[key].insert(r.category);
+    if (const auto rate = r.stated_rate(); !rate.empty()) rates[key].insert(rate);
     if (!r.flags.empty()) {
-      ++flags[r.hardware];
+      ++flags[key];
     } else {
-      values[r.hardware][r.metric].push_back(r.value);
+      values[key][r.metric].push_back(r.value);
     }
   }
-  for (const auto& h : order) {
-    const std::string stated = joined(rates[h], ", ");
-    summary.rows.push_back({h, joined(categories[h], ", "), std::to_string(rows[h]),
-                            detail::format_value(median(values[h]["latency"])),
-                            detail::format_value(median(values[h]["throughput"])),
-                            detail::format_value(median(values[h]["power"])),
-                            stated.empty() ? "-" : stated, std::to_string(flags[h])});
+  for (const auto& key : order) {
+    const std::string stated = joined(rates[key], ", ");
+    summary.rows.push_back({key.first, key.second.empty() ? "-" : key.second,
+                            joined(categories[key], ", "), std::to_string(rows[key]),
+                            detail::format_value(median(values[key]["latency"])),
+                            detail::format_value(median(values[key]["throughput"])),
+                            detail::format_value(median(values[key]["power"])),
+                            stated.empty() ? "-" : stated, std::to_string(flags[key])});
     summary.row_warning.push_back(false);
   }
   flagged.css_class = "flagged";
@@ -443,7 +449,47 @@ struct Side {
   std::string label;
   std::vector<const StoredRun*> runs;
   std::vector<std::pair<const PublishedBenchmark*, const PublishedResult*>> rows;
+  // The fields the selector chose (rmw=..., or hardware for a hardware name): a difference in
+  // them is the one asked about; any other is named beside the comparison.
+  std::set<std::string> selected_fields;
 };
+
+// What DESIGN.md §3.9 requires two compared results to share, field by field, named as a
+// selector names them; a published row states only its hardware, type and rate. Empty values
+// are unknown.
+using Configuration = std::vector<std::pair<std::string, std::string>>;
+
+Configuration configuration_of(const StoredRun& r) {
+  return {{"hardware", r.hardware},
+          {"rmw", r.rmw},
+          {"processes", r.processes},
+          {"backend", r.backend.empty() ? "cpu" : r.backend},
+          {"mode", r.type},
+          {"arrivals", r.timeline},
+          {"monitor", r.monitor_wait},
+          {"rate", rate_text(r)}};
+}
+
+Configuration configuration_of(const PublishedResult& row) {
+  return {{"hardware", row.hardware}, {"mode", row.type}, {"rate", row.stated_rate()}};
+}
+
+std::string configuration_value(const Configuration& c, const std::string& field) {
+  const auto it = std::ranges::find(c, field, &Configuration::value_type::first);
+  return it == c.end() ? "" : it->second;
+}
+
+// "rate 200 Hz vs 10 Hz" for each field both sides state and state differently, except `skip`.
+std::vector<std::string> differences(const Configuration& a, const Configuration& b,
+                                     const std::set<std::string>& skip) {
+  std::vector<std::string> out;
+  for (const auto& [field, value] : a) {
+    const std::string other = configuration_value(b, field);
+    if (skip.contains(field) || value.empty() || other.empty() || value == other) continue;
+    out.push_back(field + " " + value + " vs " + other);
+  }
+  return out;
+}
 
 // A selector of fields, "rmw=fastdds,processes=per-node,rate=30": each field a run must have.
 // Published rows have only a hardware, a type (mode) and the rate their note states; a selector
@@ -520,6 +566,9 @@ Side select(const std::string& selector, const ReportInput& in) {
   side.label = selector;
   const std::string want = lower(selector);
   const std::optional<FieldSelector> by_fields = FieldSelector::parse(selector);
+  if (by_fields) {
+    for (const auto& [key, value] : by_fields->fields) side.selected_fields.insert(key);
+  }
   for (const auto& r : in.runs) {
     if (by_fields) {
       if (by_fields->matches(r)) side.runs.push_back(&r);
@@ -527,15 +576,17 @@ Side select(const std::string& selector, const ReportInput& in) {
     }
     const bool by_file = r.path.string() == selector || r.path.filename().string() == selector ||
                          r.stem().starts_with(selector);
-    const bool by_name = lower(r.hardware) == want || lower(detail::local_series(r)) == want;
-    if (by_file || by_name) side.runs.push_back(&r);
+    const bool by_hardware = lower(r.hardware) == want;
+    if (by_hardware) side.selected_fields.insert("hardware");
+    if (by_file || by_hardware || lower(detail::local_series(r)) == want) side.runs.push_back(&r);
   }
   for (const auto& b : in.published) {
     for (const auto& row : b.results) {
       if (!row.flags.empty()) continue;
+      const bool by_hardware = !by_fields && lower(row.hardware) == want;
+      if (by_hardware) side.selected_fields.insert("hardware");
       const bool selected = by_fields ? by_fields->matches(row)
-                                      : lower(row.hardware) == want ||
-                                            lower(detail::published_series(row.hardware)) == want;
+                                      : by_hardware || lower(detail::published_series(row)) == want;
       if (selected) side.rows.emplace_back(&b, &row);
     }
   }
@@ -615,17 +666,22 @@ detail::Comparison compare(const std::string& a_sel, const std::string& b_sel,
   // A side is one configuration per benchmark: a median over intra and fastdds runs, 30 and
   // 60 Hz, two machines, or local runs and published rows describes none of them. A published
   // row's configuration is its hardware, type and stated rate.
-  for (const auto& [side, selector] : {std::pair{&a, a_sel}, std::pair{&b, b_sel}}) {
+  std::map<std::string, Configuration> configuration_a, configuration_b;
+  for (const auto& [side, selector, configuration] :
+       {std::tuple{&a, a_sel, &configuration_a}, std::tuple{&b, b_sel, &configuration_b}}) {
     for (const auto& id : ids) {
       std::set<std::string> configurations;
       for (const StoredRun* r : side->runs) {
-        if (r->benchmark_id == id && r->valid) configurations.insert(detail::local_series(*r));
+        if (r->benchmark_id != id || !r->valid) continue;
+        configurations.insert(detail::local_series(*r));
+        (*configuration)[id] = configuration_of(*r);
       }
       for (const auto& [bench, row] : side->rows) {
         if (bench->id != id) continue;
         const std::string rate = row->stated_rate();
-        configurations.insert(detail::published_series(row->hardware) + " · " + row->type +
+        configurations.insert(row->hardware + " (RobotPerf) · " + row->type +
                               (rate.empty() ? "" : " · " + rate));
+        (*configuration)[id] = configuration_of(*row);
       }
       if (configurations.size() > 1) {
         const std::string list = joined(configurations, "; ");
@@ -636,7 +692,20 @@ detail::Comparison compare(const std::string& a_sel, const std::string& b_sel,
       }
     }
   }
+  std::set<std::string> selected = a.selected_fields;
+  selected.insert(b.selected_fields.begin(), b.selected_fields.end());
   for (const auto& id : ids) {
+    const Configuration& ca = configuration_a[id];
+    const Configuration& cb = configuration_b[id];
+    if (const auto unlike = differences(ca, cb, selected); !unlike.empty()) {
+      c.notes.push_back("Not alike: " + id + ": besides what was selected, A and B differ in " +
+                        joined(unlike, "; ") +
+                        ", so a difference in the table is not the selected one's alone");
+    }
+    // An offered throughput is the rate the input was fed at: at two rates it is no result.
+    const std::string rate_a = configuration_value(ca, "rate");
+    const std::string rate_b = configuration_value(cb, "rate");
+    const bool unlike_rates = !rate_a.empty() && !rate_b.empty() && rate_a != rate_b;
     for (const auto& m : kCompareMetrics) {
       std::vector<const StoredRun*> runs_a, runs_b;
       const auto va = side_values(a, id, m.name, &runs_a);
@@ -659,7 +728,10 @@ detail::Comparison compare(const std::string& a_sel, const std::string& b_sel,
       std::string judgement;
       std::optional<double> p;
       std::string basis;
-      if (closed(ia) && closed(ib)) {
+      if (std::string(m.name) == "throughput" && unlike_rates) {
+        judgement = "not judged: the rates differ (A " + rate_a + ", B " + rate_b +
+                    "); an offered throughput is the rate the input was fed at, not a result";
+      } else if (closed(ia) && closed(ib)) {
         const bool better = m.smaller_is_better ? mb < ma : mb > ma;
         judgement = ia.upper < ib.lower || ib.upper < ia.lower
                         ? std::string("significant: B ") + (better ? "better" : "worse") +
@@ -753,19 +825,22 @@ Table machines_table(const std::vector<StoredRun>& runs) {
             ? mhz(freq["min_khz"]) + "–" + mhz(freq.value("max_khz", nlohmann::json()))
             : "-";
     std::string governors;
-    for (const auto& g : freq.value("governors", nlohmann::json::array()))
-      governors += (governors.empty() ? "" : ", ") + g.get<std::string>();
+    // The machine is read here, after loading: each value is checked for its type, so that a
+    // file from another writer shows "-" where it differs instead of stopping the report.
+    for (const auto& g : freq.value("governors", nlohmann::json::array())) {
+      if (g.is_string()) governors += (governors.empty() ? "" : ", ") + g.get<std::string>();
+    }
     std::string gpus;
     for (const auto& g : m.value("gpus", nlohmann::json::array())) {
-      std::string name = text_or_dash(g.value("model", nlohmann::json()));
-      if (name == "-")
+      std::string name = text_or_dash(g.is_object() ? g.value("model", nlohmann::json()) : g);
+      if (name == "-" && g.is_object())
         name = text_or_dash(g.value("vendor_name", nlohmann::json())) + " " +
                text_or_dash(g.value("device_id", nlohmann::json()));
       gpus += (gpus.empty() ? "" : ", ") + name;
     }
     const nlohmann::json container = object(m, "container");
     std::string isolation =
-        container.value("detected", false)
+        yes_no(container.value("detected", nlohmann::json())) == "yes"
             ? "container (" + text_or_dash(container.value("runtime", nlohmann::json())) + ")"
             : "no container";
     isolation += m.value("virtual_machine", nlohmann::json()).is_boolean() &&
@@ -819,8 +894,9 @@ std::string local_series(const StoredRun& run) {
   return configuration_series(run) + " · " + rate + " Hz";
 }
 
-std::string published_series(const std::string& hardware) {
-  return hardware + " (RobotPerf)";
+std::string published_series(const PublishedResult& row) {
+  // Black- and grey-box rows are two measurements, as local runs' series keep them apart.
+  return row.hardware + (row.type == "grey" ? " · grey" : "") + " (RobotPerf)";
 }
 
 std::string format_value(double value) {
@@ -1096,7 +1172,7 @@ ReportInput load_report_inputs(const std::vector<fs::path>& paths) {
       }
       std::ifstream f(p);
       const auto j = nlohmann::json::parse(f, nullptr, false);
-      if (j.is_object() && j.value("schema", "") == kPublishedSchema) {
+      if (j.is_object() && j.contains("schema") && j["schema"] == kPublishedSchema) {
         in.published.push_back(published_from_json(j, p));
       } else {
         in.runs.push_back(load_run(p));

@@ -106,8 +106,8 @@ bool is_machine_warning(const std::string& warning);
 std::string local_series(const StoredRun& run);
 // The same without the rate: a peak throughput's series.
 std::string configuration_series(const StoredRun& run);
-// Series label of published rows: "<hardware> (RobotPerf)".
-std::string published_series(const std::string& hardware);
+// Series label of published rows: "<hardware> (RobotPerf)", "<hardware> · grey (RobotPerf)".
+std::string published_series(const PublishedResult& row);
 
 std::string html_escape(const std::string& text);
 std::string format_value(double value);  // 4 significant digits, "-" for NaN

@@ -34,10 +34,13 @@ std::string power_line(const harness::RunResult& r) {
   std::ostringstream out;
   out << "power: " << format_fixed(p.total_average_w, 2) << " W";
   std::string parts;
+  bool whole_machine = false;
   for (const auto& s : p.sources) {
     if (!s.available || !s.info.in_total) continue;
     parts += (parts.empty() ? "" : ", ") + s.info.name + " " + format_fixed(s.average_w, 2) + " W";
+    whole_machine = whole_machine || s.info.whole_machine;
   }
+  if (whole_machine && p.sources.size() > 1) parts += ": the whole machine, the others inside it";
   out << " (" << parts << "), " << format_fixed(p.total_energy_j, 3) << " J";
   if (r.matched > 0) {
     out << ", " << format_fixed(p.total_energy_j * 1e3 / static_cast<double>(r.matched), 3)
@@ -46,6 +49,7 @@ std::string power_line(const harness::RunResult& r) {
   if (r.throughput_hz > 0 && p.total_average_w > 0) {
     out << ", " << format_fixed(r.throughput_hz / p.total_average_w, 3) << " msg/s per W";
   }
+  for (const auto& e : p.estimated) out << "; estimated: " << e;
   for (const auto& s : p.sources) {
     if (!s.available) out << "; " << s.info.name << " unavailable: " << s.unavailable_reason;
   }

@@ -234,7 +234,12 @@ void read_power(const json& power, StoredRun& run) {
     const json& sources = member(power, "sources");
     if (names.empty() && sources.is_array()) {
       for (const auto& s : sources) {
-        if (s.is_object() && s.value("available", true)) {
+        const json& available = member(s, "available");
+        if (!available.is_null() && !available.is_boolean()) {
+          throw ReportError("power.sources[].available is " + available.dump() +
+                            ", expected true or false");
+        }
+        if (s.is_object() && (available.is_null() || available.get<bool>())) {
           const auto name = string_or_empty(s, "name");
           if (!name.empty()) names.push_back(name);
         }
@@ -298,30 +303,20 @@ bool looks_like_result(const fs::path& path) {
   std::ifstream in(path);
   if (!in) return false;
   const json j = json::parse(in, nullptr, /*allow_exceptions=*/false);
-  return j.is_object() && j.value("schema", "") == "robotperf.result/1";
+  return j.is_object() && member(j, "schema") == "robotperf.result/1";
 }
 
-StoredRun load_run(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) throw ReportError(path.string() + ": cannot open the results file");
-  StoredRun run;
-  run.path = path;
-  try {
-    run.json = json::parse(in);
-  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number too large
-    throw ReportError(path.string() + ": not valid JSON (" + e.what() +
-                      "); is it a robotperf results file?");
-  }
-  const json& j = run.json;
-  if (!j.is_object() || j.value("schema", "") != "robotperf.result/1") {
-    throw ReportError(path.string() +
-                      ": not a robotperf results file (expected \"schema\": "
-                      "\"robotperf.result/1\")");
-  }
+namespace {
+
+// Every field of a results file, read into `run`. Throws ReportError (without the file name) for
+// a file that is not a usable result, and json::exception for a field of another type than
+// robotperf writes.
+void read_run(const json& j, StoredRun& run) {
+  if (!j.is_object() || member(j, "schema") != "robotperf.result/1")
+    throw ReportError("not a robotperf results file (expected \"schema\": \"robotperf.result/1\")");
   const json& benchmark = member(j, "benchmark");
   run.benchmark_id = string_or_empty(benchmark, "id");
-  if (run.benchmark_id.empty())
-    throw ReportError(path.string() + ": results file without benchmark.id");
+  if (run.benchmark_id.empty()) throw ReportError("results file without benchmark.id");
   run.benchmark_name = string_or_empty(benchmark, "name");
   run.category = string_or_empty(benchmark, "category");
   run.type = string_or_empty(j, "type");
@@ -334,27 +329,25 @@ StoredRun load_run(const fs::path& path) {
   run.timeline = string_or(config, "timeline", "fixed");
   run.monitor_wait = string_or(config, "monitor_wait", "sleep");
   run.dataset = string_or_empty(member(j, "dataset"), "name");
+  const json& software = member(j, "software");
+  run.robotperf_version = string_or(software, "robotperf_version", "?");
+  run.git_revision = string_or(software, "git_revision", "?");
   const json& machine = member(j, "machine");
   run.hardware = hardware_label(machine);
   run.hardware_category = hardware_category(machine);
   const json& counts = member(j, "counts");
   const json& latency = member(j, "latency_ms");
-  try {
-    run.measured = count_of(counts, "measured", "counts.measured");
-    run.matched = count_of(counts, "matched", "counts.matched");
-    run.lost = count_of(counts, "lost", "counts.lost");
-    run.unobserved = count_of(counts, "unobserved", "counts.unobserved");
-    run.latency = latency_summary(member(latency, "from_scheduled"));
-  } catch (const ReportError& e) {
-    throw ReportError(path.string() + ": " + e.what());
-  }
+  run.measured = count_of(counts, "measured", "counts.measured");
+  run.matched = count_of(counts, "matched", "counts.matched");
+  run.lost = count_of(counts, "lost", "counts.lost");
+  run.unobserved = count_of(counts, "unobserved", "counts.unobserved");
+  run.latency = latency_summary(member(latency, "from_scheduled"));
   run.loss_percent = number_or_nan(counts, "loss_percent");
   run.histogram = log_histogram_from_json(member(latency, "from_scheduled_histogram"));
   const json& throughput = member(j, "throughput");
   run.throughput_hz = number_or_nan(throughput, "output_hz");
   run.offered_hz = number_or_nan(throughput, "offered_hz");
-  if (throughput.is_object() && throughput.contains("kind") && throughput["kind"] == "peak")
-    run.throughput_kind = "peak";
+  if (member(throughput, "kind") == "peak") run.throughput_kind = "peak";
   read_power(member(j, "power"), run);
   const json& validity = member(j, "validity");
   run.valid = member(validity, "valid").is_boolean() && validity["valid"].get<bool>();
@@ -367,6 +360,30 @@ StoredRun load_run(const fs::path& path) {
   for (auto& why : impossible_figures(run)) {
     run.valid = false;
     run.invalid_reasons.push_back("impossible figure: " + why);
+  }
+}
+
+}  // namespace
+
+StoredRun load_run(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw ReportError(path.string() + ": cannot open the results file");
+  StoredRun run;
+  run.path = path;
+  try {
+    run.json = json::parse(in);
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number too large
+    throw ReportError(path.string() + ": not valid JSON (" + e.what() +
+                      "); is it a robotperf results file?");
+  }
+  // The one place where what is wrong with a file's content becomes the line naming the file:
+  // callers skip it, never the folder it is in.
+  try {
+    read_run(run.json, run);
+  } catch (const ReportError& e) {
+    throw ReportError(path.string() + ": " + e.what());
+  } catch (const json::exception& e) {
+    throw ReportError(path.string() + ": a field is not what robotperf writes (" + e.what() + ")");
   }
   fs::path csv = path;
   csv.replace_extension(".latencies.csv");

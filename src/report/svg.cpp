@@ -1,6 +1,7 @@
 // Inline SVG plots for the HTML report: radar charts and latency CDFs.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -100,7 +101,7 @@ std::string bars_svg(const Radar& r) {
       const double v = r.values[si][a];
       if (!std::isfinite(v)) continue;
       const char* colour = kPalette[r.colours[si] % 12];
-      const double w = axis_max > 0 && v > 0 ? kBarsWidth * v / axis_max : 0;
+      const double w = axis_max > 0 && v > 0 ? kBarsWidth * (v / axis_max) : 0;
       s << "<rect class=\"bar\" x=\"" << kBarsLeft << "\" y=\"" << num(y) << "\" width=\""
         << num(std::max(w, 1.0)) << "\" height=\"" << kBar << "\" fill=\"" << colour
         << "\" fill-opacity=\"" << (r.series_local[si] ? "0.85" : "0.35") << "\" stroke=\""
@@ -176,7 +177,7 @@ std::string radar_svg(const Radar& r) {
                    (r.smaller_is_better ? "smaller is better" : "larger is better"))
     << "</text>\n";
   // Each axis has its own scale so that benchmarks of different magnitude share the plot: linear
-  // from 0 to the axis maximum, or, when the values of an axis span more than a factor of 20
+  // from 0 to the axis maximum, or, when the values of that axis span more than a factor of 20
   // (published data has outliers), logarithmic from the axis minimum (at 10 % of the radius) to
   // the maximum. Either way a smaller value sits nearer the centre. The scale is written at the
   // end of each axis.
@@ -190,14 +191,14 @@ std::string radar_svg(const Radar& r) {
       any = true;
     }
   }
-  bool logarithmic = false;
-  for (std::size_t a = 0; a < n; ++a) logarithmic = logarithmic || axis_max[a] > 20 * axis_min[a];
+  // Decided per axis: a 10 % difference on one axis must not be drawn as 10x because another
+  // axis needed a logarithmic scale.
+  auto logarithmic = [&](std::size_t a) { return axis_max[a] > 20 * axis_min[a]; };
   // An axis with one value has nothing to scale it against: its point sits mid-way, not on the
   // rim where it would read as the worst, and the axis says "only".
   auto fraction = [&](std::size_t a, double v) {
     if (on_axis[a] == 1) return 0.5;
-    if (!logarithmic) return v / axis_max[a];
-    if (axis_max[a] <= axis_min[a]) return 1.0;
+    if (!logarithmic(a)) return v / axis_max[a];
     return 0.1 + 0.9 * std::log(v / axis_min[a]) / std::log(axis_max[a] / axis_min[a]);
   };
   auto angle = [&](std::size_t a) {
@@ -229,10 +230,9 @@ std::string radar_svg(const Radar& r) {
       << anchor << "\">" << html_escape(r.axes[a]) << " (" << r.unit << ")</text>\n";
     s << "<text class=\"axis-scale\" x=\"" << num(lx) << "\" y=\"" << num(ly + 13)
       << "\" text-anchor=\"" << anchor << "\">"
-      << (on_axis[a] == 1 ? "only " + format_value(axis_max[a])
-          : logarithmic && axis_max[a] > axis_min[a]
-              ? format_value(axis_min[a]) + "–" + format_value(axis_max[a]) + " (log)"
-              : "max " + format_value(axis_max[a]))
+      << (on_axis[a] == 1  ? "only " + format_value(axis_max[a])
+          : logarithmic(a) ? format_value(axis_min[a]) + "–" + format_value(axis_max[a]) + " (log)"
+                           : "max " + format_value(axis_max[a]))
       << "</text>\n";
   }
   // One polygon per series; a series without a value on some axis is a gap there: lines join only
@@ -295,7 +295,7 @@ std::string hops_svg(const std::vector<StoredRun::Hop>& hops, const std::string&
   if (hops.empty() || !(x_max > 0)) return "";
   const double top = 40;
   const double height = top + kRow * static_cast<double>(hops.size()) + 40;
-  auto px = [&](double v) { return kBarsLeft + kBarsWidth * v / x_max; };
+  auto px = [&](double v) { return kBarsLeft + kBarsWidth * (v / x_max); };
   std::ostringstream s;
   s << "<svg class=\"hops\" data-run=\"" << html_escape(run)
     << "\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kWidth << "\" height=\"" << num(height)
@@ -346,14 +346,20 @@ std::string distribution_svg(const std::vector<Distribution>& curves, const std:
   constexpr double kWidth = 760, kLeft = 60, kRight = 20, kTop = 30, kPlotHeight = 240;
   const double legend_height = 18.0 * static_cast<double>(curves.size()) + 10;
   const double height = kTop + kPlotHeight + 45 + legend_height;
+  // The axis ends a little past the largest latency, held well inside double's range so that
+  // the margin and the rounding up to a whole step stay finite.
   double x_max = 0;
   for (const auto& c : curves) {
-    for (const auto& [x, y] : c.points) x_max = std::max(x_max, x);
+    for (const auto& [x, y] : c.points) {
+      if (std::isfinite(x)) x_max = std::max(x_max, x);
+    }
   }
+  x_max = std::min(x_max, std::numeric_limits<double>::max() / 4);
   const double step = nice_step(x_max, 8);
   x_max = std::max(step, std::ceil(x_max * 1.02 / step) * step);
+  const int ticks = static_cast<int>(std::lround(x_max / step));
   const double plot_width = kWidth - kLeft - kRight;
-  auto px = [&](double x) { return kLeft + plot_width * x / x_max; };
+  auto px = [&](double x) { return kLeft + plot_width * (x / x_max); };  // no overflow
   auto py = [&](double y) { return kTop + kPlotHeight * (1 - y); };
   std::ostringstream s;
   s << "<svg class=\"cdf\" data-benchmark=\"" << html_escape(id)
@@ -369,7 +375,8 @@ std::string distribution_svg(const std::vector<Distribution>& curves, const std:
     s << "<text class=\"tick\" x=\"" << num(kLeft - 6) << "\" y=\"" << num(py(y) + 4)
       << "\" text-anchor=\"end\">" << y << "</text>\n";
   }
-  for (double x = 0; x <= x_max + step / 2; x += step) {
+  for (int k = 0; k <= ticks; ++k) {
+    const double x = k * step;
     s << "<line x1=\"" << num(px(x)) << "\" x2=\"" << num(px(x)) << "\" y1=\"" << num(py(0))
       << "\" y2=\"" << num(py(0) + 5) << "\" stroke=\"#666\"/>\n";
     s << "<text class=\"tick\" x=\"" << num(px(x)) << "\" y=\"" << num(py(0) + 18)

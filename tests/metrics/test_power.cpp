@@ -155,6 +155,48 @@ TEST(EnergyIntegrator, ReadingsThatAreNotPhysicalAreFailedReadings) {
   EXPECT_NEAR(r.energy_j, 40.0, 1e-9);
 }
 
+// A gauge that fails its first `failing` readings, then reads `watts`.
+class LateGauge : public PowerSource {
+ public:
+  LateGauge(std::string name, int failing, double watts)
+      : PowerSource({std::move(name), "hwmon", "fixture", "", PowerSourceKind::kPowerGauge}),
+        failing_(failing),
+        watts_(watts) {}
+  std::optional<double> read(std::string& error) override {
+    if (failing_-- > 0) {
+      error = "EIO";
+      return std::nullopt;
+    }
+    return watts_;
+  }
+
+ private:
+  int failing_;
+  double watts_;
+};
+
+// A source read for part of the window stands for the whole window at its average, and the total
+// says which source that is: energy per message is over the window the messages were counted in.
+TEST(PowerMeter, ASourceReadForPartOfTheWindowIsScaledToItAndNamed) {
+  std::vector<std::unique_ptr<PowerSource>> sources;
+  sources.push_back(std::make_unique<LateGauge>("cpu", 0, 50.0));
+  sources.push_back(std::make_unique<LateGauge>("gpu", 6, 100.0));
+  PowerMeter meter(std::move(sources), {});
+  for (int i = 0; i <= 10; ++i) meter.sample_round(i * kSecond / 10);
+  const PowerReport r = meter.report();
+  ASSERT_TRUE(r.available);
+  EXPECT_NEAR(r.window_s, 1.0, 1e-12);
+  EXPECT_NEAR(source(r, "gpu").span_s, 0.4, 1e-12);
+  EXPECT_NEAR(r.total_average_w, 150.0, 1e-9);
+  EXPECT_NEAR(r.total_energy_j, 150.0, 1e-9);  // not 50 J + 40 J
+  ASSERT_EQ(r.estimated.size(), 1u);
+  EXPECT_EQ(r.estimated[0],
+            "gpu read for 0.400 s of the 1.000 s window (its average taken for the rest)");
+  const auto j = to_json(r, 100, 30.0);
+  EXPECT_NEAR(j["total"]["energy_per_message_mj"].get<double>(), 1500.0, 1e-6);
+  EXPECT_EQ(j["total"]["estimated"].size(), 1u);
+}
+
 // A discrete GPU gauge (power1_average), an ACPI meter (power1_input with a label), an energy
 // counter, and a temperature-only sensor that is not a power source.
 void write_hwmon(const FixtureRoot& root, int gpu_w, int acpi_w, uint64_t energy_uj) {
@@ -210,13 +252,46 @@ TEST(Hwmon, GaugesAreIntegratedAndCountersDifferenced) {
   EXPECT_NEAR(source(r, "hwmon:amdgpu/power1").average_w, 65.0 / 3, 1e-9);
   EXPECT_NEAR(source(r, "hwmon:power_meter/system").average_w, 50.0, 1e-9);
   EXPECT_NEAR(source(r, "hwmon:amd_energy/Esocket0").energy_j, 9.0, 1e-9);
-  EXPECT_NEAR(r.total_energy_j, 65.0 + 150.0 + 9.0, 1e-9);
+  // The ACPI meter reads the whole machine: the GPU and the CPU are inside it.
+  EXPECT_NEAR(r.total_energy_j, 150.0, 1e-9);
+}
+
+// A meter of the whole machine (ACPI power_meter, or --power-meter) beside RAPL would count the
+// package twice: the total is the meter alone, the others listed with their own readings.
+TEST(Hwmon, AWholeMachineMeterIsTheTotalAloneBesideRapl) {
+  FixtureRoot root;
+  write_rapl(root, 1'000'000, 500'000, 100, 1'000'000);
+  write_hwmon(root, 10, 50, 7'000'000);
+  auto found = discover_power_sources(options_for(root, {"rapl", "hwmon"}));
+  std::vector<std::string> counted;
+  for (const auto& s : found.sources) {
+    if (s->info().in_total) counted.push_back(s->info().name);
+  }
+  EXPECT_EQ(counted, std::vector<std::string>{"hwmon:power_meter/system"});
+  ASSERT_FALSE(found.notes.empty());
+  EXPECT_NE(found.notes.back().find("total: hwmon:power_meter/system measures the whole machine, "
+                                    "so the total is it alone; rapl:package-0, "
+                                    "rapl:package-0/dram, rapl:package-1, hwmon:amdgpu/power1 are "
+                                    "part of it"),
+            std::string::npos)
+      << found.notes.back();
+  PowerMeter meter(std::move(found.sources), found.notes);
+  meter.sample_round(0);
+  write_rapl(root, 3'000'000, 1'500'000, 500'100, 4'000'000);
+  meter.sample_round(kSecond);
+  const PowerReport r = meter.report();
+  ASSERT_TRUE(r.available);
+  EXPECT_NEAR(r.total_average_w, 50.0, 1e-9);
+  EXPECT_NEAR(source(r, "rapl:package-0").average_w, 2.0, 1e-9);  // still listed
+  EXPECT_EQ(to_json(r, 0, 0)["total"]["sources"],
+            nlohmann::json::array({"hwmon:power_meter/system"}));
 }
 
 TEST(Hwmon, CpuEnergyDriverIsLeftOutOfTheTotalWhenRaplCountsIt) {
   FixtureRoot root;
   write_rapl(root, 1, 1, 1, 1);
   write_hwmon(root, 10, 50, 7);
+  fs::remove_all(root.path() / "sys/class/hwmon/hwmon2");  // no whole-machine meter
   const auto found = discover_power_sources(options_for(root, {}));
   for (const auto& s : found.sources) {
     if (s->info().name == "hwmon:amd_energy/Esocket0") {

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -82,6 +83,36 @@ TEST_F(AtomicFileTest, OverwritesExistingFileAndKeepsItsMode) {
   EXPECT_EQ(fs::status(path).permissions(),
             fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
   EXPECT_EQ(entries(directory_), std::set<std::string>{"results.json"});
+}
+
+// Results are never overwritten: a new file refuses a taken name, and a run's set of files whose
+// name is taken (two runs started in the same millisecond) goes under the next free one, whole.
+TEST_F(AtomicFileTest, ResultsWrittenUnderOneNameTwiceKeepBoth) {
+  const fs::path json = directory_ / "a1-intra-20261127T073315239Z.json";
+  EXPECT_TRUE(write_new_file_atomically(json, "first\n"));
+  EXPECT_FALSE(write_new_file_atomically(json, "second\n"));
+  EXPECT_EQ(read(json), "first\n");
+  EXPECT_EQ(entries(directory_), std::set<std::string>{json.filename().string()});
+
+  const fs::path base = directory_ / "a1-fastdds-20261127T073315239Z";
+  const std::map<std::string, std::string> one = {{".json", "{\"run\": 1}"},
+                                                  {".latencies.csv", "1"}};
+  const std::map<std::string, std::string> two = {{".json", "{\"run\": 2}"},
+                                                  {".latencies.csv", "2"}};
+  EXPECT_EQ(write_new_files(base, one), base);
+  const fs::path second = base.string() + "-2";
+  EXPECT_EQ(write_new_files(base, two), second);
+  EXPECT_EQ(read(base.string() + ".json"), "{\"run\": 1}");
+  EXPECT_EQ(read(base.string() + ".latencies.csv"), "1");
+  EXPECT_EQ(read(second.string() + ".json"), "{\"run\": 2}");
+  EXPECT_EQ(read(second.string() + ".latencies.csv"), "2");
+  // A stray file holding one name of a set moves the whole set on, leaving no part behind.
+  write_file_atomically(base.string() + "-3.latencies.csv", "stray");
+  const fs::path fourth = base.string() + "-4";
+  EXPECT_EQ(write_new_files(base, one), fourth);
+  EXPECT_FALSE(fs::exists(base.string() + "-3.json"));
+  EXPECT_EQ(read(base.string() + "-3.latencies.csv"), "stray");
+  EXPECT_EQ(entries(directory_).size(), 8u);  // no temporary file left
 }
 
 TEST_F(AtomicFileTest, NewFileModeFollowsUmask) {

@@ -235,6 +235,31 @@ TEST_F(BenchmarkYaml, ExportGivesRobotPerfEntries) {
   }
 }
 
+// An exported row states its input rate as imported rows are read (so a re-imported row is
+// matched on its rate), and its throughput says whether it is offered-bounded or a peak.
+TEST_F(BenchmarkYaml, ExportedNotesReadBackTheirRateAndSayWhichThroughputItIs) {
+  StoredRun run = load_run(testing::write_sample(dir_, {}));
+  run.rate_hz = 200;
+  auto entries = export_entries(run, {});
+  ASSERT_EQ(entries.size(), 2u);
+  for (auto& e : entries) {
+    check_published(e);
+    ASSERT_TRUE(e.note_rate_hz) << e.note;
+    EXPECT_EQ(e.note_rate_hz->first, 200.0) << e.note;
+    EXPECT_EQ(e.note_rate_hz->second, 200.0) << e.note;
+  }
+  EXPECT_NE(entries[1].note.find("offered-bounded"), std::string::npos) << entries[1].note;
+
+  run.throughput_kind = "peak";
+  entries = export_entries(run, {});
+  ASSERT_EQ(entries.size(), 2u);
+  EXPECT_EQ(entries[1].metric, "throughput");
+  EXPECT_NE(entries[1].note.find("peak"), std::string::npos) << entries[1].note;
+  EXPECT_EQ(entries[1].note.find("offered-bounded"), std::string::npos) << entries[1].note;
+  check_published(entries[1]);
+  EXPECT_FALSE(entries[1].note_rate_hz) << "a peak search was fed no one rate";
+}
+
 // export -> merge -> import preserves every field, and merging leaves every existing byte.
 void expect_round_trip(const std::string& original, const std::vector<PublishedResult>& entries,
                        const fs::path& file, std::size_t dash_col) {

@@ -2,11 +2,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <regex>
 #include <sstream>
 
 #include "../shared_data.hpp"
+#include "report_model.hpp"
 #include "robotperf/report/histogram.hpp"
 #include "robotperf/report/readme.hpp"
 #include "robotperf/report/report.hpp"
@@ -133,8 +135,71 @@ TEST(Histogram, CountsEverySampleAndReadsBack) {
   ASSERT_TRUE(back);
   EXPECT_EQ(back->counts, h.counts);
   EXPECT_EQ(back->first_index, h.first_index);
-  EXPECT_FALSE(log_histogram_from_json(nlohmann::json::object()));
+  EXPECT_FALSE(log_histogram_from_json(nlohmann::json()));  // older files have none
+  EXPECT_THROW(log_histogram_from_json(nlohmann::json::object()), nlohmann::json::exception);
   EXPECT_THROW(make_log_histogram(samples, 0), std::invalid_argument);
+}
+
+// Bins whose edges are beyond double's range would put infinities on the report's axis: such a
+// histogram is refused where it is read.
+TEST(Histogram, EdgesBeyondDoublesRangeAreRefused) {
+  for (const int first_index : {20000, -20000}) {
+    const nlohmann::json j = {{"scale", "log10"},
+                              {"bins_per_decade", 1},
+                              {"first_index", first_index},
+                              {"counts", {1, 2}}};
+    try {
+      log_histogram_from_json(j);
+      ADD_FAILURE() << "first_index " << first_index << " was read";
+    } catch (const ReportError& e) {
+      EXPECT_NE(std::string(e.what()).find("beyond the range of a double"), std::string::npos)
+          << e.what();
+    }
+  }
+}
+
+// An axis up to the end of double's range still has a handful of ticks, found in bounded time.
+TEST(Distribution, AnAxisNearDoublesLimitIsDrawnInBoundedTime) {
+  detail::Distribution d;
+  d.label = "huge";
+  d.source = "stored percentiles";
+  d.points = {{1.0, 0.5}, {1.7e308, 1.0}};
+  d.p50 = 1.0;
+  d.p99 = 1.7e308;
+  const std::string svg = detail::distribution_svg({d}, "a1");
+  EXPECT_LE(count(svg, "<line x1="), 20u);
+  EXPECT_EQ(svg.find("inf"), std::string::npos) << svg;
+  EXPECT_EQ(svg.find("nan"), std::string::npos);
+}
+
+// Each radar axis is logarithmic only when its own values span more than 20x: a 10 % difference
+// on another axis stays a 10 % difference, near the rim, not stretched from 0.1 to 1 of it.
+TEST(Radar, EachAxisChoosesItsOwnScale) {
+  detail::Radar r;
+  r.category = "perception";
+  r.metric = "latency";
+  r.unit = "ms";
+  r.axes = {"a1", "a2", "a3"};
+  r.series = {"X", "Y"};
+  r.series_local = {true, true};
+  r.colours = {0, 1};
+  r.values = {{10, 1, 100}, {11, 100, 105}};
+  const std::string svg = detail::radar_svg(r);
+  // The centre is (240, 200), the radius 120; a1 points straight up.
+  const std::regex circle("<circle cx=\"([0-9.]+)\" cy=\"([0-9.]+)\"");
+  std::vector<std::pair<double, double>> points;
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), circle); it != std::sregex_iterator();
+       ++it) {
+    points.emplace_back(std::stod((*it)[1]), std::stod((*it)[2]));
+  }
+  ASSERT_EQ(points.size(), 6u);
+  for (const std::size_t a1 : {0u, 3u}) {
+    const double radius = std::hypot(points[a1].first - 240, points[a1].second - 200);
+    EXPECT_GE(radius, 0.9 * 120 - 0.1) << "a1 point " << a1;
+  }
+  EXPECT_NE(svg.find("1.00–100.0 (log)"), std::string::npos) << svg;  // a2 spans 100x
+  EXPECT_NE(svg.find("max 11.00"), std::string::npos);
+  EXPECT_NE(svg.find("max 105.0"), std::string::npos);
 }
 
 TEST_F(Report, ResultsJsonCarriesTheHistogram) {
@@ -564,6 +629,83 @@ TEST_F(Report, CompareRateSelectsAControlRunByItsLoopRateToo) {
   EXPECT_THROW(render_markdown(input, options), ReportError);
 }
 
+// A comparison of two unlike configurations names every difference beside the one selected, and
+// makes no judgement on offered throughputs fed at different rates: each is its input rate.
+TEST(Comparison, NamesTheDifferencesBesideTheSelectedOneAndJudgesNoOfferedRate) {
+  ReportInput input;
+  for (int i = 0; i < 3; ++i) {
+    StoredRun intra;
+    intra.path = "d6-intra-" + std::to_string(i) + ".json";
+    intra.benchmark_id = "d6";
+    intra.category = "manipulation";
+    intra.type = "black";
+    intra.hardware = "AMD Ryzen 7 5800X";
+    intra.rmw = "intra";
+    intra.processes = "single";
+    intra.rate_hz = 200;
+    intra.valid = true;
+    intra.latency.count = 1000;
+    intra.latency.max = 2.0 + 0.1 * i;
+    intra.throughput_hz = 200.0 + 0.01 * i;
+    StoredRun fastdds = intra;
+    fastdds.path = "d6-fastdds-" + std::to_string(i) + ".json";
+    fastdds.type = "grey";
+    fastdds.rmw = "fastdds";
+    fastdds.processes = "per-node";
+    fastdds.rate_hz = 10;
+    fastdds.throughput_hz = 10.0 + 0.01 * i;
+    input.runs.push_back(intra);
+    input.runs.push_back(fastdds);
+  }
+  const detail::Comparison c = detail::build_comparison(input, "rmw=intra", "rmw=fastdds");
+  const std::string notes = joined(c.notes, "\n");
+  EXPECT_NE(notes.find("Not alike: d6: "), std::string::npos) << notes;
+  for (const char* difference :
+       {"rate 200 Hz vs 10 Hz", "mode black vs grey", "processes single vs per-node"})
+    EXPECT_NE(notes.find(difference), std::string::npos) << difference << "\n" << notes;
+  EXPECT_EQ(notes.find("rmw intra vs fastdds"), std::string::npos) << "the selected difference";
+  bool throughput = false;
+  for (const auto& row : c.table.rows) {
+    if (row[1] != "throughput (fps)") continue;
+    throughput = true;
+    EXPECT_EQ(row.back().find("significant"), std::string::npos) << row.back();
+  }
+  EXPECT_TRUE(throughput);
+}
+
+// Published black-box and grey-box rows of one hardware are two measurements: two series and two
+// rows of the published table, as local runs keep them apart, never one median of both.
+TEST(Published, BlackAndGreyRowsAreSeparateSeries) {
+  ReportInput input;
+  PublishedBenchmark b;
+  b.id = "a5";
+  b.category = "perception";
+  for (const auto& [type, value] : {std::pair{"black", 10.0}, {"grey", 40.0}}) {
+    PublishedResult row;
+    row.type = type;
+    row.metric = "latency";
+    row.metric_unit = "ms";
+    row.hardware = "Intel i7-8700K";
+    row.value = value;
+    b.results.push_back(row);
+  }
+  input.published.push_back(b);
+  const detail::Model model = detail::build_model(input, {});
+  const detail::Radar& latency = model.radars.at("perception").at(0);
+  ASSERT_EQ(latency.metric, "latency");
+  ASSERT_EQ(latency.series.size(), 2u);
+  EXPECT_EQ(latency.series[0], "Intel i7-8700K (RobotPerf)");
+  EXPECT_EQ(latency.series[1], "Intel i7-8700K · grey (RobotPerf)");
+  EXPECT_EQ(latency.values[0][0], 10.0);
+  EXPECT_EQ(latency.values[1][0], 40.0);
+  const detail::Table& table = model.benchmarks.at("perception").at(0).published;
+  ASSERT_EQ(table.rows.size(), 2u);
+  EXPECT_EQ(table.rows[0][1], "black");
+  EXPECT_EQ(table.rows[0][4], "10.00");
+  EXPECT_EQ(table.rows[1][1], "grey");
+  EXPECT_EQ(table.rows[1][4], "40.00");
+}
+
 // A results file from elsewhere may hold part of what ours do: a CPU frequency range without its
 // top is shown open, not read past the end of the object.
 TEST_F(Report, AFrequencyRangeWithoutItsMaximumIsShownOpen) {
@@ -710,6 +852,56 @@ TEST_F(Report, AFileWithAWrongTypedFieldIsSkippedNamingTheField) {
   EXPECT_NE(scan.skipped[0].find("counts.measured is \"many\""), std::string::npos)
       << scan.skipped[0];
   EXPECT_EQ(load_report_inputs({dir_}).runs.size(), 4u);
+}
+
+// A field of another type than robotperf writes, wherever it is, skips that file with one line
+// naming it; the folder's other runs are read, and what is read after loading (the machine
+// table) shows what it cannot read as "-" instead of stopping the report.
+TEST_F(Report, MalformedFilesAreSkippedOneLineEachAndTheReportRenders) {
+  testing::write_sample(dir_, {});
+  int64_t start = testing::SampleRun{}.start_unix_ns;
+  auto variant = [&](const std::string& name, auto edit) {
+    testing::SampleRun s;
+    s.start_unix_ns = (start += 1'000'000'000);
+    const auto written = testing::write_sample(dir_, s, false, 20);
+    auto j = nlohmann::json::parse(read_text(written));
+    edit(j);
+    fs::remove(written);
+    std::ofstream(dir_ / name) << j.dump();
+  };
+  variant("scale.json", [](auto& j) { j["latency_ms"]["from_scheduled_histogram"]["scale"] = 5; });
+  variant("schema.json", [](auto& j) { j["schema"] = 1; });
+  variant("available.json", [](auto& j) {
+    j["power"]["total"].erase("sources");  // the power note then names the sources read
+    j["power"]["sources"][0]["available"] = "yes";
+  });
+  variant("edges.json", [](auto& j) {
+    j["latency_ms"]["from_scheduled_histogram"]["bins_per_decade"] = 1;
+    j["latency_ms"]["from_scheduled_histogram"]["first_index"] = 20000;
+  });
+  variant("gpus.json", [](auto& j) {
+    j["machine"]["gpus"] = nlohmann::json::array({"RTX 3060", nlohmann::json::array({7})});
+    j["machine"]["cpu"]["frequency"]["governors"] = {1};
+    j["machine"]["container"] = {{"detected", "no"}};
+  });
+  const RunScan scan = scan_results(dir_);
+  EXPECT_EQ(scan.runs.size(), 2u);  // the valid one, and the one whose machine is unusual
+  ASSERT_EQ(scan.skipped.size(), 4u);
+  const std::vector<std::string> skipped_files = {"available.json", "edges.json", "scale.json",
+                                                  "schema.json"};
+  for (std::size_t i = 0; i < skipped_files.size(); ++i) {
+    EXPECT_NE(scan.skipped[i].find(skipped_files[i] + ": "), std::string::npos) << scan.skipped[i];
+    EXPECT_EQ(scan.skipped[i].find('\n'), std::string::npos) << scan.skipped[i];
+  }
+  EXPECT_NE(scan.skipped[0].find("power.sources[].available is \"yes\", expected true or false"),
+            std::string::npos)
+      << scan.skipped[0];
+  const auto input = load_report_inputs({dir_});
+  EXPECT_EQ(input.runs.size(), 2u);
+  EXPECT_EQ(input.skipped.size(), 4u);
+  const std::string md = render_markdown(input, {});
+  EXPECT_NE(md.find("| RTX 3060, - |"), std::string::npos) << md.substr(md.find("## Machines"));
+  EXPECT_NE(render_html(input, {}).find("skipped "), std::string::npos);
 }
 
 TEST_F(Report, ImpossibleFiguresMakeALocalRunInvalid) {

@@ -34,8 +34,12 @@ struct PowerSourceInfo {
   // Energy counters that wrap: the counter goes back to 0 after this many joules; 0 = never.
   double wrap_j = 0;
   // Part of the total. False for sources that a counted source already includes (RAPL core and
-  // uncore inside their package, Jetson sub-rails when the module input rail exists, ...).
+  // uncore inside their package, Jetson sub-rails when the module input rail exists, every other
+  // source when a whole-machine meter is counted, ...).
   bool in_total = true;
+  // Measures the whole machine's input power (an ACPI power meter, an external meter): every
+  // other source is part of what it reads.
+  bool whole_machine = false;
 };
 
 // What a device's source reports beside its power (NVML: a GPU): how busy it was and how much of
@@ -63,6 +67,8 @@ class PowerSource {
   PowerSource& operator=(const PowerSource&) = delete;
 
   const PowerSourceInfo& info() const { return info_; }
+  // Discovery leaves a source out of the total once it has found a meter that includes it.
+  void leave_out_of_total() { info_.in_total = false; }
   // Joules (energy counter) or watts (power gauge); nullopt with `error` set when it failed.
   virtual std::optional<double> read(std::string& error) = 0;
   // The device's load now, for sources that are a device's; nullopt otherwise or when it failed.
@@ -113,8 +119,13 @@ struct PowerReport {
   bool available = false;
   std::string unavailable_reason;  // when !available: why (never a number)
   std::vector<SourceEnergy> sources;
-  double total_energy_j = 0;  // over the available in_total sources
+  // Over the available in_total sources: each source's average power × the window, so that a
+  // source with failed readings at the start or end still stands for the whole window.
+  double total_energy_j = 0;
   double total_average_w = 0;
+  // The counted sources whose good readings covered less than the window, each with how much:
+  // their share of the total energy is an estimate from their average.
+  std::vector<std::string> estimated;
   double window_s = 0;  // the sampler's window: first to last sampling round
   double period_s = 0;
   std::size_t rounds = 0;    // sampling rounds taken

@@ -31,7 +31,9 @@ LogHistogram make_log_histogram(std::span<const double> samples, int bins_per_de
 // {"scale": "log10", "bins_per_decade", "first_index", "first_edge", "counts", "nonpositive"}
 nlohmann::json to_json(const LogHistogram& histogram);
 
-// std::nullopt when `j` is not such an object (absent, null, or from another writer).
+// std::nullopt when `j` is null (older files have no histogram). Throws ReportError for another
+// scale, bins_per_decade < 1 or edges beyond double's range, and nlohmann::json::exception for a
+// missing or wrong-typed field.
 std::optional<LogHistogram> log_histogram_from_json(const nlohmann::json& j);
 
 }  // namespace robotperf::report

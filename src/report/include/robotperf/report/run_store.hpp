@@ -42,6 +42,7 @@ struct StoredRun {
   std::string monitor_wait = "sleep";  // "sleep" or "spin"
   double rate_hz = kNoValue;
   std::string dataset;
+  std::string robotperf_version = "?", git_revision = "?";  // of the robotperf that ran it
   std::string hardware;           // short platform name: CPU model, plus GPU models
   std::string hardware_category;  // RobotPerf category guessed from the machine
   std::size_t measured = 0, matched = 0, lost = 0;
@@ -101,7 +102,8 @@ struct StoredRun {
 };
 
 // Reads one results file; throws ReportError naming the file when it is not a readable
-// robotperf.result/1 file.
+// robotperf.result/1 file, or when a field has another type than robotperf writes. Everything
+// read from the file afterwards comes from the StoredRun's fields, or is type-checked.
 StoredRun load_run(const std::filesystem::path& path);
 
 // True when `path` holds a JSON object with "schema": "robotperf.result/1" (cheap check).
