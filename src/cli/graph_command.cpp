@@ -104,18 +104,25 @@ int ros_graph(const GraphOptions& options, std::ostream& out) {
   auto transport = rmw::make_transport(options.rmw, t);
   // Discovery has no end: what is listed is what announced itself within the window.
   std::this_thread::sleep_for(std::chrono::duration<double>(options.listen_s));
-  const json graph = graph_json(transport->peers());
+  print_graph(transport->peers(), options, t.domain_id, out);
+  return 0;
+}
+
+void print_graph(const std::vector<rmw::PeerParticipant>& peers, const GraphOptions& options,
+                 int domain_id, std::ostream& out) {
+  const json graph = graph_json(peers);
   if (options.json) {
     json doc = graph;
-    doc["domain_id"] = t.domain_id;
+    doc["domain_id"] = domain_id;
     doc["rmw"] = options.rmw;
     doc["listened_s"] = options.listen_s;
-    out << doc.dump(2) << "\n";
-    return 0;
+    // Names come from any program on the domain: bytes that are not UTF-8 are replaced.
+    out << doc.dump(2, ' ', false, json::error_handler_t::replace) << "\n";
+    return;
   }
   int node_count = 0;
   for (const auto& p : graph["participants"]) node_count += static_cast<int>(p["nodes"].size());
-  out << "ROS 2 graph on domain " << t.domain_id << " (" << options.rmw << ", listened "
+  out << "ROS 2 graph on domain " << domain_id << " (" << options.rmw << ", listened "
       << options.listen_s
       << " s): " << plural(static_cast<int>(graph["participants"].size()), "participant") << ", "
       << plural(node_count, "node") << ", "
@@ -146,7 +153,6 @@ int ros_graph(const GraphOptions& options, std::ostream& out) {
         << "\"\n";
     for (const auto& e : p["endpoints_of_no_node"]) print_endpoint(out, e, "    ");
   }
-  return 0;
 }
 
 }  // namespace robotperf::cli

@@ -5,6 +5,9 @@
 #include <optional>
 #include <ostream>
 #include <string>
+#include <vector>
+
+#include "robotperf/rmw/transport.hpp"
 
 namespace robotperf::cli {
 
@@ -16,5 +19,9 @@ struct GraphOptions {
 };
 
 int ros_graph(const GraphOptions& options, std::ostream& out);
+
+// What ros_graph prints of the participants it found on `domain_id`.
+void print_graph(const std::vector<rmw::PeerParticipant>& peers, const GraphOptions& options,
+                 int domain_id, std::ostream& out);
 
 }  // namespace robotperf::cli

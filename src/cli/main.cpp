@@ -87,6 +87,20 @@ CLI::Validator number_check(bool zero_allowed) {
 const CLI::Validator kPositive = number_check(false);
 const CLI::Validator kNonNegative = number_check(true);
 
+// A number option bounded on both sides. CLI11's Range lets "nan" through (every comparison with
+// it is false).
+CLI::Validator number_between(double low, double high) {
+  std::ostringstream wanted;
+  wanted << "a number from " << low << " to " << high;
+  return CLI::Validator(
+      [low, high, wanted = wanted.str()](std::string& text) -> std::string {
+        const auto value = decimal<double>(text);
+        if (value && *value >= low && *value <= high) return "";
+        return "must be " + wanted + " (got " + text + ")";
+      },
+      "NUMBER");
+}
+
 // A whole-number option's check. CLI11 2.1.2 converts integers with strtoll/strtoull in base 0
 // (0x10 is 16, 010 is 8, and -1 an unsigned 2^64-1), so only decimal digits pass, and they are
 // rewritten without leading zeros, which that conversion then reads as decimal: options take it
@@ -148,7 +162,7 @@ void add_power_options(CLI::App* command, PowerArgs& a, bool with_period) {
     command
         ->add_option("--power-period", a.period_s,
                      "seconds between power readings in the measured window (default 0.1)")
-        ->check(CLI::Range(0.0005, 60.0));
+        ->check(number_between(0.0005, 60.0));
   }
   command->add_option("--power-meter", a.meter,
                       "external power meter: a shell command that prints watts, run once per "
@@ -338,7 +352,7 @@ struct RunArgs {
   std::vector<std::string> remaps;
   double rate_scale = 1.0;
   std::string arrival = "fixed";
-  uint64_t arrival_seed = 1;
+  std::optional<uint64_t> arrival_seed;
   std::string monitor_wait = "sleep";
   // --find-peak and its bounds.
   bool find_peak = false;
@@ -419,44 +433,33 @@ class InterruptHandling {
   struct sigaction previous_term_ {};
 };
 
-// Writes a run's files (<base><suffix> for each) atomically. When the output folder refuses them
-// (a full disk, say), they go to a folder of their own under the temporary directory instead and
-// stderr says where: a measured run is not thrown away. Returns the base the files were written
-// under, or nothing when they could be written nowhere (stderr says why).
+// Writes a run's files (<base><suffix> for each) atomically, never over another run's: a base
+// taken (two runs started in the same millisecond) becomes <base>-2, ... (report::write_new_files).
+// When the output folder refuses them (a full disk, say), they go to a folder of their own under
+// the temporary directory instead and stderr says where: a measured run is not thrown away.
+// Returns the base the files were written under, or nothing when they could be written nowhere
+// (stderr says why).
 std::optional<fs::path> write_result_files(const fs::path& base,
                                            const std::map<std::string, std::string>& files) {
-  std::vector<fs::path> written;
-  const auto write_all = [&](const fs::path& to) {
-    for (const auto& [suffix, content] : files) {
-      report::write_file_atomically(to.string() + suffix, content);
-      written.push_back(to.string() + suffix);
-    }
-  };
   try {
-    write_all(base);
-    return base;
+    return report::write_new_files(base, files);
   } catch (const std::exception& e) {
     std::cerr << "robotperf: " << e.what() << "\n";
-  }
-  // All of a run's files stay together: those that did fit go with the others.
-  for (const auto& file : written) {
-    std::error_code ignored;
-    fs::remove(file, ignored);
   }
   const fs::path elsewhere = fs::temp_directory_path() /
                              ("robotperf-unsaved-" + std::to_string(getpid())) / base.filename();
   try {
     fs::create_directories(elsewhere.parent_path());
-    write_all(elsewhere);
+    const fs::path kept = report::write_new_files(elsewhere, files);
+    std::cerr << "robotperf: the results were written to " << elsewhere.parent_path().string()
+              << " instead; move them where they belong once " << base.parent_path().string()
+              << " has room\n";
+    return kept;
   } catch (const std::exception& e) {
     std::cerr << "robotperf: the results could not be kept anywhere (" << e.what()
               << "): the summary above is all there is\n";
     return std::nullopt;
   }
-  std::cerr << "robotperf: the results were written to " << elsewhere.parent_path().string()
-            << " instead; move them where they belong once " << base.parent_path().string()
-            << " has room\n";
-  return elsewhere;
 }
 
 // "--remap from:=to" and "--window START:END" (seconds, either may be empty).
@@ -508,6 +511,10 @@ WrittenRun write_run(const harness::BenchmarkSpec& spec, const RunArgs& a,
                      harness::RunResult& result) {
   fs::path base = fs::path(a.output) / report::result_basename(result);
   if (result.grey) {
+    // The trace folder takes the first name no other run has; the files follow it.
+    for (int n = 2; fs::exists(base.string() + ".trace") || fs::exists(base.string() + ".json");
+         ++n)
+      base = fs::path(a.output) / (report::result_basename(result) + "-" + std::to_string(n));
     const fs::path trace = base.string() + ".trace";
     fs::rename(result.trace_dir, trace);
     result.trace_dir = trace;
@@ -520,7 +527,7 @@ WrittenRun write_run(const harness::BenchmarkSpec& spec, const RunArgs& a,
       {".json", json_text(report::result_to_json(result, machine), 2) + "\n"}};
   if (a.csv) files[".latencies.csv"] = report::latencies_csv(result);
   const auto kept = write_result_files(base, files);
-  const bool moved = kept && *kept != base;
+  const bool moved = kept && kept->parent_path() != base.parent_path();
   if (kept) base = *kept;
   if (kept)
     std::cout << "results: " << base.string() << ".json" << (a.csv ? " (+ .latencies.csv)" : "")
@@ -622,6 +629,12 @@ int run_series(const harness::BenchmarkSpec& spec, const RunArgs& a, const harne
 // (report::sweep_table).
 int run_sweep(harness::BenchmarkSpec spec, const RunArgs& a, const harness::RunOptions& o) {
   const auto [parameter, values] = report::parse_sweep(*a.sweep);
+  // Every value is checked before the first run: a typo in the last would waste the others.
+  for (const std::string& value : values) {
+    auto workload = spec.workload;
+    workload[parameter] = value;
+    harness::check_workload(spec.dataset, workload);
+  }
   report::Sweep sweep(spec.id, parameter);
   const SeveralRuns runs = run_several(
       spec, a, o, values.size(),
@@ -711,7 +724,13 @@ int run(const Roots& roots, const RunArgs& a) {
     spec.workload[assignment.substr(0, equals)] = assignment.substr(equals + 1);
   }
   harness::RunOptions o;
-  if (a.dataset) o.bag = bag_selection(a);
+  if (a.dataset) {
+    // A bag replaces the generated dataset, so its workload parameters would change nothing.
+    if (!a.workload.empty() || a.sweep)
+      throw std::invalid_argument(std::string(a.sweep ? "--sweep" : "--workload") +
+                                  " sets the generated dataset's parameters: not with --dataset");
+    o.bag = bag_selection(a);
+  }
   if (a.rate_scale != 1.0 && a.rate != "bag")
     throw std::invalid_argument("--rate-scale only applies with --rate bag");
   if (a.rate == "bag") {
@@ -723,7 +742,9 @@ int run(const Roots& roots, const RunArgs& a) {
       throw std::invalid_argument("--rate " + *a.rate + ": expected a rate in Hz or 'bag'");
   }
   o.arrival = harness::ArrivalPattern::parse(a.arrival);
-  o.arrival.seed = a.arrival_seed;
+  if (a.arrival_seed && o.arrival.kind != harness::ArrivalPattern::Kind::kPoisson)
+    throw std::invalid_argument("--arrival-seed only applies with --arrival poisson");
+  if (a.arrival_seed) o.arrival.seed = *a.arrival_seed;
   o.monitor_wait = a.monitor_wait == "spin" ? graph::WaitMode::kSpin : graph::WaitMode::kSleep;
   o.update_rate_hz = a.update_rate;
   // Said here, where the build is known: the kernels of a build without CUDA do not name it.
@@ -1158,7 +1179,7 @@ int main(int argc, char** argv) {
                    "each headline figure with its 95 % interval and the run-to-run spread")
       ->transform(whole_number(1, 10000));
   run_cmd->add_option("--repeat-pause", ra.repeat_pause, "with --repeat: seconds between runs")
-      ->check(CLI::Range(0.0, 3600.0));
+      ->check(number_between(0.0, 3600.0));
   run_cmd->add_option("--workload", ra.workload,
                       "KEY=VALUE: a workload parameter of the benchmark's dataset, over "
                       "benchmark.yaml's (repeatable; `list datasets` names them)");
@@ -1228,7 +1249,7 @@ int main(int argc, char** argv) {
       ->add_option("--connect-timeout", ra.connect_timeout_s,
                    "seconds the graph may take to start and connect before the run is refused "
                    "(default 15)")
-      ->check(CLI::Range(0.1, 3600.0));
+      ->check(number_between(0.1, 3600.0));
   run_cmd
       ->add_option("--security", ra.security,
                    "DDS Security: every participant presents the /robotperf enclave of this "
@@ -1442,7 +1463,7 @@ int main(int argc, char** argv) {
   graph_cmd
       ->add_option("--listen", graph_options.listen_s,
                    "seconds to listen to discovery before listing (default 3)")
-      ->check(CLI::Range(0.1, 600.0));
+      ->check(number_between(0.1, 600.0));
   graph_cmd->add_flag("--json", graph_options.json, "print JSON");
 
   std::string keystore_dir;

@@ -239,12 +239,12 @@ Dataset load_bag_dataset(const BagSelection& selection, const std::vector<Bounda
   const int64_t span = d.frame_times_ns.back() - d.frame_times_ns.front();
   d.rate_hz =
       span > 0 ? static_cast<double>(frames.size() - 1) * 1e9 / static_cast<double>(span) : 0.0;
+  // The frames' times from the first are part of the data: --rate bag replays them, and bags
+  // with the same messages at other times are other workloads.
   plugin::Fnv1a64 hash;
-  for (const auto& s : d.streams) {
-    hash.add_string(s.name).add_string(s.type->ros_type);
-    for (const auto& msg : s.messages)
-      hash.add_bytes(static_cast<const msgs::SerializedMessage*>(msg.get())->cdr);
-  }
+  hash.add_string(content_hash(d.streams));
+  for (const int64_t t : d.frame_times_ns)
+    hash.add_u64(static_cast<uint64_t>(t - d.frame_times_ns.front()));
   d.hash = hash.hex_digest();
   return d;
 }

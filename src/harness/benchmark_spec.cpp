@@ -171,7 +171,12 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   const YAML::Node inputs = root["inputs"];
   if (!inputs.IsDefined() || !inputs.IsSequence() || inputs.size() == 0)
     file.fail(root, "'inputs' must be a non-empty list");
-  for (const auto& n : inputs) spec.inputs.push_back(boundary_topic(file, n, true));
+  std::set<std::string> input_topics;
+  for (const auto& n : inputs) {
+    spec.inputs.push_back(boundary_topic(file, n, true));
+    if (!input_topics.insert(spec.inputs.back().topic).second)
+      file.fail(n["topic"], "two inputs are published on " + spec.inputs.back().topic);
+  }
   if (!root["output"].IsDefined()) file.fail(root, "missing 'output'");
   spec.output = boundary_topic(file, root["output"], false);
 
@@ -252,6 +257,13 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
       }
     }
     spec.nodes.push_back(std::move(node));
+  }
+  // The Monitor would time the Playback's own messages. Only a graph of nothing (no node, no
+  // process) does that on purpose: it measures the harness itself.
+  if (input_topics.contains(spec.output.topic) && (!spec.nodes.empty() || spec.external())) {
+    file.fail(root["output"]["topic"], "the output topic " + spec.output.topic +
+                                           " is also an input: the Monitor would time the "
+                                           "Playback's own messages, not the graph's outputs");
   }
 
   if (const YAML::Node f = root["functional"]; f.IsDefined()) {
@@ -395,10 +407,13 @@ std::vector<BenchmarkSpec> discover_benchmarks(const std::vector<fs::path>& root
     // Packages lie two levels down (<root>/<category>/<package>); one given a level too high up
     // would otherwise be skipped without a word.
     if (fs::exists(root / "graph.yaml")) {
-      throw BenchmarkError(root.string() +
-                           " is a benchmark package, not a folder of them: give the folder that "
-                           "holds its category folder (<folder>/<category>/" +
-                           root.filename().string() + ")");
+      const std::string why = root.string() +
+                              " is a benchmark package, not a folder of them: give the folder "
+                              "that holds its category folder (<folder>/<category>/" +
+                              root.filename().string() + ")";
+      if (!broken) throw BenchmarkError(why);
+      broken->push_back(why);
+      continue;
     }
     for (const auto& category : fs::directory_iterator(root)) {
       if (!category.is_directory()) continue;

@@ -42,11 +42,14 @@ void check_generated(const plugin::DatasetEntry& entry, const std::vector<Datase
   if (streams.front().messages.empty()) throw std::runtime_error(who + " generated no frame");
 }
 
+std::string workload_owner(const plugin::DatasetInfo& info) {
+  return "dataset " + info.name + " workload";
+}
+
 Dataset generate(const plugin::DatasetEntry& entry,
                  const std::map<std::string, std::string>& workload) {
   const auto& info = entry.info;
-  const plugin::Parameters parameters(info.workload, workload,
-                                      "dataset " + info.name + " workload");
+  const plugin::Parameters parameters(info.workload, workload, workload_owner(info));
   Dataset d;
   d.streams = entry.generate(parameters);
   check_generated(entry, d.streams);
@@ -57,6 +60,15 @@ Dataset generate(const plugin::DatasetEntry& entry,
   d.parameters = parameters.effective();
   d.hash = content_hash(d.streams);
   return d;
+}
+
+const plugin::DatasetEntry& find_dataset(const std::string& name) {
+  const plugin::DatasetEntry* entry = plugin::registry().find_dataset(name);
+  if (entry == nullptr) {
+    throw std::invalid_argument("unknown dataset '" + name + "' (registered: " +
+                                plugin::names_of(plugin::registry().datasets()) + ")");
+  }
+  return *entry;
 }
 
 }  // namespace
@@ -75,12 +87,13 @@ std::string content_hash(const std::vector<DatasetStream>& streams) {
   return hash.hex_digest();
 }
 
+void check_workload(const std::string& name, const std::map<std::string, std::string>& workload) {
+  const auto& info = find_dataset(name).info;
+  plugin::Parameters(info.workload, workload, workload_owner(info));
+}
+
 Dataset load_dataset(const std::string& name, const std::map<std::string, std::string>& workload) {
-  const plugin::DatasetEntry* entry = plugin::registry().find_dataset(name);
-  if (entry == nullptr) {
-    throw std::invalid_argument("unknown dataset '" + name + "' (registered: " +
-                                plugin::names_of(plugin::registry().datasets()) + ")");
-  }
+  const plugin::DatasetEntry* entry = &find_dataset(name);
   // Generated datasets are immutable and take seconds to render: a process that runs a benchmark
   // again (tests, sweeps) reuses them.
   static std::mutex mutex;

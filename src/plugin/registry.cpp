@@ -1,11 +1,16 @@
 #include "robotperf/plugin/registry.hpp"
 
 #include <dlfcn.h>
+#include <link.h>
 
 #include <algorithm>
+#include <bit>
 #include <cctype>
+#include <cstring>
 #include <deque>
+#include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "robotperf/msgs/known_types.hpp"
@@ -15,6 +20,57 @@ namespace robotperf::plugin {
 namespace {
 
 namespace fs = std::filesystem;
+
+// Reads `size` bytes at `offset` of the file; false when the file is shorter.
+bool read_at(std::ifstream& in, uint64_t offset, void* out, std::size_t size) {
+  in.clear();
+  in.seekg(static_cast<std::streamoff>(offset));
+  in.read(static_cast<char*>(out), static_cast<std::streamsize>(size));
+  return in && static_cast<std::size_t>(in.gcount()) == size;
+}
+
+// The API version ROBOTPERF_PLUGIN recorded in the file's ROBOTPERF_PLUGIN_API_SECTION, read
+// without loading it. Nullopt when there is none to read (not an ELF file of this machine's
+// class and byte order, a malformed one, or a plug-in built before the section was recorded):
+// then dlopen and the version function decide.
+std::optional<int> recorded_api_version(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  ElfW(Ehdr) header{};
+  if (!read_at(in, 0, &header, sizeof header)) return std::nullopt;
+  const unsigned char native_class = sizeof(void*) == 8 ? ELFCLASS64 : ELFCLASS32;
+  const unsigned char native_data =
+      std::endian::native == std::endian::little ? ELFDATA2LSB : ELFDATA2MSB;
+  if (std::memcmp(header.e_ident, ELFMAG, SELFMAG) != 0 ||
+      header.e_ident[EI_CLASS] != native_class || header.e_ident[EI_DATA] != native_data ||
+      header.e_shentsize != sizeof(ElfW(Shdr)) || header.e_shstrndx >= header.e_shnum) {
+    return std::nullopt;
+  }
+  std::vector<ElfW(Shdr)> sections(header.e_shnum);
+  if (!read_at(in, header.e_shoff, sections.data(), sections.size() * sizeof(ElfW(Shdr))))
+    return std::nullopt;
+  const ElfW(Shdr)& names = sections[header.e_shstrndx];
+  constexpr uint64_t kMostNameBytes = 1 << 20;
+  if (names.sh_size > kMostNameBytes) return std::nullopt;
+  std::string name_table(names.sh_size, '\0');
+  if (!read_at(in, names.sh_offset, name_table.data(), name_table.size())) return std::nullopt;
+  for (const auto& section : sections) {
+    if (section.sh_name >= name_table.size() ||
+        std::strcmp(name_table.c_str() + section.sh_name, ROBOTPERF_PLUGIN_API_SECTION) != 0)
+      continue;
+    int version = 0;
+    if (section.sh_type != SHT_PROGBITS || section.sh_size != sizeof version ||
+        !read_at(in, section.sh_offset, &version, sizeof version))
+      return std::nullopt;
+    return version;
+  }
+  return std::nullopt;
+}
+
+std::string version_error(const std::string& where, int version) {
+  return where + ": built against plug-in API version " + std::to_string(version) +
+         ", this robotperf has version " + std::to_string(ROBOTPERF_PLUGIN_API_VERSION) +
+         ": rebuild it against this robotperf";
+}
 
 bool known_type(const std::string& ros_type) {
   return msgs::with_message_type(ros_type, []<class T>() {});
@@ -234,6 +290,10 @@ void Registry::load(const fs::path& file) {
     if (std::ranges::count(state_->plugins, path)) return;
   }
   const std::string where = "plug-in " + path.string();
+  // Before loading: a plug-in of another version may need symbols this robotperf lacks (dlopen
+  // would fail on one) or run code at load.
+  if (const auto v = recorded_api_version(path); v && *v != ROBOTPERF_PLUGIN_API_VERSION)
+    throw PluginError(version_error(where, *v));
   // RTLD_LOCAL: two plug-ins may define the same internal names without clashing.
   void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (handle == nullptr) {
@@ -255,10 +315,7 @@ void Registry::load(const fs::path& file) {
   }
   if (const int v = version(); v != ROBOTPERF_PLUGIN_API_VERSION) {
     dlclose(handle);
-    throw PluginError(where + ": built against plug-in API version " + std::to_string(v) +
-                      ", this robotperf has version " +
-                      std::to_string(ROBOTPERF_PLUGIN_API_VERSION) +
-                      ": rebuild it against this robotperf");
+    throw PluginError(version_error(where, v));
   }
   // The library stays loaded for the life of the process: its factories and the code of the
   // nodes they build live in it.

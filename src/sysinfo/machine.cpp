@@ -1,5 +1,7 @@
 #include "robotperf/sysinfo/machine.hpp"
 
+#include <sys/utsname.h>
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -236,9 +238,10 @@ void collect_cpu(const fs::path& root, MachineInfo& info) {
       cpuinfo_text ? parse_cpuinfo(*cpuinfo_text) : std::vector<CpuinfoBlock>{};
 
   info.cpu_model = first_value(cpuinfo, "model name");
+  // The cores before the SoC line: Raspberry Pi kernels say "BCM2835" on every Pi.
+  if (!info.cpu_model) info.cpu_model = decode_arm_cores(cpuinfo);
   if (!info.cpu_model) info.cpu_model = first_value(cpuinfo, "Hardware");
   if (!info.cpu_model) info.cpu_model = first_value(cpuinfo, "Model");
-  if (!info.cpu_model) info.cpu_model = decode_arm_cores(cpuinfo);
 
   std::vector<unsigned> online;
   if (const auto list = read_value(cpu_root / "online")) {
@@ -509,6 +512,11 @@ MachineInfo collect_machine_info(const fs::path& root) {
   MachineInfo info;
   info.hostname = read_value(root / "proc/sys/kernel/hostname");
   info.architecture = read_value(root / "proc/sys/kernel/arch");
+  // Kernels before 6.1 have no kernel.arch; uname says the same of the machine it runs on.
+  if (!info.architecture && root == fs::path("/")) {
+    utsname name{};
+    if (uname(&name) == 0) info.architecture = name.machine;
+  }
   info.os_name = read_os_name(root);
   info.board_model = read_value(root / "proc/device-tree/model");
   if (!info.board_model) info.board_model = read_value(root / "sys/firmware/devicetree/base/model");

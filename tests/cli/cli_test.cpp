@@ -801,6 +801,29 @@ TEST_F(Cli, WholeNumberOptionsTakeDecimalDigitsOnly) {
       << o.out;
 }
 
+// Options that would change nothing, or a series with a bad value anywhere in it, are refused
+// before the first run: one line, exit 2, nothing written.
+TEST_F(Cli, OptionsThatWouldChangeNothingOrFailLaterAreRefusedFirst) {
+  const std::string out = " --quiet --count 20 --output " + (out_ / "r").string();
+  const std::string bag = shared_bag("mcap_talker");
+  for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
+           {"run n1 --sweep payload_bytes=64,abc" + out, "payload_bytes"},
+           {"run n1 --sweep no_such=1,2" + out, "no_such"},
+           {"run a5 --dataset " + bag + " --workload seed=2" + out,
+            "--workload sets the generated dataset's parameters: not with --dataset"},
+           {"run n1 --dataset " + bag + " --sweep payload_bytes=64,128" + out,
+            "--sweep sets the generated dataset's parameters: not with --dataset"},
+           {"run a5 --arrival-seed 5" + out, "--arrival-seed only applies with --arrival poisson"},
+           {"run a5 --repeat 2 --repeat-pause nan" + out, "--repeat-pause: must be a number"},
+           {"graph --listen nan --domain " + domain(), "--listen: must be a number"}}) {
+    const Outcome o = robotperf_cli(args);
+    EXPECT_EQ(o.exit_code, 2) << args << ": " << o.out;
+    EXPECT_EQ(std::ranges::count(o.out, '\n'), 1) << args << ": " << o.out;
+    EXPECT_NE(o.out.find(message), std::string::npos) << args << ": " << o.out;
+    EXPECT_FALSE(fs::exists(out_ / "r") && !fs::is_empty(out_ / "r")) << args;
+  }
+}
+
 TEST_F(Cli, WithoutACommandItListsTheCommands) {
   const Outcome o = robotperf_cli("");
   EXPECT_EQ(o.exit_code, 2);

@@ -47,10 +47,12 @@ bag::TopicInfo topic_info(const std::string& name, const std::string& type) {
 // perception/image as a bag, like `dataset generate` writes it, with the
 // topics renamed by `rename` and frame k recorded at `time_of(k)`.
 // Frames in `corrupt_images` get an image whose payload is cut in half (its header still reads).
+// Frame k is recorded `record_delay_of(k)` after its stamp.
 void write_camera_bag(const fs::path& dir, bag::Storage storage,
                       const std::map<std::string, std::string>& rename = {},
                       const std::function<int64_t(std::size_t)>& time_of = {},
-                      const std::set<std::size_t>& corrupt_images = {}) {
+                      const std::set<std::size_t>& corrupt_images = {},
+                      const std::function<int64_t(std::size_t)>& record_delay_of = {}) {
   const Dataset d = load_dataset("perception/image");
   bag::WriteOptions w;
   w.storage = storage;
@@ -72,7 +74,8 @@ void write_camera_bag(const fs::path& dir, bag::Storage storage,
       s.type->serialize(msg.get(), buffer);
       if (s.type->ros_type == "sensor_msgs/msg/Image" && corrupt_images.contains(k))
         buffer.resize(buffer.size() / 2);
-      writer.write(ids[i], t + int64_t(i) * 100'000, buffer);
+      const int64_t delay = record_delay_of ? record_delay_of(k) : 0;
+      writer.write(ids[i], t + delay + int64_t(i) * 100'000, buffer);
     }
   }
   writer.close();
@@ -139,6 +142,20 @@ TEST(BagPlayback, LoaderGroupsImageAndCameraInfoIntoFrames) {
   // A window of the first second: frames at 0 .. 0.99 s.
   const Dataset w = load_bag_dataset({tmp.path() / "bag", {}, 0.0, 0.99}, a1().inputs);
   EXPECT_EQ(w.frames, 30u);
+}
+
+TEST(BagPlayback, DatasetHashCoversTheRecordedTimeline) {
+  TempDir tmp("hash");
+  write_camera_bag(tmp.path() / "even", bag::Storage::kSqlite3);
+  write_camera_bag(tmp.path() / "even-again", bag::Storage::kSqlite3);
+  // The same messages, the second half recorded 50 ms late: --rate bag replays another workload.
+  write_camera_bag(tmp.path() / "late", bag::Storage::kSqlite3, {}, {}, {},
+                   [](std::size_t k) { return k >= 34 ? 50'000'000 : 0; });
+  const auto hash = [&](const char* name) {
+    return load_bag_dataset({tmp.path() / name, {}, {}, {}}, a1().inputs).hash;
+  };
+  EXPECT_EQ(hash("even"), hash("even-again"));
+  EXPECT_NE(hash("even"), hash("late"));
 }
 
 TEST(BagPlayback, A1OnIntraLoopsWithUniqueIdsAndNoLoss) {

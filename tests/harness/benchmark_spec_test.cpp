@@ -136,6 +136,25 @@ TEST(BenchmarkSpec, MissingListsAndOddKeysAreOneLineErrors) {
   EXPECT_NE(err.find(r.dir().string()), std::string::npos) << err;
 }
 
+// An output that is an input would time the Playback's own messages as the graph's; only a graph
+// of no node does that on purpose (the harness's own overhead). Two inputs on one topic are one
+// stream too many.
+TEST(BenchmarkSpec, OutputAndInputsAreDistinctTopicsUnlessTheGraphIsEmpty) {
+  std::string looped = relay_graph("");
+  looped.replace(looped.find("output: {topic: /out"), 20, "output: {topic: /in");
+  TestPackage p("looped", looped);
+  const std::string err = error_of(p.dir());
+  EXPECT_NE(err.find("the output topic /in is also an input"), std::string::npos) << err;
+  TestPackage empty("empty_graph", relay_graph("none"));
+  EXPECT_EQ(error_of(empty.dir()), "");
+  std::string twice = relay_graph("");
+  twice.replace(twice.find("output:"), 0,
+                "  - {topic: /in, type: sensor_msgs/msg/CameraInfo, stream: camera_info}\n");
+  TestPackage q("twice", twice);
+  EXPECT_NE(error_of(q.dir()).find("two inputs are published on /in"), std::string::npos)
+      << error_of(q.dir());
+}
+
 // A package one level too high up (<root>/<package>, with no category folder), or a package given
 // as the benchmarks folder itself, is named with the layout it needs instead of being skipped.
 TEST(BenchmarkSpec, PackageOutsideACategoryFolderIsNamed) {
@@ -163,6 +182,14 @@ TEST(BenchmarkSpec, PackageOutsideACategoryFolderIsNamed) {
               std::string::npos)
         << e.what();
   }
+  // `list` lists the packages of the other folders and says which folder it skipped.
+  broken.clear();
+  EXPECT_EQ(
+      discover_benchmarks(std::vector<std::filesystem::path>{p.dir(), p.root()}, &broken).size(),
+      1u);
+  ASSERT_EQ(broken.size(), 1u);
+  EXPECT_NE(broken[0].find("is a benchmark package, not a folder of them"), std::string::npos);
+  EXPECT_THROW(find_benchmark(p.dir(), "t1"), BenchmarkError);
   EXPECT_EQ(find_benchmark(p.root(), "t1").dir, p.dir());
 }
 

@@ -75,6 +75,16 @@ TEST(PluginLoader, AnotherApiVersionIsRefused) {
   EXPECT_NE(e.find("rebuild it against this robotperf"), std::string::npos) << e;
 }
 
+// Its version is read from the file: loading it would fail on the missing symbol, and its code
+// would run.
+TEST(PluginLoader, AnOlderApiVersionIsRefusedBeforeItIsLoaded) {
+  const std::string e = load_error(OLD_API_PLUGIN);
+  EXPECT_NE(e.find("built against plug-in API version " +
+                   std::to_string(ROBOTPERF_PLUGIN_API_VERSION - 1) + ", this robotperf has"),
+            std::string::npos)
+      << e;
+}
+
 TEST(PluginLoader, ANameTakenByABuiltInCategoryIsRefused) {
   const std::string e = load_error(DUPLICATE_PLUGIN);
   EXPECT_NE(e.find(fs::canonical(DUPLICATE_PLUGIN).string()), std::string::npos) << e;

@@ -262,12 +262,24 @@ TEST(CollectMachineInfo, UnknownArmPartLeavesModelUnknown) {
   EXPECT_EQ(info.logical_cpus, 4u);
 }
 
-TEST(CollectMachineInfo, HardwareLineNamesOlderArmSoCs) {
+// Raspberry Pi kernels say "Hardware: BCM2835" on every Pi: the cores say what the CPU is, and the
+// SoC line names only a CPU whose cores are not known.
+TEST(CollectMachineInfo, ArmCoresComeBeforeTheHardwareLine) {
+  const std::string pi =
+      "Hardware\t: BCM2835\nRevision\t: c03114\nModel\t\t: Raspberry Pi 4 Model B\n";
   FixtureRoot root;
-  root.write("proc/cpuinfo",
-             arm_cpuinfo("0xd08", 0, 4) +
-                 "Hardware\t: BCM2835\nRevision\t: c03114\nModel\t\t: Raspberry Pi 4 Model B\n");
-  EXPECT_EQ(collect_machine_info(root.path()).cpu_model, "BCM2835");
+  root.write("proc/cpuinfo", arm_cpuinfo("0xd08", 0, 4) + pi);
+  EXPECT_EQ(collect_machine_info(root.path()).cpu_model, "ARM Cortex-A72");
+  FixtureRoot unknown_cores;
+  unknown_cores.write("proc/cpuinfo", arm_cpuinfo("0xfff", 0, 4) + pi);
+  EXPECT_EQ(collect_machine_info(unknown_cores.path()).cpu_model, "BCM2835");
+}
+
+// kernel.arch is from Linux 6.1 on; before, the architecture is uname's.
+TEST(CollectMachineInfo, ArchitectureIsTheRunningKernelsMachine) {
+  utsname name{};
+  ASSERT_EQ(uname(&name), 0);
+  EXPECT_EQ(collect_machine_info("/").architecture, std::string(name.machine));
 }
 
 TEST(CollectMachineInfo, SysfsTopologyWinsAndSmtActiveIsRead) {

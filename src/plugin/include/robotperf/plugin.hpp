@@ -28,8 +28,12 @@
 
 // Defines the plug-in's entry points: the API version it was built against, which robotperf
 // checks before anything else, and the registration function, whose body follows the macro.
+// The version is also recorded in the file's section ROBOTPERF_PLUGIN_API_SECTION, which robotperf
+// reads before loading it: a plug-in of another version may need symbols this robotperf lacks.
 #define ROBOTPERF_PLUGIN(registrar)                                                      \
   static void robotperf_plugin_register_body(::robotperf::plugin::Registrar& registrar); \
+  extern "C" __attribute__((used, section(ROBOTPERF_PLUGIN_API_SECTION)))                \
+  const int robotperf_plugin_api_version_recorded = ROBOTPERF_PLUGIN_API_VERSION;        \
   extern "C" __attribute__((visibility("default"))) int robotperf_plugin_api_version() { \
     return ROBOTPERF_PLUGIN_API_VERSION;                                                 \
   }                                                                                      \

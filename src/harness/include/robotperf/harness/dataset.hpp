@@ -25,6 +25,10 @@ using plugin::DatasetStream;
 Dataset load_dataset(const std::string& name,
                      const std::map<std::string, std::string>& workload = {});
 
+// Checks `workload` as load_dataset reads it (the parameters' names and types) without generating
+// anything, so that a series of runs can refuse a bad value before the first run.
+void check_workload(const std::string& name, const std::map<std::string, std::string>& workload);
+
 // The content hash of the streams' CDR bytes: identifies the data as it goes on the wire, whatever
 // produced it.
 std::string content_hash(const std::vector<DatasetStream>& streams);

@@ -7,3 +7,7 @@
 // 2: EvaluatorInfo::on_arrival; 3: PortInfo::device_resident,
 // KernelInfo::device_resident_backends, KernelConfig::device_resident_outputs.
 #define ROBOTPERF_PLUGIN_API_VERSION 3
+
+// The ELF section in which ROBOTPERF_PLUGIN records the version (an int), read from the file
+// before it is loaded.
+#define ROBOTPERF_PLUGIN_API_SECTION "robotperf_plugin_api"
