@@ -864,6 +864,12 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
       r.nodes[i].counters = c->counters();
     }
   }
+  for (auto& n : r.nodes) {
+    const auto node = std::ranges::find(spec.nodes, n.name, &NodeSpec::name);
+    if (node == spec.nodes.end()) continue;
+    n.origin = kernel_of(*node).origin;
+    n.parameters = kernel_config(*node, spec.workload).parameters.effective();
+  }
   r.completed = r.records.size() == r.count && r.errors.empty();
   summarise(r, spec, tally);
   r.repeats = tally.repeats;

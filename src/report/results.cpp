@@ -252,10 +252,9 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
   using nlohmann::json;
   json nodes = json::array();
   for (const auto& n : r.nodes) {
-    json node = {{"name", n.name},
-                 {"kernel", n.kernel},
-                 {"backend", n.backend},
-                 {"exit_status", n.exit_status}};
+    json node = {
+        {"name", n.name},     {"kernel", n.kernel},         {"backend", n.backend},
+        {"origin", n.origin}, {"parameters", n.parameters}, {"exit_status", n.exit_status}};
     if (n.pid > 0) node["pid"] = n.pid;
     node["cpu_user_s"] = n.cpu_user_s >= 0 ? json(n.cpu_user_s) : json(nullptr);
     node["cpu_system_s"] = n.cpu_system_s >= 0 ? json(n.cpu_system_s) : json(nullptr);

@@ -83,6 +83,14 @@ TEST(BlackBox, DroppingEveryFourthMessageIsCountedExactly) {
   EXPECT_FALSE(r.valid);
   ASSERT_FALSE(r.invalid_reasons.empty());
   EXPECT_NE(r.invalid_reasons[0].find("25.00 % lost"), std::string::npos);
+  // Two runs that did different work must not look alike: the node says what it computed with.
+  ASSERT_EQ(r.nodes.size(), 1u);
+  EXPECT_EQ(r.nodes[0].origin, "built-in util");
+  EXPECT_EQ(r.nodes[0].parameters,
+            (std::map<std::string, std::string>{{"type", "sensor_msgs/msg/Image"},
+                                                {"delay_ms", "0"},
+                                                {"drop_every", "4"},
+                                                {"fail_after", "0"}}));
 }
 
 TEST(BlackBox, WarmupIsExcludedAndIdsStayUniqueWhenTheDatasetLoops) {

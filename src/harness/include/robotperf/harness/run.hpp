@@ -147,6 +147,10 @@ struct NodeReport {
   // The device of a backend other than the host CPU (plugin::DeviceNode), for nodes in the
   // runner's process.
   std::optional<plugin::DeviceInfo> device;
+  // What it computed with: its parameters as its kernel read them (graph.yaml's, the declared
+  // defaults filled in), and where its kernel came from ("built-in perception", a plug-in file).
+  std::map<std::string, std::string> parameters{};
+  std::string origin{};
 };
 
 // A process of an external graph (graph.yaml `launch:`), as it ended.
