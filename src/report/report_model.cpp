@@ -467,7 +467,8 @@ Configuration configuration_of(const StoredRun& r) {
           {"mode", r.type},
           {"arrivals", r.timeline},
           {"monitor", r.monitor_wait},
-          {"rate", rate_text(r)}};
+          {"rate", rate_text(r)},
+          {"node settings", r.node_settings}};
 }
 
 Configuration configuration_of(const PublishedResult& row) {
@@ -673,7 +674,9 @@ detail::Comparison compare(const std::string& a_sel, const std::string& b_sel,
       std::set<std::string> configurations;
       for (const StoredRun* r : side->runs) {
         if (r->benchmark_id != id || !r->valid) continue;
-        configurations.insert(detail::local_series(*r));
+        // Runs whose nodes computed with other parameters or kernels did other work.
+        configurations.insert(detail::local_series(*r) +
+                              (r->node_settings.empty() ? "" : " · " + r->node_settings));
         (*configuration)[id] = configuration_of(*r);
       }
       for (const auto& [bench, row] : side->rows) {

@@ -123,6 +123,18 @@ void read_also_measured(const json& j, StoredRun& run) {
         }
       }
     }
+    std::vector<std::string> settings;
+    for (const auto& node : nodes) {
+      const json& parameters = member(node, "parameters");
+      if (!parameters.is_object()) continue;
+      std::vector<std::string> values;
+      for (const auto& [name, value] : parameters.items())
+        values.push_back(name + "=" +
+                         (value.is_string() ? value.get<std::string>() : value.dump()));
+      settings.push_back(string_or_empty(node, "name") + " (" + string_or_empty(node, "origin") +
+                         "): " + joined(values, ", "));
+    }
+    run.node_settings = joined(settings, "; ");
     std::set<std::string> backends;
     for (const auto& node : nodes) {
       const json& b = member(node, "backend");

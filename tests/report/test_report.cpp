@@ -673,6 +673,38 @@ TEST(Comparison, NamesTheDifferencesBesideTheSelectedOneAndJudgesNoOfferedRate) 
   EXPECT_TRUE(throughput);
 }
 
+// Runs whose nodes computed with other parameters (or another plug-in's kernel) did other work:
+// one side does not pool them, and two sides that differ in them say so.
+TEST(Comparison, RunsWhoseNodesComputedDifferentlyAreNotAlike) {
+  StoredRun run;
+  run.benchmark_id = "x5";
+  run.category = "perception";
+  run.type = "black";
+  run.hardware = "AMD Ryzen 7 5800X";
+  run.rmw = "intra";
+  run.processes = "single";
+  run.rate_hz = 30;
+  run.valid = true;
+  run.latency.count = 100;
+  run.latency.max = 2.0;
+  run.throughput_hz = 30;
+  StoredRun large = run, small = run;
+  large.path = "x5-a.json";
+  large.node_settings = "resize (built-in perception): scale_width=2";
+  small.path = "x5-b.json";
+  small.node_settings = "resize (built-in perception): scale_width=0.25";
+  small.latency.max = 0.3;
+  ReportInput input;
+  input.runs = {large, small};
+  EXPECT_THROW(detail::build_comparison(input, "x5-a", "rmw=intra"), ReportError);
+  const detail::Comparison c = detail::build_comparison(input, "x5-a", "x5-b");
+  EXPECT_NE(joined(c.notes, "\n")
+                .find("node settings resize (built-in perception): scale_width=2 "
+                      "vs resize (built-in perception): scale_width=0.25"),
+            std::string::npos)
+      << joined(c.notes, "\n");
+}
+
 // Published black-box and grey-box rows of one hardware are two measurements: two series and two
 // rows of the published table, as local runs keep them apart, never one median of both.
 TEST(Published, BlackAndGreyRowsAreSeparateSeries) {

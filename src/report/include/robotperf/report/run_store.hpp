@@ -42,6 +42,9 @@ struct StoredRun {
   std::string monitor_wait = "sleep";  // "sleep" or "spin"
   double rate_hz = kNoValue;
   std::string dataset;
+  // What the nodes computed with, as one text ("relay (built-in util): delay_ms=0, ..."): runs that
+  // differ in it did different work. Empty for results written before nodes recorded it.
+  std::string node_settings;
   std::string robotperf_version = "?", git_revision = "?";  // of the robotperf that ran it
   std::string hardware;           // short platform name: CPU model, plus GPU models
   std::string hardware_category;  // RobotPerf category guessed from the machine
