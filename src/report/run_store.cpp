@@ -126,12 +126,13 @@ void read_also_measured(const json& j, StoredRun& run) {
     std::vector<std::string> settings;
     for (const auto& node : nodes) {
       const json& parameters = member(node, "parameters");
-      if (!parameters.is_object()) continue;
+      const std::string origin = string_or_empty(node, "origin");
+      if (!parameters.is_object() || (parameters.empty() && origin.empty())) continue;
       std::vector<std::string> values;
       for (const auto& [name, value] : parameters.items())
         values.push_back(name + "=" +
                          (value.is_string() ? value.get<std::string>() : value.dump()));
-      settings.push_back(string_or_empty(node, "name") + " (" + string_or_empty(node, "origin") +
+      settings.push_back(string_or_empty(node, "name") + " (" + origin +
                          "): " + joined(values, ", "));
     }
     run.node_settings = joined(settings, "; ");
