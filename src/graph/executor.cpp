@@ -15,9 +15,12 @@ Executor::~Executor() {
 }
 
 void Executor::add_node(std::shared_ptr<Node> node) {
+  {
+    std::lock_guard lock(mutex_);
+    nodes_.push_back(node);
+  }
+  // Only then the wake-up: a worker woken before would scan without the node, then sleep.
   node->set_wake_signal(signal_);
-  std::lock_guard lock(mutex_);
-  nodes_.push_back(std::move(node));
 }
 
 void Executor::spin() {

@@ -155,7 +155,6 @@ std::shared_ptr<Timer> Node::create_timer(std::chrono::nanoseconds period,
   lttng_ust_tracepoint(ros2, rclcpp_timer_link_node, timer.get(), this);
   trace_callback_register(timer->callback_handle(), callable);
   add_entity(timer);
-  notify();  // an executor already spinning must learn the new deadline
   return timer;
 }
 
@@ -235,8 +234,13 @@ void Node::add_publisher(std::shared_ptr<GenericPublisher> publisher, const QoS&
 }
 
 void Node::add_entity(std::shared_ptr<Entity> entity) {
-  std::lock_guard lock(mutex_);
-  entities_.push_back(std::move(entity));
+  {
+    std::lock_guard lock(mutex_);
+    entities_.push_back(std::move(entity));
+  }
+  // An executor already spinning must scan it: a timer's deadline, or data that arrived (and was
+  // signalled) while the entity was being created, before the executor could see it.
+  notify();
 }
 
 }  // namespace robotperf::graph

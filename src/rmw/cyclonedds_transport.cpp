@@ -642,16 +642,20 @@ class Participant {
   PeerTable& peer_table() { return peers_.table(); }
   LocalNodes& nodes() { return *nodes_; }
 
-  // The topic, created on first use; a second type is an error.
+  // The topic, created on first use; a second type is an error. Endpoints of one type name with
+  // different TypeSupports (typed, serialized) get a topic entity each, with its own sertype, so
+  // that each (de)serializes its own messages.
   dds_entity_t topic(const EndpointTopic& endpoint_topic, const msgs::TypeSupport& type) {
     const std::string& dds_name = endpoint_topic.dds_name;
     std::lock_guard lock(mutex_);
-    if (auto it = topics_.find(dds_name); it != topics_.end()) {
+    auto it = topics_.find(dds_name);
+    if (it != topics_.end()) {
       if (it->second.dds_type != type.dds_type) {
         throw TransportError("cyclonedds: topic " + endpoint_topic.name + " already has type " +
                              it->second.dds_type + ", not " + type.dds_type);
       }
-      return it->second.entity->get();
+      if (auto entity = it->second.entities.find(&type); entity != it->second.entities.end())
+        return entity->second->get();
     }
     ddsi_sertype* sertype = new_sertype(type);
     // Cyclone takes the sertype over (or replaces it with an equal one it already has).
@@ -663,7 +667,7 @@ class Participant {
     }
     auto& entry = topics_[dds_name];
     entry.dds_type = type.dds_type;
-    entry.entity = std::make_unique<Entity>(topic);
+    entry.entities.emplace(&type, std::make_unique<Entity>(topic));
     return topic;
   }
 
@@ -692,7 +696,7 @@ class Participant {
 
   struct TopicEntry {
     std::string dds_type;
-    std::unique_ptr<Entity> entity;
+    std::map<const msgs::TypeSupport*, std::unique_ptr<Entity>> entities;
   };
 
   DomainUse domain_;  // first: the domain outlives the participant

@@ -1,9 +1,10 @@
 // The Fast DDS transport: ROS 2-compatible DDS endpoints (DESIGN.md §2).
 //
 // Each message type is registered under its ROS 2 DDS type name with a keyless
-// TopicDataType that writes TypeSupport's plain-CDR bytes (encapsulation header
-// included) straight into the DDS payload, and announces no TypeObject, so
-// Fast DDS matches remote endpoints by type name as rmw_fastrtps does.
+// TopicDataType that writes the plain-CDR bytes of each endpoint's TypeSupport
+// (encapsulation header included) straight into the DDS payload, and announces
+// no TypeObject, so Fast DDS matches remote endpoints by type name as
+// rmw_fastrtps does.
 #include "fastdds_transport.hpp"
 
 #include <fastdds/rtps/common/SerializedPayload.h>
@@ -72,9 +73,20 @@ constexpr uint32_t kSharedMemorySegmentSize = 16u << 20;
 // As the Cyclone DDS transport asks for its sockets.
 constexpr uint32_t kUdpReceiveBufferSize = 8u << 20;
 
-// A message type as Fast DDS sees it: keyless, plain CDR, no TypeObject.
+// What the transport hands Fast DDS to write, or to take into: a message and the TypeSupport that
+// (de)serializes it. Fast DDS keeps one data type per type name and participant, while endpoints of
+// one name may hold messages of different layouts (a typed message, or a SerializedMessage's
+// bytes): each endpoint brings its own.
+struct EndpointSample {
+  const msgs::TypeSupport* type;
+  void* message;
+};
+
+// A message type as Fast DDS sees it: keyless, plain CDR, no TypeObject. Its samples are
+// EndpointSamples.
 class MessageDataType final : public dds::TopicDataType {
  public:
+  // `type`: the TypeSupport of the samples Fast DDS creates itself (createData).
   explicit MessageDataType(const msgs::TypeSupport& type) : type_(type) {
     setName(type.dds_type.c_str());
     m_typeSize = kInitialPayloadSize;
@@ -84,20 +96,23 @@ class MessageDataType final : public dds::TopicDataType {
   }
 
   bool serialize(void* data, SerializedPayload_t* payload) override {
-    const std::size_t size = type_.serialized_size(data);
+    const auto& sample = *static_cast<const EndpointSample*>(data);
+    const std::size_t size = sample.type->serialized_size(sample.message);
     // The writer sized the payload with getSerializedSizeProvider; a smaller
     // one means the message exceeds what a 32-bit RTPS length can carry.
     if (size > payload->max_size) return false;
-    type_.serialize(data, std::span<uint8_t>(payload->data, size));
+    sample.type->serialize(sample.message, std::span<uint8_t>(payload->data, size));
     payload->length = static_cast<uint32_t>(size);
     payload->encapsulation = CDR_LE;
     return true;
   }
 
   bool deserialize(SerializedPayload_t* payload, void* data) override {
+    const auto& sample = *static_cast<const EndpointSample*>(data);
     // Exceptions must not unwind through Fast DDS: a bad payload drops the sample.
     try {
-      type_.deserialize(std::span<const uint8_t>(payload->data, payload->length), data);
+      sample.type->deserialize(std::span<const uint8_t>(payload->data, payload->length),
+                               sample.message);
       return true;
     } catch (const std::exception&) {
       return false;
@@ -105,8 +120,9 @@ class MessageDataType final : public dds::TopicDataType {
   }
 
   std::function<uint32_t()> getSerializedSizeProvider(void* data) override {
-    return [this, data] {
-      const std::size_t size = type_.serialized_size(data);
+    return [data] {
+      const auto& sample = *static_cast<const EndpointSample*>(data);
+      const std::size_t size = sample.type->serialized_size(sample.message);
       return size > std::numeric_limits<uint32_t>::max() ? 0u : static_cast<uint32_t>(size);
     };
   }
@@ -114,23 +130,23 @@ class MessageDataType final : public dds::TopicDataType {
   // Fast DDS only asks for samples when lending them out; the transport takes
   // into its own messages, but the contract still has to hold.
   void* createData() override {
-    std::shared_ptr<void> msg = type_.create();
-    void* raw = msg.get();
-    std::lock_guard lock(lent_mutex_);
-    lent_.emplace(raw, std::move(msg));
-    return raw;
+    auto* sample = new OwnedSample;
+    sample->owned = type_.create();
+    sample->type = &type_;
+    sample->message = sample->owned.get();
+    return static_cast<EndpointSample*>(sample);
   }
   void deleteData(void* data) override {
-    std::lock_guard lock(lent_mutex_);
-    lent_.erase(data);
+    delete static_cast<OwnedSample*>(static_cast<EndpointSample*>(data));
   }
 
   bool getKey(void*, InstanceHandle_t*, bool) override { return false; }
 
  private:
+  struct OwnedSample : EndpointSample {
+    std::shared_ptr<void> owned;
+  };
   const msgs::TypeSupport& type_;
-  std::mutex lent_mutex_;
-  std::map<void*, std::shared_ptr<void>> lent_;
 };
 
 dds::ReliabilityQosPolicyKind to_dds(Reliability r) {
@@ -369,7 +385,8 @@ class Participant {
 
  private:
   // Caller holds mutex_. Fast DDS refuses a second TypeSupport under the same
-  // name, so each type name is registered once per participant.
+  // name, so each type name is registered once per participant, whichever
+  // endpoint comes first: each brings its own TypeSupport (EndpointSample).
   void register_type(const msgs::TypeSupport& type) {
     if (participant_->find_type(type.dds_type).get() != nullptr) return;
     dds::TypeSupport dds_type(new MessageDataType(type));
@@ -397,7 +414,7 @@ class FastddsPublisher final : public PublisherHandle {
  public:
   FastddsPublisher(std::shared_ptr<Participant> participant, const EndpointTopic& topic,
                    const msgs::TypeSupport& type, const QoS& qos, const NodeName& node)
-      : participant_(std::move(participant)), topic_(topic.name) {
+      : participant_(std::move(participant)), topic_(topic.name), type_(type) {
     dds::Publisher& publisher = participant_->publisher();
     dds::DataWriterQos dds_qos = writer_qos(publisher, qos);
     set_user_data(endpoint_user_data(type, participant_->nodes().distro()), dds_qos);
@@ -417,7 +434,8 @@ class FastddsPublisher final : public PublisherHandle {
   void publish(MessagePtr msg) override {
     if (!msg) throw TransportError("fastdds: cannot publish a null message on " + topic_);
     // Fast DDS takes a non-const sample pointer but only reads it to serialize.
-    void* sample = const_cast<void*>(msg.get());
+    EndpointSample endpoint_sample{&type_, const_cast<void*>(msg.get())};
+    void* sample = &endpoint_sample;
     if (lttng_ust_tracepoint_enabled(ros2, rmw_publish)) {
       // Traced, the source timestamp is set here so that rmw_publish and the
       // subscriber's rmw_take carry the same one (Fast DDS would read the
@@ -444,6 +462,7 @@ class FastddsPublisher final : public PublisherHandle {
  private:
   std::shared_ptr<Participant> participant_;
   std::string topic_;
+  const msgs::TypeSupport& type_;
   dds::DataWriter* writer_ = nullptr;
   std::optional<NodeEndpoint> node_;
 };
@@ -486,9 +505,10 @@ class FastddsSubscription final : public SubscriptionHandle {
 
   MessagePtr take(MessageInfo* info) override {
     std::shared_ptr<void> msg = type_.create();
+    EndpointSample sample{&type_, msg.get()};
     dds::SampleInfo sample_info;
     while (true) {
-      const auto rc = reader_->take_next_sample(msg.get(), &sample_info);
+      const auto rc = reader_->take_next_sample(&sample, &sample_info);
       if (rc == ReturnCode::RETCODE_NO_DATA) return nullptr;
       if (rc != ReturnCode::RETCODE_OK) {
         throw TransportError("fastdds: take on " + topic_ + " failed (code " +

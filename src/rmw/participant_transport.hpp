@@ -5,11 +5,14 @@
 // outlive their Transport.
 #pragma once
 
+#include <condition_variable>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -54,6 +57,39 @@ inline void check_secured_domain(const std::string& vendor, const TransportOptio
   }
 }
 
+// Counts the arrivals a reader signals, for a thread that waits for them; shared with the reader's
+// listener, which may signal until the reader is gone.
+class Arrivals {
+ public:
+  void notify() {
+    {
+      std::lock_guard lock(mutex_);
+      ++count_;
+    }
+    changed_.notify_all();
+  }
+  void stop() {
+    {
+      std::lock_guard lock(mutex_);
+      stopped_ = true;
+    }
+    changed_.notify_all();
+  }
+  // Waits until there were arrivals since `seen` (updated), or stop(); false once stopped.
+  bool wait(uint64_t& seen) {
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [&] { return stopped_ || count_ != seen; });
+    seen = count_;
+    return !stopped_;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  uint64_t count_ = 0;
+  bool stopped_ = false;
+};
+
 // `Participant` also has nodes() (its LocalNodes) and peer_table() (the PeerTable its discovery
 // fills); endpoints are constructed from (participant, EndpointTopic, type, qos, [on_ready,]
 // NodeName). The transport announces its nodes on ros_discovery_info and reads the others'.
@@ -68,13 +104,17 @@ class ParticipantTransport final : public Transport {
                                         discovery_type(), ros_discovery_writer_qos(), NodeName{})),
         discovery_reader_(std::make_unique<Subscription>(
             participant_, EndpointTopic::dds_only(kRosDiscoveryTopic), discovery_type(),
-            ros_discovery_reader_qos(), [] {}, NodeName{})) {
+            ros_discovery_reader_qos(), [arrivals = arrivals_] { arrivals->notify(); },
+            NodeName{})) {
     participant_->nodes().set_publisher(
         [writer = discovery_writer_.get()](std::shared_ptr<const msgs::SerializedMessage> sample) {
           writer->publish(std::move(sample));
         });
+    announcements_ = std::thread([this] { apply_announcements(); });
   }
   ~ParticipantTransport() override {
+    arrivals_->stop();
+    announcements_.join();
     // Endpoints may outlive the transport; their removal is then no longer announced.
     participant_->nodes().set_publisher(nullptr);
   }
@@ -100,17 +140,10 @@ class ParticipantTransport final : public Transport {
   }
   std::vector<PeerParticipant> peers() const override {
     // Callers on several threads (a Monitor's executor and the main thread) read the discovery
-    // data one at a time: taking it is not thread-safe on every vendor, and two samples of one
-    // participant must be applied in the order they were taken.
+    // data one at a time: a vendor may take it from its built-in topics as asked (Cyclone DDS),
+    // which is not thread-safe on every vendor, and two samples of one endpoint must be applied
+    // in the order they were taken.
     std::lock_guard lock(peers_mutex_);
-    // The nodes the others announced since last asked, each participant's latest kept.
-    MessageInfo info;
-    while (MessagePtr sample = discovery_reader_->take(&info)) {
-      const auto& cdr = static_cast<const msgs::SerializedMessage*>(sample.get())->cdr;
-      if (auto entities = decode_participant_entities(cdr)) {
-        participant_->peer_table().set_nodes(info.sender, std::move(entities->nodes));
-      }
-    }
     return participant_->peers();
   }
   ParticipantId participant() const override { return participant_->id(); }
@@ -120,10 +153,34 @@ class ParticipantTransport final : public Transport {
     return msgs::serialized_type_support(kParticipantEntitiesInfoType);
   }
 
+  // The others' nodes, applied to the peer table as their announcements arrive (each
+  // participant's latest kept), on a thread of its own as rmw_dds_common has one: the topic is
+  // keyless, so the reader's history holds every participant's announcements together, and it is
+  // emptied as it fills, whether or not anyone asks for the peers.
+  void apply_announcements() {
+    uint64_t seen = 0;
+    do {
+      MessageInfo info;
+      try {
+        while (MessagePtr sample = discovery_reader_->take(&info)) {
+          const auto& cdr = static_cast<const msgs::SerializedMessage*>(sample.get())->cdr;
+          if (auto entities = decode_participant_entities(cdr)) {
+            participant_->peer_table().set_nodes(info.sender, std::move(entities->nodes));
+          }
+        }
+      } catch (const TransportError&) {
+        // A failed take leaves ROS 2 nodes a state behind until the next arrival; the endpoints
+        // themselves work.
+      }
+    } while (arrivals_->wait(seen));
+  }
+
   std::string name_;
   std::shared_ptr<Participant> participant_;
+  const std::shared_ptr<Arrivals> arrivals_ = std::make_shared<Arrivals>();
   std::unique_ptr<Publisher> discovery_writer_;
   std::unique_ptr<Subscription> discovery_reader_;
+  std::thread announcements_;  // runs apply_announcements()
   mutable std::mutex peers_mutex_;
 };
 

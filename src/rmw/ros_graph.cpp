@@ -68,7 +68,7 @@ QoS ros_discovery_writer_qos() {
 }
 
 QoS ros_discovery_reader_qos() {
-  return QoS{History::kKeepLast, 100, Reliability::kReliable, Durability::kTransientLocal};
+  return QoS{History::kKeepAll, 0, Reliability::kReliable, Durability::kTransientLocal};
 }
 
 std::string endpoint_user_data(const msgs::TypeSupport& type, RosDistro distro) {

@@ -24,8 +24,9 @@ inline constexpr const char* kParticipantEntitiesInfoType =
     "rmw_dds_common/msg/ParticipantEntitiesInfo";
 
 // The writer's QoS rmw_dds_common gives it (reliable, transient local, keep last 1), so that a
-// participant joining later reads each one's latest state. The reader keeps the latest states of
-// many writers until they are read.
+// participant joining later reads each one's latest state. The reader keeps all it receives until
+// it is read, as rmw_fastrtps's does: the topic is keyless, so a KEEP_LAST history would be shared
+// by all writers, and a burst of one's announcements would push out another's latest.
 QoS ros_discovery_writer_qos();
 QoS ros_discovery_reader_qos();
 

@@ -25,6 +25,18 @@ QoS QoS::from_profile_name(const std::string& name) {
   throw std::invalid_argument("unknown QoS profile '" + name + "' (choose default or sensor_data)");
 }
 
+std::string qos_incompatibility(const QoS& offered, const QoS& requested) {
+  if (requested.reliability == Reliability::kReliable &&
+      offered.reliability == Reliability::kBestEffort) {
+    return "a reliable subscription needs a reliable publisher";
+  }
+  if (requested.durability == Durability::kTransientLocal &&
+      offered.durability == Durability::kVolatile) {
+    return "a transient_local subscription needs a transient_local publisher";
+  }
+  return {};
+}
+
 std::string to_string(Reliability reliability) {
   return reliability == Reliability::kReliable ? "reliable" : "best_effort";
 }

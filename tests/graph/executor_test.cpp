@@ -192,6 +192,112 @@ TEST(Executor, OnlyASpinningExecutorKeepsACoreBusyWhileIdle) {
   }
 }
 
+// A transport whose second subscription already holds a sample when it is created and signals it
+// at once (a transient-local late joiner, or a message that arrives within microseconds), then
+// returns only once the executor has scanned its node again: that pass cannot have seen the new
+// subscription, which its node adds after the transport returns it. The first subscription, a
+// probe, counts the executor's scans.
+class ReadyAtCreationTransport final : public rmw::Transport {
+ public:
+  std::string name() const override { return "ready"; }
+  Counter& scans() { return scans_; }
+  std::unique_ptr<rmw::PublisherHandle> create_publisher(const std::string&,
+                                                         const msgs::TypeSupport&, const QoS&,
+                                                         const rmw::NodeName&) override {
+    throw rmw::TransportError("ready: no publishers");
+  }
+  std::unique_ptr<rmw::SubscriptionHandle> create_subscription(const std::string&,
+                                                               const msgs::TypeSupport&, const QoS&,
+                                                               std::function<void()> on_ready,
+                                                               const rmw::NodeName&) override {
+    if (!probe_created_) {
+      probe_created_ = true;
+      return std::make_unique<Handle>(false, &scans_);
+    }
+    const int before = scans_.value();
+    on_ready();
+    EXPECT_TRUE(scans_.wait_for(before + 1)) << "the executor did not scan the node";
+    return std::make_unique<Handle>(true, nullptr);
+  }
+
+ private:
+  // Holds at most one sample; `scans`, when given, counts the takes the executor tries.
+  class Handle final : public rmw::SubscriptionHandle {
+   public:
+    Handle(bool pending, Counter* scans) : pending_(pending), scans_(scans) {}
+    rmw::MessagePtr take(MessageInfo*) override {
+      if (scans_ != nullptr) scans_->add();
+      if (!pending_.exchange(false)) return nullptr;
+      return std::make_shared<const Image>();
+    }
+    std::size_t matched_publishers() const override { return 1; }
+
+   private:
+    std::atomic<bool> pending_;
+    Counter* scans_;
+  };
+  bool probe_created_ = false;
+  Counter scans_;
+};
+
+// An executor already spinning, asleep (no timers, nothing to do), runs a node added to it. Its
+// wake-up came before the node was in its list: the worker scanned without it, then slept for good
+// (in about one try of three). Each try is a fresh executor, so that each can lose it.
+TEST(Executor, NodeAddedWhileSpinningRunsItsTimer) {
+  for (int attempt = 0; attempt < 8; ++attempt) {
+    SCOPED_TRACE("attempt " + std::to_string(attempt));
+    auto transport = std::make_unique<ReadyAtCreationTransport>();
+    Counter& scans = transport->scans();
+    Context ctx(std::move(transport));
+    auto idle = std::make_shared<Node>(ctx, "idle");
+    auto probe =
+        idle->create_subscription<Image>("/probe", QoS{}, [](std::shared_ptr<const Image>) {});
+    Executor exec(1);
+    exec.add_node(idle);
+    exec.start();
+    ASSERT_TRUE(scans.wait_for(1));  // its first scan, after which it sleeps
+    auto node = std::make_shared<Node>(ctx, "late");
+    Counter ticks;
+    auto timer = node->create_timer(std::chrono::milliseconds(10), [&] { ticks.add(); });
+    exec.add_node(node);
+    EXPECT_TRUE(ticks.wait_for(3, std::chrono::seconds(5))) << ticks.value() << " ticks";
+    exec.stop();
+  }
+}
+
+// A subscription whose data was signalled while it was being created, before its node listed it,
+// gets its callback: adding it wakes the executor again.
+TEST(Executor, SubscriptionCreatedWhileSpinningTakesAReadySample) {
+  auto transport = std::make_unique<ReadyAtCreationTransport>();
+  Counter& scans = transport->scans();
+  Context ctx(std::move(transport));
+  auto node = std::make_shared<Node>(ctx, "n");
+  auto probe =
+      node->create_subscription<Image>("/probe", QoS{}, [](std::shared_ptr<const Image>) {});
+  Executor exec(1);
+  exec.add_node(node);
+  exec.start();
+  // Its first scan, after which it sleeps until woken: the signal below wakes it for exactly one.
+  ASSERT_TRUE(scans.wait_for(1));
+  Counter received;
+  auto sub = node->create_subscription<Image>(
+      "/ready", QoS{}, [&](std::shared_ptr<const Image>) { received.add(); });
+  EXPECT_TRUE(received.wait_for(1));
+  exec.stop();
+}
+
+// The callable a subscription's callback is traced under is the one the node wrote, also when it
+// comes in a std::function moved in: a moved-from std::function holds nothing.
+TEST(Node, ASubscriptionCallbackIsNamedByTheCallableItHolds) {
+  auto lambda = [](std::shared_ptr<const Image>) {};
+  std::function<void(std::shared_ptr<const Image>)> held = lambda;
+  const TypedCallback typed = typed_callback<Image>(std::move(held));
+  ASSERT_NE(typed.callable, nullptr);
+  EXPECT_EQ(*typed.callable, typeid(lambda)) << typed.callable->name();
+  const TypedCallback plain = typed_callback<Image>(lambda);
+  EXPECT_EQ(*plain.callable, typeid(lambda));
+}
+
 // A transport whose subscriptions, like a DDS reader's listener thread, signal data until their
 // handle is gone: here once more, from the handle's destructor.
 class LateSignallingTransport final : public rmw::Transport {

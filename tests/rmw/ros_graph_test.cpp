@@ -258,6 +258,50 @@ TEST_P(RosGraph, PeersReadNodesEndpointsAndHashes) {
   EXPECT_EQ(endpoint->type_hash, kImageHash);
 }
 
+// ros_discovery_info is keyless: all participants' announcements share the reader's history, while
+// each writer keeps only its latest. A burst of one participant's announcements that the observer
+// had not read yet pushed out a quiet participant's last one, and its nodes were gone for good
+// (from 150 endpoints on Cyclone DDS, 400 on Fast DDS).
+TEST_P(RosGraph, NodesSurviveABurstOfAnnouncements) {
+  constexpr std::size_t kBurst = 500;
+  const TransportOptions options = testing::test_options();
+  const auto& type = msgs::type_support<msgs::Image>();
+  auto observer = make_transport(GetParam(), options);
+  auto quiet = make_transport(GetParam(), options);
+  auto busy = make_transport(GetParam(), options);
+  // The observer discovers both before the burst, without reading its peers (which took the
+  // samples waiting in the reader).
+  const std::string topic = testing::test_topic("heard");
+  auto heard = observer->create_subscription(topic, type, QoS{}, [] {});
+  auto quiet_pub = quiet->create_publisher(topic, type, QoS{}, NodeName{"quiet_node", "/"});
+  auto busy_pub = busy->create_publisher(topic, type, QoS{}, NodeName{"busy_node", "/"});
+  ASSERT_TRUE(testing::wait_until([&] { return heard->matched_publishers() == 2; }));
+
+  std::vector<std::unique_ptr<PublisherHandle>> burst;
+  for (std::size_t i = 0; i < kBurst; ++i) {
+    burst.push_back(busy->create_publisher(testing::test_topic("burst_" + std::to_string(i)), type,
+                                           QoS{}, NodeName{"busy_node", "/"}));
+  }
+  auto writers_of = [](const std::vector<PeerParticipant>& peers, const ParticipantId& id,
+                       const std::string& node) {
+    for (const PeerParticipant& p : peers) {
+      if (p.id != id) continue;
+      for (const PeerNode& n : p.nodes) {
+        if (n.name == node) return n.writers.size();
+      }
+    }
+    return std::size_t{0};
+  };
+  std::vector<PeerParticipant> peers;
+  EXPECT_TRUE(testing::wait_until([&] {
+    peers = observer->peers();
+    return writers_of(peers, busy->participant(), "busy_node") == kBurst + 1 &&
+           writers_of(peers, quiet->participant(), "quiet_node") == 1;
+  })) << "busy_node: "
+      << writers_of(peers, busy->participant(), "busy_node")
+      << " writers, quiet_node: " << writers_of(peers, quiet->participant(), "quiet_node");
+}
+
 INSTANTIATE_TEST_SUITE_P(Dds, RosGraph, ::testing::Values("fastdds", "cyclonedds"),
                          [](const auto& info) { return info.param; });
 

@@ -203,6 +203,39 @@ TEST_P(DdsTransport, SerializedAndTypedEndpointsOfOneTypeShareAProcess) {
   EXPECT_TRUE(as<msgs::SerializedMessage>(got_serialized).cdr == msgs::to_cdr(image));
 }
 
+// One participant with serialized and typed endpoints of one type, on different topics and on the
+// same one: Fast DDS keeps one data type per type name and participant, whose codec the first
+// endpoint chose for all (a typed subscription decoded Images with the serialized codec and
+// corrupted the heap); Cyclone DDS's topic of one name was one sertype for both.
+TEST_P(DdsTransport, SerializedAndTypedOfOneTypeShareOneParticipant) {
+  auto mixed = make();
+  auto sender = make();
+  const msgs::TypeSupport& typed = msgs::type_support<Image>();
+  const msgs::TypeSupport& serialized = msgs::serialized_type_support(typed.ros_type);
+  const std::string recorded = test_topic("recorded");
+  const std::string camera = test_topic("camera");
+  Inbox recorded_inbox, typed_inbox, serialized_inbox;
+  // The serialized endpoint first: it is the one the participant registers the type for.
+  auto recorded_sub = mixed->create_subscription(recorded, serialized, QoS::ros_default(),
+                                                 recorded_inbox.on_ready());
+  auto typed_sub =
+      mixed->create_subscription(camera, typed, QoS::ros_default(), typed_inbox.on_ready());
+  auto serialized_sub = mixed->create_subscription(camera, serialized, QoS::ros_default(),
+                                                   serialized_inbox.on_ready());
+  auto pub = sender->create_publisher(camera, typed, QoS::ros_default());
+  ASSERT_TRUE(wait_until([&] { return pub->matched_subscriptions() == 2; }));
+
+  const Image image = make_image(640, 4, 9);
+  pub->publish(share(image));
+  MessagePtr got_typed = typed_inbox.take(*typed_sub);
+  ASSERT_NE(got_typed, nullptr);
+  EXPECT_TRUE(as<Image>(got_typed) == image);
+  MessagePtr got_serialized = serialized_inbox.take(*serialized_sub);
+  ASSERT_NE(got_serialized, nullptr);
+  EXPECT_TRUE(as<msgs::SerializedMessage>(got_serialized).cdr == msgs::to_cdr(image));
+  EXPECT_EQ(recorded_sub->take(nullptr), nullptr);
+}
+
 TEST_P(DdsTransport, InvalidTopicNameIsATransportError) {
   auto transport = make();
   EXPECT_THROW(transport->create_publisher("no_slash", msgs::type_support<Image>(), QoS{}),
@@ -407,6 +440,109 @@ TEST(IntraTransport, KeepLastDepthZeroKeepsTheLastMessage) {
   ASSERT_NE(got, nullptr);
   EXPECT_EQ(as<CameraInfo>(got).width, 2u);
   EXPECT_EQ(infos.sub->take(nullptr), nullptr);
+}
+
+// Intra matches a publisher and a subscription as DDS does (and as rclcpp's intra-process refuses
+// an incompatible pair): it delivered a best-effort publisher's messages to a reliable
+// subscription.
+TEST(IntraTransport, HonoursRequestedOfferedQos) {
+  auto transport = make_transport("intra");
+  const QoS reliable = QoS::ros_default();
+  const QoS best_effort = QoS::sensor_data();
+  QoS latched = QoS::ros_default();
+  latched.durability = Durability::kTransientLocal;
+  struct Case {
+    QoS offered, requested;
+    bool matched;
+  };
+  const Case cases[] = {{best_effort, reliable, false},
+                        {reliable, latched, false},
+                        {reliable, best_effort, true},
+                        {latched, reliable, true},
+                        {best_effort, best_effort, true}};
+  int index = 0;
+  for (const Case& c : cases) {
+    SCOPED_TRACE("offered " + to_string(c.offered) + ", requested " + to_string(c.requested));
+    const std::string topic = test_topic("qos_match_" + std::to_string(index++));
+    auto pub = transport->create_publisher(topic, msgs::type_support<CameraInfo>(), c.offered);
+    auto sub =
+        transport->create_subscription(topic, msgs::type_support<CameraInfo>(), c.requested, [] {});
+    EXPECT_EQ(pub->matched_subscriptions(), c.matched ? 1u : 0u);
+    EXPECT_EQ(sub->matched_publishers(), c.matched ? 1u : 0u);
+    EXPECT_EQ(qos_incompatibility(c.offered, c.requested).empty(), c.matched);
+    pub->publish(share(make_camera_info()));
+    EXPECT_EQ(sub->take(nullptr) != nullptr, c.matched);
+  }
+  EXPECT_EQ(qos_incompatibility(best_effort, reliable),
+            "a reliable subscription needs a reliable publisher");
+}
+
+// A transient-local publisher keeps its last `depth` messages for the transient-local subscriptions
+// that join later, as DDS does (DdsTransport.TransientLocalDeliversItsDepthToLateSubscriber); a
+// volatile one joining later gets only what comes after it.
+TEST(IntraTransport, TransientLocalDeliversToLateSubscriber) {
+  auto transport = make_transport("intra");
+  const QoS latched{History::kKeepLast, 2, Reliability::kReliable, Durability::kTransientLocal};
+  const std::string topic = test_topic("latched");
+  auto pub = transport->create_publisher(topic, msgs::type_support<CameraInfo>(), latched);
+  CameraInfo info = make_camera_info();
+  for (uint32_t width : {1u, 2u, 3u}) {
+    info.width = width;
+    pub->publish(share(info));
+  }
+  int ready = 0;
+  auto late = transport->create_subscription(topic, msgs::type_support<CameraInfo>(), latched,
+                                             [&] { ++ready; });
+  EXPECT_GT(ready, 0) << "the kept messages are signalled as they are delivered";
+  auto volatile_late = transport->create_subscription(topic, msgs::type_support<CameraInfo>(),
+                                                      QoS::ros_default(), [] {});
+  EXPECT_EQ(volatile_late->take(nullptr), nullptr);
+  auto widths = [](SubscriptionHandle& sub) {
+    std::vector<uint32_t> out;
+    while (MessagePtr got = sub.take(nullptr)) out.push_back(as<CameraInfo>(got).width);
+    return out;
+  };
+  EXPECT_EQ(widths(*late), (std::vector<uint32_t>{2, 3}));
+  info.width = 4;
+  pub->publish(share(info));
+  EXPECT_EQ(widths(*late), std::vector<uint32_t>{4});
+  EXPECT_EQ(widths(*volatile_late), std::vector<uint32_t>{4});
+}
+
+// A serialized and a typed endpoint of one type on one topic (a bag's Playback and a graph node):
+// the subscription gets a message of its own type, converted through CDR, as rclcpp converts
+// between generic and typed endpoints; a typed subscription took a SerializedMessage as if it were
+// an Image. Bytes that do not decode are dropped, as a DDS reader drops them.
+TEST(IntraTransport, ConvertsBetweenSerializedAndTypedEndpoints) {
+  auto transport = make_transport("intra");
+  const msgs::TypeSupport& typed = msgs::type_support<Image>();
+  const msgs::TypeSupport& serialized = msgs::serialized_type_support(typed.ros_type);
+  const std::string topic = test_topic("mixed");
+  auto serialized_pub = transport->create_publisher(topic, serialized, QoS::ros_default());
+  auto typed_pub = transport->create_publisher(topic, typed, QoS::ros_default());
+  auto typed_sub = transport->create_subscription(topic, typed, QoS::ros_default(), [] {});
+  auto serialized_sub =
+      transport->create_subscription(topic, serialized, QoS::ros_default(), [] {});
+
+  const Image image = make_image(64, 2, 5);
+  serialized_pub->publish(share(msgs::SerializedMessage{msgs::to_cdr(image)}));
+  MessagePtr got_typed = typed_sub->take(nullptr);
+  ASSERT_NE(got_typed, nullptr);
+  EXPECT_TRUE(as<Image>(got_typed) == image);
+  MessagePtr got_serialized = serialized_sub->take(nullptr);
+  ASSERT_NE(got_serialized, nullptr);
+  EXPECT_TRUE(as<msgs::SerializedMessage>(got_serialized).cdr == msgs::to_cdr(image));
+
+  const MessagePtr sent = share(image);
+  typed_pub->publish(sent);
+  EXPECT_EQ(typed_sub->take(nullptr), sent) << "between typed endpoints, the very same object";
+  got_serialized = serialized_sub->take(nullptr);
+  ASSERT_NE(got_serialized, nullptr);
+  EXPECT_TRUE(as<msgs::SerializedMessage>(got_serialized).cdr == msgs::to_cdr(image));
+
+  serialized_pub->publish(share(msgs::SerializedMessage{{0x00, 0x01, 0x00, 0x00, 0x07}}));
+  EXPECT_EQ(typed_sub->take(nullptr), nullptr);
+  EXPECT_NE(serialized_sub->take(nullptr), nullptr);
 }
 
 INSTANTIATE_TEST_SUITE_P(Dds, DdsTransport, ::testing::Values("fastdds", "cyclonedds"),

@@ -189,6 +189,31 @@ const std::type_info& callable_type(const F& callable) {
   }
 }
 
+// A callback on messages of type T, as a GenericSubscription runs it, and the type of the callable
+// the node wrote (callable_type).
+struct TypedCallback {
+  GenericSubscription::Callback callback;
+  const std::type_info* callable = nullptr;
+};
+
+// `callback` takes (std::shared_ptr<const T>) or (std::shared_ptr<const T>, const MessageInfo&).
+template <class T, class F>
+TypedCallback typed_callback(F&& callback) {
+  // Read before `callback` is moved into the wrapper: a moved-from std::function holds nothing.
+  const std::type_info& callable = callable_type(callback);
+  if constexpr (std::invocable<F, std::shared_ptr<const T>, const MessageInfo&>) {
+    return {[f = std::forward<F>(callback)](rmw::MessagePtr m, const MessageInfo& info) {
+              f(std::static_pointer_cast<const T>(std::move(m)), info);
+            },
+            &callable};
+  } else {
+    return {[f = std::forward<F>(callback)](rmw::MessagePtr m, const MessageInfo&) {
+              f(std::static_pointer_cast<const T>(std::move(m)));
+            },
+            &callable};
+  }
+}
+
 class Node {
  public:
   Node(Context& context, std::string name);
@@ -212,19 +237,9 @@ class Node {
   template <class T, class F>
   std::shared_ptr<GenericSubscription> create_subscription(const std::string& topic, const QoS& qos,
                                                            F&& callback) {
-    GenericSubscription::Callback cb;
-    if constexpr (std::invocable<F, std::shared_ptr<const T>, const MessageInfo&>) {
-      cb = [f = std::forward<F>(callback)](rmw::MessagePtr m, const MessageInfo& info) {
-        f(std::static_pointer_cast<const T>(std::move(m)), info);
-      };
-    } else {
-      cb = [f = std::forward<F>(callback)](rmw::MessagePtr m, const MessageInfo&) {
-        f(std::static_pointer_cast<const T>(std::move(m)));
-      };
-    }
-    const std::type_info& callable = callable_type(callback);
-    return create_generic_subscription(topic, msgs::type_support<T>(), qos, std::move(cb),
-                                       &callable);
+    TypedCallback typed = typed_callback<T>(std::forward<F>(callback));
+    return create_generic_subscription(topic, msgs::type_support<T>(), qos,
+                                       std::move(typed.callback), typed.callable);
   }
 
   std::shared_ptr<GenericPublisher> create_generic_publisher(const std::string& topic,

@@ -48,6 +48,11 @@ struct QoS {
   friend bool operator==(const QoS&, const QoS&) = default;
 };
 
+// Why a publisher offering `offered` does not match a subscription requesting `requested`, by DDS's
+// requested-versus-offered rules, which every transport follows ("a reliable subscription needs a
+// reliable publisher"); empty when they match. History and depth never keep a pair apart.
+std::string qos_incompatibility(const QoS& offered, const QoS& requested);
+
 // "reliable" / "best_effort", "transient_local" / "volatile": as ROS 2 names them.
 std::string to_string(Reliability reliability);
 std::string to_string(Durability durability);
