@@ -111,15 +111,7 @@ std::string mismatch(const rmw::PeerEndpoint& theirs, const graph::EndpointStatu
   if (their_type != ours.type) return "its type is " + their_type;
   const rmw::QoS& writer = ours.is_publisher ? our_qos : theirs.qos;
   const rmw::QoS& reader = ours.is_publisher ? theirs.qos : our_qos;
-  if (reader.reliability == rmw::Reliability::kReliable &&
-      writer.reliability == rmw::Reliability::kBestEffort) {
-    return "a reliable subscription needs a reliable publisher";
-  }
-  if (reader.durability == rmw::Durability::kTransientLocal &&
-      writer.durability == rmw::Durability::kVolatile) {
-    return "a transient_local subscription needs a transient_local publisher";
-  }
-  return {};
+  return rmw::qos_incompatibility(writer, reader);
 }
 
 // What the other participants of the domain have on `ours.topic`: each opposite endpoint with
