@@ -47,6 +47,43 @@ TEST(BackendCheck, ImagesAgreeWithinOneGreyLevelPerChannel) {
   EXPECT_EQ(share(type, &bgr, &cpu), 0.0);
 }
 
+// A depth image in metres, every pixel `metres`.
+msgs::Image depth(float metres) {
+  msgs::Image i;
+  i.width = 10;
+  i.height = 10;
+  i.encoding = "32FC1";
+  i.step = 40;
+  i.data.resize(400);
+  for (std::size_t p = 0; p < 100; ++p) std::memcpy(i.data.data() + 4 * p, &metres, 4);
+  return i;
+}
+
+void set_pixel(msgs::Image& image, std::size_t p, float value) {
+  std::memcpy(image.data.data() + 4 * p, &value, 4);
+}
+
+TEST(BackendCheck, FloatImagesAgreeWithinTheirRoundingNotWithinAUnit) {
+  const std::string type = "sensor_msgs/msg/Image";
+  const msgs::Image cpu = depth(2.0f);
+  EXPECT_EQ(share(type, &cpu, &cpu), 1.0);
+  const msgs::Image rounded = depth(2.0f * (1.0f + 4e-5f));  // 0.08 mm: rounding
+  EXPECT_EQ(share(type, &rounded, &cpu), 1.0);
+  const msgs::Image a_millimetre_off = depth(2.001f);
+  EXPECT_EQ(share(type, &a_millimetre_off, &cpu), 0.0);
+  const msgs::Image half_a_metre_off = depth(2.5f);
+  EXPECT_EQ(share(type, &half_a_metre_off, &cpu), 0.0);
+  msgs::Image with_none = cpu, other = cpu;
+  set_pixel(with_none, 3, std::numeric_limits<float>::quiet_NaN());
+  set_pixel(other, 3, std::numeric_limits<float>::quiet_NaN());
+  set_pixel(with_none, 4, std::numeric_limits<float>::infinity());
+  set_pixel(other, 4, std::numeric_limits<float>::infinity());
+  EXPECT_EQ(share(type, &other, &with_none), 1.0);
+  set_pixel(other, 3, 2.0f);  // a depth where the cpu has none
+  EXPECT_DOUBLE_EQ(share(type, &other, &with_none), 0.99);
+  EXPECT_NE(compare_answers(type, &other, &cpu)->criterion.find("1e-4"), std::string::npos);
+}
+
 // `points` zero points of x, y, z and a packed colour declared `rgb_type`, 16 bytes each.
 msgs::PointCloud2 xyz_rgb_cloud(uint32_t points, uint8_t rgb_type) {
   msgs::PointCloud2 c;
