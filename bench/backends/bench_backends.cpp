@@ -36,6 +36,7 @@
 #include "robotperf/harness/run.hpp"
 #include "robotperf/perception/cuda_device.hpp"
 #include "robotperf/perception/opencl_device.hpp"
+#include "this_build.hpp"
 
 using namespace robotperf;
 
@@ -164,6 +165,7 @@ std::string target(const std::string& id, const Measured& cpu, const Measured& m
 int main(int argc, char** argv) {
   // A line as soon as it is measured, into a file too: a run cut short keeps what it measured.
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  robotperf::bench::warn_about_this_build();
   categories::register_builtin_categories();
   std::size_t count = 300;
   std::vector<std::string> ids;

@@ -26,6 +26,7 @@
 #include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/msgs/definitions.hpp"
+#include "this_build.hpp"
 
 namespace fs = std::filesystem;
 using namespace robotperf;
@@ -135,6 +136,7 @@ ReadFigures time_read(const fs::path& dir) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  robotperf::bench::warn_about_this_build();
   robotperf::categories::register_builtin_categories();
   uint64_t size_mb = 1024;
   fs::path root;

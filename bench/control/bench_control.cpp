@@ -24,6 +24,7 @@
 #include "robotperf/control/controller_manager.hpp"
 #include "robotperf/control/forward_command_controller.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
+#include "this_build.hpp"
 
 namespace {
 
@@ -164,6 +165,7 @@ bool run(const Options& o, int rt_priority) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  robotperf::bench::warn_about_this_build();
   try {
     const Options o = parse(argc, argv);
     std::printf(

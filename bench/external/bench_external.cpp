@@ -29,6 +29,7 @@
 #include "robotperf/metrics/latency_stats.hpp"
 #include "robotperf/rmw/transport.hpp"
 #include "ros2_types.h"
+#include "this_build.hpp"
 
 extern char** environ;
 
@@ -170,6 +171,7 @@ void row(const char* label, const metrics::SampleStats& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  robotperf::bench::warn_about_this_build();
   std::size_t count = 300;
   if (argc == 3 && std::strcmp(argv[1], "--count") == 0) count = std::stoul(argv[2]);
   const std::size_t warmup = 30;

@@ -27,6 +27,7 @@
 #include "robotperf/harness/run.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
 #include "robotperf/rmw/transport.hpp"
+#include "this_build.hpp"
 
 namespace fs = std::filesystem;
 using namespace robotperf;
@@ -117,6 +118,7 @@ void report(const char* label, const harness::RunResult& r, const Floor& floor, 
 }  // namespace
 
 int main() {
+  robotperf::bench::warn_about_this_build();
   robotperf::categories::register_builtin_categories();
   const fs::path root =
       fs::temp_directory_path() / ("robotperf-bench-harness-" + std::to_string(getpid()));

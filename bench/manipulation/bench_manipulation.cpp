@@ -36,6 +36,7 @@
 #include "robotperf/manipulation/kinematics.hpp"
 #include "robotperf/msgs/robotperf_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
+#include "this_build.hpp"
 
 using namespace robotperf;
 namespace fs = std::filesystem;
@@ -219,6 +220,7 @@ void fcl_vs_bullet() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  robotperf::bench::warn_about_this_build();
   robotperf::categories::register_builtin_categories();
   const bench::BenchOptions options = bench::parse_bench_options(argc, argv);
   std::vector<std::string> ids = options.args;

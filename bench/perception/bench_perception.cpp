@@ -37,6 +37,7 @@
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/sysinfo/run_rules.hpp"
+#include "this_build.hpp"
 
 using namespace robotperf;
 
@@ -89,6 +90,7 @@ bool compare(const std::string& id, std::size_t frames, std::size_t rounds) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  robotperf::bench::warn_about_this_build();
   robotperf::categories::register_builtin_categories();
   const bench::BenchOptions options = bench::parse_bench_options(argc, argv);
   cv::setNumThreads(1);

@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "robotperf/metrics/power.hpp"
+#include "this_build.hpp"
 
 namespace fs = std::filesystem;
 using namespace robotperf::metrics;
@@ -70,6 +71,7 @@ std::vector<std::unique_ptr<PowerSource>> all_sources(const fs::path& fixture,
 }  // namespace
 
 int main(int argc, char** argv) {
+  robotperf::bench::warn_about_this_build();
   const double seconds = argc > 1 ? std::atof(argv[1]) : 5.0;
   const fs::path fixture = write_fixture();
   constexpr double kTargetPercentAt10Hz = 1.0;

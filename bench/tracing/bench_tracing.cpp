@@ -21,6 +21,7 @@
 #include "robotperf/tracing/analysis.hpp"
 #include "robotperf/tracing/session.hpp"
 #include "robotperf/tracing/tracepoints.hpp"
+#include "this_build.hpp"
 
 namespace fs = std::filesystem;
 using namespace robotperf;
@@ -105,6 +106,7 @@ void emit_frame(uint64_t k, int64_t period_ns) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  robotperf::bench::warn_about_this_build();
   std::size_t target_events = 10'500'000;
   for (int i = 1; i + 1 < argc; ++i) {
     if (std::string(argv[i]) == "--events") target_events = std::strtoull(argv[i + 1], nullptr, 10);

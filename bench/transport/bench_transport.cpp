@@ -70,6 +70,7 @@
 #include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/msgs/serialized_message.hpp"
 #include "robotperf/rmw/transport.hpp"
+#include "this_build.hpp"
 
 extern char** environ;
 
@@ -1011,6 +1012,7 @@ int main(int argc, char** argv) {
   using namespace robotperf::bench;
   try {
     if (argc == 6 && std::strcmp(argv[1], "--child") == 0) return run_child(argv + 2);
+    warn_about_this_build();
     RunConfig config;
     for (int i = 1; i < argc; ++i) {
       const std::string arg = argv[i];

@@ -47,23 +47,28 @@ std::string join(const std::vector<std::string>& words) {
 
 }  // namespace
 
-std::vector<RunWarning> check_run_rules(const RunRuleInputs& in) {
+std::vector<RunWarning> build_warnings(const std::string& build_type, bool sanitized) {
   std::vector<RunWarning> warnings;
+  if (build_type == "Debug" || build_type.empty()) {
+    warnings.push_back({"build", "robotperf is a " +
+                                     (build_type.empty() ? "unoptimised" : build_type) +
+                                     " build: kernels run far slower than in a release; build "
+                                     "with -DCMAKE_BUILD_TYPE=Release"});
+  }
+  if (sanitized) {
+    warnings.push_back({"build",
+                        "robotperf is built with AddressSanitizer/UBSan: several times slower "
+                        "than a normal build; rebuild without -DROBOTPERF_SANITIZE=ON"});
+  }
+  return warnings;
+}
+
+std::vector<RunWarning> check_run_rules(const RunRuleInputs& in) {
+  std::vector<RunWarning> warnings = build_warnings(in.build_type, in.sanitized);
   const auto warn = [&](std::string rule, std::string message) {
     warnings.push_back({std::move(rule), std::move(message)});
   };
   const MachineInfo& m = in.machine;
-
-  if (in.build_type == "Debug" || in.build_type.empty()) {
-    warn("build", "robotperf is a " + (in.build_type.empty() ? "unoptimised" : in.build_type) +
-                      " build: kernels run far slower than in a release; build with "
-                      "-DCMAKE_BUILD_TYPE=Release");
-  }
-  if (in.sanitized) {
-    warn("build",
-         "robotperf is built with AddressSanitizer/UBSan: several times slower than a "
-         "normal build; rebuild without -DROBOTPERF_SANITIZE=ON");
-  }
 
   std::vector<std::string> slow_governors;
   for (const auto& g : m.governors) {

@@ -51,6 +51,16 @@ TEST(RunRules, TunedMachineHasNoWarnings) {
   EXPECT_TRUE(warnings.empty()) << warnings.front().message;
 }
 
+TEST(RunRules, TheBuildRulesAloneJudgeOnlyTheBuild) {
+  EXPECT_TRUE(build_warnings("Release", false).empty());
+  EXPECT_TRUE(build_warnings("RelWithDebInfo", false).empty());
+  const auto unset = build_warnings("", false);
+  ASSERT_EQ(unset.size(), 1u);
+  EXPECT_NE(unset[0].message.find("unoptimised"), std::string::npos);
+  EXPECT_EQ(rules_of(build_warnings("Release", true)), std::vector<std::string>{"build"});
+  EXPECT_EQ(build_warnings("Debug", true).size(), 2u);
+}
+
 TEST(RunRules, EveryRuleFires) {
   FixtureRoot root;
   root.write("sys/devices/system/cpu/intel_pstate/no_turbo", "0\n");

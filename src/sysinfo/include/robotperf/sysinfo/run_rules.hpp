@@ -39,4 +39,8 @@ inline constexpr double kBusyThresholdPercent = 25.0;
 
 std::vector<RunWarning> check_run_rules(const RunRuleInputs& inputs);
 
+// The rules on robotperf's own build alone (an unoptimised or sanitized one), for the benches,
+// whose figures such a build makes as wrong as a run's.
+std::vector<RunWarning> build_warnings(const std::string& build_type, bool sanitized);
+
 }  // namespace robotperf::sysinfo
