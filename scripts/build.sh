@@ -12,12 +12,14 @@ if ! command -v nvcc >/dev/null && [[ -x /usr/local/cuda/bin/nvcc && -z "${CUDAC
   [[ " $* " != *" -DCMAKE_CUDA_COMPILER="* && " $* " != *" -DROBOTPERF_CUDA=OFF "* ]]; then
   cuda_compiler=(-DCMAKE_CUDA_COMPILER=/usr/local/cuda/bin/nvcc)
 fi
-# The defaults are given each time, before the extra arguments: an option given once (a sanitized
-# build) does not stay in ./build's cache for every later plain build.
+# The defaults of every option are given each time, before the extra arguments: an option given
+# once (a sanitized build, one GPU architecture, no tests) does not stay in ./build's cache for
+# every later plain build.
 mkdir -p "$root/build"
 log="$root/build/configure.log"
 cmake -S "$root" -B "$root/build" -DCMAKE_BUILD_TYPE=Release -DROBOTPERF_SANITIZE=OFF \
-  -DROBOTPERF_CUDA=ON "${cuda_compiler[@]}" "$@" >"$log" || {
+  -DROBOTPERF_CUDA=ON -DROBOTPERF_BUILD_TESTS=ON -DROBOTPERF_BUILD_BENCH=ON -DROBOTPERF_FUZZ=OFF \
+  -UCMAKE_CUDA_ARCHITECTURES "${cuda_compiler[@]}" "$@" >"$log" || {
   cat "$log"
   exit 1
 }
