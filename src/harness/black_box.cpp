@@ -275,6 +275,11 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
   return sent;
 }
 
+rmw::QoS Monitor::subscription_qos(rmw::QoS graph_output) {
+  graph_output.history = rmw::History::kKeepAll;
+  return graph_output;
+}
+
 Monitor::Monitor(graph::Context& context, const BoundaryTopic& output, MessageIds ids,
                  std::size_t warmup, RunIsolation* isolation)
     : node_(std::make_shared<graph::Node>(context, "robotperf_monitor")),
@@ -285,11 +290,7 @@ Monitor::Monitor(graph::Context& context, const BoundaryTopic& output, MessageId
       isolation_(isolation),
       state_(output.state) {
   tally_.received_ns.assign(ids_.count, -1);
-  // The Monitor keeps everything the graph delivered: a briefly starved
-  // Monitor must not turn into loss charged to the graph under test.
-  rmw::QoS qos = output.qos;
-  qos.history = rmw::History::kKeepAll;
-  node_->create_generic_subscription(output.topic, *type_, qos,
+  node_->create_generic_subscription(output.topic, *type_, subscription_qos(output.qos),
                                      [this](rmw::MessagePtr m, const graph::MessageInfo& info) {
                                        // Read the clock first: everything after is monitor
                                        // overhead.

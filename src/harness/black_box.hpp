@@ -103,6 +103,10 @@ class Playback {
 
 class Monitor {
  public:
+  // The QoS the Monitor subscribes an output with: the graph's, but keeping everything delivered
+  // (a briefly starved Monitor must not turn into loss charged to the graph under test).
+  static rmw::QoS subscription_qos(rmw::QoS graph_output);
+
   // Counts receptions of ids >= `warmup` towards received_measured(). With `isolation`, another
   // run's receptions are counted as foreign and otherwise ignored.
   Monitor(graph::Context& context, const BoundaryTopic& output, MessageIds ids, std::size_t warmup,

@@ -407,7 +407,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   r.executor_threads = spec.executor_threads;
   r.output_topic = spec.output.topic;
   for (const auto& in : spec.inputs) r.qos.push_back({"playback", in.topic, in.qos});
-  r.qos.push_back({"monitor", spec.output.topic, spec.output.qos});
+  r.qos.push_back({"monitor", spec.output.topic, Monitor::subscription_qos(spec.output.qos)});
   for (const auto& node : spec.nodes) {
     for (const auto& [port, topic] : node.topics) r.qos.push_back({node.name, topic, node.qos});
   }
@@ -678,14 +678,28 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   r.warnings = check_run_rules_for(r, measurement.probe_other_load());
   // Discovery has run at least as long as the graph took to connect.
   add_peers(r.domain_peers, isolation.others());
-  if (!r.domain_peers.empty()) {
+  // An external graph's own participants are on the domain by design: only the others warn (and
+  // refuse a --strict run).
+  std::vector<rmw::PeerParticipant> others = r.domain_peers;
+  if (spec.external()) {
+    std::set<std::string> graph_topics{spec.output.topic};
+    for (const auto& in : spec.inputs) graph_topics.insert(in.topic);
+    for (const auto& node : spec.nodes) {
+      for (const auto& [port, topic] : node.topics) graph_topics.insert(topic);
+    }
+    others = outside_graph(others, std::move(graph_topics));
+  }
+  if (!others.empty()) {
+    const std::size_t graphs_own = r.domain_peers.size() - others.size();
     r.warnings.push_back(
         {"other_participants",
-         std::to_string(r.domain_peers.size()) + " other DDS participant(s) on domain " +
-             std::to_string(r.domain_id) + ": " + describe_peers(r.domain_peers, 3) +
+         std::to_string(others.size()) + " other DDS participant(s) on domain " +
+             std::to_string(r.domain_id) +
+             (graphs_own > 0 ? " besides the external graph's " + std::to_string(graphs_own)
+                             : std::string()) +
+             ": " + describe_peers(others, 3) +
              "; their messages are told apart, but they share the machine and the network "
-             "(--domain auto picks an empty domain)" +
-             (spec.external() ? "; the external graph's own nodes are among them" : "")});
+             "(--domain auto picks an empty domain)"});
   }
   if (options.strict && !r.warnings.empty()) {
     std::string broken;

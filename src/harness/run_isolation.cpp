@@ -104,6 +104,29 @@ std::vector<rmw::PeerParticipant> RunIsolation::others() const {
   return out;
 }
 
+std::vector<rmw::PeerParticipant> outside_graph(const std::vector<rmw::PeerParticipant>& peers,
+                                                std::set<std::string> graph_topics) {
+  std::vector<bool> in_graph(peers.size(), false);
+  // Grows until no participant joins: a pass adds those touching a topic known to be the graph's.
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (std::size_t i = 0; i < peers.size(); ++i) {
+      const auto& peer = peers[i];
+      if (in_graph[i] || !parse_run_user_data(peer.user_data).token.empty()) continue;
+      if (std::ranges::none_of(peer.topics,
+                               [&](const std::string& t) { return graph_topics.contains(t); }))
+        continue;
+      in_graph[i] = grew = true;
+      graph_topics.insert(peer.topics.begin(), peer.topics.end());
+    }
+  }
+  std::vector<rmw::PeerParticipant> out;
+  for (std::size_t i = 0; i < peers.size(); ++i) {
+    if (!in_graph[i]) out.push_back(peers[i]);
+  }
+  return out;
+}
+
 std::string describe_peers(const std::vector<rmw::PeerParticipant>& peers, std::size_t max_listed) {
   std::string out;
   for (std::size_t i = 0; i < peers.size() && i < max_listed; ++i) {

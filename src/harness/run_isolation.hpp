@@ -10,6 +10,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -71,6 +72,14 @@ class RunIsolation {
   std::map<rmw::ParticipantId, bool> is_other_;  // by participant, as last refreshed
   std::vector<MessageIds> other_ids_;            // ID spaces other runs announced
 };
+
+// Of `peers`, those that are no part of an external graph whose boundary topics (inputs, output,
+// and the topics of robotperf's own nodes beside it) are `graph_topics`: a participant is the
+// graph's when one of its topics is one of these or one of another of the graph's participants
+// (a launched pipeline's inner nodes). Another robotperf run's participants, and those whose
+// topics are not known yet, are never the graph's.
+std::vector<rmw::PeerParticipant> outside_graph(const std::vector<rmw::PeerParticipant>& peers,
+                                                std::set<std::string> graph_topics);
 
 // One line naming the participants (name, addresses, topics), at most `max_listed` of them.
 std::string describe_peers(const std::vector<rmw::PeerParticipant>& peers, std::size_t max_listed);

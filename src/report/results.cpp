@@ -202,9 +202,11 @@ nlohmann::json transport_json(const std::string& rmw, int domain_id, const std::
     if (const char* file = std::getenv(variable); file && *file) profiles = file;
   }
   t["profiles_file"] = profiles;
-  t["settings"] = profiles.is_null() ? "Fast DDS defaults: UDPv4 + shared memory, XCDR1, QoS per "
-                                       "topic as in graph.yaml"
-                                     : "Fast DDS with the XML profile in profiles_file";
+  t["settings"] = profiles.is_null()
+                      ? "Fast DDS defaults (UDPv4 + shared memory, XCDR1) but a 16 MiB "
+                        "shared-memory segment and socket receive buffers up to 8 MiB, QoS per "
+                        "topic as in graph.yaml"
+                      : "Fast DDS with the XML profile in profiles_file";
   return t;
 }
 

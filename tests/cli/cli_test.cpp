@@ -145,12 +145,15 @@ TEST_P(CliPerNode, RunA1OneProcessPerNode) {
       transport["settings"].get<std::string>().find(rmw == "fastdds" ? "Fast DDS" : "Cyclone DDS"),
       std::string::npos)
       << transport.dump();
+  // What robotperf sets beyond the vendor's defaults is said.
+  EXPECT_NE(transport["settings"].get<std::string>().find("8 MiB"), std::string::npos)
+      << transport.dump();
   EXPECT_FALSE(j["software"]["libraries"][rmw].get<std::string>().empty());
   // The QoS of every endpoint robotperf made.
   bool monitor_qos = false, node_qos = false;
   for (const auto& e : transport["qos"]) {
     monitor_qos |= e["owner"] == "monitor" && e["topic"] == "/resize/image" &&
-                   e["reliability"] == "reliable" && e["depth"].get<int>() > 0;
+                   e["reliability"] == "reliable" && e["history"] == "keep_all";
     node_qos |= e["owner"] == "rectify";
   }
   EXPECT_TRUE(monitor_qos && node_qos) << transport["qos"].dump();

@@ -274,6 +274,16 @@ TEST_F(ExternalGraph, ForeignNodeAtVgaColour30HzLosesNothing) {
   }
 }
 
+// The launched node is on the domain by design: listed in domain_peers, but no "other
+// participant" (which would make --strict refuse every external graph).
+TEST_F(ExternalGraph, ALaunchedNodeIsTheGraphsOwnNotAnotherParticipant) {
+  const Outcome o = run_foreign("copy", "cyclonedds", 40);
+  ASSERT_TRUE(o.exit_code == 0 || o.exit_code == 3) << o.out;  // 3: a sanitized build's loss
+  const auto j = result();
+  ASSERT_FALSE(j["domain_peers"].empty()) << j.dump();
+  for (const auto& w : j["warnings"]) EXPECT_NE(w["rule"], "other_participants") << w.dump();
+}
+
 // A node that matches every endpoint but never publishes: refused once --connect-timeout has
 // passed, however long the warm-up is repeated.
 TEST_F(ExternalGraph, ForeignNodeThatNeverDeliversIsRefused) {

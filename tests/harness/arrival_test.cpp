@@ -3,6 +3,9 @@
 
 #include <chrono>
 #include <cmath>
+#include <set>
+#include <string>
+#include <vector>
 
 #include "black_box.hpp"
 #include "robotperf/harness/peak_search.hpp"
@@ -144,6 +147,36 @@ TEST(RunUserData, RoundTripsAndToleratesOtherKeys) {
   EXPECT_FALSE(parse_run_user_data("robotperf_ids=1,0,5;").ids.has_value());
   EXPECT_FALSE(parse_run_user_data("robotperf_ids=1,2;").ids.has_value());
   EXPECT_FALSE(parse_run_user_data("robotperf_ids=1,2,3x;").ids.has_value());
+}
+
+rmw::PeerParticipant peer(const std::string& name, std::set<std::string> topics,
+                          const std::string& user_data = "") {
+  rmw::PeerParticipant p;
+  p.name = name;
+  p.topics = std::move(topics);
+  p.user_data = user_data;
+  return p;
+}
+
+std::vector<std::string> names(const std::vector<rmw::PeerParticipant>& peers) {
+  std::vector<std::string> out;
+  for (const auto& p : peers) out.push_back(p.name);
+  return out;
+}
+
+TEST(OutsideGraph, AnExternalGraphsParticipantsAreItsOwnThroughItsTopics) {
+  // A launched pipeline rectify -> resize between the run's input and output: both are the
+  // graph's, the second through the topic it shares with the first, listed after it or not.
+  const std::vector<rmw::PeerParticipant> peers{
+      peer("resize", {"/rect", "/out"}), peer("rectify", {"/in", "/rect"}),
+      peer("stranger", {"/chatter"}),    peer("another run", {"/in"}, "robotperf_run=00ff;"),
+      peer("undiscovered", {}),
+  };
+  EXPECT_EQ(names(outside_graph(peers, {"/in", "/final"})),
+            (std::vector<std::string>{"stranger", "another run", "undiscovered"}));
+  EXPECT_EQ(names(outside_graph(peers, {"/out"})),
+            (std::vector<std::string>{"stranger", "another run", "undiscovered"}));
+  EXPECT_EQ(outside_graph(peers, {"/elsewhere"}).size(), peers.size());
 }
 
 }  // namespace
