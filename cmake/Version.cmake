@@ -1,12 +1,16 @@
-# Records the git revision and build settings in a generated header so that
-# every result can state exactly which robotperf produced it.
-execute_process(
-  COMMAND git -C "${CMAKE_SOURCE_DIR}" describe --always --dirty --abbrev=12
-  OUTPUT_VARIABLE ROBOTPERF_GIT_REVISION
-  OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET)
-if(NOT ROBOTPERF_GIT_REVISION)
-  set(ROBOTPERF_GIT_REVISION "unknown")
-endif()
+# Records the git revision and build settings in generated headers so that
+# every result can state exactly which robotperf produced it. The revision is read at every build
+# (robotperf/git_revision.hpp, target robotperf_git_revision; those that include it depend on
+# it), the settings at configure time (robotperf/build_info.hpp).
+set(_robotperf_git_revision_command
+    ${CMAKE_COMMAND} -DSOURCE_DIR=${CMAKE_SOURCE_DIR}
+    -DOUTPUT=${CMAKE_BINARY_DIR}/generated/robotperf/git_revision.hpp
+    -P ${CMAKE_CURRENT_LIST_DIR}/GitRevision.cmake)
+execute_process(COMMAND ${_robotperf_git_revision_command})
+add_custom_target(robotperf_git_revision
+  COMMAND ${_robotperf_git_revision_command}
+  BYPRODUCTS ${CMAKE_BINARY_DIR}/generated/robotperf/git_revision.hpp
+  VERBATIM)
 set(ROBOTPERF_COMPILER "${CMAKE_CXX_COMPILER_ID} ${CMAKE_CXX_COMPILER_VERSION}")
 string(TOUPPER "${CMAKE_BUILD_TYPE}" _bt)
 set(ROBOTPERF_CXX_FLAGS "${CMAKE_CXX_FLAGS} ${CMAKE_CXX_FLAGS_${_bt}}")

@@ -25,6 +25,7 @@
 #include "registry_commands.hpp"
 #include "robotperf/bag/bag.hpp"
 #include "robotperf/build_info.hpp"
+#include "robotperf/git_revision.hpp"
 #include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"

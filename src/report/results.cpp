@@ -10,6 +10,7 @@
 #include <tuple>
 
 #include "robotperf/build_info.hpp"
+#include "robotperf/git_revision.hpp"
 #include "robotperf/report/histogram.hpp"
 #include "robotperf/report/run_store.hpp"
 #include "robotperf/rmw/security.hpp"
