@@ -1,10 +1,10 @@
 // Replaying rosbag2 bags: any-type playback with IDs written into the header bytes.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <set>
 
+#include "../fixture_root.hpp"
 #include "../sanitized_build.hpp"
 #include "black_box.hpp"
 #include "robotperf/bag/bag.hpp"
@@ -20,20 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class TempDir {
- public:
-  explicit TempDir(const std::string& name)
-      : path_(fs::temp_directory_path() /
-              ("robotperf-bagplay-" + std::to_string(getpid()) + "-" + name)) {
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using robotperf::testing::FixtureRoot;
 
 bag::TopicInfo topic_info(const std::string& name, const std::string& type) {
   bag::TopicInfo t;
@@ -124,7 +111,7 @@ TEST(SerializedMessage, StampIsReadAndWrittenInPlace) {
 }
 
 TEST(BagPlayback, LoaderGroupsImageAndCameraInfoIntoFrames) {
-  TempDir tmp("loader");
+  FixtureRoot tmp;
   write_camera_bag(tmp.path() / "bag", bag::Storage::kMcap);
   const Dataset d = load_bag_dataset({tmp.path() / "bag", {}, {}, {}}, a1().inputs);
   EXPECT_EQ(d.frames, 68u);
@@ -145,7 +132,7 @@ TEST(BagPlayback, LoaderGroupsImageAndCameraInfoIntoFrames) {
 }
 
 TEST(BagPlayback, DatasetHashCoversTheRecordedTimeline) {
-  TempDir tmp("hash");
+  FixtureRoot tmp;
   write_camera_bag(tmp.path() / "even", bag::Storage::kSqlite3);
   write_camera_bag(tmp.path() / "even-again", bag::Storage::kSqlite3);
   // The same messages, the second half recorded 50 ms late: --rate bag replays another workload.
@@ -159,7 +146,7 @@ TEST(BagPlayback, DatasetHashCoversTheRecordedTimeline) {
 }
 
 TEST(BagPlayback, A1OnIntraLoopsWithUniqueIdsAndNoLoss) {
-  TempDir tmp("intra");
+  FixtureRoot tmp;
   write_camera_bag(tmp.path() / "bag", bag::Storage::kSqlite3);
   const RunResult r = run_benchmark(a1(), bag_run(tmp.path() / "bag", "intra", 80));
   expect_all_matched(r, 80);  // 80 > 68 frames: the bag loops
@@ -168,7 +155,7 @@ TEST(BagPlayback, A1OnIntraLoopsWithUniqueIdsAndNoLoss) {
 }
 
 TEST(BagPlayback, A1OnFastddsPublishesRecordedBytesWithRemapping) {
-  TempDir tmp("fastdds");
+  FixtureRoot tmp;
   write_camera_bag(tmp.path() / "bag", bag::Storage::kMcap,
                    {{"/camera/image_raw", "/front/image"}, {"/camera/camera_info", "/front/info"}});
   RunOptions o = bag_run(tmp.path() / "bag", "fastdds", 80);
@@ -191,7 +178,7 @@ TEST(BagPlayback, A1OnFastddsPublishesRecordedBytesWithRemapping) {
 // A corrupt message in a bag is found when the bag is loaded and left out, with a warning: it is
 // never sent, so the graph is never blamed for dropping it.
 TEST(BagPlayback, CorruptMessagesAreReportedNotCountedAsLost) {
-  TempDir tmp("corrupt");
+  FixtureRoot tmp;
   write_camera_bag(tmp.path() / "bag", bag::Storage::kMcap, {}, {}, {5, 17});
   const RunResult r = run_benchmark(a1(), bag_run(tmp.path() / "bag", "intra", 40));
   expect_all_matched(r, 40);
@@ -207,7 +194,7 @@ TEST(BagPlayback, CorruptMessagesAreReportedNotCountedAsLost) {
 }
 
 TEST(BagPlayback, TypesWithoutHeaderAreRefused) {
-  TempDir tmp("unstamped");
+  FixtureRoot tmp;
   {
     bag::Writer writer(tmp.path() / "bag", {});
     const auto t = writer.add_topic(topic_info("/in", "std_msgs/msg/String"));
@@ -235,7 +222,7 @@ TEST(BagPlayback, TimelineScheduleFollowsRecordedIntervalsAndLoops) {
 }
 
 TEST(BagPlayback, BagTimelinePacesSendsLikeTheRecording) {
-  TempDir tmp("timeline");
+  FixtureRoot tmp;
   // Intervals of 10, 20, 30, ... ms: clearly not a fixed rate.
   const auto time_of = [](std::size_t k) {
     return 1'700'000'000'000'000'000 + int64_t(k * (k + 1) / 2) * 10'000'000;

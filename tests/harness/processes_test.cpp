@@ -20,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "../fixture_root.hpp"
 #include "launched_processes.hpp"
 #include "measurement.hpp"
 #include "node_processes.hpp"
@@ -33,20 +34,7 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
-// A package folder for processes to run in and log to.
-class Scratch {
- public:
-  explicit Scratch(const std::string& name)
-      : dir_(fs::temp_directory_path() /
-             ("robotperf-processes-" + std::to_string(getpid()) + "-" + name)) {
-    fs::create_directories(dir_);
-  }
-  ~Scratch() { fs::remove_all(dir_); }
-  const fs::path& dir() const { return dir_; }
-
- private:
-  fs::path dir_;
-};
+using robotperf::testing::FixtureRoot;
 
 BenchmarkSpec launching(const fs::path& dir, const std::vector<std::string>& command) {
   BenchmarkSpec spec;
@@ -78,10 +66,10 @@ std::set<pid_t> groups_running(const std::string& marker) {
 // `ros2 run`, `ros2 launch` and wrapper scripts run the node as their child: its CPU is the
 // launched process's, not another process's.
 TEST(LaunchedProcesses, TheCpuOfALaunchedCommandsChildrenIsItsOwn) {
-  Scratch scratch("children_cpu");
+  FixtureRoot scratch;
   // `; true` keeps the shell waiting for the busy child instead of becoming it.
-  LaunchedProcesses launched(launching(scratch.dir(), {"sh", "-c", "yes > /dev/null; true"}),
-                             "fastdds", 0, scratch.dir(), "cpu.");
+  LaunchedProcesses launched(launching(scratch.path(), {"sh", "-c", "yes > /dev/null; true"}),
+                             "fastdds", 0, scratch.path(), "cpu.");
   const auto [pid, name] = launched.processes().at(0);
   RunOptions options;
   WindowMeasurement measurement(options, {{pid, name}}, {pid});
@@ -103,10 +91,11 @@ TEST(LaunchedProcesses, TheCpuOfALaunchedCommandsChildrenIsItsOwn) {
 // A member of the group that ignores SIGINT and SIGTERM (here a background job of the launched
 // shell) outlives the processes robotperf started; it must still get SIGKILL.
 TEST(LaunchedProcesses, StoppingKillsTheWholeGroupEvenAfterTheLaunchedProcessEnded) {
-  Scratch scratch("group_stop");
+  FixtureRoot scratch;
   LaunchedProcesses launched(
-      launching(scratch.dir(), {"sh", "-c", "(trap '' INT TERM; exec sleep 299) & exec sleep 300"}),
-      "fastdds", 0, scratch.dir(), "stop.");
+      launching(scratch.path(),
+                {"sh", "-c", "(trap '' INT TERM; exec sleep 299) & exec sleep 300"}),
+      "fastdds", 0, scratch.path(), "stop.");
   const pid_t group = launched.processes().at(0).first;
   // The background job is up once it is in the group beside the shell.
   const auto deadline = std::chrono::steady_clock::now() + 10s;
@@ -135,7 +124,7 @@ bool refuse_pidfd_open() {
 // Without a pidfd (an older kernel, or no descriptor left) a launched process is still watched:
 // its end during the run is a failure with how it ended.
 TEST(LaunchedProcesses, AProcessWithoutAPidfdIsStillSupervised) {
-  Scratch scratch("no_pidfd");
+  FixtureRoot scratch;
   std::unique_ptr<LaunchedProcesses> launched;
   bool refused = false;
   // In a thread of its own: the filter stays with the thread, not the rest of the tests.
@@ -143,8 +132,8 @@ TEST(LaunchedProcesses, AProcessWithoutAPidfdIsStillSupervised) {
     refused = refuse_pidfd_open();
     if (refused) {
       launched = std::make_unique<LaunchedProcesses>(
-          launching(scratch.dir(), {"sh", "-c", "sleep 0.5; exit 3"}), "fastdds", 0, scratch.dir(),
-          "nopidfd.");
+          launching(scratch.path(), {"sh", "-c", "sleep 0.5; exit 3"}), "fastdds", 0,
+          scratch.path(), "nopidfd.");
     }
   }).join();
   if (!refused) GTEST_SKIP() << "seccomp filters are not available here";
@@ -173,9 +162,9 @@ BenchmarkSpec with_nodes(const fs::path& dir, const std::vector<std::string>& ho
 // A child that does not stop is killed with what it started: a process of its own holding the
 // child's stdout open must not keep the runner waiting for its end.
 TEST(NodeProcesses, ShutdownEndsAChildWhoseOwnChildHoldsItsOutputOpen) {
-  Scratch scratch("node_shutdown");
+  FixtureRoot scratch;
   auto children = std::make_shared<NodeProcesses>(
-      with_nodes(scratch.dir(), {""}),
+      with_nodes(scratch.path(), {""}),
       std::vector<std::string>{"sh", "-c", "sleep 1000 & while :; do sleep 1; done"}, "fastdds", 0);
   const pid_t group = children->processes().at(0).first;
   auto reports = std::async(std::launch::async, [children] { return children->shutdown(0.5); });
@@ -190,9 +179,9 @@ TEST(NodeProcesses, ShutdownEndsAChildWhoseOwnChildHoldsItsOutputOpen) {
 
 // A node whose process cannot start takes the ones started before it down with it.
 TEST(NodeProcesses, AChildThatCannotStartTakesTheOthersWithIt) {
-  Scratch scratch("node_start");
+  FixtureRoot scratch;
   const std::string marker = "robotperf-test-" + std::to_string(getpid()) + "-start";
-  EXPECT_THROW(NodeProcesses(with_nodes(scratch.dir(), {"", "nowhere"}),
+  EXPECT_THROW(NodeProcesses(with_nodes(scratch.path(), {"", "nowhere"}),
                              {"sh", "-c", "sleep 1000; true # " + marker}, "fastdds", 0, {},
                              {{"nowhere", {"/nonexistent/robotperf-test-launcher"}}}),
                std::runtime_error);

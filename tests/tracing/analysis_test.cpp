@@ -3,12 +3,12 @@
 #include "robotperf/tracing/analysis.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <map>
 
+#include "../fixture_root.hpp"
 #include "ctf_writer.hpp"
 #include "robotperf/tracing/ctf.hpp"
 
@@ -19,19 +19,7 @@ namespace fs = std::filesystem;
 using testing::CtfWriter;
 using V = testing::FieldValue;
 
-class TempDir {
- public:
-  explicit TempDir(const std::string& name)
-      : path_(fs::temp_directory_path() /
-              ("robotperf-tracing-" + std::to_string(getpid()) + "-" + name)) {
-    fs::remove_all(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using robotperf::testing::FixtureRoot;
 
 constexpr int32_t kRunPid = 42;
 constexpr int64_t kBase = 1'700'000'000'000'000'000;  // message ID of frame 0
@@ -184,14 +172,14 @@ void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool devic
 // IDs that are not base + k * period of the run (a trace robotperf's Playback did not write) are
 // looked up instead of computed: the same counts, latencies and hops.
 TEST(Analyzer, IdsOfAnotherSpacingGiveTheSameResult) {
-  auto analysed = [](const std::string& name, int64_t declared_period) {
-    TempDir dir(name);
+  auto analysed = [](int64_t declared_period) {
+    FixtureRoot dir;
     CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
     write_run(w, 0, false, true, declared_period);
     return analyze_trace(dir.path());
   };
-  const TraceAnalysis computed = analysed("ids-computed", kPeriod);
-  const TraceAnalysis looked_up = analysed("ids-looked-up", kPeriod + 1);
+  const TraceAnalysis computed = analysed(kPeriod);
+  const TraceAnalysis looked_up = analysed(kPeriod + 1);
   EXPECT_EQ(looked_up.matched, 2u);
   EXPECT_EQ(looked_up.duplicates, 1u);
   EXPECT_EQ(looked_up.lost, computed.lost);
@@ -208,7 +196,7 @@ TEST(Analyzer, IdsOfAnotherSpacingGiveTheSameResult) {
 // A warm-up message the Playback sent again comes back again: not a duplicate, as in the
 // black-box count; a measured message taken twice is one.
 TEST(Analyzer, ARepeatedWarmupIsNoDuplicate) {
-  TempDir dir("repeated-warmup");
+  FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
   write_run(w, 0, false, true);
   const TraceAnalysis a = analyze_trace(dir.path());
@@ -222,14 +210,14 @@ TEST(Analyzer, ARepeatedWarmupIsNoDuplicate) {
 // from the first publish and the first take. A trace from before run_begin said so counts them
 // as duplicates, as robotperf did then.
 TEST(Analyzer, AStateStreamsRepeatsAreNeitherDuplicatesNorHopSamples) {
-  auto analysed = [](const std::string& name, OutputKind output) {
-    TempDir dir(name);
+  auto analysed = [](OutputKind output) {
+    FixtureRoot dir;
     CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
     write_run(w, 0, false, false, kPeriod, output);
     return analyze_trace(dir.path());
   };
-  const TraceAnalysis plain = analysed("plain-output", OutputKind::kPlain);
-  const TraceAnalysis state = analysed("state-output", OutputKind::kState);
+  const TraceAnalysis plain = analysed(OutputKind::kPlain);
+  const TraceAnalysis state = analysed(OutputKind::kState);
   ASSERT_TRUE(state.run.has_value());
   EXPECT_TRUE(state.run->state_output);
   EXPECT_FALSE(plain.run->state_output);
@@ -246,7 +234,7 @@ TEST(Analyzer, AStateStreamsRepeatsAreNeitherDuplicatesNorHopSamples) {
         << plain.hops[i].label();
   }
 
-  const TraceAnalysis unrecorded = analysed("state-unrecorded", OutputKind::kStateUnrecorded);
+  const TraceAnalysis unrecorded = analysed(OutputKind::kStateUnrecorded);
   ASSERT_TRUE(unrecorded.run.has_value());
   EXPECT_FALSE(unrecorded.run->state_output);
   EXPECT_EQ(unrecorded.matched, 2u);
@@ -256,7 +244,7 @@ TEST(Analyzer, AStateStreamsRepeatsAreNeitherDuplicatesNorHopSamples) {
 }
 
 TEST(CtfReader, DecodesCompactAndExtendedHeadersWithClockWrap) {
-  TempDir dir("headers");
+  FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kCompact, true);
   w.define("a:b", {{"v", testing::FieldKind::kU64}, {"s", testing::FieldKind::kString}});
   // Low 27 bits wrap between the 2nd and 3rd event; a gap of more than 2^27 ns
@@ -290,7 +278,7 @@ TEST(CtfReader, DecodesCompactAndExtendedHeadersWithClockWrap) {
 // Strings of every length up to 80 bytes (found a word at a time, then by memchr), each followed
 // by a number that must be read from right after its NUL.
 TEST(CtfReader, StringsOfEveryLengthEndAtTheirNul) {
-  TempDir dir("string-lengths");
+  FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kLarge, false);
   w.define("a:s", {{"s", testing::FieldKind::kString}, {"v", testing::FieldKind::kU64}});
   auto text = [](uint64_t n) {
@@ -313,7 +301,7 @@ TEST(CtfReader, StringsOfEveryLengthEndAtTheirNul) {
 // A reader that selects fields gets those exactly as without a selection, and the others with no
 // value; the events after an unselected string or gid array are still read from the right place.
 TEST(CtfReader, FieldsNotSelectedAreSteppedOver) {
-  TempDir dir("selection");
+  FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false);
   w.define("a:mixed", {{"name", testing::FieldKind::kString},
                        {"gid", testing::FieldKind::kGid},
@@ -360,7 +348,7 @@ TEST(CtfReader, FieldsNotSelectedAreSteppedOver) {
 
 TEST(Analyzer, HandBuiltTraceGivesExactLatencies) {
   for (auto header : {CtfWriter::Header::kCompact, CtfWriter::Header::kLarge}) {
-    TempDir dir(header == CtfWriter::Header::kCompact ? "exact-compact" : "exact-large");
+    FixtureRoot dir;
     CtfWriter w(dir.path() / "ust" / "uid" / "0" / "64-bit", header,
                 header == CtfWriter::Header::kLarge, 2);
     write_run(w);
@@ -489,7 +477,7 @@ void write_long_run(CtfWriter& w, uint64_t frames) {
 // Decoding in parts on several threads gives what one thread reading every stream in order
 // gives, to the last field.
 TEST(Analyzer, DecodingInPartsGivesTheResultOfOneThread) {
-  TempDir dir("parts");
+  FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
   write_long_run(w, 60);
   AnalyzeOptions one;
@@ -515,7 +503,7 @@ TEST(Analyzer, DecodingInPartsGivesTheResultOfOneThread) {
 // The publish -> take table counts the messages the hop table does: not the warm-up's, however
 // long their transport took.
 TEST(Analyzer, PublishToTakeLeavesTheWarmupOut) {
-  TempDir dir("warmup-take");
+  FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
   write_run(w, 0, false, false, kPeriod, OutputKind::kPlain, true);
   const TraceAnalysis a = analyze_trace(dir.path());
@@ -529,7 +517,7 @@ TEST(Analyzer, PublishToTakeLeavesTheWarmupOut) {
 // A kernel on a device: its upload, compute and download stages are hops of their own, beside
 // the kernel's.
 TEST(Analyzer, DeviceStagesAreHopsOfTheirOwn) {
-  TempDir dir("device");
+  FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
   write_run(w, 0, true);
   const TraceAnalysis a = analyze_trace(dir.path());
@@ -549,7 +537,7 @@ TEST(Analyzer, DeviceStagesAreHopsOfTheirOwn) {
 }
 
 TEST(Analyzer, DiscardedEventsAreReportedAndInvalidate) {
-  TempDir dir("discarded");
+  FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kLarge, false, 2);
   write_run(w, 7);
   const TraceAnalysis a = analyze_trace(dir.path());
@@ -568,7 +556,7 @@ TEST(Analyzer, DiscardedEventsAreReportedAndInvalidate) {
 }
 
 TEST(Analyzer, TraceWithoutRobotperfRunStillGivesCallbacksAndTopics) {
-  TempDir dir("ros2-only");
+  FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false);
   testing::define_robotperf_events(w);
   w.event(0, "ros2:rcl_node_init", 100, 7, 7,
@@ -592,7 +580,7 @@ TEST(Analyzer, TraceWithoutRobotperfRunStillGivesCallbacksAndTopics) {
 // A process whose run the trace does not hold: no run is taken instead, and the reasons name the
 // processes whose runs it holds.
 TEST(Analyzer, ARunOfAnotherProcessIsNamedNotTaken) {
-  TempDir dir("other-pid");
+  FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
   write_run(w);
   EXPECT_EQ(analyze_trace(dir.path(), {.run_pid = kRunPid, .extra_processes = {}}).run_pids,
@@ -614,7 +602,7 @@ TEST(Analyzer, ARunOfAnotherProcessIsNamedNotTaken) {
 // timestamp) cannot pair publishes with takes, and the analysis says so instead of dropping the
 // table silently.
 TEST(Analyzer, CallbackSymbolsAndWhyATableIsMissing) {
-  TempDir dir("humble");
+  FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false);
   testing::define_robotperf_events(w, testing::Ros2Layout::kHumble);
   w.event(0, "ros2:rcl_node_init", 100, 7, 7,
@@ -646,7 +634,7 @@ TEST(Analyzer, CallbackSymbolsAndWhyATableIsMissing) {
 
 // Event times count nanoseconds whatever the clock's frequency: its cycles are converted.
 TEST(CtfReader, EventTimesAreNanosecondsOfAClockOfAnyFrequency) {
-  TempDir dir("clock-freq");
+  FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false);
   w.clock_frequency(1'000'000);  // 1 MHz: a cycle is 1 us
   testing::define_robotperf_events(w);
@@ -717,7 +705,7 @@ uint64_t read_events(const fs::path& dir) {
 // back into events already read; so is a length from the metadata whose bytes overflow.
 // Elements that take no bits are refused before being decoded 2^40 times.
 TEST(CtfReader, LengthsBeyondThePacketAreErrorsNotStepsBack) {
-  TempDir dir("lengths");
+  FixtureRoot dir;
   const uint64_t wraps_back = (uint64_t{1} << 61) - 74;
   const std::pair<uint64_t, std::string> sequences[] = {
       {wraps_back, "_sent;\n\t\tuint8_t _blob[_sent];"},
@@ -739,7 +727,7 @@ TEST(CtfReader, LengthsBeyondThePacketAreErrorsNotStepsBack) {
 // A packet size near 2^64 does not wrap the next packet's start back to an earlier packet: it
 // does not fit the file.
 TEST(CtfReader, APacketSizeNear2To64DoesNotFitTheFile) {
-  TempDir dir("packet-size");
+  FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false);
   testing::define_robotperf_events(w);
   w.event(0, "robotperf:run_end", 1000, 1, 1, {V(uint64_t{4})});
@@ -764,7 +752,7 @@ TEST(CtfReader, APacketSizeNear2To64DoesNotFitTheFile) {
 }
 
 TEST(CtfReader, CorruptTracesGiveClearErrors) {
-  TempDir dir("corrupt");
+  FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kLarge, false);
   testing::define_robotperf_events(w);
   w.event(0, "robotperf:run_end", 1000, 1, 1, {V(uint64_t{4})});
@@ -791,7 +779,7 @@ TEST(CtfReader, CorruptTracesGiveClearErrors) {
     EXPECT_NE(std::string(e.what()).find("line 4"), std::string::npos) << e.what();
   }
   EXPECT_THROW(analyze_trace(dir.path() / "nothing-here"), ctf::CtfError);
-  const TempDir empty("empty");
+  const FixtureRoot empty;
   fs::create_directories(empty.path());
   EXPECT_THROW(analyze_trace(empty.path()), std::invalid_argument);
 }
