@@ -15,9 +15,11 @@
 #   kernel_times: the GPU time of each kernel a3 runs on cuda, by Nsight Compute (ncu).
 # GPU_CHECK_STEPS (names separated by spaces) runs only the steps it names.
 # Run it from the repository's root. Each step's output goes to a file in OUT_DIR (default $OUT,
-# else ./gpu-check), with summary.txt listing each step's outcome. The steps share one deadline
-# (GPU_CHECK_SECONDS, default 480) so that the whole check ends within a lease's command limit;
-# a step cut short says so in the summary.
+# else ./gpu-check), with summary.txt listing each step's outcome, and under a step of several
+# commands (the kernel test programs, the benchmarks) each one's: every one runs whether or not
+# another failed. The steps share one deadline (GPU_CHECK_SECONDS, default 480) so that the whole
+# check ends within a lease's command limit; a step cut short says so in the summary. Exit status:
+# 0, 1 when a step did not pass. The unpacked bundle is removed on exit.
 set -uo pipefail
 root=$(pwd)
 bundle=$root/.gpu-bundle
@@ -34,7 +36,18 @@ die() {
 
 [[ -f "$bundle/bundle.tar.xz" ]] ||
   die "no $bundle/bundle.tar.xz: run scripts/gpu-bundle.sh on the build machine and copy it here"
-unpacked=$(mktemp -d /tmp/robotperf-gpu.XXXXXX)
+unpacked=$(mktemp -d /tmp/robotperf-gpu.XXXXXX) || die "cannot make a folder in /tmp"
+links=()  # the links made here to the bundle's paths, removed with it
+cleanup() {
+  local link
+  for link in ${links[@]+"${links[@]}"}; do
+    [[ -L "$link" ]] && rm -f "$link"
+  done
+  rm -rf "$unpacked"
+}
+trap cleanup EXIT
+trap 'exit 130' INT
+trap 'exit 143' TERM
 # Python's tarfile where there is no xz program.
 if command -v xz >/dev/null; then
   tar -C "$unpacked" -xJf "$bundle/bundle.tar.xz" || die "cannot unpack the bundle"
@@ -51,13 +64,15 @@ if [[ "$source_dir" != "$root" ]]; then
     die "$source_dir (where the bundle was built) exists here and is not this repository"
   fi
   mkdir -p "$(dirname "$source_dir")"
-  [[ -e "$source_dir" ]] || ln -s "$root" "$source_dir"
+  if [[ ! -e "$source_dir" ]]; then
+    ln -s "$root" "$source_dir" && links+=("$source_dir")
+  fi
 fi
 if [[ -e "$build_dir" && ! -L "$build_dir" ]]; then
   die "$build_dir (the bundle's build folder) exists here: remove it or check from another copy"
 fi
 rm -f "$build_dir"
-ln -s "$unpacked/build" "$build_dir"
+ln -s "$unpacked/build" "$build_dir" && links+=("$build_dir")
 
 export LD_LIBRARY_PATH=$unpacked/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
 # The build machine's libstdc++ only where this machine's cannot run robotperf.
@@ -81,6 +96,30 @@ if [[ -z "${OCL_ICD_VENDORS:-}" ]]; then
   fi
 fi
 
+# each LABEL COMMAND [LABEL COMMAND]...: runs every COMMAND (a bash command line), whatever the
+# others' exit status, saying "each: LABEL: passed" or "each: LABEL: exit N" after it; fails when
+# one failed. A step runs it as "${each[@]}" LABEL COMMAND ...
+each() {
+  local failed=0 rc
+  while (($# >= 2)); do
+    echo "=== $1: $2"
+    bash -c "$2"
+    rc=$?
+    if ((rc == 0)); then
+      echo "each: $1: passed"
+    else
+      echo "each: $1: exit $rc"
+      failed=1
+    fi
+    shift 2
+  done
+  return "$failed"
+}
+export -f each
+# shellcheck disable=SC2016 # expanded by the inner shell
+each=(bash -c 'each "$@"' each)
+
+failures=0
 # step NAME LIMIT_SECONDS COMMAND...: runs it into OUT_DIR/NAME.txt within the shared deadline.
 step() {
   local name=$1 limit=$2
@@ -92,6 +131,7 @@ step() {
   local left=$((deadline - SECONDS))
   if ((left < 10)); then
     echo "$name: not run (the deadline was reached)" | tee -a "$summary"
+    failures=$((failures + 1))
     return
   fi
   ((limit > left)) && limit=$left
@@ -106,24 +146,34 @@ step() {
   skipped=$(grep -c '^\[  SKIPPED \] .* ms)$' "$out/$name.txt")
   ((skipped > 0)) && outcome="$outcome, $skipped tests SKIPPED"
   echo "$name: $outcome ($((SECONDS - start)) s)" | tee -a "$summary"
+  # Each command of the step (each above), as far as it got.
+  sed -n 's/^each: /  /p' "$out/$name.txt" | tee -a "$summary"
+  ((rc == 0)) || failures=$((failures + 1))
 }
 
 cd "$build_dir" || die "cannot enter $build_dir"
 step device 60 bash -c 'nvidia-smi && ./robotperf sysinfo'
-step kernels 120 bash -c "./tests/kernels/kernels_image_proc_test --gtest_filter='*Cuda*' &&
-  ./tests/kernels/kernels_stereo_depth_test --gtest_filter='*Cuda*' &&
-  ./tests/kernels/kernels_cuda_disparity_filter_test"
-step runs 150 bash -c "for b in a1 a2 a3 a4 a5; do
-  ./robotperf run \$b --backend cuda --output '$out/results' || exit; done &&
-  ./robotperf run a1 --backend cuda --device-resident --output '$out/results'"
-step opencl_kernels 45 bash -c "./tests/kernels/kernels_image_proc_test --gtest_filter='*OpenCl*' &&
-  ./tests/kernels/kernels_stereo_depth_test --gtest_filter='*OpenCl*'"
+step kernels 120 "${each[@]}" \
+  image_proc "./tests/kernels/kernels_image_proc_test --gtest_filter='*Cuda*'" \
+  stereo_depth "./tests/kernels/kernels_stereo_depth_test --gtest_filter='*Cuda*'" \
+  cuda_disparity_filter ./tests/kernels/kernels_cuda_disparity_filter_test
+results=$(printf %q "$out/results")
+runs=()
+for b in a1 a2 a3 a4 a5; do
+  runs+=("$b" "./robotperf run $b --backend cuda --output $results")
+done
+runs+=("a1 device-resident" "./robotperf run a1 --backend cuda --device-resident --output $results")
+step runs 150 "${each[@]}" "${runs[@]}"
+step opencl_kernels 45 "${each[@]}" \
+  image_proc "./tests/kernels/kernels_image_proc_test --gtest_filter='*OpenCl*'" \
+  stereo_depth "./tests/kernels/kernels_stereo_depth_test --gtest_filter='*OpenCl*'"
 step opencl_a3 60 ./robotperf run a3 --backend opencl --connect-timeout 45 --output "$out/results"
 step bench_backends 300 ./bench/backends/bench_backends
 step cli 200 ./tests/cli/cli_test --gtest_filter='*Cuda*'
-step grey 60 bash -c "./robotperf run a1 --backend cuda --mode grey --count 150 --output '$out/results' &&
-  ./robotperf run a5 --backend cuda --mode grey --count 150 --output '$out/results' &&
-  ./robotperf run a5 --mode grey --count 150 --output '$out/results'"
+step grey 60 "${each[@]}" \
+  "a1 cuda" "./robotperf run a1 --backend cuda --mode grey --count 150 --output $results" \
+  "a5 cuda" "./robotperf run a5 --backend cuda --mode grey --count 150 --output $results" \
+  "a5 cpu" "./robotperf run a5 --mode grey --count 150 --output $results"
 # One metric, one pass per kernel; past the warm-up (a3 launches 12 kernels a message). ncu with
 # its own libraries, not the bundle's. Profiled, the graph falls behind its rate: the run is
 # invalid (exit status 3), the kernels' times are what this step is for.
@@ -136,4 +186,5 @@ step kernel_times 80 env -u LD_LIBRARY_PATH PATH="$PATH:/usr/local/cuda/bin" \
 if [[ -d "$out/results" ]]; then
   tar -C "$out" -cf "$out/results.tar" results && rm -rf "$out/results"
 fi
-echo "gpu-check: outputs in $out" | tee -a "$summary"
+echo "gpu-check: outputs in $out; $failures steps did not pass" | tee -a "$summary"
+((failures == 0))

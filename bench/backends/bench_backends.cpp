@@ -1,36 +1,38 @@
 // The perception benchmarks on each backend of this machine: p50 and p99 latency (black-box,
 // intra, from send: transfers to and from the device included, as every message pays them), the
-// speed-up over the cpu backend of the same machine, whether the answer still passes the
-// benchmark's functional checks, and where a device backend's time goes: upload, compute and
-// download per message (mean ms, summed over the graph's nodes on the device), from a second,
-// grey-box run in which each stage waits for its device (LTTng; the latency comes from the
-// first run, which does not wait). With a CUDA device it first prints the floor under those
-// stages: the same bytes moved with no kernel (perception::cuda_transfer_floor).
+// speed-up over the cpu backend of the same machine, the share of messages lost, whether the run
+// is valid (it delivered what its benchmark requires and its answers passed the functional
+// checks, the check against cpu among them; an invalid row is followed by why), and where a
+// device backend's time goes: upload, compute and download per message (mean ms, summed over the
+// graph's nodes on the device), from a second, grey-box run in which each stage waits for its
+// device (LTTng; the latency comes from the first run, which does not wait). With a CUDA device
+// it first prints the floor under those stages: the same bytes moved with no kernel
+// (perception::cuda_transfer_floor).
 // Run on demand: ./build/bench/backends/bench_backends [--count N] [--backends opencl,cuda]
 //                 [a1 a2 a3 a4 a5]
 // (cpu, the baseline, is always measured). A benchmark or backend that fails is a row saying why,
-// and the others are still measured. Exit status: 0, 1 when an answer failed its functional
-// checks, 2 when a run failed.
+// and the others are still measured. Exit status: 0, 1 when a run was invalid, 2 when a run
+// failed.
 // a3 is in the default list only where a CUDA device is: on a CPU OpenCL device (pocl) its block
 // matcher takes about 150 ms a pair and cannot keep up with a3's 30 Hz, so the figure would be
 // queueing.
 //
 // Targets (issue #19), for the cuda backend on a data-centre GPU: a3 >= 10x, a1, a2, a5 >= 3x,
-// a1 p50 <= 1 ms. They are printed beside cuda, met or not; a CPU "device" behind OpenCL (pocl)
-// is there to test the path, not to be fast. Where the graph can keep images on the device
-// between nodes (a1), a "cuda-res" row follows cuda's: the device-resident configuration (run
-// --device-resident), for information.
+// a1 p50 <= 1 ms. They are printed beside cuda, met or not, and not judged where either run is
+// invalid; a CPU "device" behind OpenCL (pocl) is there to test the path, not to be fast. Where
+// the graph can keep images on the device between nodes (a1), a "cuda-res" row follows cuda's:
+// the device-resident configuration (run --device-resident), for information.
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "backend_row.hpp"
 #include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/run.hpp"
@@ -41,11 +43,6 @@
 using namespace robotperf;
 
 namespace {
-
-struct Measured {
-  double p50_ms = 0, p99_ms = 0;
-  bool functional_ok = false;
-};
 
 // Mean ms per message of each device stage, summed over the nodes on the device.
 struct StageSplit {
@@ -64,15 +61,9 @@ harness::RunOptions options(std::size_t count, const std::string& backend, bool 
   return o;
 }
 
-Measured measure(const harness::BenchmarkSpec& spec, const std::string& backend, std::size_t count,
-                 bool resident) {
-  const harness::RunOptions o = options(count, backend, resident);
-  const harness::RunResult r = harness::run_benchmark(spec, o);
-  Measured m;
-  m.p50_ms = r.latency_from_sent.p50 / 1e6;
-  m.p99_ms = r.latency_from_sent.p99 / 1e6;
-  m.functional_ok = r.functional ? r.functional->valid : true;
-  return m;
+bench::BackendRow measure(const harness::BenchmarkSpec& spec, const std::string& backend,
+                          std::size_t count, bool resident) {
+  return bench::backend_row(harness::run_benchmark(spec, options(count, backend, resident)));
 }
 
 // The device stages of a grey-box run of `count` messages; empty when there is no tracing here
@@ -146,20 +137,6 @@ bool can_stay_on_device(harness::BenchmarkSpec spec) {
   }
 }
 
-// Issue #19's target for the cuda backend of `id`, and whether `m` meets it; empty when none.
-std::string target(const std::string& id, const Measured& cpu, const Measured& m) {
-  const std::map<std::string, double> speedup = {{"a1", 3}, {"a2", 3}, {"a3", 10}, {"a5", 3}};
-  const auto t = speedup.find(id);
-  if (t == speedup.end()) return "-";
-  bool met = cpu.p50_ms / m.p50_ms >= t->second;
-  std::string text = ">= " + std::to_string(static_cast<int>(t->second)) + "x";
-  if (id == "a1") {
-    text += ", p50 <= 1 ms";
-    met = met && m.p50_ms <= 1.0;
-  }
-  return text + (met ? ": met" : ": NOT met");
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -224,18 +201,24 @@ int main(int argc, char** argv) {
       "backend p50 on this machine; upload / compute / download: mean ms per message from a "
       "grey-box run of %zu\n",
       count, split_count);
-  std::printf("%-4s %-8s %9s %9s %9s  %-10s %8s %8s %8s  %s\n", "id", "backend", "p50", "p99",
-              "speed-up", "functional", "upload", "compute", "download",
+  std::printf("%-4s %-8s %9s %9s %9s %7s  %-7s %8s %8s %8s  %s\n", "id", "backend", "p50", "p99",
+              "speed-up", "lost %", "valid", "upload", "compute", "download",
               "target (issue #19, cuda)");
   // A benchmark or backend that fails is a row saying why; the others are still measured.
   int status = 0;
+  // An invalid run's figures are of a graph that fell behind or answered wrongly: its reasons
+  // follow its row, and the exit status says so.
+  const auto invalid = [&](const bench::BackendRow& row) {
+    for (const auto& why : row.reasons) std::printf("     why: %s\n", why.c_str());
+    if (!row.valid && status == 0) status = 1;
+  };
   const auto failed = [&](const std::string& id, const std::string& name, const char* why) {
     std::printf("%-4s %-8s  failed: %s\n", id.c_str(), name.c_str(), why);
     status = 2;
   };
   for (const auto& id : ids) {
     std::optional<harness::BenchmarkSpec> spec;
-    Measured cpu;
+    bench::BackendRow cpu;
     try {
       spec = harness::find_benchmark(ROBOTPERF_BENCHMARKS_DIR, id);
       cpu = measure(*spec, "cpu", count, false);
@@ -243,9 +226,9 @@ int main(int argc, char** argv) {
       failed(id, "cpu", e.what());
       continue;
     }
-    std::printf("%-4s %-8s %9.3f %9.3f %9s  %-10s\n", id.c_str(), "cpu", cpu.p50_ms, cpu.p99_ms,
-                "1.00x", cpu.functional_ok ? "ok" : "INVALID");
-    if (!cpu.functional_ok && status == 0) status = 1;
+    std::printf("%-4s %-8s %9.3f %9.3f %9s %7.2f  %s\n", id.c_str(), "cpu", cpu.p50_ms, cpu.p99_ms,
+                "1.00x", cpu.loss_percent, cpu.valid ? "ok" : "INVALID");
+    invalid(cpu);
     // cuda also device-resident where the graph can keep images on the device (a1): its own
     // configuration, for information beside the host-memory baseline the targets are about.
     std::vector<std::pair<std::string, bool>> rows;
@@ -255,7 +238,7 @@ int main(int argc, char** argv) {
     }
     for (const auto& [b, resident] : rows) {
       const std::string name = resident ? b + "-res" : b;
-      Measured m;
+      bench::BackendRow m;
       try {
         m = measure(*spec, b, count, resident);
       } catch (const std::exception& e) {
@@ -268,14 +251,14 @@ int main(int argc, char** argv) {
         if (s) std::snprintf(text, sizeof text, "%.3f", (*s).*stage);
         return std::string(text);
       };
-      std::printf("%-4s %-8s %9.3f %9.3f %8.2fx  %-10s %8s %8s %8s  %s\n", id.c_str(), name.c_str(),
-                  m.p50_ms, m.p99_ms, cpu.p50_ms / m.p50_ms, m.functional_ok ? "ok" : "INVALID",
-                  ms(&StageSplit::upload_ms).c_str(), ms(&StageSplit::compute_ms).c_str(),
-                  ms(&StageSplit::download_ms).c_str(),
-                  b == "cuda" && !resident ? target(id, cpu, m).c_str()
+      std::printf("%-4s %-8s %9.3f %9.3f %8.2fx %7.2f  %-7s %8s %8s %8s  %s\n", id.c_str(),
+                  name.c_str(), m.p50_ms, m.p99_ms, cpu.p50_ms / m.p50_ms, m.loss_percent,
+                  m.valid ? "ok" : "INVALID", ms(&StageSplit::upload_ms).c_str(),
+                  ms(&StageSplit::compute_ms).c_str(), ms(&StageSplit::download_ms).c_str(),
+                  b == "cuda" && !resident ? bench::cuda_target(id, cpu, m).c_str()
                   : resident               ? "device-resident: information"
                                            : "-");
-      if (!m.functional_ok && status == 0) status = 1;
+      invalid(m);
     }
   }
   return status;

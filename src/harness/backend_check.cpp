@@ -1,12 +1,15 @@
 #include "robotperf/harness/backend_check.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <cstring>
+#include <limits>
 #include <mutex>
 #include <stdexcept>
+#include <string_view>
 
 #include "robotperf/graph/executor.hpp"
 #include "robotperf/graph/node.hpp"
@@ -49,8 +52,40 @@ double share_close(const uint8_t* a, const uint8_t* b, std::size_t bytes, double
 constexpr double kIntegerChannelLevels = 1.0;
 constexpr double kFloatChannelShareOfMagnitude = 1e-4;
 
-bool is_float_encoding(const std::string& e) {
-  return e.find("32F") != std::string::npos || e.find("64F") != std::string::npos;
+// The type of one channel of an image's pixels.
+enum class Channel { kU8, kS8, kU16, kS16, kS32, kF32, kF64 };
+
+// The channel type of an encoding of sensor_msgs/image_encodings: a named one (mono8, rgb16,
+// bayer_rggb8, yuv422, ...) or "<bits><U|S|F>C<channels>" (8UC3, 16SC1, 32FC1, ...). nullopt for
+// one it does not name: its bytes say nothing comparable.
+std::optional<Channel> channel_of(std::string_view encoding) {
+  for (std::string_view name :
+       {"mono8", "rgb8", "bgr8", "rgba8", "bgra8", "bayer_rggb8", "bayer_bggr8", "bayer_gbrg8",
+        "bayer_grbg8", "yuv422", "uyvy", "yuyv", "yuv422_yuy2"}) {
+    if (encoding == name) return Channel::kU8;
+  }
+  for (std::string_view name : {"mono16", "rgb16", "bgr16", "rgba16", "bgra16", "bayer_rggb16",
+                                "bayer_bggr16", "bayer_gbrg16", "bayer_grbg16"}) {
+    if (encoding == name) return Channel::kU16;
+  }
+  const std::size_t c = encoding.find('C');
+  if (c == std::string_view::npos) return std::nullopt;
+  const std::string_view digits = encoding.substr(c + 1);
+  int channels = 0;
+  const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), channels);
+  if (digits.empty() || error != std::errc() || end != digits.data() + digits.size() ||
+      channels < 1) {
+    return std::nullopt;
+  }
+  const std::string_view depth = encoding.substr(0, c);
+  if (depth == "8U") return Channel::kU8;
+  if (depth == "8S") return Channel::kS8;
+  if (depth == "16U") return Channel::kU16;
+  if (depth == "16S") return Channel::kS16;
+  if (depth == "32S") return Channel::kS32;
+  if (depth == "32F") return Channel::kF32;
+  if (depth == "64F") return Channel::kF64;
+  return std::nullopt;
 }
 
 template <class T>
@@ -63,21 +98,46 @@ double float_share(const uint8_t* a, const uint8_t* reference, std::size_t bytes
   return share_close<T>(a, reference, bytes, kFloatChannelShareOfMagnitude * magnitude);
 }
 
-// The element type of an encoding, by its depth: 32F, 64F, 16-bit or else 8-bit channels.
+// Channel by channel, as the encoding's channel type; nothing agrees in an encoding it cannot
+// read.
 double image_share(const msgs::Image& a, const msgs::Image& b) {
   if (a.width != b.width || a.height != b.height || a.encoding != b.encoding || a.step != b.step ||
       a.data.size() != b.data.size()) {
     return 0.0;
   }
-  const std::string& e = a.encoding;
+  const std::optional<Channel> channel = channel_of(a.encoding);
+  if (!channel) return 0.0;
   const uint8_t* x = a.data.data();
   const uint8_t* y = b.data.data();
   const std::size_t bytes = a.data.size();
-  if (e.find("32F") != std::string::npos) return float_share<float>(x, y, bytes);
-  if (e.find("64F") != std::string::npos) return float_share<double>(x, y, bytes);
-  if (e.find("16") != std::string::npos)
-    return share_close<uint16_t>(x, y, bytes, kIntegerChannelLevels);
-  return share_close<uint8_t>(x, y, bytes, kIntegerChannelLevels);
+  switch (*channel) {
+    case Channel::kU8:
+      return share_close<uint8_t>(x, y, bytes, kIntegerChannelLevels);
+    case Channel::kS8:
+      return share_close<int8_t>(x, y, bytes, kIntegerChannelLevels);
+    case Channel::kU16:
+      return share_close<uint16_t>(x, y, bytes, kIntegerChannelLevels);
+    case Channel::kS16:
+      return share_close<int16_t>(x, y, bytes, kIntegerChannelLevels);
+    case Channel::kS32:
+      return share_close<int32_t>(x, y, bytes, kIntegerChannelLevels);
+    case Channel::kF32:
+      return float_share<float>(x, y, bytes);
+    case Channel::kF64:
+      return float_share<double>(x, y, bytes);
+  }
+  return 0.0;
+}
+
+std::string image_criterion(const std::string& encoding) {
+  const std::optional<Channel> channel = channel_of(encoding);
+  if (!channel) {
+    return "pixels of a known encoding ('" + encoding +
+           "' is not one of sensor_msgs/image_encodings, so nothing is compared)";
+  }
+  if (*channel == Channel::kF32 || *channel == Channel::kF64)
+    return "|difference| <= 1e-4 x the cpu image's largest |value| on float pixel channels";
+  return "|difference| <= 1 on pixel channels";
 }
 
 double cloud_share(const msgs::PointCloud2& a, const msgs::PointCloud2& b) {
@@ -120,7 +180,15 @@ double cloud_share(const msgs::PointCloud2& a, const msgs::PointCloud2& b) {
   return static_cast<double>(agree) / static_cast<double>(points);
 }
 
-// Of the pixels where the cpu found a disparity, the share the other backend has within 1 px.
+// The node gives every pixel it finds no disparity for one value, min_disparity - 1 less the x
+// offset of the two principal points (it takes the offset off every pixel, as ROS's
+// stereo_image_proc does), and the message does not carry that offset. Every disparity it finds
+// is at least 1 above that value, so the value is the smallest of the cpu's answer, as ROS's
+// point cloud node finds it (cv::reprojectImageTo3D's missing values); both answers are to the
+// same inputs, so it is the same offset on both sides. A pixel is valid on a side where it is
+// finite and more than half a pixel above that value. Of the pixels valid on either side, the
+// share valid on both and within 1 px: one the other backend leaves out, or keeps where the cpu
+// filtered it (texture, uniqueness, speckles), disagrees.
 double disparity_share(const msgs::DisparityImage& accelerated, const msgs::DisparityImage& cpu) {
   const msgs::Image& a = accelerated.image;
   const msgs::Image& c = cpu.image;
@@ -129,14 +197,22 @@ double disparity_share(const msgs::DisparityImage& accelerated, const msgs::Disp
     return 0.0;
   }
   const std::size_t n = c.data.size() / sizeof(float);
-  std::size_t valid = 0, within = 0;
+  float invalid = std::numeric_limits<float>::infinity();
+  for (std::size_t i = 0; i < n; ++i) {
+    const float y = element<float>(c.data.data(), i);
+    if (std::isfinite(y)) invalid = std::min(invalid, y);
+  }
+  // A cpu answer with no disparity at all: any the other backend finds disagrees.
+  if (!std::isfinite(invalid)) invalid = -std::numeric_limits<float>::infinity();
+  const auto valid = [&](float d) { return std::isfinite(d) && d > invalid + 0.5f; };
+  std::size_t either = 0, within = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const float x = element<float>(a.data.data(), i), y = element<float>(c.data.data(), i);
-    if (!(y >= cpu.min_disparity)) continue;
-    ++valid;
-    within += std::abs(x - y) <= 1.0f ? 1 : 0;
+    if (!valid(x) && !valid(y)) continue;
+    ++either;
+    within += valid(x) && valid(y) && std::abs(x - y) <= 1.0f ? 1 : 0;
   }
-  return valid == 0 ? 1.0 : static_cast<double>(within) / static_cast<double>(valid);
+  return either == 0 ? 1.0 : static_cast<double>(within) / static_cast<double>(either);
 }
 
 // The n-th frame's stamp in the reference: increasing, as the nodes' pairing wants.
@@ -170,11 +246,8 @@ std::optional<Agreement> compare_answers(const std::string& ros_type, const void
                                          const void* cpu) {
   if (ros_type == msgs::MessageTraits<msgs::Image>::ros_type) {
     const auto& cpu_image = *static_cast<const msgs::Image*>(cpu);
-    return Agreement{
-        image_share(*static_cast<const msgs::Image*>(accelerated), cpu_image), 0.999,
-        is_float_encoding(cpu_image.encoding)
-            ? "|difference| <= 1e-4 x the cpu image's largest |value| on float pixel channels"
-            : "|difference| <= 1 on pixel channels"};
+    return Agreement{image_share(*static_cast<const msgs::Image*>(accelerated), cpu_image), 0.999,
+                     image_criterion(cpu_image.encoding)};
   }
   if (ros_type == msgs::MessageTraits<msgs::PointCloud2>::ros_type) {
     return Agreement{cloud_share(*static_cast<const msgs::PointCloud2*>(accelerated),
@@ -184,7 +257,9 @@ std::optional<Agreement> compare_answers(const std::string& ros_type, const void
   if (ros_type == msgs::MessageTraits<msgs::DisparityImage>::ros_type) {
     return Agreement{disparity_share(*static_cast<const msgs::DisparityImage*>(accelerated),
                                      *static_cast<const msgs::DisparityImage*>(cpu)),
-                     0.95, "pixels with a cpu disparity that are within 1 px of it"};
+                     0.95,
+                     "pixels with a disparity on either backend that have one on both, within "
+                     "1 px"};
   }
   return std::nullopt;
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <vector>
 
 #include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/msgs/stereo_msgs.hpp"
@@ -45,6 +46,53 @@ TEST(BackendCheck, ImagesAgreeWithinOneGreyLevelPerChannel) {
   msgs::Image bgr = cpu;
   bgr.encoding = "bgr8";
   EXPECT_EQ(share(type, &bgr, &cpu), 0.0);
+}
+
+// A one-row image of `encoding` holding `values` as T.
+template <class T>
+msgs::Image image_of(const std::string& encoding, std::vector<T> values) {
+  msgs::Image i;
+  i.width = static_cast<uint32_t>(values.size());
+  i.height = 1;
+  i.encoding = encoding;
+  i.step = static_cast<uint32_t>(sizeof(T) * values.size());
+  i.data.resize(i.step);
+  std::memcpy(i.data.data(), values.data(), i.step);
+  return i;
+}
+
+TEST(BackendCheck, ImageChannelsAreComparedAsTheirEncodingsType) {
+  const std::string type = "sensor_msgs/msg/Image";
+  // 256 against 0 is one byte a level apart, and 256 levels.
+  const msgs::Image s32 = image_of<int32_t>("32SC1", {256}),
+                    s32_zero = image_of<int32_t>("32SC1", {0});
+  EXPECT_EQ(share(type, &s32, &s32_zero), 0.0);
+  // -1 against 0 is a level, not 65535.
+  const msgs::Image s16 = image_of<int16_t>("16SC1", {-1}),
+                    s16_zero = image_of<int16_t>("16SC1", {0});
+  EXPECT_EQ(share(type, &s16, &s16_zero), 1.0);
+  const msgs::Image s8 = image_of<int8_t>("8SC2", {-1, 127}),
+                    s8_near = image_of<int8_t>("8SC2", {0, 126});
+  EXPECT_EQ(share(type, &s8, &s8_near), 1.0);
+  const msgs::Image bayer = image_of<uint16_t>("bayer_rggb16", {256}),
+                    bayer_zero = image_of<uint16_t>("bayer_rggb16", {0});
+  EXPECT_EQ(share(type, &bayer, &bayer_zero), 0.0);
+  const msgs::Image f64 = image_of<double>("64FC1", {2.0}),
+                    f64_off = image_of<double>("64FC1", {2.5});
+  EXPECT_EQ(share(type, &f64, &f64_off), 0.0);
+  EXPECT_NE(compare_answers(type, &f64, &f64)->criterion.find("1e-4"), std::string::npos);
+}
+
+TEST(BackendCheck, ImagesOfAnEncodingItCannotReadAgreeNowhere) {
+  const std::string type = "sensor_msgs/msg/Image";
+  for (const std::string encoding : {"rgb12", "12UC1", "8UC", "8UC0", "32UC1", "16FC1", "mono8x"}) {
+    const msgs::Image i = image_of<uint8_t>(encoding, {7, 7});
+    const auto r = compare_answers(type, &i, &i);
+    ASSERT_TRUE(r.has_value());
+    EXPECT_EQ(r->share, 0.0) << encoding;
+    EXPECT_NE(r->criterion.find("'" + encoding + "' is not one of"), std::string::npos)
+        << r->criterion;
+  }
 }
 
 // A depth image in metres, every pixel `metres`.
@@ -131,20 +179,46 @@ TEST(BackendCheck, PointCloudColourDeclaredFloatIsComparedByChannel) {
   EXPECT_EQ(share("sensor_msgs/msg/PointCloud2", &swapped, &cpu), 0.0);
 }
 
-TEST(BackendCheck, DisparitiesAgreeWithinOnePixelWhereTheCpuHasOne) {
-  msgs::DisparityImage cpu;
-  cpu.min_disparity = 0;
-  cpu.image.width = 4;
-  cpu.image.height = 1;
-  cpu.image.encoding = "32FC1";
-  cpu.image.step = 16;
-  const float cpu_values[4] = {-1.0f, 10.0f, 20.0f, 30.0f};  // the first: no disparity
-  cpu.image.data.resize(16);
-  std::memcpy(cpu.image.data.data(), cpu_values, 16);
-  msgs::DisparityImage other = cpu;
-  const float other_values[4] = {55.0f, 10.9f, 22.0f, 30.0f};
-  std::memcpy(other.image.data.data(), other_values, 16);
-  EXPECT_DOUBLE_EQ(share("stereo_msgs/msg/DisparityImage", &other, &cpu), 2.0 / 3.0);
+// A disparity image of `values`, searched from min_disparity 0: the node's value for no disparity
+// is -1 less the principal points' x offset (left cx - right cx).
+msgs::DisparityImage disparities(std::vector<float> values) {
+  msgs::DisparityImage d;
+  d.min_disparity = 0;
+  d.max_disparity = 63;
+  d.image.width = static_cast<uint32_t>(values.size());
+  d.image.height = 1;
+  d.image.encoding = "32FC1";
+  d.image.step = 4 * d.image.width;
+  d.image.data.resize(d.image.step);
+  std::memcpy(d.image.data.data(), values.data(), d.image.step);
+  return d;
+}
+
+double disparity_share(const std::vector<float>& other, const std::vector<float>& cpu) {
+  const msgs::DisparityImage a = disparities(other), b = disparities(cpu);
+  return share("stereo_msgs/msg/DisparityImage", &a, &b);
+}
+
+TEST(BackendCheck, DisparitiesAgreeWithinOnePixelWhereEitherBackendHasOne) {
+  constexpr float kNone = -1.0f;
+  EXPECT_DOUBLE_EQ(disparity_share({kNone, 10.9f, 22.0f, 30.0f}, {kNone, 10.0f, 20.0f, 30.0f}),
+                   2.0 / 3.0);
+  // A disparity where the cpu filtered the pixel (StereoBM's texture, uniqueness and speckle
+  // checks only take disparities away): a backend leaving them out disagrees there.
+  EXPECT_DOUBLE_EQ(disparity_share({55.0f, 10.0f}, {kNone, 10.0f}), 0.5);
+  // None where the cpu has one, however near the value for none is.
+  EXPECT_DOUBLE_EQ(disparity_share({kNone, kNone, 10.0f}, {kNone, 0.0f, 10.0f}), 0.5);
+  EXPECT_DOUBLE_EQ(disparity_share({kNone, kNone}, {kNone, kNone}), 1.0);
+}
+
+// With the principal points apart in x, every pixel is shifted, the value for none too; the
+// message's min_disparity says nothing of which pixels have a disparity.
+TEST(BackendCheck, DisparitiesAreValidAboveTheNodesValueForNoneWhereverThePrincipalPointsAre) {
+  // Right cx 3 px right of the left's: none is -1 + 3 = 2, the least disparity 3.
+  EXPECT_DOUBLE_EQ(disparity_share({2.0f, 13.0f, 2.0f}, {2.0f, 13.0f, 2.0f}), 1.0);
+  EXPECT_DOUBLE_EQ(disparity_share({2.0f, 13.0f, 3.0f}, {2.0f, 13.0f, 2.0f}), 0.5);
+  // Right cx 3 px left: none is -4, and -2.5 a disparity (0.5 before the shift).
+  EXPECT_DOUBLE_EQ(disparity_share({-4.0f, 7.0f, -4.0f}, {-4.0f, 7.0f, -2.5f}), 0.5);
 }
 
 TEST(BackendCheck, TypesWithoutAComparisonAreNotCompared) {

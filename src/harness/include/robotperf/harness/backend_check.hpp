@@ -30,11 +30,13 @@ struct BackendCheck {
 };
 
 // How two answers of one output type compare: the share of their elements within the type's
-// tolerance, and the least share that passes. Images: |difference| <= 1 per channel on >= 99.9 %
-// (the two backends may round a bilinear tap differently); point clouds: every point's float
-// fields within 1e-6 (m) or both NaN, other fields identical; disparity images: >= 95 % of the
-// pixels with a cpu disparity within 1 px. An answer of another size, encoding or layout agrees
-// nowhere. nullopt for a type without a comparison.
+// tolerance, and the least share that passes. Images: each channel read as its encoding's type
+// (sensor_msgs/image_encodings), |difference| <= 1 on an integer channel and <= 1e-4 of the cpu
+// image's largest |value| on a float one, on >= 99.9 % (the two backends may round a bilinear tap
+// differently); an encoding it cannot read agrees nowhere. Point clouds: every point's float
+// fields within 1e-6 (m) or both NaN, other fields identical. Disparity images: of the pixels
+// with a disparity on either backend, >= 95 % with one on both within 1 px. An answer of another
+// size, encoding or layout agrees nowhere. nullopt for a type without a comparison.
 struct Agreement {
   double share = 0;
   double required = 0;

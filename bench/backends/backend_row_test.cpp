@@ -1,0 +1,67 @@
+// What bench_backends makes of a run: a run that lost messages or answered wrongly is invalid,
+// and no target is met on its latency.
+#include "backend_row.hpp"
+
+#include <gtest/gtest.h>
+
+namespace robotperf::bench {
+namespace {
+
+harness::RunResult run_of(double p50_ms) {
+  harness::RunResult r;
+  r.valid = true;
+  r.latency_from_sent.p50 = p50_ms * 1e6;
+  r.latency_from_sent.p99 = 2 * p50_ms * 1e6;
+  return r;
+}
+
+BackendRow valid_row(double p50_ms) {
+  return backend_row(run_of(p50_ms));
+}
+
+TEST(BackendRow, ARunThatLostMessagesIsInvalidWithItsReasons) {
+  // As a3 on pocl's opencl at 30 Hz: the device cannot keep up and most messages are lost.
+  harness::RunResult r = run_of(622.708);
+  r.loss_percent = 70.91;
+  r.valid = false;
+  r.invalid_reasons = {"70.91 % of the measured messages lost (at most 1 % allowed)"};
+  const BackendRow row = backend_row(r);
+  EXPECT_FALSE(row.valid);
+  EXPECT_DOUBLE_EQ(row.loss_percent, 70.91);
+  EXPECT_DOUBLE_EQ(row.p50_ms, 622.708);
+  ASSERT_EQ(row.reasons.size(), 1u);
+  EXPECT_EQ(row.reasons[0], r.invalid_reasons[0]);
+  EXPECT_TRUE(valid_row(1.0).valid);
+  EXPECT_TRUE(valid_row(1.0).reasons.empty());
+}
+
+TEST(BackendRow, AnAnswerThatFailedItsChecksMakesTheRowInvalid) {
+  harness::RunResult r = run_of(1.0);
+  r.functional.emplace();
+  r.functional->evaluator = "backend check";
+  r.functional->valid = false;
+  r.functional->reasons = {"cuda drifts from cpu"};
+  const BackendRow row = backend_row(r);
+  EXPECT_FALSE(row.valid);
+  ASSERT_EQ(row.reasons.size(), 1u);
+  EXPECT_EQ(row.reasons[0], "functional (backend check): cuda drifts from cpu");
+}
+
+TEST(BackendRow, TargetsAreJudgedOnlyOnValidRuns) {
+  EXPECT_EQ(cuda_target("a3", valid_row(20.0), valid_row(1.9)), ">= 10x: met");
+  EXPECT_EQ(cuda_target("a3", valid_row(20.0), valid_row(2.1)), ">= 10x: NOT met");
+  EXPECT_EQ(cuda_target("a1", valid_row(4.0), valid_row(1.2)), ">= 3x, p50 <= 1 ms: NOT met");
+  EXPECT_EQ(cuda_target("a4", valid_row(4.0), valid_row(1.0)), "-");
+  // Ten times faster, but on a run that lost most of its messages (or a cpu run that did).
+  harness::RunResult lost = run_of(1.0);
+  lost.valid = false;
+  lost.loss_percent = 70.0;
+  EXPECT_EQ(cuda_target("a3", valid_row(20.0), backend_row(lost)),
+            ">= 10x: not judged (an invalid run)");
+  lost.latency_from_sent.p50 = 200e6;
+  EXPECT_EQ(cuda_target("a3", backend_row(lost), valid_row(1.0)),
+            ">= 10x: not judged (an invalid run)");
+}
+
+}  // namespace
+}  // namespace robotperf::bench
