@@ -175,10 +175,12 @@ __kernel void xyzrgb(__global const uchar* depth, int depth_step, int depth_offs
 
 void convert_on_opencl(const cv::Mat& depth, const cv::Mat& colour, const XyzrgbModel& m,
                        OpenClCloudBuffers& device, msgs::PointCloud2& cloud) {
-  static const cv::ocl::ProgramSource source(kXyzrgbSource);
-  cv::ocl::Kernel kernel("xyzrgb", source);
-  if (kernel.empty())
-    throw std::runtime_error("point_cloud_xyzrgb: the OpenCL kernel did not build");
+  cv::ocl::Kernel& kernel = device.xyzrgb;
+  if (kernel.empty()) {
+    static const cv::ocl::ProgramSource source(kXyzrgbSource);
+    if (!kernel.create("xyzrgb", source, cv::String()))
+      throw std::runtime_error("point_cloud_xyzrgb: the OpenCL kernel did not build");
+  }
   {
     DeviceStage upload("upload",
                        depth.total() * depth.elemSize() + colour.total() * colour.elemSize(),

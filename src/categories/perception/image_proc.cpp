@@ -50,14 +50,48 @@ bool starts_with_any(std::string_view s, std::initializer_list<std::string_view>
                      [s](std::string_view p) { return s.starts_with(p); });
 }
 
-void require_valid_interpolation(int interpolation, ImageBackend backend) {
+// OpenCV's OpenCL remap and resize (ocl_remap, ocl_resize) compute INTER_NEAREST and INTER_LINEAR,
+// and resize INTER_AREA when it does not enlarge; any other interpolation they hand to the CPU
+// without saying, which the opencl backend must not time under its name.
+void require_valid_interpolation(int interpolation, ImageBackend backend, bool is_resize) {
+  const std::string named = "interpolation " + std::to_string(interpolation);
   if (interpolation < cv::INTER_NEAREST || interpolation > cv::INTER_LANCZOS4) {
-    throw std::invalid_argument("interpolation " + std::to_string(interpolation) +
-                                " is not one of INTER_NEAREST(0) .. INTER_LANCZOS4(4)");
+    throw std::invalid_argument(named + " is not one of INTER_NEAREST(0) .. INTER_LANCZOS4(4)");
   }
   if (backend == ImageBackend::kCuda && interpolation != cv::INTER_LINEAR) {
-    throw std::invalid_argument("interpolation " + std::to_string(interpolation) +
-                                " has no cuda backend: it has INTER_LINEAR (1) only");
+    throw std::invalid_argument(named + " has no cuda backend: it has INTER_LINEAR (1) only");
+  }
+  const bool on_opencl = interpolation == cv::INTER_NEAREST || interpolation == cv::INTER_LINEAR ||
+                         (is_resize && interpolation == cv::INTER_AREA);
+  if (backend == ImageBackend::kOpenCl && !on_opencl) {
+    throw std::invalid_argument(
+        named + " has no opencl backend: OpenCV's OpenCL " +
+        (is_resize ? "resize has INTER_NEAREST (0), INTER_LINEAR (1) and, to shrink, INTER_AREA (3)"
+                   : "remap has INTER_NEAREST (0) and INTER_LINEAR (1)") +
+        " and computes the others on the CPU; use one of those or the cpu backend");
+  }
+}
+
+// The pixels OpenCV's OpenCL remap and resize compute: 1 to 4 channels, not doubles (fp64 is
+// optional in OpenCL, and PoCL fails to build remap's kernel for them). Others they hand to the
+// CPU without saying, so the opencl backend refuses them.
+void require_opencl_pixels(const cv::Mat& image, const std::string& encoding, const char* what) {
+  if (image.channels() > 4 || image.depth() == CV_64F) {
+    throw std::invalid_argument(std::string(what) + ": encoding '" + encoding +
+                                "' has no opencl backend: OpenCV's OpenCL remap and resize take "
+                                "1 to 4 channels, not 64F, and compute others on the CPU; use the "
+                                "cpu backend");
+  }
+}
+
+// OpenCV's OpenCL resize uses INTER_AREA to shrink only (x and y scales at most 1); enlarging it
+// does on the CPU.
+void require_opencl_area_shrinks(double scale_x, double scale_y, const std::string& resizing) {
+  if (scale_x > 1.0 || scale_y > 1.0) {
+    throw std::invalid_argument("resize: interpolation 3 (INTER_AREA) enlarging " + resizing +
+                                " has no opencl backend: OpenCV's OpenCL resize uses it to shrink "
+                                "only and enlarges on the CPU; use INTER_LINEAR (1) or the cpu "
+                                "backend");
   }
 }
 
@@ -287,7 +321,7 @@ void on_device(const cv::Mat& in, cv::UMat& device_in, cv::UMat& device_out, cv:
 
 Rectifier::Rectifier(int interpolation, ImageBackend backend)
     : interpolation_(interpolation), backend_(backend) {
-  require_valid_interpolation(interpolation, backend);
+  require_valid_interpolation(interpolation, backend, false);
   if (backend == ImageBackend::kCuda) cuda_ = cuda::make_remapper();
 }
 
@@ -442,6 +476,7 @@ void Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& info,
     cuda_->remap(raw_view, make_output);
     return;
   }
+  if (backend_ == ImageBackend::kOpenCl) require_opencl_pixels(raw_view, raw.encoding, "rectify");
   cv::Mat rectified_view = make_output();
   // Float images get NaN outside the field of view (no data), as image_geometry does.
   const bool is_float = raw_view.depth() == CV_32F || raw_view.depth() == CV_64F;
@@ -471,7 +506,13 @@ msgs::Image Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& i
 
 Resizer::Resizer(const ResizeParams& params, ImageBackend backend)
     : params_(params), backend_(backend) {
-  require_valid_interpolation(params.interpolation, backend);
+  require_valid_interpolation(params.interpolation, backend, true);
+  if (backend == ImageBackend::kOpenCl && params.interpolation == cv::INTER_AREA &&
+      params.use_scale) {
+    require_opencl_area_shrinks(
+        params.scale_width, params.scale_height,
+        cv::format("by scale_width %g, scale_height %g", params.scale_width, params.scale_height));
+  }
   if (backend == ImageBackend::kCuda) cuda_ = cuda::make_resizer();
 }
 
@@ -533,6 +574,28 @@ void Resizer::resize(const msgs::Image& image, const msgs::CameraInfo& info, msg
     info_height = static_cast<uint32_t>(out_size.height);
   }
   if (out_size.empty()) throw std::invalid_argument("resize: output would be empty");
+  // The inverse scales cv::resize computes with: those given, or the sizes' ratios.
+  const double inv_scale_x =
+      params.use_scale ? scale_x : static_cast<double>(out_size.width) / in_size.width;
+  const double inv_scale_y =
+      params.use_scale ? scale_y : static_cast<double>(out_size.height) / in_size.height;
+  if (backend_ == ImageBackend::kOpenCl) {
+    require_opencl_pixels(in_view, image.encoding, "resize");
+    // OpenCV's OpenCL resize takes images over 10 px each way.
+    if (in_size.width <= 10 || in_size.height <= 10) {
+      throw std::invalid_argument("resize: a " + std::to_string(in_size.width) + "x" +
+                                  std::to_string(in_size.height) +
+                                  " image has no opencl backend: OpenCV's OpenCL resize takes "
+                                  "images over 10 px each way and resizes smaller ones on the "
+                                  "CPU; use the cpu backend");
+    }
+    if (params.interpolation == cv::INTER_AREA) {
+      require_opencl_area_shrinks(
+          inv_scale_x, inv_scale_y,
+          std::to_string(in_size.width) + "x" + std::to_string(in_size.height) + " to " +
+              std::to_string(out_size.width) + "x" + std::to_string(out_size.height));
+    }
+  }
 
   cv::Mat out_view;
   const auto make_output = [&] {
@@ -550,12 +613,7 @@ void Resizer::resize(const msgs::Image& image, const msgs::CameraInfo& info, msg
     make_output();
     on_device(in_view, device_in_, device_out_, out_view, compute);
   } else if (backend_ == ImageBackend::kCuda) {
-    // The inverse scales cv::resize computes with: those given, or the sizes' ratios. The output
-    // message is made while the device works.
-    const double inv_scale_x =
-        params.use_scale ? scale_x : static_cast<double>(out_size.width) / in_size.width;
-    const double inv_scale_y =
-        params.use_scale ? scale_y : static_cast<double>(out_size.height) / in_size.height;
+    // The output message is made while the device works.
     if (pixels != nullptr) {
       cuda_->resize(*pixels, out_size, inv_scale_x, inv_scale_y, make_output);
     } else {

@@ -25,6 +25,17 @@ constexpr const char* kMissing =
     "the opencl backend has no OpenCL device: install an OpenCL driver (Debian: "
     "pocl-opencl-icd for the CPU, or the GPU vendor's ICD) and check that clinfo lists it";
 
+// Why there is no device: none installed, or, where the user chose one with OPENCV_OPENCL_DEVICE
+// (`user_choice`, null when unset), none that the choice matches.
+std::string missing_device(const char* user_choice) {
+  if (user_choice == nullptr) return kMissing;
+  return std::string("the opencl backend has no OpenCL device: OPENCV_OPENCL_DEVICE='") +
+         user_choice +
+         "' matches none (its form is <platform>:<CPU|GPU|ACCELERATOR>:<device name>; robotperf "
+         "sysinfo lists the devices as opencl_devices); unset it to take a GPU, else a CPU or "
+         "accelerator device";
+}
+
 // Calls `f` for every device of every platform; creates no OpenCL context of OpenCV's.
 template <class F>
 void for_each_device(const F& f) {
@@ -57,8 +68,9 @@ const plugin::DeviceInfo& opencl_device() {
   static plugin::DeviceInfo chosen;
   static std::string error;
   std::call_once(once, [] {
+    const char* user_choice = std::getenv("OPENCV_OPENCL_DEVICE");
     // OpenCV takes only GPUs by default; which type is read when it first creates its context.
-    if (std::getenv("OPENCV_OPENCL_DEVICE") == nullptr) {
+    if (user_choice == nullptr) {
       int types = 0;
       for_each_device([&](const cv::ocl::Device& d) { types |= d.type(); });
       if (!(types & cv::ocl::Device::TYPE_GPU) && (types & cv::ocl::Device::TYPE_CPU)) {
@@ -70,7 +82,7 @@ const plugin::DeviceInfo& opencl_device() {
     cv::ocl::setUseOpenCL(true);
     const cv::ocl::Device& d = cv::ocl::Device::getDefault();
     if (!cv::ocl::useOpenCL() || !d.available()) {
-      error = kMissing;
+      error = missing_device(user_choice);
       return;
     }
     chosen = describe(d);

@@ -7,8 +7,11 @@
 #include "stereo_bm_opencl.hpp"
 
 #include <algorithm>
+#include <cstdint>
+#include <limits>
 #include <opencv2/core/ocl.hpp>
 #include <stdexcept>
+#include <string>
 
 #include "device_stage.hpp"
 #include "stereo_bm_device.hpp"
@@ -156,6 +159,23 @@ void OpenClBlockMatcher::compute(const cv::Mat& left, const cv::Mat& right, cons
     throw std::invalid_argument("disparity: the opencl backend needs min_disparity >= 0");
   const BlockMatchingShape s = block_matching_shape(left.rows, left.cols, p);
   const int rows = s.rows, cols = s.cols;
+  // The cost volumes, an int per pixel and disparity and one plane for the texture, each one
+  // buffer on the device: no larger than the device allocates at once.
+  const std::size_t planes = static_cast<std::size_t>(s.disparities) + 1;
+  const std::size_t volume_bytes =
+      planes * static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols) * sizeof(int32_t);
+  const std::size_t max_alloc = cv::ocl::Device::getDefault().maxMemAllocSize();
+  if (volume_bytes > max_alloc ||
+      planes * rows > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    throw std::invalid_argument(
+        "disparity: the opencl backend's two cost volumes for " + std::to_string(cols) + "x" +
+        std::to_string(rows) + " images and disparity_range " + std::to_string(s.disparities) +
+        " are " + std::to_string(volume_bytes) + " bytes each, more than the device allocates at " +
+        "once (" + std::to_string(max_alloc) +
+        " bytes, CL_DEVICE_MAX_MEM_ALLOC_SIZE); reduce disparity_range or use the cpu or cuda "
+        "backend");
+  }
+  const int volume_rows = static_cast<int>(planes * rows);
   {
     DeviceStage upload("upload", left.total() + right.total(), opencl_queue());
     left.copyTo(left_);
@@ -163,8 +183,8 @@ void OpenClBlockMatcher::compute(const cv::Mat& left, const cv::Mat& right, cons
   }
   filtered_left_.create(rows, cols, CV_8UC1);
   filtered_right_.create(rows, cols, CV_8UC1);
-  row_costs_.create(1, (s.disparities + 1) * rows * cols, CV_32SC1);
-  costs_.create(1, (s.disparities + 1) * rows * cols, CV_32SC1);
+  row_costs_.create(volume_rows, cols, CV_32SC1);
+  costs_.create(volume_rows, cols, CV_32SC1);
   disparity_.create(rows, cols, CV_16SC1);
   if (choose_.empty()) {
     prefilter_ = build("prefilter");

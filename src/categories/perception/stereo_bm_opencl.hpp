@@ -11,8 +11,9 @@ namespace robotperf::perception {
 // OpenCV StereoBM's answer, fixed point (1/16 px, invalid = (min_disparity - 1) * 16), computed on
 // the device: every call uploads the pair and downloads the disparity. The device's buffers (the
 // cost volume is 80 MB for a 640x480 pair at 64 disparities) and kernels are kept from one pair to
-// the next of the same size. compute() throws std::invalid_argument for SGBM or a negative
-// min_disparity, std::runtime_error when the device fails.
+// the next of the same size. compute() throws std::invalid_argument for SGBM, a negative
+// min_disparity, or a cost volume larger than the device allocates at once
+// (CL_DEVICE_MAX_MEM_ALLOC_SIZE), std::runtime_error when the device fails.
 class OpenClBlockMatcher {
  public:
   void compute(const cv::Mat& left, const cv::Mat& right, const StereoParams& params,

@@ -100,6 +100,16 @@ void DisparityProcessor::compute(const msgs::Image& left, const msgs::Image& rig
           "disparity: image sizes do not match their CameraInfo");
   require(right_info.p[0] != 0.0, "disparity: right CameraInfo has no focal length (P[0] = 0)");
   require(left.width > 0 && left.height > 0, "disparity: empty images");
+  // StereoBM's own check (cv::Exception on the cpu), made for every backend: the device kernels
+  // would give an all-invalid image where the cpu gives none.
+  if (params_.algorithm == StereoAlgorithm::kBlockMatching) {
+    require(
+        static_cast<uint32_t>(params_.correlation_window_size) < std::min(left.width, left.height),
+        "disparity: correlation_window_size " + std::to_string(params_.correlation_window_size) +
+            " is not smaller than the " + std::to_string(left.width) + "x" +
+            std::to_string(left.height) +
+            " images (StereoBM needs a window below their width and height)");
+  }
 
   to_mono8(left, "disparity: left image", left_mono_);
   to_mono8(right, "disparity: right image", right_mono_);

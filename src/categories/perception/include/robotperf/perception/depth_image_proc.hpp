@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <opencv2/core/ocl.hpp>
 
 #include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/perception/image_proc.hpp"
@@ -51,13 +52,15 @@ void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
                         const msgs::CameraInfo& info, const PointCloudXyzrgbParams& params,
                         msgs::PointCloud2& cloud, ImageBackend backend = ImageBackend::kCpu);
 
-// The opencl backend's images on the device (OpenCV's transparent API).
+// The opencl backend's images on the device (OpenCV's transparent API), and its kernel, built at
+// the first message.
 struct OpenClCloudBuffers {
   cv::UMat depth, colour, resized_colour, cloud;
+  cv::ocl::Kernel xyzrgb;
 };
 
 // point_cloud_xyzrgb() keeping what a node keeps from message to message on its backend (with
-// ImageBackend::kCuda its stream and buffers, with kOpenCl its device images; the free
+// ImageBackend::kCuda its stream and buffers, with kOpenCl its device images and kernel; the free
 // function's are for its call only). Not thread-safe: one per node.
 class PointCloudXyzrgbProcessor {
  public:
@@ -72,8 +75,8 @@ class PointCloudXyzrgbProcessor {
 
  private:
   ImageBackend backend_;
-  // kOpenCl: the depth, colour (and resized colour) and cloud on the device, kept from one
-  // message to the next.
+  // kOpenCl: the depth, colour (and resized colour) and cloud on the device, and the kernel,
+  // kept from one message to the next.
   OpenClCloudBuffers opencl_;
   std::unique_ptr<cuda::PointCloudMaker> cuda_;
 };

@@ -113,7 +113,9 @@ class Rectifier {
   // INTER_LINEAR only (std::invalid_argument naming the interpolation otherwise), OpenCV's CPU
   // arithmetic (8-bit images within 1 of the cpu's, as a rule the same) for 8-bit, 16-bit
   // unsigned and float images of 1 to 4 channels; it throws std::invalid_argument without its
-  // device (cuda_device()).
+  // device (cuda_device()). ImageBackend::kOpenCl has what OpenCV's OpenCL remap computes:
+  // INTER_NEAREST and INTER_LINEAR (std::invalid_argument naming another), and per image 1 to 4
+  // channels, not 64F (rectify() throws std::invalid_argument for others).
   explicit Rectifier(int interpolation = cv::INTER_LINEAR,
                      ImageBackend backend = ImageBackend::kCpu);
   ~Rectifier();
@@ -196,7 +198,9 @@ struct ResizeParams {
 class Resizer {
  public:
   // Throws std::invalid_argument for an interpolation out of range, with kCuda for any but
-  // INTER_LINEAR (naming it), and with kCuda without its device (cuda_device()).
+  // INTER_LINEAR (naming it), with kCuda without its device (cuda_device()), and with kOpenCl for
+  // what OpenCV's OpenCL resize does not compute (naming it): any but INTER_NEAREST, INTER_LINEAR
+  // and INTER_AREA, and INTER_AREA by a scale over 1.
   explicit Resizer(const ResizeParams& params, ImageBackend backend = ImageBackend::kCpu);
   ~Resizer();
   Resizer(Resizer&&) noexcept;
@@ -207,7 +211,9 @@ class Resizer {
   // and width, K[0], K[2], P[0], P[2], P[3] times the x scale, K[4], K[5], P[5], P[6] times the y
   // scale, ROI offsets and size scaled (truncated), as image_proc does. With use_scale, the image
   // size is rounded (cv::resize) and the CameraInfo size truncated, as in image_proc.
-  // Throws std::invalid_argument for non-positive scales or sizes, or a bad image. kCuda follows
+  // Throws std::invalid_argument for non-positive scales or sizes, or a bad image, and with
+  // kOpenCl for an image OpenCV's OpenCL resize would resize on the CPU: more than 4 channels,
+  // 64F, 10 px or less either way, or enlarged with INTER_AREA. kCuda follows
   // OpenCV's CPU arithmetic for INTER_LINEAR (8-bit images within 1 of the cpu's, as a rule the
   // same) for 8-bit, 16-bit unsigned and float images of 1 to 4 channels.
   // With `pixels` (kCuda only, else std::logic_error), `image`'s pixels are those on the device

@@ -55,7 +55,8 @@ void validate(const StereoParams& params);
 //   disparity (left border of disparity_range + min_disparity + window/2 - 1, window/2 on the
 //   other sides); min_disparity, max_disparity = min + range - 1, delta_d = 1/16.
 // Throws std::invalid_argument when the images differ in size, do not match their CameraInfo,
-// or the right CameraInfo has no focal length.
+// are (StereoBM, on every backend) no wider or taller than correlation_window_size, or the right
+// CameraInfo has no focal length.
 //
 // With ImageBackend::kOpenCl or kCuda, StereoBM runs on the device (kernels of robotperf's own:
 // OpenCV's OpenCL StereoBM has no texture check; the cuda kernels are their port, on a CUDA
