@@ -22,8 +22,26 @@ void* allocate(std::size_t bytes) {
 
 }  // namespace
 
+// Every form that pairs with the deletes below: a sanitizer's own nothrow new (std::stable_sort's
+// buffer) freed by this free() is a mismatch it reports.
 void* operator new(std::size_t bytes) {
   return allocate(bytes);
+}
+void* operator new(std::size_t bytes, const std::nothrow_t&) noexcept {
+  try {
+    return allocate(bytes);
+  } catch (const std::bad_alloc&) {
+    return nullptr;
+  }
+}
+void* operator new[](std::size_t bytes, const std::nothrow_t& tag) noexcept {
+  return operator new(bytes, tag);
+}
+void operator delete(void* p, const std::nothrow_t&) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, const std::nothrow_t&) noexcept {
+  std::free(p);
 }
 void* operator new[](std::size_t bytes) {
   return allocate(bytes);
