@@ -629,22 +629,32 @@ TEST_F(Report, CompareRateSelectsAControlRunByItsLoopRateToo) {
   EXPECT_THROW(render_markdown(input, options), ReportError);
 }
 
+// A valid black-box run of `id` on one machine, intra in one process at `rate_hz`: `messages`
+// latencies of at most 2 ms, throughput at its rate.
+StoredRun valid_intra_run(const std::string& id, const std::string& category, double rate_hz,
+                          std::size_t messages) {
+  StoredRun run;
+  run.benchmark_id = id;
+  run.category = category;
+  run.type = "black";
+  run.hardware = "AMD Ryzen 7 5800X";
+  run.rmw = "intra";
+  run.processes = "single";
+  run.rate_hz = rate_hz;
+  run.valid = true;
+  run.latency.count = messages;
+  run.latency.max = 2.0;
+  run.throughput_hz = rate_hz;
+  return run;
+}
+
 // A comparison of two unlike configurations names every difference beside the one selected, and
 // makes no judgement on offered throughputs fed at different rates: each is its input rate.
 TEST(Comparison, NamesTheDifferencesBesideTheSelectedOneAndJudgesNoOfferedRate) {
   ReportInput input;
   for (int i = 0; i < 3; ++i) {
-    StoredRun intra;
+    StoredRun intra = valid_intra_run("d6", "manipulation", 200, 1000);
     intra.path = "d6-intra-" + std::to_string(i) + ".json";
-    intra.benchmark_id = "d6";
-    intra.category = "manipulation";
-    intra.type = "black";
-    intra.hardware = "AMD Ryzen 7 5800X";
-    intra.rmw = "intra";
-    intra.processes = "single";
-    intra.rate_hz = 200;
-    intra.valid = true;
-    intra.latency.count = 1000;
     intra.latency.max = 2.0 + 0.1 * i;
     intra.throughput_hz = 200.0 + 0.01 * i;
     StoredRun fastdds = intra;
@@ -676,18 +686,7 @@ TEST(Comparison, NamesTheDifferencesBesideTheSelectedOneAndJudgesNoOfferedRate) 
 // Runs whose nodes computed with other parameters (or another plug-in's kernel) did other work:
 // one side does not pool them, and two sides that differ in them say so.
 TEST(Comparison, RunsWhoseNodesComputedDifferentlyAreNotAlike) {
-  StoredRun run;
-  run.benchmark_id = "x5";
-  run.category = "perception";
-  run.type = "black";
-  run.hardware = "AMD Ryzen 7 5800X";
-  run.rmw = "intra";
-  run.processes = "single";
-  run.rate_hz = 30;
-  run.valid = true;
-  run.latency.count = 100;
-  run.latency.max = 2.0;
-  run.throughput_hz = 30;
+  const StoredRun run = valid_intra_run("x5", "perception", 30, 100);
   StoredRun large = run, small = run;
   large.path = "x5-a.json";
   large.node_settings = "resize (built-in perception): scale_width=2";
