@@ -682,12 +682,9 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   // refuse a --strict run).
   std::vector<rmw::PeerParticipant> others = r.domain_peers;
   if (spec.external()) {
-    std::set<std::string> graph_topics{spec.output.topic};
-    for (const auto& in : spec.inputs) graph_topics.insert(in.topic);
-    for (const auto& node : spec.nodes) {
-      for (const auto& [port, topic] : node.topics) graph_topics.insert(topic);
-    }
-    others = outside_graph(others, std::move(graph_topics));
+    Wiring w = wiring_of(spec);
+    w.published.merge(w.subscribed);
+    others = outside_graph(others, std::move(w.published));
   }
   if (!others.empty()) {
     const std::size_t graphs_own = r.domain_peers.size() - others.size();
