@@ -7,6 +7,7 @@
 
 #include "../node_test_support.hpp"
 #include "category.hpp"
+#include "output_pool.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/msgs/stereo_msgs.hpp"
 #include "robotperf/perception/image_proc.hpp"
@@ -41,6 +42,32 @@ bool has_stamp(const std::vector<T>& messages, int32_t sec) {
   for (const auto& m : messages)
     if (m.header.stamp.sec == sec) return true;
   return false;
+}
+
+// A node's next output is its last one only when nobody else holds that one: a subscriber still
+// reading a message never sees it overwritten by the next frame.
+TEST(OutputPool, ReusesTheLastMessageOnlyOnceEveryHolderHasLetGo) {
+  OutputPool<msgs::Image> pool;
+  std::shared_ptr<msgs::Image> first = pool.acquire();
+  first->data.assign(1000, 7);
+  const uint8_t* pixels = first->data.data();
+  std::shared_ptr<const msgs::Image> held = first;  // published; a subscriber holds it
+  first.reset();
+  std::shared_ptr<msgs::Image> second = pool.acquire();
+  EXPECT_NE(second.get(), held.get());
+  second->data.assign(1000, 9);
+  EXPECT_EQ(held->data, std::vector<uint8_t>(1000, 7));
+  second.reset();
+  held.reset();
+  // The second is the pool's last now; the first went with its holder.
+  std::shared_ptr<msgs::Image> third = pool.acquire();
+  EXPECT_EQ(third->data, std::vector<uint8_t>(1000, 9));
+  EXPECT_NE(third->data.data(), pixels);
+  const uint8_t* kept = third->data.data();
+  third.reset();
+  // Let go by everyone: the same message and buffer, which resize() to its size does not touch.
+  std::shared_ptr<msgs::Image> fourth = pool.acquire();
+  EXPECT_EQ(fourth->data.data(), kept);
 }
 
 // An uncalibrated camera (K[0] = 0), which image_proc's rectify refuses, then a calibrated one.

@@ -4,6 +4,7 @@
 #include "camera_sync.hpp"
 #include "category.hpp"
 #include "device_node.hpp"
+#include "output_pool.hpp"
 #include "robotperf/perception/image_proc.hpp"
 #include "skipping_node.hpp"
 
@@ -60,18 +61,20 @@ class RectifyNode final : public CameraNode, public ImageDeviceNode {
 
  private:
   void process(const CameraSync::ImagePtr& image, const CameraSync::InfoPtr& info) override {
-    msgs::Image out;
     plugin::trace_kernel_init(*this, kKernel, image->header.stamp.to_ns(), *image);
     const DeviceStageContext stages(*this, image->header.stamp.to_ns());
     std::shared_ptr<const msgs::Image> message;
     if (resident_) {
       // The next node takes the pixels on the device; a copy (no distortion) stays on the host.
+      msgs::Image out;
       std::optional<ResidentPixels> pixels = rectifier_.rectify_on_device(*image, *info, out);
-      if (pixels) message = resident_image_message(std::move(out), std::move(*pixels));
+      message = pixels ? resident_image_message(std::move(out), std::move(*pixels))
+                       : std::make_shared<const msgs::Image>(std::move(out));
     } else {
-      rectifier_.rectify(*image, *info, out);
+      std::shared_ptr<msgs::Image> out = pool_.acquire();
+      rectifier_.rectify(*image, *info, *out);
+      message = std::move(out);
     }
-    if (!message) message = std::make_shared<const msgs::Image>(std::move(out));
     plugin::trace_kernel_fini(*this, kKernel, *message);
     output_->publish(std::move(message));
   }
@@ -79,6 +82,7 @@ class RectifyNode final : public CameraNode, public ImageDeviceNode {
   static constexpr const char* kKernel = "image_proc/rectify";
   Rectifier rectifier_;
   bool resident_;  // image_rect's pixels stay on the device (a device-resident run)
+  OutputPool<msgs::Image> pool_;
   std::shared_ptr<graph::Publisher<msgs::Image>> output_;
 };
 
@@ -94,7 +98,7 @@ class ResizeNode final : public CameraNode, public ImageDeviceNode {
 
  private:
   void process(const CameraSync::ImagePtr& image, const CameraSync::InfoPtr& info) override {
-    auto out = std::make_shared<msgs::Image>();
+    std::shared_ptr<msgs::Image> out = pool_.acquire();
     auto out_info = std::make_shared<msgs::CameraInfo>();
     plugin::trace_kernel_init(*this, kKernel, image->header.stamp.to_ns(), *image);
     const DeviceStageContext stages(*this, image->header.stamp.to_ns());
@@ -119,6 +123,7 @@ class ResizeNode final : public CameraNode, public ImageDeviceNode {
 
   static constexpr const char* kKernel = "image_proc/resize";
   Resizer resizer_;
+  OutputPool<msgs::Image> pool_;
   std::shared_ptr<graph::Publisher<msgs::Image>> image_out_;
   std::shared_ptr<graph::Publisher<msgs::CameraInfo>> info_out_;
 };

@@ -4,6 +4,7 @@
 
 #include "category.hpp"
 #include "device_node.hpp"
+#include "output_pool.hpp"
 #include "robotperf/perception/depth_image_proc.hpp"
 #include "robotperf/perception/stereo_image_proc.hpp"
 #include "skipping_node.hpp"
@@ -30,23 +31,6 @@ template <class T>
 int64_t stamp_of(const std::shared_ptr<const T>& m) {
   return m->header.stamp.to_ns();
 }
-
-// Output messages of megabytes: the last one published is reused once every subscriber has let
-// go of it (like a ROS 2 loaned message), so the kernel writes into memory already mapped instead
-// of page-faulting a fresh buffer on every frame.
-template <class T>
-class OutputPool {
- public:
-  std::shared_ptr<T> acquire() {
-    // use_count 1: only we hold it, and nobody can take a new reference from us.
-    if (last_ && last_.use_count() == 1) return last_;
-    last_ = std::make_shared<T>();
-    return last_;
-  }
-
- private:
-  std::shared_ptr<T> last_;
-};
 
 class DisparityNode final : public SkippingNode, public ImageDeviceNode {
  public:
