@@ -1,6 +1,8 @@
 #include "backend_row.hpp"
 
 #include <map>
+#include <utility>
+#include <vector>
 
 namespace robotperf::bench {
 
@@ -23,14 +25,19 @@ std::string cuda_target(const std::string& id, const BackendRow& cpu, const Back
   const std::map<std::string, double> speedup = {{"a1", 3}, {"a2", 3}, {"a3", 10}, {"a5", 3}};
   const auto t = speedup.find(id);
   if (t == speedup.end()) return "-";
-  std::string text = ">= " + std::to_string(static_cast<int>(t->second)) + "x";
-  bool met = cpu.p50_ms / cuda.p50_ms >= t->second;
-  if (id == "a1") {
-    text += ", p50 <= 1 ms";
-    met = met && cuda.p50_ms <= 1.0;
+  // Each part on its own: a1 can be under 1 ms and not 3x faster.
+  std::vector<std::pair<std::string, bool>> parts = {
+      {">= " + std::to_string(static_cast<int>(t->second)) + "x",
+       cpu.p50_ms / cuda.p50_ms >= t->second}};
+  if (id == "a1") parts.emplace_back("p50 <= 1 ms", cuda.p50_ms <= 1.0);
+  std::string text;
+  for (const auto& [target, met] : parts) {
+    if (!text.empty()) text += cpu.valid && cuda.valid ? "; " : ", ";
+    text += target;
+    if (cpu.valid && cuda.valid) text += met ? ": met" : ": NOT met";
   }
-  if (!cpu.valid || !cuda.valid) return text + ": not judged (an invalid run)";
-  return text + (met ? ": met" : ": NOT met");
+  if (!cpu.valid || !cuda.valid) text += ": not judged (an invalid run)";
+  return text;
 }
 
 }  // namespace robotperf::bench

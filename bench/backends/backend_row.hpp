@@ -21,8 +21,9 @@ struct BackendRow {
 BackendRow backend_row(const harness::RunResult& run);
 
 // Issue #19's target for the cuda backend of `id` against `cpu`, and whether `cuda` meets it:
-// "-" for a benchmark without one; "... : met", ": NOT met", or ": not judged" where either run is
-// invalid (a latency of a graph that fell behind its rate or answered wrongly says nothing).
+// "-" for a benchmark without one; else each part with ": met" or ": NOT met" (a1 has two, joined
+// by "; "), or the parts and ": not judged" where either run is invalid (a latency of a graph
+// that fell behind its rate or answered wrongly says nothing).
 std::string cuda_target(const std::string& id, const BackendRow& cpu, const BackendRow& cuda);
 
 }  // namespace robotperf::bench

@@ -50,7 +50,11 @@ TEST(BackendRow, AnAnswerThatFailedItsChecksMakesTheRowInvalid) {
 TEST(BackendRow, TargetsAreJudgedOnlyOnValidRuns) {
   EXPECT_EQ(cuda_target("a3", valid_row(20.0), valid_row(1.9)), ">= 10x: met");
   EXPECT_EQ(cuda_target("a3", valid_row(20.0), valid_row(2.1)), ">= 10x: NOT met");
-  EXPECT_EQ(cuda_target("a1", valid_row(4.0), valid_row(1.2)), ">= 3x, p50 <= 1 ms: NOT met");
+  EXPECT_EQ(cuda_target("a1", valid_row(2.0), valid_row(1.2)),
+            ">= 3x: NOT met; p50 <= 1 ms: NOT met");
+  // Each part judged on its own.
+  EXPECT_EQ(cuda_target("a1", valid_row(1.5), valid_row(0.75)), ">= 3x: NOT met; p50 <= 1 ms: met");
+  EXPECT_EQ(cuda_target("a1", valid_row(3.6), valid_row(1.1)), ">= 3x: met; p50 <= 1 ms: NOT met");
   EXPECT_EQ(cuda_target("a4", valid_row(4.0), valid_row(1.0)), "-");
   // Ten times faster, but on a run that lost most of its messages (or a cpu run that did).
   harness::RunResult lost = run_of(1.0);
@@ -61,6 +65,8 @@ TEST(BackendRow, TargetsAreJudgedOnlyOnValidRuns) {
   lost.latency_from_sent.p50 = 200e6;
   EXPECT_EQ(cuda_target("a3", backend_row(lost), valid_row(1.0)),
             ">= 10x: not judged (an invalid run)");
+  EXPECT_EQ(cuda_target("a1", backend_row(lost), valid_row(0.1)),
+            ">= 3x, p50 <= 1 ms: not judged (an invalid run)");
 }
 
 }  // namespace
