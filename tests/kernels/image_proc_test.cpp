@@ -691,6 +691,19 @@ TEST(OpenClDevice, AChoiceThatMatchesNoDeviceIsNamedInTheLine) {
   EXPECT_NE(line.find("OPENCV_OPENCL_DEVICE='" + choice + "'"), std::string::npos) << line;
   EXPECT_EQ(line.find("install"), std::string::npos) << line;
 }
+
+// A kernel built on the opencl backend without a node (as a plug-in may) asks for its device
+// too: without one it is refused in the same line, not run wherever OpenCV falls back to.
+TEST(OpenClDevice, AKernelBuiltWithoutANodeNeedsTheDevice) {
+  for (const char* kernel : {"rectifier", "resizer", "disparity", "point_cloud"}) {
+    const test_support::Outcome o =
+        test_support::shell(std::string("OPENCV_OPENCL_DEVICE='robotperf-no-such-platform:GPU:' ") +
+                            OPENCL_DEVICE_PROBE + " " + kernel);
+    EXPECT_EQ(o.exit_code, 2) << kernel << ": " << o.out;
+    EXPECT_NE(o.out.find("the opencl backend has no OpenCL device"), std::string::npos)
+        << kernel << ": " << o.out;
+  }
+}
 #endif
 
 // OpenCV's OpenCL remap computes INTER_NEAREST and INTER_LINEAR, its resize those and INTER_AREA

@@ -12,6 +12,7 @@
 #include "cuda/cuda_backend.hpp"
 #include "device_stage.hpp"
 #include "robotperf/perception/image_proc.hpp"
+#include "robotperf/perception/opencl_device.hpp"
 #include "xyzrgb_model.hpp"
 
 namespace robotperf::perception {
@@ -217,6 +218,7 @@ void convert_on_opencl(const cv::Mat& depth, const cv::Mat& colour, const Xyzrgb
 }  // namespace
 
 PointCloudXyzrgbProcessor::PointCloudXyzrgbProcessor(ImageBackend backend) : backend_(backend) {
+  if (backend == ImageBackend::kOpenCl) opencl_device();
   if (backend == ImageBackend::kCuda) cuda_ = cuda::make_point_cloud_maker();
 }
 

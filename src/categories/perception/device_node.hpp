@@ -28,13 +28,10 @@ inline std::vector<std::string> image_resident_backends() {
   return {};
 }
 
-// The backend a node's config names; a device backend needs its device now, not at the first
-// frame.
+// The backend a node's config names. Its device is asked for when the node builds its kernel (a
+// device backend needs it then, not at the first frame).
 inline ImageBackend backend_of(const plugin::KernelConfig& config) {
-  const ImageBackend b = image_backend(config.backend);
-  if (b == ImageBackend::kOpenCl) opencl_device();
-  if (b == ImageBackend::kCuda) cuda_device();
-  return b;
+  return image_backend(config.backend);
 }
 
 class ImageDeviceNode : public plugin::DeviceNode {

@@ -12,6 +12,7 @@
 #include "device_stage.hpp"
 #include "robotperf/perception/camera_model.hpp"
 #include "robotperf/perception/cuda_device.hpp"
+#include "robotperf/perception/opencl_device.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -322,6 +323,7 @@ void on_device(const cv::Mat& in, cv::UMat& device_in, cv::UMat& device_out, cv:
 Rectifier::Rectifier(int interpolation, ImageBackend backend)
     : interpolation_(interpolation), backend_(backend) {
   require_valid_interpolation(interpolation, backend, false);
+  if (backend == ImageBackend::kOpenCl) opencl_device();
   if (backend == ImageBackend::kCuda) cuda_ = cuda::make_remapper();
 }
 
@@ -513,6 +515,7 @@ Resizer::Resizer(const ResizeParams& params, ImageBackend backend)
         params.scale_width, params.scale_height,
         cv::format("by scale_width %g, scale_height %g", params.scale_width, params.scale_height));
   }
+  if (backend == ImageBackend::kOpenCl) opencl_device();
   if (backend == ImageBackend::kCuda) cuda_ = cuda::make_resizer();
 }
 

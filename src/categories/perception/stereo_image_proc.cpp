@@ -7,6 +7,7 @@
 
 #include "cuda/cuda_backend.hpp"
 #include "robotperf/perception/image_proc.hpp"
+#include "robotperf/perception/opencl_device.hpp"
 #include "stereo_bm_opencl.hpp"
 
 namespace robotperf::perception {
@@ -61,7 +62,10 @@ DisparityProcessor::DisparityProcessor(const StereoParams& params, ImageBackend 
     require(params_.min_disparity >= 0, "the " + name + " backend needs min_disparity >= 0");
   }
   if (backend_ == ImageBackend::kCuda) cuda_ = cuda::make_block_matcher(params_);
-  if (backend_ == ImageBackend::kOpenCl) opencl_ = std::make_unique<OpenClBlockMatcher>();
+  if (backend_ == ImageBackend::kOpenCl) {
+    opencl_device();
+    opencl_ = std::make_unique<OpenClBlockMatcher>();
+  }
   if (params_.algorithm == StereoAlgorithm::kBlockMatching) {
     auto bm = cv::StereoBM::create(params_.disparity_range, params_.correlation_window_size);
     bm->setPreFilterSize(params_.prefilter_size);

@@ -64,7 +64,7 @@ struct OpenClCloudBuffers {
 // function's are for its call only). Not thread-safe: one per node.
 class PointCloudXyzrgbProcessor {
  public:
-  // With kCuda, throws std::invalid_argument without its device (cuda_device()).
+  // Throws std::invalid_argument without its backend's device (cuda_device(), opencl_device()).
   explicit PointCloudXyzrgbProcessor(ImageBackend backend = ImageBackend::kCpu);
   ~PointCloudXyzrgbProcessor();
   PointCloudXyzrgbProcessor(PointCloudXyzrgbProcessor&&) noexcept;

@@ -115,7 +115,8 @@ class Rectifier {
   // unsigned and float images of 1 to 4 channels; it throws std::invalid_argument without its
   // device (cuda_device()). ImageBackend::kOpenCl has what OpenCV's OpenCL remap computes:
   // INTER_NEAREST and INTER_LINEAR (std::invalid_argument naming another), and per image 1 to 4
-  // channels, not 64F (rectify() throws std::invalid_argument for others).
+  // channels, not 64F (rectify() throws std::invalid_argument for others); it throws
+  // std::invalid_argument without its device (opencl_device()), which it chooses if none was.
   explicit Rectifier(int interpolation = cv::INTER_LINEAR,
                      ImageBackend backend = ImageBackend::kCpu);
   ~Rectifier();
@@ -198,9 +199,9 @@ struct ResizeParams {
 class Resizer {
  public:
   // Throws std::invalid_argument for an interpolation out of range, with kCuda for any but
-  // INTER_LINEAR (naming it), with kCuda without its device (cuda_device()), and with kOpenCl for
-  // what OpenCV's OpenCL resize does not compute (naming it): any but INTER_NEAREST, INTER_LINEAR
-  // and INTER_AREA, and INTER_AREA by a scale over 1.
+  // INTER_LINEAR (naming it), without its backend's device (cuda_device(), opencl_device()), and
+  // with kOpenCl for what OpenCV's OpenCL resize does not compute (naming it): any but
+  // INTER_NEAREST, INTER_LINEAR and INTER_AREA, and INTER_AREA by a scale over 1.
   explicit Resizer(const ResizeParams& params, ImageBackend backend = ImageBackend::kCpu);
   ~Resizer();
   Resizer(Resizer&&) noexcept;

@@ -64,7 +64,7 @@ void validate(const StereoParams& params);
 // left-right check and the speckle filter run on the host. Its answer agrees with the cpu's
 // within 1 px on >= 95 % of the pixels the cpu gives a disparity. StereoSGBM, and a negative
 // min_disparity, have no device backend (the constructor throws std::invalid_argument), nor has
-// kCuda without its device (cuda_device()).
+// a device backend without its device (cuda_device(), opencl_device()).
 //
 // Not thread-safe: one processor per stream.
 class DisparityProcessor {
