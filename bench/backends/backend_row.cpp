@@ -30,14 +30,14 @@ std::string cuda_target(const std::string& id, const BackendRow& cpu, const Back
       {">= " + std::to_string(static_cast<int>(t->second)) + "x",
        cpu.p50_ms / cuda.p50_ms >= t->second}};
   if (id == "a1") parts.emplace_back("p50 <= 1 ms", cuda.p50_ms <= 1.0);
+  const bool judged = cpu.valid && cuda.valid;
   std::string text;
   for (const auto& [target, met] : parts) {
-    if (!text.empty()) text += cpu.valid && cuda.valid ? "; " : ", ";
+    if (!text.empty()) text += judged ? "; " : ", ";
     text += target;
-    if (cpu.valid && cuda.valid) text += met ? ": met" : ": NOT met";
+    if (judged) text += met ? ": met" : ": NOT met";
   }
-  if (!cpu.valid || !cuda.valid) text += ": not judged (an invalid run)";
-  return text;
+  return judged ? text : text + ": not judged (an invalid run)";
 }
 
 }  // namespace robotperf::bench
