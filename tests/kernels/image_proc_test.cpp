@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -12,6 +13,7 @@
 #include <optional>
 #include <stdexcept>
 #include <utility>
+#include <vector>
 
 #include "../command_line.hpp"
 #include "cuda_test_support.hpp"
@@ -154,6 +156,47 @@ TEST(ImageView, PrepareImageReusesTheBuffer) {
   cv::Mat second = prepare_image(image, header, "mono8", 20, 10);
   EXPECT_EQ(image.data.data(), buffer);
   EXPECT_EQ(second.data, buffer);
+}
+
+// to_mono8 into memory of the caller's (the cuda backend's pinned upload memory): the same grey
+// pixels, written where they were asked for, or one line saying what is wrong.
+TEST(Mono8, WriteMono8WritesTheGreyPixelsInPlace) {
+  msgs::Image rgb;
+  cv::randu(prepare_image(rgb, {}, "rgb8", 7, 5), 0, 256);
+  cv::Mat expected;
+  to_mono8(rgb, "left", expected);
+  std::vector<uint8_t> memory(7 * 5, 0);
+  cv::Mat into(5, 7, CV_8UC1, memory.data());
+  write_mono8(rgb, "left", into);
+  EXPECT_EQ(into.data, memory.data());
+  EXPECT_EQ(cv::norm(into, expected, cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::countNonZero(into), 0);
+
+  msgs::Image mono;
+  cv::randu(prepare_image(mono, {}, "mono8", 7, 5), 1, 256);
+  write_mono8(mono, "left", into);
+  EXPECT_EQ(into.data, memory.data());
+  EXPECT_EQ(std::memcmp(memory.data(), mono.data.data(), memory.size()), 0);
+  EXPECT_NE(memory.data(), mono.data.data());
+}
+
+TEST(Mono8, WriteMono8RefusesAnotherSizeAndEncodingsWithoutGrey) {
+  msgs::Image rgb;
+  prepare_image(rgb, {}, "rgb8", 7, 5);
+  std::vector<uint8_t> memory(8 * 5, 0);
+  cv::Mat wider(5, 8, CV_8UC1, memory.data());
+  EXPECT_THROW(write_mono8(rgb, "left", wider), std::logic_error);
+  EXPECT_TRUE(std::all_of(memory.begin(), memory.end(), [](uint8_t b) { return b == 0; }));
+  msgs::Image depth;
+  prepare_image(depth, {}, "32FC1", 8, 5);
+  try {
+    write_mono8(depth, "disparity: right image", wider);
+    ADD_FAILURE() << "a 32FC1 image was written as mono8";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("disparity: right image encoding '32FC1'"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -795,6 +795,39 @@ TEST(DisparityCuda, GivesTheCpusDisparityAtAnOddHeight) {
   expect_cpus_disparity_at_an_odd_height(ImageBackend::kCuda);
 }
 
+// The pair is written as mono8 straight into the memory the device uploads from: an rgb8 pair
+// (converted there) and its mono8 twin (copied there) give the same disparity, the cpu's own
+// for the twin.
+TEST(DisparityCuda, GivesAMono8PairTheDisparityOfItsRgb8Twin) {
+  if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
+  SyntheticStereoConfig config;
+  config.width = 160;
+  config.height = 120;
+  config.frames = 1;
+  const StereoFrame frame = generate_stereo_sequence(config).front();
+  ASSERT_EQ(frame.left.encoding, "rgb8");
+  msgs::Image left_mono = frame.left, right_mono = frame.right;
+  cv::Mat grey;
+  to_mono8(frame.left, "left", grey);
+  grey.copyTo(prepare_image(left_mono, frame.left.header, "mono8", 160, 120));
+  to_mono8(frame.right, "right", grey);
+  grey.copyTo(prepare_image(right_mono, frame.right.header, "mono8", 160, 120));
+  StereoParams params;
+  params.disparity_range = 32;
+  DisparityProcessor device(params, ImageBackend::kCuda);
+  msgs::DisparityImage from_rgb, from_mono;
+  // The twin first: its pixels are not in that memory already.
+  device.compute(left_mono, right_mono, frame.left_info, frame.right_info, from_mono);
+  device.compute(frame.left, frame.right, frame.left_info, frame.right_info, from_rgb);
+  EXPECT_EQ(from_mono.image.data, from_rgb.image.data);
+  msgs::DisparityImage on_cpu;
+  DisparityProcessor(params).compute(left_mono, right_mono, frame.left_info, frame.right_info,
+                                     on_cpu);
+  const cv::Mat cpu = image_view(on_cpu.image), cuda = image_view(from_mono.image);
+  EXPECT_GT(cv::countNonZero(cpu > 0), 160 * 120 / 4);
+  EXPECT_GE(cv::countNonZero(cv::abs(cpu - cuda) <= 1.0), 160 * 120 * 95 / 100);
+}
+
 // Refused whatever the machine: the parameters are checked before the device is asked for.
 TEST(DisparityCuda, HasStereoBmWithoutNegativeDisparitiesOnly) {
   StereoParams sgbm;

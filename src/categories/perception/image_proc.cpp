@@ -203,26 +203,48 @@ cv::Mat image_view(const msgs::Image& image) {
   return make_view(image);
 }
 
+namespace {
+
+// cvtColor's code from `encoding` to mono8; -1 for mono8 itself.
+int mono8_conversion(const msgs::Image& image, const std::string& what) {
+  if (image.encoding == "mono8" || image.encoding == "8UC1") return -1;
+  if (image.encoding == "rgb8") return cv::COLOR_RGB2GRAY;
+  if (image.encoding == "bgr8") return cv::COLOR_BGR2GRAY;
+  if (image.encoding == "rgba8") return cv::COLOR_RGBA2GRAY;
+  if (image.encoding == "bgra8") return cv::COLOR_BGRA2GRAY;
+  throw std::invalid_argument(what + " encoding '" + image.encoding +
+                              "' cannot be converted to mono8 (use mono8, rgb8, bgr8, rgba8 or "
+                              "bgra8)");
+}
+
+}  // namespace
+
 void to_mono8(const msgs::Image& image, const std::string& what, cv::Mat& mono) {
   const cv::Mat view = image_view(image);
+  const int code = mono8_conversion(image, what);
   // A view of an earlier mono8 message is let go: converting into it would write the grey pixels
   // into that message, const and shared, or freed by now.
   if (mono.u == nullptr) mono.release();
-  if (image.encoding == "mono8" || image.encoding == "8UC1") {
+  if (code < 0) {
     mono = view;
-  } else if (image.encoding == "rgb8") {
-    cv::cvtColor(view, mono, cv::COLOR_RGB2GRAY);
-  } else if (image.encoding == "bgr8") {
-    cv::cvtColor(view, mono, cv::COLOR_BGR2GRAY);
-  } else if (image.encoding == "rgba8") {
-    cv::cvtColor(view, mono, cv::COLOR_RGBA2GRAY);
-  } else if (image.encoding == "bgra8") {
-    cv::cvtColor(view, mono, cv::COLOR_BGRA2GRAY);
   } else {
-    throw std::invalid_argument(what + " encoding '" + image.encoding +
-                                "' cannot be converted to mono8 (use mono8, rgb8, bgr8, rgba8 or "
-                                "bgra8)");
+    cv::cvtColor(view, mono, code);
   }
+}
+
+void write_mono8(const msgs::Image& image, const std::string& what, cv::Mat& into) {
+  const cv::Mat view = image_view(image);
+  const int code = mono8_conversion(image, what);
+  if (into.type() != CV_8UC1 || into.size() != view.size()) {
+    throw std::logic_error(what + ": the mono8 pixels' memory has another size");
+  }
+  const uchar* const memory = into.data;
+  if (code < 0) {
+    view.copyTo(into);
+  } else {
+    cv::cvtColor(view, into, code);
+  }
+  if (into.data != memory) throw std::logic_error(what + ": the mono8 pixels were moved");
 }
 
 cv::Mat prepare_image(msgs::Image& image, const msgs::Header& header, std::string_view encoding,

@@ -115,28 +115,35 @@ void DisparityProcessor::compute(const msgs::Image& left, const msgs::Image& rig
             " images (StereoBM needs a window below their width and height)");
   }
 
-  to_mono8(left, "disparity: left image", left_mono_);
-  to_mono8(right, "disparity: right image", right_mono_);
   const int width = static_cast<int>(left.width);
   const int height = static_cast<int>(left.height);
+  const std::string left_what = "disparity: left image", right_what = "disparity: right image";
   cv::Mat disparity;
   const auto make_output = [&] {
     out.header = left_info.header;
     disparity = prepare_image(out.image, left_info.header, "32FC1", width, height);
   };
-  if (backend_ == ImageBackend::kOpenCl) {
-    opencl_->compute(left_mono_, right_mono_, params_, disparity16_);
-    make_output();
-  } else if (backend_ == ImageBackend::kCuda) {
-    // The output message is made while the device works.
-    cuda_->compute(left_mono_, right_mono_, params_, disparity16_, make_output);
+  cv::Mat disparity16;  // the fixed-point disparity, 1/16 px
+  if (backend_ == ImageBackend::kCuda) {
+    // The pair is written into the device's upload memory, and the output message made while the
+    // device works.
+    disparity16 = cuda_->compute(
+        cv::Size(width, height), [&](cv::Mat& into) { write_mono8(left, left_what, into); },
+        [&](cv::Mat& into) { write_mono8(right, right_what, into); }, params_, make_output);
   } else {
-    matcher_->compute(left_mono_, right_mono_, disparity16_);
+    to_mono8(left, left_what, left_mono_);
+    to_mono8(right, right_what, right_mono_);
+    if (backend_ == ImageBackend::kOpenCl) {
+      opencl_->compute(left_mono_, right_mono_, params_, disparity16_);
+    } else {
+      matcher_->compute(left_mono_, right_mono_, disparity16_);
+    }
+    disparity16 = disparity16_;
     make_output();
   }
   // Principal points of a rectified pair may differ in x; disparities are relative to them.
   const double cx_offset = left_info.p[2] - right_info.p[2];
-  disparity16_.convertTo(disparity, CV_32F, 1.0 / kDisparitiesPerPixel, -cx_offset);
+  disparity16.convertTo(disparity, CV_32F, 1.0 / kDisparitiesPerPixel, -cx_offset);
 
   out.f = static_cast<float>(right_info.p[0]);
   out.t = static_cast<float>(-right_info.p[3] / right_info.p[0]);

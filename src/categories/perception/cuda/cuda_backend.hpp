@@ -62,15 +62,21 @@ class PointCloudMaker {
                       cv::Mat& cloud) = 0;
 };
 
-// StereoBM (params.algorithm block matching, min_disparity >= 0) on a rectified mono8 pair: the
-// fixed-point disparity (1/16 px, filtered pixels (min_disparity - 1) * 16) into `disparity16`,
-// after the left-right check and the speckle filter, all on the device. `meanwhile` runs on the
-// host once the device has the work (the node makes its output message then).
+// Writes one image of a stereo pair as mono8 into `into` (the pair's size, CV_8UC1, written in
+// place).
+using MonoWriter = std::function<void(cv::Mat& into)>;
+
+// StereoBM (params.algorithm block matching, min_disparity >= 0) on a rectified pair of `size`,
+// which `left` and `right` write as mono8 straight into the pinned memory of its upload (no host
+// copy of the pair): the fixed-point disparity (1/16 px, filtered pixels (min_disparity - 1) * 16)
+// after the speckle filter, all on the device, returned in the pinned memory of its download,
+// valid until the next call. `meanwhile` runs on the host once the device has the work (the node
+// makes its output message then).
 class BlockMatcher {
  public:
   virtual ~BlockMatcher() = default;
-  virtual void compute(const cv::Mat& left, const cv::Mat& right, const StereoParams& params,
-                       cv::Mat& disparity16, const std::function<void()>& meanwhile) = 0;
+  virtual cv::Mat compute(cv::Size size, const MonoWriter& left, const MonoWriter& right,
+                          const StereoParams& params, const std::function<void()>& meanwhile) = 0;
 };
 
 // Each throws std::invalid_argument with cuda_device()'s one line when there is no device or no

@@ -14,12 +14,14 @@ namespace {
 
 class CudaBlockMatcher final : public BlockMatcher {
  public:
-  void compute(const cv::Mat& left, const cv::Mat& right, const StereoParams& params,
-               cv::Mat& disparity16, const std::function<void()>& meanwhile) override {
-    if (left.type() != CV_8UC1 || right.type() != CV_8UC1 || left.size() != right.size())
-      throw std::logic_error("cuda: block matching takes a mono8 pair of one size");
-    const BlockMatchingShape s = block_matching_shape(left.rows, left.cols, params);
-    const std::size_t pixels = left.total();
+  cv::Mat compute(cv::Size size, const MonoWriter& left, const MonoWriter& right,
+                  const StereoParams& params, const std::function<void()>& meanwhile) override {
+    const BlockMatchingShape s = block_matching_shape(size.height, size.width, params);
+    const std::size_t pixels = size.area();
+    cv::Mat left_pixels = left_.staging(size.height, size.width, CV_8UC1);
+    cv::Mat right_pixels = right_.staging(size.height, size.width, CV_8UC1);
+    left(left_pixels);
+    right(right_pixels);
     BlockMatchingBuffers b;
     b.filtered_left = filtered_left_.reserve_for<uint8_t>(pixels);
     b.filtered_right = filtered_right_.reserve_for<uint8_t>(pixels);
@@ -29,20 +31,22 @@ class CudaBlockMatcher final : public BlockMatcher {
     f.labels = labels_.reserve_for<int32_t>(pixels);
     f.region_sizes = region_sizes_.reserve_for<int32_t>(pixels);
     {
-      DeviceStage upload("upload", left.total() + right.total(), stream_);
-      b.left = static_cast<const uint8_t*>(left_.upload(left, stream_.get()).data);
-      b.right = static_cast<const uint8_t*>(right_.upload(right, stream_.get()).data);
+      DeviceStage upload("upload", 2 * pixels, stream_);
+      b.left = static_cast<const uint8_t*>(left_.queue_upload(stream_.get()).data);
+      b.right = static_cast<const uint8_t*>(right_.queue_upload(stream_.get()).data);
     }
     {
       DeviceStage compute("compute", 0, stream_);
       block_match(s, b, stream_.get());
       filter_disparity(s, disparity_filter(params), f, stream_.get());
     }
-    download_overlapped(stream_, disparity_, [&] {
-      meanwhile();
-      disparity16.create(s.rows, s.cols, CV_16SC1);
-      return disparity16;
-    });
+    disparity_.queue_download(stream_.get());
+    meanwhile();
+    {
+      DeviceStage download("download", disparity_.bytes(), stream_);
+      stream_.synchronize();
+    }
+    return disparity_.downloaded();
   }
 
  private:

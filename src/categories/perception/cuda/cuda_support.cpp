@@ -115,13 +115,21 @@ std::size_t StagedImage::bytes() const {
 }
 
 DeviceImage StagedImage::upload(const cv::Mat& image, cudaStream_t stream) {
-  const DeviceImage on_device = reserve(image.rows, image.cols, image.type());
+  cv::Mat pinned = staging(image.rows, image.cols, image.type());
+  host_copy(image, pinned);
+  return queue_upload(stream);
+}
+
+cv::Mat StagedImage::staging(int rows, int cols, int type) {
+  reserve(rows, cols, type);
   pinned_data_ = pinned_.reserve(bytes());
-  cv::Mat staging(rows_, cols_, type_, pinned_data_);
-  host_copy(image, staging);
+  return {rows_, cols_, type_, pinned_data_};
+}
+
+DeviceImage StagedImage::queue_upload(cudaStream_t stream) {
   check(cudaMemcpyAsync(device_data_, pinned_data_, bytes(), cudaMemcpyHostToDevice, stream),
         "cudaMemcpyAsync (upload)");
-  return on_device;
+  return {device_data_, cols_, rows_};
 }
 
 DeviceImage StagedImage::reserve(int rows, int cols, int type) {
@@ -142,7 +150,11 @@ void StagedImage::copy_to(cv::Mat& out) const {
   if (out.rows != rows_ || out.cols != cols_ || out.type() != type_) {
     throw std::logic_error("cuda: the device's output has another size or type");
   }
-  host_copy(cv::Mat(rows_, cols_, type_, pinned_data_), out);
+  host_copy(downloaded(), out);
+}
+
+cv::Mat StagedImage::downloaded() const {
+  return {rows_, cols_, type_, pinned_data_};
 }
 
 void download_overlapped(Stream& stream, StagedImage& from,

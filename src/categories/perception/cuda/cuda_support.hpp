@@ -92,6 +92,11 @@ class StagedImage {
   // Copies `image` into pinned memory and queues its upload on `stream`; returns the device's
   // copy.
   DeviceImage upload(const cv::Mat& image, cudaStream_t stream);
+  // The pinned memory of a dense rows x cols image of `type`, for the host to write the image
+  // into (in place) before queue_upload(): no copy of it on the host then.
+  cv::Mat staging(int rows, int cols, int type);
+  // Queues the upload of what the pinned memory holds on `stream`; returns the device's copy.
+  DeviceImage queue_upload(cudaStream_t stream);
   // A dense rows x cols image of `type` on the device, for a kernel's output.
   DeviceImage reserve(int rows, int cols, int type);
   // Queues the download of the image last uploaded or reserved into pinned memory.
@@ -99,6 +104,9 @@ class StagedImage {
   // Once the stream has finished the download: copies it into `out`, which has its size and type
   // already (written in place).
   void copy_to(cv::Mat& out) const;
+  // Once the stream has finished the download: the image in pinned memory, valid until this
+  // object's next upload, reservation or download.
+  cv::Mat downloaded() const;
   std::size_t bytes() const;
 
  private:

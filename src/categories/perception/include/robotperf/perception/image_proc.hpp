@@ -54,6 +54,9 @@ cv::Mat prepare_image(msgs::Image& image, const msgs::Header& header, std::strin
 // earlier call is never: it gets a buffer of its own). Throws std::invalid_argument
 // for another encoding, naming it after `what` ("disparity: left image").
 void to_mono8(const msgs::Image& image, const std::string& what, cv::Mat& mono);
+// to_mono8() into memory of the caller's, written in place: `into` is image's size, CV_8UC1 (else
+// std::logic_error), and gets a copy of a mono8 image.
+void write_mono8(const msgs::Image& image, const std::string& what, cv::Mat& into);
 
 // ---------------------------------------------------------------------------------------------
 // Backends

@@ -61,10 +61,13 @@ void validate(const StereoParams& params);
 // With ImageBackend::kOpenCl or kCuda, StereoBM runs on the device (kernels of robotperf's own:
 // OpenCV's OpenCL StereoBM has no texture check; the cuda kernels are their port, on a CUDA
 // stream of the processor's own); each pair is uploaded and its disparity downloaded; the
-// left-right check and the speckle filter run on the host. Its answer agrees with the cpu's
-// within 1 px on >= 95 % of the pixels the cpu gives a disparity. StereoSGBM, and a negative
-// min_disparity, have no device backend (the constructor throws std::invalid_argument), nor has
-// a device backend without its device (cuda_device(), opencl_device()).
+// speckle filter runs on the host for opencl, on the device for cuda (StereoBM makes no
+// left-right check). The cuda backend converts the pair to mono8 straight into the pinned memory
+// it uploads from, and the float disparity straight from the memory it downloads into. Its answer
+// agrees with the cpu's within 1 px on >= 95 % of the pixels the cpu gives a disparity. StereoSGBM,
+// and a negative min_disparity, have no device backend (the constructor throws
+// std::invalid_argument), nor has a device backend without its device (cuda_device(),
+// opencl_device()).
 //
 // Not thread-safe: one processor per stream.
 class DisparityProcessor {
