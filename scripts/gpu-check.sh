@@ -10,9 +10,11 @@
 #   5. the opencl backend on the GPU's own OpenCL driver, where the NVIDIA driver has one: its
 #      kernel tests, and a3 (its own OpenCL block matcher) end to end;
 #   6. the CLI's cuda test (each benchmark's answers on the GPU, in one process and per node).
-# Two more steps run only when named in GPU_CHECK_STEPS, for whoever speeds the backend up:
-#   grey: a1 and a5 on cuda, and a5 on cpu, grey-box (the per-hop breakdown around the kernels);
+# Three more steps run only when named in GPU_CHECK_STEPS, for whoever speeds the backend up:
+#   grey: a1, a3 and a5 on cuda, and a5 on cpu, grey-box (the per-hop breakdown around the
+#   kernels);
 #   kernel_times: the GPU time of each kernel a3 runs on cuda, by Nsight Compute (ncu).
+#   kernel_profile: why a3's matching and region joining kernels take their time (ncu sections).
 # GPU_CHECK_STEPS (names separated by spaces) runs only the steps it names.
 # Run it from the repository's root. Each step's output goes to a file in OUT_DIR (default $OUT,
 # else ./gpu-check), with summary.txt listing each step's outcome, and under a step of several
@@ -125,7 +127,7 @@ step() {
   local name=$1 limit=$2
   shift 2
   if [[ -n "${GPU_CHECK_STEPS:-}" && " $GPU_CHECK_STEPS " != *" $name "* ]] ||
-    [[ -z "${GPU_CHECK_STEPS:-}" && "$name" =~ ^(grey|kernel_times)$ ]]; then
+    [[ -z "${GPU_CHECK_STEPS:-}" && "$name" =~ ^(grey|kernel_times|kernel_profile)$ ]]; then
     return
   fi
   local left=$((deadline - SECONDS))
@@ -173,7 +175,8 @@ step cli 200 ./tests/cli/cli_test --gtest_filter='*Cuda*'
 step grey 60 "${each[@]}" \
   "a1 cuda" "./robotperf run a1 --backend cuda --mode grey --count 150 --output $results" \
   "a5 cuda" "./robotperf run a5 --backend cuda --mode grey --count 150 --output $results" \
-  "a5 cpu" "./robotperf run a5 --mode grey --count 150 --output $results"
+  "a5 cpu" "./robotperf run a5 --mode grey --count 150 --output $results" \
+  "a3 cuda" "./robotperf run a3 --backend cuda --mode grey --count 150 --output $results"
 # One metric, one pass per kernel; past the warm-up (a3 launches 12 kernels a message). ncu with
 # its own libraries, not the bundle's. Profiled, the graph falls behind its rate: the run is
 # invalid (exit status 3), the kernels' times are what this step is for.
@@ -181,6 +184,15 @@ step grey 60 "${each[@]}" \
 step kernel_times 80 env -u LD_LIBRARY_PATH PATH="$PATH:/usr/local/cuda/bin" \
   LIBRARIES="$LD_LIBRARY_PATH" bash -c 'ncu --metrics gpu__time_duration.sum --launch-skip 240 \
   --launch-count 36 env LD_LIBRARY_PATH="$LIBRARIES" ./robotperf run a3 --backend cuda --count 40 \
+  --connect-timeout 60 --output /tmp/robotperf-ncu; status=$?; ((status == 0 || status == 3))'
+# Why a3's two slowest kernels take their time: Nsight Compute's throughput, launch, occupancy
+# and warp-stall sections, two launches of each (several replays a launch).
+# shellcheck disable=SC2016 # expanded by the inner shell
+step kernel_profile 120 env -u LD_LIBRARY_PATH PATH="$PATH:/usr/local/cuda/bin" \
+  LIBRARIES="$LD_LIBRARY_PATH" bash -c 'ncu --kernel-name regex:"match_kernel|join_regions_kernel" \
+  --section SpeedOfLight --section LaunchStats --section Occupancy --section WarpStateStats \
+  --section SchedulerStats --launch-skip 40 --launch-count 4 \
+  env LD_LIBRARY_PATH="$LIBRARIES" ./robotperf run a3 --backend cuda --count 40 \
   --connect-timeout 60 --output /tmp/robotperf-ncu; status=$?; ((status == 0 || status == 3))'
 # The results as one file: a lent machine hands back few files.
 if [[ -d "$out/results" ]]; then
