@@ -795,9 +795,9 @@ TEST(DisparityCuda, GivesTheCpusDisparityAtAnOddHeight) {
   expect_cpus_disparity_at_an_odd_height(ImageBackend::kCuda);
 }
 
-// The pair is written as mono8 straight into the memory the device uploads from: an rgb8 pair
-// (converted there) and its mono8 twin (copied there) give the same disparity, the cpu's own
-// for the twin.
+// The pair is written as mono8 straight into the memory the device uploads from, the left image
+// going up while the right one is written: an rgb8 pair (converted there) and its mono8 twin
+// (copied there) give the same disparity, the cpu's own for the twin.
 TEST(DisparityCuda, GivesAMono8PairTheDisparityOfItsRgb8Twin) {
   if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
   SyntheticStereoConfig config;
@@ -820,6 +820,21 @@ TEST(DisparityCuda, GivesAMono8PairTheDisparityOfItsRgb8Twin) {
   device.compute(left_mono, right_mono, frame.left_info, frame.right_info, from_mono);
   device.compute(frame.left, frame.right, frame.left_info, frame.right_info, from_rgb);
   EXPECT_EQ(from_mono.image.data, from_rgb.image.data);
+  // A right image it cannot convert is refused in one line once the left one went up, and the
+  // next pair is computed as before.
+  msgs::Image unconvertible = frame.right;
+  unconvertible.encoding = "8UC3";
+  msgs::DisparityImage refused, again;
+  try {
+    device.compute(frame.left, unconvertible, frame.left_info, frame.right_info, refused);
+    ADD_FAILURE() << "an 8UC3 right image was matched";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("disparity: right image encoding '8UC3'"),
+              std::string::npos)
+        << e.what();
+  }
+  device.compute(frame.left, frame.right, frame.left_info, frame.right_info, again);
+  EXPECT_EQ(again.image.data, from_rgb.image.data);
   msgs::DisparityImage on_cpu;
   DisparityProcessor(params).compute(left_mono, right_mono, frame.left_info, frame.right_info,
                                      on_cpu);

@@ -18,10 +18,6 @@ class CudaBlockMatcher final : public BlockMatcher {
                   const StereoParams& params, const std::function<void()>& meanwhile) override {
     const BlockMatchingShape s = block_matching_shape(size.height, size.width, params);
     const std::size_t pixels = size.area();
-    cv::Mat left_pixels = left_.staging(size.height, size.width, CV_8UC1);
-    cv::Mat right_pixels = right_.staging(size.height, size.width, CV_8UC1);
-    left(left_pixels);
-    right(right_pixels);
     BlockMatchingBuffers b;
     b.filtered_left = filtered_left_.reserve_for<uint8_t>(pixels);
     b.filtered_right = filtered_right_.reserve_for<uint8_t>(pixels);
@@ -30,9 +26,20 @@ class CudaBlockMatcher final : public BlockMatcher {
     f.disparity = b.disparity;
     f.labels = labels_.reserve_for<int32_t>(pixels);
     f.region_sizes = region_sizes_.reserve_for<int32_t>(pixels);
+    // The left image goes up while the host converts the right one; the stage has what is left
+    // of both transfers then.
+    cv::Mat left_pixels = left_.staging(size.height, size.width, CV_8UC1);
+    left(left_pixels);
+    b.left = static_cast<const uint8_t*>(left_.queue_upload(stream_.get()).data);
+    cv::Mat right_pixels = right_.staging(size.height, size.width, CV_8UC1);
+    try {
+      right(right_pixels);
+    } catch (...) {
+      stream_.finish();  // the left image's transfer leaves no work queued behind the error
+      throw;
+    }
     {
       DeviceStage upload("upload", 2 * pixels, stream_);
-      b.left = static_cast<const uint8_t*>(left_.queue_upload(stream_.get()).data);
       b.right = static_cast<const uint8_t*>(right_.queue_upload(stream_.get()).data);
     }
     {
