@@ -4,8 +4,9 @@
 // is valid (it delivered what its benchmark requires and its answers passed the functional
 // checks, the check against cpu among them; an invalid row is followed by why), and where a
 // device backend's time goes: upload, compute and download per message (mean ms, summed over the
-// graph's nodes on the device), from a second, grey-box run in which each stage waits for its
-// device (LTTng; the latency comes from the first run, which does not wait). With a CUDA device
+// graph's nodes on the device), and the host's work in those nodes' kernel functions around them
+// (their kernel hops less the stages), from a second, grey-box run in which each stage waits for
+// its device (LTTng; the latency comes from the first run, which does not wait). With a CUDA device
 // it first prints the floor under those stages: the same bytes moved with no kernel
 // (perception::cuda_transfer_floor).
 // Run on demand: ./build/bench/backends/bench_backends [--count N] [--backends opencl,cuda]
@@ -29,6 +30,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -44,9 +46,10 @@ using namespace robotperf;
 
 namespace {
 
-// Mean ms per message of each device stage, summed over the nodes on the device.
+// Mean ms per message of each device stage, summed over the nodes on the device, and of the
+// host's work in those nodes' kernel functions outside the stages.
 struct StageSplit {
-  double upload_ms = 0, compute_ms = 0, download_ms = 0;
+  double upload_ms = 0, compute_ms = 0, download_ms = 0, host_ms = 0;
 };
 
 // The options of a run of `spec` on `backend`. A device's warm-up (its programs built, its
@@ -79,13 +82,21 @@ std::optional<StageSplit> split(const harness::BenchmarkSpec& spec, const std::s
     std::filesystem::remove_all(r.trace_dir);
     if (!r.grey) return std::nullopt;
     StageSplit s;
+    std::set<std::string> on_device;
     for (const auto& hop : r.grey->hops) {
       if (hop.kind != "device") continue;
       const double ms = hop.duration.mean / 1e6;
       if (hop.to == "upload") s.upload_ms += ms;
       if (hop.to == "compute") s.compute_ms += ms;
       if (hop.to == "download") s.download_ms += ms;
+      on_device.insert(hop.node);
     }
+    double kernels_ms = 0;
+    for (const auto& hop : r.grey->hops) {
+      if (hop.kind == "kernel" && on_device.contains(hop.node))
+        kernels_ms += hop.duration.mean / 1e6;
+    }
+    s.host_ms = kernels_ms - s.upload_ms - s.compute_ms - s.download_ms;
     return s;
   } catch (const std::exception& e) {
     std::filesystem::remove_all(o.trace_dir);
@@ -198,11 +209,11 @@ int main(int argc, char** argv) {
   const std::size_t split_count = std::min<std::size_t>(count, 100);
   std::printf(
       "latency from send, intra, %zu messages at each benchmark's rate, ms; speed-up = cpu p50 / "
-      "backend p50 on this machine; upload / compute / download: mean ms per message from a "
-      "grey-box run of %zu\n",
+      "backend p50 on this machine; upload / compute / download, and the host's work in those "
+      "nodes' kernels around them: mean ms per message from a grey-box run of %zu\n",
       count, split_count);
-  std::printf("%-4s %-8s %9s %9s %9s %7s  %-7s %8s %8s %8s  %s\n", "id", "backend", "p50", "p99",
-              "speed-up", "lost %", "valid", "upload", "compute", "download",
+  std::printf("%-4s %-8s %9s %9s %9s %7s  %-7s %8s %8s %8s %8s  %s\n", "id", "backend", "p50",
+              "p99", "speed-up", "lost %", "valid", "upload", "compute", "download", "host",
               "target (issue #19, cuda)");
   // A benchmark or backend that fails is a row saying why; the others are still measured.
   int status = 0;
@@ -251,10 +262,11 @@ int main(int argc, char** argv) {
         if (s) std::snprintf(text, sizeof text, "%.3f", (*s).*stage);
         return std::string(text);
       };
-      std::printf("%-4s %-8s %9.3f %9.3f %8.2fx %7.2f  %-7s %8s %8s %8s  %s\n", id.c_str(),
+      std::printf("%-4s %-8s %9.3f %9.3f %8.2fx %7.2f  %-7s %8s %8s %8s %8s  %s\n", id.c_str(),
                   name.c_str(), m.p50_ms, m.p99_ms, cpu.p50_ms / m.p50_ms, m.loss_percent,
                   m.valid ? "ok" : "INVALID", ms(&StageSplit::upload_ms).c_str(),
                   ms(&StageSplit::compute_ms).c_str(), ms(&StageSplit::download_ms).c_str(),
+                  ms(&StageSplit::host_ms).c_str(),
                   b == "cuda" && !resident ? bench::cuda_target(id, cpu, m).c_str()
                   : resident               ? "device-resident: information"
                                            : "-");
