@@ -9,14 +9,16 @@
 // its device (LTTng; the latency comes from the first run, which does not wait). With a CUDA device
 // it first prints the floor under those stages: the same bytes moved with no kernel
 // (perception::cuda_transfer_floor).
-// Run on demand: ./build/bench/backends/bench_backends [--count N] [--backends opencl,cuda]
-//                 [a1 a2 a3 a4 a5]
-// (cpu, the baseline, is always measured). A benchmark or backend that fails is a row saying why,
-// and the others are still measured. Exit status: 0, 1 when a run was invalid, 2 when a run
-// failed.
-// a3 is in the default list only where a CUDA device is: on a CPU OpenCL device (pocl) its block
-// matcher takes about 150 ms a pair and cannot keep up with a3's 30 Hz, so the figure would be
-// queueing.
+// Run on demand: ./build/bench/backends/bench_backends [--count N] [--repeat R]
+//                 [--backends opencl,cuda] [a1 a2 a3 a4 a5]
+// (cpu, the baseline, is always measured). --repeat R runs each backend R times, in rounds (cpu,
+// then each backend), for a machine whose state drifts between runs: a row's p50 and p99 are the
+// medians of its runs', its speed-up the median of the pairs' (a round's cpu run against its
+// backend run), and a target is judged on those medians, the pairs' range beside it. A benchmark or
+// backend that fails is a row saying why, and the others are still measured. Exit status: 0, 1 when
+// a run was invalid, 2 when a run failed. a3 is in the default list only where a CUDA device is: on
+// a CPU OpenCL device (pocl) its block matcher takes about 150 ms a pair and cannot keep up with
+// a3's 30 Hz, so the figure would be queueing.
 //
 // Targets (issue #19), for the cuda backend on a data-centre GPU: a3 >= 10x, a1, a2, a5 >= 3x,
 // a1 p50 <= 1 ms. They are printed beside cuda, met or not, and not judged where either run is
@@ -156,12 +158,15 @@ int main(int argc, char** argv) {
   robotperf::bench::warn_about_this_build();
   categories::register_builtin_categories();
   std::size_t count = 300;
+  std::size_t repeat = 1;  // runs of each backend, in rounds
   std::vector<std::string> ids;
   std::optional<std::string> chosen;  // comma-separated device backends; all found when absent
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--count" && i + 1 < argc) {
       count = std::strtoul(argv[++i], nullptr, 10);
+    } else if (a == "--repeat" && i + 1 < argc) {
+      repeat = std::max<std::size_t>(1, std::strtoul(argv[++i], nullptr, 10));
     } else if (a == "--backends" && i + 1 < argc) {
       chosen = "," + std::string(argv[++i]) + ",";
     } else {
@@ -208,10 +213,12 @@ int main(int argc, char** argv) {
   }
   const std::size_t split_count = std::min<std::size_t>(count, 100);
   std::printf(
-      "latency from send, intra, %zu messages at each benchmark's rate, ms; speed-up = cpu p50 / "
-      "backend p50 on this machine; upload / compute / download, and the host's work in those "
+      "latency from send, intra, %zu messages at each benchmark's rate, ms%s; speed-up = cpu p50 "
+      "/ backend p50 on this machine; upload / compute / download, and the host's work in those "
       "nodes' kernels around them: mean ms per message from a grey-box run of %zu\n",
-      count, split_count);
+      count,
+      repeat > 1 ? (", the medians of " + std::to_string(repeat) + " runs in rounds").c_str() : "",
+      split_count);
   std::printf("%-4s %-8s %9s %9s %9s %7s  %-7s %8s %8s %8s %8s  %s\n", "id", "backend", "p50",
               "p99", "speed-up", "lost %", "valid", "upload", "compute", "download", "host",
               "target (issue #19, cuda)");
@@ -229,48 +236,71 @@ int main(int argc, char** argv) {
   };
   for (const auto& id : ids) {
     std::optional<harness::BenchmarkSpec> spec;
-    bench::BackendRow cpu;
     try {
       spec = harness::find_benchmark(ROBOTPERF_BENCHMARKS_DIR, id);
-      cpu = measure(*spec, "cpu", count, false);
     } catch (const std::exception& e) {
       failed(id, "cpu", e.what());
       continue;
     }
-    std::printf("%-4s %-8s %9.3f %9.3f %9s %7.2f  %s\n", id.c_str(), "cpu", cpu.p50_ms, cpu.p99_ms,
-                "1.00x", cpu.loss_percent, cpu.valid ? "ok" : "INVALID");
-    invalid(cpu);
     // cuda also device-resident where the graph can keep images on the device (a1): its own
     // configuration, for information beside the host-memory baseline the targets are about.
-    std::vector<std::pair<std::string, bool>> rows;
+    struct Row {
+      std::string backend, name;
+      bool resident = false;
+      std::vector<bench::BackendRow> runs;
+      bool failed = false;
+    };
+    std::vector<Row> rows;
     for (const auto& b : backends) {
-      rows.emplace_back(b, false);
-      if (b == "cuda" && can_stay_on_device(*spec)) rows.emplace_back(b, true);
+      rows.push_back({b, b, false, {}, false});
+      if (b == "cuda" && can_stay_on_device(*spec))
+        rows.push_back({b, b + "-res", true, {}, false});
     }
-    for (const auto& [b, resident] : rows) {
-      const std::string name = resident ? b + "-res" : b;
-      bench::BackendRow m;
+    // Round k measures the cpu, then each backend: run k of each, one after the other. A line is
+    // printed once its row has all its runs (in the last round).
+    std::vector<bench::BackendRow> cpu;
+    for (std::size_t round = 0; round < repeat; ++round) {
+      const bool last = round + 1 == repeat;
       try {
-        m = measure(*spec, b, count, resident);
+        cpu.push_back(measure(*spec, "cpu", count, false));
       } catch (const std::exception& e) {
-        failed(id, name, e.what());
-        continue;
+        failed(id, "cpu", e.what());
+        break;
       }
-      const std::optional<StageSplit> s = split(*spec, b, split_count, resident);
-      const auto ms = [&](double StageSplit::*stage) {
-        char text[32] = "-";
-        if (s) std::snprintf(text, sizeof text, "%.3f", (*s).*stage);
-        return std::string(text);
-      };
-      std::printf("%-4s %-8s %9.3f %9.3f %8.2fx %7.2f  %-7s %8s %8s %8s %8s  %s\n", id.c_str(),
-                  name.c_str(), m.p50_ms, m.p99_ms, cpu.p50_ms / m.p50_ms, m.loss_percent,
-                  m.valid ? "ok" : "INVALID", ms(&StageSplit::upload_ms).c_str(),
-                  ms(&StageSplit::compute_ms).c_str(), ms(&StageSplit::download_ms).c_str(),
-                  ms(&StageSplit::host_ms).c_str(),
-                  b == "cuda" && !resident ? bench::cuda_target(id, cpu, m).c_str()
-                  : resident               ? "device-resident: information"
-                                           : "-");
-      invalid(m);
+      const bench::BackendRow c = bench::combined(cpu);
+      if (last) {
+        std::printf("%-4s %-8s %9.3f %9.3f %9s %7.2f  %s\n", id.c_str(), "cpu", c.p50_ms, c.p99_ms,
+                    "1.00x", c.loss_percent, c.valid ? "ok" : "INVALID");
+        invalid(c);
+      }
+      for (Row& row : rows) {
+        if (row.failed) continue;
+        try {
+          row.runs.push_back(measure(*spec, row.backend, count, row.resident));
+        } catch (const std::exception& e) {
+          failed(id, row.name, e.what());
+          row.failed = true;
+          continue;
+        }
+        if (!last) continue;
+        const bench::BackendRow m = bench::combined(row.runs);
+        const std::optional<StageSplit> s = split(*spec, row.backend, split_count, row.resident);
+        const auto ms = [&](double StageSplit::*stage) {
+          char text[32] = "-";
+          if (s) std::snprintf(text, sizeof text, "%.3f", (*s).*stage);
+          return std::string(text);
+        };
+        std::printf("%-4s %-8s %9.3f %9.3f %8.2fx %7.2f  %-7s %8s %8s %8s %8s  %s\n", id.c_str(),
+                    row.name.c_str(), m.p50_ms, m.p99_ms, bench::speedup(cpu, row.runs).median,
+                    m.loss_percent, m.valid ? "ok" : "INVALID", ms(&StageSplit::upload_ms).c_str(),
+                    ms(&StageSplit::compute_ms).c_str(), ms(&StageSplit::download_ms).c_str(),
+                    ms(&StageSplit::host_ms).c_str(),
+                    row.backend == "cuda" && !row.resident
+                        ? bench::cuda_target(id, cpu, row.runs).c_str()
+                    : row.resident ? "device-resident: information"
+                                   : "-");
+        invalid(m);
+      }
     }
   }
   return status;
