@@ -59,6 +59,7 @@ inline uint4 make_uint4(unsigned x, unsigned y, unsigned z, unsigned w) {
 #define __global__
 #define __device__
 #define __host__
+#define __launch_bounds__(...)
 
 // The running GPU thread's coordinates.
 extern constinit thread_local uint3 threadIdx, blockIdx;

@@ -3,7 +3,8 @@
 // texture and uniqueness checks and the sub-pixel fit. A block matches a tile of pixels with the
 // column sums of its windows in shared memory and each pixel's search in registers, so that no
 // cost volume goes through device memory (a separate pass per sum and a volume of 80 MB for a3
-// took 0.73 of its 0.94 ms of compute on an H100).
+// took 0.73 of its 0.94 ms of compute on an H100). The column sums are summed along each tile
+// row, so that a window's cost is two reads, not one per window column (15 at a3's window).
 #include <algorithm>
 #include <climits>
 #include <cstddef>
@@ -46,18 +47,27 @@ __global__ void prefilter_kernel(const uint8_t* src, uint8_t* dst, int rows, int
 // The matcher's tile: the pixels of a block, a warp along each of 8 rows.
 constexpr int kTileCols = 32, kTileRows = 8, kTileThreads = kTileCols * kTileRows;
 
-// A matcher block's shared memory: the column sums of a batch of disparity indices (uint16_t:
-// at most (2 radius + 1) * 2 cap, 255 * 126), then the pre-filtered left and right pixels the
-// tile's windows cover (rows first), clamped to the image.
+#if defined(__CUDA_ARCH__) && __CUDA_ARCH__ < 800
+constexpr int kMatchBlocksPerSm = 4;
+#else
+constexpr int kMatchBlocksPerSm = 6;
+#endif
+
+// A matcher block's shared memory: for a batch of disparity indices, each tile row's column sums
+// across the halo columns, then summed along the row in place (uint32_t: a row's sum can exceed
+// 16 bits), each row `line` entries apart (odd, so that the threads summing rows read different
+// banks); then the pre-filtered left and right pixels the tile's windows cover (rows first),
+// clamped to the image.
 struct MatchTiles {
   int halo_cols = 0;   // the tile's columns and a window radius either side
   int halo_rows = 0;   // the same for rows
   int right_cols = 0;  // the right image's columns the windows reach: halo_cols + disparities - 1
+  int line = 0;        // entries from one row's sums to the next: halo_cols, or one more if even
   int batch = 0;       // disparity indices a turn
 };
 
 std::size_t shared_bytes(const MatchTiles& t) {
-  return sizeof(uint16_t) * static_cast<std::size_t>(t.batch) * kTileRows * t.halo_cols +
+  return sizeof(uint32_t) * static_cast<std::size_t>(t.batch) * kTileRows * t.line +
          static_cast<std::size_t>(t.halo_rows) * (t.halo_cols + t.right_cols);
 }
 
@@ -107,21 +117,25 @@ struct Search {
 };
 
 // A block per tile of the valid region: its windows' pixels into shared memory, then, a batch of
-// disparity indices at a time, the column sums of every tile row and halo column, and from them
-// each pixel's window costs; then the texture and uniqueness checks and the fixed-point (1/16
-// px) disparity with OpenCV's sub-pixel fit. Index `disparities` is the texture, |L - cap|. Inside
-// the valid region no window column or row is clamped (min_disparity >= 0), so the clamping of the
-// tiles only keeps the tile's part past that region inside the image.
-__global__ void match_kernel(const uint8_t* left, const uint8_t* right, int16_t* disparity,
-                             BlockMatchingShape s, MatchTiles t) {
+// disparity indices at a time, the column sums of every tile row and halo column, summed along
+// each row, so that a pixel's window cost is the difference of two of them; then the texture and
+// uniqueness checks and the fixed-point (1/16 px) disparity with OpenCV's sub-pixel fit. Index
+// `disparities` is the texture, |L - cap|. Inside the valid region no window column or row is
+// clamped (min_disparity >= 0), so the clamping of the tiles only keeps the tile's part past that
+// region inside the image. Registers for six blocks an SM (40 a thread; the compiler took 48, for
+// five), as the matcher had before it summed along the rows; four on Turing, whose SM holds 1024
+// threads.
+__global__ void __launch_bounds__(kTileThreads, kMatchBlocksPerSm)
+    match_kernel(const uint8_t* left, const uint8_t* right, int16_t* disparity,
+                 BlockMatchingShape s, MatchTiles t) {
   const int tx = static_cast<int>(threadIdx.x), ty = static_cast<int>(threadIdx.y);
   const int id = ty * kTileCols + tx;
   const int tile_x = s.x0 + static_cast<int>(blockIdx.x) * kTileCols;
   const int tile_y = s.y0 + static_cast<int>(blockIdx.y) * kTileRows;
   const int window = 2 * s.radius + 1;
-  uint16_t* column_sums = dynamic_shared<uint16_t>();
-  uint8_t* left_tile = reinterpret_cast<uint8_t*>(column_sums + static_cast<std::size_t>(t.batch) *
-                                                                    kTileRows * t.halo_cols);
+  uint32_t* sums = dynamic_shared<uint32_t>();
+  uint8_t* left_tile =
+      reinterpret_cast<uint8_t*>(sums + static_cast<std::size_t>(t.batch) * kTileRows * t.line);
   uint8_t* right_tile = left_tile + t.halo_rows * t.halo_cols;
   for (int i = id; i < t.halo_rows * t.halo_cols; i += kTileThreads) {
     const int y = clamped(tile_y - s.radius + i / t.halo_cols, 0, s.rows - 1);
@@ -152,18 +166,27 @@ __global__ void match_kernel(const uint8_t* left, const uint8_t* right, int16_t*
       };
       int sum = 0;
       for (int j = 0; j < window; ++j) sum += cost_at(j);
-      uint16_t* out = column_sums + b * kTileRows * t.halo_cols + c;
-      out[0] = static_cast<uint16_t>(sum);
+      uint32_t* out = sums + b * kTileRows * t.line + c;
+      out[0] = static_cast<uint32_t>(sum);
       for (int row = 1; row < kTileRows; ++row) {
         sum += cost_at(row + window - 1) - cost_at(row - 1);
-        out[row * t.halo_cols] = static_cast<uint16_t>(sum);
+        out[row * t.line] = static_cast<uint32_t>(sum);
+      }
+    }
+    __syncthreads();
+    // A thread per disparity index and tile row: the row's column sums summed along it.
+    if (id < count * kTileRows) {
+      uint32_t* row = sums + id * t.line;
+      uint32_t total = 0;
+      for (int c = 0; c < t.halo_cols; ++c) {
+        total += row[c];
+        row[c] = total;
       }
     }
     __syncthreads();
     for (int b = 0; b < count; ++b) {
-      const uint16_t* sums = column_sums + (b * kTileRows + ty) * t.halo_cols + tx;
-      int cost = 0;
-      for (int j = 0; j < window; ++j) cost += sums[j];
+      const uint32_t* row = sums + (b * kTileRows + ty) * t.line;
+      const int cost = static_cast<int>(row[tx + window - 1] - (tx > 0 ? row[tx - 1] : 0u));
       if (k0 + b == s.disparities) {
         texture = cost;
       } else {
@@ -316,6 +339,7 @@ MatchTiles match_tiles(int radius, int disparities) {
   t.halo_cols = kTileCols + 2 * radius;
   t.halo_rows = kTileRows + 2 * radius;
   t.right_cols = t.halo_cols + disparities - 1;
+  t.line = t.halo_cols | 1;
   t.batch = 32;
   while (t.batch > 1 && shared_bytes(t) > kSharedLimit) t.batch /= 2;
   if (radius < 0 || disparities <= 0 || shared_bytes(t) > kSharedLimit) {
