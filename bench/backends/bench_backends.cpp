@@ -267,8 +267,8 @@ int main(int argc, char** argv) {
         failed(id, "cpu", e.what());
         break;
       }
-      const bench::BackendRow c = bench::combined(cpu);
       if (last) {
+        const bench::BackendRow c = bench::combined(cpu);
         std::printf("%-4s %-8s %9.3f %9.3f %9s %7.2f  %s\n", id.c_str(), "cpu", c.p50_ms, c.p99_ms,
                     "1.00x", c.loss_percent, c.valid ? "ok" : "INVALID");
         invalid(c);
