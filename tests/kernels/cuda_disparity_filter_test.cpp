@@ -72,7 +72,8 @@ TEST(DisparityFilterCuda, GivesOpenCvsSpeckleFilter) {
       params.speckle_size = k.speckle_size;
       params.speckle_range = k.speckle_range;
       const int invalid = (params.min_disparity - 1) * 16;
-      cv::Mat disparity(120, 200, CV_16SC1);
+      // Whole blocks of the kernels' 32 x 8 threads, and blocks cut at the right and the bottom.
+      cv::Mat disparity = seed == 2 ? cv::Mat(117, 203, CV_16SC1) : cv::Mat(120, 200, CV_16SC1);
       make_disparity(seed, disparity, invalid);
       cv::Mat expected = disparity.clone();
       filter_on_host(expected, params);
@@ -85,6 +86,31 @@ TEST(DisparityFilterCuda, GivesOpenCvsSpeckleFilter) {
       EXPECT_GT(cv::countNonZero(expected != disparity), 0) << what;
     }
   }
+}
+
+// One region winding through every block, a column at a time (down one, up the next, joined at
+// alternate ends): kept, though what each block holds of it alone is a speckle. Its union-find
+// trees are the deepest an image of this size gives, and one join missed across a block's edge
+// cuts it into speckles. Beside it, columns on their own, which go.
+TEST(DisparityFilterCuda, KeepsARegionWindingThroughEveryBlock) {
+  if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
+  StereoParams params;
+  params.disparity_range = 64;
+  params.speckle_size = 3000;
+  params.speckle_range = 1;
+  const int invalid = (params.min_disparity - 1) * 16;
+  const int rows = 133, cols = 150, winding_cols = 96;
+  cv::Mat disparity(rows, cols, CV_16SC1, cv::Scalar(invalid));
+  for (int x = 0; x < cols; x += 2) {
+    for (int y = 0; y < rows; ++y) disparity.at<int16_t>(y, x) = static_cast<int16_t>(300 + y % 2);
+    if (x + 2 < winding_cols) disparity.at<int16_t>(x % 4 == 0 ? rows - 1 : 0, x + 1) = 300;
+  }
+  cv::Mat expected = disparity.clone();
+  filter_on_host(expected, params);
+  ASSERT_EQ(expected.at<int16_t>(rows / 2, 0), 300) << "the winding region is kept";
+  ASSERT_EQ(expected.at<int16_t>(rows / 2, cols - 2), invalid) << "a column alone goes";
+  const cv::Mat got = on_device(disparity, block_matching_shape(rows, cols, params), params);
+  EXPECT_EQ(cv::countNonZero(got != expected), 0);
 }
 
 }  // namespace
