@@ -29,11 +29,6 @@ BackendRow backend_row(const harness::RunResult& run) {
 
 namespace {
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return metrics::quantile_of_sorted(v, 0.5);
-}
-
 std::string times(double x) {
   char text[32];
   std::snprintf(text, sizeof text, "%.2fx", x);
@@ -57,8 +52,8 @@ BackendRow combined(const std::vector<BackendRow>& runs) {
     for (const auto& why : r.reasons)
       row.reasons.push_back("run " + std::to_string(k + 1) + ": " + why);
   }
-  row.p50_ms = median(p50);
-  row.p99_ms = median(p99);
+  row.p50_ms = metrics::median(std::move(p50));
+  row.p99_ms = metrics::median(std::move(p99));
   return row;
 }
 

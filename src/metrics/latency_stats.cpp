@@ -88,6 +88,11 @@ double quantile_of_sorted(std::span<const double> sorted_samples, double q) {
   return below + fraction * (above - below);
 }
 
+double median(std::vector<double> samples) {
+  std::ranges::sort(samples);
+  return quantile_of_sorted(samples, 0.5);
+}
+
 namespace {
 
 void require_finite(std::span<const double> samples) {

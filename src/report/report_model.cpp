@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 #include <tuple>
+#include <utility>
 
 #include "robotperf/build_info.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
@@ -28,9 +29,7 @@ std::string lower(std::string s) {
 
 double median(std::vector<double> v) {
   std::erase_if(v, [](double x) { return !std::isfinite(x); });
-  if (v.empty()) return kNoValue;
-  std::ranges::sort(v);
-  return metrics::quantile_of_sorted(v, 0.5);
+  return metrics::median(std::move(v));  // NaN (kNoValue) for none
 }
 
 // A value of one metric measured once: by a local run or in a published row.

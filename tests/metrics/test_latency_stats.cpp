@@ -122,6 +122,12 @@ TEST(ComputeStats, MillionUniformSamplesAreFastAndSane) {
   EXPECT_LT(std::chrono::duration<double>(elapsed).count(), 5.0);
 }
 
+TEST(Median, OfSamplesInAnyOrder) {
+  EXPECT_DOUBLE_EQ(median({8.0, 2.0, 4.0}), 4.0);
+  EXPECT_DOUBLE_EQ(median({8.0, 2.0, 4.0, 3.0}), 3.5);
+  EXPECT_TRUE(std::isnan(median({})));
+}
+
 TEST(QuantileOfSorted, EndpointsAndInvalidQuantile) {
   const std::vector<double> sorted = {2.0, 4.0, 8.0};
   EXPECT_DOUBLE_EQ(quantile_of_sorted(sorted, 0.0), 2.0);

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <span>
 #include <string_view>
+#include <vector>
 
 namespace robotperf::metrics {
 
@@ -82,6 +83,9 @@ SampleStats compute_stats_of_sorted(std::span<const double> sorted);
 // Type-7 quantile (see SampleStats) of samples already sorted ascending; q in [0, 1].
 // Returns NaN for an empty span. Throws std::invalid_argument if q is outside [0, 1].
 double quantile_of_sorted(std::span<const double> sorted_samples, double q);
+// The type-7 median (for an even count, the mean of the middle two) of samples in any order;
+// NaN for none. NaN samples have no order: the caller removes them first.
+double median(std::vector<double> samples);
 
 // JSON object {"count", "min", "mean", "rms", "stddev", "p50", "p90", "p99", "p999", "max",
 // "p50_ci95", ..., "p999_ci95"} (the intervals as [lower, upper]) with every value except count
