@@ -236,7 +236,8 @@ __global__ void mark_unmatched_kernel(int16_t* disparity, BlockMatchingShape s) 
 // The root of i's tree, each label passed on the way pointed at its grandparent (path halving),
 // so that the threads that follow walk half as far. Safe beside concurrent unite()s: a label only
 // ever points at a smaller pixel of the same region, and a root (whose label an atomicMin may be
-// lowering) is never written here, as a pixel that has a parent never becomes a root again.
+// lowering) is never written here, as a pixel that has a parent never becomes a root again. Not
+// where a thread writes a label that must stay: another thread's halving may overwrite it.
 __device__ int find_root(int32_t* labels, int i) {
   while (true) {
     const int parent = labels[i];
@@ -246,6 +247,12 @@ __device__ int find_root(int32_t* labels, int i) {
     labels[i] = grandparent;
     i = grandparent;
   }
+}
+
+// The root of i's tree, read without writing a label (see find_root).
+__device__ int root_of(const int32_t* labels, int i) {
+  while (labels[i] != i) i = labels[i];
+  return i;
 }
 
 // Joins the trees of a and b, each root pointing at the smaller; a thread that loses a race to
@@ -346,14 +353,17 @@ __global__ void join_regions_kernel(const int16_t* disparity, int32_t* labels, i
 }
 
 // Every pixel's root, and its region's size: the lanes of a warp in one region add their count
-// once (a large region fills whole warps, whose atomics on its one counter would queue).
+// once (a large region fills whole warps, whose atomics on its one counter would queue). The walk
+// to the root writes no label, so that each pixel's root, written here, stays for
+// remove_speckles_kernel (find_root's halving in another thread could point it at a mere
+// ancestor, whose region size is 0).
 __global__ void count_regions_kernel(int32_t* labels, int32_t* region_sizes, int rows, int cols) {
   const int x = blockIdx.x * blockDim.x + threadIdx.x;
   const int y = blockIdx.y * blockDim.y + threadIdx.y;
   const int at = y * cols + x;
   int root = -1;
   if (x < cols && y < rows && labels[at] >= 0) {
-    root = find_root(labels, at);
+    root = root_of(labels, at);
     labels[at] = root;
   }
   const unsigned same = __match_any_sync(0xffffffffu, root);
