@@ -9,8 +9,7 @@ namespace robotperf::fuzz {
 
 // `open` is bag::open_mcap or bag::open_sqlite3.
 template <class Open>
-void read_whole_bag(Open open, const std::filesystem::path& file,
-                    const bag::ReadOptions& options) {
+void read_whole_bag(Open open, const std::filesystem::path& file, const bag::ReadOptions& options) {
   try {
     auto reader = open(file, options);
     (void)reader->topics();

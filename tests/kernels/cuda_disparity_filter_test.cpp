@@ -36,6 +36,16 @@ void make_disparity(uint32_t seed, cv::Mat& disparity, int invalid) {
   }
 }
 
+// The filter's parameters, with a3's range of disparities.
+StereoParams speckle_params(int min_disparity, int speckle_size, int speckle_range) {
+  StereoParams params;
+  params.min_disparity = min_disparity;
+  params.disparity_range = 64;
+  params.speckle_size = speckle_size;
+  params.speckle_range = speckle_range;
+  return params;
+}
+
 cv::Mat on_device(const cv::Mat& disparity, const BlockMatchingShape& shape,
                   const StereoParams& params) {
   using cuda::Buffer;
@@ -66,11 +76,8 @@ TEST(DisparityFilterCuda, GivesOpenCvsSpeckleFilter) {
   };
   for (const Case k : {Case{100, 4}, Case{20, 16}, Case{400, 0}, Case{50, 2}}) {
     for (const uint32_t seed : {1u, 2u, 3u}) {
-      StereoParams params;
-      params.min_disparity = seed == 3 ? 4 : 0;
-      params.disparity_range = 64;
-      params.speckle_size = k.speckle_size;
-      params.speckle_range = k.speckle_range;
+      const StereoParams params =
+          speckle_params(seed == 3 ? 4 : 0, k.speckle_size, k.speckle_range);
       const int invalid = (params.min_disparity - 1) * 16;
       // Whole blocks of the kernels' 32 x 8 threads, and blocks cut at the right and the bottom.
       cv::Mat disparity = seed == 2 ? cv::Mat(117, 203, CV_16SC1) : cv::Mat(120, 200, CV_16SC1);
@@ -94,10 +101,7 @@ TEST(DisparityFilterCuda, GivesOpenCvsSpeckleFilter) {
 // cuts it into speckles. Beside it, columns on their own, which go.
 TEST(DisparityFilterCuda, KeepsARegionWindingThroughEveryBlock) {
   if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
-  StereoParams params;
-  params.disparity_range = 64;
-  params.speckle_size = 3000;
-  params.speckle_range = 1;
+  const StereoParams params = speckle_params(0, 3000, 1);
   const int invalid = (params.min_disparity - 1) * 16;
   const int rows = 133, cols = 150, winding_cols = 96;
   cv::Mat disparity(rows, cols, CV_16SC1, cv::Scalar(invalid));

@@ -48,7 +48,7 @@ struct FieldType {
   Primitive primitive = Primitive::kInt32;
   std::string message_type;  // "pkg/msg/Type" when primitive == kMessage
   ArrayKind array = ArrayKind::kNone;
-  std::size_t array_size = 0;  // the size (fixed) or the bound (bounded)
+  std::size_t array_size = 0;    // the size (fixed) or the bound (bounded)
   std::size_t string_bound = 0;  // N of string<=N (wstring<=N); 0: unbounded
 };
 

@@ -13,6 +13,8 @@
 #if !defined(ROBOTPERF_TRACING_TP_ROBOTPERF_H) || defined(LTTNG_UST_TRACEPOINT_HEADER_MULTI_READ)
 #define ROBOTPERF_TRACING_TP_ROBOTPERF_H
 
+/* The event fields have no commas between them, which clang-format would run together. */
+/* clang-format off */
 #include <lttng/tracepoint.h>
 #include <stdint.h>
 
@@ -169,6 +171,7 @@ LTTNG_UST_TRACEPOINT_EVENT(
         lttng_ust_field_integer(uint64_t, cycle, cycle_arg)
         lttng_ust_field_integer(int64_t, message_id, message_id_arg)))
 
+/* clang-format on */
 #endif /* ROBOTPERF_TRACING_TP_ROBOTPERF_H */
 
 #include <lttng/tracepoint-event.h>

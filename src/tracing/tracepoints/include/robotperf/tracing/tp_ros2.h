@@ -12,6 +12,8 @@
 #if !defined(ROBOTPERF_TRACING_TP_ROS2_H) || defined(LTTNG_UST_TRACEPOINT_HEADER_MULTI_READ)
 #define ROBOTPERF_TRACING_TP_ROS2_H
 
+/* The event fields have no commas between them, which clang-format would run together. */
+/* clang-format off */
 #include <lttng/tracepoint.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -174,6 +176,7 @@ LTTNG_UST_TRACEPOINT_EVENT(
     LTTNG_UST_TP_ARGS(const void *, callback_arg),
     LTTNG_UST_TP_FIELDS(lttng_ust_field_integer_hex(const void *, callback, callback_arg)))
 
+/* clang-format on */
 #endif /* ROBOTPERF_TRACING_TP_ROS2_H */
 
 #include <lttng/tracepoint-event.h>
