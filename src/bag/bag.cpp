@@ -17,6 +17,7 @@
 
 #include "mcap_format.hpp"
 #include "robotperf/bag/qos.hpp"
+#include "robotperf/text/yaml_scalar.hpp"
 
 namespace robotperf::bag {
 namespace {
@@ -245,29 +246,6 @@ fs::path storage_path(const BagInfo& info, const FileInfo& f) {
   return info.path / f.path;
 }
 
-std::string quoted(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    switch (c) {
-      case '"':
-        out += "\\\"";
-        break;
-      case '\\':
-        out += "\\\\";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      case '\t':
-        out += "\\t";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out + "\"";
-}
-
 }  // namespace
 
 std::string to_string(Storage storage) {
@@ -465,19 +443,21 @@ void write_metadata_file(const fs::path& dir, Storage storage, const std::vector
     << "  topics_with_message_count:\n";
   for (const auto& t : topics) {
     y << "    - topic_metadata:\n"
-      << "        name: " << quoted(t.name) << "\n"
-      << "        type: " << quoted(t.type) << "\n"
-      << "        serialization_format: " << quoted(t.serialization_format) << "\n"
-      << "        offered_qos_profiles: " << quoted(integer_qos(t, target)) << "\n"
+      << "        name: " << text::yaml_double_quoted(t.name) << "\n"
+      << "        type: " << text::yaml_double_quoted(t.type) << "\n"
+      << "        serialization_format: " << text::yaml_double_quoted(t.serialization_format)
+      << "\n"
+      << "        offered_qos_profiles: " << text::yaml_double_quoted(integer_qos(t, target))
+      << "\n"
       << "      message_count: " << t.message_count << "\n";
   }
   y << "  compression_format: \"\"\n"
     << "  compression_mode: \"\"\n"
     << "  relative_file_paths:\n";
-  for (const auto& f : files) y << "    - " << quoted(f.path.string()) << "\n";
+  for (const auto& f : files) y << "    - " << text::yaml_double_quoted(f.path.string()) << "\n";
   y << "  files:\n";
   for (const auto& f : files) {
-    y << "    - path: " << quoted(f.path.string()) << "\n"
+    y << "    - path: " << text::yaml_double_quoted(f.path.string()) << "\n"
       << "      starting_time:\n        nanoseconds_since_epoch: " << f.starting_time_ns << "\n"
       << "      duration:\n        nanoseconds: " << f.duration_ns << "\n"
       << "      message_count: " << f.message_count << "\n";

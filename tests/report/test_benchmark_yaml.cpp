@@ -380,8 +380,8 @@ TEST_F(BenchmarkYaml, ScalarsReadBackExactly) {
                               "{y}",
                               "x # y",
                               "%"}) {
-    const YAML::Node n = YAML::Load("k: " + yaml_scalar(s));
-    EXPECT_EQ(n["k"].as<std::string>(), s) << yaml_scalar(s);
+    const YAML::Node n = YAML::Load("k: " + text::yaml_scalar(s));
+    EXPECT_EQ(n["k"].as<std::string>(), s) << text::yaml_scalar(s);
   }
   for (double v : {0.0, 20.4, 46.155170000000005, 8.97e-44, 1e300, 30.0, -2298.236986}) {
     EXPECT_EQ(YAML::Load("k: " + shortest_number(v))["k"].as<double>(), v);
