@@ -359,30 +359,7 @@ TEST_F(BenchmarkYaml, RefusesWhatItCannotMergeSafely) {
   EXPECT_EQ(fresh.text.substr(0, 20), "id: x1\nname: x1_new\n");
 }
 
-TEST_F(BenchmarkYaml, ScalarsReadBackExactly) {
-  for (const std::string s : {"plain text",
-                              "",
-                              "true",
-                              "No",
-                              "2023-07-06 08:05:58",
-                              "07-07-2023",
-                              "a: b",
-                              "#x",
-                              "- x",
-                              "tab\there",
-                              "quote \" and \\",
-                              "\x01 control",
-                              "ROBOTCORE\xC2\xAE Perception",
-                              "null",
-                              "trailing ",
-                              "12",
-                              "[x]",
-                              "{y}",
-                              "x # y",
-                              "%"}) {
-    const YAML::Node n = YAML::Load("k: " + text::yaml_scalar(s));
-    EXPECT_EQ(n["k"].as<std::string>(), s) << text::yaml_scalar(s);
-  }
+TEST_F(BenchmarkYaml, NumbersReadBackExactly) {
   for (double v : {0.0, 20.4, 46.155170000000005, 8.97e-44, 1e300, 30.0, -2298.236986}) {
     EXPECT_EQ(YAML::Load("k: " + shortest_number(v))["k"].as<double>(), v);
   }

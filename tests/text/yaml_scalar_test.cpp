@@ -9,6 +9,11 @@ namespace robotperf::text {
 namespace {
 
 const char* const kAwkward[] = {"plain",
+                                "true",
+                                "No",
+                                "2023-07-06 08:05:58",
+                                "07-07-2023",
+                                "a: b",
                                 "with: colon",
                                 "#x",
                                 "- x",
