@@ -35,7 +35,7 @@
 #include "robotperf/msgs/dynamic.hpp"
 #include "robotperf/perception/cuda_device.hpp"
 #include "robotperf/perception/opencl_device.hpp"
-#include "robotperf/report/atomic_file.hpp"
+#include "robotperf/files/atomic_file.hpp"
 #include "robotperf/report/benchmark_yaml.hpp"
 #include "robotperf/report/readme.hpp"
 #include "robotperf/report/report.hpp"
@@ -435,7 +435,7 @@ class InterruptHandling {
 };
 
 // Writes a run's files (<base><suffix> for each) atomically, never over another run's: a base
-// taken (two runs started in the same millisecond) becomes <base>-2, ... (report::write_new_files).
+// taken (two runs started in the same millisecond) becomes <base>-2, ... (files::write_new_files).
 // When the output folder refuses them (a full disk, say), they go to a folder of their own under
 // the temporary directory instead and stderr says where: a measured run is not thrown away.
 // Returns the base the files were written under, or nothing when they could be written nowhere
@@ -443,7 +443,7 @@ class InterruptHandling {
 std::optional<fs::path> write_result_files(const fs::path& base,
                                            const std::map<std::string, std::string>& files) {
   try {
-    return report::write_new_files(base, files);
+    return files::write_new_files(base, files);
   } catch (const std::exception& e) {
     std::cerr << "robotperf: " << e.what() << "\n";
   }
@@ -451,7 +451,7 @@ std::optional<fs::path> write_result_files(const fs::path& base,
                              ("robotperf-unsaved-" + std::to_string(getpid())) / base.filename();
   try {
     fs::create_directories(elsewhere.parent_path());
-    const fs::path kept = report::write_new_files(elsewhere, files);
+    const fs::path kept = files::write_new_files(elsewhere, files);
     std::cerr << "robotperf: the results were written to " << elsewhere.parent_path().string()
               << " instead; move them where they belong once " << base.parent_path().string()
               << " has room\n";
@@ -541,7 +541,7 @@ WrittenRun write_run(const harness::BenchmarkSpec& spec, const RunArgs& a,
     if (!accepted.results.empty()) input.published.push_back(accepted);
     report::ReportOptions options;
     options.title = "robotperf " + spec.id + " — " + report::result_basename(result);
-    report::write_file_atomically(base.string() + ".report.html",
+    files::write_file_atomically(base.string() + ".report.html",
                                   report::render_html(input, options));
     std::cout << "report: " << base.string() << ".report.html\n";
   }
@@ -600,7 +600,7 @@ void write_summary(const SeveralRuns& runs, const std::string& kind, const std::
   std::cout << "\n" << table;
   if (!runs.first) return;
   const fs::path path = fs::path(*runs.first).replace_extension("." + kind + ".json");
-  report::write_file_atomically(path, json_text(summary, 2) + "\n");
+  files::write_file_atomically(path, json_text(summary, 2) + "\n");
   std::cout << kind << ": " << path.string() << "\n";
 }
 
@@ -881,7 +881,7 @@ int analyze(const TraceArgs& a) {
             {"from_sent", metrics::to_json(analysis.latency_from_sent, 1e-6, "ms")}}},
           {"throughput_hz", analysis.throughput_hz}};
     }
-    report::write_output(a.json, json_text(j, 2) + "\n");
+    files::write_output(a.json, json_text(j, 2) + "\n");
   }
   return analysis.valid ? kExitOk : kExitInvalidResult;
 }
@@ -952,8 +952,8 @@ int export_results(const Roots& roots, const ExportArgs& a) {
   }
   for (const auto& [file, entries] : targets) {
     if (file.empty()) {
-      report::write_output(a.output, report::entries_yaml(entries));
-      if (!report::is_standard_output(a.output)) std::cout << a.output << "\n";
+      files::write_output(a.output, report::entries_yaml(entries));
+      if (!files::is_standard_output(a.output)) std::cout << a.output << "\n";
       continue;
     }
     std::ifstream in(file, std::ios::binary);
@@ -961,7 +961,7 @@ int export_results(const Roots& roots, const ExportArgs& a) {
       throw report::ReportError(file.string() + ": cannot read the benchmark.yaml to merge into");
     const std::string original{std::istreambuf_iterator<char>(in), {}};
     const auto merged = report::merge_entries(original, file.string(), entries);
-    if (merged.added) report::write_file_atomically(file, merged.text);
+    if (merged.added) files::write_file_atomically(file, merged.text);
     std::cout << file.string() << ": added " << merged.added << " result(s)";
     if (merged.already_present) std::cout << ", " << merged.already_present << " already there";
     std::cout << "\n";
@@ -1000,7 +1000,7 @@ int import_published(const std::vector<std::string>& paths, const std::string& i
     flagged += report::flagged_rows_report(b);
     if (!into.empty()) {
       const fs::path out = fs::path(into) / ("published-" + b.category + "-" + b.name + ".json");
-      report::write_file_atomically(out, json_text(report::to_json(b), 1) + "\n");
+      files::write_file_atomically(out, json_text(report::to_json(b), 1) + "\n");
     }
   }
   if (!flagged.empty()) std::cout << "\nrows that break the measurement rules:\n" << flagged;
@@ -1025,7 +1025,7 @@ int readme(const Roots& roots, const std::vector<std::string>& ids, bool check) 
       }
       continue;
     }
-    report::write_file_atomically(file, text);
+    files::write_file_atomically(file, text);
     std::cout << file.string() << "\n";
   }
   return status;
@@ -1054,21 +1054,21 @@ int make_report(const ReportArgs& a) {
   report::ReportOptions options;
   options.title = a.title;
   if (a.compare.size() == 2) options.compare = std::pair{a.compare[0], a.compare[1]};
-  if (!a.html.empty() && !a.md.empty() && report::is_standard_output(a.html) &&
-      report::is_standard_output(a.md)) {
+  if (!a.html.empty() && !a.md.empty() && files::is_standard_output(a.html) &&
+      files::is_standard_output(a.md)) {
     throw std::invalid_argument("report: only one of --html and --md can be - (standard output)");
   }
   // Standard output carries the report alone; where a file went is said on stderr then.
-  std::ostream& said = report::is_standard_output(a.html) || report::is_standard_output(a.md)
+  std::ostream& said = files::is_standard_output(a.html) || files::is_standard_output(a.md)
                            ? std::cerr
                            : std::cout;
   if (!a.html.empty()) {
-    report::write_output(a.html, report::render_html(input, options));
-    if (!report::is_standard_output(a.html)) said << "report: " << a.html << "\n";
+    files::write_output(a.html, report::render_html(input, options));
+    if (!files::is_standard_output(a.html)) said << "report: " << a.html << "\n";
   }
   if (!a.md.empty()) {
-    report::write_output(a.md, report::render_markdown(input, options));
-    if (!report::is_standard_output(a.md)) said << "report: " << a.md << "\n";
+    files::write_output(a.md, report::render_markdown(input, options));
+    if (!files::is_standard_output(a.md)) said << "report: " << a.md << "\n";
   }
   return kExitOk;
 }

@@ -11,7 +11,7 @@
 #include <regex>
 #include <sstream>
 
-#include "robotperf/text/yaml_scalar.hpp"
+#include "robotperf/files/yaml_scalar.hpp"
 
 namespace robotperf::report {
 namespace {
@@ -124,16 +124,16 @@ std::string render_entry(const PublishedResult& e, std::size_t dash_col, std::si
   std::string out = std::string(dash_col, ' ') + "- result:\n";
   for (const auto& key : order) {
     std::string value;
-    if (key == "type") value = text::yaml_scalar(e.type);
-    if (key == "metric") value = text::yaml_scalar(e.metric);
-    if (key == "metric_unit") value = text::yaml_scalar(e.metric_unit);
-    if (key == "hardware") value = text::yaml_scalar(e.hardware);
-    if (key == "category") value = text::yaml_scalar(e.category);
-    if (key == "timestampt") value = text::yaml_scalar(e.timestampt);
+    if (key == "type") value = files::yaml_scalar(e.type);
+    if (key == "metric") value = files::yaml_scalar(e.metric);
+    if (key == "metric_unit") value = files::yaml_scalar(e.metric_unit);
+    if (key == "hardware") value = files::yaml_scalar(e.hardware);
+    if (key == "category") value = files::yaml_scalar(e.category);
+    if (key == "timestampt") value = files::yaml_scalar(e.timestampt);
     if (key == "value")
-      value = std::isfinite(e.value) ? shortest_number(e.value) : text::yaml_scalar(e.value_text);
-    if (key == "note") value = text::yaml_scalar(e.note);
-    if (key == "datasource") value = text::yaml_scalar(e.datasource);
+      value = std::isfinite(e.value) ? shortest_number(e.value) : files::yaml_scalar(e.value_text);
+    if (key == "note") value = files::yaml_scalar(e.note);
+    if (key == "datasource") value = files::yaml_scalar(e.datasource);
     out += std::string(field_col, ' ') + key + ": " + value + "\n";
   }
   return out;

@@ -275,7 +275,7 @@ void expect_round_trip(const std::string& original, const std::vector<PublishedR
   const std::string inserted = merged.text.substr(prefix, merged.text.size() - original.size());
   EXPECT_EQ(inserted.find_first_not_of(' '), dash_col) << inserted;
 
-  report::write_file_atomically(file, merged.text);
+  files::write_file_atomically(file, merged.text);
   const auto back = import_benchmark_yaml(file);
   ASSERT_GE(back.results.size(), entries.size());
   const std::size_t first_new = back.results.size() - entries.size();
@@ -326,7 +326,7 @@ TEST_F(BenchmarkYaml, RoundTripIntoAnEmptyPackageFile) {
   EXPECT_EQ(merged.text.substr(0, original.find("results: []")),
             original.substr(0, original.find("results: []")));
   const fs::path file = dir_ / "benchmark.yaml";
-  report::write_file_atomically(file, merged.text);
+  files::write_file_atomically(file, merged.text);
   const auto back = import_benchmark_yaml(file);
   ASSERT_EQ(back.results.size(), 3u);
   for (std::size_t i = 0; i < 3; ++i) EXPECT_TRUE(back.results[i].same_entry(entries[i]));

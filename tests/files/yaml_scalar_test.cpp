@@ -1,11 +1,11 @@
-#include "robotperf/text/yaml_scalar.hpp"
+#include "robotperf/files/yaml_scalar.hpp"
 
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
 #include <string>
 
-namespace robotperf::text {
+namespace robotperf::files {
 namespace {
 
 const char* const kAwkward[] = {"plain",
@@ -50,4 +50,4 @@ TEST(YamlScalar, PlainOnlyWhereNothingElseCanBeRead) {
 }
 
 }  // namespace
-}  // namespace robotperf::text
+}  // namespace robotperf::files

@@ -6,7 +6,7 @@
 #include <string>
 #include <string_view>
 
-namespace robotperf::text {
+namespace robotperf::files {
 
 // `text` double-quoted, with the escapes every YAML 1.1/1.2 reader takes: \" \\ \n \t, and \xNN
 // for the other control characters. UTF-8 text passes as it is.
@@ -16,4 +16,4 @@ std::string yaml_double_quoted(std::string_view text);
 // boolean, null, a flow collection, a comment), else yaml_double_quoted.
 std::string yaml_scalar(std::string_view text);
 
-}  // namespace robotperf::text
+}  // namespace robotperf::files

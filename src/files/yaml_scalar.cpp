@@ -1,9 +1,9 @@
-#include "robotperf/text/yaml_scalar.hpp"
+#include "robotperf/files/yaml_scalar.hpp"
 
 #include <cstdio>
 #include <regex>
 
-namespace robotperf::text {
+namespace robotperf::files {
 
 std::string yaml_double_quoted(std::string_view text) {
   std::string out = "\"";
@@ -42,4 +42,4 @@ std::string yaml_scalar(std::string_view text) {
   return yaml_double_quoted(text);
 }
 
-}  // namespace robotperf::text
+}  // namespace robotperf::files
