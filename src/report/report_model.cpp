@@ -1188,9 +1188,10 @@ ReportInput load_report_inputs(const std::vector<fs::path>& paths) {
     if (fs::is_directory(p)) {
       std::vector<fs::path> files;
       for (const auto& e : fs::recursive_directory_iterator(p)) {
-        if (!e.is_regular_file()) continue;
         const auto name = e.path().filename().string();
-        if (may_be_run_file(e.path()) || may_be_imported_file(e.path()) || name == "benchmark.yaml")
+        if ((may_be_run_file(e.path()) || may_be_imported_file(e.path()) ||
+             name == "benchmark.yaml") &&
+            is_regular_file_or_skip(e, in.skipped))
           files.push_back(e.path());
       }
       std::ranges::sort(files);

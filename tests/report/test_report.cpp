@@ -885,6 +885,21 @@ TEST_F(Report, AFileWithAWrongTypedFieldIsSkippedNamingTheField) {
   EXPECT_EQ(load_report_inputs({dir_}).runs.size(), 4u);
 }
 
+// A link that loops, named like a results file: one line, and the folder's other runs are read
+// (listing and reporting a folder stopped at it).
+TEST_F(Report, ALoopingLinkIsSkippedOneLine) {
+  testing::write_sample(dir_, {});
+  fs::create_symlink(dir_ / "loop.json", dir_ / "loop.json");
+  const RunScan scan = scan_results(dir_);
+  EXPECT_EQ(scan.runs.size(), 1u);
+  ASSERT_EQ(scan.skipped.size(), 1u);
+  EXPECT_NE(scan.skipped[0].find("loop.json: cannot be read"), std::string::npos)
+      << scan.skipped[0];
+  const auto input = load_report_inputs({dir_});
+  EXPECT_EQ(input.runs.size(), 1u);
+  EXPECT_EQ(input.skipped.size(), 1u);
+}
+
 // A field of another type than robotperf writes, wherever it is, skips that file with one line
 // naming it; the folder's other runs are read, and what is read after loading (the machine
 // table) shows what it cannot read as "-" instead of stopping the report.
