@@ -885,6 +885,26 @@ TEST_F(Report, AFileWithAWrongTypedFieldIsSkippedNamingTheField) {
   EXPECT_EQ(load_report_inputs({dir_}).runs.size(), 4u);
 }
 
+// A hardware name holding '=' is a name, not fields: the automatic comparison and a comparison
+// asked by that name find its runs (the report stopped with "is not a field=value").
+TEST_F(Report, AHardwareNameWithAnEqualsSignIsAName) {
+  testing::SampleRun a;
+  a.cpu = "ACME x=1";
+  testing::write_sample(dir_, a, false, 40);
+  testing::SampleRun b;
+  b.cpu = "ACME y=2";
+  b.start_unix_ns += 60'000'000'000;
+  testing::write_sample(dir_, b, false, 41);
+  const auto input = load_report_inputs({dir_});
+  ASSERT_EQ(input.runs.size(), 2u);
+  EXPECT_NE(render_html(input, {}).find("ACME x=1"), std::string::npos);
+  ReportOptions options;
+  options.compare = std::pair{"ACME x=1", "ACME y=2"};
+  const std::string md = render_markdown(input, options);
+  EXPECT_EQ(md.find("no benchmark and metric in common"), std::string::npos) << md;
+  EXPECT_NE(md.find("ACME x=1"), std::string::npos) << md;
+}
+
 // A link that loops, named like a results file: one line, and the folder's other runs are read
 // (listing and reporting a folder stopped at it).
 TEST_F(Report, ALoopingLinkIsSkippedOneLine) {
