@@ -8,6 +8,8 @@ namespace robotperf::cli {
 
 std::atomic<int> g_interrupted{0};
 
+namespace {
+
 void on_interrupt(int signal_number) {
   if (g_interrupted.exchange(signal_number) != 0) {
     constexpr char kMessage[] = "\nrobotperf: interrupted again: stopping now\n";
@@ -19,6 +21,8 @@ void on_interrupt(int signal_number) {
       "\nrobotperf: interrupted: ending the run, keeping what it measured (again to force)\n";
   (void)!write(STDERR_FILENO, kMessage, sizeof kMessage - 1);
 }
+
+}  // namespace
 
 InterruptHandling::InterruptHandling() {
   struct sigaction action {};

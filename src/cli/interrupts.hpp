@@ -11,14 +11,13 @@ namespace robotperf::cli {
 // The signal that interrupted the run, 0 while none has.
 extern std::atomic<int> g_interrupted;
 
-void on_interrupt(int signal_number);
-
 // The exit status of a run the signal in g_interrupted ended.
 inline int interrupted_exit_code() {
   return 128 + g_interrupted.load();
 }
 
-// Handles SIGINT and SIGTERM with on_interrupt while it lives.
+// Handles SIGINT and SIGTERM while it lives: the first sets g_interrupted, a second ends the
+// process with 128 + its signal.
 class InterruptHandling {
  public:
   InterruptHandling();
