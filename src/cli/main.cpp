@@ -29,6 +29,7 @@
 #include "robotperf/git_revision.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
+#include "robotperf/harness/node_spec_wire.hpp"
 #include "robotperf/harness/peak_search.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/msgs/cdr.hpp"
@@ -1441,10 +1442,8 @@ int main(int argc, char** argv) {
   node_cmd->add_option("--node", node_name)->required();
   node_cmd->add_option("--rmw", node_rmw);
   node_cmd->add_option("--domain", node_domain)->transform(domain_id_check(false));
-  std::optional<double> node_update_rate;
-  node_cmd->add_option("--update-rate", node_update_rate);
-  std::optional<std::string> node_backend;
-  node_cmd->add_option("--backend", node_backend);
+  std::string node_nodes;
+  node_cmd->add_option("--nodes", node_nodes);
   double node_callback_timeout_s = 30.0;
   node_cmd->add_option("--callback-timeout", node_callback_timeout_s);
   std::string node_run_token;
@@ -1552,8 +1551,7 @@ int main(int argc, char** argv) {
     }
     if (*node_cmd) {
       harness::BenchmarkSpec spec = harness::load_benchmark(node_package);
-      if (node_update_rate) harness::override_update_rate(spec, *node_update_rate);
-      if (node_backend) harness::override_backend(spec, *node_backend);
+      if (!node_nodes.empty()) harness::use_encoded_nodes(spec, node_nodes);
       return harness::run_node_process(spec, node_name, node_rmw, node_domain,
                                        node_scheduling.options(), node_callback_timeout_s,
                                        node_run_token, node_keystore,

@@ -8,10 +8,10 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
-#include <sstream>
 
 #include "control_loop.hpp"
 #include "graph_connection.hpp"
+#include "robotperf/harness/node_spec_wire.hpp"
 #include "robotperf/metrics/delivery_validity.hpp"
 #include "robotperf/msgs/known_types.hpp"
 #include "robotperf/plugin/control_loop.hpp"
@@ -72,18 +72,12 @@ std::vector<int64_t> schedule_of(const RunPlan& plan, const RunOptions& options,
   return arrival_schedule(options.arrival, plan.period_ns, r.count);
 }
 
-// The arguments each node process gets beside its node's name, transport and domain: the options
-// it applies to the package it loads, and the run's.
-std::vector<std::string> node_arguments(const RunOptions& options, const RunResult& r) {
+// The arguments each node process gets beside its node's name, transport and domain: the graph's
+// nodes as resolved here (the overrides applied), and the run's settings.
+std::vector<std::string> node_arguments(const BenchmarkSpec& spec, const RunOptions& options,
+                                        const RunResult& r) {
   std::vector<std::string> arguments = options.scheduling.node_arguments();
-  if (options.update_rate_hz) {
-    // The children load the package themselves: they get the override to apply.
-    std::ostringstream hz;
-    hz.precision(17);
-    hz << *options.update_rate_hz;
-    arguments.insert(arguments.end(), {"--update-rate", hz.str()});
-  }
-  if (options.backend) arguments.insert(arguments.end(), {"--backend", *options.backend});
+  arguments.insert(arguments.end(), {"--nodes", encode_nodes(spec.nodes)});
   arguments.insert(arguments.end(), {"--callback-timeout", number_text(options.callback_timeout_s),
                                      "--run-token", r.run_token});
   if (!r.keystore.empty()) arguments.insert(arguments.end(), {"--security", r.keystore.string()});
@@ -167,7 +161,7 @@ GraphUnderTest::GraphUnderTest(const RunPlan& plan, const RunOptions& options, R
   } else {
     children =
         std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw, options.domain_id,
-                                        node_arguments(options, r), options.host_launchers);
+                                        node_arguments(spec, options, r), options.host_launchers);
   }
   if (!spec.launch.empty()) {
     launched = std::make_unique<LaunchedProcesses>(
