@@ -27,14 +27,13 @@
 #include "robotperf/build_info.hpp"
 #include "robotperf/categories/builtin.hpp"
 #include "robotperf/git_revision.hpp"
+#include "robotperf/harness/backend_check.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/peak_search.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/msgs/cdr.hpp"
 #include "robotperf/msgs/dynamic.hpp"
-#include "robotperf/perception/cuda_device.hpp"
-#include "robotperf/perception/opencl_device.hpp"
 #include "robotperf/report/atomic_file.hpp"
 #include "robotperf/report/benchmark_yaml.hpp"
 #include "robotperf/report/readme.hpp"
@@ -748,9 +747,8 @@ int run(const Roots& roots, const RunArgs& a) {
   if (a.arrival_seed) o.arrival.seed = *a.arrival_seed;
   o.monitor_wait = a.monitor_wait == "spin" ? graph::WaitMode::kSpin : graph::WaitMode::kSleep;
   o.update_rate_hz = a.update_rate;
-  // Said here, where the build is known: the kernels of a build without CUDA do not name it.
-  if (a.backend == "cuda" && !perception::cuda_backend_built())
-    throw std::invalid_argument(std::string("--backend cuda: ") + perception::kCudaNotBuilt);
+  // Said before anything else of the run: a backend this build lacks is named by no kernel.
+  if (a.backend) harness::check_backend_available(*a.backend);
   o.backend = a.backend;
   o.device_resident = a.device_resident;
   o.count = a.count;
@@ -1540,13 +1538,16 @@ int main(int argc, char** argv) {
     if (*analyze_cmd) return analyze(ta);
     if (*graph_cmd) return cli::ros_graph(graph_options, std::cout);
     if (*sysinfo_cmd) {
-      const nlohmann::json description = {
+      nlohmann::json description = {
           {"machine", sysinfo::to_json(sysinfo::collect_machine_info())},
           {"software", report::software_json()},
           {"power",
-           metrics::sources_to_json(metrics::discover_power_sources(sysinfo_power.options()))},
-          {"opencl_devices", devices_json(perception::opencl_devices())},
-          {"cuda_devices", devices_json(perception::cuda_devices())}};
+           metrics::sources_to_json(metrics::discover_power_sources(sysinfo_power.options()))}};
+      // Every registered backend's devices; the host's cpu is the machine above.
+      for (const auto* backend : plugin::registry().backends()) {
+        description[backend->info.name + "_devices"] = devices_json(
+            backend->hooks.devices ? backend->hooks.devices() : std::vector<plugin::DeviceInfo>{});
+      }
       std::cout << json_text(description, 2) << "\n";
       return kExitOk;
     }
