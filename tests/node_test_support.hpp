@@ -23,7 +23,8 @@
 
 namespace robotperf::testing {
 
-// The kernels and evaluators the given registration functions add (datasets are left out).
+// The kernels and evaluators the given registration functions add (datasets, output comparisons
+// and backends are left out).
 class CategoryUnderTest final : public plugin::Registrar {
  public:
   CategoryUnderTest(std::initializer_list<void (*)(plugin::Registrar&)> registrations) {
@@ -34,6 +35,8 @@ class CategoryUnderTest final : public plugin::Registrar {
     kernels_[name] = {std::move(info), std::move(factory)};
   }
   void add_dataset(plugin::DatasetInfo, plugin::DatasetGenerator) override {}
+  void add_output_comparison(plugin::OutputComparisonInfo, plugin::OutputComparison) override {}
+  void add_backend(plugin::BackendInfo, plugin::BackendHooks) override {}
   void add_evaluator(plugin::EvaluatorInfo info, plugin::EvaluatorFactory factory) override {
     const std::string name = info.name;
     evaluators_[name] = {std::move(info), std::move(factory)};

@@ -1,12 +1,11 @@
-// The robotperf executable: registers the built-in categories and hands the command line what
-// only they know, their backends' devices and which backends this build has.
+// The robotperf executable: the composition root, the one place that links the built-in categories.
+// It registers them, as a plug-in would register itself, and runs the command line, which knows
+// them only through the registry.
 #include <exception>
 
 #include "robotperf/categories/builtin.hpp"
 #include "robotperf/cli/command_line.hpp"
 #include "robotperf/cli/exit_codes.hpp"
-#include "robotperf/perception/cuda_device.hpp"
-#include "robotperf/perception/opencl_device.hpp"
 
 int main(int argc, char** argv) {
   using namespace robotperf;
@@ -15,16 +14,5 @@ int main(int argc, char** argv) {
   } catch (...) {
     return cli::report_error(std::current_exception());
   }
-  cli::Backends backends;
-  backends.devices = [] {
-    std::map<std::string, std::vector<plugin::DeviceInfo>> devices;
-    devices["opencl"] = perception::opencl_devices();
-    devices["cuda"] = perception::cuda_devices();
-    return devices;
-  };
-  backends.not_built = [](const std::string& backend) -> std::optional<std::string> {
-    if (backend == "cuda" && !perception::cuda_backend_built()) return perception::kCudaNotBuilt;
-    return std::nullopt;
-  };
-  return cli::run_command_line(argc, argv, backends);
+  return cli::run_command_line(argc, argv);
 }

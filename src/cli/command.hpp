@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "options.hpp"
-#include "robotperf/cli/command_line.hpp"
 
 namespace robotperf::cli {
 
@@ -16,7 +15,6 @@ namespace robotperf::cli {
 struct Context {
   Roots roots;                       // the benchmark folders
   std::vector<std::string> plugins;  // --plugin, for the processes a run starts
-  const Backends& backends;
 };
 
 class Command {

@@ -15,7 +15,7 @@
 
 namespace robotperf::cli {
 
-int run_command_line(int argc, char** argv, const Backends& backends) {
+int run_command_line(int argc, char** argv) {
   CLI::App app{
       "robotperf — benchmarking suite for robotics computing (ROS 2 graphs, black-box and "
       "grey-box)"};
@@ -51,7 +51,7 @@ int run_command_line(int argc, char** argv, const Backends& backends) {
 
   try {
     load_plugins(plugin_flags);
-    const Context context{benchmark_roots(benchmarks_flags), plugin_flags, backends};
+    const Context context{benchmark_roots(benchmarks_flags), plugin_flags};
     for (std::size_t i = 0; i < commands.size(); ++i) {
       if (*subcommands[i]) return commands[i]->run(context);
     }

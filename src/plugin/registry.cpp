@@ -178,6 +178,20 @@ void check_evaluator(const EvaluatorInfo& info, const EvaluatorFactory& factory)
   check_parameters(who, info.parameters);
 }
 
+void check_output_comparison(const OutputComparisonInfo& info, const OutputComparison& compare) {
+  check_type("output comparison", info.ros_type);
+  if (!compare)
+    throw std::invalid_argument("output comparison of " + info.ros_type + ": no comparison");
+}
+
+void check_backend(const BackendInfo& info) {
+  check_name("backend", info.name);
+  if (info.name == kHostBackend) {
+    throw std::invalid_argument(std::string("backend '") + kHostBackend +
+                                "' is the host's, there without registering it");
+  }
+}
+
 // Collects what one registration adds, checking each description as it comes.
 class StagingRegistrar final : public Registrar {
  public:
@@ -193,11 +207,30 @@ class StagingRegistrar final : public Registrar {
     check_evaluator(info, factory);
     evaluators.push_back({std::move(info), std::move(factory), {}});
   }
+  void add_output_comparison(OutputComparisonInfo info, OutputComparison compare) override {
+    check_output_comparison(info, compare);
+    output_comparisons.push_back({std::move(info), std::move(compare), {}});
+  }
+  void add_backend(BackendInfo info, BackendHooks hooks) override {
+    check_backend(info);
+    backends.push_back({std::move(info), std::move(hooks), {}});
+  }
 
   std::vector<KernelEntry> kernels;
   std::vector<DatasetEntry> datasets;
   std::vector<EvaluatorEntry> evaluators;
+  std::vector<OutputComparisonEntry> output_comparisons;
+  std::vector<BackendEntry> backends;
 };
+
+// What an entry is registered under: its name, or for a comparison its message type.
+template <class Entry>
+const std::string& key_of(const Entry& e) {
+  return e.info.name;
+}
+const std::string& key_of(const OutputComparisonEntry& e) {
+  return e.info.ros_type;
+}
 
 template <class Entry>
 const Entry* find_in(const std::map<std::string, Entry>& entries, const std::string& name) {
@@ -218,12 +251,13 @@ void check_unique(const char* what, const std::vector<Entry>& staged,
                   const std::map<std::string, Entry>& existing) {
   std::set<std::string> names;
   for (const auto& e : staged) {
-    if (auto it = existing.find(e.info.name); it != existing.end()) {
-      throw std::invalid_argument(std::string(what) + " '" + e.info.name +
-                                  "' is already registered by " + it->second.origin);
+    const std::string& key = key_of(e);
+    if (auto it = existing.find(key); it != existing.end()) {
+      throw std::invalid_argument(std::string(what) + " '" + key + "' is already registered by " +
+                                  it->second.origin);
     }
-    if (!names.insert(e.info.name).second)
-      throw std::invalid_argument(std::string(what) + " '" + e.info.name + "' registered twice");
+    if (!names.insert(key).second)
+      throw std::invalid_argument(std::string(what) + " '" + key + "' registered twice");
   }
 }
 
@@ -232,8 +266,8 @@ void commit(std::vector<Entry>& staged, std::map<std::string, Entry>& into,
             const std::string& origin) {
   for (auto& e : staged) {
     e.origin = origin;
-    std::string name = e.info.name;
-    into.emplace(std::move(name), std::move(e));
+    std::string key = key_of(e);
+    into.emplace(std::move(key), std::move(e));
   }
 }
 
@@ -244,6 +278,8 @@ struct Registry::State {
   std::map<std::string, KernelEntry> kernels;
   std::map<std::string, DatasetEntry> datasets;
   std::map<std::string, EvaluatorEntry> evaluators;
+  std::map<std::string, OutputComparisonEntry> output_comparisons;  // by message type
+  std::map<std::string, BackendEntry> backends;
   std::vector<fs::path> plugins;
 };
 
@@ -273,12 +309,16 @@ void Registry::add_as(const std::string& origin, const std::string& label,
     check_unique("kernel", staged.kernels, state_->kernels);
     check_unique("dataset", staged.datasets, state_->datasets);
     check_unique("evaluator", staged.evaluators, state_->evaluators);
+    check_unique("output comparison of", staged.output_comparisons, state_->output_comparisons);
+    check_unique("backend", staged.backends, state_->backends);
   } catch (const std::invalid_argument& e) {
     throw PluginError(label + ": " + e.what());
   }
   commit(staged.kernels, state_->kernels, origin);
   commit(staged.datasets, state_->datasets, origin);
   commit(staged.evaluators, state_->evaluators, origin);
+  commit(staged.output_comparisons, state_->output_comparisons, origin);
+  commit(staged.backends, state_->backends, origin);
 }
 
 void Registry::load(const fs::path& file) {
@@ -339,6 +379,16 @@ const EvaluatorEntry* Registry::find_evaluator(const std::string& name) const {
   return find_in(state_->evaluators, name);
 }
 
+const OutputComparisonEntry* Registry::find_output_comparison(const std::string& ros_type) const {
+  std::lock_guard lock(mutex_);
+  return find_in(state_->output_comparisons, ros_type);
+}
+
+const BackendEntry* Registry::find_backend(const std::string& name) const {
+  std::lock_guard lock(mutex_);
+  return find_in(state_->backends, name);
+}
+
 std::vector<const KernelEntry*> Registry::kernels() const {
   std::lock_guard lock(mutex_);
   return all_of(state_->kernels);
@@ -352,6 +402,16 @@ std::vector<const DatasetEntry*> Registry::datasets() const {
 std::vector<const EvaluatorEntry*> Registry::evaluators() const {
   std::lock_guard lock(mutex_);
   return all_of(state_->evaluators);
+}
+
+std::vector<const OutputComparisonEntry*> Registry::output_comparisons() const {
+  std::lock_guard lock(mutex_);
+  return all_of(state_->output_comparisons);
+}
+
+std::vector<const BackendEntry*> Registry::backends() const {
+  std::lock_guard lock(mutex_);
+  return all_of(state_->backends);
 }
 
 std::vector<fs::path> Registry::plugins() const {

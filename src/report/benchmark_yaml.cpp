@@ -8,6 +8,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <sstream>
 
@@ -99,24 +100,32 @@ std::vector<PublishedResult> read_results(const YAML::Node& results, const fs::p
   return out;
 }
 
-std::string category_from_id(const std::string& id) {
+// RobotPerf's published format numbers its benchmarks within their category, the id's letter
+// naming it (robotperf/benchmarks: a1-a5 are perception's, b1-b3 localization's, ...): data of
+// that format, for a published file read outside its <category>/<package>/ folder. Empty for an
+// id it does not number.
+std::string published_category_of_id(const std::string& id) {
+  static const std::map<char, std::string> kCategoryOfIdLetter = {
+      {'a', "perception"},   {'b', "localization"}, {'c', "control"},
+      {'d', "manipulation"}, {'m', "meta"},         {'n', "middleware"}};
   if (id.empty()) return {};
-  switch (id[0]) {
-    case 'a':
-      return "perception";
-    case 'b':
-      return "localization";
-    case 'c':
-      return "control";
-    case 'd':
-      return "manipulation";
-    case 'm':
-      return "meta";
-    case 'n':
-      return "middleware";
-    default:
-      return {};
-  }
+  const auto it = kCategoryOfIdLetter.find(id[0]);
+  return it == kCategoryOfIdLetter.end() ? std::string() : it->second;
+}
+
+// The category of the package `file` lies in, when the caller named none: the folder above it
+// (<category>/<package>/benchmark.yaml), as the harness records a loaded package's, for one of
+// robotperf's packages (a graph.yaml beside the file); for a published RobotPerf file, which may
+// be a copy anywhere, the category its id has in that format, else that folder. Empty where
+// the path names no folder above the package.
+std::string package_category(const fs::path& file, const std::string& id) {
+  const fs::path package = file.parent_path();
+  const std::string folder = package.has_parent_path()
+                                 ? fs::absolute(package).parent_path().filename().string()
+                                 : std::string();
+  if (fs::exists(fs::absolute(file).parent_path() / "graph.yaml")) return folder;
+  const std::string published = published_category_of_id(id);
+  return published.empty() ? folder : published;
 }
 
 std::string render_entry(const PublishedResult& e, std::size_t dash_col, std::size_t field_col,
@@ -259,7 +268,7 @@ void check_published(PublishedResult& r) {
   }
 }
 
-PublishedBenchmark import_benchmark_yaml(const fs::path& path_in) {
+PublishedBenchmark import_benchmark_yaml(const fs::path& path_in, const std::string& category) {
   fs::path path = fs::is_directory(path_in) ? path_in / "benchmark.yaml" : path_in;
   if (!fs::exists(path)) throw ReportError(path.string() + ": no such benchmark.yaml");
   YAML::Node root;
@@ -286,14 +295,7 @@ PublishedBenchmark import_benchmark_yaml(const fs::path& path_in) {
     b.description = scalar_text(root, "description");
     b.graph = scalar_text(root, "graph");
     b.reproduction = scalar_text(root, "reproduction");
-    const fs::path package = path.parent_path();
-    b.category = package.has_parent_path() ? fs::absolute(package).parent_path().filename().string()
-                                           : std::string();
-    if (b.category != category_from_id(b.id)) {
-      // A file outside a <category>/<package>/ tree: fall back on RobotPerf's id letters.
-      const std::string by_id = category_from_id(b.id);
-      if (!by_id.empty()) b.category = by_id;
-    }
+    b.category = category.empty() ? package_category(path, b.id) : category;
     b.results = read_results(root["results"], path);
     for (auto& r : b.results) check_published(r);
     return b;

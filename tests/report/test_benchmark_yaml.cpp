@@ -391,5 +391,26 @@ TEST_F(BenchmarkYaml, BadFilesGiveOneLine) {
   EXPECT_THROW(import_benchmark_yaml(dir_ / "missing.yaml"), ReportError);
 }
 
+// A package's category is the folder it lies in, as the harness records a loaded package's; the
+// id's letter says it only for a published RobotPerf file, which may be a copy anywhere.
+TEST_F(BenchmarkYaml, TheCategoryComesFromThePackageFolder) {
+  const auto write = [&](const fs::path& package, const std::string& id, bool graph) {
+    fs::create_directories(package);
+    std::ofstream(package / "benchmark.yaml") << "id: " << id << "\nname: " << id << "_x\n";
+    if (graph) std::ofstream(package / "graph.yaml") << "nodes: []\n";
+    return package / "benchmark.yaml";
+  };
+  // robotperf's package of a plug-in's category, whatever its id's letter.
+  EXPECT_EQ(import_benchmark_yaml(write(dir_ / "mine" / "a7_x", "a7", true)).category, "mine");
+  // A copy of a published RobotPerf file: its format's category for the id.
+  EXPECT_EQ(import_benchmark_yaml(write(dir_ / "copies" / "a5", "a5", false)).category,
+            "perception");
+  // A published file of an id RobotPerf does not number: the folder.
+  EXPECT_EQ(import_benchmark_yaml(write(dir_ / "theirs" / "z1_x", "z1", false)).category, "theirs");
+  // The caller's, when it knows it.
+  EXPECT_EQ(import_benchmark_yaml(dir_ / "copies" / "a5" / "benchmark.yaml", "given").category,
+            "given");
+}
+
 }  // namespace
 }  // namespace robotperf::report

@@ -1,5 +1,6 @@
 // The perception category (RobotPerf a1-a5): image_proc, stereo_image_proc and depth_image_proc
-// kernels on OpenCV, the synthetic camera, stereo and depth datasets, and their evaluators.
+// kernels on OpenCV, the synthetic camera, stereo and depth datasets, their evaluators, how their
+// answers on opencl and cuda are compared with the cpu's, and those two backends.
 #include "category.hpp"
 
 namespace robotperf::perception {
@@ -9,6 +10,8 @@ void register_category(plugin::Registrar& registrar) {
   register_stereo_depth_kernels(registrar);
   register_datasets(registrar);
   register_evaluators(registrar);
+  register_output_comparisons(registrar);
+  register_backends(registrar);
 }
 
 }  // namespace robotperf::perception

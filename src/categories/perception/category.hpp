@@ -9,5 +9,7 @@ void register_image_proc_kernels(plugin::Registrar& registrar);
 void register_stereo_depth_kernels(plugin::Registrar& registrar);
 void register_datasets(plugin::Registrar& registrar);
 void register_evaluators(plugin::Registrar& registrar);
+void register_output_comparisons(plugin::Registrar& registrar);
+void register_backends(plugin::Registrar& registrar);
 
 }  // namespace robotperf::perception

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "../interrupts.hpp"
+#include "robotperf/harness/backend_check.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/rmw/transport.hpp"
 #include "robotperf/tracing/session.hpp"
@@ -80,7 +81,7 @@ std::map<std::string, std::vector<std::string>> host_launchers(const harness::Be
 }
 
 // What is sent, when, and what the nodes run on.
-void set_input_options(harness::RunOptions& o, const RunArgs& a, const Backends& backends) {
+void set_input_options(harness::RunOptions& o, const RunArgs& a) {
   if (a.dataset) {
     // A bag replaces the generated dataset, so its workload parameters would change nothing.
     if (!a.workload.empty() || a.sweep)
@@ -104,11 +105,8 @@ void set_input_options(harness::RunOptions& o, const RunArgs& a, const Backends&
   if (a.arrival_seed) o.arrival.seed = *a.arrival_seed;
   o.monitor_wait = a.monitor_wait == "spin" ? graph::WaitMode::kSpin : graph::WaitMode::kSleep;
   o.update_rate_hz = a.update_rate;
-  // Said here, where the build is known: the kernels of a build without a backend do not name it.
-  if (a.backend && backends.not_built) {
-    if (const auto why = backends.not_built(*a.backend))
-      throw std::invalid_argument("--backend " + *a.backend + ": " + *why);
-  }
+  // Said before anything else of the run: a backend this build lacks is named by no kernel.
+  if (a.backend) harness::check_backend_available(*a.backend);
   o.backend = a.backend;
   o.device_resident = a.device_resident;
   o.count = a.count;
@@ -193,7 +191,7 @@ void apply_workload(harness::BenchmarkSpec& spec, const RunArgs& args) {
 harness::RunOptions run_options(const harness::BenchmarkSpec& spec, const RunArgs& args,
                                 const Context& context, std::optional<harness::NetworkLink>& link) {
   harness::RunOptions options;
-  set_input_options(options, args, context.backends);
+  set_input_options(options, args);
   set_graph_options(options, spec, args, context, link);
   set_measurement_options(options, spec, args);
   return options;

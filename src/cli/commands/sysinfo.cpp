@@ -6,6 +6,7 @@
 #include "robotperf/cli/exit_codes.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/metrics/power.hpp"
+#include "robotperf/plugin/registry.hpp"
 #include "robotperf/report/results.hpp"
 #include "robotperf/sysinfo/machine.hpp"
 
@@ -13,13 +14,15 @@ namespace robotperf::cli {
 
 namespace {
 
-// Each backend's devices under "<backend>_devices", as results record a device.
-void add_device_lists(nlohmann::json& description, const Backends& backends) {
-  if (!backends.devices) return;
-  for (const auto& [backend, devices] : backends.devices()) {
+// Each registered backend's devices under "<backend>_devices", as results record a device; the
+// host's cpu is the machine above.
+void add_device_lists(nlohmann::json& description) {
+  for (const auto* backend : plugin::registry().backends()) {
     nlohmann::json list = nlohmann::json::array();
-    for (const auto& d : devices) list.push_back(harness::device_to_json(d));
-    description[backend + "_devices"] = std::move(list);
+    if (backend->hooks.devices) {
+      for (const auto& d : backend->hooks.devices()) list.push_back(harness::device_to_json(d));
+    }
+    description[backend->info.name + "_devices"] = std::move(list);
   }
 }
 
@@ -35,12 +38,12 @@ class SysinfoCommand : public Command {
     return command;
   }
 
-  int run(const Context& context) override {
+  int run(const Context&) override {
     nlohmann::json description = {
         {"machine", sysinfo::to_json(sysinfo::collect_machine_info())},
         {"software", report::software_json()},
         {"power", metrics::sources_to_json(metrics::discover_power_sources(power_.options()))}};
-    add_device_lists(description, context.backends);
+    add_device_lists(description);
     std::cout << json_text(description, 2) << "\n";
     return kExitOk;
   }

@@ -1,5 +1,6 @@
 // The robotperf plug-in API: everything a shared library needs to add kernels, dataset
-// generators and functional evaluators to robotperf, and nothing of the harness.
+// generators, functional evaluators, output comparisons and backends to robotperf, and nothing
+// of the harness.
 //
 //   #include <robotperf/plugin.hpp>
 //
@@ -7,6 +8,8 @@
 //     registrar.add_kernel(info, factory);
 //     registrar.add_dataset(info, generator);
 //     registrar.add_evaluator(info, factory);
+//     registrar.add_output_comparison(info, compare);
+//     registrar.add_backend(info, hooks);
 //   }
 //
 // Build it against an installed robotperf (find_package(robotperf) and link robotperf::plugin)
@@ -16,12 +19,14 @@
 
 #include "robotperf/graph/node.hpp"
 #include "robotperf/msgs/known_types.hpp"
+#include "robotperf/plugin/backend.hpp"
 #include "robotperf/plugin/content_hash.hpp"
 #include "robotperf/plugin/control_loop.hpp"
 #include "robotperf/plugin/dataset.hpp"
 #include "robotperf/plugin/evaluator.hpp"
 #include "robotperf/plugin/kernel.hpp"
 #include "robotperf/plugin/message_sync.hpp"
+#include "robotperf/plugin/output_comparison.hpp"
 #include "robotperf/plugin/parameters.hpp"
 #include "robotperf/plugin/registry.hpp"
 #include "robotperf/plugin/version.hpp"

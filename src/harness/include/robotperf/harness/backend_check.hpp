@@ -14,6 +14,7 @@
 
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
+#include "robotperf/plugin/output_comparison.hpp"
 #include "robotperf/rmw/transport.hpp"
 
 namespace robotperf::harness {
@@ -29,22 +30,19 @@ struct BackendCheck {
   std::vector<std::string> reasons;  // why not, one line each
 };
 
-// How two answers of one output type compare: the share of their elements within the type's
-// tolerance, and the least share that passes. Images: each channel read as its encoding's type
-// (sensor_msgs/image_encodings), |difference| <= 1 on an integer channel and <= 1e-4 of the cpu
-// image's largest |value| on a float one, on >= 99.9 % (the two backends may round a bilinear tap
-// differently); an encoding it cannot read agrees nowhere. Point clouds: every point's float
-// fields within 1e-6 (m) or both NaN, other fields identical. Disparity images: of the pixels
-// with a disparity on either backend, >= 95 % with one on both within 1 px. An answer of another
-// size, encoding or layout agrees nowhere. nullopt for a type without a comparison.
-struct Agreement {
-  double share = 0;
-  double required = 0;
-  std::string criterion;
-};
+// How two answers of one output type compare: the comparison registered for the type
+// (plugin::Registrar::add_output_comparison, by the category or plug-in whose kernels answer with
+// it), nullopt for a type without one.
+using plugin::Agreement;
 std::optional<Agreement> compare_answers(const std::string& ros_type, const void* accelerated,
                                          const void* cpu);
 bool has_comparison(const std::string& ros_type);
+
+// Refuses a backend this robotperf cannot run on any machine (run --backend): throws
+// std::invalid_argument with "--backend <name>: " and its registered entry's one line
+// (plugin::BackendHooks::unavailable_reason). Nothing for cpu, a backend it can run, or a name no
+// category or plug-in registered (override_backend then names the backends the kernels have).
+void check_backend_available(const std::string& backend);
 
 // Whether `spec` runs a node on another backend than cpu.
 bool uses_other_backend(const BenchmarkSpec& spec);

@@ -1,6 +1,6 @@
-// Where kernels, dataset generators and evaluators are registered: by the built-in categories at
-// start-up and by plug-ins (shared libraries) loaded with --plugin, ROBOTPERF_PLUGIN_PATH or a
-// benchmark's `plugins:`. Both go through the same Registrar.
+// Where kernels, dataset generators, evaluators, output comparisons and backends are registered:
+// by the built-in categories at start-up and by plug-ins (shared libraries) loaded with --plugin,
+// ROBOTPERF_PLUGIN_PATH or a benchmark's `plugins:`. Both go through the same Registrar.
 #pragma once
 
 #include <filesystem>
@@ -11,9 +11,11 @@
 #include <string>
 #include <vector>
 
+#include "robotperf/plugin/backend.hpp"
 #include "robotperf/plugin/dataset.hpp"
 #include "robotperf/plugin/evaluator.hpp"
 #include "robotperf/plugin/kernel.hpp"
+#include "robotperf/plugin/output_comparison.hpp"
 
 namespace robotperf::plugin {
 
@@ -26,6 +28,10 @@ class Registrar {
   virtual void add_kernel(KernelInfo info, KernelFactory factory) = 0;
   virtual void add_dataset(DatasetInfo info, DatasetGenerator generator) = 0;
   virtual void add_evaluator(EvaluatorInfo info, EvaluatorFactory factory) = 0;
+  // One comparison per message type, whoever registers it.
+  virtual void add_output_comparison(OutputComparisonInfo info, OutputComparison compare) = 0;
+  // Any backend but cpu, which is implicit (robotperf/plugin/backend.hpp).
+  virtual void add_backend(BackendInfo info, BackendHooks hooks) = 0;
 };
 
 // A plug-in that cannot be used; the message is one line naming the file and the problem.
@@ -50,6 +56,16 @@ struct EvaluatorEntry {
   EvaluatorFactory make;
   std::string origin;
 };
+struct OutputComparisonEntry {
+  OutputComparisonInfo info;
+  OutputComparison compare;
+  std::string origin;
+};
+struct BackendEntry {
+  BackendInfo info;
+  BackendHooks hooks;
+  std::string origin;
+};
 
 class Registry {
  public:
@@ -67,15 +83,19 @@ class Registry {
   // built against another API version, or its registration failed.
   void load(const std::filesystem::path& file);
 
-  // Entries live as long as the registry; null when no such name.
+  // Entries live as long as the registry; null when no such name (message type).
   const KernelEntry* find_kernel(const std::string& name) const;
   const DatasetEntry* find_dataset(const std::string& name) const;
   const EvaluatorEntry* find_evaluator(const std::string& name) const;
+  const OutputComparisonEntry* find_output_comparison(const std::string& ros_type) const;
+  const BackendEntry* find_backend(const std::string& name) const;
 
-  // Sorted by name.
+  // Sorted by name (message type).
   std::vector<const KernelEntry*> kernels() const;
   std::vector<const DatasetEntry*> datasets() const;
   std::vector<const EvaluatorEntry*> evaluators() const;
+  std::vector<const OutputComparisonEntry*> output_comparisons() const;
+  std::vector<const BackendEntry*> backends() const;
 
   // The plug-in files loaded, in load order.
   std::vector<std::filesystem::path> plugins() const;

@@ -48,7 +48,7 @@ struct PublishedResult {
 struct PublishedBenchmark {
   std::filesystem::path source;
   std::string id, name, short_description, description, graph, reproduction;
-  std::string category;  // the folder above the package (perception, control, ...)
+  std::string category;  // the package's category (perception, control, ...)
   std::vector<PublishedResult> results;
 
   std::size_t flagged() const;
@@ -56,8 +56,12 @@ struct PublishedBenchmark {
 
 // Reads a benchmark.yaml (or a package folder holding one), checks every result against the
 // measurement rules and fills `flags`. Throws ReportError naming the file and line when the file
-// is not YAML or not a benchmark description.
-PublishedBenchmark import_benchmark_yaml(const std::filesystem::path& path);
+// is not YAML or not a benchmark description. `category` is the package's when the caller knows it
+// (a loaded package's BenchmarkSpec::category); empty: the folder above a package of robotperf's
+// (one with a graph.yaml), as the harness records it, and for a published RobotPerf file the
+// category RobotPerf's format gives its id, which holds for a copy outside its category folder.
+PublishedBenchmark import_benchmark_yaml(const std::filesystem::path& path,
+                                         const std::string& category = {});
 
 // The measurement-rule checks of one entry (DESIGN.md §3): negative latencies (value or note),
 // loss above 100 %, power <= 0 W or below 1 mW (no real sensor read), throughput <= 0, and values

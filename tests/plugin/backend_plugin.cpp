@@ -1,0 +1,108 @@
+// A plug-in that brings a backend of its own and judges its answers itself: the kernel
+// backend_plugin/offset copies joint states, adding `accelerator_error` to every position on the
+// test_accelerator backend (an accelerator that computes another answer); the plug-in registers
+// test_accelerator, with one device, and the comparison of sensor_msgs/JointState answers, and
+// test_unbuilt, a backend this robotperf cannot run. The backend plug-in tests load it.
+#include <cmath>
+#include <random>
+
+#include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/plugin.hpp"
+
+namespace {
+
+using namespace robotperf;
+
+constexpr const char* kAccelerator = "test_accelerator";
+
+class OffsetNode final : public graph::Node {
+ public:
+  OffsetNode(graph::Context& context, const plugin::KernelConfig& config)
+      : Node(context, config.node_name),
+        error_(config.backend == kAccelerator ? config.parameters.get_double("accelerator_error")
+                                              : 0.0) {
+    output_ = create_publisher<msgs::JointState>(config.topic("output"), config.qos);
+    input_ = create_subscription<msgs::JointState>(
+        config.topic("input"), config.qos, [this](std::shared_ptr<const msgs::JointState> in) {
+          msgs::JointState out = *in;
+          for (double& p : out.position) p += error_;
+          output_->publish(std::move(out));
+        });
+  }
+
+ private:
+  double error_;
+  std::shared_ptr<graph::Publisher<msgs::JointState>> output_;
+  std::shared_ptr<graph::GenericSubscription> input_;
+};
+
+std::vector<plugin::DatasetStream> joint_states(const plugin::Parameters& workload) {
+  std::mt19937_64 random(static_cast<uint64_t>(workload.get_int("seed")));
+  std::uniform_real_distribution<double> position(-1.0, 1.0);
+  auto states = plugin::make_stream<msgs::JointState>("states", "/backend_plugin/states");
+  for (int64_t k = 0; k < workload.get_int("frames"); ++k) {
+    msgs::JointState s;
+    s.name = {"a", "b"};
+    s.position = {position(random), position(random)};
+    plugin::append(states, std::move(s));
+  }
+  return {std::move(states)};
+}
+
+// The share of positions within 1e-9 of the cpu's; another number of joints agrees nowhere.
+plugin::Agreement compare_joint_states(const void* accelerated, const void* cpu) {
+  const auto& a = *static_cast<const msgs::JointState*>(accelerated);
+  const auto& c = *static_cast<const msgs::JointState*>(cpu);
+  plugin::Agreement agreement{0.0, 1.0, "joint positions within 1e-9 (backend_plugin)"};
+  if (a.position.size() != c.position.size()) return agreement;
+  if (c.position.empty()) {
+    agreement.share = 1.0;
+    return agreement;
+  }
+  std::size_t within = 0;
+  for (std::size_t i = 0; i < c.position.size(); ++i)
+    within += std::abs(a.position[i] - c.position[i]) <= 1e-9 ? 1 : 0;
+  agreement.share = static_cast<double>(within) / static_cast<double>(c.position.size());
+  return agreement;
+}
+
+}  // namespace
+
+ROBOTPERF_PLUGIN(registrar) {
+  registrar.add_kernel(
+      {.name = "backend_plugin/offset",
+       .description = "copy joint states, off by accelerator_error on test_accelerator",
+       .backends = {"cpu", kAccelerator},
+       .inputs = {{"input", "sensor_msgs/msg/JointState"}},
+       .outputs = {{"output", "sensor_msgs/msg/JointState"}},
+       .parameters = {plugin::double_parameter("accelerator_error", 0.0,
+                                               "added to every position on test_accelerator")}},
+      [](graph::Context& context, const plugin::KernelConfig& config) {
+        return std::make_shared<OffsetNode>(context, config);
+      });
+  registrar.add_dataset({.name = "backend_plugin/joints",
+                         .description = "seeded joint states",
+                         .rate_hz = 50,
+                         .frames = 40,
+                         .streams = {{"states", "/backend_plugin/states",
+                                      "sensor_msgs/msg/JointState", false, "joint states"}},
+                         .workload = {plugin::int_parameter("seed", 11, "random seed"),
+                                      plugin::int_parameter("frames", 40, "frames")}},
+                        joint_states);
+  registrar.add_output_comparison(
+      {.ros_type = "sensor_msgs/msg/JointState", .description = "joint positions within 1e-9"},
+      compare_joint_states);
+  registrar.add_backend(
+      {.name = kAccelerator, .description = "a device only the tests have"},
+      {.devices =
+           [] {
+             return std::vector<plugin::DeviceInfo>{
+                 {"test accelerator 0", "robotperf tests", "1.0", "TestAPI 1.0", 1 << 20}};
+           },
+       .unavailable_reason = {}});
+  registrar.add_backend(
+      {.name = "test_unbuilt", .description = "a backend this robotperf was built without"},
+      {.devices = {}, .unavailable_reason = [] {
+         return std::string("the test_unbuilt backend was not built into this robotperf");
+       }});
+}
