@@ -8,15 +8,20 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <sstream>
+#include <utility>
 
 #include "mcap_format.hpp"
 #include "robotperf/bag/qos.hpp"
+#include "robotperf/files/atomic_file.hpp"
+#include "robotperf/files/yaml_scalar.hpp"
 
 namespace robotperf::bag {
 namespace {
@@ -196,6 +201,8 @@ bool file_compressed(const BagInfo& info) {
 
 // Decompresses a zstd-compressed storage file into a temporary file of its own: two readers in
 // one process, of one bag or of two bags whose files share a name, must not write each other's.
+// The file is written through the descriptor mkstemp opened, never reopened by its name (which
+// another process could have replaced with a link in the meantime).
 fs::path decompress_file(const fs::path& compressed) {
   std::ifstream in(compressed, std::ios::binary);
   if (!in) throw BagError(compressed.string() + ": cannot open");
@@ -204,68 +211,46 @@ fs::path decompress_file(const fs::path& compressed) {
                          .string();
   const int fd = ::mkstemp(name.data());
   if (fd < 0) throw BagError(name + ": cannot create a temporary file: " + std::strerror(errno));
-  ::close(fd);
   const fs::path out_path = name;
-  std::ofstream out(out_path, std::ios::binary | std::ios::trunc);
-  if (!out) {
-    fs::remove(out_path);
+  // Removed on every way out but the last.
+  struct Output {
+    std::FILE* file;
+    fs::path path;
+    ~Output() {
+      if (file != nullptr) std::fclose(file);
+      if (!path.empty()) fs::remove(path);
+    }
+  } out{::fdopen(fd, "wb"), out_path};
+  if (out.file == nullptr) {
+    ::close(fd);
     throw BagError(out_path.string() + ": cannot write a temporary file");
   }
-  ZSTD_DCtx* ctx = ZSTD_createDCtx();
+  const std::unique_ptr<ZSTD_DCtx, decltype(&ZSTD_freeDCtx)> ctx(ZSTD_createDCtx(), ZSTD_freeDCtx);
   std::vector<char> src(ZSTD_DStreamInSize()), dst(ZSTD_DStreamOutSize());
   std::size_t last = 0;
-  while (in) {
+  bool written = true;
+  while (in && written) {
     in.read(src.data(), static_cast<std::streamsize>(src.size()));
     ZSTD_inBuffer input{src.data(), static_cast<std::size_t>(in.gcount()), 0};
-    while (input.pos < input.size) {
+    while (input.pos < input.size && written) {
       ZSTD_outBuffer output{dst.data(), dst.size(), 0};
-      last = ZSTD_decompressStream(ctx, &output, &input);
-      if (ZSTD_isError(last)) {
-        ZSTD_freeDCtx(ctx);
-        fs::remove(out_path);
+      last = ZSTD_decompressStream(ctx.get(), &output, &input);
+      if (ZSTD_isError(last))
         throw BagError(compressed.string() + ": zstd: " + ZSTD_getErrorName(last));
-      }
-      out.write(dst.data(), static_cast<std::streamsize>(output.pos));
+      written = std::fwrite(dst.data(), 1, output.pos, out.file) == output.pos;
     }
   }
-  ZSTD_freeDCtx(ctx);
-  if (last != 0) {
-    fs::remove(out_path);
-    throw BagError(compressed.string() + ": truncated zstd file");
-  }
-  if (!out.flush()) {
-    fs::remove(out_path);
+  if (written && last != 0) throw BagError(compressed.string() + ": truncated zstd file");
+  const int closed = std::fclose(std::exchange(out.file, nullptr));
+  if (!written || closed != 0)
     throw BagError(out_path.string() + ": cannot write a temporary file (is the disk full?)");
-  }
+  out.path.clear();
   return out_path;
 }
 
 // Storage file names in metadata.yaml of file-compressed bags carry ".zstd".
 fs::path storage_path(const BagInfo& info, const FileInfo& f) {
   return info.path / f.path;
-}
-
-std::string quoted(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    switch (c) {
-      case '"':
-        out += "\\\"";
-        break;
-      case '\\':
-        out += "\\\\";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      case '\t':
-        out += "\\t";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out + "\"";
 }
 
 }  // namespace
@@ -465,35 +450,32 @@ void write_metadata_file(const fs::path& dir, Storage storage, const std::vector
     << "  topics_with_message_count:\n";
   for (const auto& t : topics) {
     y << "    - topic_metadata:\n"
-      << "        name: " << quoted(t.name) << "\n"
-      << "        type: " << quoted(t.type) << "\n"
-      << "        serialization_format: " << quoted(t.serialization_format) << "\n"
-      << "        offered_qos_profiles: " << quoted(integer_qos(t, target)) << "\n"
+      << "        name: " << files::yaml_double_quoted(t.name) << "\n"
+      << "        type: " << files::yaml_double_quoted(t.type) << "\n"
+      << "        serialization_format: " << files::yaml_double_quoted(t.serialization_format)
+      << "\n"
+      << "        offered_qos_profiles: " << files::yaml_double_quoted(integer_qos(t, target))
+      << "\n"
       << "      message_count: " << t.message_count << "\n";
   }
   y << "  compression_format: \"\"\n"
     << "  compression_mode: \"\"\n"
     << "  relative_file_paths:\n";
-  for (const auto& f : files) y << "    - " << quoted(f.path.string()) << "\n";
+  for (const auto& f : files) y << "    - " << files::yaml_double_quoted(f.path.string()) << "\n";
   y << "  files:\n";
   for (const auto& f : files) {
-    y << "    - path: " << quoted(f.path.string()) << "\n"
+    y << "    - path: " << files::yaml_double_quoted(f.path.string()) << "\n"
       << "      starting_time:\n        nanoseconds_since_epoch: " << f.starting_time_ns << "\n"
       << "      duration:\n        nanoseconds: " << f.duration_ns << "\n"
       << "      message_count: " << f.message_count << "\n";
   }
-  const fs::path tmp = dir / (std::string(kMetadataFile) + ".tmp");
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    out << y.str();
-    out.close();
-    if (!out) throw BagError(tmp.string() + ": write failed");
+  // A temporary file of its own, never a fixed name: one planted in the folder (a link to
+  // another file) is not written through.
+  try {
+    files::write_file_atomically(target, y.str());
+  } catch (const std::runtime_error& e) {
+    throw BagError(e.what());
   }
-  sync_to_disk(tmp);
-  std::error_code ec;
-  fs::rename(tmp, target, ec);
-  if (ec) throw BagError(target.string() + ": cannot write: " + ec.message());
-  sync_to_disk(dir);
 }
 
 }  // namespace
@@ -579,7 +561,6 @@ class Writer::Impl {
     std::error_code ec;
     for (const auto& f : files_) fs::remove(dir_ / f.path, ec);
     fs::remove(dir_ / kMetadataFile, ec);
-    fs::remove(dir_ / (std::string(kMetadataFile) + ".tmp"), ec);
     for (const auto& d : created_) fs::remove(d, ec);  // only while empty
   }
 

@@ -11,6 +11,8 @@
 #include <regex>
 #include <sstream>
 
+#include "robotperf/files/yaml_scalar.hpp"
+
 namespace robotperf::report {
 namespace {
 
@@ -122,16 +124,16 @@ std::string render_entry(const PublishedResult& e, std::size_t dash_col, std::si
   std::string out = std::string(dash_col, ' ') + "- result:\n";
   for (const auto& key : order) {
     std::string value;
-    if (key == "type") value = yaml_scalar(e.type);
-    if (key == "metric") value = yaml_scalar(e.metric);
-    if (key == "metric_unit") value = yaml_scalar(e.metric_unit);
-    if (key == "hardware") value = yaml_scalar(e.hardware);
-    if (key == "category") value = yaml_scalar(e.category);
-    if (key == "timestampt") value = yaml_scalar(e.timestampt);
+    if (key == "type") value = files::yaml_scalar(e.type);
+    if (key == "metric") value = files::yaml_scalar(e.metric);
+    if (key == "metric_unit") value = files::yaml_scalar(e.metric_unit);
+    if (key == "hardware") value = files::yaml_scalar(e.hardware);
+    if (key == "category") value = files::yaml_scalar(e.category);
+    if (key == "timestampt") value = files::yaml_scalar(e.timestampt);
     if (key == "value")
-      value = std::isfinite(e.value) ? shortest_number(e.value) : yaml_scalar(e.value_text);
-    if (key == "note") value = yaml_scalar(e.note);
-    if (key == "datasource") value = yaml_scalar(e.datasource);
+      value = std::isfinite(e.value) ? shortest_number(e.value) : files::yaml_scalar(e.value_text);
+    if (key == "note") value = files::yaml_scalar(e.note);
+    if (key == "datasource") value = files::yaml_scalar(e.datasource);
     out += std::string(field_col, ' ') + key + ": " + value + "\n";
   }
   return out;
@@ -175,39 +177,6 @@ std::string shortest_number(double value) {
   // A whole number keeps a decimal point, so that YAML readers see a float as RobotPerf writes.
   if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
   return s;
-}
-
-std::string yaml_scalar(const std::string& text) {
-  static const std::regex plain("[A-Za-z][A-Za-z0-9 _./+()-]*");
-  static const std::regex reserved("(?:true|false|yes|no|on|off|null|y|n)", std::regex::icase);
-  if (std::regex_match(text, plain) && text.back() != ' ' && !std::regex_match(text, reserved))
-    return text;
-  std::string out = "\"";
-  for (unsigned char c : text) {
-    switch (c) {
-      case '\\':
-        out += "\\\\";
-        break;
-      case '"':
-        out += "\\\"";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      case '\t':
-        out += "\\t";
-        break;
-      default:
-        if (c < 0x20 || c == 0x7f) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\x%02X", c);
-          out += buf;
-        } else {
-          out += static_cast<char>(c);
-        }
-    }
-  }
-  return out + "\"";
 }
 
 void check_published(PublishedResult& r) {

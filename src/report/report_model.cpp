@@ -565,29 +565,37 @@ Side select(const std::string& selector, const ReportInput& in) {
   Side side;
   side.label = selector;
   const std::string want = lower(selector);
-  const std::optional<FieldSelector> by_fields = FieldSelector::parse(selector);
+  auto by_file = [&](const StoredRun& r) {
+    return r.path.string() == selector || r.path.filename().string() == selector ||
+           r.stem().starts_with(selector);
+  };
+  auto run_named = [&](const StoredRun& r) {
+    return by_file(r) || lower(r.hardware) == want || lower(detail::local_series(r)) == want;
+  };
+  auto row_named = [&](const PublishedResult& row) {
+    return row.flags.empty() &&
+           (lower(row.hardware) == want || lower(detail::published_series(row)) == want);
+  };
+  // What names a run or a published row is taken as that name: a hardware name may hold '='
+  // ("ACME x=1"), which would otherwise read as fields.
+  const bool a_name = std::ranges::any_of(in.runs, run_named) ||
+                      std::ranges::any_of(in.published, [&](const PublishedBenchmark& b) {
+                        return std::ranges::any_of(b.results, row_named);
+                      });
+  const std::optional<FieldSelector> by_fields =
+      a_name ? std::nullopt : FieldSelector::parse(selector);
   if (by_fields) {
     for (const auto& [key, value] : by_fields->fields) side.selected_fields.insert(key);
   }
   for (const auto& r : in.runs) {
-    if (by_fields) {
-      if (by_fields->matches(r)) side.runs.push_back(&r);
-      continue;
-    }
-    const bool by_file = r.path.string() == selector || r.path.filename().string() == selector ||
-                         r.stem().starts_with(selector);
-    const bool by_hardware = lower(r.hardware) == want;
-    if (by_hardware) side.selected_fields.insert("hardware");
-    if (by_file || by_hardware || lower(detail::local_series(r)) == want) side.runs.push_back(&r);
+    if (by_fields ? by_fields->matches(r) : run_named(r)) side.runs.push_back(&r);
+    if (!by_fields && lower(r.hardware) == want) side.selected_fields.insert("hardware");
   }
   for (const auto& b : in.published) {
     for (const auto& row : b.results) {
       if (!row.flags.empty()) continue;
-      const bool by_hardware = !by_fields && lower(row.hardware) == want;
-      if (by_hardware) side.selected_fields.insert("hardware");
-      const bool selected = by_fields ? by_fields->matches(row)
-                                      : by_hardware || lower(detail::published_series(row)) == want;
-      if (selected) side.rows.emplace_back(&b, &row);
+      if (by_fields ? by_fields->matches(row) : row_named(row)) side.rows.emplace_back(&b, &row);
+      if (!by_fields && lower(row.hardware) == want) side.selected_fields.insert("hardware");
     }
   }
   if (side.runs.empty() && side.rows.empty()) {
@@ -1189,9 +1197,10 @@ ReportInput load_report_inputs(const std::vector<fs::path>& paths) {
     if (fs::is_directory(p)) {
       std::vector<fs::path> files;
       for (const auto& e : fs::recursive_directory_iterator(p)) {
-        if (!e.is_regular_file()) continue;
         const auto name = e.path().filename().string();
-        if (may_be_run_file(e.path()) || may_be_imported_file(e.path()) || name == "benchmark.yaml")
+        if ((may_be_run_file(e.path()) || may_be_imported_file(e.path()) ||
+             name == "benchmark.yaml") &&
+            is_regular_file_or_skip(e, in.skipped))
           files.push_back(e.path());
       }
       std::ranges::sort(files);

@@ -416,6 +416,15 @@ bool may_be_imported_file(const fs::path& path) {
   return path.extension() == ".json" && path.filename().string().starts_with("published-");
 }
 
+bool is_regular_file_or_skip(const fs::directory_entry& entry, std::vector<std::string>& skipped) {
+  std::error_code error;
+  const bool regular = entry.is_regular_file(error);
+  // A link to nothing is not an error here (there is no file to read), a loop is.
+  if (error && error != std::errc::no_such_file_or_directory)
+    skipped.push_back(entry.path().string() + ": cannot be read: " + error.message());
+  return regular && !error;
+}
+
 RunScan scan_results(const fs::path& dir) {
   if (!fs::is_directory(dir))
     throw ReportError(dir.string() +
@@ -424,7 +433,8 @@ RunScan scan_results(const fs::path& dir) {
   RunScan scan;
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(dir)) {
-    if (e.is_regular_file() && may_be_run_file(e.path())) files.push_back(e.path());
+    if (may_be_run_file(e.path()) && is_regular_file_or_skip(e, scan.skipped))
+      files.push_back(e.path());
   }
   std::ranges::sort(files);
   for (const auto& f : files) {

@@ -138,11 +138,12 @@ int domain_id_from_environment() {
 namespace {
 
 // A lock on /tmp/robotperf-domain-<N>.lock, held while the descriptor is open; -1 when another
-// process holds it (or the file cannot be made). The kernel drops it when the process ends.
+// process holds it, or the file cannot be made or is a link (planted by another user: a lock must
+// not create or open the file it points at). The kernel drops it when the process ends.
 int lock_domain(int domain) {
   const std::string path = "/tmp/robotperf-domain-" + std::to_string(domain) + ".lock";
   // Read-only: any user may lock a file another user created.
-  const int fd = open(path.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC, 0666);
+  const int fd = open(path.c_str(), O_RDONLY | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0666);
   if (fd < 0) return -1;
   if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
     close(fd);

@@ -262,6 +262,23 @@ TEST(Writer, AFolderGivenWithATrailingSlashNamesItsFilesAfterIt) {
   EXPECT_EQ(read_all(dir / "b").size(), 1u);
 }
 
+// A link planted in the bag's folder under the name a fixed temporary file would have: reindex
+// writes metadata.yaml through a file of its own, and the link's target is left as it was.
+TEST(Writer, ReindexDoesNotWriteThroughALinkInTheFolder) {
+  ScratchDir dir;
+  {
+    Writer w(dir.path() / "b", {Storage::kMcap, Compression::kNone});
+    w.write(w.add_topic(jazzy_topic()), 100, payload(0));
+  }
+  write_file(dir / "victim", {'k', 'e', 'e', 'p'});
+  fs::create_symlink(dir / "victim", dir / "b" / "metadata.yaml.tmp");
+  fs::remove(dir / "b" / "metadata.yaml");
+  EXPECT_EQ(reindex(dir / "b").message_count, 1u);
+  EXPECT_EQ(read_file(dir / "victim"), (std::vector<uint8_t>{'k', 'e', 'e', 'p'}));
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir / "b" / "metadata.yaml.tmp")));
+  EXPECT_EQ(read_all(dir / "b").size(), 1u);
+}
+
 // A bag folder whose second file is cut short: its conversion fails after the first file's
 // messages were written, and must leave nothing that looks like a complete bag behind.
 TEST(Writer, AFailedConversionLeavesNoBagBehind) {

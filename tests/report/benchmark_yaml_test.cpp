@@ -275,7 +275,7 @@ void expect_round_trip(const std::string& original, const std::vector<PublishedR
   const std::string inserted = merged.text.substr(prefix, merged.text.size() - original.size());
   EXPECT_EQ(inserted.find_first_not_of(' '), dash_col) << inserted;
 
-  report::write_file_atomically(file, merged.text);
+  files::write_file_atomically(file, merged.text);
   const auto back = import_benchmark_yaml(file);
   ASSERT_GE(back.results.size(), entries.size());
   const std::size_t first_new = back.results.size() - entries.size();
@@ -326,7 +326,7 @@ TEST_F(BenchmarkYaml, RoundTripIntoAnEmptyPackageFile) {
   EXPECT_EQ(merged.text.substr(0, original.find("results: []")),
             original.substr(0, original.find("results: []")));
   const fs::path file = dir_ / "benchmark.yaml";
-  report::write_file_atomically(file, merged.text);
+  files::write_file_atomically(file, merged.text);
   const auto back = import_benchmark_yaml(file);
   ASSERT_EQ(back.results.size(), 3u);
   for (std::size_t i = 0; i < 3; ++i) EXPECT_TRUE(back.results[i].same_entry(entries[i]));
@@ -359,30 +359,7 @@ TEST_F(BenchmarkYaml, RefusesWhatItCannotMergeSafely) {
   EXPECT_EQ(fresh.text.substr(0, 20), "id: x1\nname: x1_new\n");
 }
 
-TEST_F(BenchmarkYaml, ScalarsReadBackExactly) {
-  for (const std::string s : {"plain text",
-                              "",
-                              "true",
-                              "No",
-                              "2023-07-06 08:05:58",
-                              "07-07-2023",
-                              "a: b",
-                              "#x",
-                              "- x",
-                              "tab\there",
-                              "quote \" and \\",
-                              "\x01 control",
-                              "ROBOTCORE\xC2\xAE Perception",
-                              "null",
-                              "trailing ",
-                              "12",
-                              "[x]",
-                              "{y}",
-                              "x # y",
-                              "%"}) {
-    const YAML::Node n = YAML::Load("k: " + yaml_scalar(s));
-    EXPECT_EQ(n["k"].as<std::string>(), s) << yaml_scalar(s);
-  }
+TEST_F(BenchmarkYaml, NumbersReadBackExactly) {
   for (double v : {0.0, 20.4, 46.155170000000005, 8.97e-44, 1e300, 30.0, -2298.236986}) {
     EXPECT_EQ(YAML::Load("k: " + shortest_number(v))["k"].as<double>(), v);
   }

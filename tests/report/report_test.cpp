@@ -885,6 +885,41 @@ TEST_F(Report, AFileWithAWrongTypedFieldIsSkippedNamingTheField) {
   EXPECT_EQ(load_report_inputs({dir_}).runs.size(), 4u);
 }
 
+// A hardware name holding '=' is a name, not fields: the automatic comparison and a comparison
+// asked by that name find its runs (the report stopped with "is not a field=value").
+TEST_F(Report, AHardwareNameWithAnEqualsSignIsAName) {
+  testing::SampleRun a;
+  a.cpu = "ACME x=1";
+  testing::write_sample(dir_, a, false, 40);
+  testing::SampleRun b;
+  b.cpu = "ACME y=2";
+  b.start_unix_ns += 60'000'000'000;
+  testing::write_sample(dir_, b, false, 41);
+  const auto input = load_report_inputs({dir_});
+  ASSERT_EQ(input.runs.size(), 2u);
+  EXPECT_NE(render_html(input, {}).find("ACME x=1"), std::string::npos);
+  ReportOptions options;
+  options.compare = std::pair{"ACME x=1", "ACME y=2"};
+  const std::string md = render_markdown(input, options);
+  EXPECT_EQ(md.find("no benchmark and metric in common"), std::string::npos) << md;
+  EXPECT_NE(md.find("ACME x=1"), std::string::npos) << md;
+}
+
+// A link that loops, named like a results file: one line, and the folder's other runs are read
+// (listing and reporting a folder stopped at it).
+TEST_F(Report, ALoopingLinkIsSkippedOneLine) {
+  testing::write_sample(dir_, {});
+  fs::create_symlink(dir_ / "loop.json", dir_ / "loop.json");
+  const RunScan scan = scan_results(dir_);
+  EXPECT_EQ(scan.runs.size(), 1u);
+  ASSERT_EQ(scan.skipped.size(), 1u);
+  EXPECT_NE(scan.skipped[0].find("loop.json: cannot be read"), std::string::npos)
+      << scan.skipped[0];
+  const auto input = load_report_inputs({dir_});
+  EXPECT_EQ(input.runs.size(), 1u);
+  EXPECT_EQ(input.skipped.size(), 1u);
+}
+
 // A field of another type than robotperf writes, wherever it is, skips that file with one line
 // naming it; the folder's other runs are read, and what is read after loading (the machine
 // table) shows what it cannot read as "-" instead of stopping the report.

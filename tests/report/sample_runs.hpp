@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "robotperf/report/atomic_file.hpp"
+#include "robotperf/files/atomic_file.hpp"
 #include "robotperf/report/results.hpp"
 
 namespace robotperf::report::testing {
@@ -123,8 +123,8 @@ inline std::filesystem::path write_sample(const std::filesystem::path& dir, cons
     j["warnings"] = {{{"rule", "governor"}, {"message", "CPU governor is powersave"}}};
   }
   const auto base = dir / result_basename(run);
-  write_file_atomically(base.string() + ".json", j.dump(2) + "\n");
-  if (csv) write_file_atomically(base.string() + ".latencies.csv", latencies_csv(run));
+  files::write_file_atomically(base.string() + ".json", j.dump(2) + "\n");
+  if (csv) files::write_file_atomically(base.string() + ".latencies.csv", latencies_csv(run));
   return base.string() + ".json";
 }
 

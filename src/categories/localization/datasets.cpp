@@ -7,6 +7,7 @@
 #include "robotperf/msgs/nav_msgs.hpp"
 #include "robotperf/perception/camera_model.hpp"
 #include "robotperf/perception/image_proc.hpp"
+#include "robotperf/plugin/stereo_streams.hpp"
 
 namespace robotperf::localization {
 namespace {
@@ -84,10 +85,7 @@ msgs::Image mono_image(const cv::Mat& pixels, const msgs::Header& header) {
 std::vector<DatasetStream> odometry_streams(const plugin::Parameters&) {
   const SyntheticOdometryConfig config;
   const OdometrySequence sequence = generate_odometry_sequence(config);
-  auto left = make_stream<msgs::Image>("left_image", "/left/image_rect");
-  auto left_info = make_stream<msgs::CameraInfo>("left_camera_info", "/left/camera_info");
-  auto right = make_stream<msgs::Image>("right_image", "/right/image_rect");
-  auto right_info = make_stream<msgs::CameraInfo>("right_camera_info", "/right/camera_info");
+  plugin::StereoPairStreams pair;
   auto truth = make_stream<msgs::PoseStamped>("pose_truth", "/ground_truth/pose");
   msgs::CameraInfo left_camera = perception::make_pinhole_camera_info(
       config.width, config.height, config.hfov_rad, std::vector<double>(5, 0.0),
@@ -100,13 +98,11 @@ std::vector<DatasetStream> odometry_streams(const plugin::Parameters&) {
     msgs::Header header;
     header.stamp = msgs::Time::from_ns(std::llround(f.stamp_s * 1e9));
     header.frame_id = left_camera.header.frame_id;
-    append(left, mono_image(f.left, header));
+    msgs::Image left = mono_image(f.left, header);
     left_camera.header.stamp = header.stamp;
-    append(left_info, left_camera);
     header.frame_id = right_camera.header.frame_id;
-    append(right, mono_image(f.right, header));
     right_camera.header.stamp = header.stamp;
-    append(right_info, right_camera);
+    pair.append(std::move(left), left_camera, mono_image(f.right, header), right_camera);
     msgs::PoseStamped pose;
     pose.header.stamp = header.stamp;
     pose.header.frame_id = "odom";
@@ -115,8 +111,9 @@ std::vector<DatasetStream> odometry_streams(const plugin::Parameters&) {
     pose.pose.orientation = quaternion_from_matrix(f.left_in_first.rotation());
     append(truth, std::move(pose));
   }
-  return {std::move(left), std::move(left_info), std::move(right), std::move(right_info),
-          std::move(truth)};
+  std::vector<DatasetStream> more;
+  more.push_back(std::move(truth));
+  return pair.take(std::move(more));
 }
 
 }  // namespace
@@ -163,16 +160,9 @@ void register_datasets(plugin::Registrar& registrar) {
                       "ray-cast textured room with pillars and crates",
        .rate_hz = odometry.rate_hz,
        .frames = odometry.frames,
-       .streams = {{"left_image", "/left/image_rect", "sensor_msgs/msg/Image", false,
-                    "rectified left image"},
-                   {"left_camera_info", "/left/camera_info", "sensor_msgs/msg/CameraInfo", false,
-                    "left calibration"},
-                   {"right_image", "/right/image_rect", "sensor_msgs/msg/Image", false,
-                    "rectified right image"},
-                   {"right_camera_info", "/right/camera_info", "sensor_msgs/msg/CameraInfo", false,
-                    "right calibration (P[3] = -fx * baseline)"},
-                   {"pose_truth", "/ground_truth/pose", "geometry_msgs/msg/PoseStamped", true,
-                    "the left camera's true pose in the first frame's left camera"}}},
+       .streams = plugin::stereo_pair_stream_infos(
+           {{"pose_truth", "/ground_truth/pose", "geometry_msgs/msg/PoseStamped", true,
+             "the left camera's true pose in the first frame's left camera"}})},
       odometry_streams);
 }
 

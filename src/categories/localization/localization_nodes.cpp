@@ -13,44 +13,42 @@
 #include "robotperf/msgs/nav_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/perception/image_proc.hpp"
+#include "robotperf/plugin/synced_inputs.hpp"
 
 namespace robotperf::localization {
 namespace {
 
 using plugin::KernelConfig;
-using plugin::MessageSync;
 
-// Inputs paired by exact stamps (as the ROS nodes' message_filters do).
+// Inputs paired by exact stamps (as the ROS nodes' message_filters do); a set the kernel rejects
+// is skipped and counted.
 template <std::size_t N>
 class SyncedNode : public graph::Node, public plugin::NodeCounters {
  public:
   std::map<std::string, uint64_t> counters() const override {
-    std::map<std::string, uint64_t> out{{"sets_processed", sync_.emitted()},
-                                        {"rejected_sets", rejected_.count()}};
-    for (std::size_t i = 0; i < N; ++i) out["unpaired_" + port_names_[i]] = sync_.dropped()[i];
+    std::map<std::string, uint64_t> out = inputs_.counters();
+    out["rejected_sets"] = rejected_.count();
     return out;
   }
 
  protected:
+  using Set = typename plugin::SyncedInputs<N>::Set;
+
   SyncedNode(graph::Context& context, const KernelConfig& config,
              std::array<std::string, N> port_names)
       : Node(context, config.node_name),
-        port_names_(std::move(port_names)),
-        sync_(plugin::SyncOptions{}, [this](const auto& set) { guarded(set); }) {}
+        inputs_(std::move(port_names), plugin::SyncOptions{},
+                [this](const Set& set) { guarded(set); }) {}
 
   template <class T>
   void subscribe(const KernelConfig& config, std::size_t input) {
-    subscriptions_.push_back(create_subscription<T>(config.topic(port_names_[input]), config.qos,
-                                                    [this, input](std::shared_ptr<const T> m) {
-                                                      const int64_t stamp = m->header.stamp.to_ns();
-                                                      sync_.add(input, std::move(m), stamp);
-                                                    }));
+    inputs_.template subscribe<T>(*this, config, input);
   }
 
-  virtual void process(const typename MessageSync<N>::Set& set) = 0;
+  virtual void process(const Set& set) = 0;
 
  private:
-  void guarded(const typename MessageSync<N>::Set& set) {
+  void guarded(const Set& set) {
     try {
       process(set);
     } catch (const std::invalid_argument& e) {
@@ -58,10 +56,8 @@ class SyncedNode : public graph::Node, public plugin::NodeCounters {
     }
   }
 
-  std::array<std::string, N> port_names_;
-  MessageSync<N> sync_;
+  plugin::SyncedInputs<N> inputs_;
   plugin::SkippedInputs rejected_;
-  std::vector<std::shared_ptr<graph::GenericSubscription>> subscriptions_;
 };
 
 template <class T>
@@ -103,7 +99,7 @@ class AprilTagNode final : public SyncedNode<2> {
   }
 
  private:
-  void process(const MessageSync<2>::Set& set) override {
+  void process(const Set& set) override {
     const auto& image = input<msgs::Image>(set[kImage]);
     auto detections = std::make_shared<msgs::AprilTagDetectionArray>();
     auto poses = std::make_shared<msgs::PoseArray>();
@@ -324,7 +320,7 @@ class StereoOdometryNode final : public SyncedNode<4> {
   }
 
  private:
-  void process(const MessageSync<4>::Set& set) override {
+  void process(const Set& set) override {
     const auto& left = input<msgs::Image>(set[kLeftImage]);
     const auto& right = input<msgs::Image>(set[kRightImage]);
     const StereoCalibration camera = stereo_calibration(input<msgs::CameraInfo>(set[kLeftInfo]),

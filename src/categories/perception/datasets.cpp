@@ -6,6 +6,7 @@
 #include "robotperf/perception/synthetic_camera.hpp"
 #include "robotperf/perception/synthetic_depth.hpp"
 #include "robotperf/perception/synthetic_stereo.hpp"
+#include "robotperf/plugin/stereo_streams.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -27,20 +28,16 @@ std::vector<DatasetStream> camera_streams(const plugin::Parameters&) {
 // The pair is rectified: its topics are those a3 takes, so that the bag `dataset generate`
 // writes plays into a3 without remapping.
 std::vector<DatasetStream> stereo_streams(const plugin::Parameters&) {
-  auto left = make_stream<msgs::Image>("left_image", "/left/image_rect");
-  auto left_info = make_stream<msgs::CameraInfo>("left_camera_info", "/left/camera_info");
-  auto right = make_stream<msgs::Image>("right_image", "/right/image_rect");
-  auto right_info = make_stream<msgs::CameraInfo>("right_camera_info", "/right/camera_info");
+  plugin::StereoPairStreams pair;
   auto truth = make_stream<msgs::DisparityImage>("disparity_truth", "/ground_truth/disparity");
   for (auto& f : generate_stereo_sequence()) {
-    append(left, std::move(f.left));
-    append(left_info, std::move(f.left_info));
-    append(right, std::move(f.right));
-    append(right_info, std::move(f.right_info));
+    pair.append(std::move(f.left), std::move(f.left_info), std::move(f.right),
+                std::move(f.right_info));
     append(truth, std::move(f.truth));
   }
-  return {std::move(left), std::move(left_info), std::move(right), std::move(right_info),
-          std::move(truth)};
+  std::vector<DatasetStream> more;
+  more.push_back(std::move(truth));
+  return pair.take(std::move(more));
 }
 
 // Depth registered to the colour camera, on the topics a4 takes (depth_image_proc's names).
@@ -85,16 +82,10 @@ void register_datasets(plugin::Registrar& registrar) {
                       "1.6-6 m)",
        .rate_hz = stereo.rate_hz,
        .frames = stereo.frames,
-       .streams = {{"left_image", "/left/image_rect", "sensor_msgs/msg/Image", false,
-                    "rectified left image"},
-                   {"left_camera_info", "/left/camera_info", "sensor_msgs/msg/CameraInfo", false,
-                    "left calibration"},
-                   {"right_image", "/right/image_rect", "sensor_msgs/msg/Image", false,
-                    "rectified right image"},
-                   {"right_camera_info", "/right/camera_info", "sensor_msgs/msg/CameraInfo", false,
-                    "right calibration (P[3] = -fx * baseline)"},
-                   {"disparity_truth", "/ground_truth/disparity", "stereo_msgs/msg/DisparityImage",
-                    true, "per-pixel true disparity of the left view, NaN where occluded"}}},
+       .streams = plugin::stereo_pair_stream_infos(
+           {{"disparity_truth", "/ground_truth/disparity", "stereo_msgs/msg/DisparityImage", true,
+             "per-pixel true disparity of the left view, NaN where "
+             "occluded"}})},
       stereo_streams);
   const SyntheticDepthConfig depth;
   registrar.add_dataset(

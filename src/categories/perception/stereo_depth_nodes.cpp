@@ -7,13 +7,13 @@
 #include "output_pool.hpp"
 #include "robotperf/perception/depth_image_proc.hpp"
 #include "robotperf/perception/stereo_image_proc.hpp"
+#include "robotperf/plugin/synced_inputs.hpp"
 #include "skipping_node.hpp"
 
 namespace robotperf::perception {
 namespace {
 
 using plugin::KernelConfig;
-using plugin::MessageSync;
 using plugin::SyncOptions;
 using plugin::SyncPolicy;
 
@@ -27,11 +27,6 @@ SyncOptions sync_options(const KernelConfig& config, bool approximate) {
   return o;
 }
 
-template <class T>
-int64_t stamp_of(const std::shared_ptr<const T>& m) {
-  return m->header.stamp.to_ns();
-}
-
 class DisparityNode final : public SkippingNode, public ImageDeviceNode {
  public:
   enum Input { kLeftImage, kLeftInfo, kRightImage, kRightInfo };
@@ -40,20 +35,20 @@ class DisparityNode final : public SkippingNode, public ImageDeviceNode {
       : SkippingNode(context, config.node_name),
         ImageDeviceNode(backend_of(config)),
         processor_(params_from(config), backend_),
-        sync_(sync_options(config, config.parameters.get_bool("approximate_sync")),
-              [this](const auto& set) { process(set); }) {
+        inputs_({"left_image", "left_camera_info", "right_image", "right_camera_info"},
+                sync_options(config, config.parameters.get_bool("approximate_sync")),
+                [this](const Inputs::Set& set) { process(set); }) {
     output_ = create_publisher<msgs::DisparityImage>(config.topic("disparity"), config.qos);
-    subscribe<msgs::Image>(config, "left_image", kLeftImage);
-    subscribe<msgs::CameraInfo>(config, "left_camera_info", kLeftInfo);
-    subscribe<msgs::Image>(config, "right_image", kRightImage);
-    subscribe<msgs::CameraInfo>(config, "right_camera_info", kRightInfo);
+    inputs_.subscribe<msgs::Image>(*this, config, kLeftImage);
+    inputs_.subscribe<msgs::CameraInfo>(*this, config, kLeftInfo);
+    inputs_.subscribe<msgs::Image>(*this, config, kRightImage);
+    inputs_.subscribe<msgs::CameraInfo>(*this, config, kRightInfo);
   }
 
   std::map<std::string, uint64_t> counters() const override {
-    const auto& d = sync_.dropped();
-    return {{"sets_processed", sync_.emitted()},           {"unpaired_left_image", d[kLeftImage]},
-            {"unpaired_left_camera_info", d[kLeftInfo]},   {"unpaired_right_image", d[kRightImage]},
-            {"unpaired_right_camera_info", d[kRightInfo]}, {"rejected_sets", rejected_.count()}};
+    std::map<std::string, uint64_t> out = inputs_.counters();
+    out["rejected_sets"] = rejected_.count();
+    return out;
   }
 
  private:
@@ -86,25 +81,17 @@ class DisparityNode final : public SkippingNode, public ImageDeviceNode {
     return p;
   }
 
-  template <class T>
-  void subscribe(const KernelConfig& config, const char* port, Input input) {
-    subscriptions_.push_back(create_subscription<T>(config.topic(port), config.qos,
-                                                    [this, input](std::shared_ptr<const T> m) {
-                                                      const int64_t stamp = stamp_of(m);
-                                                      sync_.add(input, std::move(m), stamp);
-                                                    }));
-  }
+  using Inputs = plugin::SyncedInputs<4>;
 
-  void process(const MessageSync<4>::Set& set) {
+  void process(const Inputs::Set& set) {
     guarded([&] {
       std::shared_ptr<msgs::DisparityImage> out = pool_.acquire();
-      const auto& left = *std::static_pointer_cast<const msgs::Image>(set[kLeftImage]);
-      const auto& right = *std::static_pointer_cast<const msgs::Image>(set[kRightImage]);
+      const auto& left = Inputs::message<msgs::Image>(set, kLeftImage);
+      const auto& right = Inputs::message<msgs::Image>(set, kRightImage);
       plugin::trace_kernel_init(*this, kKernel, left.header.stamp.to_ns(), left, right);
       const DeviceStageContext stages(*this, left.header.stamp.to_ns());
-      processor_.compute(left, right,
-                         *std::static_pointer_cast<const msgs::CameraInfo>(set[kLeftInfo]),
-                         *std::static_pointer_cast<const msgs::CameraInfo>(set[kRightInfo]), *out);
+      processor_.compute(left, right, Inputs::message<msgs::CameraInfo>(set, kLeftInfo),
+                         Inputs::message<msgs::CameraInfo>(set, kRightInfo), *out);
       plugin::trace_kernel_fini(*this, kKernel, *out);
       output_->publish(std::shared_ptr<const msgs::DisparityImage>(std::move(out)));
     });
@@ -113,9 +100,8 @@ class DisparityNode final : public SkippingNode, public ImageDeviceNode {
   static constexpr const char* kKernel = "stereo_image_proc/disparity";
   DisparityProcessor processor_;
   OutputPool<msgs::DisparityImage> pool_;
-  MessageSync<4> sync_;
+  Inputs inputs_;
   std::shared_ptr<graph::Publisher<msgs::DisparityImage>> output_;
-  std::vector<std::shared_ptr<graph::GenericSubscription>> subscriptions_;
 };
 
 class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
@@ -126,46 +112,36 @@ class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
       : SkippingNode(context, config.node_name),
         ImageDeviceNode(backend_of(config)),
         processor_(backend_),
-        sync_(sync_options(config, !config.parameters.get_bool("exact_sync")),
-              [this](const auto& set) { process(set); }) {
+        inputs_({"depth", "image", "camera_info"},
+                sync_options(config, !config.parameters.get_bool("exact_sync")),
+                [this](const Inputs::Set& set) { process(set); }) {
     params_.range_max = config.parameters.get_double("range_max");
     if (!(params_.range_max >= 0.0) || !std::isfinite(params_.range_max)) {
       throw std::invalid_argument("node '" + config.node_name + "': range_max must be >= 0");
     }
     output_ = create_publisher<msgs::PointCloud2>(config.topic("points"), config.qos);
-    subscribe<msgs::Image>(config, "depth", kDepth);
-    subscribe<msgs::Image>(config, "image", kImage);
-    subscribe<msgs::CameraInfo>(config, "camera_info", kInfo);
+    inputs_.subscribe<msgs::Image>(*this, config, kDepth);
+    inputs_.subscribe<msgs::Image>(*this, config, kImage);
+    inputs_.subscribe<msgs::CameraInfo>(*this, config, kInfo);
   }
 
   std::map<std::string, uint64_t> counters() const override {
-    const auto& d = sync_.dropped();
-    return {{"sets_processed", sync_.emitted()},
-            {"unpaired_depth", d[kDepth]},
-            {"unpaired_image", d[kImage]},
-            {"unpaired_camera_info", d[kInfo]},
-            {"rejected_sets", rejected_.count()}};
+    std::map<std::string, uint64_t> out = inputs_.counters();
+    out["rejected_sets"] = rejected_.count();
+    return out;
   }
 
  private:
-  template <class T>
-  void subscribe(const KernelConfig& config, const char* port, Input input) {
-    subscriptions_.push_back(create_subscription<T>(config.topic(port), config.qos,
-                                                    [this, input](std::shared_ptr<const T> m) {
-                                                      const int64_t stamp = stamp_of(m);
-                                                      sync_.add(input, std::move(m), stamp);
-                                                    }));
-  }
+  using Inputs = plugin::SyncedInputs<3>;
 
-  void process(const MessageSync<3>::Set& set) {
+  void process(const Inputs::Set& set) {
     guarded([&] {
       std::shared_ptr<msgs::PointCloud2> cloud = pool_.acquire();
-      const auto& depth = *std::static_pointer_cast<const msgs::Image>(set[kDepth]);
-      const auto& image = *std::static_pointer_cast<const msgs::Image>(set[kImage]);
+      const auto& depth = Inputs::message<msgs::Image>(set, kDepth);
+      const auto& image = Inputs::message<msgs::Image>(set, kImage);
       plugin::trace_kernel_init(*this, kKernel, depth.header.stamp.to_ns(), depth, image);
       const DeviceStageContext stages(*this, depth.header.stamp.to_ns());
-      processor_.compute(depth, image,
-                         *std::static_pointer_cast<const msgs::CameraInfo>(set[kInfo]), params_,
+      processor_.compute(depth, image, Inputs::message<msgs::CameraInfo>(set, kInfo), params_,
                          *cloud);
       plugin::trace_kernel_fini(*this, kKernel, *cloud);
       output_->publish(std::shared_ptr<const msgs::PointCloud2>(std::move(cloud)));
@@ -176,9 +152,8 @@ class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
   PointCloudXyzrgbParams params_;
   PointCloudXyzrgbProcessor processor_;
   OutputPool<msgs::PointCloud2> pool_;
-  MessageSync<3> sync_;
+  Inputs inputs_;
   std::shared_ptr<graph::Publisher<msgs::PointCloud2>> output_;
-  std::vector<std::shared_ptr<graph::GenericSubscription>> subscriptions_;
 };
 
 plugin::ParameterInfo queue_size_declaration() {

@@ -99,9 +99,6 @@ PublishedBenchmark published_from_json(const nlohmann::json& j, const std::files
 // One line per flagged row: "<file>:<line>: <hardware> <metric> <value>: <reason>; ...".
 std::string flagged_rows_report(const PublishedBenchmark& benchmark);
 
-// A YAML scalar for `text`: plain when that is unambiguous, else double-quoted with escapes.
-std::string yaml_scalar(const std::string& text);
-
 // Shortest text that reads back as exactly `value`.
 std::string shortest_number(double value);
 

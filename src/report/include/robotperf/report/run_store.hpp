@@ -127,6 +127,11 @@ RunScan scan_results(const std::filesystem::path& dir);
 bool may_be_run_file(const std::filesystem::path& path);
 bool may_be_imported_file(const std::filesystem::path& path);
 
+// Whether a folder's entry is a regular file, links followed. A link that cannot be followed (one
+// that loops) is one line in `skipped` instead of the end of the folder's scan.
+bool is_regular_file_or_skip(const std::filesystem::directory_entry& entry,
+                             std::vector<std::string>& skipped);
+
 // A short platform name from a machine description (robotperf sysinfo JSON):
 // "AMD Ryzen 7 5800X", "Intel Core i7-12700H + NVIDIA GeForce RTX 3060", "NVIDIA Jetson AGX Orin".
 std::string hardware_label(const nlohmann::json& machine);

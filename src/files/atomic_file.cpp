@@ -1,4 +1,4 @@
-#include "robotperf/report/atomic_file.hpp"
+#include "robotperf/files/atomic_file.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -15,7 +15,7 @@
 #include <system_error>
 #include <vector>
 
-namespace robotperf::report {
+namespace robotperf::files {
 namespace {
 
 namespace fs = std::filesystem;
@@ -222,4 +222,4 @@ void write_output(const fs::path& path, std::string_view content) {
   write_file_atomically(path, content);
 }
 
-}  // namespace robotperf::report
+}  // namespace robotperf::files

@@ -1,3 +1,5 @@
+#include "robotperf/files/atomic_file.hpp"
+
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -13,9 +15,7 @@
 #include <string>
 #include <thread>
 
-#include "robotperf/report/atomic_file.hpp"
-
-namespace robotperf::report {
+namespace robotperf::files {
 namespace {
 
 namespace fs = std::filesystem;
@@ -212,4 +212,4 @@ TEST_F(AtomicFileTest, DashIsStandardOutputAndFilesAreStillAtomic) {
 }
 
 }  // namespace
-}  // namespace robotperf::report
+}  // namespace robotperf::files

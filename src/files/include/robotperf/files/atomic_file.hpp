@@ -1,5 +1,6 @@
-// Crash-safe file replacement for results: a reader sees either the old file or the complete new
-// one, never a truncated mix, even if the process or the machine dies mid-write.
+// Crash-safe file replacement for what robotperf writes (results, reports, bags' metadata): a
+// reader sees either the old file or the complete new one, never a truncated mix, even if the
+// process or the machine dies mid-write.
 #pragma once
 
 #include <filesystem>
@@ -7,7 +8,7 @@
 #include <string>
 #include <string_view>
 
-namespace robotperf::report {
+namespace robotperf::files {
 
 // Writes `content` to `path` atomically: creates missing parent directories, writes a uniquely
 // named temporary file in the same directory, fsyncs it, renames it over `path` and fsyncs the
@@ -40,4 +41,4 @@ void write_output(const std::filesystem::path& path, std::string_view content);
 // Whether write_output(path, ...) writes to standard output.
 bool is_standard_output(const std::filesystem::path& path);
 
-}  // namespace robotperf::report
+}  // namespace robotperf::files

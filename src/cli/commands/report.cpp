@@ -1,0 +1,93 @@
+// `robotperf report`: the HTML and Markdown report of results and published rows.
+#include "robotperf/report/report.hpp"
+
+#include <cstdio>
+#include <iostream>
+#include <stdexcept>
+
+#include "commands.hpp"
+#include "robotperf/cli/exit_codes.hpp"
+#include "robotperf/files/atomic_file.hpp"
+#include "robotperf/report/run_store.hpp"
+
+namespace robotperf::cli {
+
+namespace {
+
+struct ReportArgs {
+  std::vector<std::string> inputs;
+  std::string html, md, title = "robotperf report";
+  std::vector<std::string> compare;
+};
+
+// What the report cannot be asked, before anything is read.
+void check_report_args(const ReportArgs& a) {
+  if (a.html.empty() && a.md.empty())
+    throw std::invalid_argument("report: say where to write it: --html FILE and/or --md FILE");
+  if (!a.compare.empty() && a.compare.size() != 2)
+    throw std::invalid_argument(
+        "report: --compare takes exactly two selectors (--compare A --compare B)");
+}
+
+int make_report(const ReportArgs& a) {
+  check_report_args(a);
+  std::vector<fs::path> paths;
+  for (const auto& p : a.inputs.empty() ? std::vector<std::string>{"results"} : a.inputs)
+    paths.emplace_back(p);
+  const auto input = report::load_report_inputs(paths);
+  for (const auto& s : input.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
+  if (input.runs.empty() && input.published.empty())
+    throw report::ReportError(
+        "nothing to report: no results files or benchmark.yaml in the given paths");
+  report::ReportOptions options;
+  options.title = a.title;
+  if (a.compare.size() == 2) options.compare = std::pair{a.compare[0], a.compare[1]};
+  if (!a.html.empty() && !a.md.empty() && files::is_standard_output(a.html) &&
+      files::is_standard_output(a.md)) {
+    throw std::invalid_argument("report: only one of --html and --md can be - (standard output)");
+  }
+  // Standard output carries the report alone; where a file went is said on stderr then.
+  std::ostream& said =
+      files::is_standard_output(a.html) || files::is_standard_output(a.md) ? std::cerr : std::cout;
+  if (!a.html.empty()) {
+    files::write_output(a.html, report::render_html(input, options));
+    if (!files::is_standard_output(a.html)) said << "report: " << a.html << "\n";
+  }
+  if (!a.md.empty()) {
+    files::write_output(a.md, report::render_markdown(input, options));
+    if (!files::is_standard_output(a.md)) said << "report: " << a.md << "\n";
+  }
+  return kExitOk;
+}
+
+class ReportCommand : public Command {
+ public:
+  CLI::App* declare(CLI::App& app) override {
+    auto* command = app.add_subcommand(
+        "report", "HTML and Markdown report: radar plots across hardware, runs, distributions");
+    command->add_option("results", args_.inputs,
+                        "results files, imported files, benchmark.yaml files or folders "
+                        "(default: ./results)");
+    command->add_option("--html", args_.html, "write the HTML report here (- : standard output)");
+    command->add_option("--md", args_.md, "write the Markdown report here (- : standard output)");
+    command->add_option("--title", args_.title, "report title");
+    command->add_option("--compare", args_.compare,
+                        "compare two sides (give it twice): a results file or name prefix, "
+                        "or a hardware name");
+    command->footer("Example: robotperf report results --html report.html --md report.md");
+    return command;
+  }
+
+  int run(const Context&) override { return make_report(args_); }
+
+ private:
+  ReportArgs args_;
+};
+
+}  // namespace
+
+std::unique_ptr<Command> report_command() {
+  return std::make_unique<ReportCommand>();
+}
+
+}  // namespace robotperf::cli

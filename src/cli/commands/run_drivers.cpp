@@ -1,0 +1,288 @@
+// How `run` runs: once, as a series (--repeat), a sweep (--sweep) or a peak search
+// (--find-peak); and how each run's summary and files are written.
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <stdexcept>
+#include <thread>
+
+#include "../interrupts.hpp"
+#include "robotperf/cli/exit_codes.hpp"
+#include "robotperf/files/atomic_file.hpp"
+#include "robotperf/harness/dataset.hpp"
+#include "robotperf/harness/peak_search.hpp"
+#include "robotperf/report/benchmark_yaml.hpp"
+#include "robotperf/report/report.hpp"
+#include "robotperf/report/results.hpp"
+#include "robotperf/report/run_store.hpp"
+#include "robotperf/report/series.hpp"
+#include "robotperf/report/sweep.hpp"
+#include "robotperf/sysinfo/machine.hpp"
+#include "run.hpp"
+
+namespace robotperf::cli {
+
+namespace {
+
+// Writes a run's files (<base><suffix> for each) atomically, never over another run's: a base
+// taken (two runs started in the same millisecond) becomes <base>-2, ... (files::write_new_files).
+// When the output folder refuses them (a full disk, say), they go to a folder of their own under
+// the temporary directory instead and stderr says where: a measured run is not thrown away.
+// Returns the base the files were written under, or nothing when they could be written nowhere
+// (stderr says why).
+std::optional<fs::path> write_result_files(const fs::path& base,
+                                           const std::map<std::string, std::string>& files) {
+  try {
+    return files::write_new_files(base, files);
+  } catch (const std::exception& e) {
+    std::cerr << "robotperf: " << e.what() << "\n";
+  }
+  const fs::path elsewhere = fs::temp_directory_path() /
+                             ("robotperf-unsaved-" + std::to_string(getpid())) / base.filename();
+  try {
+    fs::create_directories(elsewhere.parent_path());
+    const fs::path kept = files::write_new_files(elsewhere, files);
+    std::cerr << "robotperf: the results were written to " << elsewhere.parent_path().string()
+              << " instead; move them where they belong once " << base.parent_path().string()
+              << " has room\n";
+    return kept;
+  } catch (const std::exception& e) {
+    std::cerr << "robotperf: the results could not be kept anywhere (" << e.what()
+              << "): the summary above is all there is\n";
+    return std::nullopt;
+  }
+}
+
+// One run of `spec`; a grey run's trace folder is removed when the run does not happen.
+harness::RunResult measure(const harness::BenchmarkSpec& spec, const harness::RunOptions& o) {
+  const InterruptHandling interrupts;
+  try {
+    return harness::run_benchmark(spec, o);
+  } catch (...) {
+    std::error_code ec;
+    if (!o.trace_dir.empty()) fs::remove_all(o.trace_dir, ec);
+    throw;
+  }
+}
+
+// The first name under --output no other run has; a grey run's trace folder is moved there.
+fs::path name_run(const RunArgs& a, harness::RunResult& result) {
+  fs::path base = fs::path(a.output) / report::result_basename(result);
+  if (result.grey) {
+    // The trace folder takes the first name no other run has; the files follow it.
+    for (int n = 2; fs::exists(base.string() + ".trace") || fs::exists(base.string() + ".json");
+         ++n)
+      base = fs::path(a.output) / (report::result_basename(result) + "-" + std::to_string(n));
+    const fs::path trace = base.string() + ".trace";
+    fs::rename(result.trace_dir, trace);
+    result.trace_dir = trace;
+  }
+  return base;
+}
+
+// --report: the run's HTML report beside its results, with the package's accepted results.
+void write_run_report(const harness::BenchmarkSpec& spec, const harness::RunResult& result,
+                      const fs::path& base) {
+  report::ReportInput input;
+  input.runs.push_back(report::load_run(base.string() + ".json"));
+  const auto accepted = report::import_benchmark_yaml(spec.dir / "benchmark.yaml");
+  if (!accepted.results.empty()) input.published.push_back(accepted);
+  report::ReportOptions options;
+  options.title = "robotperf " + spec.id + " — " + report::result_basename(result);
+  files::write_file_atomically(base.string() + ".report.html", report::render_html(input, options));
+  std::cout << "report: " << base.string() << ".report.html\n";
+}
+
+struct WrittenRun {
+  int code = kExitOk;            // the exit status this run alone would give
+  std::optional<fs::path> json;  // where its results file went, when it was written
+};
+
+// Prints the run's summary, then writes its results (and report, trace, CSV as asked).
+WrittenRun write_run(const harness::BenchmarkSpec& spec, const RunArgs& a,
+                     harness::RunResult& result) {
+  fs::path base = name_run(a, result);
+  const auto machine = sysinfo::collect_machine_info();
+  // The summary first: whatever happens to the files, what was measured is on the screen.
+  std::cout << report::summary_table(result);
+  std::cout << "machine: " << sysinfo::summary_line(machine) << "\n";
+  std::map<std::string, std::string> files = {
+      {".json", json_text(report::result_to_json(result, machine), 2) + "\n"}};
+  if (a.csv) files[".latencies.csv"] = report::latencies_csv(result);
+  const auto kept = write_result_files(base, files);
+  const bool moved = kept && kept->parent_path() != base.parent_path();
+  if (kept) base = *kept;
+  if (kept)
+    std::cout << "results: " << base.string() << ".json" << (a.csv ? " (+ .latencies.csv)" : "")
+              << (result.grey ? " (+ .trace)" : "") << "\n";
+  if (a.report && kept && !moved) write_run_report(spec, result, base);
+  WrittenRun out;
+  const bool functional_ok = !result.functional || result.functional->valid;
+  out.code = result.valid && functional_ok ? kExitOk : kExitInvalidResult;
+  if (result.interrupted) out.code = interrupted_exit_code();
+  // Results not where they were asked for are an error of the run, whatever it measured.
+  if (!kept || moved) out.code = kExitError;
+  if (kept) out.json = base.string() + ".json";
+  if (result.threads_abandoned) {
+    // A callback that never returned still runs on objects that must never be destroyed: end
+    // here, with everything written, without running destructors.
+    std::cout.flush();
+    std::fflush(nullptr);
+    std::_Exit(out.code);
+  }
+  return out;
+}
+
+// Several runs of one benchmark (--repeat, --sweep), each with a fresh graph and written as usual.
+// Before run i, `prepare(i)` sets it up (it may change `spec`, which run i then measures) and
+// names it for the progress line; after it, `record` keeps its figures. Ends early on an interrupt
+// (during a run or a preparation) or when a result cannot be written. The exit status is the
+// first failing run's, or 128 + the signal when interrupted; `first` is the first results file
+// written.
+struct SeveralRuns {
+  int code = kExitOk;
+  std::optional<fs::path> first;
+};
+SeveralRuns run_several(
+    const harness::BenchmarkSpec& spec, const RunArgs& a, const harness::RunOptions& o,
+    std::size_t runs, const std::function<std::string(std::size_t)>& prepare,
+    const std::function<void(const harness::RunResult&, const WrittenRun&)>& record) {
+  const InterruptHandling interrupts;  // also over the preparations (--repeat-pause)
+  SeveralRuns out;
+  for (std::size_t i = 0; i < runs; ++i) {
+    const std::string label = prepare(i);
+    if (g_interrupted.load() != 0) break;
+    if (!a.quiet) std::fprintf(stderr, "[%s] %s\n", spec.id.c_str(), label.c_str());
+    harness::RunResult result = measure(spec, o);
+    const WrittenRun written = write_run(spec, a, result);
+    record(result, written);
+    if (!out.first) out.first = written.json;
+    if (written.code != kExitOk && out.code == kExitOk) out.code = written.code;
+    if (result.interrupted || written.code == kExitError) break;
+  }
+  if (g_interrupted.load() != 0 && out.code == kExitOk) out.code = interrupted_exit_code();
+  return out;
+}
+
+// The summary of several runs: printed, and written beside the first of them as
+// <first>.<kind>.json ("series", "sweep").
+void write_summary(const SeveralRuns& runs, const std::string& kind, const std::string& table,
+                   const nlohmann::json& summary) {
+  std::cout << "\n" << table;
+  if (!runs.first) return;
+  const fs::path path = fs::path(*runs.first).replace_extension("." + kind + ".json");
+  files::write_file_atomically(path, json_text(summary, 2) + "\n");
+  std::cout << kind << ": " << path.string() << "\n";
+}
+
+// --repeat-pause: interruptible, a Ctrl-C during the pause ends the series like one during a run.
+void pause_between_runs(double seconds) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < until && g_interrupted.load() == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+}
+
+// --find-peak's bounds from the command line; the step length is --duration (default 5 s), the
+// start --rate-range's low end, else --rate, else the benchmark's rate.
+harness::PeakSearchOptions peak_search_options(const RunArgs& a) {
+  harness::PeakSearchOptions search;
+  search.loss_bound_percent = a.loss_bound;
+  search.latency_bound_ms = a.latency_bound;
+  search.latency_percentile = a.latency_percentile;
+  search.resolution_percent = a.peak_resolution;
+  if (a.duration) search.step_duration_s = *a.duration;
+  if (a.rate_range) {
+    const auto colon = a.rate_range->find(':');
+    std::optional<double> low, high;
+    if (colon != std::string::npos) {
+      low = decimal<double>(a.rate_range->substr(0, colon));
+      high = decimal<double>(a.rate_range->substr(colon + 1));
+    }
+    if (!low || !high || !(*low > 0) || !(*high >= *low) || !std::isfinite(*high))
+      throw std::invalid_argument("--rate-range " + *a.rate_range +
+                                  ": expected LO:HI in Hz with 0 < LO <= HI");
+    search.rate_low_hz = low;
+    search.rate_high_hz = high;
+  }
+  return search;
+}
+
+}  // namespace
+
+int run_once(const harness::BenchmarkSpec& spec, const RunArgs& args,
+             const harness::RunOptions& options) {
+  harness::RunResult result = measure(spec, options);
+  return write_run(spec, args, result).code;
+}
+
+// --repeat N: N runs; then the run-to-run view of the headline figures (report::series_summary).
+int run_series(const harness::BenchmarkSpec& spec, const RunArgs& a, const harness::RunOptions& o) {
+  report::Series series(spec.id);
+  const SeveralRuns runs = run_several(
+      spec, a, o, a.repeat,
+      [&](std::size_t i) {
+        if (i > 0 && a.repeat_pause > 0) pause_between_runs(a.repeat_pause);
+        return "run " + std::to_string(i + 1) + " of " + std::to_string(a.repeat);
+      },
+      [&](const harness::RunResult& result, const WrittenRun& written) {
+        series.add(result, written.json);
+      });
+  write_summary(runs, "series", report::series_table(series), report::series_json(series));
+  return runs.code;
+}
+
+// --sweep KEY=V1,V2,...: one run per value of a workload parameter; then the values side by side
+// (report::sweep_table).
+int run_sweep(harness::BenchmarkSpec spec, const RunArgs& a, const harness::RunOptions& o) {
+  const auto [parameter, values] = report::parse_sweep(*a.sweep);
+  // Every value is checked before the first run: a typo in the last would waste the others.
+  for (const std::string& value : values) {
+    auto workload = spec.workload;
+    workload[parameter] = value;
+    harness::check_workload(spec.dataset, workload);
+  }
+  report::Sweep sweep(spec.id, parameter);
+  const SeveralRuns runs = run_several(
+      spec, a, o, values.size(),
+      [&](std::size_t i) {
+        spec.workload[parameter] = values[i];
+        return parameter + " = " + values[i];
+      },
+      [&](const harness::RunResult& result, const WrittenRun& written) {
+        sweep.add(spec.workload[parameter], result, written.json);
+      });
+  write_summary(runs, "sweep", report::sweep_table(sweep), report::sweep_json(sweep));
+  return runs.code;
+}
+
+// --find-peak: the steps' progress on stderr; the peak found is written as a run.
+int run_peak_search(const harness::BenchmarkSpec& spec, const RunArgs& a, harness::RunOptions o) {
+  if (a.mode == "grey") throw std::invalid_argument("--find-peak runs black-box only");
+  if (a.repeat > 1) throw std::invalid_argument("--find-peak is one search: not with --repeat");
+  harness::PeakSearchOptions search = peak_search_options(a);
+  o.duration_s.reset();
+  o.progress = nullptr;
+  const InterruptHandling interrupts;
+  std::size_t steps = 0;
+  auto found = harness::find_peak(spec, o, search, [&](const harness::PeakStep& s) {
+    if (a.quiet) return;
+    std::fprintf(stderr, "[%s] peak search step %zu: %.1f Hz: %s\n", spec.id.c_str(), ++steps,
+                 s.rate_hz, s.passed ? "sustained" : ("failed: " + s.reason).c_str());
+  });
+  if (!found.peak) {
+    std::cout << report::peak_search_table(found.record);
+    std::cout << "result: no rate met the bounds; nothing written\n";
+    return g_interrupted.load() ? interrupted_exit_code() : kExitInvalidResult;
+  }
+  const int code = write_run(spec, a, *found.peak).code;
+  // An interrupted search still writes the peak it had found; the exit status says it stopped.
+  return g_interrupted.load() != 0 ? interrupted_exit_code() : code;
+}
+
+}  // namespace robotperf::cli

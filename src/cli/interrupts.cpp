@@ -1,0 +1,40 @@
+#include "interrupts.hpp"
+
+#include <unistd.h>
+
+#include "robotperf/harness/run.hpp"
+
+namespace robotperf::cli {
+
+std::atomic<int> g_interrupted{0};
+
+namespace {
+
+void on_interrupt(int signal_number) {
+  if (g_interrupted.exchange(signal_number) != 0) {
+    constexpr char kMessage[] = "\nrobotperf: interrupted again: stopping now\n";
+    (void)!write(STDERR_FILENO, kMessage, sizeof kMessage - 1);
+    harness::kill_node_processes();
+    _exit(128 + signal_number);
+  }
+  constexpr char kMessage[] =
+      "\nrobotperf: interrupted: ending the run, keeping what it measured (again to force)\n";
+  (void)!write(STDERR_FILENO, kMessage, sizeof kMessage - 1);
+}
+
+}  // namespace
+
+InterruptHandling::InterruptHandling() {
+  struct sigaction action {};
+  action.sa_handler = on_interrupt;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, &previous_int_);
+  sigaction(SIGTERM, &action, &previous_term_);
+}
+
+InterruptHandling::~InterruptHandling() {
+  sigaction(SIGINT, &previous_int_, nullptr);
+  sigaction(SIGTERM, &previous_term_, nullptr);
+}
+
+}  // namespace robotperf::cli

@@ -1,0 +1,178 @@
+#include "options.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdlib>
+#include <sstream>
+#include <stdexcept>
+#include <system_error>
+
+#include "robotperf/build_info.hpp"
+#include "robotperf/rmw/transport.hpp"
+
+namespace robotperf::cli {
+
+// CLI11's PositiveNumber prints the range up to DBL_MAX, three hundred digits long.
+const CLI::Validator kPositive(
+    [](std::string& text) -> std::string {
+      const auto value = decimal<double>(text);
+      if (value && *value > 0) return "";
+      return "must be a number greater than 0 (got " + text + ")";
+    },
+    "POSITIVE");
+
+CLI::Validator number_between(double low, double high) {
+  std::ostringstream wanted;
+  wanted << "a number from " << low << " to " << high;
+  return CLI::Validator(
+      [low, high, wanted = wanted.str()](std::string& text) -> std::string {
+        const auto value = decimal<double>(text);
+        if (value && *value >= low && *value <= high) return "";
+        return "must be " + wanted + " (got " + text + ")";
+      },
+      "NUMBER");
+}
+
+CLI::Validator whole_number(std::uint64_t min, std::uint64_t max) {
+  const bool unbounded = max == std::numeric_limits<std::uint64_t>::max();
+  const std::string range = unbounded ? std::to_string(min) + " or more"
+                                      : std::to_string(min) + " to " + std::to_string(max);
+  const std::string wanted = unbounded ? ", " + range : " from " + range;
+  return CLI::Validator(
+      [min, max, wanted](std::string& text) -> std::string {
+        const auto value = decimal<std::uint64_t>(text);
+        if (!value || *value < min || *value > max)
+          return "must be a whole number" + wanted + " (got " + text + ")";
+        text = std::to_string(*value);
+        return "";
+      },
+      range);
+}
+
+CLI::Validator domain_id_check(bool auto_allowed) {
+  const std::string range = "0 to " + std::to_string(rmw::kMaxDomainId);
+  const std::string wanted = "a DDS domain id from " + range + (auto_allowed ? ", or auto" : "");
+  return CLI::Validator(
+      [auto_allowed, wanted](std::string& text) -> std::string {
+        if (auto_allowed && text == "auto") return "";
+        const auto id = rmw::parse_domain_id(text);
+        if (!id) return "must be " + wanted + " (got " + text + ")";
+        text = std::to_string(*id);
+        return "";
+      },
+      auto_allowed ? range + ", or auto" : range);
+}
+
+metrics::PowerOptions PowerArgs::options() const {
+  metrics::PowerOptions o;
+  o.period =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(period_s));
+  o.meter_command = meter;
+  o.sysfs_root = sysfs_root;
+  o.nvml_library = nvml_library;
+  o.types.insert(types.begin(), types.end());
+  return o;
+}
+
+void add_power_options(CLI::App* command, PowerArgs& args, bool with_period) {
+  if (with_period) {
+    command
+        ->add_option("--power-period", args.period_s,
+                     "seconds between power readings in the measured window (default 0.1)")
+        ->check(number_between(0.0005, 60.0));
+  }
+  command->add_option("--power-meter", args.meter,
+                      "external power meter: a shell command that prints watts, run once per "
+                      "reading");
+  command
+      ->add_option("--power-sources", args.types,
+                   "use only these source types: rapl, hwmon, nvml, jetson, external "
+                   "(default: all found)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"rapl", "hwmon", "nvml", "jetson", "external"}));
+  command->add_option("--sysfs-root", args.sysfs_root,
+                      "root under which sys/ holds the power sensors (default /; for testing)");
+  command->add_option("--nvml-library", args.nvml_library,
+                      "NVML library to load (default libnvidia-ml.so.1)");
+}
+
+harness::SchedulingOptions SchedulingArgs::options() const {
+  harness::SchedulingOptions o;
+  if (!cpus.empty()) {
+    o.cpus = harness::parse_cpu_list(cpus);
+    harness::check_cpus_allowed(o.cpus);
+  }
+  o.rt_priority = rt_priority;
+  o.lock_memory = lock_memory;
+  return o;
+}
+
+void add_scheduling_options(CLI::App* command, SchedulingArgs& args) {
+  command->add_option("--cpus", args.cpus, "pin the graph to these CPUs, e.g. 2-3 or 0,2");
+  command
+      ->add_option("--rt-priority", args.rt_priority,
+                   "run the graph with SCHED_FIFO at this priority (1-99)")
+      ->transform(whole_number(1, 99));
+  command->add_flag("--mlock", args.lock_memory, "lock the graph's memory (mlockall)");
+}
+
+fs::path self_executable() {
+  std::error_code ec;
+  fs::path p = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) throw std::runtime_error("cannot locate the robotperf executable: " + ec.message());
+  return p;
+}
+
+Roots benchmark_roots(const std::vector<std::string>& flags) {
+  Roots roots;
+  const fs::path installed =
+      self_executable().parent_path().parent_path() / build_info::kInstalledBenchmarksDir;
+  std::error_code ec;
+  roots.push_back(fs::is_directory(installed, ec) ? installed
+                                                  : fs::path(build_info::kBenchmarksDir));
+  if (const char* env = std::getenv("ROBOTPERF_BENCHMARKS"); env && *env) {
+    std::stringstream entries(env);
+    std::string entry;
+    while (std::getline(entries, entry, ':')) {
+      if (!entry.empty()) roots.emplace_back(entry);
+    }
+  }
+  for (const auto& f : flags) roots.emplace_back(f);
+  // A folder given twice (or the built-in one again) is read once.
+  Roots unique;
+  for (const auto& r : roots) {
+    const fs::path canonical = fs::weakly_canonical(r, ec);
+    if (std::ranges::none_of(unique, [&](const fs::path& u) { return u == canonical; }))
+      unique.push_back(ec ? r : canonical);
+  }
+  return unique;
+}
+
+void require_writable_folder(const fs::path& folder, const std::string& option) {
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  const fs::path probe = folder / (".robotperf-write-check-" + std::to_string(getpid()));
+  if (!ec) {
+    const int fd = open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (fd < 0) {
+      ec.assign(errno, std::generic_category());
+    } else {
+      close(fd);
+      fs::remove(probe, ec);
+    }
+  }
+  if (ec) {
+    throw std::invalid_argument(option + " " + folder.string() + ": cannot write there (" +
+                                ec.message() + "); give a folder you can write to");
+  }
+}
+
+std::string json_text(const nlohmann::json& j, int indent) {
+  return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+}  // namespace robotperf::cli
