@@ -6,6 +6,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -29,9 +30,30 @@ class YamlFile {
     }
     if (!root_.IsMap())
       throw BenchmarkError(path_.string() + ": expected a mapping at the top level");
+    refuse_duplicate_keys(root_);
   }
 
   const YAML::Node& root() const { return root_; }
+
+  // yaml-cpp keeps the first of two equal keys and says nothing: a package whose second value
+  // was meant would run with the first.
+  void refuse_duplicate_keys(const YAML::Node& node) const {
+    if (node.IsSequence()) {
+      for (const auto& item : node) refuse_duplicate_keys(item);
+    } else if (node.IsMap()) {
+      std::map<std::string, int> first_line;
+      for (const auto& kv : node) {
+        if (kv.first.IsScalar()) {
+          const auto [at, added] = first_line.emplace(kv.first.Scalar(), kv.first.Mark().line + 1);
+          if (!added) {
+            fail(kv.first, "duplicate key '" + kv.first.Scalar() + "' (first at line " +
+                               std::to_string(at->second) + ")");
+          }
+        }
+        refuse_duplicate_keys(kv.second);
+      }
+    }
+  }
 
   [[noreturn]] void fail(const YAML::Node& at, const std::string& what) const {
     std::string where = path_.string();
@@ -61,6 +83,18 @@ class YamlFile {
     } catch (const YAML::Exception&) {
       fail(n, std::string("'") + key + "' has the wrong type");
     }
+  }
+
+  // A name that becomes part of a file name (valid_file_name_part); `what` says whose it is.
+  std::string require_file_name_part(const YAML::Node& map, const char* key,
+                                     const std::string& what) const {
+    std::string name = require_string(map, key);
+    if (!valid_file_name_part(name)) {
+      fail(map[key], what + " '" + name +
+                         "' is not a name robotperf can put in a file name: letters, digits, "
+                         "'.', '-' and '_', starting with a letter, a digit or '_' (at most 128)");
+    }
+    return name;
   }
 
   std::string require_string(const YAML::Node& map, const char* key) const {
@@ -214,7 +248,7 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   for (const auto& n : nodes) {
     file.allow_keys(n, {"name", "kernel", "backend", "host", "parameters", "topics", "qos"});
     NodeSpec node;
-    node.name = file.require_string(n, "name");
+    node.name = file.require_file_name_part(n, "name", "node name");
     if (!names.insert(node.name).second) file.fail(n, "duplicate node name '" + node.name + "'");
     node.kernel = file.require_string(n, "kernel");
     const plugin::KernelEntry* entry = plugin::registry().find_kernel(node.kernel);
@@ -376,6 +410,11 @@ bool valid_host_name(const std::string& name) {
   });
 }
 
+bool valid_file_name_part(const std::string& name) {
+  return !name.empty() && name.size() <= 128 && name.front() != '.' && name.front() != '-' &&
+         valid_host_name(name);
+}
+
 BenchmarkSpec load_benchmark(const fs::path& dir) {
   BenchmarkSpec spec;
   spec.dir = dir;
@@ -384,8 +423,8 @@ BenchmarkSpec load_benchmark(const fs::path& dir) {
   // key, say) still become one line naming the package.
   try {
     const YamlFile meta(dir / "benchmark.yaml");
-    spec.id = meta.require_string(meta.root(), "id");
-    spec.name = meta.require_string(meta.root(), "name");
+    spec.id = meta.require_file_name_part(meta.root(), "id", "id");
+    spec.name = meta.require_file_name_part(meta.root(), "name", "name");
     spec.short_description = meta.get<std::string>(meta.root(), "short", "");
     spec.description = meta.get<std::string>(meta.root(), "description", "");
     spec.workload = meta.string_map(meta.root(), "workload");

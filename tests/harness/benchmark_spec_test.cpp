@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <fstream>
 #include <set>
 #include <string>
 #include <vector>
@@ -134,6 +135,43 @@ TEST(BenchmarkSpec, MissingListsAndOddKeysAreOneLineErrors) {
   TestPackage r("map_key", relay_graph("", "{a: 1}: 2\n"));
   const std::string err = error_of(r.dir());
   EXPECT_NE(err.find(r.dir().string()), std::string::npos) << err;
+}
+
+// An id, a name or a node name becomes part of a file name (results, reports, logs): one that
+// could leave the output folder, or make an odd file name, is refused where the package is loaded.
+TEST(BenchmarkSpec, NamesThatBecomeFileNamesAreRefusedUnlessPlain) {
+  const char* const kBad[] = {"/abs/ABSOLUTE", "../../..", "\"\"", "\"a\\nb\"",
+                              ".hidden",       "a/b",      "-rf"};
+  for (const std::string bad : kBad) {
+    TestPackage p("ids", relay_graph(""));
+    std::ofstream(p.dir() / "benchmark.yaml")
+        << "id: " << bad << "\nname: t1_ids\nshort: test\ndescription: test\nresults: []\n";
+    std::string err = error_of(p.dir());
+    EXPECT_NE(err.find("benchmark.yaml:1: id '"), std::string::npos) << bad << ": " << err;
+    EXPECT_NE(err.find("is not a name robotperf can put in a file name"), std::string::npos) << err;
+    std::ofstream(p.dir() / "benchmark.yaml")
+        << "id: t1\nname: " << bad << "\nshort: test\ndescription: test\nresults: []\n";
+    err = error_of(p.dir());
+    EXPECT_NE(err.find("benchmark.yaml:2: name '"), std::string::npos) << bad << ": " << err;
+    std::string graph = relay_graph("");
+    graph.replace(graph.find("name: relay"), 11, "name: " + bad);
+    std::ofstream(p.dir() / "graph.yaml") << graph;
+    std::ofstream(p.dir() / "benchmark.yaml")
+        << "id: t1\nname: t1_ids\nshort: test\ndescription: test\nresults: []\n";
+    err = error_of(p.dir());
+    EXPECT_NE(err.find("node name '"), std::string::npos) << bad << ": " << err;
+  }
+}
+
+// yaml-cpp keeps the first of two equal keys: the package is refused instead, naming both lines.
+TEST(BenchmarkSpec, DuplicateKeysAreRefusedNamingBothLines) {
+  TestPackage p("duplicate", relay_graph("", "rate_hz: 30\n"));
+  const std::string err = error_of(p.dir());
+  EXPECT_NE(err.find("graph.yaml:5: duplicate key 'rate_hz' (first at line 2)"), std::string::npos)
+      << err;
+  TestPackage q("nested", relay_graph("reliable: true, reliable: false"));
+  EXPECT_NE(error_of(q.dir()).find("duplicate key 'reliable'"), std::string::npos)
+      << error_of(q.dir());
 }
 
 // An output that is an input would time the Playback's own messages as the graph's; only a graph

@@ -2,6 +2,7 @@
 // by a per-node run (internal: not listed in --help).
 #include "commands.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
+#include "robotperf/harness/node_spec_wire.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/rmw/transport.hpp"
 
@@ -19,8 +20,9 @@ class NodeCommand : public Command {
     command->add_option("--node", name_)->required();
     command->add_option("--rmw", rmw_);
     command->add_option("--domain", domain_)->transform(domain_id_check(false));
-    command->add_option("--update-rate", update_rate_);
-    command->add_option("--backend", backend_);
+    // The package's nodes as the run resolved them (--backend, --update-rate applied):
+    // harness::encode_nodes.
+    command->add_option("--nodes", nodes_);
     command->add_option("--callback-timeout", callback_timeout_s_);
     command->add_option("--run-token", run_token_);
     command->add_option("--security", keystore_);
@@ -34,8 +36,7 @@ class NodeCommand : public Command {
 
   int run(const Context&) override {
     harness::BenchmarkSpec spec = harness::load_benchmark(package_);
-    if (update_rate_) harness::override_update_rate(spec, *update_rate_);
-    if (backend_) harness::override_backend(spec, *backend_);
+    if (!nodes_.empty()) harness::use_encoded_nodes(spec, nodes_);
     return harness::run_node_process(spec, name_, rmw_, domain_, scheduling_.options(),
                                      callback_timeout_s_, run_token_, keystore_,
                                      rmw::ros_distro_from_name(ros_distro_));
@@ -44,8 +45,7 @@ class NodeCommand : public Command {
  private:
   std::string package_, name_, rmw_ = "fastdds";
   int domain_ = 0;
-  std::optional<double> update_rate_;
-  std::optional<std::string> backend_;
+  std::string nodes_;
   double callback_timeout_s_ = 30.0;
   std::string run_token_;
   std::string keystore_;

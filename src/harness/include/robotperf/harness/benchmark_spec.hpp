@@ -106,6 +106,11 @@ struct BenchmarkSpec {
 // A name graph.yaml's `host:` and --host accept: letters, digits, '.', '-' and '_'.
 bool valid_host_name(const std::string& name);
 
+// A benchmark's id and name, and its nodes' names, become parts of file names (results, reports,
+// logs): letters, digits, '.', '-' and '_', starting with a letter, a digit or '_', at most 128
+// characters. No such name can leave the folder it is written in.
+bool valid_file_name_part(const std::string& name);
+
 // Reads and checks <dir>/benchmark.yaml and <dir>/graph.yaml, loading the plug-ins graph.yaml
 // names first; throws BenchmarkError.
 BenchmarkSpec load_benchmark(const std::filesystem::path& dir);

@@ -51,6 +51,21 @@ struct ArrivalPattern {
   std::string name() const;  // as parse() reads it
 };
 
+// The stages of run_benchmark, in their order: each acquires what it needs for the run, and an
+// exception or interrupt at any point releases what the stages before it acquired.
+enum class RunStage {
+  kPlan,        // the options checked against the benchmark and resolved; the dataset loaded
+  kPrepare,     // scheduling, grey-box recording, transport, Playback and Monitor
+  kStartGraph,  // the graph's nodes: in this process, per node, or an external graph's launched
+  kConnect,     // discovery, the run rules (--strict)
+  kMeasure,     // the warm-up, then the measured messages
+  kDrain,       // the outputs still on their way
+  kStopGraph,   // executors, node processes, the nodes' reports
+  kSummarise,   // the figures, and the warnings about the run
+  kCheck        // the outputs against ground truth, other backends' against the cpu's
+};
+std::string to_string(RunStage stage);
+
 struct RunOptions {
   std::optional<double> rate_hz;  // default: the benchmark's
   // Control benchmarks: the controller managers' loop rate in Hz (default: the graph's).
@@ -116,6 +131,8 @@ struct RunOptions {
   graph::WaitMode monitor_wait = graph::WaitMode::kSleep;
   // Called from the playback thread after each send.
   std::function<void(std::size_t sent, std::size_t total, std::size_t received)> progress;
+  // Called from the thread of run_benchmark as each stage begins.
+  std::function<void(RunStage)> on_stage;
 };
 
 // One message the Playback sent. Times are CLOCK_MONOTONIC nanoseconds.
