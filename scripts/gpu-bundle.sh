@@ -18,18 +18,18 @@ die() {
 }
 
 [[ -f "$build/CMakeCache.txt" ]] || die "$build is not a build folder: run ./scripts/build.sh first"
-targets=(robotperf bench_backends kernels_image_proc_test opencl_device_probe
-  kernels_stereo_depth_test kernels_cuda_disparity_filter_test cli_test)
+targets=(robotperf bench_backends perception_image_proc_test opencl_device_probe
+  perception_stereo_depth_test perception_cuda_disparity_filter_test cli_test)
 cmake --build "$build" --target "${targets[@]}" -j "$(nproc)" >/dev/null
 [[ "$("$build/robotperf" list kernels)" == *"backends: cpu, opencl, cuda"* ]] ||
   die "$build has no cuda backend: install a CUDA toolkit (scripts/install-deps.sh --cuda) and rebuild"
 
 # The executables, each at its path in the build: the tests name robotperf and the benchmark
 # packages by the absolute paths the build gave them, which gpu-check.sh makes again.
-# kernels_image_proc_test runs opencl_device_probe.
-executables=(robotperf bench/backends/bench_backends tests/kernels/kernels_image_proc_test
-  tests/kernels/opencl_device_probe tests/kernels/kernels_stereo_depth_test
-  tests/kernels/kernels_cuda_disparity_filter_test tests/cli/cli_test)
+# perception_image_proc_test runs opencl_device_probe.
+executables=(robotperf bench/backends/bench_backends tests/perception/perception_image_proc_test
+  tests/perception/opencl_device_probe tests/perception/perception_stereo_depth_test
+  tests/perception/perception_cuda_disparity_filter_test tests/cli/cli_test)
 lttng_tools=(/usr/bin/lttng /usr/bin/lttng-sessiond
   /usr/lib/x86_64-linux-gnu/lttng/libexec/lttng-consumerd)
 for tool in "${lttng_tools[@]}"; do

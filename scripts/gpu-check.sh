@@ -159,9 +159,9 @@ step() {
 cd "$build_dir" || die "cannot enter $build_dir"
 step device 60 bash -c 'nvidia-smi && ./robotperf sysinfo'
 step kernels 120 "${each[@]}" \
-  image_proc "./tests/kernels/kernels_image_proc_test --gtest_filter='*Cuda*'" \
-  stereo_depth "./tests/kernels/kernels_stereo_depth_test --gtest_filter='*Cuda*'" \
-  cuda_disparity_filter "./tests/kernels/kernels_cuda_disparity_filter_test --gtest_repeat=20"
+  image_proc "./tests/perception/perception_image_proc_test --gtest_filter='*Cuda*'" \
+  stereo_depth "./tests/perception/perception_stereo_depth_test --gtest_filter='*Cuda*'" \
+  cuda_disparity_filter "./tests/perception/perception_cuda_disparity_filter_test --gtest_repeat=20"
 results=$(printf %q "$out/results")
 runs=()
 for b in a1 a2 a3 a4 a5; do
@@ -170,8 +170,8 @@ done
 runs+=("a1 device-resident" "./robotperf run a1 --backend cuda --device-resident --output $results")
 step runs 150 "${each[@]}" "${runs[@]}"
 step opencl_kernels 45 "${each[@]}" \
-  image_proc "./tests/kernels/kernels_image_proc_test --gtest_filter='*OpenCl*'" \
-  stereo_depth "./tests/kernels/kernels_stereo_depth_test --gtest_filter='*OpenCl*'"
+  image_proc "./tests/perception/perception_image_proc_test --gtest_filter='*OpenCl*'" \
+  stereo_depth "./tests/perception/perception_stereo_depth_test --gtest_filter='*OpenCl*'"
 step opencl_a3 60 ./robotperf run a3 --backend opencl --connect-timeout 45 --output "$out/results"
 step bench_backends 300 ./bench/backends/bench_backends
 step cli 200 ./tests/cli/cli_test --gtest_filter='*Cuda*'

@@ -37,12 +37,11 @@
 #include <vector>
 
 #include "backend_row.hpp"
-#include "robotperf/categories/builtin.hpp"
+#include "bench_start.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/perception/cuda_device.hpp"
 #include "robotperf/perception/opencl_device.hpp"
-#include "this_build.hpp"
 
 using namespace robotperf;
 
@@ -155,8 +154,7 @@ bool can_stay_on_device(harness::BenchmarkSpec spec) {
 int main(int argc, char** argv) {
   // A line as soon as it is measured, into a file too: a run cut short keeps what it measured.
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
-  robotperf::bench::warn_about_this_build();
-  categories::register_builtin_categories();
+  bench::start_with_builtin_categories();
   std::size_t count = 300;
   std::size_t repeat = 1;  // runs of each backend, in rounds
   std::vector<std::string> ids;

@@ -22,11 +22,10 @@
 #include <string>
 #include <vector>
 
+#include "bench_start.hpp"
 #include "robotperf/bag/bag.hpp"
-#include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/msgs/definitions.hpp"
-#include "this_build.hpp"
 
 namespace fs = std::filesystem;
 using namespace robotperf;
@@ -136,8 +135,7 @@ ReadFigures time_read(const fs::path& dir) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  robotperf::bench::warn_about_this_build();
-  robotperf::categories::register_builtin_categories();
+  robotperf::bench::start_with_builtin_categories();
   uint64_t size_mb = 1024;
   fs::path root;
   bool keep = false;

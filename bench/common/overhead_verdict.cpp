@@ -129,4 +129,35 @@ bool confirm_defects(const BenchOptions& options, const std::vector<std::string>
   return confirmed;
 }
 
+int run_overhead_bench(const BenchOptions& options, const std::string& bench,
+                       const std::vector<std::string>& ids,
+                       const std::function<bool(const std::string&)>& compare,
+                       const std::function<void()>& after) {
+  try {
+    std::vector<std::string> suspected;
+    for (const auto& id : ids)
+      if (compare(id)) suspected.push_back(id);
+    bool defect = !suspected.empty();
+    if (defect && !options.confirming) defect = confirm_defects(options, suspected);
+    if (after) after();
+    return defect ? 1 : 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: %s\n", bench.c_str(), e.what());
+    return 2;
+  }
+}
+
+void print_overhead_columns() {
+  std::printf("%-34s %10s %10s %10s %10s\n", "kernel", "reference", "graph", "overhead", "share");
+}
+
+void print_overhead_row(const std::string& label, const OverheadVerdict& v, double target_ratio) {
+  std::printf(
+      "%-34s %10.3f %10.3f %10.3f %9.1f %%   noise +-%.1f %% (rounds %+.1f..%+.1f %%, p10 "
+      "%+.1f %%)   target <= %.0f %%: ratio %.2f %s\n",
+      label.c_str(), v.reference_p50, v.graph_p50, v.graph_p50 - v.reference_p50, 100 * v.ratio,
+      100 * v.band, 100 * v.round_low, 100 * v.round_high, 100 * v.floor_ratio, 100 * target_ratio,
+      v.ratio / target_ratio, verdict_text(v, true).c_str());
+}
+
 }  // namespace robotperf::bench

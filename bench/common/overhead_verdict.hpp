@@ -4,6 +4,7 @@
 // work, and the overhead figure says nothing).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -68,5 +69,20 @@ std::vector<std::string> confirming_command(const BenchOptions& options, const s
 // (confirm_defect of its confirming_command): a defect that fresh processes find in another
 // benchmark confirms none. Returns whether any was confirmed.
 bool confirm_defects(const BenchOptions& options, const std::vector<std::string>& suspected);
+
+// The body of an overhead bench's main: `compare` for each of `ids` (it returns whether that
+// benchmark's comparison came out as a defect), the suspected ones confirmed by confirm_defects
+// unless this process is itself confirming one, then `after` (when given). Returns the bench's
+// exit status: 0, 1 for a defect confirmed (or found by a confirming process), 2 for an error,
+// printed to stderr as "<bench>: <what>".
+int run_overhead_bench(const BenchOptions& options, const std::string& bench,
+                       const std::vector<std::string>& ids,
+                       const std::function<bool(const std::string&)>& compare,
+                       const std::function<void()>& after = {});
+
+// The columns of the kernel benches' comparison rows, and one row: the kernel's `label`, both
+// p50s in ms, the overhead, its noise band and the verdict against `target_ratio`.
+void print_overhead_columns();
+void print_overhead_row(const std::string& label, const OverheadVerdict& v, double target_ratio);
 
 }  // namespace robotperf::bench

@@ -6,6 +6,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 namespace robotperf::bench {
 namespace {
@@ -111,6 +114,65 @@ TEST(ConfirmDefect, TheConfirmingRunIsTheSameBenchOnTheSuspectedBenchmarkAlone) 
   const BenchOptions confirming = parse_bench_options(3, with);
   EXPECT_TRUE(confirming.confirming);
   EXPECT_EQ(confirming.args, (std::vector<std::string>{"b3"}));
+}
+
+// The body every overhead bench's main runs: its exit status says no defect (0), a confirmed
+// defect (1) or an error (2, named after the bench).
+TEST(RunOverheadBench, NoDefectIsStatusZeroAfterEveryComparisonAndTheLastStep) {
+  std::vector<std::string> compared;
+  bool after = false;
+  const int status = run_overhead_bench(
+      BenchOptions{}, "bench_x", {"b3", "b1"},
+      [&](const std::string& id) {
+        compared.push_back(id);
+        return false;
+      },
+      [&] { after = true; });
+  EXPECT_EQ(status, 0);
+  EXPECT_EQ(compared, (std::vector<std::string>{"b3", "b1"}));
+  EXPECT_TRUE(after);
+}
+
+// A confirming process reports the defect it found itself: no further process is started.
+TEST(RunOverheadBench, ADefectInAConfirmingProcessIsStatusOne) {
+  BenchOptions confirming;
+  confirming.confirming = true;
+  EXPECT_EQ(run_overhead_bench(confirming, "bench_x", {"b3", "b1"},
+                               [](const std::string& id) { return id == "b1"; }),
+            1);
+}
+
+TEST(RunOverheadBench, AnErrorIsStatusTwoAndOneLineNamingTheBench) {
+  bool after = false;
+  ::testing::internal::CaptureStderr();
+  const int status = run_overhead_bench(
+      BenchOptions{}, "bench_x", {"b9"},
+      [](const std::string& id) -> bool { throw std::invalid_argument("no benchmark " + id); },
+      [&] { after = true; });
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "bench_x: no benchmark b9\n");
+  EXPECT_EQ(status, 2);
+  EXPECT_FALSE(after);
+  EXPECT_EQ(run_overhead_bench(
+                BenchOptions{}, "bench_x", {}, [](const std::string&) { return false; },
+                [] { throw std::runtime_error("the last step failed"); }),
+            2);
+}
+
+TEST(OverheadRow, ShowsBothMediansTheOverheadItsNoiseAndTheVerdict) {
+  OverheadVerdict v;
+  v.reference_p50 = 10;
+  v.graph_p50 = 10.5;
+  v.ratio = 0.05;
+  v.band = 0.01;
+  v.round_low = 0.04;
+  v.round_high = 0.06;
+  v.floor_ratio = 0.03;
+  v.met = true;
+  ::testing::internal::CaptureStdout();
+  print_overhead_row("a3 stereo", v, 0.10);
+  EXPECT_EQ(::testing::internal::GetCapturedStdout(),
+            "a3 stereo                              10.000     10.500      0.500       5.0 %   "
+            "noise +-1.0 % (rounds +4.0..+6.0 %, p10 +3.0 %)   target <= 10 %: ratio 0.50 (met)\n");
 }
 
 }  // namespace

@@ -24,12 +24,11 @@
 #include <string>
 #include <vector>
 
-#include "robotperf/categories/builtin.hpp"
+#include "bench_start.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
 #include "robotperf/rmw/transport.hpp"
 #include "ros2_types.h"
-#include "this_build.hpp"
 
 extern char** environ;
 
@@ -171,11 +170,10 @@ void row(const char* label, const metrics::SampleStats& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  robotperf::bench::warn_about_this_build();
+  robotperf::bench::start_with_builtin_categories();
   std::size_t count = 300;
   if (argc == 3 && std::strcmp(argv[1], "--count") == 0) count = std::stoul(argv[2]);
   const std::size_t warmup = 30;
-  categories::register_builtin_categories();
   const int domain = rmw::reserved_domain();
   std::printf(
       "Harness around a foreign echo node (Cyclone DDS C API), 640x480 rgb8 at %.0f Hz, "

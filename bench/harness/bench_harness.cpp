@@ -23,11 +23,10 @@
 #include <thread>
 #include <vector>
 
-#include "robotperf/categories/builtin.hpp"
+#include "bench_start.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
 #include "robotperf/rmw/transport.hpp"
-#include "this_build.hpp"
 
 namespace fs = std::filesystem;
 using namespace robotperf;
@@ -118,8 +117,7 @@ void report(const char* label, const harness::RunResult& r, const Floor& floor, 
 }  // namespace
 
 int main() {
-  robotperf::bench::warn_about_this_build();
-  robotperf::categories::register_builtin_categories();
+  robotperf::bench::start_with_builtin_categories();
   const fs::path root =
       fs::temp_directory_path() / ("robotperf-bench-harness-" + std::to_string(getpid()));
   const int domain = rmw::reserved_domain();

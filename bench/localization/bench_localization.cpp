@@ -18,12 +18,11 @@
 #include <string>
 #include <vector>
 
+#include "bench_start.hpp"
 #include "node_reference.hpp"
 #include "overhead_verdict.hpp"
-#include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/run.hpp"
-#include "this_build.hpp"
 
 using namespace robotperf;
 
@@ -68,13 +67,7 @@ bool compare(const std::string& id, std::size_t frames, std::size_t rounds) {
     measured.push_back({std::move(samples.reference_ms), std::move(samples.graph_ms)});
   }
   const bench::OverheadVerdict v = bench::judge_overhead(measured, kTargetRatio);
-  const std::string label = id + " " + spec.nodes.front().kernel;
-  std::printf(
-      "%-34s %10.3f %10.3f %10.3f %9.1f %%   noise +-%.1f %% (rounds %+.1f..%+.1f %%, p10 "
-      "%+.1f %%)   target <= %.0f %%: ratio %.2f %s\n",
-      label.c_str(), v.reference_p50, v.graph_p50, v.graph_p50 - v.reference_p50, 100 * v.ratio,
-      100 * v.band, 100 * v.round_low, 100 * v.round_high, 100 * v.floor_ratio, 100 * kTargetRatio,
-      v.ratio / kTargetRatio, bench::verdict_text(v, true).c_str());
+  bench::print_overhead_row(id + " " + spec.nodes.front().kernel, v, kTargetRatio);
   std::printf("%-34s per frame %.2f ms = %.1f Hz   target %s: ratio %.2f (%s)\n", "",
               v.reference_p50, 1000.0 / v.reference_p50, targets.time_target,
               v.reference_p50 / targets.max_frame_ms,
@@ -99,8 +92,7 @@ bool compare(const std::string& id, std::size_t frames, std::size_t rounds) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  robotperf::bench::warn_about_this_build();
-  robotperf::categories::register_builtin_categories();
+  bench::start_with_builtin_categories();
   const bench::BenchOptions options = bench::parse_bench_options(argc, argv);
   cv::setNumThreads(1);
   const std::size_t frames = options.smoke ? 15 : 80;
@@ -117,17 +109,8 @@ int main(int argc, char** argv) {
       "the Monitor. Both sides built afresh each round; OpenCV on one thread.\n"
       "accuracy: the graph's functional metrics in its last round\n",
       rounds, frames);
-  std::printf("%-34s %10s %10s %10s %10s\n", "kernel", "reference", "graph", "overhead", "share");
-  bool defect = false;
-  try {
-    std::vector<std::string> suspected;
-    for (const auto& id : ids)
-      if (compare(id, frames, rounds)) suspected.push_back(id);
-    defect = !suspected.empty();
-    if (defect && !options.confirming) defect = bench::confirm_defects(options, suspected);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_localization: %s\n", e.what());
-    return 2;
-  }
-  return defect ? 1 : 0;
+  bench::print_overhead_columns();
+  return bench::run_overhead_bench(options, "bench_localization", ids, [&](const std::string& id) {
+    return compare(id, frames, rounds);
+  });
 }

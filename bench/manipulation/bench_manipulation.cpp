@@ -26,9 +26,9 @@
 #include <thread>
 #include <vector>
 
+#include "bench_start.hpp"
 #include "node_reference.hpp"
 #include "overhead_verdict.hpp"
-#include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/run.hpp"
@@ -36,7 +36,6 @@
 #include "robotperf/manipulation/kinematics.hpp"
 #include "robotperf/msgs/robotperf_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
-#include "this_build.hpp"
 
 using namespace robotperf;
 namespace fs = std::filesystem;
@@ -120,9 +119,7 @@ std::vector<double> positions(const harness::DatasetStream& states, std::size_t 
       ->position;
 }
 
-// Returns the ids whose comparison came out as a bench defect.
-std::vector<std::string> kernel_overheads(const std::vector<std::string>& ids, std::size_t requests,
-                                          std::size_t rounds, bool grey) {
+void print_kernel_overhead_header(std::size_t requests, std::size_t rounds) {
   std::printf(
       "Kernel latency in the graph (intra, p50 from send) vs its reference (p50), %zu rounds of "
       "%zu requests at %.0f Hz, microseconds\n"
@@ -133,32 +130,32 @@ std::vector<std::string> kernel_overheads(const std::vector<std::string>& ids, s
       rounds, requests, kRateHz);
   std::printf("%-36s %9s %9s %9s %8s  %-22s %s\n", "kernel", "reference", "graph", "overhead",
               "noise", "target <= 10 %", "node (grey)");
-  std::vector<std::string> suspected;
-  for (const std::string& id : ids) {
-    const harness::BenchmarkSpec spec = harness::find_benchmark(ROBOTPERF_BENCHMARKS_DIR, id);
-    const std::string kernel = spec.nodes.front().kernel;
-    if (kernel != "manipulation/collision_fcl" && kernel != "manipulation/collision_bullet" &&
-        kernel != "manipulation/ik_kdl" && kernel != "manipulation/ik_lma" &&
-        kernel != "manipulation/forward_kinematics")
-      throw std::invalid_argument(id + " is not one of d2-d6 (its kernel is " + kernel + ")");
-    const harness::Dataset d = harness::load_dataset(spec.dataset, spec.workload);
-    std::vector<bench::OverheadRound> measured;
-    for (std::size_t i = 0; i < rounds; ++i) measured.push_back(measure_round(spec, d, requests));
-    const std::optional<double> node_us = grey ? node_time_us(spec, requests) : std::nullopt;
-    const bench::OverheadVerdict v = bench::judge_overhead(measured, kTargetRatio);
-    const bool target_applies = id != "d6";
-    const std::string label = id + " " + kernel;
-    std::printf("%-36s %9.1f %9.1f %8.1f %% %7.1f %%  %-22s ", label.c_str(), v.reference_p50,
-                v.graph_p50, 100 * v.ratio, 100 * v.band,
-                bench::verdict_text(v, target_applies).c_str());
-    if (node_us) {
-      std::printf("%.1f\n", *node_us);
-    } else {
-      std::printf("-\n");
-    }
-    if (v.defect) suspected.push_back(id);
+}
+
+// Returns whether the comparison came out as a bench defect.
+bool kernel_overhead(const std::string& id, std::size_t requests, std::size_t rounds, bool grey) {
+  const harness::BenchmarkSpec spec = harness::find_benchmark(ROBOTPERF_BENCHMARKS_DIR, id);
+  const std::string kernel = spec.nodes.front().kernel;
+  if (kernel != "manipulation/collision_fcl" && kernel != "manipulation/collision_bullet" &&
+      kernel != "manipulation/ik_kdl" && kernel != "manipulation/ik_lma" &&
+      kernel != "manipulation/forward_kinematics")
+    throw std::invalid_argument(id + " is not one of d2-d6 (its kernel is " + kernel + ")");
+  const harness::Dataset d = harness::load_dataset(spec.dataset, spec.workload);
+  std::vector<bench::OverheadRound> measured;
+  for (std::size_t i = 0; i < rounds; ++i) measured.push_back(measure_round(spec, d, requests));
+  const std::optional<double> node_us = grey ? node_time_us(spec, requests) : std::nullopt;
+  const bench::OverheadVerdict v = bench::judge_overhead(measured, kTargetRatio);
+  const bool target_applies = id != "d6";
+  const std::string label = id + " " + kernel;
+  std::printf("%-36s %9.1f %9.1f %8.1f %% %7.1f %%  %-22s ", label.c_str(), v.reference_p50,
+              v.graph_p50, 100 * v.ratio, 100 * v.band,
+              bench::verdict_text(v, target_applies).c_str());
+  if (node_us) {
+    std::printf("%.1f\n", *node_us);
+  } else {
+    std::printf("-\n");
   }
-  return suspected;
+  return v.defect;
 }
 
 void fcl_vs_bullet() {
@@ -220,22 +217,18 @@ void fcl_vs_bullet() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  robotperf::bench::warn_about_this_build();
-  robotperf::categories::register_builtin_categories();
+  bench::start_with_builtin_categories();
   const bench::BenchOptions options = bench::parse_bench_options(argc, argv);
   std::vector<std::string> ids = options.args;
   if (ids.empty()) ids = {"d2", "d3", "d4", "d5", "d6"};
-  bool defect = false;
-  try {
-    // The smoke test skips the grey-box run: an LTTng session would be most of its time.
-    const std::vector<std::string> suspected =
-        kernel_overheads(ids, options.smoke ? 60 : 150, options.smoke ? 2 : 3, !options.smoke);
-    defect = !suspected.empty();
-    if (defect && !options.confirming) defect = bench::confirm_defects(options, suspected);
-    if (!options.smoke && !options.confirming) fcl_vs_bullet();
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_manipulation: %s\n", e.what());
-    return 2;
-  }
-  return defect ? 1 : 0;
+  const std::size_t requests = options.smoke ? 60 : 150;
+  const std::size_t rounds = options.smoke ? 2 : 3;
+  print_kernel_overhead_header(requests, rounds);
+  return bench::run_overhead_bench(
+      options, "bench_manipulation", ids,
+      // The smoke test skips the grey-box run: an LTTng session would be most of its time.
+      [&](const std::string& id) { return kernel_overhead(id, requests, rounds, !options.smoke); },
+      [&] {
+        if (!options.smoke && !options.confirming) fcl_vs_bullet();
+      });
 }

@@ -31,13 +31,12 @@
 #include <thread>
 #include <vector>
 
+#include "bench_start.hpp"
 #include "node_reference.hpp"
 #include "overhead_verdict.hpp"
-#include "robotperf/categories/builtin.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/sysinfo/run_rules.hpp"
-#include "this_build.hpp"
 
 using namespace robotperf;
 
@@ -71,13 +70,7 @@ bool compare(const std::string& id, std::size_t frames, std::size_t rounds) {
   for (std::size_t i = 0; i < rounds; ++i)
     measured.push_back(measure_round(spec, dataset, frames, other_load));
   const bench::OverheadVerdict v = bench::judge_overhead(measured, kTargetRatio);
-  const std::string label = id + " " + spec.nodes.front().kernel;
-  std::printf(
-      "%-34s %10.3f %10.3f %10.3f %9.1f %%   noise +-%.1f %% (rounds %+.1f..%+.1f %%, p10 "
-      "%+.1f %%)   target <= %.0f %%: ratio %.2f %s\n",
-      label.c_str(), v.reference_p50, v.graph_p50, v.graph_p50 - v.reference_p50, 100 * v.ratio,
-      100 * v.band, 100 * v.round_low, 100 * v.round_high, 100 * v.floor_ratio, 100 * kTargetRatio,
-      v.ratio / kTargetRatio, bench::verdict_text(v, true).c_str());
+  bench::print_overhead_row(id + " " + spec.nodes.front().kernel, v, kTargetRatio);
   // Woken threads wait for a core while other processes hold both: the hand-offs of the graph
   // then cost what the scheduler makes them cost, and the figure says little about the runtime.
   if (other_load && *other_load > sysinfo::kBusyThresholdPercent) {
@@ -90,8 +83,7 @@ bool compare(const std::string& id, std::size_t frames, std::size_t rounds) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  robotperf::bench::warn_about_this_build();
-  robotperf::categories::register_builtin_categories();
+  bench::start_with_builtin_categories();
   const bench::BenchOptions options = bench::parse_bench_options(argc, argv);
   cv::setNumThreads(1);
   // Smoke: more, shorter rounds, so that one round whose threads the scheduler placed badly
@@ -109,19 +101,10 @@ int main(int argc, char** argv) {
       "both sides built afresh each round; OpenCV on one thread on both sides (its worker pool "
       "moves a kernel's time per round with thread placement, which is not graph overhead)\n",
       rounds, frames);
-  std::printf("%-34s %10s %10s %10s %10s\n", "kernel", "reference", "graph", "overhead", "share");
+  bench::print_overhead_columns();
   std::vector<std::string> ids = options.args;
   if (ids.empty()) ids = {"a3", "a4"};
-  bool defect = false;
-  try {
-    std::vector<std::string> suspected;
-    for (const auto& id : ids)
-      if (compare(id, frames, rounds)) suspected.push_back(id);
-    defect = !suspected.empty();
-    if (defect && !options.confirming) defect = bench::confirm_defects(options, suspected);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_perception: %s\n", e.what());
-    return 2;
-  }
-  return defect ? 1 : 0;
+  return bench::run_overhead_bench(options, "bench_perception", ids, [&](const std::string& id) {
+    return compare(id, frames, rounds);
+  });
 }

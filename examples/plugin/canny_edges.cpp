@@ -112,7 +112,7 @@ class CannyNode final : public graph::Node, public plugin::NodeCounters {
       out->data.resize(std::size_t{out->step} * out->height);
       cv::Mat edges(grey.rows, grey.cols, CV_8UC1, out->data.data(), out->step);
       if (opencl_) {
-        // Host memory in and out, as the graph's messages are (DESIGN.md §6).
+        // Host memory in and out, as the graph's messages are (docs/design.md §6).
         cv::UMat device_edges;
         cv::Canny(grey.getUMat(cv::ACCESS_READ), device_edges, params_.low_threshold,
                   params_.high_threshold, params_.aperture, params_.l2_gradient);

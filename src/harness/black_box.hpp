@@ -1,5 +1,5 @@
 // Private to the harness: the Playback and Monitor nodes around the graph
-// under test (DESIGN.md §3).
+// under test (docs/design.md §3).
 #pragma once
 
 #include <atomic>

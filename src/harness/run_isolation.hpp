@@ -1,6 +1,6 @@
 // Private to the harness: telling this run's traffic from another run's on the same DDS domain
-// (DESIGN.md §3). Every participant of a run carries the run's token in its USER_DATA, and the
-// Playback's and Monitor's participant also its message-ID space, so that a Monitor can tell
+// (docs/design.md §3.10). Every participant of a run carries the run's token in its USER_DATA, and
+// the Playback's and Monitor's participant also its message-ID space, so that a Monitor can tell
 //  - outputs written by another run's participants (its graph processed our inputs, or its own),
 //  - outputs our graph made from another run's inputs (their stamps are that run's IDs)
 // from this run's outputs and from stamps nobody sent (a graph defect).

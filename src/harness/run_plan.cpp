@@ -14,7 +14,7 @@
 namespace robotperf::harness {
 namespace {
 
-// Bounds on what a run may be asked for (DESIGN.md §3): the Playback's clock cannot pace
+// Bounds on what a run may be asked for (docs/design.md §3): the Playback's clock cannot pace
 // messages closer than a microsecond, a week is longer than any benchmark needs, and every
 // nanosecond figure derived from these must fit in 64 bits.
 constexpr double kMinPeriodS = 1e-6;
@@ -152,7 +152,7 @@ void resolve_hosts(const BenchmarkSpec& spec, const RunOptions& options, RunResu
     r.host_launchers[host] = command_text(host_launcher(host, options.host_launchers));
 }
 
-// Everything is loaded before timing starts (DESIGN.md §3.4).
+// Everything is loaded before timing starts (docs/design.md §3.4).
 void load_dataset_of(RunPlan& plan, const RunOptions& options) {
   const BenchmarkSpec& spec = plan.spec();
   plan.dataset = options.bag ? load_bag_dataset(*options.bag, spec.inputs, &plan.corrupt_messages)

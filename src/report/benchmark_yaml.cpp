@@ -345,7 +345,7 @@ std::vector<PublishedResult> export_entries(const StoredRun& run, const ExportOp
     e.metric = "throughput";
     e.metric_unit = "fps";
     e.value = run.throughput_hz;
-    // DESIGN.md §3.5: a throughput says whether it is offered-bounded or a peak.
+    // docs/design.md §3.5: a throughput says whether it is offered-bounded or a peak.
     e.note = (peak ? "peak output rate" : "offered-bounded output rate") +
              std::string(", offered ") + format_fixed(run.offered_hz, 3) + " Hz, " + lost + ", " +
              context;

@@ -453,7 +453,7 @@ struct Side {
   std::set<std::string> selected_fields;
 };
 
-// What DESIGN.md §3.9 requires two compared results to share, field by field, named as a
+// What docs/design.md §3.9 requires two compared results to share, field by field, named as a
 // selector names them; a published row states only its hardware, type and rate. Empty values
 // are unknown.
 using Configuration = std::vector<std::pair<std::string, std::string>>;
@@ -885,9 +885,10 @@ const char* const kPalette[12] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#
                                   "#e377c2", "#17becf", "#7f7f7f", "#bcbd22", "#393b79", "#637939"};
 
 std::string configuration_series(const StoredRun& run) {
-  // What makes two runs comparable (DESIGN.md §3.9), the rate aside: the machine, the transport,
-  // the process layout, the backend, black- or grey-box, the arrivals and how the Monitor waited
-  // (a spinning one takes no wake-up out of each latency). Defaults are left out of the label.
+  // What makes two runs comparable (docs/design.md §3.9), the rate aside: the machine, the
+  // transport, the process layout, the backend, black- or grey-box, the arrivals and how the
+  // Monitor waited (a spinning one takes no wake-up out of each latency). Defaults are left out of
+  // the label.
   std::string label = run.hardware + " · " + run.rmw;
   if (run.processes == "per-node") label += " · per-node";
   if (!run.backend.empty()) label += " · " + run.backend;

@@ -102,7 +102,7 @@ std::string warning_summary(const Model& model);
 bool is_machine_warning(const std::string& warning);
 
 // Series label of a local run: "<hardware> · <rmw>[ · per-node][ · <backend>][ · grey][ ·
-// <arrivals>] · <rate> Hz": runs of one series are comparable (DESIGN.md §3.9).
+// <arrivals>] · <rate> Hz": runs of one series are comparable (docs/design.md §3.9).
 std::string local_series(const StoredRun& run);
 // The same without the rate: a peak throughput's series.
 std::string configuration_series(const StoredRun& run);

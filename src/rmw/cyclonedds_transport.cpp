@@ -1,4 +1,5 @@
-// The Cyclone DDS transport: ROS 2-compatible DDS endpoints (DESIGN.md §2) on Cyclone DDS's C API.
+// The Cyclone DDS transport: ROS 2-compatible DDS endpoints (docs/design.md §2) on Cyclone DDS's C
+// API.
 //
 // Each message type gets a keyless sertype under its ROS 2 DDS type name (as rmw_cyclonedds
 // registers one), whose serdata is the message's plain-CDR bytes, encapsulation header included:

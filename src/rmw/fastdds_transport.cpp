@@ -1,4 +1,4 @@
-// The Fast DDS transport: ROS 2-compatible DDS endpoints (DESIGN.md §2).
+// The Fast DDS transport: ROS 2-compatible DDS endpoints (docs/design.md §2).
 //
 // Each message type is registered under its ROS 2 DDS type name with a keyless
 // TopicDataType that writes the plain-CDR bytes of each endpoint's TypeSupport

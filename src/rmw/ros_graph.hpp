@@ -1,5 +1,5 @@
 // Private to the rmw library: ROS 2's graph announcements on DDS, as rmw_dds_common makes them
-// (DESIGN.md §2). Each participant publishes on the DDS-only topic ros_discovery_info one
+// (docs/design.md §2). Each participant publishes on the DDS-only topic ros_discovery_info one
 // rmw_dds_common/msg/ParticipantEntitiesInfo sample: its GID and, per ROS 2 node, the GIDs of the
 // node's readers and writers. ROS 2 tools name nodes from it; DDS discovery alone has no nodes.
 #pragma once

@@ -768,7 +768,7 @@ class MessageLookup {
   std::vector<int64_t> repeated_;
 };
 
-// The first `warmup` messages are sent but not measured (DESIGN: measurement rules): every table
+// The first `warmup` messages are sent but not measured (docs/design.md §3.4): every table
 // of the run tells them by this.
 bool is_warmup(const Input& in, const RunInfo& run) {
   return in.index < run.warmup;

@@ -1,4 +1,4 @@
-// How answers of two backends are compared (the tolerances of DESIGN.md section 6).
+// How answers of two backends are compared (the tolerances of docs/design.md §6).
 #include "robotperf/harness/backend_check.hpp"
 
 #include <gtest/gtest.h>

@@ -243,8 +243,8 @@ TEST(BlackBox, ABurstThatWouldNotFitInMemoryIsRefusedBeforeTiming) {
   }
 }
 
-// What has not arrived by the end of the drain is lost (DESIGN.md §3.4), however long the run then
-// takes to end: here the external power meter's last reading takes over a second, in which the
+// What has not arrived by the end of the drain is lost (docs/design.md §3.4), however long the run
+// then takes to end: here the external power meter's last reading takes over a second, in which the
 // outputs a relay held back arrive.
 TEST(BlackBox, OutputsArrivingAfterTheDrainAreNotCounted) {
   RunOptions o = with_count(2, 100);

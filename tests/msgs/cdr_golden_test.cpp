@@ -1,5 +1,5 @@
 // Golden CDR bytes, derived by hand from the XCDR1 rules ROS 2 uses
-// (DESIGN.md §2): 4-byte encapsulation header 00 01 00 00; alignment counts
+// (docs/design.md §2): 4-byte encapsulation header 00 01 00 00; alignment counts
 // from the byte after the header; each primitive aligned to its own size;
 // string = uint32 length including the NUL, the bytes, the NUL; sequence =
 // uint32 count then the elements; fixed array = the elements only; nested

@@ -1,4 +1,4 @@
-// The dependency rule of DESIGN.md §1: the harness, cli and report name no kernel, dataset or
+// The dependency rule of docs/design.md §1: the harness, cli and report name no kernel, dataset or
 // evaluator; everything of a category lives in its folder and comes in through the plug-in API.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// ROS 2 graph conformance of the DDS transports (DESIGN.md §2), seen by a plain Fast DDS
+// ROS 2 graph conformance of the DDS transports (docs/design.md §2), seen by a plain Fast DDS
 // participant and decoded from the ROS 2 .msg files alone: each participant publishes its nodes
 // on ros_discovery_info (rmw_dds_common/msg/ParticipantEntitiesInfo, GIDs in the chosen
 // distribution's layout) and, from Iron on, each endpoint's REP 2011 type hash in its USER_DATA.

@@ -1,5 +1,5 @@
-// The perception category's comparisons of a backend's answers with the cpu's (DESIGN.md
-// section 6), for the message types its kernels answer with: images, point clouds and disparity
+// The perception category's comparisons of a backend's answers with the cpu's (docs/design.md
+// §6), for the message types its kernels answer with: images, point clouds and disparity
 // images.
 #include <algorithm>
 #include <charconv>

@@ -6,7 +6,7 @@
 //
 // Each object owns a CUDA stream and the buffers it reuses from message to message (device memory,
 // pinned host staging). Every call uploads its inputs and downloads its outputs, as a node whose
-// messages live in host memory must (DESIGN.md section 6), in the device stages "upload",
+// messages live in host memory must (docs/design.md §6), in the device stages "upload",
 // "compute" and "download", except where a device-resident run hands an image from one node to
 // the next on the device (ResidentPixels). Not thread-safe: one object per node.
 #pragma once

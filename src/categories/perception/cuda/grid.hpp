@@ -20,8 +20,8 @@ inline dim3 image_grid(int width, int height) {
 }
 
 // Queues `kernel` on `stream` with `grid` x `block` threads. Every launch goes through here so
-// that the tests' host emulation of the CUDA runtime (tests/kernels/cuda_emulation), which has no
-// <<< >>>, runs the same kernels on machines without a GPU.
+// that the tests' host emulation of the CUDA runtime (tests/perception/cuda_emulation), which has
+// no <<< >>>, runs the same kernels on machines without a GPU.
 template <class... Params, class... Args>
 void launch(void (*kernel)(Params...), dim3 grid, dim3 block, cudaStream_t stream,
             const Args&... args) {

@@ -1,6 +1,6 @@
 #pragma once
 
-// Answers checked across backends (DESIGN.md section 6): a run whose nodes computed on another
+// Answers checked across backends (docs/design.md §6): a run whose nodes computed on another
 // backend than the host CPU has a sample of its outputs compared with what the same nodes on
 // `cpu` answer to the same inputs. An accelerator that computes a slightly different answer is
 // caught here whether or not the benchmark has ground truth (a bag has none).

@@ -162,7 +162,7 @@ struct ResidentTopic {
   std::string backend;
 };
 
-// The device-resident configuration (DESIGN.md section 6: type adaptation, as REP 2007 and
+// The device-resident configuration (docs/design.md §6: type adaptation, as REP 2007 and
 // NITROS do) of a single-process graph: a node's output stays on the device where no subscriber
 // needs it on the host. That is, where every node that takes the topic runs on the publisher's
 // backend, each kernel can hand its images over there (KernelInfo::device_resident_backends), and

@@ -321,7 +321,7 @@ struct RunResult {
   // The other participants seen on the domain, before and during the run.
   std::vector<rmw::PeerParticipant> domain_peers;
   SchedulingOptions scheduling;
-  // Run rules broken before or during the run (DESIGN.md §3).
+  // Run rules broken before or during the run (docs/design.md §3.11).
   std::vector<sysinfo::RunWarning> warnings;
   // Over the measured window: from the first measured send to the end of the drain.
   metrics::PowerReport power;

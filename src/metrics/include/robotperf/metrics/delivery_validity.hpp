@@ -1,5 +1,5 @@
-// The rules DESIGN.md §3.5-3.6 set on a run's message counts, and its rates, shared by black-box
-// results and the grey-box trace analysis so that both judge and count a run alike.
+// The rules docs/design.md §3.5-3.6 set on a run's message counts, and its rates, shared by
+// black-box results and the grey-box trace analysis so that both judge and count a run alike.
 #pragma once
 
 #include <cstddef>

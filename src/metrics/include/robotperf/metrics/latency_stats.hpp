@@ -1,5 +1,5 @@
 // Summary statistics of a set of samples (latencies, periods, ...), computed from all samples as
-// DESIGN.md §3.6 requires.
+// docs/design.md §3.6 requires.
 #pragma once
 
 #include <cstddef>

@@ -1,4 +1,4 @@
-// Power and energy of the machine during a measured window (DESIGN.md §3.8): read from real
+// Power and energy of the machine during a measured window (docs/design.md §3.8): read from real
 // sensors only — RAPL (powercap), hwmon, NVML, Jetson INA3221 rails, or an external meter —
 // and "unavailable, because ..." otherwise, never 0.
 //

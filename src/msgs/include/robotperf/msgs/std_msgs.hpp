@@ -25,7 +25,7 @@ struct MessageTraits<Header> {
 };
 
 // Messages whose first field is a std_msgs/Header: the harness carries the
-// message ID in header.stamp (DESIGN.md §3.1).
+// message ID in header.stamp (docs/design.md §3.1).
 template <class T>
 concept Stamped = requires(T& m) {
   { m.header } -> std::convertible_to<Header&>;
@@ -78,7 +78,7 @@ void visit_fields(V& v, M& m) {
   v(m.layout);
   v(m.data);
 }
-// Float64MultiArray has no header, so the harness carries a command's message ID (DESIGN.md
+// Float64MultiArray has no header, so the harness carries a command's message ID (docs/design.md
 // §3.1) in the label of the first layout dimension: "robotperf_id=<nanoseconds>". The dimension
 // describes the data as a plain vector (size = stride = data.size()), so the layout stays true;
 // forward command controllers read only `data`, as ros2_controllers' do.

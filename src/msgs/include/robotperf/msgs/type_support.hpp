@@ -37,7 +37,7 @@ struct TypeSupport {
   void (*deserialize)(std::span<const uint8_t> payload, void* msg);
   // For types that start with a std_msgs/Header (null otherwise): read the
   // header stamp in nanoseconds, and copy a message giving it a new stamp.
-  // The harness carries message IDs in the stamp (DESIGN.md §3.1). Header-less
+  // The harness carries message IDs in the stamp (docs/design.md §3.1). Header-less
   // types with a HasMessageIdField trait (Float64MultiArray) read and write
   // their ID there instead.
   int64_t (*stamp_ns)(const void* msg);

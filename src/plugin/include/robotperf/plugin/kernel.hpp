@@ -45,7 +45,7 @@ struct KernelInfo {
   std::optional<ControlLoopInfo> control_loop{};
   // The backends on which the kernel's device_resident ports can leave data on the device for
   // the next node of its process, or take data another node left there (device-resident runs,
-  // DESIGN.md section 6: type adaptation, as REP 2007 and NITROS do).
+  // docs/design.md §6: type adaptation, as REP 2007 and NITROS do).
   std::vector<std::string> device_resident_backends{};
 
   const PortInfo* find_port(const std::string& port) const;

@@ -1,4 +1,4 @@
-// How a kernel's answers on a backend other than cpu are judged (DESIGN.md section 6): the run
+// How a kernel's answers on a backend other than cpu are judged (docs/design.md §6): the run
 // feeds a sample of its inputs through the same nodes on cpu and compares each output with the
 // cpu's answer to the same input. The comparison is registered per output message type, by the
 // category or plug-in that knows what a tolerable difference of that type is; a benchmark whose

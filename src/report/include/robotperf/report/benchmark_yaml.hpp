@@ -63,7 +63,7 @@ struct PublishedBenchmark {
 PublishedBenchmark import_benchmark_yaml(const std::filesystem::path& path,
                                          const std::string& category = {});
 
-// The measurement-rule checks of one entry (DESIGN.md §3): negative latencies (value or note),
+// The measurement-rule checks of one entry (docs/design.md §3): negative latencies (value or note),
 // loss above 100 %, power <= 0 W or below 1 mW (no real sensor read), throughput <= 0, and values
 // that are not numbers. Also fills the note_* figures.
 void check_published(PublishedResult& result);

@@ -59,7 +59,7 @@ std::string to_string(Durability durability);
 // "reliable, volatile, keep_last 10"
 std::string to_string(const QoS& qos);
 
-// The ROS 2 release whose graph conventions the DDS transports follow (DESIGN.md §2): Humble
+// The ROS 2 release whose graph conventions the DDS transports follow (docs/design.md §2): Humble
 // announces 24-byte GIDs on ros_discovery_info and no type hashes; Iron and later 16-byte GIDs
 // and each endpoint's type hash ("typehash=RIHS01_...;" in its USER_DATA).
 enum class RosDistro { kHumble, kIron, kJazzy };
@@ -237,7 +237,7 @@ int find_quiet_domain(const std::string& transport, double listen_s = 3.5);
 // Throws TransportError when all are held.
 int reserved_domain();
 
-// Monotonic time (CLOCK_MONOTONIC) in nanoseconds: the one clock of DESIGN.md §3.2.
+// Monotonic time (CLOCK_MONOTONIC) in nanoseconds: the one clock of docs/design.md §3.2.
 int64_t steady_now_ns();
 // Wall-clock time (CLOCK_REALTIME) in nanoseconds since the epoch: DDS's source timestamps, which
 // ros2:rmw_publish and ros2:rmw_take record on every transport.

@@ -1,5 +1,5 @@
-// Description of the machine a benchmark ran on (DESIGN.md §3.7 provenance), read from the Linux
-// pseudo-filesystems. Every value that could not be read is left empty (std::nullopt / JSON
+// Description of the machine a benchmark ran on (docs/design.md §3.7 provenance), read from the
+// Linux pseudo-filesystems. Every value that could not be read is left empty (std::nullopt / JSON
 // null): a result must never state a guess as a fact.
 #pragma once
 

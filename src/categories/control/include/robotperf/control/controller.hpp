@@ -12,7 +12,7 @@
 
 namespace robotperf::control {
 
-// A command's message ID (the header stamp in nanoseconds, DESIGN.md §3.1); kNoCommand when none.
+// A command's message ID (its header stamp in ns, docs/design.md §3.1); kNoCommand when none.
 inline constexpr int64_t kNoCommand = -1;
 
 struct UpdateContext {

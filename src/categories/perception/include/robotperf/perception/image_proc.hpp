@@ -65,8 +65,8 @@ void write_mono8(const msgs::Image& image, const std::string& what, cv::Mat& int
 // Where an image function computes: on the host CPU, on the OpenCL device (opencl_device())
 // through OpenCV's transparent API, or on the CUDA device (cuda_device()) with kernels of
 // robotperf's own, each object on a CUDA stream of its own. With a device every call uploads its
-// input and downloads its output, as a node whose messages live in host memory must (DESIGN.md
-// section 6).
+// input and downloads its output, as a node whose messages live in host memory must
+// (docs/design.md §6).
 enum class ImageBackend { kCpu, kOpenCl, kCuda };
 
 // "cpu", "opencl" or "cuda"; throws std::invalid_argument for any other name, and for "cuda" in a
@@ -76,7 +76,7 @@ ImageBackend image_backend(std::string_view name);
 const char* image_backend_name(ImageBackend backend);
 
 // An image's pixels left on the CUDA device for the next node of the process, in a
-// device-resident run (DESIGN.md section 6: type adaptation, as REP 2007 and NITROS do): dense
+// device-resident run (docs/design.md §6: type adaptation, as REP 2007 and NITROS do): dense
 // rows x cols of OpenCV `type`, finished before the message that carries them is published, and
 // held until the last message that refers to them goes.
 struct ResidentPixels {

@@ -23,7 +23,7 @@ enum class StereoAlgorithm {
   kSemiGlobal = 1,     // cv::StereoSGBM
 };
 
-// stereo_image_proc's parameters, with its defaults (DESIGN.md §5).
+// stereo_image_proc's parameters, with its defaults (docs/design.md §5).
 struct StereoParams {
   StereoAlgorithm algorithm = StereoAlgorithm::kBlockMatching;
   int prefilter_size = 9;            // BM only: odd, 5..255

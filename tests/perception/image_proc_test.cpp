@@ -609,7 +609,7 @@ TEST(Resize, RejectsBadInput) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The OpenCL backend: the CPU's answer on the same inputs (DESIGN.md section 6)
+// The OpenCL backend: the CPU's answer on the same inputs (docs/design.md §6)
 // ---------------------------------------------------------------------------------------------
 
 // How a backend's image agrees with the cpu's: the share of channels the run's own backend check
@@ -868,7 +868,7 @@ TEST_F(RectifySynthetic, OpenClRefusesTheImagesOpenCvWouldComputeOnTheCpu) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The cuda backend: the CPU's answer on the same inputs (DESIGN.md section 6)
+// The cuda backend: the CPU's answer on the same inputs (docs/design.md §6)
 // ---------------------------------------------------------------------------------------------
 
 TEST_F(RectifySynthetic, CudaRectifiesAsTheCpuDoes) {

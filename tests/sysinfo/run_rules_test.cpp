@@ -1,3 +1,5 @@
+#include "robotperf/sysinfo/run_rules.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -6,7 +8,6 @@
 #include <fstream>
 
 #include "../fixture_root.hpp"
-#include "robotperf/sysinfo/run_rules.hpp"
 
 namespace robotperf::sysinfo {
 namespace {

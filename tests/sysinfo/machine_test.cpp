@@ -1,3 +1,5 @@
+#include "robotperf/sysinfo/machine.hpp"
+
 #include <gtest/gtest.h>
 #include <sys/utsname.h>
 #include <unistd.h>
@@ -8,7 +10,6 @@
 #include <thread>
 
 #include "../fixture_root.hpp"
-#include "robotperf/sysinfo/machine.hpp"
 
 namespace robotperf::sysinfo {
 namespace {

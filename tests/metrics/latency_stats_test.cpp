@@ -1,3 +1,5 @@
+#include "robotperf/metrics/latency_stats.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,8 +10,6 @@
 #include <random>
 #include <stdexcept>
 #include <vector>
-
-#include "robotperf/metrics/latency_stats.hpp"
 
 namespace robotperf::metrics {
 namespace {

@@ -1,5 +1,7 @@
 // Resource usage of processes and the machine over a window: fixture /proc trees with known
 // counters, and this process burning CPU.
+#include "robotperf/metrics/resources.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -9,8 +11,6 @@
 #include <fstream>
 #include <string>
 #include <thread>
-
-#include "robotperf/metrics/resources.hpp"
 
 namespace robotperf::metrics {
 namespace {

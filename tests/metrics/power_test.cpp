@@ -1,5 +1,7 @@
 // Power sources against fixture sysfs trees that reproduce each layout, a fake NVML library
 // loaded through the real dlopen path, an external meter command, and this machine.
+#include "robotperf/metrics/power.hpp"
+
 #include <dlfcn.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -10,7 +12,6 @@
 #include <thread>
 
 #include "../fixture_root.hpp"
-#include "robotperf/metrics/power.hpp"
 
 namespace robotperf::metrics {
 namespace {

@@ -1,3 +1,5 @@
+#include "robotperf/report/benchmark_yaml.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
@@ -6,7 +8,6 @@
 #include <sstream>
 
 #include "../shared_data.hpp"
-#include "robotperf/report/benchmark_yaml.hpp"
 #include "sample_runs.hpp"
 
 namespace robotperf::report {

@@ -1,9 +1,9 @@
 // The rates a run reports, for sends and receptions one by one and in bursts.
+#include "robotperf/metrics/delivery_validity.hpp"
+
 #include <gtest/gtest.h>
 
 #include <vector>
-
-#include "robotperf/metrics/delivery_validity.hpp"
 
 namespace robotperf::metrics {
 namespace {

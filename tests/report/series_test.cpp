@@ -1,10 +1,10 @@
 // Repeated runs: the series summary and what its intervals promise.
+#include "robotperf/report/series.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
-
-#include "robotperf/report/series.hpp"
 
 namespace robotperf::report {
 namespace {

@@ -1,3 +1,5 @@
+#include "robotperf/report/report.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -11,7 +13,6 @@
 #include "report_model.hpp"
 #include "robotperf/report/histogram.hpp"
 #include "robotperf/report/readme.hpp"
-#include "robotperf/report/report.hpp"
 #include "robotperf/report/run_store.hpp"
 #include "robotperf/report/significance.hpp"
 #include "sample_runs.hpp"
