@@ -151,13 +151,10 @@ BoundaryTopic boundary_topic(const YamlFile& file, const YAML::Node& n, bool is_
   return t;
 }
 
-void load_graph(const fs::path& path, BenchmarkSpec& spec) {
-  const YamlFile file(path);
+// graph.yaml `plugins:`, loaded first: they may register the kernels, dataset and evaluator the
+// graph names.
+void load_plugins(const YamlFile& file, BenchmarkSpec& spec) {
   const YAML::Node& root = file.root();
-  file.allow_keys(root, {"plugins", "dataset", "rate_hz", "count", "warmup", "drain_s",
-                         "executor_threads", "processes", "security", "validity", "inputs",
-                         "output", "nodes", "launch", "attach", "functional"});
-  // Plug-ins first: they may register the kernels, dataset and evaluator named below.
   if (const YAML::Node plugins = root["plugins"]; plugins.IsDefined()) {
     if (!plugins.IsSequence()) file.fail(plugins, "'plugins' must be a list of files");
     for (const auto& entry : plugins) {
@@ -171,6 +168,11 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
       spec.plugins.push_back(plugin);
     }
   }
+}
+
+// The dataset, the rate, counts, processes, security, the executor and the validity bounds.
+void load_settings(const YamlFile& file, BenchmarkSpec& spec) {
+  const YAML::Node& root = file.root();
   spec.dataset = file.require_string(root, "dataset");
   spec.rate_hz = file.get<double>(root, "rate_hz", 30.0);
   if (!(spec.rate_hz > 0)) file.fail(root["rate_hz"], "rate_hz must be positive");
@@ -200,7 +202,11 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
       file.fail(v["max_loss_percent"], "max_loss_percent must be within 0-100");
     if (spec.min_samples == 0) file.fail(v["min_samples"], "min_samples must be >= 1");
   }
+}
 
+// The Playback's inputs and the Monitor's output; returns the input topics.
+std::set<std::string> load_boundary(const YamlFile& file, BenchmarkSpec& spec) {
+  const YAML::Node& root = file.root();
   // A missing key is an invalid node in yaml-cpp: asking its type throws, so check it is defined.
   const YAML::Node inputs = root["inputs"];
   if (!inputs.IsDefined() || !inputs.IsSequence() || inputs.size() == 0)
@@ -213,10 +219,12 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   }
   if (!root["output"].IsDefined()) file.fail(root, "missing 'output'");
   spec.output = boundary_topic(file, root["output"], false);
+  return input_topics;
+}
 
-  std::vector<const BoundaryTopic*> boundary{&spec.output};
-  for (const auto& in : spec.inputs) boundary.push_back(&in);
-  std::set<std::string> names;
+// graph.yaml `launch:`, an external graph's processes; their names go into `names`.
+void load_launch(const YamlFile& file, BenchmarkSpec& spec, std::set<std::string>& names) {
+  const YAML::Node& root = file.root();
   if (const YAML::Node launch = root["launch"]; launch.IsDefined()) {
     if (!launch.IsSequence()) file.fail(launch, "'launch' must be a list of processes");
     for (const auto& l : launch) {
@@ -238,6 +246,130 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
       spec.launch.push_back(std::move(process));
     }
   }
+}
+
+// One of graph.yaml's `nodes:`, its name added to `names`; a port wired to a boundary topic must
+// carry the boundary's type.
+NodeSpec load_node(const YamlFile& file, const YAML::Node& n,
+                   const std::vector<const BoundaryTopic*>& boundary,
+                   std::set<std::string>& names) {
+  file.allow_keys(n, {"name", "kernel", "backend", "host", "parameters", "topics", "qos"});
+  NodeSpec node;
+  node.name = file.require_file_name_part(n, "name", "node name");
+  if (!names.insert(node.name).second) file.fail(n, "duplicate node name '" + node.name + "'");
+  node.kernel = file.require_string(n, "kernel");
+  const plugin::KernelEntry* entry = plugin::registry().find_kernel(node.kernel);
+  if (entry == nullptr) {
+    file.fail(n["kernel"], "unknown kernel '" + node.kernel +
+                               "' (registered: " + plugin::names_of(plugin::registry().kernels()) +
+                               "; a plug-in's kernel needs --plugin or 'plugins:')");
+  }
+  const plugin::KernelInfo& info = entry->info;
+  node.backend = file.get<std::string>(n, "backend", "cpu");
+  node.host = file.get<std::string>(n, "host", "");
+  if (n["host"].IsDefined() && !valid_host_name(node.host)) {
+    file.fail(n["host"],
+              "host '" + node.host + "' is not a host name (letters, digits, '.', '-' and '_')");
+  }
+  if (std::ranges::count(info.backends, node.backend) == 0) {
+    std::string backends;
+    for (const auto& b : info.backends) backends += (backends.empty() ? "" : ", ") + b;
+    file.fail(n["backend"], "kernel " + node.kernel + " has no backend '" + node.backend +
+                                "' (it has: " + backends + ")");
+  }
+  node.parameters = file.string_map(n, "parameters");
+  try {
+    plugin::Parameters(info.parameters, node.parameters, "node '" + node.name + "'");
+  } catch (const std::invalid_argument& e) {
+    file.fail(n["parameters"], e.what());
+  }
+  node.topics = file.string_map(n, "topics");
+  node.qos = file.qos(n);
+  for (const auto& [port, topic] : node.topics) {
+    const plugin::PortInfo* p = info.find_port(port);
+    if (p == nullptr)
+      file.fail(n["topics"], "kernel " + node.kernel + " has no port '" + port + "'");
+    // A port of a fixed type wired to a boundary topic must carry the boundary's type.
+    for (const BoundaryTopic* b : boundary) {
+      if (b->topic == topic && !p->type.empty() && p->type != b->type) {
+        file.fail(n["topics"], "port '" + port + "' of " + node.kernel + " carries " + p->type +
+                                   ", but " + topic + " is declared " + b->type);
+      }
+    }
+  }
+  return node;
+}
+
+// graph.yaml `functional:`, the evaluator of the outputs and the truth it reads.
+void load_functional(const YamlFile& file, BenchmarkSpec& spec) {
+  const YAML::Node f = file.root()["functional"];
+  if (!f.IsDefined()) return;
+  file.allow_keys(
+      f, {"evaluator", "truth", "sample", "observed_truth", "second_output", "parameters"});
+  FunctionalSpec functional;
+  functional.evaluator = file.require_string(f, "evaluator");
+  const plugin::EvaluatorEntry* entry = plugin::registry().find_evaluator(functional.evaluator);
+  if (entry == nullptr) {
+    file.fail(f["evaluator"],
+              "unknown functional evaluator '" + functional.evaluator +
+                  "' (registered: " + plugin::names_of(plugin::registry().evaluators()) + ")");
+  }
+  const plugin::EvaluatorInfo* info = &entry->info;
+  functional.parameters = file.string_map(f, "parameters");
+  try {
+    plugin::Parameters(info->parameters, functional.parameters,
+                       "evaluator " + functional.evaluator);
+  } catch (const std::invalid_argument& e) {
+    file.fail(f["parameters"], e.what());
+  }
+  if (info->output_type != spec.output.type) {
+    file.fail(f["evaluator"], "evaluator " + info->name + " reads " + info->output_type +
+                                  ", but the output is " + spec.output.type);
+  }
+  functional.truth = file.string_map(f, "truth");
+  for (const auto& role : info->truth_roles) {
+    if (!functional.truth.contains(role)) {
+      file.fail(f, "evaluator " + info->name + " needs truth stream '" + role + "'");
+    }
+  }
+  for (const auto& [role, stream] : functional.truth) {
+    if (std::ranges::count(info->truth_roles, role) == 0) {
+      file.fail(f["truth"], "evaluator " + info->name + " has no truth role '" + role + "'");
+    }
+  }
+  functional.sample = file.get<std::size_t>(f, "sample", functional.sample);
+  // The evaluator's second topic: a truth observed during the run, or a second output of the
+  // graph; one slot under the name that says which.
+  functional.observed_truth_topic = file.get<std::string>(f, "observed_truth", "");
+  if (const auto second = file.get<std::string>(f, "second_output", ""); !second.empty()) {
+    if (!functional.observed_truth_topic.empty())
+      file.fail(f, "give observed_truth or second_output, not both");
+    functional.observed_truth_topic = second;
+  }
+  if (info->observed_truth_type.empty() != functional.observed_truth_topic.empty()) {
+    file.fail(f, info->observed_truth_type.empty()
+                     ? "evaluator " + info->name + " takes no observed_truth or second_output"
+                     : "evaluator " + info->name +
+                           " needs an observed_truth or second_output "
+                           "topic (" +
+                           info->observed_truth_type + ")");
+  }
+  spec.functional = std::move(functional);
+}
+
+void load_graph(const fs::path& path, BenchmarkSpec& spec) {
+  const YamlFile file(path);
+  const YAML::Node& root = file.root();
+  file.allow_keys(root, {"plugins", "dataset", "rate_hz", "count", "warmup", "drain_s",
+                         "executor_threads", "processes", "security", "validity", "inputs",
+                         "output", "nodes", "launch", "attach", "functional"});
+  load_plugins(file, spec);
+  load_settings(file, spec);
+  const std::set<std::string> input_topics = load_boundary(file, spec);
+  std::vector<const BoundaryTopic*> boundary{&spec.output};
+  for (const auto& in : spec.inputs) boundary.push_back(&in);
+  std::set<std::string> names;
+  load_launch(file, spec, names);
   spec.attach = file.get<bool>(root, "attach", false);
   if (spec.attach && !spec.launch.empty())
     file.fail(root["attach"], "attach: true is for a graph already running, not with launch:");
@@ -245,53 +377,7 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   if (nodes.IsDefined() ? !nodes.IsSequence() : !spec.external()) {
     file.fail(root, "'nodes' must be a list (or the graph external: launch: or attach: true)");
   }
-  for (const auto& n : nodes) {
-    file.allow_keys(n, {"name", "kernel", "backend", "host", "parameters", "topics", "qos"});
-    NodeSpec node;
-    node.name = file.require_file_name_part(n, "name", "node name");
-    if (!names.insert(node.name).second) file.fail(n, "duplicate node name '" + node.name + "'");
-    node.kernel = file.require_string(n, "kernel");
-    const plugin::KernelEntry* entry = plugin::registry().find_kernel(node.kernel);
-    if (entry == nullptr) {
-      file.fail(n["kernel"], "unknown kernel '" + node.kernel + "' (registered: " +
-                                 plugin::names_of(plugin::registry().kernels()) +
-                                 "; a plug-in's kernel needs --plugin or 'plugins:')");
-    }
-    const plugin::KernelInfo& info = entry->info;
-    node.backend = file.get<std::string>(n, "backend", "cpu");
-    node.host = file.get<std::string>(n, "host", "");
-    if (n["host"].IsDefined() && !valid_host_name(node.host)) {
-      file.fail(n["host"],
-                "host '" + node.host + "' is not a host name (letters, digits, '.', '-' and '_')");
-    }
-    if (std::ranges::count(info.backends, node.backend) == 0) {
-      std::string backends;
-      for (const auto& b : info.backends) backends += (backends.empty() ? "" : ", ") + b;
-      file.fail(n["backend"], "kernel " + node.kernel + " has no backend '" + node.backend +
-                                  "' (it has: " + backends + ")");
-    }
-    node.parameters = file.string_map(n, "parameters");
-    try {
-      plugin::Parameters(info.parameters, node.parameters, "node '" + node.name + "'");
-    } catch (const std::invalid_argument& e) {
-      file.fail(n["parameters"], e.what());
-    }
-    node.topics = file.string_map(n, "topics");
-    node.qos = file.qos(n);
-    for (const auto& [port, topic] : node.topics) {
-      const plugin::PortInfo* p = info.find_port(port);
-      if (p == nullptr)
-        file.fail(n["topics"], "kernel " + node.kernel + " has no port '" + port + "'");
-      // A port of a fixed type wired to a boundary topic must carry the boundary's type.
-      for (const BoundaryTopic* b : boundary) {
-        if (b->topic == topic && !p->type.empty() && p->type != b->type) {
-          file.fail(n["topics"], "port '" + port + "' of " + node.kernel + " carries " + p->type +
-                                     ", but " + topic + " is declared " + b->type);
-        }
-      }
-    }
-    spec.nodes.push_back(std::move(node));
-  }
+  for (const auto& n : nodes) spec.nodes.push_back(load_node(file, n, boundary, names));
   // The Monitor would time the Playback's own messages. Only a graph of nothing (no node, no
   // process) does that on purpose: it measures the harness itself.
   if (input_topics.contains(spec.output.topic) && (!spec.nodes.empty() || spec.external())) {
@@ -299,60 +385,7 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
                                            " is also an input: the Monitor would time the "
                                            "Playback's own messages, not the graph's outputs");
   }
-
-  if (const YAML::Node f = root["functional"]; f.IsDefined()) {
-    file.allow_keys(
-        f, {"evaluator", "truth", "sample", "observed_truth", "second_output", "parameters"});
-    FunctionalSpec functional;
-    functional.evaluator = file.require_string(f, "evaluator");
-    const plugin::EvaluatorEntry* entry = plugin::registry().find_evaluator(functional.evaluator);
-    if (entry == nullptr) {
-      file.fail(f["evaluator"],
-                "unknown functional evaluator '" + functional.evaluator +
-                    "' (registered: " + plugin::names_of(plugin::registry().evaluators()) + ")");
-    }
-    const plugin::EvaluatorInfo* info = &entry->info;
-    functional.parameters = file.string_map(f, "parameters");
-    try {
-      plugin::Parameters(info->parameters, functional.parameters,
-                         "evaluator " + functional.evaluator);
-    } catch (const std::invalid_argument& e) {
-      file.fail(f["parameters"], e.what());
-    }
-    if (info->output_type != spec.output.type) {
-      file.fail(f["evaluator"], "evaluator " + info->name + " reads " + info->output_type +
-                                    ", but the output is " + spec.output.type);
-    }
-    functional.truth = file.string_map(f, "truth");
-    for (const auto& role : info->truth_roles) {
-      if (!functional.truth.contains(role)) {
-        file.fail(f, "evaluator " + info->name + " needs truth stream '" + role + "'");
-      }
-    }
-    for (const auto& [role, stream] : functional.truth) {
-      if (std::ranges::count(info->truth_roles, role) == 0) {
-        file.fail(f["truth"], "evaluator " + info->name + " has no truth role '" + role + "'");
-      }
-    }
-    functional.sample = file.get<std::size_t>(f, "sample", functional.sample);
-    // The evaluator's second topic: a truth observed during the run, or a second output of the
-    // graph; one slot under the name that says which.
-    functional.observed_truth_topic = file.get<std::string>(f, "observed_truth", "");
-    if (const auto second = file.get<std::string>(f, "second_output", ""); !second.empty()) {
-      if (!functional.observed_truth_topic.empty())
-        file.fail(f, "give observed_truth or second_output, not both");
-      functional.observed_truth_topic = second;
-    }
-    if (info->observed_truth_type.empty() != functional.observed_truth_topic.empty()) {
-      file.fail(f, info->observed_truth_type.empty()
-                       ? "evaluator " + info->name + " takes no observed_truth or second_output"
-                       : "evaluator " + info->name +
-                             " needs an observed_truth or second_output "
-                             "topic (" +
-                             info->observed_truth_type + ")");
-    }
-    spec.functional = std::move(functional);
-  }
+  load_functional(file, spec);
 }
 
 // benchmark.yaml `functional: {thresholds: {<metric>: {min: x, max: y}}}`.
