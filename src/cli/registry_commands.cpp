@@ -29,6 +29,8 @@ void parameters(std::ostream& out, const std::vector<plugin::ParameterInfo>& lis
     out << "    " << p.name << " (" << plugin::type_name(p.type);
     if (p.default_value)
       out << ", default " << (p.default_value->empty() ? "\"\"" : *p.default_value);
+    if (const std::string range = plugin::bounds_text(p.bounds); !range.empty())
+      out << ", " << range;
     out << "): " << p.doc << "\n";
   }
 }

@@ -46,10 +46,25 @@ std::string workload_owner(const plugin::DatasetInfo& info) {
   return "dataset " + info.name + " workload";
 }
 
+// The workload read against the dataset's declarations, each value within its bounds and the
+// values together within the dataset's limits.
+plugin::Parameters checked_workload(const plugin::DatasetInfo& info,
+                                    const std::map<std::string, std::string>& workload) {
+  plugin::Parameters parameters(info.workload, workload, workload_owner(info));
+  if (info.check_workload) {
+    try {
+      info.check_workload(parameters);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(workload_owner(info) + ": " + e.what());
+    }
+  }
+  return parameters;
+}
+
 Dataset generate(const plugin::DatasetEntry& entry,
                  const std::map<std::string, std::string>& workload) {
   const auto& info = entry.info;
-  const plugin::Parameters parameters(info.workload, workload, workload_owner(info));
+  const plugin::Parameters parameters = checked_workload(info, workload);
   Dataset d;
   d.streams = entry.generate(parameters);
   check_generated(entry, d.streams);
@@ -88,8 +103,7 @@ std::string content_hash(const std::vector<DatasetStream>& streams) {
 }
 
 void check_workload(const std::string& name, const std::map<std::string, std::string>& workload) {
-  const auto& info = find_dataset(name).info;
-  plugin::Parameters(info.workload, workload, workload_owner(info));
+  checked_workload(find_dataset(name).info, workload);
 }
 
 Dataset load_dataset(const std::string& name, const std::map<std::string, std::string>& workload) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <system_error>
@@ -64,16 +65,45 @@ void check_value(ParameterType type, const std::string& text) {
   }
 }
 
+void check_value(const ParameterInfo& parameter, const std::string& text) {
+  check_value(parameter.type, text);
+  const ParameterBounds& b = parameter.bounds;
+  if ((!b.minimum && !b.maximum) ||
+      (parameter.type != ParameterType::kInt && parameter.type != ParameterType::kDouble))
+    return;
+  const double value = parameter.type == ParameterType::kInt
+                           ? static_cast<double>(parse_number<int64_t>(text, "an integer"))
+                           : parse_number<double>(text, "a number");
+  // Written so that NaN is outside every range.
+  if (!(!b.minimum || value >= *b.minimum) || !(!b.maximum || value <= *b.maximum))
+    throw std::invalid_argument(text + " is outside its range, " + bounds_text(b));
+}
+
+std::string bounds_text(const ParameterBounds& b) {
+  // Whole bounds as integers (100000, not 1e+05).
+  auto text = [](double v) {
+    return v == std::trunc(v) && std::fabs(v) < 1e15 ? std::to_string(static_cast<int64_t>(v))
+                                                     : shortest(v);
+  };
+  if (b.minimum && b.maximum) return text(*b.minimum) + " to " + text(*b.maximum);
+  if (b.minimum) return "at least " + text(*b.minimum);
+  if (b.maximum) return "at most " + text(*b.maximum);
+  return "";
+}
+
 ParameterInfo bool_parameter(std::string name, bool default_value, std::string doc) {
   return {std::move(name), ParameterType::kBool, default_value ? "true" : "false", std::move(doc)};
 }
 
-ParameterInfo int_parameter(std::string name, int64_t default_value, std::string doc) {
-  return {std::move(name), ParameterType::kInt, std::to_string(default_value), std::move(doc)};
+ParameterInfo int_parameter(std::string name, int64_t default_value, std::string doc,
+                            ParameterBounds bounds) {
+  return {std::move(name), ParameterType::kInt, std::to_string(default_value), std::move(doc),
+          bounds};
 }
 
-ParameterInfo double_parameter(std::string name, double default_value, std::string doc) {
-  return {std::move(name), ParameterType::kDouble, shortest(default_value), std::move(doc)};
+ParameterInfo double_parameter(std::string name, double default_value, std::string doc,
+                               ParameterBounds bounds) {
+  return {std::move(name), ParameterType::kDouble, shortest(default_value), std::move(doc), bounds};
 }
 
 ParameterInfo string_parameter(std::string name, std::string default_value, std::string doc) {
@@ -96,7 +126,7 @@ Parameters::Parameters(std::vector<ParameterInfo> declared,
                                   (known.empty() ? "it takes none" : "known: " + known) + ")");
     }
     try {
-      check_value(it->type, value);
+      check_value(*it, value);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(owner + ": parameter '" + name + "' (" + type_name(it->type) +
                                   "): " + e.what());

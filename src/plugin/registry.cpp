@@ -99,7 +99,7 @@ void check_parameters(const std::string& who, const std::vector<ParameterInfo>& 
       throw std::invalid_argument(who + ": parameter '" + p.name + "' declared twice");
     if (p.default_value) {
       try {
-        check_value(p.type, *p.default_value);
+        check_value(p, *p.default_value);
       } catch (const std::invalid_argument& e) {
         throw std::invalid_argument(who + ": default of parameter '" + p.name + "': " + e.what());
       }

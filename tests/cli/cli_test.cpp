@@ -197,6 +197,20 @@ TEST_F(Cli, N1SweepsPayloadSizes) {
   EXPECT_EQ(list.out.find(".sweep"), std::string::npos) << list.out;
 }
 
+// A sweep value beyond the dataset's bounds, alone or with another parameter, is refused before
+// the first run: nothing is run or written.
+TEST_F(Cli, ASweepValueOutOfBoundsIsRefusedBeforeTheFirstRun) {
+  for (const std::string sweep :
+       {"payload_bytes=64,300000000", "payload_bytes=64,67108864 --workload frames=100"}) {
+    const Outcome o =
+        robotperf_cli("run n1 --count 130 --quiet --sweep " + sweep + " --output " + out_.string());
+    EXPECT_EQ(o.exit_code, 2) << o.out;
+    EXPECT_NE(o.out.find("payload_bytes"), std::string::npos) << o.out;
+    EXPECT_EQ(o.out.find("latency"), std::string::npos) << "a run was made: " << o.out;
+    EXPECT_FALSE(fs::exists(out_) && !fs::is_empty(out_)) << sweep;
+  }
+}
+
 // n2 is per-node by definition: the pong runs in its own process, over Cyclone DDS here.
 TEST_F(Cli, N2PongRunsInAProcessOfItsOwn) {
   const Outcome o =

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <tuple>
+
 namespace robotperf::plugin {
 namespace {
 
@@ -72,6 +74,35 @@ TEST(Parameters, ValueOfTheWrongTypeIsRefusedNamingIt) {
     } catch (const std::invalid_argument& e) {
       EXPECT_NE(std::string(e.what()).find("parameter '" + name + "'"), std::string::npos)
           << e.what();
+    }
+  }
+}
+
+// A value outside its declared range is refused naming the parameter and the range; the ends
+// are inside, NaN is not.
+TEST(Parameters, AValueOutsideItsBoundsIsRefusedNamingTheRange) {
+  const std::vector<ParameterInfo> bounded = {
+      int_parameter("bytes", 64, "payload", {.minimum = 1, .maximum = 1024}),
+      double_parameter("fraction", 0.5, "share", {.minimum = 0, .maximum = 1}),
+      int_parameter("count", 1, "at least one", {.minimum = 1})};
+  for (const auto& [name, text] : std::vector<std::pair<std::string, std::string>>{
+           {"bytes", "1"}, {"bytes", "1024"}, {"fraction", "0"}, {"count", "99999999"}}) {
+    EXPECT_NO_THROW(Parameters(bounded, {{name, text}}, "dataset d workload")) << name << text;
+  }
+  for (const auto& [name, text, range] :
+       std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"bytes", "300000000", "1 to 1024"},
+           {"bytes", "0", "1 to 1024"},
+           {"fraction", "1.5", "0 to 1"},
+           {"fraction", "nan", "0 to 1"},
+           {"count", "-3", "at least 1"}}) {
+    try {
+      Parameters(bounded, {{name, text}}, "dataset d workload");
+      FAIL() << name << " accepted '" << text << "'";
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("parameter '" + name + "'"), std::string::npos) << what;
+      EXPECT_NE(what.find("outside its range, " + range), std::string::npos) << what;
     }
   }
 }

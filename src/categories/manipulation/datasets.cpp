@@ -17,9 +17,7 @@ constexpr double kRateHz = 100;
 ManipulationWorkload workload_of(const plugin::Parameters& p) {
   ManipulationWorkload w;
   w.seed = static_cast<uint64_t>(p.get_int("seed"));
-  const int64_t requests = p.get_int("requests");
-  if (requests < 1) throw std::invalid_argument("workload requests must be >= 1");
-  w.requests = static_cast<std::size_t>(requests);
+  w.requests = static_cast<std::size_t>(p.get_int("requests"));  // >= 1: its bounds
   return w;
 }
 
@@ -28,11 +26,13 @@ std::vector<plugin::ParameterInfo> workload_parameters(bool near_fraction) {
   std::vector<plugin::ParameterInfo> p{
       plugin::int_parameter("seed", static_cast<int64_t>(w.seed),
                             "seed of the request generator (and of the planner's OMPL)"),
-      plugin::int_parameter("requests", static_cast<int64_t>(w.requests), "requests generated")};
+      plugin::int_parameter("requests", static_cast<int64_t>(w.requests), "requests generated",
+                            {.minimum = 1})};
   if (near_fraction) {
     p.push_back(plugin::double_parameter("near_fraction", w.near_fraction,
                                          "share of states with the flange within 0.15 m of the "
-                                         "box (the rest anywhere)"));
+                                         "box (the rest anywhere)",
+                                         {.minimum = 0, .maximum = 1}));
   }
   return p;
 }
@@ -49,8 +49,6 @@ std::vector<DatasetStream> kinematics_streams(const plugin::Parameters& p) {
 std::vector<DatasetStream> collision_streams(const plugin::Parameters& p) {
   ManipulationWorkload w = workload_of(p);
   w.near_fraction = p.get_double("near_fraction");
-  if (!(w.near_fraction >= 0 && w.near_fraction <= 1))
-    throw std::invalid_argument("workload near_fraction must be within [0, 1]");
   auto r = generate_collision_requests(w);
   auto states = make_stream<msgs::JointState>("joint_states", "/collision/joint_states");
   auto truth = make_stream<msgs::CollisionResult>("truth", "/ground_truth/collision");

@@ -22,12 +22,10 @@ constexpr int64_t kMaxPayloadBytes = int64_t{256} << 20;
 // Every frame's payload is held in memory for the run.
 constexpr int64_t kMaxDatasetBytes = int64_t{1} << 30;
 
-std::vector<DatasetStream> payload_streams(const plugin::Parameters& p) {
+// Each parameter's own range is its bounds; together they must fit in memory.
+void check_payload_workload(const plugin::Parameters& p) {
   const int64_t bytes = p.get_int("payload_bytes");
   const int64_t frames = p.get_int("frames");
-  if (bytes < 1 || bytes > kMaxPayloadBytes)
-    throw std::invalid_argument("payload_bytes must be 1 to " + std::to_string(kMaxPayloadBytes));
-  if (frames < 1 || frames > 100000) throw std::invalid_argument("frames must be 1 to 100000");
   if (bytes * frames > kMaxDatasetBytes) {
     throw std::invalid_argument(
         "payload_bytes x frames is " + std::to_string((bytes * frames) >> 20) +
@@ -35,6 +33,11 @@ std::vector<DatasetStream> payload_streams(const plugin::Parameters& p) {
         " MiB bound: give fewer frames (--workload frames=" +
         std::to_string(std::max<int64_t>(1, kMaxDatasetBytes / bytes)) + ")");
   }
+}
+
+std::vector<DatasetStream> payload_streams(const plugin::Parameters& p) {
+  const int64_t bytes = p.get_int("payload_bytes");
+  const int64_t frames = p.get_int("frames");
   std::mt19937_64 random(static_cast<uint64_t>(p.get_int("seed")));
   auto stream = plugin::make_stream<msgs::Image>("payload", "/ping");
   for (int64_t i = 0; i < frames; ++i) {
@@ -102,11 +105,14 @@ void register_category(plugin::Registrar& registrar) {
        .streams = {{"payload", "/ping", "sensor_msgs/msg/Image", false,
                     "what the ping side sends; the pong echoes it"}},
        .workload = {plugin::int_parameter("payload_bytes", 64,
-                                          "bytes of payload (the Image's data), 1 to 256 MiB"),
+                                          "bytes of payload (the Image's data), up to 256 MiB",
+                                          {.minimum = 1, .maximum = kMaxPayloadBytes}),
                     plugin::int_parameter("frames", 100,
                                           "distinct payloads (the run loops over them); "
-                                          "payload_bytes x frames at most 1 GiB"),
-                    plugin::int_parameter("seed", 1, "seed of the payload bytes")}},
+                                          "payload_bytes x frames at most 1 GiB",
+                                          {.minimum = 1, .maximum = 100000}),
+                    plugin::int_parameter("seed", 1, "seed of the payload bytes")},
+       .check_workload = check_payload_workload},
       payload_streams);
   registrar.add_evaluator(
       {.name = "payload_echo",

@@ -34,6 +34,10 @@ struct DatasetInfo {
   std::vector<StreamInfo> streams{};
   // benchmark.yaml `workload:` parameters (e.g. seed, requests); none for a fixed sequence.
   std::vector<ParameterInfo> workload{};
+  // Limits that involve several workload parameters (each one's own range is its bounds):
+  // throws std::invalid_argument saying which and what to give instead. Called before any run
+  // (a sweep calls it for every value before the first) and before the generator.
+  std::function<void(const Parameters& workload)> check_workload{};
 };
 
 // The messages of one stream. Streams loaded from a bag hold msgs::SerializedMessage payloads

@@ -15,6 +15,14 @@ enum class ParameterType { kBool, kInt, kDouble, kString };
 // "bool", "int", "double", "string".
 const char* type_name(ParameterType type);
 
+// The closed range an int or double parameter's value must lie in; an absent end is open.
+// Checked where the value is given, so that a value out of range is refused before any run
+// (a sweep checks every value before its first).
+struct ParameterBounds {
+  std::optional<double> minimum{};
+  std::optional<double> maximum{};
+};
+
 struct ParameterInfo {
   std::string name{};
   ParameterType type = ParameterType::kString;
@@ -22,12 +30,15 @@ struct ParameterInfo {
   // parameters or the workload (the doc then says how).
   std::optional<std::string> default_value{};
   std::string doc{};  // one line
+  ParameterBounds bounds{};
 };
 
 // Declarations with their default in the declared type.
 ParameterInfo bool_parameter(std::string name, bool default_value, std::string doc);
-ParameterInfo int_parameter(std::string name, int64_t default_value, std::string doc);
-ParameterInfo double_parameter(std::string name, double default_value, std::string doc);
+ParameterInfo int_parameter(std::string name, int64_t default_value, std::string doc,
+                            ParameterBounds bounds = {});
+ParameterInfo double_parameter(std::string name, double default_value, std::string doc,
+                               ParameterBounds bounds = {});
 ParameterInfo string_parameter(std::string name, std::string default_value, std::string doc);
 // A parameter whose default depends on something else: read it with a fallback.
 ParameterInfo computed_parameter(std::string name, ParameterType type, std::string doc);
@@ -37,7 +48,8 @@ class Parameters {
  public:
   Parameters() = default;
   // Throws std::invalid_argument naming `owner` and the parameter when a name is not declared
-  // (listing those that are) or a value does not convert to its declared type.
+  // (listing those that are), a value does not convert to its declared type or lies outside its
+  // bounds.
   Parameters(std::vector<ParameterInfo> declared, const std::map<std::string, std::string>& values,
              const std::string& owner);
 
@@ -80,5 +92,10 @@ class Parameters {
 // Converts `text` as a value of `type` would be read; throws std::invalid_argument saying why
 // not. Used to check values and defaults before anything runs.
 void check_value(ParameterType type, const std::string& text);
+// Also checks that the value lies within the parameter's bounds.
+void check_value(const ParameterInfo& parameter, const std::string& text);
+
+// "1 to 268435456", "at least 1", "at most 0.5"; empty without bounds.
+std::string bounds_text(const ParameterBounds& bounds);
 
 }  // namespace robotperf::plugin
