@@ -1,9 +1,10 @@
-// SIGINT and SIGTERM during a run: the first ends the run cleanly (the harness polls
-// g_interrupted), a second one ends the process at once.
+// SIGINT, SIGTERM, SIGHUP (a dropped ssh session) and SIGQUIT during a run: the first ends the
+// run cleanly (the harness polls g_interrupted), a second one ends the process at once.
 #pragma once
 
 #include <signal.h>
 
+#include <array>
 #include <atomic>
 
 namespace robotperf::cli {
@@ -16,8 +17,8 @@ inline int interrupted_exit_code() {
   return 128 + g_interrupted.load();
 }
 
-// Handles SIGINT and SIGTERM while it lives: the first sets g_interrupted, a second ends the
-// process with 128 + its signal.
+// Handles those signals while it lives: the first sets g_interrupted, a second ends the process
+// with 128 + its signal.
 class InterruptHandling {
  public:
   InterruptHandling();
@@ -26,8 +27,8 @@ class InterruptHandling {
   InterruptHandling& operator=(const InterruptHandling&) = delete;
 
  private:
-  struct sigaction previous_int_ {};
-  struct sigaction previous_term_ {};
+  static constexpr std::array kHandled = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
+  std::array<struct sigaction, kHandled.size()> previous_{};
 };
 
 }  // namespace robotperf::cli

@@ -173,7 +173,7 @@ PeakSearchResult find_peak(const BenchmarkSpec& spec, const RunOptions& options,
     going = step((passing + failing) / 2);
 
   if (!going) {
-    // stop_reason says why.
+    rec.finished = false;  // stop_reason says why
   } else if (passing == 0) {
     rec.stop_reason =
         "no rate down to " + text(rate) + " Hz met the bounds; the last: " + failing_reason;
@@ -184,7 +184,16 @@ PeakSearchResult find_peak(const BenchmarkSpec& spec, const RunOptions& options,
     rec.stop_reason = "the next rate tried, " + text(failing) + " Hz, failed: " + failing_reason;
   }
   if (out.peak) {
-    out.peak->throughput_kind = "peak";
+    // An unfinished search's best run is one the graph sustained, not its peak: written as an
+    // offered throughput, marked as the search was, with the search that found it.
+    if (rec.finished) {
+      out.peak->throughput_kind = "peak";
+    } else {
+      out.peak->interrupted = options.interrupted && options.interrupted->load() != 0;
+      out.peak->warnings.push_back(
+          {"peak_search_unfinished", "the peak search did not finish (" + rec.stop_reason +
+                                         "): this rate was sustained; the peak may be higher"});
+    }
     out.peak->peak_search = rec;
   }
   return out;

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -31,6 +32,10 @@ constexpr int64_t kWatchPeriodNs = 100'000'000;
 constexpr int kNodeHungExit = 5;
 
 }  // namespace
+
+std::string interrupted_by(int signal_number) {
+  return std::string("interrupted by SIG") + sigabbrev_np(signal_number);
+}
 
 std::string to_string(RunStage stage) {
   switch (stage) {
@@ -123,8 +128,9 @@ int run_node_process(const BenchmarkSpec& spec, const std::string& node_name,
                      const std::string& rmw, int domain_id, const SchedulingOptions& scheduling,
                      double callback_timeout_s, const std::string& run_token,
                      const std::filesystem::path& keystore, rmw::RosDistro ros_distro) {
-  // Ctrl-C in a terminal reaches the whole process group: the runner stops us when it is done.
-  signal(SIGINT, SIG_IGN);
+  // Ctrl-C (or Ctrl-\ or a dropped terminal) reaches the whole process group: the runner
+  // stops us when it is done.
+  for (const int s : {SIGINT, SIGQUIT, SIGHUP}) signal(s, SIG_IGN);
   const NodeSpec* node_spec = spec.find_node(node_name);
   if (node_spec == nullptr) {
     std::cerr << "robotperf node: benchmark " << spec.id << " has no node '" << node_name << "'\n";

@@ -59,10 +59,6 @@ void add_peers(std::vector<rmw::PeerParticipant>& seen, std::vector<rmw::PeerPar
   }
 }
 
-std::string interrupted_by(const std::atomic<int>& signal) {
-  return std::string("interrupted by SIG") + sigabbrev_np(signal.load());
-}
-
 // When the Playback sends each message; empty: every period.
 std::vector<int64_t> schedule_of(const RunPlan& plan, const RunOptions& options,
                                  const RunResult& r) {
@@ -196,7 +192,7 @@ void connect_graph(const RunPlan& plan, const RunOptions& options, const RunEnvi
   if ((graph.children && !graph.children->wait_ready(deadline, interrupted)) ||
       !wait_connected(graph.local_nodes, wiring_of(plan.spec()), deadline, interrupted,
                       about_topic)) {
-    throw RunInterrupted(interrupted_by(*options.interrupted) +
+    throw RunInterrupted(interrupted_by(options.interrupted->load()) +
                          " before the run started: nothing was measured");
   }
 }
@@ -287,7 +283,7 @@ const std::string& RunWatch::must_stop() {
   const auto callback_limit_ns = static_cast<int64_t>(options_.callback_timeout_s * 1e9);
   if (options_.interrupted && options_.interrupted->load() != 0) {
     r_.interrupted = true;
-    stop_now_ = interrupted_by(*options_.interrupted);
+    stop_now_ = interrupted_by(options_.interrupted->load());
   } else if (auto stuck =
                  graph_.executor->running_longer_than(callback_limit_ns, rmw::steady_now_ns())) {
     stop_now_ = "node '" + stuck->node + "' hung: its callback has run for " +

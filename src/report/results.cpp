@@ -449,7 +449,7 @@ std::string peak_search_table(const harness::PeakSearchRecord& p) {
                   format_fixed(s.latency_ms, 3).c_str());
     out << line << (s.passed ? "sustained" : "failed: " + s.reason) << "\n";
   }
-  out << "  " << p.stop_reason << "\n";
+  out << "  " << (p.finished ? "" : "unfinished: ") << p.stop_reason << "\n";
   return out.str();
 }
 
@@ -473,7 +473,8 @@ nlohmann::json peak_search_json(const harness::PeakSearchRecord& p) {
           {"resolution_percent", p.resolution_percent},
           {"step_duration_s", p.step_duration_s},
           {"steps", steps},
-          {"stop_reason", p.stop_reason}};
+          {"stop_reason", p.stop_reason},
+          {"finished", p.finished}};
 }
 
 std::string percentile_intervals_line(const metrics::SampleStats& s, double scale,
@@ -595,7 +596,10 @@ std::string summary_table(const harness::RunResult& r) {
   }
   out << "\nthroughput: " << format_fixed(r.throughput_hz, 3) << " Hz out, "
       << format_fixed(r.offered_rate_hz, 3) << " Hz offered"
-      << (r.throughput_kind == "peak" ? " (peak: the highest rate the search found sustained)" : "")
+      << (r.throughput_kind == "peak" ? " (peak: the highest rate the search found sustained)"
+          : r.peak_search ? " (the highest rate sustained before the search was cut short: not "
+                            "the peak)"
+                          : "")
       << "\n";
   if (r.peak_search) out << peak_search_table(*r.peak_search);
   if (r.grey) out << "\n" << tracing::breakdown_table(*r.grey) << "\n";

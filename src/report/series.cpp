@@ -31,8 +31,22 @@ double SeriesFigure::spread_percent() const {
   return spread_of(stats());
 }
 
-Series::Series(std::string benchmark_id)
+std::string RunsCompleted::note(std::size_t done) const {
+  if (ended_early.empty()) return "";
+  return ", ended early after " + std::to_string(done) + " of " + std::to_string(planned) +
+         " runs: " + ended_early;
+}
+
+void RunsCompleted::add_to(nlohmann::json& summary) const {
+  summary["planned_runs"] = planned;
+  summary["complete"] = ended_early.empty();
+  summary["ended_early"] =
+      ended_early.empty() ? nlohmann::json(nullptr) : nlohmann::json(ended_early);
+}
+
+Series::Series(std::string benchmark_id, std::size_t planned_runs)
     : benchmark_id_(std::move(benchmark_id)),
+      completed_{planned_runs, ""},
       figures_{{"latency p50", "ms", {}},
                {"latency p99", "ms", {}},
                {"latency max", "ms", {}},
@@ -55,8 +69,9 @@ void Series::add(const harness::RunResult& run, const std::optional<std::filesys
 
 std::string series_table(const Series& series) {
   std::ostringstream out;
-  out << "series " << series.benchmark_id() << ": " << series.runs() << " runs, "
-      << series.valid_runs() << " valid (figures over the valid runs; the median's 95 % interval "
+  out << "series " << series.benchmark_id() << ": " << series.runs() << " runs"
+      << series.completed().note(series.runs()) << ", " << series.valid_runs()
+      << " valid (figures over the valid runs; the median's 95 % interval "
       << "is distribution-free and needs at least 6 runs for both ends)\n";
   char line[200];
   std::snprintf(line, sizeof line, "  %-18s %10s %23s %10s %10s %9s\n", "figure", "median",
@@ -89,9 +104,11 @@ nlohmann::json series_json(const Series& series) {
         {"spread_percent", finite_or_null(spread_of(s))},
         {"values", f.values}};
   }
-  return {{"schema", "robotperf.series/1"}, {"benchmark", series.benchmark_id()},
-          {"runs", series.runs()},          {"valid_runs", series.valid_runs()},
-          {"files", series.files()},        {"figures", figures}};
+  nlohmann::json summary = {{"schema", "robotperf.series/1"}, {"benchmark", series.benchmark_id()},
+                            {"runs", series.runs()},          {"valid_runs", series.valid_runs()},
+                            {"files", series.files()},        {"figures", figures}};
+  series.completed().add_to(summary);
+  return summary;
 }
 
 }  // namespace robotperf::report

@@ -21,8 +21,10 @@ std::string ms(double ns) {
 
 }  // namespace
 
-Sweep::Sweep(std::string benchmark_id, std::string parameter)
-    : benchmark_id_(std::move(benchmark_id)), parameter_(std::move(parameter)) {}
+Sweep::Sweep(std::string benchmark_id, std::string parameter, std::size_t planned_runs)
+    : benchmark_id_(std::move(benchmark_id)),
+      parameter_(std::move(parameter)),
+      completed_{planned_runs, ""} {}
 
 void Sweep::add(const std::string& value, const harness::RunResult& run,
                 const std::optional<std::filesystem::path>& json) {
@@ -58,7 +60,8 @@ std::pair<std::string, std::vector<std::string>> parse_sweep(const std::string& 
 std::string sweep_table(const Sweep& sweep) {
   std::ostringstream out;
   out << "sweep " << sweep.benchmark_id() << " over " << sweep.parameter() << ": "
-      << sweep.rows().size() << " runs; latency from the scheduled send, ms (for a ping-pong: "
+      << sweep.rows().size() << " runs" << sweep.completed().note(sweep.rows().size())
+      << "; latency from the scheduled send, ms (for a ping-pong: "
       << "the round trip on the ping side's clock; p50/2 is half of it)\n";
   char line[256];
   std::snprintf(line, sizeof line, "  %12s %9s %9s %9s %9s %9s %9s %7s %9s  %s\n",
@@ -99,10 +102,12 @@ nlohmann::json sweep_json(const Sweep& sweep) {
                     {"throughput_hz", finite_or_null(r.throughput_hz)},
                     {"cpu_percent", cpu}});
   }
-  return {{"schema", "robotperf.sweep/1"},
-          {"benchmark", sweep.benchmark_id()},
-          {"parameter", sweep.parameter()},
-          {"runs", rows}};
+  nlohmann::json summary = {{"schema", "robotperf.sweep/1"},
+                            {"benchmark", sweep.benchmark_id()},
+                            {"parameter", sweep.parameter()},
+                            {"runs", rows}};
+  sweep.completed().add_to(summary);
+  return summary;
 }
 
 }  // namespace robotperf::report

@@ -5,6 +5,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -107,8 +109,19 @@ TEST_F(Faults, AHungCallbackEndsTheRunNamingTheNode) {
   }
 }
 
+// Whether process `pid` has a handler of its own for `signal_number` (/proc's SigCgt mask).
+bool catches(pid_t pid, int signal_number) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.starts_with("SigCgt:"))
+      return (std::stoull(line.substr(7), nullptr, 16) >> (signal_number - 1) & 1) != 0;
+  }
+  return false;
+}
+
+// SIGHUP (a dropped ssh session) and SIGQUIT (Ctrl-\) end a run as SIGINT and SIGTERM do.
 TEST_F(Faults, InterruptsEndTheRunKeepingWhatItMeasured) {
-  for (const int signal_number : {SIGINT, SIGTERM}) {
+  for (const int signal_number : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) {
     fs::remove_all(dir_ / "results");
     // The meter is read once before the run and then during the measured window: its second
     // reading says the run is under way.
@@ -129,9 +142,53 @@ TEST_F(Faults, InterruptsEndTheRunKeepingWhatItMeasured) {
     EXPECT_EQ(j["completed"], false);
     EXPECT_GT(j["counts"]["sent"].get<int>(), 0);
     EXPECT_LT(j["counts"]["sent"].get<int>(), 2000);
-    EXPECT_EQ(j["errors"][0],
-              signal_number == SIGINT ? "interrupted by SIGINT" : "interrupted by SIGTERM");
+    EXPECT_EQ(j["errors"][0], std::string("interrupted by SIG") + sigabbrev_np(signal_number));
   }
+}
+
+// The handlers are in place before the run makes anything (here: the domain --domain auto
+// reserves while it listens for other participants, 3.5 s): a SIGTERM then ends it cleanly
+// with no result, not by default handling.
+TEST_F(Faults, ASignalBeforeTheRunStartsEndsItCleanly) {
+  Background run(std::string(ROBOTPERF_EXECUTABLE) + " " + benchmarks("") +
+                     " run f1 --count 20 --rmw fastdds --domain auto --output " +
+                     (dir_ / "results").string(),
+                 dir_ / "log");
+  ASSERT_TRUE(eventually([&] { return catches(run.pid(), SIGTERM); }, std::chrono::seconds(30)))
+      << run.output();
+  EXPECT_EQ(run.output().find("--domain auto: domain"), std::string::npos)
+      << "the handlers came only after the domain was chosen: " << run.output();
+  run.signal(SIGTERM);
+  EXPECT_EQ(run.wait(std::chrono::seconds(60)), 128 + SIGTERM) << run.output();
+  EXPECT_NE(run.output().find("interrupted by SIGTERM"), std::string::npos) << run.output();
+  EXPECT_FALSE(fs::exists(dir_ / "results") && !fs::is_empty(dir_ / "results"));
+}
+
+// An interrupted --repeat keeps the runs it made, and its series file says it ended early.
+TEST_F(Faults, AnInterruptedSeriesSaysItEndedEarly) {
+  const fs::path readings = dir_ / "readings";
+  Background run(std::string(ROBOTPERF_EXECUTABLE) + " " + benchmarks("") +
+                     " run f1 --repeat 3 --count 2000 --quiet --power-meter 'echo x >> " +
+                     readings.string() + "; echo 5' --domain " + domain() + " --output " +
+                     (dir_ / "results").string(),
+                 dir_ / "log");
+  ASSERT_TRUE(eventually([&] { return readings_of(readings) >= 2; }, std::chrono::seconds(60)))
+      << run.output();
+  run.signal(SIGINT);
+  EXPECT_EQ(run.wait(std::chrono::seconds(30)), 130) << run.output();
+  EXPECT_NE(run.output().find("ended early after 1 of 3 runs: interrupted by SIGINT"),
+            std::string::npos)
+      << run.output();
+  nlohmann::json series;
+  for (const auto& e : fs::directory_iterator(dir_ / "results")) {
+    if (e.path().string().ends_with(".series.json"))
+      series = nlohmann::json::parse(std::ifstream(e.path()));
+  }
+  ASSERT_TRUE(series.is_object()) << run.output();
+  EXPECT_EQ(series["runs"], 1);
+  EXPECT_EQ(series["planned_runs"], 3);
+  EXPECT_EQ(series["complete"], false);
+  EXPECT_EQ(series["ended_early"], "interrupted by SIGINT");
 }
 
 TEST_F(Faults, ASecondInterruptForcesAndStopsTheNodeProcesses) {

@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <csignal>
+
 #include "../sanitized_build.hpp"
 #include "test_package.hpp"
 
@@ -103,6 +106,35 @@ TEST(PeakSearch, ALossBoundStopsAGraphThatDropsAtEveryRate) {
     EXPECT_NE(s.reason.find("lost, above the 10 % bound"), std::string::npos) << s.reason;
   }
   EXPECT_DOUBLE_EQ(found.record.loss_bound_percent, 10.0);
+}
+
+// An interrupt after the first sustained rate ends the search there: the best run it had is
+// kept, but as a rate the graph sustained, marked interrupted, never as the peak.
+TEST(PeakSearch, AnInterruptedSearchReportsNoPeak) {
+  TestPackage p("peak_interrupted", relay_graph("delay_ms: 1"));
+  const BenchmarkSpec spec = load_benchmark(p.dir());
+  std::atomic<int> interrupted = 0;
+  RunOptions o;
+  o.rate_hz = 20;
+  o.interrupted = &interrupted;
+  PeakSearchOptions search;
+  search.step_duration_s = 1.0;
+  search.rate_high_hz = 400;
+  const PeakSearchResult found = find_peak(spec, o, search, [&](const PeakStep& s) {
+    if (s.passed) interrupted = SIGINT;
+  });
+  ASSERT_TRUE(found.peak.has_value()) << found.record.stop_reason;
+  EXPECT_FALSE(found.record.finished);
+  EXPECT_EQ(found.record.steps.size(), 1u);
+  EXPECT_NE(found.record.stop_reason.find("interrupted"), std::string::npos)
+      << found.record.stop_reason;
+  const RunResult& best = *found.peak;
+  EXPECT_NE(best.throughput_kind, "peak");
+  EXPECT_TRUE(best.interrupted);
+  ASSERT_TRUE(best.peak_search.has_value());
+  EXPECT_FALSE(best.peak_search->finished);
+  ASSERT_FALSE(best.warnings.empty());
+  EXPECT_EQ(best.warnings.back().rule, "peak_search_unfinished");
 }
 
 TEST(PeakSearch, BadBoundsAreRejectedBeforeAnyStep) {

@@ -19,7 +19,7 @@ harness::RunResult run_with(double p50_ms, bool valid = true) {
 }
 
 TEST(Series, SummarisesValidRunsAndListsEveryFile) {
-  Series s("a1");
+  Series s("a1", 4);
   s.add(run_with(4), std::filesystem::path("a.json"));
   s.add(run_with(6), std::filesystem::path("b.json"));
   s.add(run_with(100, false), std::filesystem::path("c.json"));
@@ -40,6 +40,26 @@ TEST(Series, SummarisesValidRunsAndListsEveryFile) {
   EXPECT_TRUE(j["figures"]["latency p50"]["median_ci95"][1].is_null());
 }
 
+// A series that stopped before its planned runs says so, in its table and its file; one that
+// made them all says it is complete.
+TEST(Series, OneThatEndedEarlySaysSo) {
+  Series s("a1", 5);
+  s.add(run_with(4), std::nullopt);
+  s.add(run_with(5), std::nullopt);
+  EXPECT_TRUE(series_json(s)["complete"].get<bool>());
+  EXPECT_TRUE(series_json(s)["ended_early"].is_null());
+  s.end_early("interrupted by SIGINT");
+  const std::string table = series_table(s);
+  EXPECT_NE(table.find("series a1: 2 runs, ended early after 2 of 5 runs: interrupted by SIGINT"),
+            std::string::npos)
+      << table;
+  const nlohmann::json j = series_json(s);
+  EXPECT_EQ(j["planned_runs"], 5);
+  EXPECT_EQ(j["runs"], 2);
+  EXPECT_FALSE(j["complete"].get<bool>());
+  EXPECT_EQ(j["ended_early"], "interrupted by SIGINT");
+}
+
 // Ten runs of a figure that varies from run to run (a skewed distribution, as latencies are):
 // the median's interval holds the true median at least 95 % of the time (98 % exactly, for ten
 // runs: ranks 2 and 9), and is not so wide that it always does.
@@ -49,7 +69,7 @@ TEST(Series, TheMediansIntervalCoversTheTrueMedianAtTheStatedRate) {
   const int trials = 2000;
   int covered = 0;
   for (int t = 0; t < trials; ++t) {
-    Series s("a1");
+    Series s("a1", 10);
     for (int k = 0; k < 10; ++k) s.add(run_with(figure(generator)), std::nullopt);
     const metrics::SampleStats st = s.figures()[0].stats();
     ASSERT_FALSE(std::isnan(st.p50_ci.lower));

@@ -4,6 +4,7 @@
 
 #include <stdexcept>
 
+#include "../interrupts.hpp"
 #include "commands.hpp"
 
 namespace robotperf::cli {
@@ -27,6 +28,9 @@ class RunCommand : public Command {
   }
 
   int run(const Context& context) override {
+    // Before any resource is made (the --netns link, the domain --domain auto reserves, a
+    // trace session): from here on a signal ends the run through its clean-up.
+    const InterruptHandling interrupts;
     auto spec = harness::find_benchmark(context.roots, args_.id);
     apply_workload(spec, args_);
     std::optional<harness::NetworkLink> link;

@@ -61,7 +61,6 @@ std::optional<fs::path> write_result_files(const fs::path& base,
 
 // One run of `spec`; a grey run's trace folder is removed when the run does not happen.
 harness::RunResult measure(const harness::BenchmarkSpec& spec, const harness::RunOptions& o) {
-  const InterruptHandling interrupts;
   try {
     return harness::run_benchmark(spec, o);
   } catch (...) {
@@ -144,16 +143,16 @@ WrittenRun write_run(const harness::BenchmarkSpec& spec, const RunArgs& a,
 // names it for the progress line; after it, `record` keeps its figures. Ends early on an interrupt
 // (during a run or a preparation) or when a result cannot be written. The exit status is the
 // first failing run's, or 128 + the signal when interrupted; `first` is the first results file
-// written.
+// written; `ended_early` why the runs stopped before the last one (empty when they did not).
 struct SeveralRuns {
   int code = kExitOk;
   std::optional<fs::path> first;
+  std::string ended_early;
 };
 SeveralRuns run_several(
     const harness::BenchmarkSpec& spec, const RunArgs& a, const harness::RunOptions& o,
     std::size_t runs, const std::function<std::string(std::size_t)>& prepare,
     const std::function<void(const harness::RunResult&, const WrittenRun&)>& record) {
-  const InterruptHandling interrupts;  // also over the preparations (--repeat-pause)
   SeveralRuns out;
   for (std::size_t i = 0; i < runs; ++i) {
     const std::string label = prepare(i);
@@ -164,9 +163,16 @@ SeveralRuns run_several(
     record(result, written);
     if (!out.first) out.first = written.json;
     if (written.code != kExitOk && out.code == kExitOk) out.code = written.code;
-    if (result.interrupted || written.code == kExitError) break;
+    if (written.code == kExitError) {
+      if (i + 1 < runs) out.ended_early = "a run's results could not be written where asked";
+      break;
+    }
+    if (result.interrupted) break;
   }
-  if (g_interrupted.load() != 0 && out.code == kExitOk) out.code = interrupted_exit_code();
+  if (g_interrupted.load() != 0) {
+    if (out.code == kExitOk) out.code = interrupted_exit_code();
+    out.ended_early = harness::interrupted_by(g_interrupted.load());
+  }
   return out;
 }
 
@@ -223,7 +229,7 @@ int run_once(const harness::BenchmarkSpec& spec, const RunArgs& args,
 
 // --repeat N: N runs; then the run-to-run view of the headline figures (report::series_summary).
 int run_series(const harness::BenchmarkSpec& spec, const RunArgs& a, const harness::RunOptions& o) {
-  report::Series series(spec.id);
+  report::Series series(spec.id, a.repeat);
   const SeveralRuns runs = run_several(
       spec, a, o, a.repeat,
       [&](std::size_t i) {
@@ -233,6 +239,7 @@ int run_series(const harness::BenchmarkSpec& spec, const RunArgs& a, const harne
       [&](const harness::RunResult& result, const WrittenRun& written) {
         series.add(result, written.json);
       });
+  if (!runs.ended_early.empty()) series.end_early(runs.ended_early);
   write_summary(runs, "series", report::series_table(series), report::series_json(series));
   return runs.code;
 }
@@ -247,7 +254,7 @@ int run_sweep(harness::BenchmarkSpec spec, const RunArgs& a, const harness::RunO
     workload[parameter] = value;
     harness::check_workload(spec.dataset, workload);
   }
-  report::Sweep sweep(spec.id, parameter);
+  report::Sweep sweep(spec.id, parameter, values.size());
   const SeveralRuns runs = run_several(
       spec, a, o, values.size(),
       [&](std::size_t i) {
@@ -257,6 +264,7 @@ int run_sweep(harness::BenchmarkSpec spec, const RunArgs& a, const harness::RunO
       [&](const harness::RunResult& result, const WrittenRun& written) {
         sweep.add(spec.workload[parameter], result, written.json);
       });
+  if (!runs.ended_early.empty()) sweep.end_early(runs.ended_early);
   write_summary(runs, "sweep", report::sweep_table(sweep), report::sweep_json(sweep));
   return runs.code;
 }
@@ -268,7 +276,6 @@ int run_peak_search(const harness::BenchmarkSpec& spec, const RunArgs& a, harnes
   harness::PeakSearchOptions search = peak_search_options(a);
   o.duration_s.reset();
   o.progress = nullptr;
-  const InterruptHandling interrupts;
   std::size_t steps = 0;
   auto found = harness::find_peak(spec, o, search, [&](const harness::PeakStep& s) {
     if (a.quiet) return;

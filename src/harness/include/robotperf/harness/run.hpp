@@ -220,6 +220,9 @@ struct PeakSearchRecord {
   std::vector<PeakStep> steps;  // in the order tried
   // Why the search ended where it did: the next rate's failure, the top of the range, ...
   std::string stop_reason;
+  // False when an interrupt or an error ended it before its bounds did: the best rate it had
+  // then is only a rate the graph sustained, not its peak.
+  bool finished = true;
 };
 
 struct RunResult {
@@ -356,6 +359,9 @@ class GraphNotConnected : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+// "interrupted by SIGINT": how a result and a summary name the signal that ended a run.
+std::string interrupted_by(int signal_number);
 
 // An interrupt (RunOptions::interrupted) came before timing started: nothing was measured.
 class RunInterrupted : public std::runtime_error {

@@ -26,9 +26,21 @@ struct SeriesFigure {
   double spread_percent() const;
 };
 
+// How far several runs of one benchmark (a series, a sweep) got: every run planned, or fewer and
+// why. A summary over fewer runs than asked for says so, in its table and its file.
+struct RunsCompleted {
+  std::size_t planned = 0;
+  std::string ended_early;  // why no further run was made; empty when all were
+
+  // ", ended early after D of P runs: WHY" when it did, else "".
+  std::string note(std::size_t done) const;
+  // Adds "planned_runs", "complete" and "ended_early" (the reason, or null) to a summary file.
+  void add_to(nlohmann::json& summary) const;
+};
+
 class Series {
  public:
-  explicit Series(std::string benchmark_id);
+  Series(std::string benchmark_id, std::size_t planned_runs);
 
   // A finished run: its file (when written) is listed; its figures count when it is valid.
   void add(const harness::RunResult& run, const std::optional<std::filesystem::path>& json);
@@ -39,9 +51,13 @@ class Series {
   const std::vector<std::string>& files() const { return files_; }
   // Latency p50, p99 and max (ms, from the scheduled send), throughput (Hz), loss (%).
   const std::vector<SeriesFigure>& figures() const { return figures_; }
+  // No further run will be added, before the planned number: the summary says why.
+  void end_early(std::string why) { completed_.ended_early = std::move(why); }
+  const RunsCompleted& completed() const { return completed_; }
 
  private:
   std::string benchmark_id_;
+  RunsCompleted completed_;
   std::size_t runs_ = 0;
   std::size_t valid_runs_ = 0;
   std::vector<std::string> files_;

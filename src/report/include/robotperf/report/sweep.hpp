@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "robotperf/harness/run.hpp"
+#include "robotperf/report/series.hpp"
 
 namespace robotperf::report {
 
@@ -26,17 +27,21 @@ struct SweepRow {
 
 class Sweep {
  public:
-  Sweep(std::string benchmark_id, std::string parameter);
+  Sweep(std::string benchmark_id, std::string parameter, std::size_t planned_runs);
   void add(const std::string& value, const harness::RunResult& run,
            const std::optional<std::filesystem::path>& json);
 
   const std::string& benchmark_id() const { return benchmark_id_; }
   const std::string& parameter() const { return parameter_; }
   const std::vector<SweepRow>& rows() const { return rows_; }
+  // No further value will be run, before the last one: the summary says why.
+  void end_early(std::string why) { completed_.ended_early = std::move(why); }
+  const RunsCompleted& completed() const { return completed_; }
 
  private:
   std::string benchmark_id_;
   std::string parameter_;
+  RunsCompleted completed_;
   std::vector<SweepRow> rows_;
 };
 
