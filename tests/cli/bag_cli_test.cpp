@@ -283,6 +283,23 @@ TEST_F(BagCli, AFlatMsgDirSrvFileServesAServiceEventTopic) {
   expect_add_two_ints_events(robotperf_cli("bag echo " + path("mcap")));
 }
 
+// ROS 2's bags keep their definitions in the storage (MCAP schemas, sqlite3 message_definitions),
+// not in metadata.yaml: `run --dataset` reads them there, so that refusing a topic names its real
+// fault (no std_msgs/Header to carry message IDs), not a missing definition.
+TEST_F(BagCli, RunDatasetJudgesTopicsByTheDefinitionsInTheStorage) {
+  const std::pair<std::string, std::string> bags[] = {
+      {"mcap_talker", " --remap /topic:=/camera/image_raw --remap /rosout:=/camera/camera_info"},
+      {"sqlite3_cdr_test",
+       " --remap /test_topic:=/camera/image_raw --remap /array_topic:=/camera/camera_info"}};
+  for (const auto& [name, remaps] : bags) {
+    const Outcome o = robotperf_cli("run a1 --dataset " + shared_bag(name) + remaps);
+    EXPECT_EQ(o.exit_code, 2) << name << ": " << o.out;
+    EXPECT_EQ(o.out.find("has no definition"), std::string::npos) << name << ": " << o.out;
+    EXPECT_NE(o.out.find("does not start with a std_msgs/Header"), std::string::npos)
+        << name << ": " << o.out;
+  }
+}
+
 // A split bag that lost its metadata.yaml: reindex writes it again from the storage files, in
 // the order of their split index, and will not overwrite one that exists.
 TEST_F(BagCli, ReindexRestoresASplitBagsMetadata) {
