@@ -300,6 +300,67 @@ TEST_F(BagCli, RunDatasetJudgesTopicsByTheDefinitionsInTheStorage) {
   }
 }
 
+// `bag info` states what metadata.yaml says; `--verify` reads the storage too and names, one line
+// each, where it disagrees: counts per topic and in total, first and last times, a storage that
+// cannot be read. ROS 2's own bags agree with themselves.
+TEST_F(BagCli, InfoVerifyReportsWhereTheStorageDisagreesWithMetadata) {
+  for (const std::string name : {"mcap_talker", "sqlite3_cdr_test"}) {
+    const Outcome o = robotperf_cli("bag info --verify " + shared_bag(name));
+    EXPECT_EQ(o.exit_code, 0) << name << ": " << o.out;
+    EXPECT_NE(o.out.find("counts and times agree"), std::string::npos) << name << ": " << o.out;
+  }
+  // A writable copy of ROS 2's bag `name` at `to`.
+  const auto copy = [&](const std::string& name, const std::string& to) {
+    fs::copy(shared_bag(name), dir_ / to);
+    for (const auto& e : fs::directory_iterator(dir_ / to))
+      fs::permissions(e.path(), fs::perms::owner_write, fs::perm_options::add);
+    return dir_ / to;
+  };
+
+  // The first and last messages lost (one of each topic), metadata.yaml left as it was.
+  const fs::path lost = copy("sqlite3_cdr_test", "lost");
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((lost / "cdr_test_0.db3").c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db,
+                         "DELETE FROM messages WHERE timestamp IN ((SELECT MIN(timestamp) FROM "
+                         "messages), (SELECT MAX(timestamp) FROM messages))",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  Outcome o = robotperf_cli("bag info " + lost.string());
+  EXPECT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("Messages:          7"), std::string::npos) << o.out;
+  o = robotperf_cli("bag info --verify " + lost.string());
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  for (const std::string line :
+       {"topic /array_topic: metadata.yaml says 4 messages, the storage holds 3\n",
+        "topic /test_topic: metadata.yaml says 3 messages, the storage holds 2\n",
+        "total: metadata.yaml says 7 messages, the storage holds 5\n",
+        "start: metadata.yaml says 1586406456.763032325 s, the first message is at "
+        "1586406456.782683500 s\n",
+        "end: metadata.yaml says 1586406456.914169506 s (start + duration), the last message is "
+        "at 1586406456.866330524 s\n"}) {
+    EXPECT_NE(o.out.find("robotperf: " + lost.string() + ": " + line), std::string::npos)
+        << line << o.out;
+  }
+  EXPECT_EQ(o.out.find("Verified"), std::string::npos) << o.out;
+
+  // Storage files cut short: `bag info` alone cannot tell, --verify says so in one line.
+  const fs::path cut_sqlite = copy("sqlite3_cdr_test", "cut_sqlite");
+  fs::resize_file(cut_sqlite / "cdr_test_0.db3", 5000);
+  const fs::path cut_mcap = copy("mcap_talker", "cut_mcap");
+  fs::resize_file(cut_mcap / "talker.mcap", fs::file_size(cut_mcap / "talker.mcap") / 2);
+  for (const fs::path& cut : {cut_sqlite, cut_mcap}) {
+    EXPECT_EQ(robotperf_cli("bag info " + cut.string()).exit_code, 0) << cut;
+    o = robotperf_cli("bag info --verify " + cut.string());
+    EXPECT_EQ(o.exit_code, 2) << o.out;
+    EXPECT_NE(o.out.find("robotperf: " + cut.string() + ": the storage is unreadable after "),
+              std::string::npos)
+        << o.out;
+    EXPECT_EQ(o.out.find("total:"), std::string::npos) << o.out;
+  }
+}
+
 // A split bag that lost its metadata.yaml: reindex writes it again from the storage files, in
 // the order of their split index, and will not overwrite one that exists.
 TEST_F(BagCli, ReindexRestoresASplitBagsMetadata) {
