@@ -6,6 +6,7 @@
 
 #include <map>
 #include <set>
+#include <string_view>
 
 #include "robotperf/bag/bag.hpp"
 #include "robotperf/bag/qos.hpp"
@@ -92,6 +93,18 @@ class Database {
   fs::path file_;
 };
 
+// The service a service type is derived from ("pkg/srv/Name" for pkg/srv/Name_Event, _Request or
+// _Response), or "" for other types. Jazzy stores the definition of a service event topic's type
+// under the service's name, as its .srv text, from which the derived types are built.
+std::string service_of(const std::string& type) {
+  if (type.find("/srv/") == std::string::npos) return "";
+  for (const std::string_view suffix : {"_Event", "_Request", "_Response"}) {
+    if (type.size() > suffix.size() && type.ends_with(suffix))
+      return type.substr(0, type.size() - suffix.size());
+  }
+  return "";
+}
+
 class SqliteReader final : public StorageReader {
  public:
   SqliteReader(const fs::path& file, const ReadOptions& options)
@@ -140,8 +153,11 @@ class SqliteReader final : public StorageReader {
       t.serialization_format = q.text(3);
       t.offered_qos_profiles = q.text(4);
       t.type_description_hash = q.text(5);
-      if (auto it = definitions.find(t.type);
-          it != definitions.end() && it->second.first != "unknown") {
+      auto it = definitions.find(t.type);
+      if (const std::string service = service_of(t.type);
+          it == definitions.end() && !service.empty())
+        it = definitions.find(service);
+      if (it != definitions.end() && it->second.first != "unknown") {
         t.definition_encoding = it->second.first;
         t.definition = it->second.second;
       }

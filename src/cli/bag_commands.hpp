@@ -8,8 +8,10 @@
 
 namespace robotperf::cli {
 
-// Like `ros2 bag info`: storage, files, duration, per-topic counts, types, QoS.
-int bag_info(const std::string& path);
+// Like `ros2 bag info`: storage, files, duration, per-topic counts, types, QoS. With `verify`,
+// also reads every message and reports, one line each, where the storage disagrees with what
+// metadata.yaml states: kExitUsage when it does.
+int bag_info(const std::string& path, bool verify);
 
 struct EchoOptions {
   std::vector<std::string> topics;    // empty: all

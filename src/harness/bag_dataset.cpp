@@ -86,7 +86,9 @@ Dataset load_bag_dataset(const BagSelection& selection, const std::vector<Bounda
                          std::vector<std::string>* corrupt) {
   const std::string path = selection.path.string();
   if (inputs.empty()) throw BenchmarkError("a benchmark without inputs cannot replay bag " + path);
-  const bag::BagInfo info = bag::read_info(selection.path);
+  // From a Reader, not read_info(): ROS 2 keeps the definitions the checks below judge types by in
+  // the storage (MCAP schemas, sqlite3 message_definitions), not in metadata.yaml.
+  const bag::BagInfo info = bag::Reader(selection.path).info();
   auto benchmark_topic = [&](const std::string& bag_topic) {
     auto it = selection.remaps.find(bag_topic);
     return it == selection.remaps.end() ? bag_topic : it->second;

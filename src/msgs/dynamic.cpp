@@ -60,6 +60,31 @@ std::string standard_definition(const std::string& type) {
   return ros2msg_schema(type).value();
 }
 
+// The service's or action's name in the name of a type derived from it ("AddTwoInts" for
+// "AddTwoInts_Event"); a name without a derived type's suffix is the interface's own.
+std::string interface_name(std::string name) {
+  static const char* const kSuffixes[] = {"_SendGoal_Request",
+                                          "_SendGoal_Response",
+                                          "_SendGoal_Event",
+                                          "_GetResult_Request",
+                                          "_GetResult_Response",
+                                          "_GetResult_Event",
+                                          "_FeedbackMessage",
+                                          "_Request",
+                                          "_Response",
+                                          "_Event",
+                                          "_Goal",
+                                          "_Result",
+                                          "_Feedback"};
+  for (const char* suffix : kSuffixes) {
+    if (name.size() > std::strlen(suffix) && name.ends_with(suffix)) {
+      name.resize(name.size() - std::strlen(suffix));
+      break;
+    }
+  }
+  return name;
+}
+
 std::string package_of(const std::string& type) {
   return type.substr(0, type.find('/'));
 }
@@ -490,9 +515,13 @@ void TypeRegistry::add_ros2msg(const std::string& type, std::string_view schema)
     text.clear();
   };
   bool expect_name = false;
+  bool first_line = true;
   while (std::getline(lines, line)) {
+    const bool leading = std::exchange(first_line, false);
     if (line.size() >= 10 && line.find_first_not_of('=') == std::string::npos) {
-      flush();
+      // A schema that starts with a section has no text for `type` itself (Jazzy's service event
+      // schemas): `type` is not a type without fields, it comes from the section.
+      if (!leading) flush();
       current.clear();
       expect_name = true;
       continue;
@@ -517,32 +546,12 @@ void TypeRegistry::add_interface(const std::string& type, std::string_view text)
   const auto last = full.rfind('/');
   const std::string package = full.substr(0, first);
   const std::string kind = full.substr(first + 1, last - first - 1);
-  std::string base = full.substr(last + 1);
+  const std::string base = interface_name(full.substr(last + 1));
   const std::vector<std::string> parts = interface_parts(text);
   if ((kind != "srv" || parts.size() != 2) && (kind != "action" || parts.size() != 3)) {
     throw DefinitionError(full + ": a definition with " + std::to_string(parts.size()) +
                           " parts between '---' lines is neither a service (2, pkg/srv/...) nor "
                           "an action (3, pkg/action/...)");
-  }
-  // The type asked for names one of the derived types: strip its suffix to get the interface.
-  static const char* const kSuffixes[] = {"_SendGoal_Request",
-                                          "_SendGoal_Response",
-                                          "_SendGoal_Event",
-                                          "_GetResult_Request",
-                                          "_GetResult_Response",
-                                          "_GetResult_Event",
-                                          "_FeedbackMessage",
-                                          "_Request",
-                                          "_Response",
-                                          "_Event",
-                                          "_Goal",
-                                          "_Result",
-                                          "_Feedback"};
-  for (const char* suffix : kSuffixes) {
-    if (base.size() > std::strlen(suffix) && base.ends_with(suffix)) {
-      base.resize(base.size() - std::strlen(suffix));
-      break;
-    }
   }
   const std::string prefix = package + "/" + kind + "/" + base;
   // The types ROS 2 generates around them use these standard types, when the registry lacks them.
@@ -611,7 +620,7 @@ std::size_t TypeRegistry::add_directory(const fs::path& dir, const std::string& 
     } catch (const DefinitionError& e) {
       throw DefinitionError(entry.path().string() + ": " + e.what());
     }
-    if (flat && package.empty() && kind == "msg") unpackaged_[name] = text.str();
+    if (flat && package.empty()) unpackaged_[kind + "/" + name] = text.str();
     ++n;
   }
   return n;
@@ -626,9 +635,19 @@ std::size_t TypeRegistry::adopt(const std::string& type) {
     todo.pop_back();
     if (!seen.insert(t).second) continue;
     if (!contains(t)) {
-      auto flat = unpackaged_.find(t.substr(t.rfind('/') + 1));
+      // "pkg/msg/Name" is served by a flat Name.msg; "pkg/srv/Name_Event" (any type derived from
+      // a service or action) by a flat Name.srv (Name.action).
+      const auto first = t.find('/');
+      const auto last = t.rfind('/');
+      const std::string kind = t.substr(first + 1, last - first - 1);
+      const std::string name = t.substr(last + 1);
+      auto flat = unpackaged_.find(kind + "/" + (kind == "msg" ? name : interface_name(name)));
       if (flat == unpackaged_.end()) continue;
-      add_msg(t, flat->second);
+      if (kind == "msg") {
+        add_msg(t, flat->second);
+      } else {
+        add_interface(t, flat->second);
+      }
       ++adopted;
     }
     for (const Field& f : get(t).fields) {

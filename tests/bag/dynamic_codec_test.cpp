@@ -131,6 +131,22 @@ TEST(DynamicCodec, ServiceEventTypesComeFromTheSrvText) {
   EXPECT_EQ(dyn::encode(registry, "test_msgs/srv/BasicTypes_Event", v), payload);
 }
 
+// Jazzy's schema of a service event type is the .srv text behind an "SRV: pkg/srv/Name" heading,
+// with no text of its own: the name it is stored under gets no definition from the empty text
+// before the heading (it would decode as a type without fields).
+TEST(DynamicCodec, AJazzyServiceSchemaDefinesOnlyTheTypesOfItsSrvSection) {
+  const std::string schema = std::string(80, '=') +
+                             "\nSRV: example_interfaces/srv/AddTwoInts\nint64 a\nint64 b\n---\n"
+                             "int64 sum\n";
+  dyn::TypeRegistry registry;
+  registry.add_ros2msg("example_interfaces/srv/AddTwoInts_Event", schema);
+  EXPECT_EQ(registry.get("example_interfaces/srv/AddTwoInts_Event").fields.size(), 3u);
+  EXPECT_EQ(registry.get("example_interfaces/srv/AddTwoInts_Request").fields.size(), 2u);
+  dyn::TypeRegistry misnamed;
+  misnamed.add_ros2msg("example_interfaces/srv/Other_Event", schema);
+  EXPECT_FALSE(misnamed.contains("example_interfaces/srv/Other_Event"));
+}
+
 TEST(DynamicCodec, ActionTypesComeFromTheActionText) {
   dyn::TypeRegistry registry;
   registry.add_interface("test_msgs/action/Fibonacci_FeedbackMessage",

@@ -154,6 +154,213 @@ TEST_F(BagCli, ServiceEventTopicsDecode) {
   EXPECT_NE(o.out.find("request: []"), std::string::npos) << o.out;
 }
 
+// CDR as ROS 2 writes it (little endian): each value aligned to its size, counted from the first
+// byte after the 4-byte encapsulation header.
+class Cdr {
+ public:
+  template <class T>
+  Cdr& put(T value) {
+    while ((bytes_.size() - 4) % sizeof(T) != 0) bytes_.push_back(0);
+    const auto* p = reinterpret_cast<const uint8_t*>(&value);
+    bytes_.insert(bytes_.end(), p, p + sizeof(T));
+    return *this;
+  }
+  const std::vector<uint8_t>& bytes() const { return bytes_; }
+
+ private:
+  std::vector<uint8_t> bytes_{0, 1, 0, 0};
+};
+
+// One example_interfaces/srv/AddTwoInts_Event: ServiceEventInfo (event_type, stamp, a 16-byte
+// client GID, sequence number), then request[<=1] {a, b} and response[<=1] {sum}.
+std::vector<uint8_t> add_two_ints_event(uint8_t event_type,
+                                        const std::vector<std::pair<int64_t, int64_t>>& request,
+                                        const std::vector<int64_t>& response) {
+  Cdr cdr;
+  cdr.put(event_type).put(int32_t{1'700'000'000}).put(uint32_t{5});
+  for (uint8_t b = 1; b <= 16; ++b) cdr.put(b);
+  cdr.put(int64_t{1}).put(static_cast<uint32_t>(request.size()));
+  for (const auto& [a, b] : request) cdr.put(a).put(b);
+  cdr.put(static_cast<uint32_t>(response.size()));
+  for (const int64_t sum : response) cdr.put(sum);
+  return cdr.bytes();
+}
+
+constexpr const char* kAddTwoIntsSrv = "int64 a\nint64 b\n---\nint64 sum\n";
+
+// A Jazzy recording of the service /add_two_ints, as rosbag2 writes it into sqlite3 (schema 4):
+// the topic /add_two_ints/_service_event of type example_interfaces/srv/AddTwoInts_Event, and,
+// when `with_definition`, its definition stored under the service's name, the .srv text behind
+// an "SRV:" heading. One request sent, one response received.
+void write_jazzy_service_bag(const fs::path& file, bool with_definition) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(file.c_str(), &db), SQLITE_OK);
+  const std::string definition =
+      std::string(80, '=') + "\nSRV: example_interfaces/srv/AddTwoInts\n" + kAddTwoIntsSrv;
+  const std::string sql =
+      "CREATE TABLE schema(schema_version INTEGER PRIMARY KEY,ros_distro TEXT NOT NULL);"
+      "INSERT INTO schema VALUES(4,'jazzy');"
+      "CREATE TABLE metadata(id INTEGER PRIMARY KEY,metadata_version INTEGER NOT NULL,"
+      "metadata TEXT NOT NULL);"
+      "CREATE TABLE topics(id INTEGER PRIMARY KEY,name TEXT NOT NULL,type TEXT NOT NULL,"
+      "serialization_format TEXT NOT NULL,offered_qos_profiles TEXT NOT NULL,"
+      "type_description_hash TEXT NOT NULL);"
+      "CREATE TABLE message_definitions(id INTEGER PRIMARY KEY,topic_type TEXT NOT NULL,"
+      "encoding TEXT NOT NULL,encoded_message_definition TEXT NOT NULL,"
+      "type_description_hash TEXT NOT NULL);"
+      "CREATE TABLE messages(id INTEGER PRIMARY KEY,topic_id INTEGER NOT NULL,"
+      "timestamp INTEGER NOT NULL,data BLOB NOT NULL);"
+      "INSERT INTO topics VALUES(1,'/add_two_ints/_service_event',"
+      "'example_interfaces/srv/AddTwoInts_Event','cdr','','');" +
+      (with_definition ? "INSERT INTO message_definitions VALUES(1,"
+                         "'example_interfaces/srv/AddTwoInts','ros2msg','" +
+                             definition + "','');"
+                       : std::string());
+  ASSERT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK)
+      << sqlite3_errmsg(db);
+  const std::vector<uint8_t> events[] = {add_two_ints_event(0, {{2, 3}}, {}),
+                                         add_two_ints_event(3, {}, {5})};
+  sqlite3_stmt* insert = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(db, "INSERT INTO messages(topic_id, timestamp, data) VALUES(1,?,?)",
+                               -1, &insert, nullptr),
+            SQLITE_OK);
+  for (int k = 0; k < 2; ++k) {
+    sqlite3_bind_int64(insert, 1, 1'700'000'000'000'000'000 + k);
+    sqlite3_bind_blob(insert, 2, events[k].data(), static_cast<int>(events[k].size()),
+                      SQLITE_STATIC);
+    ASSERT_EQ(sqlite3_step(insert), SQLITE_DONE);
+    sqlite3_reset(insert);
+  }
+  sqlite3_finalize(insert);
+  sqlite3_close(db);
+}
+
+// What `bag echo` prints for the two AddTwoInts events, in order.
+void expect_add_two_ints_events(const Outcome& o) {
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_EQ(o.out.find("warning"), std::string::npos) << o.out;
+  const auto request = o.out.find("event_type: 0");
+  const auto response = o.out.find("event_type: 3");
+  ASSERT_NE(request, std::string::npos) << o.out;
+  ASSERT_NE(response, std::string::npos) << o.out;
+  EXPECT_NE(
+      o.out.find("--- /add_two_ints/_service_event [example_interfaces/srv/AddTwoInts_Event]"),
+      std::string::npos)
+      << o.out;
+  EXPECT_NE(o.out.find("sec: 1700000000"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("sequence_number: 1"), std::string::npos) << o.out;
+  const auto a = o.out.find("a: 2", request);
+  const auto b = o.out.find("b: 3", request);
+  EXPECT_LT(a, response) << o.out;
+  EXPECT_LT(b, response) << o.out;
+  EXPECT_NE(o.out.find("sum: 5", response), std::string::npos) << o.out;
+}
+
+// Jazzy stores a service event topic's definition under the service (pkg/srv/Name), not under
+// the topic's type (pkg/srv/Name_Event): echo finds it there, and conversion carries it into an
+// MCAP schema that decodes on its own.
+TEST_F(BagCli, AJazzySqliteServiceEventBagDecodesAndConverts) {
+  write_jazzy_service_bag(dir_ / "jazzy.db3", true);
+  expect_add_two_ints_events(robotperf_cli("bag echo " + path("jazzy.db3")));
+  const Outcome converted = robotperf_cli("bag convert " + path("jazzy.db3") + " " + path("mcap"));
+  ASSERT_EQ(converted.exit_code, 0) << converted.out;
+  EXPECT_EQ(converted.out.find("warning"), std::string::npos) << converted.out;
+  expect_add_two_ints_events(robotperf_cli("bag echo " + path("mcap")));
+}
+
+// Without a stored definition, a flat --msg-dir holding the .srv file serves the service's
+// derived types by name, whatever the folder is called.
+TEST_F(BagCli, AFlatMsgDirSrvFileServesAServiceEventTopic) {
+  write_jazzy_service_bag(dir_ / "bare.db3", false);
+  fs::create_directories(dir_ / "interfaces");
+  std::ofstream(dir_ / "interfaces" / "AddTwoInts.srv") << kAddTwoIntsSrv;
+  expect_add_two_ints_events(
+      robotperf_cli("bag echo " + path("bare.db3") + " --msg-dir " + path("interfaces")));
+  const Outcome converted = robotperf_cli("bag convert " + path("bare.db3") + " " + path("mcap") +
+                                          " --msg-dir " + path("interfaces"));
+  ASSERT_EQ(converted.exit_code, 0) << converted.out;
+  EXPECT_EQ(converted.out.find("warning"), std::string::npos) << converted.out;
+  expect_add_two_ints_events(robotperf_cli("bag echo " + path("mcap")));
+}
+
+// ROS 2's bags keep their definitions in the storage (MCAP schemas, sqlite3 message_definitions),
+// not in metadata.yaml: `run --dataset` reads them there, so that refusing a topic names its real
+// fault (no std_msgs/Header to carry message IDs), not a missing definition.
+TEST_F(BagCli, RunDatasetJudgesTopicsByTheDefinitionsInTheStorage) {
+  const std::pair<std::string, std::string> bags[] = {
+      {"mcap_talker", " --remap /topic:=/camera/image_raw --remap /rosout:=/camera/camera_info"},
+      {"sqlite3_cdr_test",
+       " --remap /test_topic:=/camera/image_raw --remap /array_topic:=/camera/camera_info"}};
+  for (const auto& [name, remaps] : bags) {
+    const Outcome o = robotperf_cli("run a1 --dataset " + shared_bag(name) + remaps);
+    EXPECT_EQ(o.exit_code, 2) << name << ": " << o.out;
+    EXPECT_EQ(o.out.find("has no definition"), std::string::npos) << name << ": " << o.out;
+    EXPECT_NE(o.out.find("does not start with a std_msgs/Header"), std::string::npos)
+        << name << ": " << o.out;
+  }
+}
+
+// `bag info` states what metadata.yaml says; `--verify` reads the storage too and names, one line
+// each, where it disagrees: counts per topic and in total, first and last times, a storage that
+// cannot be read. ROS 2's own bags agree with themselves.
+TEST_F(BagCli, InfoVerifyReportsWhereTheStorageDisagreesWithMetadata) {
+  for (const std::string name : {"mcap_talker", "sqlite3_cdr_test"}) {
+    const Outcome o = robotperf_cli("bag info --verify " + shared_bag(name));
+    EXPECT_EQ(o.exit_code, 0) << name << ": " << o.out;
+    EXPECT_NE(o.out.find("counts and times agree"), std::string::npos) << name << ": " << o.out;
+  }
+  // A writable copy of ROS 2's bag `name` at `to`.
+  const auto copy = [&](const std::string& name, const std::string& to) {
+    fs::copy(shared_bag(name), dir_ / to);
+    for (const auto& e : fs::directory_iterator(dir_ / to))
+      fs::permissions(e.path(), fs::perms::owner_write, fs::perm_options::add);
+    return dir_ / to;
+  };
+
+  // The first and last messages lost (one of each topic), metadata.yaml left as it was.
+  const fs::path lost = copy("sqlite3_cdr_test", "lost");
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((lost / "cdr_test_0.db3").c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db,
+                         "DELETE FROM messages WHERE timestamp IN ((SELECT MIN(timestamp) FROM "
+                         "messages), (SELECT MAX(timestamp) FROM messages))",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  Outcome o = robotperf_cli("bag info " + lost.string());
+  EXPECT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("Messages:          7"), std::string::npos) << o.out;
+  o = robotperf_cli("bag info --verify " + lost.string());
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  for (const std::string line :
+       {"topic /array_topic: metadata.yaml says 4 messages, the storage holds 3\n",
+        "topic /test_topic: metadata.yaml says 3 messages, the storage holds 2\n",
+        "total: metadata.yaml says 7 messages, the storage holds 5\n",
+        "start: metadata.yaml says 1586406456.763032325 s, the first message is at "
+        "1586406456.782683500 s\n",
+        "end: metadata.yaml says 1586406456.914169506 s (start + duration), the last message is "
+        "at 1586406456.866330524 s\n"}) {
+    EXPECT_NE(o.out.find("robotperf: " + lost.string() + ": " + line), std::string::npos)
+        << line << o.out;
+  }
+  EXPECT_EQ(o.out.find("Verified"), std::string::npos) << o.out;
+
+  // Storage files cut short: `bag info` alone cannot tell, --verify says so in one line.
+  const fs::path cut_sqlite = copy("sqlite3_cdr_test", "cut_sqlite");
+  fs::resize_file(cut_sqlite / "cdr_test_0.db3", 5000);
+  const fs::path cut_mcap = copy("mcap_talker", "cut_mcap");
+  fs::resize_file(cut_mcap / "talker.mcap", fs::file_size(cut_mcap / "talker.mcap") / 2);
+  for (const fs::path& cut : {cut_sqlite, cut_mcap}) {
+    EXPECT_EQ(robotperf_cli("bag info " + cut.string()).exit_code, 0) << cut;
+    o = robotperf_cli("bag info --verify " + cut.string());
+    EXPECT_EQ(o.exit_code, 2) << o.out;
+    EXPECT_NE(o.out.find("robotperf: " + cut.string() + ": the storage is unreadable after "),
+              std::string::npos)
+        << o.out;
+    EXPECT_EQ(o.out.find("total:"), std::string::npos) << o.out;
+  }
+}
+
 // A split bag that lost its metadata.yaml: reindex writes it again from the storage files, in
 // the order of their split index, and will not overwrite one that exists.
 TEST_F(BagCli, ReindexRestoresASplitBagsMetadata) {

@@ -13,7 +13,11 @@ class BagCommand : public Command {
     command->require_subcommand(1);
     info_ = command->add_subcommand("info", "storage, duration, topics, counts, QoS");
     info_->add_option("bag", path_, "bag directory, .db3 or .mcap file")->required();
-    info_->footer("Example: robotperf bag info camera_bag");
+    info_->add_flag(
+        "--verify", verify_,
+        "also read every message and report, one line each, where the storage "
+        "disagrees with metadata.yaml (counts, start, end, unreadable storage): exit 2");
+    info_->footer("Example: robotperf bag info camera_bag --verify");
     declare_echo(*command);
     declare_convert(*command);
     reindex_ = command->add_subcommand(
@@ -24,7 +28,7 @@ class BagCommand : public Command {
   }
 
   int run(const Context&) override {
-    if (*info_) return bag_info(path_);
+    if (*info_) return bag_info(path_, verify_);
     if (*echo_) return bag_echo(path_, echo_options_);
     if (*convert_) return bag_convert(path_, convert_out_, convert_options_);
     return bag_reindex(reindex_dir_);
@@ -67,6 +71,7 @@ class BagCommand : public Command {
   }
 
   std::string path_;
+  bool verify_ = false;
   EchoOptions echo_options_;
   ConvertOptions convert_options_;
   std::string convert_out_;

@@ -133,6 +133,13 @@ class Reader {
 // metadata.yaml or the storage's own summary).
 BagInfo read_info(const std::filesystem::path& path);
 
+// Reads every message of the bag and compares what its storage holds with what read_info()
+// states (metadata.yaml, or a lone storage file's summary): each topic's message count, the
+// total, and the times of the first and last messages. Returns one line per disagreement, none
+// when they agree; a storage that cannot be read to its end is one line, naming the file and the
+// problem.
+std::vector<std::string> verify(const std::filesystem::path& path);
+
 struct WriteOptions {
   Storage storage = Storage::kSqlite3;
   Compression compression = Compression::kZstd;  // MCAP chunk compression

@@ -74,7 +74,9 @@ class TypeRegistry {
   void add(MessageDefinition definition);
   void add_msg(const std::string& type, std::string_view text) { add(parse_msg(type, text)); }
   // A bag schema: `type`'s .msg, then "====...\nMSG: pkg/Type\n<text>" sections. A section
-  // holding a .srv or .action text defines the types derived from it (add_interface).
+  // holding a .srv or .action text defines the types derived from it (add_interface); Jazzy's
+  // schema of a service event type has no text of its own and starts with such a section
+  // ("SRV: pkg/srv/Name").
   void add_ros2msg(const std::string& type, std::string_view schema);
   // A service's (pkg/srv/...) or action's (pkg/action/...) text, named by any type derived from
   // it: defines <Name>_Request, _Response and _Event (ServiceEventInfo info, request[<=1],
@@ -85,9 +87,10 @@ class TypeRegistry {
   // package `package`, default the folder's name, or its parent's for a folder named "msg").
   // Returns how many.
   std::size_t add_directory(const std::filesystem::path& dir, const std::string& package = "");
-  // Defines `type` and the types it needs that are still unknown from .msg files a flat folder
-  // gave without a package (add_directory with no `package`), matched by name: a flat folder of
-  // test_msgs files serves test_msgs/msg/Arrays whatever the folder is called. Returns how many.
+  // Defines `type` and the types it needs that are still unknown from .msg (.srv, .action) files
+  // a flat folder gave without a package (add_directory with no `package`), matched by name: a
+  // flat folder of test_msgs files serves test_msgs/msg/Arrays whatever the folder is called, and
+  // one holding AddTwoInts.srv serves example_interfaces/srv/AddTwoInts_Event. Returns how many.
   std::size_t adopt(const std::string& type);
 
   bool contains(const std::string& type) const;
@@ -101,7 +104,8 @@ class TypeRegistry {
 
  private:
   std::map<std::string, MessageDefinition> types_;
-  std::map<std::string, std::string> unpackaged_;  // name -> .msg text, from flat folders
+  // "msg/Name", "srv/Name" or "action/Name" -> the file's text, from flat folders.
+  std::map<std::string, std::string> unpackaged_;
 };
 
 struct Value;
