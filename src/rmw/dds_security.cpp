@@ -444,6 +444,31 @@ void link(const fs::path& to, const fs::path& path) {
 
 // --- The keystore --------------------------------------------------------------------------------
 
+// The enclaves a keystore holds: every folder under enclaves/ with a certificate or a key, named
+// as an enclave ("/robot/camera"). Whatever else is there (a damaged enclave's remains without
+// either) is not one.
+std::vector<std::string> enclaves_in(const fs::path& keystore) {
+  std::vector<std::string> found;
+  std::error_code error;
+  const fs::path root = keystore / "enclaves";
+  for (fs::recursive_directory_iterator it(root, error), end; !error && it != end;
+       it.increment(error)) {
+    if (!it->is_directory(error)) continue;
+    if (!fs::exists(it->path() / kCertificate, error) &&
+        !fs::exists(it->path() / kPrivateKey, error))
+      continue;
+    const std::string name = "/" + it->path().lexically_relative(root).generic_string();
+    try {
+      check_enclave_name(name);
+      found.push_back(name);
+    } catch (const SecurityError&) {
+      // Not a name robotperf would have made: not an enclave of ours.
+    }
+  }
+  std::ranges::sort(found);
+  return found;
+}
+
 // The CA of a keystore (identity and permissions CA at once) and its signed governance.
 struct Authority {
   Certificate certificate;
@@ -534,6 +559,30 @@ std::vector<std::string> missing_enclaves(const fs::path& keystore,
     if (std::ranges::find(missing, enclave) == missing.end()) missing.push_back(enclave);
   }
   return missing;
+}
+
+// A whole keystore in the empty folder `root`: a new CA, its governance and `enclaves`.
+void build_keystore(const fs::path& root, const std::vector<std::string>& enclaves,
+                    int validity_days) {
+  const std::time_t now = std::time(nullptr);
+  const Authority ca = new_authority(now, validity_days);
+  make_folder(root / "public");
+  make_folder(root / "private", fs::perms::owner_all);
+  make_folder(root / "enclaves");
+  write_file(ca_certificate_path(root), ca.certificate_pem);
+  write_file(ca_key_path(root), key_pem(ca.key.get()), 0600);
+  // SROS2's tools look for the identity and permissions CA under these names.
+  for (const std::string name : {"identity_ca", "permissions_ca"}) {
+    link("ca.cert.pem", root / "public" / (name + ".cert.pem"));
+    link("ca.key.pem", root / "private" / (name + ".key.pem"));
+  }
+  write_file(root / "enclaves" / "governance.xml", governance_xml());
+  write_file(governance_path(root), ca.governance_p7s);
+  for (const std::string& enclave : missing_enclaves(root, enclaves)) {
+    make_folder(enclave_folder(root, enclave));
+    write_enclave(enclave_folder(root, enclave), enclave, ca, now, validity_days);
+  }
+  sync_folders(root);
 }
 
 std::string joined(const std::vector<std::string>& names) {
@@ -667,12 +716,21 @@ void check_enclave_files(const SecurityFiles& files, const std::string& hint) {
 SecurityFiles enclave_files(const fs::path& keystore, const std::string& enclave) {
   check_enclave_name(enclave);
   const fs::path root = keystore_path(keystore);
-  const std::string hint = "run `robotperf security init " + keystore.string() + "` first";
   std::error_code ignored;
   if (!fs::is_directory(root, ignored)) {
-    throw SecurityError("security keystore " + keystore.string() + " is not a folder; " + hint);
+    throw SecurityError("security keystore " + keystore.string() +
+                        " is not a folder; run `robotperf security init " + keystore.string() +
+                        "` first");
   }
   const fs::path folder = enclave_folder(root, enclave);
+  // An enclave the keystore lacks altogether is added; one whose files are missing or damaged
+  // (or signed by a damaged CA) takes a new keystore.
+  const std::string hint =
+      fs::exists(folder, ignored)
+          ? "run `robotperf security init " + keystore.string() +
+                " --renew` to replace the keystore's CA and enclaves with new ones"
+          : "run `robotperf security init " + keystore.string() + " --enclave " + enclave +
+                "` to add it";
   SecurityFiles files{.identity_ca = folder / kIdentityCa,
                       .certificate = folder / kCertificate,
                       .private_key = folder / kPrivateKey,
@@ -719,25 +777,7 @@ void create_keystore(const fs::path& dir, const std::vector<std::string>& enclav
   ScratchFolder scratch(into_folder ? target : target.parent_path(),
                         into_folder ? ".new" : "." + target.filename().string() + ".new");
   const fs::path& root = scratch.path();
-  const std::time_t now = std::time(nullptr);
-  const Authority ca = new_authority(now, validity_days);
-  make_folder(root / "public");
-  make_folder(root / "private", fs::perms::owner_all);
-  make_folder(root / "enclaves");
-  write_file(ca_certificate_path(root), ca.certificate_pem);
-  write_file(ca_key_path(root), key_pem(ca.key.get()), 0600);
-  // SROS2's tools look for the identity and permissions CA under these names.
-  for (const std::string name : {"identity_ca", "permissions_ca"}) {
-    link("ca.cert.pem", root / "public" / (name + ".cert.pem"));
-    link("ca.key.pem", root / "private" / (name + ".key.pem"));
-  }
-  write_file(root / "enclaves" / "governance.xml", governance_xml());
-  write_file(governance_path(root), ca.governance_p7s);
-  for (const std::string& enclave : missing_enclaves(root, enclaves)) {
-    make_folder(enclave_folder(root, enclave));
-    write_enclave(enclave_folder(root, enclave), enclave, ca, now, validity_days);
-  }
-  sync_folders(root);
+  build_keystore(root, enclaves, validity_days);
   if (into_folder) {
     // public/ last: its CA certificate is what makes a folder a keystore.
     for (const char* part : {"enclaves", "private", "public"}) move(root / part, target / part);
@@ -749,6 +789,39 @@ void create_keystore(const fs::path& dir, const std::vector<std::string>& enclav
   move(root, target);
   scratch.keep();
   sync_folder(target.parent_path());
+}
+
+std::vector<std::string> renew_keystore(const fs::path& dir, std::vector<std::string> enclaves,
+                                        int validity_days) {
+  ERR_clear_error();
+  for (const std::string& enclave : enclaves) check_enclave_name(enclave);
+  const fs::path target = keystore_path(dir);
+  std::error_code error;
+  if (!fs::is_directory(target / "enclaves", error) && !holds_keystore(target)) {
+    throw SecurityError("keystore: " + target.string() +
+                        " is not a keystore: nothing to renew (robotperf security init " +
+                        dir.string() + " makes one)");
+  }
+  for (const std::string& enclave : enclaves_in(target)) {
+    if (std::ranges::find(enclaves, enclave) == enclaves.end()) enclaves.push_back(enclave);
+  }
+  if (enclaves.empty()) enclaves.push_back(kDefaultEnclave);
+  // The new keystore is built beside the old one, then takes its place; the old one is moved
+  // aside first and put back if that fails, so that one keystore is always there.
+  ScratchFolder fresh(target.parent_path(), "." + target.filename().string() + ".new");
+  build_keystore(fresh.path(), enclaves, validity_days);
+  set_permissions(fresh.path(), kPublicFolder);
+  ScratchFolder old(target.parent_path(), "." + target.filename().string() + ".old");
+  move(target, old.path() / "keystore");
+  try {
+    move(fresh.path(), target);
+  } catch (const SecurityError&) {
+    fs::rename(old.path() / "keystore", target, error);
+    throw;
+  }
+  fresh.keep();
+  sync_folder(target.parent_path());
+  return enclaves;
 }
 
 std::string describe(const SecurityFiles& files) {

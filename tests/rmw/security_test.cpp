@@ -341,6 +341,46 @@ TEST(SecurityKeystore, EnclaveFilesNamesABrokenFile) {
   EXPECT_NO_THROW(enclave_files(keystore));
 }
 
+// A damaged keystore (a certificate altered, the CA's key gone) is named with the command that
+// mends it, and --renew replaces it whole: a new CA, every enclave it had, nothing left beside
+// it. A folder that is not a keystore is not touched.
+TEST(SecurityKeystore, RenewReplacesADamagedKeystoreWithEveryEnclave) {
+  TempFolder folder;
+  const fs::path keystore = folder.path() / "keystore";
+  create_keystore(keystore, {"/robotperf", "/robot/camera"});
+  const std::string ca = read_text(keystore / "public" / "ca.cert.pem");
+  std::ofstream(keystore / "enclaves" / "robotperf" / "cert.pem") << "garbage";
+  fs::remove(keystore / "private" / "ca.key.pem");
+  try {
+    enclave_files(keystore);
+    ADD_FAILURE() << "a damaged keystore was taken";
+  } catch (const SecurityError& e) {
+    EXPECT_NE(std::string(e.what()).find("security init " + keystore.string() + " --renew"),
+              std::string::npos)
+        << e.what();
+  }
+  // Adding enclaves cannot mend it: the CA's key is gone.
+  EXPECT_THROW(create_keystore(keystore, {"/lidar"}), SecurityError);
+
+  EXPECT_EQ(renew_keystore(keystore, {"/lidar"}),
+            (std::vector<std::string>{"/lidar", "/robot/camera", "/robotperf"}));
+  EXPECT_NE(read_text(keystore / "public" / "ca.cert.pem"), ca);
+  for (const char* enclave : {"/robotperf", "/robot/camera", "/lidar"}) {
+    const SecurityFiles files = enclave_files(keystore, enclave);
+    EXPECT_TRUE(issued_by(files.certificate, keystore / "public" / "ca.cert.pem")) << enclave;
+  }
+  std::vector<std::string> beside;
+  for (const auto& entry : fs::directory_iterator(folder.path()))
+    beside.push_back(entry.path().filename());
+  EXPECT_EQ(beside, std::vector<std::string>{"keystore"});
+
+  const fs::path other = folder.path() / "photos";
+  fs::create_directories(other);
+  std::ofstream(other / "a.jpg") << "not a keystore";
+  EXPECT_THROW(renew_keystore(other, {}), SecurityError);
+  EXPECT_EQ(read_text(other / "a.jpg"), "not a keystore");
+}
+
 TEST(SecurityKeystore, IsCreatedOnceAndThenOnlyGainsEnclaves) {
   TempFolder folder;
   const fs::path keystore = folder.path() / "keystore";

@@ -23,15 +23,24 @@ class SecurityCommand : public Command {
     init->add_option("--enclave", enclaves_,
                      "an enclave to make, e.g. /my_robot/camera (default: /robotperf); repeatable")
         ->type_name("NAME");
-    init->footer("Example: robotperf security init keys --enclave /robotperf");
+    init->add_flag("--renew", renew_,
+                   "replace the keystore, damaged or not, with a new one: a new CA and every "
+                   "enclave it held (plus --enclave ones), signed by it");
+    init->footer(
+        "Examples: robotperf security init keys --enclave /robotperf\n"
+        "          robotperf security init keys --renew");
     return command;
   }
 
   int run(const Context&) override {
-    if (enclaves_.empty()) enclaves_.push_back(rmw::kDefaultEnclave);
     // Named absolutely before it is made, whatever becomes of the current folder.
     const fs::path keystore = fs::absolute(dir_);
-    rmw::create_keystore(keystore, enclaves_);
+    if (renew_) {
+      enclaves_ = rmw::renew_keystore(keystore, enclaves_);
+    } else {
+      if (enclaves_.empty()) enclaves_.push_back(rmw::kDefaultEnclave);
+      rmw::create_keystore(keystore, enclaves_);
+    }
     fs::path shown = keystore.lexically_normal();
     if (!shown.has_filename()) shown = shown.parent_path();  // "dir/." is "dir/"
     std::cout << "keystore: " << shown.string() << "\n";
@@ -46,6 +55,7 @@ class SecurityCommand : public Command {
  private:
   std::string dir_;
   std::vector<std::string> enclaves_;
+  bool renew_ = false;
 };
 
 }  // namespace

@@ -58,6 +58,14 @@ SecurityFiles enclave_files(const std::filesystem::path& keystore,
 void create_keystore(const std::filesystem::path& dir, const std::vector<std::string>& enclaves,
                      int validity_days = 3650);
 
+// Replaces the keystore in `dir` (a damaged one too: a file missing, altered or signed by a CA
+// that no longer matches) with a new one: a new CA, and every enclave it held plus `enclaves`
+// (/robotperf when that makes none). The new keystore takes the old one's place in one rename;
+// on error the old one stays. Refuses a folder that is not a keystore. Returns the enclaves made.
+std::vector<std::string> renew_keystore(const std::filesystem::path& dir,
+                                        std::vector<std::string> enclaves,
+                                        int validity_days = 3650);
+
 // One line for results: which plug-ins a participant with `files` runs and what its governance
 // protects, e.g. "authentication PKI-DH, access control (governance: rtps SIGN, discovery
 // ENCRYPT, data ENCRYPT), crypto AES-GCM-GMAC, enclave /robotperf".
