@@ -165,19 +165,21 @@ void LaunchedProcesses::supervise() {
     for (auto& p : processes_) {
       if (p.ended) continue;
       reap(p);
-      if (p.ended && !stopping_ && failure_.empty()) {
-        const std::string tail = log_tail(p.log, 5);
-        failure_ = "launched process '" + p.name + "' (pid " + std::to_string(p.pid) +
-                   ") ended during the run (" + p.exit_status + "); its log " + p.log.string() +
-                   (tail.empty() ? " is empty" : " ends:" + tail);
+      if (p.ended && !stopping_ && !failed_) {
+        failed_ = static_cast<std::size_t>(&p - processes_.data());
+        failed_log_tail_ = log_tail(p.log, 5);
       }
     }
   }
 }
 
-std::string LaunchedProcesses::failure() const {
+std::string LaunchedProcesses::failure(const std::string& when) const {
   std::lock_guard lock(mutex_);
-  return failure_;
+  if (!failed_) return "";
+  const Process& p = processes_[*failed_];
+  return "launched process '" + p.name + "' (pid " + std::to_string(p.pid) + ") ended " + when +
+         " (" + p.exit_status + "); its log " + p.log.string() +
+         (failed_log_tail_.empty() ? " is empty" : " ends:" + failed_log_tail_);
 }
 
 std::vector<std::pair<int, std::string>> LaunchedProcesses::processes() const {

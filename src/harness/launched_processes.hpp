@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -28,9 +29,10 @@ class LaunchedProcesses {
   LaunchedProcesses(const LaunchedProcesses&) = delete;
   LaunchedProcesses& operator=(const LaunchedProcesses&) = delete;
 
-  // A process that ended before stop() was asked: what it was, how it ended and the last lines of
-  // its log; empty while all run.
-  std::string failure() const;
+  // A process that ended before stop() was asked: what it was, when (`when`: "during the run",
+  // "before the graph connected"), how it ended and the last lines of its log; empty while all
+  // run.
+  std::string failure(const std::string& when = "during the run") const;
   // Pid and name of every process.
   std::vector<std::pair<int, std::string>> processes() const;
   // Stops them all (the whole group, with what they started), at most `grace_s` per signal, and
@@ -56,7 +58,9 @@ class LaunchedProcesses {
   pid_t group_ = 0;
   mutable std::mutex mutex_;
   bool stopping_ = false;
-  std::string failure_;
+  // The first process that ended by itself, and its log's last lines then.
+  std::optional<std::size_t> failed_;
+  std::string failed_log_tail_;
   int wake_pipe_[2] = {-1, -1};
   std::thread supervisor_;
 };

@@ -172,10 +172,11 @@ GraphUnderTest::GraphUnderTest(const RunPlan& plan, const RunOptions& options, R
 void connect_graph(const RunPlan& plan, const RunOptions& options, const RunEnvironment& env,
                    GraphUnderTest& graph, const RunResult& r) {
   auto interrupted = [&] {
-    // A launched process that ends before the graph is up ends the wait with what it said.
+    // A launched process that ends before the graph is up ends the wait with what it said: the
+    // graph as given cannot run, as one that never connects.
     if (graph.launched) {
-      if (std::string f = graph.launched->failure(); !f.empty())
-        throw std::runtime_error(f + " (before the graph was connected)");
+      if (std::string f = graph.launched->failure("before the graph connected"); !f.empty())
+        throw GraphNotConnected(f);
     }
     return options.interrupted && options.interrupted->load() != 0;
   };

@@ -208,6 +208,26 @@ TEST_F(ExternalGraph, NodeDyingMidRunEndsTheRunWithItsLogKept) {
   EXPECT_TRUE(fs::exists(j["launched"][0]["log"].get<std::string>()));
 }
 
+// A launched node that exits while the graph is still connecting: the graph as given cannot run
+// (exit 2), and the message says it ended before connecting, with its log's last lines.
+TEST_F(ExternalGraph, NodeExitingBeforeTheGraphConnectsIsRefused) {
+  const Outcome o =
+      run_package("x3",
+                  "dataset: middleware/payload\nrate_hz: 50\ncount: 130\nwarmup: 10\n"
+                  "inputs:\n  - {topic: /ping, type: sensor_msgs/msg/Image, stream: payload}\n"
+                  "output: {topic: /pong, type: sensor_msgs/msg/Image}\n"
+                  "launch:\n  - name: camera_driver\n    command: [/bin/sh, -c, "
+                  "'echo cannot open /dev/video9 >&2; exit 4']\n",
+                  "fastdds");
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_NE(o.out.find("launched process 'camera_driver'"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("ended before the graph connected (exited with status 4)"),
+            std::string::npos)
+      << o.out;
+  EXPECT_NE(o.out.find("cannot open /dev/video9"), std::string::npos) << o.out;
+  EXPECT_EQ(o.out.find("during the run"), std::string::npos) << o.out;
+}
+
 TEST_F(ExternalGraph, NodeThatDoesNotCopyTheHeaderIsNamedNotLost) {
   const Outcome o = run_echo("restamp");
   EXPECT_EQ(o.exit_code, 3) << o.out;
