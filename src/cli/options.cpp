@@ -102,8 +102,8 @@ void add_power_options(CLI::App* command, PowerArgs& args, bool with_period) {
 
 harness::SchedulingOptions SchedulingArgs::options() const {
   harness::SchedulingOptions o;
-  if (!cpus.empty()) {
-    o.cpus = harness::parse_cpu_list(cpus);
+  if (cpus) {
+    o.cpus = harness::parse_cpu_list(*cpus);
     harness::check_cpus_allowed(o.cpus);
   }
   o.rt_priority = rt_priority;

@@ -63,7 +63,7 @@ void add_power_options(CLI::App* command, PowerArgs& args, bool with_period);
 
 // Scheduling options shared by `run` and `node`.
 struct SchedulingArgs {
-  std::string cpus;
+  std::optional<std::string> cpus;  // given empty, it is refused, not taken as no pinning
   int rt_priority = 0;
   bool lock_memory = false;
 

@@ -357,6 +357,36 @@ void load_functional(const YamlFile& file, BenchmarkSpec& spec) {
   spec.functional = std::move(functional);
 }
 
+// The graph's own nodes against its inputs, before anything runs: an input no node reads would
+// run to 100 % loss, and a node that publishes onto an input feeds the Playback's topic, looping
+// messages back as duplicates. A graph with launched or attached nodes is not known here.
+void check_wiring(const YamlFile& file, const BenchmarkSpec& spec) {
+  if (spec.external() || spec.nodes.empty()) return;
+  const YAML::Node& root = file.root();
+  std::set<std::string> read;
+  for (const NodeSpec& node : spec.nodes) {
+    const plugin::KernelInfo& info = plugin::registry().find_kernel(node.kernel)->info;
+    for (const auto& [port, topic] : node.topics) {
+      if (std::ranges::count(info.inputs, port, &plugin::PortInfo::name) != 0) read.insert(topic);
+      const bool publishes = std::ranges::count(info.outputs, port, &plugin::PortInfo::name) != 0;
+      if (publishes && std::ranges::count(spec.inputs, topic, &BoundaryTopic::topic) != 0) {
+        file.fail(root["nodes"], "node '" + node.name + "' publishes (port '" + port + "') on " +
+                                     topic +
+                                     ", an input of the graph: its messages would loop back "
+                                     "into the graph as the Playback's; give it a topic of its "
+                                     "own");
+      }
+    }
+  }
+  for (std::size_t i = 0; i < spec.inputs.size(); ++i) {
+    if (!read.contains(spec.inputs[i].topic)) {
+      file.fail(root["inputs"][i], "input " + spec.inputs[i].topic +
+                                       " is read by no node: every message sent on it would be "
+                                       "lost; wire it to a node's input port or remove it");
+    }
+  }
+}
+
 void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   const YamlFile file(path);
   const YAML::Node& root = file.root();
@@ -378,6 +408,7 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
     file.fail(root, "'nodes' must be a list (or the graph external: launch: or attach: true)");
   }
   for (const auto& n : nodes) spec.nodes.push_back(load_node(file, n, boundary, names));
+  check_wiring(file, spec);
   // The Monitor would time the Playback's own messages. Only a graph of nothing (no node, no
   // process) does that on purpose: it measures the harness itself.
   if (input_topics.contains(spec.output.topic) && (!spec.nodes.empty() || spec.external())) {

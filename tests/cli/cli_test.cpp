@@ -646,6 +646,10 @@ TEST_F(Cli, PinnedRunIsRecorded) {
   const Outcome bad = robotperf_cli("run a2 --count 20 --cpus 1-x --output " + out_.string());
   EXPECT_EQ(bad.exit_code, 2) << bad.out;
   EXPECT_NE(bad.out.find("bad CPU list '1-x'"), std::string::npos) << bad.out;
+  // An empty list (a shell variable that was not set) pins nothing: refused, not ignored.
+  const Outcome empty = robotperf_cli("run a2 --count 20 --cpus '' --output " + out_.string());
+  EXPECT_EQ(empty.exit_code, 2) << empty.out;
+  EXPECT_NE(empty.out.find("bad CPU list ''"), std::string::npos) << empty.out;
 }
 
 // A meter that fails with output over several lines is still one line of robotperf's.

@@ -193,6 +193,24 @@ TEST(BenchmarkSpec, OutputAndInputsAreDistinctTopicsUnlessTheGraphIsEmpty) {
       << error_of(q.dir());
 }
 
+// Before any run: an input no node reads (every message would be lost) and a node that publishes
+// back onto an input (a relay loop: the Playback's topic fed again, duplicates by the thousand)
+// are refused naming the topic and the node.
+TEST(BenchmarkSpec, AnUnreadInputAndALoopOntoAnInputAreRefused) {
+  std::string unread = relay_graph("");
+  unread.replace(unread.find("output:"), 0,
+                 "  - {topic: /unused, type: sensor_msgs/msg/CameraInfo, stream: camera_info}\n");
+  TestPackage p("unread", unread);
+  EXPECT_NE(error_of(p.dir()).find("input /unused is read by no node"), std::string::npos)
+      << error_of(p.dir());
+  TestPackage q("loop", relay_graph("") +
+                            "  - name: back\n    kernel: util/relay\n"
+                            "    topics: {input: /out, output: /in}\n");
+  EXPECT_NE(error_of(q.dir()).find("node 'back' publishes (port 'output') on /in, an input"),
+            std::string::npos)
+      << error_of(q.dir());
+}
+
 // A package one level too high up (<root>/<package>, with no category folder), or a package given
 // as the benchmarks folder itself, is named with the layout it needs instead of being skipped.
 TEST(BenchmarkSpec, PackageOutsideACategoryFolderIsNamed) {
