@@ -612,44 +612,55 @@ std::string clock_text(uint64_t cycles, uint64_t freq) {
   return text;
 }
 
-// Marks the packets of one stream whose own times are out of order: a packet that begins after
-// its end, and both packets of a pair where the later one begins before the earlier one ends
-// (which of the two holds the wrong time cannot be told). Sets each packet's timestamp_end to the
-// latest time its events may have. `known_end` says which packets' timestamp_end can be trusted.
+// Marks the packets of one stream whose own times are out of order, and sets each packet's
+// timestamp_end to the latest time its events may have (`known_end`: whether its timestamp_end
+// can be trusted; if not, the next packet's begin bounds its events). A packet that begins after
+// its end is defective; so are both packets of a pair where the later one begins before the end
+// of the one before it that is left in (which of the two holds the wrong time cannot be told).
+// Every packet left in then begins at or after the end of each one before it: with the events
+// inside their packets' times, none goes back from one packet to the next.
 void check_packet_times(std::vector<Packet>& packets, const std::vector<bool>& known_end,
                         uint64_t freq, const std::string& file) {
+  auto byte = [](const Packet& p) { return std::to_string(p.start_bits / 8); };
   auto mark = [&](Packet& p, const std::string& what) {
-    if (p.defect.empty())
-      p.defect = file + ": packet at byte " + std::to_string(p.start_bits / 8) + " " + what;
+    if (p.defect.empty()) p.defect = file + ": packet at byte " + byte(p) + " " + what;
   };
-  Packet* previous = nullptr;
-  bool previous_end_known = false;
+  // A packet without a clock value continues the clock of the packet before it: its times are
+  // unknown in a stream where others give theirs (LTTng writes it in every packet).
+  const bool timed_stream =
+      std::any_of(packets.begin(), packets.end(), [](const Packet& p) { return p.has_clock; });
+  std::vector<std::size_t> timed;  // packets with a clock that do not begin after their end
   for (std::size_t i = 0; i < packets.size(); ++i) {
     Packet& p = packets[i];
-    if (!p.has_clock) continue;
-    if (previous != nullptr) {
-      // The time this packet may not begin before: the previous one's end, or its begin.
-      const uint64_t after =
-          previous_end_known ? previous->timestamp_end : previous->timestamp_begin;
-      const char* ends = previous_end_known ? "ends" : "begins";
-      if (p.timestamp_begin < after) {
-        mark(*previous, std::string(ends) + " at " + clock_text(after, freq) +
-                            ", after the next packet (byte " + std::to_string(p.start_bits / 8) +
-                            ") begins at " + clock_text(p.timestamp_begin, freq));
-        mark(p, "begins at " + clock_text(p.timestamp_begin, freq) +
-                    ", before the previous packet (byte " +
-                    std::to_string(previous->start_bits / 8) + ") " + ends + " at " +
-                    clock_text(after, freq));
-      }
-      if (!previous_end_known) previous->timestamp_end = p.timestamp_begin;
+    if (!p.has_clock) {
+      if (timed_stream) mark(p, "has no timestamp_begin, unlike the other packets of its stream");
+      continue;
     }
     if (known_end[i] && p.timestamp_begin > p.timestamp_end) {
       mark(p, "begins at " + clock_text(p.timestamp_begin, freq) + ", after its end at " +
                   clock_text(p.timestamp_end, freq));
+      continue;
     }
-    previous = &p;
-    previous_end_known = known_end[i];
     if (!known_end[i]) p.timestamp_end = UINT64_MAX;
+    if (!timed.empty() && !known_end[timed.back()])
+      packets[timed.back()].timestamp_end = p.timestamp_begin;
+    timed.push_back(i);
+  }
+  std::vector<std::size_t> kept;
+  for (const std::size_t i : timed) {
+    Packet& p = packets[i];
+    if (!kept.empty() && p.timestamp_begin < packets[kept.back()].timestamp_end) {
+      Packet& before = packets[kept.back()];
+      const std::string ends = (known_end[kept.back()] ? "ends at " : "runs to ") +
+                               clock_text(before.timestamp_end, freq);
+      mark(before, ends + ", after the packet at byte " + byte(p) + " begins at " +
+                       clock_text(p.timestamp_begin, freq));
+      mark(p, "begins at " + clock_text(p.timestamp_begin, freq) + ", before the packet at byte " +
+                  byte(before) + " " + ends);
+      kept.pop_back();
+      continue;
+    }
+    kept.push_back(i);
   }
 }
 
@@ -856,8 +867,17 @@ PacketsRead Trace::read_packets(std::size_t index, std::span<Packet> packets,
     return static_cast<uint64_t>(ns);
   };
 
+  // A packet without a clock of its own continues the one before it: after a defective packet,
+  // its times are unknown (in a stream none of whose packets gives its clock).
+  bool after_defect = false;
   for (Packet& p : packets) {
-    if (!p.defect.empty()) continue;
+    if (p.defect.empty() && !p.has_clock && after_defect) {
+      p.defect = file + ": packet at byte " + std::to_string(p.start_bits / 8) +
+                 " has no clock value of its own and follows a defective packet";
+      ++read.defective_packets;
+    }
+    after_defect = !p.defect.empty();
+    if (after_defect) continue;
     const StreamClass* sc = p.stream_class;
     d.seek(p.events_bits);
     d.set_end(p.content_end_bits);
@@ -933,6 +953,7 @@ PacketsRead Trace::read_packets(std::size_t index, std::span<Packet> packets,
                         ? " is before the packet's begin at " + clock_text(p.timestamp_begin, freq)
                         : " is before the event before it at " + clock_text(earliest, freq));
         ++read.defective_packets;
+        after_defect = true;
         break;
       }
       earliest = cycles;

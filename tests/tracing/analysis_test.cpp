@@ -884,6 +884,23 @@ TEST(Analyzer, AFlippedTimeByteLeavesItsPacketOutAndInvalidates) {
       << analysis_summary(a);
 }
 
+// A corrupt end far in the future overlaps every later packet, but only the pair it breaks is
+// left out: the packets after it are checked against the last packet left in.
+TEST(Analyzer, ACorruptPacketEndLeavesOutItsPairNotTheRestOfTheStream) {
+  FixtureRoot dir;
+  CtfWriter w(dir.path(), CtfWriter::Header::kLarge, false);
+  write_timer_callbacks(w, 20, 5);
+  const fs::path stream = dir.path() / "channel0_0";
+  const uint64_t second = ctf::Trace(dir.path()).index_stream(0).packets.at(1).start_bits / 8;
+  write_at(stream, second + kEndAt + 7, uint8_t{0x40});  // the end's top byte: 146 years later
+  const TraceAnalysis a = analyze_trace(dir.path());
+  EXPECT_EQ(to_json(a)["trace"]["defective_packets"], 2);
+  ASSERT_EQ(a.callbacks.size(), 1u);
+  EXPECT_EQ(a.callbacks[0].duration.count, 10u) << "the first and the last two packets' callbacks";
+  EXPECT_DOUBLE_EQ(a.callbacks[0].duration.max, 5'000'000.0);
+  EXPECT_FALSE(a.valid);
+}
+
 // The reader's checks of event and packet times, one corrupt time each in a trace of two packets
 // (compact headers; the fourth event's time is a full 64-bit one): the defective packets' events
 // are left out, and each defect is one line naming the stream, the packet and the times.
@@ -948,10 +965,10 @@ TEST(CtfReader, TimesOutOfOrderMakeTheirPacketsDefective) {
        second_packet + kBeginAt,
        2000,
        {},
-       {packet(0) + " ends at 0.268440456 s, after the next packet (byte " +
-            std::to_string(second_packet) + ") begins at 0.000002000 s",
-        packet(second_packet) + " begins at 0.000002000 s, before the previous packet (byte 0) "
-                                "ends at 0.268440456 s"}},
+       {packet(0) + " ends at 0.268440456 s, after the packet at byte " +
+            std::to_string(second_packet) + " begins at 0.000002000 s",
+        packet(second_packet) + " begins at 0.000002000 s, before the packet at byte 0 ends at "
+                                "0.268440456 s"}},
   };
   for (const Case& c : cases) {
     write();

@@ -150,7 +150,8 @@ struct StreamStats {
 // The times of a stream's events never go back: within a packet each event is at or after the
 // one before it, and all lie in [timestamp_begin, timestamp_end]; a packet begins at or after the
 // end of the packet before it. A packet that breaks this (a corrupt byte in a time) is defective:
-// its events are not read, so that a wrong time does not become a wrong latency.
+// its events are not read, so that a wrong time does not become a wrong latency. So is a packet
+// without timestamp_begin in a stream whose other packets have theirs: its times are unknown.
 struct Packet {
   const StreamClass* stream_class = nullptr;
   uint64_t start_bits = 0;   // of the packet header
