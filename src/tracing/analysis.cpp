@@ -34,6 +34,8 @@ constexpr double kNsPerMs = 1e6;
 // Decoding threads at most, and the smallest part of a stream worth a thread of its own.
 constexpr unsigned kMaxDecodeThreads = 16;
 constexpr uint64_t kMinPartBytes = 1 << 20;
+// Defective packets described one by one; the rest are counted (a trace may have thousands).
+constexpr std::size_t kMaxDefectLines = 20;
 
 // What the analysis does with an event class, and where its fields are.
 enum class Handler : uint8_t {
@@ -404,7 +406,7 @@ struct StreamPart {
   const DispatchTable* dispatch = nullptr;
   const ctf::FieldSelection* selection = nullptr;  // the dispatch's fields
   std::size_t stream = 0;
-  std::span<const ctf::Packet> packets;
+  std::span<ctf::Packet> packets;  // its own: decoding marks the defective ones
   uint64_t bytes = 0;
 
   Collected c;
@@ -413,7 +415,8 @@ struct StreamPart {
   std::exception_ptr error;
 };
 
-void collect(StreamPart& part) {
+// Collects the events of the part's packets; returns how many packets it found defective.
+uint64_t collect_once(StreamPart& part) {
   Collected& c = part.c;
   // Room for every event the part may hold (LTTng events take 40 bytes or more): growing the
   // vectors would copy them and fault in pages twice.
@@ -556,7 +559,21 @@ void collect(StreamPart& part) {
         break;
     }
   };
-  part.events = part.trace->read_packets(part.stream, part.packets, on_event, part.selection);
+  const ctf::PacketsRead read =
+      part.trace->read_packets(part.stream, part.packets, on_event, part.selection);
+  part.events = read.events;
+  return read.defective_packets;
+}
+
+// Collects the events of the part's packets, none of a defective packet's: the events a packet
+// gave before its defect showed are dropped with the rest of the part, which is collected again
+// without that packet (a corrupt trace's parts only).
+void collect(StreamPart& part) {
+  while (collect_once(part) > 0) {
+    part.c = Collected{};
+    part.first_ns = INT64_MAX;
+    part.last_ns = 0;
+  }
 }
 
 // Appends `part` to `c` as if its events had been collected into `c` after those before it:
@@ -626,8 +643,7 @@ void merge(Collected& c, Collected&& part) {
 // Cuts each stream into parts of about `target_bytes`, at packets that give their clock.
 std::vector<StreamPart> cut_into_parts(const ctf::Trace& trace, const DispatchTable& dispatch,
                                        const ctf::FieldSelection& selection, std::size_t stream,
-                                       std::span<const ctf::Packet> packets,
-                                       uint64_t target_bytes) {
+                                       std::span<ctf::Packet> packets, uint64_t target_bytes) {
   std::vector<StreamPart> parts;
   std::size_t first = 0;
   uint64_t bytes = 0;
@@ -866,7 +882,8 @@ MessageLookup summarise_run(TraceAnalysis& a, const Collected& c, const RunInfo&
   (run.state_output ? a.repeats : a.duplicates) = receptions_of_measured - a.matched;
   a.sent = a.messages.size();
   // Trace loss is never message loss: with events discarded, a missing output event says nothing.
-  if (a.discarded_events > 0 || a.lost_packets > 0) a.unobserved = a.measured - a.matched;
+  if (a.discarded_events > 0 || a.lost_packets > 0 || a.defective_packets > 0)
+    a.unobserved = a.measured - a.matched;
   a.lost = a.measured - a.matched - a.unobserved;
   a.loss_percent =
       a.measured ? 100.0 * static_cast<double>(a.lost) / static_cast<double>(a.measured) : 0.0;
@@ -1382,6 +1399,15 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
     }
   }
   collect_parallel(parts, std::min<unsigned>(threads, static_cast<unsigned>(parts.size())), c, a);
+  for (const auto& trace_indexes : indexes) {
+    for (const ctf::StreamIndex& index : trace_indexes) {
+      for (const ctf::Packet& p : index.packets) {
+        if (p.defect.empty()) continue;
+        ++a.defective_packets;
+        if (a.packet_defects.size() < kMaxDefectLines) a.packet_defects.push_back(p.defect);
+      }
+    }
+  }
 
   if (!c.runs.empty()) {
     std::sort(c.runs.begin(), c.runs.end(),
@@ -1434,6 +1460,13 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
     a.invalid_reasons.insert(a.invalid_reasons.begin(),
                              "the tracer lost " + std::to_string(a.lost_packets) + " packets");
   }
+  if (a.defective_packets > 0) {
+    a.invalid_reasons.insert(
+        a.invalid_reasons.begin(),
+        "the trace is corrupt: the events of " + std::to_string(a.defective_packets) +
+            (a.defective_packets == 1 ? " packet" : " packets") +
+            " are left out, their times out of order (" + a.packet_defects.front() + ")");
+  }
   if (!a.run && options.run_pid != 0) a.invalid_reasons.push_back(missing_run(a, options.run_pid));
   a.valid = a.invalid_reasons.empty();
   a.read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -1479,6 +1512,8 @@ nlohmann::json to_json(const TraceAnalysis& a) {
             {"events", a.events},
             {"discarded_events", a.discarded_events},
             {"lost_packets", a.lost_packets},
+            {"defective_packets", a.defective_packets},
+            {"packet_defects", a.packet_defects},
             {"duration_s", static_cast<double>(a.last_ns - a.first_ns) * 1e-9},
             {"analysis_s", a.read_seconds}}},
           {"hops", hops},
@@ -1539,9 +1574,17 @@ std::string breakdown_table(const TraceAnalysis& a) {
     for (const auto& line_text : a.unavailable) out << "  " << line_text << "\n";
     out << "\n";
   }
+  if (!a.packet_defects.empty()) {
+    out << "defective packets, their events left out:\n";
+    for (const auto& line_text : a.packet_defects) out << "  " << line_text << "\n";
+    if (a.defective_packets > a.packet_defects.size())
+      out << "  and " << a.defective_packets - a.packet_defects.size() << " more\n";
+    out << "\n";
+  }
   out << "trace: " << a.events << " events in " << a.streams << " streams, " << a.packets
-      << " packets; discarded events " << a.discarded_events << ", lost packets " << a.lost_packets
-      << "; analysed in " << fixed(a.read_seconds, 3) << " s\n";
+      << " packets; discarded events " << a.discarded_events << ", lost packets " << a.lost_packets;
+  if (a.defective_packets > 0) out << ", defective packets " << a.defective_packets;
+  out << "; analysed in " << fixed(a.read_seconds, 3) << " s\n";
   return out.str();
 }
 

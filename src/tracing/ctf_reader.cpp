@@ -7,8 +7,12 @@
 
 #include <algorithm>
 #include <bit>
+#include <charconv>
+#include <cinttypes>
+#include <cstdio>
 #include <cstring>
 #include <map>
+#include <optional>
 
 #include "robotperf/tracing/ctf.hpp"
 
@@ -574,6 +578,92 @@ uint64_t clock_freq(const Metadata& md, const fs::path& dir) {
   return md.clocks.front().freq;
 }
 
+// Whether the trace's tracer is one that wrote events after their packet's timestamp_end:
+// LTTng-UST before 2.11.0, LTTng-modules before 2.9.13, 2.10.10 and 2.11.0. Versions are read as
+// babeltrace2 reads them: a missing minor or patch number counts as 0, a missing major as no
+// version at all.
+bool writes_events_after_packet_end(const Metadata& md) {
+  auto number = [&](std::string_view key) -> std::optional<int64_t> {
+    const std::string text = md.env_value(key);
+    int64_t n = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
+    if (ec != std::errc() || end != text.data() + text.size()) return std::nullopt;
+    return n;
+  };
+  const std::string tracer = md.env_value("tracer_name");
+  const std::optional<int64_t> major = number("tracer_major");
+  if (!major) return false;
+  const int64_t minor = number("tracer_minor").value_or(0);
+  const int64_t patch = number("tracer_patch").value_or(number("tracer_patchlevel").value_or(0));
+  if (tracer == "lttng-ust") return *major < 2 || (*major == 2 && minor < 11);
+  if (tracer == "lttng-modules") {
+    return *major < 2 || (*major == 2 &&
+                          (minor < 9 || (minor == 9 && patch < 13) || (minor == 10 && patch < 10)));
+  }
+  return false;
+}
+
+// A time of the trace's clock for a message: seconds with every digit of a nanosecond clock.
+std::string clock_text(uint64_t cycles, uint64_t freq) {
+  const auto fraction =
+      static_cast<uint64_t>(static_cast<unsigned __int128>(cycles % freq) * kNsPerSecond / freq);
+  char text[48];
+  std::snprintf(text, sizeof text, "%" PRIu64 ".%09" PRIu64 " s", cycles / freq, fraction);
+  return text;
+}
+
+// Marks the packets of one stream whose own times are out of order, and sets each packet's
+// timestamp_end to the latest time its events may have (`known_end`: whether its timestamp_end
+// can be trusted; if not, the next packet's begin bounds its events). A packet that begins after
+// its end is defective; so are both packets of a pair where the later one begins before the end
+// of the one before it that is left in (which of the two holds the wrong time cannot be told).
+// Every packet left in then begins at or after the end of each one before it: with the events
+// inside their packets' times, none goes back from one packet to the next.
+void check_packet_times(std::vector<Packet>& packets, const std::vector<bool>& known_end,
+                        uint64_t freq, const std::string& file) {
+  auto byte = [](const Packet& p) { return std::to_string(p.start_bits / 8); };
+  auto mark = [&](Packet& p, const std::string& what) {
+    if (p.defect.empty()) p.defect = file + ": packet at byte " + byte(p) + " " + what;
+  };
+  // A packet without a clock value continues the clock of the packet before it: its times are
+  // unknown in a stream where others give theirs (LTTng writes it in every packet).
+  const bool timed_stream =
+      std::any_of(packets.begin(), packets.end(), [](const Packet& p) { return p.has_clock; });
+  std::vector<std::size_t> timed;  // packets with a clock that do not begin after their end
+  for (std::size_t i = 0; i < packets.size(); ++i) {
+    Packet& p = packets[i];
+    if (!p.has_clock) {
+      if (timed_stream) mark(p, "has no timestamp_begin, unlike the other packets of its stream");
+      continue;
+    }
+    if (known_end[i] && p.timestamp_begin > p.timestamp_end) {
+      mark(p, "begins at " + clock_text(p.timestamp_begin, freq) + ", after its end at " +
+                  clock_text(p.timestamp_end, freq));
+      continue;
+    }
+    if (!known_end[i]) p.timestamp_end = UINT64_MAX;
+    if (!timed.empty() && !known_end[timed.back()])
+      packets[timed.back()].timestamp_end = p.timestamp_begin;
+    timed.push_back(i);
+  }
+  std::vector<std::size_t> kept;
+  for (const std::size_t i : timed) {
+    Packet& p = packets[i];
+    if (!kept.empty() && p.timestamp_begin < packets[kept.back()].timestamp_end) {
+      Packet& before = packets[kept.back()];
+      const std::string ends = (known_end[kept.back()] ? "ends at " : "runs to ") +
+                               clock_text(before.timestamp_end, freq);
+      mark(before, ends + ", after the packet at byte " + byte(p) + " begins at " +
+                       clock_text(p.timestamp_begin, freq));
+      mark(p, "begins at " + clock_text(p.timestamp_begin, freq) + ", before the packet at byte " +
+                  byte(before) + " " + ends);
+      kept.pop_back();
+      continue;
+    }
+    kept.push_back(i);
+  }
+}
+
 int index_of(const TypePtr& t, std::string_view name) {
   if (!t) return -1;
   for (std::size_t i = 0; i < t->fields.size(); ++i) {
@@ -587,6 +677,7 @@ int index_of(const TypePtr& t, std::string_view name) {
 Trace::Trace(const fs::path& dir) : dir_(dir) {
   metadata_ = read_metadata(dir / "metadata");
   clock_freq_ = clock_freq(metadata_, dir);
+  events_after_packet_end_ = writes_events_after_packet_end(metadata_);
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     if (!entry.is_regular_file()) continue;
@@ -638,7 +729,9 @@ int Trace::stream_context_index(uint64_t stream_id, std::string_view name) const
 StreamStats Trace::read_stream(std::size_t index,
                                const std::function<void(const Event&)>& on_event) {
   StreamIndex i = index_stream(index);
-  i.stats.events = read_packets(index, i.packets, on_event);
+  // The first pass marks the defective packets, whose events the second leaves out.
+  read_packets(index, i.packets, [](const Event&) {});
+  i.stats.events = read_packets(index, i.packets, on_event).events;
   return i.stats;
 }
 
@@ -656,6 +749,7 @@ StreamIndex Trace::index_stream(std::size_t index) const {
   uint64_t last_discarded = 0;
   bool have_seq = false;
   uint64_t last_seq = 0;
+  std::vector<bool> known_end;
   const uint64_t file_bits = m.size * 8;
   uint64_t packet_start = 0;
   while (packet_start < file_bits) {
@@ -673,6 +767,7 @@ StreamIndex Trace::index_stream(std::size_t index) const {
     p.stream_class = md.stream(stream_id);
     if (p.stream_class == nullptr) d.fail("unknown stream id " + std::to_string(stream_id));
     uint64_t content_bits = file_bits - packet_start, packet_bits = content_bits;
+    bool end_known = false;
     if (const TypePtr& pc = p.stream_class->packet_context) {
       context_values.clear();
       d.decode_struct(*pc, &context_values, nullptr);
@@ -686,6 +781,12 @@ StreamIndex Trace::index_stream(std::size_t index) const {
         p.has_clock = true;
         p.timestamp_begin = v->u;
       }
+      const Value* end = get("timestamp_end");
+      if (end != nullptr) p.timestamp_end = end->u;
+      // A session that crashed leaves the end of its last packets 0 (babeltrace2's "LTTng crash
+      // quirk"): their events are bounded by the next packet's begin instead.
+      end_known =
+          end != nullptr && !events_after_packet_end_ && !(end->u == 0 && p.timestamp_begin != 0);
       if (const Value* v = get("cpu_id")) p.cpu_id = static_cast<uint32_t>(v->u);
       if (const Value* v = get("events_discarded")) {
         // A running count per stream: what it gained since the previous packet.
@@ -706,18 +807,21 @@ StreamIndex Trace::index_stream(std::size_t index) const {
     p.events_bits = d.pos();
     p.content_end_bits = packet_start + content_bits;
     p.end_bits = packet_start + packet_bits;
+    known_end.push_back(end_known);
     out.packets.push_back(p);
     packet_start += packet_bits;
   }
   out.stats.packets = out.packets.size();
+  check_packet_times(out.packets, known_end, clock_freq_, out.stats.file);
   return out;
 }
 
-uint64_t Trace::read_packets(std::size_t index, std::span<const Packet> packets,
-                             const std::function<void(const Event&)>& on_event,
-                             const FieldSelection* selection) const {
+PacketsRead Trace::read_packets(std::size_t index, std::span<Packet> packets,
+                                const std::function<void(const Event&)>& on_event,
+                                const FieldSelection* selection) const {
   const Mapped& m = *mapped_.at(index);
-  if (m.size == 0 || packets.empty()) return 0;
+  PacketsRead read;
+  if (m.size == 0 || packets.empty()) return read;
   // The packets' pages mapped in one call, on this thread: a page fault each 64 KiB costs
   // microseconds in a virtual machine. Without MADV_POPULATE_READ (Linux < 5.14), faults map them.
   {
@@ -753,7 +857,6 @@ uint64_t Trace::read_packets(std::size_t index, std::span<const Packet> packets,
   std::vector<uint8_t> payload_flat;
   HeaderShape shape = HeaderShape::kGeneral;
   const FlatLayout* context_layout = nullptr;
-  uint64_t events = 0;
   // Clock cycles to nanoseconds, which every reader of event times counts in (LTTng's clocks
   // count nanoseconds; LTTNG_UST_CLOCK_PLUGIN and other producers may not).
   const uint64_t freq = clock_freq_;
@@ -764,12 +867,24 @@ uint64_t Trace::read_packets(std::size_t index, std::span<const Packet> packets,
     return static_cast<uint64_t>(ns);
   };
 
-  for (const Packet& p : packets) {
+  // A packet without a clock of its own continues the one before it: after a defective packet,
+  // its times are unknown (in a stream none of whose packets gives its clock).
+  bool after_defect = false;
+  for (Packet& p : packets) {
+    if (p.defect.empty() && !p.has_clock && after_defect) {
+      p.defect = file + ": packet at byte " + std::to_string(p.start_bits / 8) +
+                 " has no clock value of its own and follows a defective packet";
+      ++read.defective_packets;
+    }
+    after_defect = !p.defect.empty();
+    if (after_defect) continue;
     const StreamClass* sc = p.stream_class;
     d.seek(p.events_bits);
     d.set_end(p.content_end_bits);
     if (p.has_clock) d.set_clock(p.timestamp_begin);
     d.set_clock_updates(true);
+    // The time the next event may not be before: the packet's begin, then each event's time.
+    uint64_t earliest = d.clock();
     if (layouts_for != sc) {
       layouts_for = sc;
       shape =
@@ -825,17 +940,34 @@ uint64_t Trace::read_packets(std::size_t index, std::span<const Packet> packets,
       if (d.pos() == event_start)
         d.fail("event '" + ec->name +
                "' takes no bits: its metadata gives it no header and no fields");
+      // Checked in clock cycles, after the wrap of a compact time is applied: a corrupt time
+      // shows as a step back or, read as a wrap, as a step past the packet's end.
+      const uint64_t cycles = d.clock();
+      if (cycles < earliest || cycles > p.timestamp_end) [[unlikely]] {
+        const std::string at = clock_text(cycles, freq);
+        p.defect = file + ": packet at byte " + std::to_string(p.start_bits / 8) + ": event '" +
+                   ec->name + "' at " + at +
+                   (cycles > p.timestamp_end
+                        ? " is after the packet's end at " + clock_text(p.timestamp_end, freq)
+                    : p.has_clock && cycles < p.timestamp_begin
+                        ? " is before the packet's begin at " + clock_text(p.timestamp_begin, freq)
+                        : " is before the event before it at " + clock_text(earliest, freq));
+        ++read.defective_packets;
+        after_defect = true;
+        break;
+      }
+      earliest = cycles;
       Event ev;
       ev.cls = ec;
-      ev.timestamp = ns_of(d.clock());
+      ev.timestamp = ns_of(cycles);
       ev.cpu_id = p.cpu_id;
       ev.fields = payload;
       ev.stream_context = event_context;
-      ++events;
+      ++read.events;
       on_event(ev);
     }
   }
-  return events;
+  return read;
 }
 
 std::vector<fs::path> find_traces(const fs::path& root) {

@@ -316,7 +316,7 @@ TEST(CtfReader, FieldsNotSelectedAreSteppedOver) {
   }
   w.finish();
   ctf::Trace trace(dir.path());
-  const ctf::StreamIndex index = trace.index_stream(0);
+  ctf::StreamIndex index = trace.index_stream(0);
   ctf::FieldSelection selection;
   selection.payload = [](const ctf::EventClass&, std::size_t field) {
     return field == 3 || field == 5;
@@ -327,21 +327,24 @@ TEST(CtfReader, FieldsNotSelectedAreSteppedOver) {
     return static_cast<int>(field) == vtid;
   };
   uint64_t k = 0;
-  const uint64_t events = trace.read_packets(
-      0, index.packets,
-      [&](const ctf::Event& e) {
-        ASSERT_EQ(e.fields.size(), 6u);
-        EXPECT_EQ(e.fields[0].tag, ctf::Value::Tag::kNone) << k;
-        EXPECT_EQ(e.fields[2].tag, ctf::Value::Tag::kNone) << k;
-        EXPECT_EQ(e.fields[4].tag, ctf::Value::Tag::kNone) << k;
-        EXPECT_EQ(e.fields[3].as_int(), -static_cast<int64_t>(k)) << k;
-        EXPECT_EQ(e.fields[5].u, k * 3) << k;
-        EXPECT_EQ(e.stream_context[static_cast<std::size_t>(vtid)].as_int(),
-                  static_cast<int64_t>(100 + k));
-        EXPECT_EQ(e.timestamp, 1000 + k);
-        ++k;
-      },
-      &selection);
+  const uint64_t events =
+      trace
+          .read_packets(
+              0, index.packets,
+              [&](const ctf::Event& e) {
+                ASSERT_EQ(e.fields.size(), 6u);
+                EXPECT_EQ(e.fields[0].tag, ctf::Value::Tag::kNone) << k;
+                EXPECT_EQ(e.fields[2].tag, ctf::Value::Tag::kNone) << k;
+                EXPECT_EQ(e.fields[4].tag, ctf::Value::Tag::kNone) << k;
+                EXPECT_EQ(e.fields[3].as_int(), -static_cast<int64_t>(k)) << k;
+                EXPECT_EQ(e.fields[5].u, k * 3) << k;
+                EXPECT_EQ(e.stream_context[static_cast<std::size_t>(vtid)].as_int(),
+                          static_cast<int64_t>(100 + k));
+                EXPECT_EQ(e.timestamp, 1000 + k);
+                ++k;
+              },
+              &selection)
+          .events;
   EXPECT_EQ(events, 20u);
   EXPECT_EQ(k, 20u);
 }
@@ -693,11 +696,15 @@ void write_declared(const fs::path& dir, const std::vector<std::string>& fields,
 // Every event of the trace in `dir`, or the reader's error; an endless stream of events is cut.
 uint64_t read_events(const fs::path& dir) {
   ctf::Trace trace(dir);
-  const ctf::StreamIndex index = trace.index_stream(0);
+  ctf::StreamIndex index = trace.index_stream(0);
   uint64_t events = 0;
-  return trace.read_packets(0, index.packets, [&](const ctf::Event&) {
-    if (++events > 1000) throw std::runtime_error("endless events from a trace of two");
-  });
+  return trace
+      .read_packets(0, index.packets,
+                    [&](const ctf::Event&) {
+                      if (++events > 1000)
+                        throw std::runtime_error("endless events from a trace of two");
+                    })
+      .events;
 }
 
 // A length read from the trace whose count of bits overflows 64 bits (2^61 - 74 bytes: the
@@ -782,6 +789,299 @@ TEST(CtfReader, CorruptTracesGiveClearErrors) {
   const FixtureRoot empty;
   fs::create_directories(empty.path());
   EXPECT_THROW(analyze_trace(empty.path()), std::invalid_argument);
+}
+
+// A value of type T at byte `offset` of file `path`, read or overwritten (a corrupt byte, a
+// tracer's quirk).
+template <class T>
+T read_at(const fs::path& path, uint64_t offset) {
+  T value{};
+  std::ifstream(path, std::ios::binary)
+      .seekg(static_cast<std::streamoff>(offset))
+      .read(reinterpret_cast<char*>(&value), sizeof value);
+  return value;
+}
+template <class T>
+void write_at(const fs::path& path, uint64_t offset, T value) {
+  std::fstream(path, std::ios::in | std::ios::out | std::ios::binary)
+      .seekp(static_cast<std::streamoff>(offset))
+      .write(reinterpret_cast<const char*>(&value), sizeof value);
+}
+
+// Where the writer's packet context puts timestamp_begin and timestamp_end, from the packet's
+// start: after the 32-byte packet header.
+constexpr uint64_t kBeginAt = 32, kEndAt = 40;
+
+// The times of every event of stream 0 that the reader gives.
+std::vector<uint64_t> event_times(const fs::path& dir) {
+  ctf::Trace trace(dir);
+  std::vector<uint64_t> times;
+  trace.read_stream(0, [&](const ctf::Event& e) { times.push_back(e.timestamp); });
+  return times;
+}
+
+// The `trace` block of the analysis's JSON (the defective packets and their lines).
+nlohmann::json trace_block(const fs::path& dir) {
+  return to_json(analyze_trace(dir))["trace"];
+}
+
+// A timer callback of node "talker" every 10 ms that takes 5 ms, `per_packet` callbacks a packet.
+void write_timer_callbacks(CtfWriter& w, uint64_t callbacks, uint64_t per_packet) {
+  testing::define_robotperf_events(w);
+  w.event(0, "ros2:rcl_node_init", kStart - 40, 7, 7,
+          {V(uint64_t{1}), V(uint64_t{0}), V(std::string("talker")), V(std::string("/"))});
+  w.event(0, "ros2:rcl_timer_init", kStart - 30, 7, 7, {V(uint64_t{2}), V(int64_t{kPeriod})});
+  w.event(0, "ros2:rclcpp_timer_callback_added", kStart - 20, 7, 7,
+          {V(uint64_t{2}), V(uint64_t{3})});
+  w.event(0, "ros2:rclcpp_timer_link_node", kStart - 10, 7, 7, {V(uint64_t{2}), V(uint64_t{1})});
+  for (uint64_t k = 0; k < callbacks; ++k) {
+    const uint64_t start = kStart + k * kPeriod;
+    w.event(0, "ros2:callback_start", start, 7, 7, {V(uint64_t{3}), V(int64_t{0})});
+    w.event(0, "ros2:callback_end", start + 5'000'000, 7, 7, {V(uint64_t{3})});
+    if (k % per_packet == per_packet - 1) w.end_packet(0);
+  }
+  w.finish();
+}
+
+// Issue #47: one flipped byte in a 32-bit event time (LTTng's large event header) lowers it,
+// which the reader takes for a wrap of the clock's low 32 bits: the event, and the rest of its
+// packet, 4.26 s later. A 5 ms timer callback measured 4,266 ms in a trace analysed as valid. The
+// event lies after its packet's end: the packet's events are left out, and the result says why.
+TEST(Analyzer, AFlippedTimeByteLeavesItsPacketOutAndInvalidates) {
+  FixtureRoot dir;
+  CtfWriter w(dir.path(), CtfWriter::Header::kLarge, false);
+  write_timer_callbacks(w, 20, 5);
+  const fs::path stream = dir.path() / "channel0_0";
+  // Callback 7's end, in the second packet (callbacks 5 to 9): a callback_start takes 43 bytes
+  // (16-bit id, 32-bit time, 25 bytes of context, 12 of payload), a callback_end 39.
+  const uint64_t second = ctf::Trace(dir.path()).index_stream(0).packets.at(1).events_bits / 8;
+  const uint64_t end_7 = second + 2 * (43 + 39) + 43;
+  ASSERT_EQ(read_at<uint16_t>(stream, end_7), w.id("ros2:callback_end"));
+  const uint64_t time_7 = kStart + 7 * kPeriod + 5'000'000;
+  ASSERT_EQ(read_at<uint32_t>(stream, end_7 + 2), static_cast<uint32_t>(time_7));
+  const uint64_t top = end_7 + 5;  // the time's most significant byte
+  write_at(stream, top, static_cast<uint8_t>(read_at<uint8_t>(stream, top) ^ 0x02));
+
+  const TraceAnalysis a = analyze_trace(dir.path());
+  ASSERT_EQ(a.callbacks.size(), 1u);
+  EXPECT_EQ(a.callbacks[0].duration.count, 15u) << "the second packet's 5 callbacks left out";
+  EXPECT_DOUBLE_EQ(a.callbacks[0].duration.max, 5'000'000.0);
+  EXPECT_FALSE(a.valid);
+  ASSERT_FALSE(a.invalid_reasons.empty());
+  const std::string defect =
+      stream.string() + ": packet at byte " +
+      std::to_string(ctf::Trace(dir.path()).index_stream(0).packets[1].start_bits / 8) +
+      ": event 'ros2:callback_end' at 9.336412864 s" +
+      " is after the packet's end at 5.095000000 s";
+  EXPECT_EQ(a.invalid_reasons[0],
+            "the trace is corrupt: the events of 1 packet are left out, their times out of order "
+            "(" +
+                defect + ")");
+  const nlohmann::json trace = to_json(a)["trace"];
+  EXPECT_EQ(trace["defective_packets"], 1);
+  EXPECT_EQ(trace["packet_defects"], nlohmann::json::array({defect}));
+  EXPECT_NE(analysis_summary(a).find("result: INVALID — the trace is corrupt"), std::string::npos)
+      << analysis_summary(a);
+}
+
+// A corrupt end far in the future overlaps every later packet, but only the pair it breaks is
+// left out: the packets after it are checked against the last packet left in.
+TEST(Analyzer, ACorruptPacketEndLeavesOutItsPairNotTheRestOfTheStream) {
+  FixtureRoot dir;
+  CtfWriter w(dir.path(), CtfWriter::Header::kLarge, false);
+  write_timer_callbacks(w, 20, 5);
+  const fs::path stream = dir.path() / "channel0_0";
+  const uint64_t second = ctf::Trace(dir.path()).index_stream(0).packets.at(1).start_bits / 8;
+  write_at(stream, second + kEndAt + 7, uint8_t{0x40});  // the end's top byte: 146 years later
+  const TraceAnalysis a = analyze_trace(dir.path());
+  EXPECT_EQ(to_json(a)["trace"]["defective_packets"], 2);
+  ASSERT_EQ(a.callbacks.size(), 1u);
+  EXPECT_EQ(a.callbacks[0].duration.count, 10u) << "the first and the last two packets' callbacks";
+  EXPECT_DOUBLE_EQ(a.callbacks[0].duration.max, 5'000'000.0);
+  EXPECT_FALSE(a.valid);
+}
+
+// The reader's checks of event and packet times, one corrupt time each in a trace of two packets
+// (compact headers; the fourth event's time is a full 64-bit one): the defective packets' events
+// are left out, and each defect is one line naming the stream, the packet and the times.
+TEST(CtfReader, TimesOutOfOrderMakeTheirPacketsDefective) {
+  FixtureRoot dir;
+  const fs::path stream = dir.path() / "channel0_0";
+  const uint64_t first[] = {1000, 2000, 3000, (uint64_t{1} << 28) + 4000,
+                            (uint64_t{1} << 28) + 5000};
+  const uint64_t second[] = {uint64_t{1} << 29, (uint64_t{1} << 29) + 10};
+  // A compact event takes 37 bytes (32-bit header, 25 bytes of context, 8 of payload); the
+  // extended header's 64-bit time follows its 5-bit id, its padding and its 32-bit id.
+  const uint64_t full_time_at = 84 + 3 * 37 + 5;
+  uint64_t second_packet = 0;
+  auto write = [&] {
+    fs::remove_all(dir.path());
+    CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false);
+    w.define("a:b", {{"v", testing::FieldKind::kU64}});
+    for (const uint64_t t : first) w.event(0, "a:b", t, 1, 1, {V(t)});
+    w.end_packet(0);
+    for (const uint64_t t : second) w.event(0, "a:b", t, 1, 1, {V(t)});
+    w.finish();
+    second_packet = ctf::Trace(dir.path()).index_stream(0).packets.at(1).start_bits / 8;
+    ASSERT_EQ(read_at<uint64_t>(stream, full_time_at), first[3]);
+  };
+  const std::vector<uint64_t> first_times(std::begin(first), std::end(first));
+  const std::vector<uint64_t> second_times(std::begin(second), std::end(second));
+  auto packet = [&](uint64_t at) {
+    return stream.string() + ": packet at byte " + std::to_string(at);
+  };
+  struct Case {
+    const char* what;
+    uint64_t offset;  // of the corrupt 64-bit time: from the stream's start
+    uint64_t value;
+    std::vector<uint64_t> times;  // the events read
+    std::vector<std::string> defects;
+  };
+  write();
+  const Case cases[] = {
+      {"an event before the one before it",
+       full_time_at,
+       2500,
+       second_times,
+       {packet(0) + ": event 'a:b' at 0.000002500 s is before the event before it at "
+                    "0.000003000 s"}},
+      {"an event before its packet's begin",
+       full_time_at,
+       500,
+       second_times,
+       {packet(0) + ": event 'a:b' at 0.000000500 s is before the packet's begin at "
+                    "0.000001000 s"}},
+      {"an event after its packet's end",
+       kEndAt,
+       4000,
+       second_times,
+       {packet(0) + ": event 'a:b' at 0.268439456 s is after the packet's end at 0.000004000 s"}},
+      {"a packet beginning after its end",
+       second_packet + kBeginAt,
+       second[1] + 1,
+       first_times,
+       {packet(second_packet) + " begins at 0.536870923 s, after its end at 0.536870922 s"}},
+      {"a packet beginning before the previous one ends",
+       second_packet + kBeginAt,
+       2000,
+       {},
+       {packet(0) + " ends at 0.268440456 s, after the packet at byte " +
+            std::to_string(second_packet) + " begins at 0.000002000 s",
+        packet(second_packet) + " begins at 0.000002000 s, before the packet at byte 0 ends at "
+                                "0.268440456 s"}},
+  };
+  for (const Case& c : cases) {
+    write();
+    write_at(stream, c.offset, c.value);
+    EXPECT_EQ(event_times(dir.path()), c.times) << c.what;
+    const nlohmann::json trace = trace_block(dir.path());
+    EXPECT_EQ(trace["defective_packets"], c.defects.size()) << c.what;
+    EXPECT_EQ(trace["packet_defects"], nlohmann::json(c.defects)) << c.what;
+    EXPECT_EQ(trace["events"], c.times.size()) << c.what;
+  }
+}
+
+// Compact times hold the low 27 or 32 bits of the clock: a value below the one before it is a
+// wrap of those bits, not a step back, also for a packet's first event after its begin.
+TEST(CtfReader, WrapsOfCompactTimesAreNoDefects) {
+  FixtureRoot dir;
+  const fs::path stream = dir.path() / "channel0_0";
+  for (const auto header : {CtfWriter::Header::kCompact, CtfWriter::Header::kLarge}) {
+    const uint64_t wrap = uint64_t{1} << (header == CtfWriter::Header::kCompact ? 27 : 32);
+    fs::remove_all(dir.path());
+    CtfWriter w(dir.path(), header, false);
+    w.define("a:b", {{"v", testing::FieldKind::kU64}});
+    // Wraps between events of a packet, and from the second packet's begin (set 5 cycles before
+    // the wrap) to its first event.
+    const uint64_t first[] = {5 * wrap - 3, 5 * wrap + 2, 6 * wrap - 10};
+    const uint64_t second[] = {6 * wrap + 1, 7 * wrap - 1, 7 * wrap + 7};
+    for (const uint64_t t : first) w.event(0, "a:b", t, 1, 1, {V(t)});
+    w.end_packet(0);
+    for (const uint64_t t : second) w.event(0, "a:b", t, 1, 1, {V(t)});
+    w.finish();
+    const uint64_t second_packet =
+        ctf::Trace(dir.path()).index_stream(0).packets.at(1).start_bits / 8;
+    write_at(stream, second_packet + kBeginAt, 6 * wrap - 5);
+    std::vector<uint64_t> expected(std::begin(first), std::end(first));
+    expected.insert(expected.end(), std::begin(second), std::end(second));
+    EXPECT_EQ(event_times(dir.path()), expected);
+    const TraceAnalysis a = analyze_trace(dir.path());
+    EXPECT_TRUE(a.valid) << analysis_summary(a);
+    EXPECT_EQ(to_json(a)["trace"]["defective_packets"], 0);
+  }
+}
+
+// The packet ends that tracers are known to get wrong bound nothing but what the next packet's
+// begin bounds (as babeltrace2 reads them): the end of a crashed session's packets, left 0, and
+// the end LTTng-UST wrote before 2.11, which its last events may follow.
+TEST(CtfReader, PacketEndsKnownWrongAreNoDefects) {
+  FixtureRoot dir;
+  const fs::path stream = dir.path() / "channel0_0";
+  uint64_t second_packet = 0;
+  auto write = [&](const std::string& tracer_minor) {
+    fs::remove_all(dir.path());
+    CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false);
+    w.define("a:b", {{"v", testing::FieldKind::kU64}});
+    for (const uint64_t t : {1000, 2000}) w.event(0, "a:b", t, 1, 1, {V(t)});
+    w.end_packet(0);
+    for (const uint64_t t : {3000, 4000}) w.event(0, "a:b", t, 1, 1, {V(t)});
+    w.finish();
+    second_packet = ctf::Trace(dir.path()).index_stream(0).packets.at(1).start_bits / 8;
+    std::string metadata;
+    {
+      std::ifstream in(dir.path() / "metadata");
+      metadata.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const auto at = metadata.find("tracer_minor = 13;");
+    ASSERT_NE(at, std::string::npos);
+    std::ofstream(dir.path() / "metadata")
+        << metadata.replace(at, 18, "tracer_minor = " + tracer_minor + ";");
+  };
+  const std::vector<uint64_t> all = {1000, 2000, 3000, 4000};
+  // A crashed session: both packets' ends 0.
+  write("13");
+  write_at(stream, kEndAt, uint64_t{0});
+  write_at(stream, second_packet + kEndAt, uint64_t{0});
+  EXPECT_EQ(event_times(dir.path()), all);
+  EXPECT_EQ(trace_block(dir.path())["defective_packets"], 0);
+  // The first packet's events past its end: a defect from LTTng-UST 2.11 on only.
+  for (const char* minor : {"10", "13"}) {
+    write(minor);
+    write_at(stream, kEndAt, uint64_t{1500});
+    EXPECT_EQ(trace_block(dir.path())["defective_packets"], minor == std::string("10") ? 0 : 1)
+        << "lttng-ust 2." << minor;
+  }
+  // Past the next packet's begin is a defect whatever the version.
+  write("10");
+  write_at(stream, second_packet + kBeginAt, uint64_t{1500});
+  EXPECT_EQ(event_times(dir.path()), (std::vector<uint64_t>{3000, 4000}));
+}
+
+// A corrupt packet is left out whichever part of a stream holds it and however many threads
+// decode: the result is the one of a single thread.
+TEST(Analyzer, ADefectivePacketGivesTheSameResultInParts) {
+  FixtureRoot dir;
+  CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
+  write_long_run(w, 60);
+  // The end of stream 1's fourth packet before its last event.
+  const fs::path stream = dir.path() / "channel0_1";
+  const uint64_t fourth = ctf::Trace(dir.path()).index_stream(1).packets.at(3).start_bits / 8;
+  write_at(stream, fourth + kEndAt, read_at<uint64_t>(stream, fourth + kEndAt) - 1);
+  AnalyzeOptions one;
+  one.decode_threads = 1;
+  one.part_bytes = uint64_t{1} << 40;
+  nlohmann::json expected = to_json(analyze_trace(dir.path(), one));
+  expected["trace"].erase("analysis_s");
+  EXPECT_EQ(expected["trace"]["defective_packets"], 1);
+  for (unsigned threads : {2u, 8u}) {
+    AnalyzeOptions parts;
+    parts.decode_threads = threads;
+    parts.part_bytes = 1;
+    nlohmann::json got = to_json(analyze_trace(dir.path(), parts));
+    got["trace"].erase("analysis_s");
+    EXPECT_TRUE(got == expected) << threads << " threads differ from one: "
+                                 << nlohmann::json::diff(expected, got).dump().substr(0, 600);
+  }
 }
 
 }  // namespace

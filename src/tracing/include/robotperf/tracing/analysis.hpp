@@ -90,6 +90,10 @@ struct TraceAnalysis {
   uint64_t events = 0;
   uint64_t discarded_events = 0;
   uint64_t lost_packets = 0;
+  // Packets whose event times go back or leave the packet's begin..end (a corrupt trace): their
+  // events are left out, and the result is invalid. One line for each of the first ones.
+  uint64_t defective_packets = 0;
+  std::vector<std::string> packet_defects;
   int64_t first_ns = 0, last_ns = 0;
   double read_seconds = 0;  // wall time of the analysis
 
@@ -100,9 +104,9 @@ struct TraceAnalysis {
   std::vector<MessageTimes> messages;  // by index
   std::size_t sent = 0, measured = 0, matched = 0, lost = 0, duplicates = 0, unknown = 0;
   std::size_t repeats = 0;  // a state output's further receptions of measured IDs (no error)
-  // Measured messages without an output event while the tracer discarded events or lost packets:
-  // the output may have been delivered and its event discarded, so they are not counted as lost
-  // (the discard alone makes the result invalid).
+  // Measured messages without an output event while the tracer discarded events or lost packets,
+  // or while defective packets' events were left out: the output may have been delivered and its
+  // event not read, so they are not counted as lost (that alone makes the result invalid).
   std::size_t unobserved = 0;
   double loss_percent = 0;
   metrics::SampleStats latency_from_scheduled, latency_from_sent, send_lateness;  // ns

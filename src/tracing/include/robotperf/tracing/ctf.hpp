@@ -146,6 +146,12 @@ struct StreamStats {
 
 // One packet of a stream: where it lies and what its context says. Its events can be decoded
 // on their own when it gives its first clock value (timestamp_begin, as LTTng writes).
+//
+// The times of a stream's events never go back: within a packet each event is at or after the
+// one before it, and all lie in [timestamp_begin, timestamp_end]; a packet begins at or after the
+// end of the packet before it. A packet that breaks this (a corrupt byte in a time) is defective:
+// its events are not read, so that a wrong time does not become a wrong latency. So is a packet
+// without timestamp_begin in a stream whose other packets have theirs: its times are unknown.
 struct Packet {
   const StreamClass* stream_class = nullptr;
   uint64_t start_bits = 0;   // of the packet header
@@ -154,7 +160,14 @@ struct Packet {
   uint64_t end_bits = 0;  // of the packet, padding included
   bool has_clock = false;
   uint64_t timestamp_begin = 0;
+  // The latest time (clock cycles) its events may have: its timestamp_end, or the next packet's
+  // timestamp_begin where timestamp_end is missing or known to be wrong (LTTng before 2.11 wrote
+  // events after it; a crashed session leaves it 0); UINT64_MAX when neither is known.
+  uint64_t timestamp_end = UINT64_MAX;
   uint32_t cpu_id = 0;
+  // Why its events are not read, one line naming the stream file and the packet's byte offset;
+  // empty when they are.
+  std::string defect;
 };
 
 // A stream's packets in file order, and the stream's counters from their contexts (its events
@@ -162,6 +175,14 @@ struct Packet {
 struct StreamIndex {
   std::vector<Packet> packets;
   StreamStats stats;
+};
+
+// What one Trace::read_packets call did.
+struct PacketsRead {
+  uint64_t events = 0;  // given to the caller
+  // Packets it found defective by their events' times, and marked so (Packet::defect). Events
+  // of theirs before the defective one were given to the caller already.
+  uint64_t defective_packets = 0;
 };
 
 // The fields a reader uses. The others are stepped over without being decoded, and their Values
@@ -191,18 +212,23 @@ class Trace {
 
   // Decodes every event of stream `index`, in stream order (time order within
   // the stream), calling `on_event` for each. The Event and its views are valid
-  // during the call only; string views stay valid while the Trace lives.
+  // during the call only; string views stay valid while the Trace lives. The events of defective
+  // packets are left out (found by decoding the stream once more beforehand).
   StreamStats read_stream(std::size_t index, const std::function<void(const Event&)>& on_event);
 
-  // Reads the packet headers and contexts of stream `index`, without its events.
+  // Reads the packet headers and contexts of stream `index`, without its events, and marks the
+  // packets whose times are out of order (see Packet).
   StreamIndex index_stream(std::size_t index) const;
   // Decodes the events of `packets` (consecutive packets of stream `index`'s index, in order),
-  // calling `on_event` for each; returns how many. Stream parts whose first packet has its clock
-  // can be decoded on different threads at once: a Trace is only read. With `selection`, only
-  // the fields it selects are decoded (where the layout allows stepping over the others).
-  uint64_t read_packets(std::size_t index, std::span<const Packet> packets,
-                        const std::function<void(const Event&)>& on_event,
-                        const FieldSelection* selection = nullptr) const;
+  // calling `on_event` for each. Stream parts whose first packet has its clock can be decoded on
+  // different threads at once: a Trace is only read, and each call writes its own packets only.
+  // With `selection`, only the fields it selects are decoded (where the layout allows stepping
+  // over the others). Defective packets are stepped over; a packet found defective here (an
+  // event out of order or out of the packet's times) is marked, and decoding goes on with the
+  // next one: a caller that must not use any of its events decodes the packets again.
+  PacketsRead read_packets(std::size_t index, std::span<Packet> packets,
+                           const std::function<void(const Event&)>& on_event,
+                           const FieldSelection* selection = nullptr) const;
 
   // Index of a stream event-context field ("vpid", "vtid", "procname"), or -1.
   int stream_context_index(uint64_t stream_id, std::string_view name) const;
@@ -212,6 +238,9 @@ class Trace {
   std::filesystem::path dir_;
   Metadata metadata_;
   uint64_t clock_freq_ = 0;  // Hz, of the clock the event times count in
+  // The tracer is one that wrote events after their packet's timestamp_end (LTTng-UST before
+  // 2.11, LTTng-modules before 2.9.13, 2.10.10 and 2.11, as babeltrace2 documents).
+  bool events_after_packet_end_ = false;
   std::vector<std::filesystem::path> stream_files_;
   std::vector<std::unique_ptr<Mapped>> mapped_;
 };
