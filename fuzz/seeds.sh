@@ -24,6 +24,19 @@ case $target in
       { cat "$package/benchmark.yaml" && printf '\n---8<---\n' && cat "$graph"; } \
         >"$corpus/$(basename "$package").yaml"
     done
+    # Ids and names that would leave the output folder, for the fuzzer to vary.
+    a1="$root/benchmarks/perception/a1_perception_2nodes"
+    if [ -f "$a1/graph.yaml" ]; then
+      n=0
+      for id in '../../ESCAPED' '/abs/ABSOLUTE' '""' '"a\nb"' '.hidden' '-dash'; do
+        n=$((n + 1))
+        { sed "s|^id: .*|id: $id|" "$a1/benchmark.yaml" && printf '\n---8<---\n' &&
+          cat "$a1/graph.yaml"; } >"$corpus/escaping-id-$n.yaml"
+      done
+      { cat "$a1/benchmark.yaml" && printf '\n---8<---\n' &&
+        sed 's|^nodes:|launch:\n  - {name: ../../x, command: [true]}\nnodes:|' "$a1/graph.yaml"; } \
+        >"$corpus/escaping-launch-name.yaml"
+    fi
     if [ -d "$data/robotperf" ]; then
       find "$data/robotperf" -name benchmark.yaml | while read -r published; do
         cp "$published" "$corpus/published-$(basename "$(dirname "$published")").yaml"

@@ -2,8 +2,12 @@
 // offered_qos_profiles[, type_description_hash]) and messages(id, topic_id,
 // timestamp, data); schema 3 (Humble) adds schema and metadata tables, schema 4
 // (Iron, Jazzy) adds type_description_hash and message_definitions.
+#include <fcntl.h>
 #include <sqlite3.h>
+#include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
 #include <map>
 #include <set>
 #include <string_view>
@@ -223,10 +227,24 @@ class SqliteReader final : public StorageReader {
 // Schema 4, Iron's and Jazzy's layout: topics with type_description_hash, and message_definitions
 // holding each type's definition, which Iron and later read back (from schema 4 on). Humble's
 // plug-in selects the tables and columns it knows by name and ignores the others.
+// Makes `file` as a new empty file, never through a link or over another file (SQLite's own
+// create follows links and writes into an existing file), and returns it.
+const fs::path& created_exclusively(const fs::path& file) {
+  const int fd = open(file.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    throw BagError(
+        file.string() + ": cannot create the storage file: " + std::strerror(errno) +
+        (errno == EEXIST ? " (something is already there; choose a new bag directory)" : ""));
+  }
+  close(fd);
+  return file;
+}
+
 class SqliteWriter final : public StorageWriter {
  public:
+  // SQLITE_OPEN_NOFOLLOW: the file made just before is not swapped for a link in between.
   explicit SqliteWriter(const fs::path& file)
-      : file_(file), db_(file, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE) {
+      : file_(file), db_(created_exclusively(file), SQLITE_OPEN_READWRITE | SQLITE_OPEN_NOFOLLOW) {
     db_.exec(
         "PRAGMA journal_mode=MEMORY; PRAGMA synchronous=OFF; PRAGMA page_size=4096;"
         "CREATE TABLE schema(schema_version INTEGER PRIMARY KEY,ros_distro TEXT NOT NULL);"

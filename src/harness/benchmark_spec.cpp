@@ -230,9 +230,7 @@ void load_launch(const YamlFile& file, BenchmarkSpec& spec, std::set<std::string
     for (const auto& l : launch) {
       file.allow_keys(l, {"name", "command", "cwd", "env"});
       LaunchSpec process;
-      process.name = file.require_string(l, "name");
-      if (!valid_host_name(process.name))
-        file.fail(l["name"], "a launched process's name is letters, digits, '.', '-' and '_'");
+      process.name = file.require_file_name_part(l, "name", "launched process name");
       if (!names.insert(process.name).second) file.fail(l, "duplicate name '" + process.name + "'");
       const YAML::Node command = l["command"];
       if (!command.IsSequence() || command.size() == 0)

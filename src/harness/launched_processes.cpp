@@ -17,6 +17,7 @@
 
 #include "node_processes.hpp"
 #include "process_table.hpp"
+#include "robotperf/files/paths.hpp"
 
 extern char** environ;
 
@@ -81,7 +82,7 @@ LaunchedProcesses::LaunchedProcesses(const BenchmarkSpec& spec, const std::strin
                                               {"RMW_IMPLEMENTATION", ros_rmw_of(rmw)}};
     for (const auto& [key, value] : launch.env) env[key] = replaced(value, values);
     std::vector<std::string> environment = environment_with(env);
-    p.log = log_dir / (log_prefix + launch.name + ".log");
+    p.log = files::path_inside(log_dir, log_prefix + launch.name + ".log");
     const fs::path cwd = launch.cwd.is_absolute() ? launch.cwd : spec.dir / launch.cwd;
 
     std::vector<char*> argv, envp;

@@ -279,6 +279,21 @@ TEST(Writer, ReindexDoesNotWriteThroughALinkInTheFolder) {
   EXPECT_EQ(read_all(dir / "b").size(), 1u);
 }
 
+// A storage file is created, never opened: a link planted where it goes (another user's, in a
+// shared folder) or a file already there is refused and left as it was, for both storages.
+TEST(Writer, AStorageFileIsNeverWrittenThroughALinkOrOverAFile) {
+  ScratchDir dir;
+  write_file(dir / "victim", {});
+  fs::create_symlink(dir / "victim", dir / "link.db3");
+  fs::create_symlink(dir / "victim", dir / "link.mcap");
+  EXPECT_THROW(create_sqlite3(dir / "link.db3"), BagError);
+  EXPECT_THROW(create_mcap(dir / "link.mcap", Compression::kNone, 1 << 20), BagError);
+  EXPECT_TRUE(read_file(dir / "victim").empty());
+  write_file(dir / "there.db3", {});
+  EXPECT_THROW(create_sqlite3(dir / "there.db3"), BagError);
+  EXPECT_TRUE(read_file(dir / "there.db3").empty());
+}
+
 // A bag folder whose second file is cut short: its conversion fails after the first file's
 // messages were written, and must leave nothing that looks like a complete bag behind.
 TEST(Writer, AFailedConversionLeavesNoBagBehind) {

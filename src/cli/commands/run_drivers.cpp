@@ -15,6 +15,7 @@
 #include "../interrupts.hpp"
 #include "robotperf/cli/exit_codes.hpp"
 #include "robotperf/files/atomic_file.hpp"
+#include "robotperf/files/paths.hpp"
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/peak_search.hpp"
 #include "robotperf/report/benchmark_yaml.hpp"
@@ -72,12 +73,12 @@ harness::RunResult measure(const harness::BenchmarkSpec& spec, const harness::Ru
 
 // The first name under --output no other run has; a grey run's trace folder is moved there.
 fs::path name_run(const RunArgs& a, harness::RunResult& result) {
-  fs::path base = fs::path(a.output) / report::result_basename(result);
+  fs::path base = files::path_inside(a.output, report::result_basename(result));
   if (result.grey) {
     // The trace folder takes the first name no other run has; the files follow it.
     for (int n = 2; fs::exists(base.string() + ".trace") || fs::exists(base.string() + ".json");
          ++n)
-      base = fs::path(a.output) / (report::result_basename(result) + "-" + std::to_string(n));
+      base = files::path_inside(a.output, report::result_basename(result) + "-" + std::to_string(n));
     const fs::path trace = base.string() + ".trace";
     fs::rename(result.trace_dir, trace);
     result.trace_dir = trace;
