@@ -80,15 +80,18 @@ struct Recorded {
   std::shared_ptr<msgs::SerializedMessage> payload;
 };
 
-}  // namespace
+// One time of the replay: a message of every input, with equal header stamps.
+struct Frame {
+  int64_t time_ns;
+  std::vector<const Recorded*> parts;
+};
 
-Dataset load_bag_dataset(const BagSelection& selection, const std::vector<BoundaryTopic>& inputs,
-                         std::vector<std::string>* corrupt) {
+// The bag topic each input is fed from (remapped as --remap says), each checked to be CDR, of
+// the input's type and stamped.
+std::vector<const bag::TopicInfo*> choose_sources(const BagSelection& selection,
+                                                  const bag::BagInfo& info,
+                                                  const std::vector<BoundaryTopic>& inputs) {
   const std::string path = selection.path.string();
-  if (inputs.empty()) throw BenchmarkError("a benchmark without inputs cannot replay bag " + path);
-  // From a Reader, not read_info(): ROS 2 keeps the definitions the checks below judge types by in
-  // the storage (MCAP schemas, sqlite3 message_definitions), not in metadata.yaml.
-  const bag::BagInfo info = bag::Reader(selection.path).info();
   auto benchmark_topic = [&](const std::string& bag_topic) {
     auto it = selection.remaps.find(bag_topic);
     return it == selection.remaps.end() ? bag_topic : it->second;
@@ -101,10 +104,7 @@ Dataset load_bag_dataset(const BagSelection& selection, const std::vector<Bounda
                            " has no topic " + from);
     }
   }
-
-  // Which bag topic feeds each input.
   std::vector<const bag::TopicInfo*> sources;
-  bag::ReadOptions read;
   for (const auto& input : inputs) {
     const bag::TopicInfo* source = nullptr;
     for (const auto& t : info.topics) {
@@ -137,21 +137,29 @@ Dataset load_bag_dataset(const BagSelection& selection, const std::vector<Bounda
                            input.topic + " expects " + input.type);
     }
     sources.push_back(source);
-    read.topics.insert(source->name);
   }
+  return sources;
+}
+
+// The sources' messages in the selected window, per input, the bytes as recorded. Every message
+// is decoded once here, before timing, as the subscribers will decode it: one that cannot be
+// would be dropped by the graph's first node and counted as lost. Those are left out, and
+// `corrupt` (when given) gets a line per input that had any.
+std::vector<std::vector<Recorded>> read_recorded(const BagSelection& selection,
+                                                 const bag::BagInfo& info,
+                                                 const std::vector<const bag::TopicInfo*>& sources,
+                                                 std::vector<std::string>* corrupt) {
+  bag::ReadOptions read;
+  for (const auto* source : sources) read.topics.insert(source->name);
   if (selection.start_s) {
     read.start_time_ns = info.starting_time_ns + std::llround(*selection.start_s * 1e9);
   }
   if (selection.end_s) {
     read.end_time_ns = info.starting_time_ns + std::llround(*selection.end_s * 1e9);
   }
-
-  // Load, keeping the bytes as recorded.
   std::map<std::string, std::size_t> input_of_topic;
   for (std::size_t i = 0; i < sources.size(); ++i) input_of_topic[sources[i]->name] = i;
-  std::vector<std::vector<Recorded>> recorded(inputs.size());
-  // Every message is decoded once here, before timing, as the subscribers will decode it: one
-  // that cannot be would be dropped by the graph's first node and counted as lost.
+  std::vector<std::vector<Recorded>> recorded(sources.size());
   std::vector<PayloadCheck> checks;
   for (const auto* source : sources) checks.emplace_back(*source);
   struct Corrupt {
@@ -159,7 +167,7 @@ Dataset load_bag_dataset(const BagSelection& selection, const std::vector<Bounda
     int64_t first_ns = 0;
     std::string why;
   };
-  std::vector<Corrupt> corrupted(inputs.size());
+  std::vector<Corrupt> corrupted(sources.size());
   bag::Reader reader(selection.path, read);
   bag::Message m;
   while (reader.next(m)) {
@@ -180,42 +188,57 @@ Dataset load_bag_dataset(const BagSelection& selection, const std::vector<Bounda
     payload->cdr = std::move(m.data);
     recorded[i].push_back({m.timestamp_ns, stamp, std::move(payload)});
   }
-
-  for (std::size_t i = 0; i < inputs.size(); ++i) {
+  for (std::size_t i = 0; i < sources.size(); ++i) {
     if (corrupted[i].count == 0 || corrupt == nullptr) continue;
     char first[64];
     std::snprintf(first, sizeof first, "%.9f", static_cast<double>(corrupted[i].first_ns) * 1e-9);
-    corrupt->push_back("bag " + path + ": " + std::to_string(corrupted[i].count) + " message" +
-                       (corrupted[i].count == 1 ? "" : "s") + " on " + sources[i]->name +
-                       " do not decode as " + sources[i]->type + " (the first at " + first +
-                       " s: " + corrupted[i].why +
-                       "); left out of the replay, neither sent nor counted as lost");
+    corrupt->push_back(
+        "bag " + selection.path.string() + ": " + std::to_string(corrupted[i].count) + " message" +
+        (corrupted[i].count == 1 ? "" : "s") + " on " + sources[i]->name + " do not decode as " +
+        sources[i]->type + " (the first at " + first + " s: " + corrupted[i].why +
+        "); left out of the replay, neither sent nor counted as lost");
   }
+  return recorded;
+}
 
-  // Frames: the first input's messages in order, joined by equal header
-  // stamps with one unused message of every other input.
-  struct Frame {
-    int64_t time_ns;
-    std::vector<const Recorded*> parts;
-  };
-  std::vector<std::multimap<int64_t, const Recorded*>> by_stamp(inputs.size());
-  for (std::size_t i = 1; i < inputs.size(); ++i) {
+// Frames: the first input's messages in order, joined by equal header stamps with one unused
+// message of every other input, in the order they were recorded.
+std::vector<Frame> join_frames(const std::vector<std::vector<Recorded>>& recorded) {
+  const std::size_t inputs = recorded.size();
+  std::vector<std::multimap<int64_t, const Recorded*>> by_stamp(inputs);
+  for (std::size_t i = 1; i < inputs; ++i) {
     for (const auto& r : recorded[i]) by_stamp[i].emplace(r.stamp_ns, &r);
   }
   std::vector<Frame> frames;
   for (const auto& first : recorded[0]) {
     Frame f{first.time_ns, {&first}};
-    for (std::size_t i = 1; i < inputs.size() && f.parts.size() == i; ++i) {
+    for (std::size_t i = 1; i < inputs && f.parts.size() == i; ++i) {
       auto it = by_stamp[i].find(first.stamp_ns);
       if (it == by_stamp[i].end()) break;
       f.time_ns = std::min(f.time_ns, it->second->time_ns);
       f.parts.push_back(it->second);
       by_stamp[i].erase(it);
     }
-    if (f.parts.size() == inputs.size()) frames.push_back(std::move(f));
+    if (f.parts.size() == inputs) frames.push_back(std::move(f));
   }
   std::stable_sort(frames.begin(), frames.end(),
                    [](const Frame& a, const Frame& b) { return a.time_ns < b.time_ns; });
+  return frames;
+}
+
+}  // namespace
+
+Dataset load_bag_dataset(const BagSelection& selection, const std::vector<BoundaryTopic>& inputs,
+                         std::vector<std::string>* corrupt) {
+  const std::string path = selection.path.string();
+  if (inputs.empty()) throw BenchmarkError("a benchmark without inputs cannot replay bag " + path);
+  // From a Reader, not read_info(): ROS 2 keeps the definitions the checks below judge types by in
+  // the storage (MCAP schemas, sqlite3 message_definitions), not in metadata.yaml.
+  const bag::BagInfo info = bag::Reader(selection.path).info();
+  const std::vector<const bag::TopicInfo*> sources = choose_sources(selection, info, inputs);
+  const std::vector<std::vector<Recorded>> recorded =
+      read_recorded(selection, info, sources, corrupt);
+  const std::vector<Frame> frames = join_frames(recorded);
   if (frames.empty()) {
     std::string topics;
     for (const auto* s : sources) topics += (topics.empty() ? "" : ", ") + s->name;

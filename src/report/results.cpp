@@ -251,8 +251,12 @@ nlohmann::json network_json(const harness::RunResult& r) {
 
 }  // namespace
 
-nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::MachineInfo& machine) {
-  using nlohmann::json;
+namespace {
+
+using nlohmann::json;
+
+// Per node: what ran, where, how it ended and what it used.
+json nodes_json(const harness::RunResult& r) {
   json nodes = json::array();
   for (const auto& n : r.nodes) {
     json node = {
@@ -270,11 +274,11 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
     }
     nodes.push_back(std::move(node));
   }
-  // The RobotPerf headline is the maximum latency, taken from the same block so the two agree
-  // exactly.
-  const json from_scheduled = metrics::to_json(r.latency_from_scheduled, 1.0 / kNsPerMs, "ms");
-  // The distribution itself, compactly, so that a report can draw it without the CSV.
-  const std::vector<double> latencies_ms = harness::scheduled_latencies_ms(r);
+  return nodes;
+}
+
+// The other DDS participants seen on the run's domain.
+json peers_json(const harness::RunResult& r) {
   json peers = json::array();
   for (const auto& p : r.domain_peers) {
     peers.push_back({{"id", rmw::to_hex(p.id)},
@@ -283,8 +287,12 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
                      {"addresses", p.addresses},
                      {"topics", p.topics}});
   }
-  json warnings = json::array();
-  for (const auto& w : r.warnings) warnings.push_back({{"rule", w.rule}, {"message", w.message}});
+  return peers;
+}
+
+// robotperf's build and the transport as the run used it: QoS per endpoint, the ROS 2 release
+// announced, security.
+json software_of(const harness::RunResult& r) {
   json software = software_json();
   software["transport"] = transport_json(r.rmw, r.domain_id, r.processes);
   json qos = json::array();
@@ -302,42 +310,93 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
                                                          : json{{"keystore", r.keystore.string()},
                                                                 {"enclave", rmw::kDefaultEnclave},
                                                                 {"plugins", r.security}};
+  return software;
+}
+
+// How the run was configured: its rate and timeline, counts, transport, scheduling.
+json configuration_json(const harness::RunResult& r) {
   const auto& sched = r.scheduling;
   const json scheduling = {
       {"cpus", sched.cpus.empty() ? json(nullptr) : json(harness::format_cpu_list(sched.cpus))},
       {"rt_priority", sched.rt_priority ? json(sched.rt_priority) : json(nullptr)},
       {"lock_memory", sched.lock_memory}};
+  return {{"rate_hz", r.rate_hz},
+          {"timeline", r.timeline},
+          {"rate_scale", r.timeline == "bag" ? json(r.rate_scale) : json(nullptr)},
+          {"burst", r.timeline == "burst" ? json(r.burst) : json(nullptr)},
+          {"arrival_seed", r.timeline == "poisson" ? json(r.arrival_seed) : json(nullptr)},
+          {"count", r.count},
+          {"warmup", r.warmup},
+          {"warmup_repeated_s", r.warmup_repeated_s},
+          {"drain_s", r.drain_s},
+          {"rmw", r.rmw},
+          {"processes", r.processes},
+          {"monitor_wait", r.monitor_wait},
+          {"device_resident", device_resident_json(r.device_resident)},
+          {"executor_threads", r.executor_threads},
+          {"output_topic", r.output_topic},
+          {"domain_id", r.domain_id},
+          {"id_base_ns", r.id_base_ns},
+          {"run_token", r.run_token},
+          {"update_rate_hz", r.update_rate_hz ? json(*r.update_rate_hz) : json(nullptr)},
+          {"scheduling", scheduling}};
+}
+
+json launched_json(const harness::RunResult& r) {
+  json launched = json::array();
+  for (const auto& l : r.launched) {
+    launched.push_back({{"name", l.name},
+                        {"command", l.command},
+                        {"pid", l.pid},
+                        {"exit_status", l.exit_status},
+                        {"stopped_by", l.stopped_by},
+                        {"log", l.log}});
+  }
+  return launched;
+}
+
+json control_loops_json(const harness::RunResult& r) {
+  json loops = json::array();
+  const double us = 1e-3;
+  for (const auto& c : r.control_loops) {
+    loops.push_back(
+        {{"node", c.node},
+         {"update_rate_hz", c.update_rate_hz},
+         {"cpu", c.cpu >= 0 ? json(c.cpu) : json(nullptr)},
+         {"rt_priority", c.rt_priority ? json(c.rt_priority) : json(nullptr)},
+         {"cycles", c.cycles},
+         {"recorded_cycles", c.recorded_cycles},
+         {"deadline_misses", c.deadline_misses},
+         {"update_duration_us", metrics::to_json(c.update_duration, us, "us")},
+         {"cycle_duration_us", metrics::to_json(c.cycle_duration, us, "us")},
+         {"period_jitter_us", metrics::to_json(c.period_jitter, us, "us")},
+         {"wake_latency_us", metrics::to_json(c.wake_latency, us, "us")},
+         {"command_to_write_ms", metrics::to_json(c.command_to_write, 1.0 / kNsPerMs, "ms")}});
+  }
+  return loops;
+}
+
+}  // namespace
+
+nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::MachineInfo& machine) {
+  // The RobotPerf headline is the maximum latency, taken from the same block so the two agree
+  // exactly.
+  const json from_scheduled = metrics::to_json(r.latency_from_scheduled, 1.0 / kNsPerMs, "ms");
+  // The distribution itself, compactly, so that a report can draw it without the CSV.
+  const std::vector<double> latencies_ms = harness::scheduled_latencies_ms(r);
+  json warnings = json::array();
+  for (const auto& w : r.warnings) warnings.push_back({{"rule", w.rule}, {"message", w.message}});
   json out = {
       {"schema", kResultSchema},
       {"benchmark", {{"id", r.benchmark_id}, {"name", r.benchmark_name}, {"category", r.category}}},
       {"type", r.grey ? "grey" : "black"},
       {"started_utc", utc_time(r.started_unix_ns, "%Y-%m-%dT%H:%M:%SZ")},
-      {"configuration",
-       {{"rate_hz", r.rate_hz},
-        {"timeline", r.timeline},
-        {"rate_scale", r.timeline == "bag" ? json(r.rate_scale) : json(nullptr)},
-        {"burst", r.timeline == "burst" ? json(r.burst) : json(nullptr)},
-        {"arrival_seed", r.timeline == "poisson" ? json(r.arrival_seed) : json(nullptr)},
-        {"count", r.count},
-        {"warmup", r.warmup},
-        {"warmup_repeated_s", r.warmup_repeated_s},
-        {"drain_s", r.drain_s},
-        {"rmw", r.rmw},
-        {"processes", r.processes},
-        {"monitor_wait", r.monitor_wait},
-        {"device_resident", device_resident_json(r.device_resident)},
-        {"executor_threads", r.executor_threads},
-        {"output_topic", r.output_topic},
-        {"domain_id", r.domain_id},
-        {"id_base_ns", r.id_base_ns},
-        {"run_token", r.run_token},
-        {"update_rate_hz", r.update_rate_hz ? json(*r.update_rate_hz) : json(nullptr)},
-        {"scheduling", scheduling}}},
+      {"configuration", configuration_json(r)},
       {"dataset", dataset_json(r)},
       {"machine", sysinfo::to_json(machine)},
-      {"software", software},
+      {"software", software_of(r)},
       {"warnings", warnings},
-      {"domain_peers", peers},
+      {"domain_peers", peers_json(r)},
       {"counts",
        {{"sent", r.sent},
         {"measured", r.measured},
@@ -362,7 +421,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"window_s", r.window_s}}},
       {"power", metrics::to_json(r.power, r.matched, r.throughput_hz)},
       {"resources", metrics::to_json(r.resources)},
-      {"nodes", nodes},
+      {"nodes", nodes_json(r)},
       {"completed", r.completed},
       {"interrupted", r.interrupted},
       {"errors", r.errors},
@@ -371,38 +430,8 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"backend_check", backend_check_json(r.backend_check)},
   };
   if (!r.host_launchers.empty()) out["network"] = network_json(r);
-  if (!r.launched.empty()) {
-    json launched = json::array();
-    for (const auto& l : r.launched) {
-      launched.push_back({{"name", l.name},
-                          {"command", l.command},
-                          {"pid", l.pid},
-                          {"exit_status", l.exit_status},
-                          {"stopped_by", l.stopped_by},
-                          {"log", l.log}});
-    }
-    out["launched"] = launched;
-  }
-  if (!r.control_loops.empty()) {
-    json loops = json::array();
-    const double us = 1e-3;
-    for (const auto& c : r.control_loops) {
-      loops.push_back(
-          {{"node", c.node},
-           {"update_rate_hz", c.update_rate_hz},
-           {"cpu", c.cpu >= 0 ? json(c.cpu) : json(nullptr)},
-           {"rt_priority", c.rt_priority ? json(c.rt_priority) : json(nullptr)},
-           {"cycles", c.cycles},
-           {"recorded_cycles", c.recorded_cycles},
-           {"deadline_misses", c.deadline_misses},
-           {"update_duration_us", metrics::to_json(c.update_duration, us, "us")},
-           {"cycle_duration_us", metrics::to_json(c.cycle_duration, us, "us")},
-           {"period_jitter_us", metrics::to_json(c.period_jitter, us, "us")},
-           {"wake_latency_us", metrics::to_json(c.wake_latency, us, "us")},
-           {"command_to_write_ms", metrics::to_json(c.command_to_write, 1.0 / kNsPerMs, "ms")}});
-    }
-    out["control_loops"] = loops;
-  }
+  if (!r.launched.empty()) out["launched"] = launched_json(r);
+  if (!r.control_loops.empty()) out["control_loops"] = control_loops_json(r);
   if (r.peak_search) out["peak_search"] = peak_search_json(*r.peak_search);
   if (r.grey) {
     // Grey-box: where the trace is and what it says beyond end-to-end latency.
@@ -498,8 +527,10 @@ std::string percentile_intervals_line(const metrics::SampleStats& s, double scal
   return out + "\n";
 }
 
-std::string summary_table(const harness::RunResult& r) {
-  std::ostringstream out;
+namespace {
+
+// The summary's first lines: what ran, how, on what, fed with what.
+void write_configuration(std::ostream& out, const harness::RunResult& r) {
   out << r.benchmark_id << " (" << r.benchmark_name << ") · " << (r.grey ? "grey-box · " : "")
       << r.rmw << " · " << r.processes << " process" << (r.processes == "single" ? "" : "es")
       << " · " << format_fixed(r.rate_hz, 1) << " Hz";
@@ -521,6 +552,11 @@ std::string summary_table(const harness::RunResult& r) {
     out << " (" << parameters << ")";
   }
   out << "\n";
+}
+
+// Where the graph ran: backends, device-resident topics, hosts, the network link, launched
+// processes, security.
+void write_placement(std::ostream& out, const harness::RunResult& r) {
   // Which node ran where, when any ran on a backend other than the host CPU.
   if (std::ranges::any_of(r.nodes, [](const auto& n) { return n.backend != "cpu"; })) {
     out << "backends:";
@@ -562,6 +598,10 @@ std::string summary_table(const harness::RunResult& r) {
   }
   if (!r.security.empty())
     out << "security: " << r.security << " (keystore " << r.keystore.string() << ")\n";
+}
+
+// The message counts: sent, measured, matched, lost and what else arrived.
+void write_messages(std::ostream& out, const harness::RunResult& r) {
   out << "messages: sent " << r.sent << " (warm-up " << r.warmup;
   if (r.warmup_repeated_s > 0) {
     out << ", repeated for " << format_fixed(r.warmup_repeated_s, 2)
@@ -575,6 +615,10 @@ std::string summary_table(const harness::RunResult& r) {
   if (r.unobserved) out << ", unobserved " << r.unobserved << " (trace events discarded)";
   if (r.repeats) out << ", state repeats " << r.repeats;
   out << "\n\n";
+}
+
+// The latency table (ms), its percentiles' intervals, and a control loop's command latency.
+void write_latency(std::ostream& out, const harness::RunResult& r) {
   char line[256];
   std::snprintf(line, sizeof line, "%-24s %9s %9s %9s %9s %9s %9s %9s %9s\n", "latency (ms)", "min",
                 "mean", "rms", "p50", "p90", "p99", "p99.9", "max");
@@ -594,6 +638,10 @@ std::string summary_table(const harness::RunResult& r) {
   for (const auto& c : r.control_loops) {
     row("command -> hw write", c.command_to_write);
   }
+}
+
+// Throughput (and the peak search that found it), the grey-box breakdown, the headline.
+void write_throughput(std::ostream& out, const harness::RunResult& r) {
   out << "\nthroughput: " << format_fixed(r.throughput_hz, 3) << " Hz out, "
       << format_fixed(r.offered_rate_hz, 3) << " Hz offered"
       << (r.throughput_kind == "peak" ? " (peak: the highest rate the search found sustained)"
@@ -606,6 +654,11 @@ std::string summary_table(const harness::RunResult& r) {
   out << "headline (RobotPerf): latency "
       << format_fixed(r.latency_from_scheduled.max / kNsPerMs, 3) << " ms (max), throughput "
       << format_fixed(r.throughput_hz, 3) << " Hz\n";
+}
+
+// Each control loop's cycle timing (us) and deadline misses.
+void write_control_loops(std::ostream& out, const harness::RunResult& r) {
+  char line[256];
   for (const auto& c : r.control_loops) {
     out << "\ncontrol loop " << c.node << " at " << format_fixed(c.update_rate_hz, 1) << " Hz"
         << (c.cpu >= 0 ? ", CPU " + std::to_string(c.cpu) : std::string())
@@ -625,7 +678,10 @@ std::string summary_table(const harness::RunResult& r) {
     loop_row("period jitter", c.period_jitter);
     loop_row("wake-up latency", c.wake_latency);
   }
-  out << power_line(r) << resources_line(r);
+}
+
+// Run-rule warnings, and the inputs each node received but could not use.
+void write_warnings(std::ostream& out, const harness::RunResult& r) {
   if (!r.warnings.empty()) {
     out << "warnings (run rules):\n";
     for (const auto& w : r.warnings) out << "  " << w.rule << ": " << w.message << "\n";
@@ -639,6 +695,11 @@ std::string summary_table(const harness::RunResult& r) {
     }
     if (!unused.empty()) out << "node " << n.name << " dropped inputs: " << unused << "\n";
   }
+}
+
+// The functional evaluation and the backend check: whether the answers were right.
+void write_answers(std::ostream& out, const harness::RunResult& r) {
+  char line[256];
   if (r.functional) {
     const auto& f = *r.functional;
     out << "\nfunctional (" << f.evaluator << ", " << f.evaluated << " of " << f.requested
@@ -665,12 +726,32 @@ std::string summary_table(const harness::RunResult& r) {
         << " outputs): " << (c.compared > 0 ? c.criterion + " " + line : std::string("none"))
         << (c.passed ? "  ok" : "  FAILED") << "\n";
   }
+}
+
+// The errors that ended the run and the verdict with its reasons.
+void write_verdict(std::ostream& out, const harness::RunResult& r) {
   for (const auto& e : r.errors) out << "error: " << e << "\n";
   out << "result: " << (r.valid ? "VALID" : "INVALID");
   for (std::size_t i = 0; i < r.invalid_reasons.size(); ++i) {
     out << (i == 0 ? " — " : "; ") << r.invalid_reasons[i];
   }
   out << "\n";
+}
+
+}  // namespace
+
+std::string summary_table(const harness::RunResult& r) {
+  std::ostringstream out;
+  write_configuration(out, r);
+  write_placement(out, r);
+  write_messages(out, r);
+  write_latency(out, r);
+  write_throughput(out, r);
+  write_control_loops(out, r);
+  out << power_line(r) << resources_line(r);
+  write_warnings(out, r);
+  write_answers(out, r);
+  write_verdict(out, r);
   return out.str();
 }
 
