@@ -16,6 +16,7 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr const char* kSessionPrefix = "robotperf-";
+constexpr uint64_t kMaxPid = 4194304;  // the kernel's PID_MAX_LIMIT
 
 std::string current_boot_id() {
   std::string id;
@@ -73,7 +74,7 @@ std::optional<ProcessIdentity> parse_identity(const std::string& text) {
   if (!(in >> pid >> start >> boot)) return std::nullopt;
   const auto p = number(pid);
   const auto s = number(start);
-  if (!p || !s || *p == 0 || *p > 4194304) return std::nullopt;
+  if (!p || !s || *p == 0 || *p > kMaxPid) return std::nullopt;
   return ProcessIdentity{static_cast<pid_t>(*p), *s, boot};
 }
 
@@ -100,7 +101,7 @@ std::optional<ProcessIdentity> session_maker(const std::string& name) {
   const auto pid = number(name.substr(pid_dash + 1, start_dash - pid_dash - 1));
   if (!number(name.substr(counter_dash + 1)) || !start.starts_with('s')) return std::nullopt;
   const auto ticks = number(start.substr(1));
-  if (!pid || !ticks || *pid == 0) return std::nullopt;
+  if (!pid || !ticks || *pid == 0 || *pid > kMaxPid) return std::nullopt;
   return ProcessIdentity{static_cast<pid_t>(*pid), *ticks, current_boot_id()};
 }
 
