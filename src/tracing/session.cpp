@@ -1,30 +1,22 @@
 #include "robotperf/tracing/session.hpp"
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <atomic>
-#include <cctype>
-#include <cerrno>
+#include <algorithm>
 #include <chrono>
-#include <csignal>
 #include <cstdlib>
-#include <fstream>
 #include <stdexcept>
 #include <thread>
 
-extern char** environ;
+#include "forced_exit.hpp"
+#include "lttng_command.hpp"
+#include "ownership.hpp"
 
 namespace robotperf::tracing {
 namespace {
 
 namespace fs = std::filesystem;
-
-const char* const kInstallHint =
-    "install lttng-tools (Debian: sudo apt-get install lttng-tools liblttng-ust-dev babeltrace2, "
-    "or run scripts/install-deps.sh); black-box runs (the default --mode black) do not need it";
+using namespace detail;
 
 bool on_path(const std::string& program) {
   const char* path = std::getenv("PATH");
@@ -37,45 +29,6 @@ bool on_path(const std::string& program) {
     start = end + 1;
   }
   return false;
-}
-
-struct CommandResult {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr together
-};
-
-// Runs a program (found on PATH) and collects its output.
-CommandResult run_command(const std::vector<std::string>& args) {
-  int pipe_fds[2];
-  if (pipe2(pipe_fds, O_CLOEXEC) != 0) throw TracingError("cannot create a pipe for " + args[0]);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDOUT_FILENO);
-  posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDERR_FILENO);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int rc = posix_spawnp(&pid, args[0].c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  close(pipe_fds[1]);
-  if (rc != 0) {
-    close(pipe_fds[0]);
-    throw TracingUnavailable("cannot run " + args[0] + ": " + kInstallHint);
-  }
-  CommandResult result;
-  char buf[4096];
-  ssize_t n;
-  while ((n = read(pipe_fds[0], buf, sizeof buf)) > 0 || (n < 0 && errno == EINTR)) {
-    if (n > 0) result.output.append(buf, static_cast<std::size_t>(n));
-  }
-  close(pipe_fds[0]);
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  return result;
 }
 
 std::string join(const std::vector<std::string>& args) {
@@ -107,41 +60,24 @@ bool registered(pid_t pid) {
          r.output.find("PID: " + std::to_string(pid) + " ") != std::string::npos;
 }
 
-// Where the session daemon of this user writes its pid (lttng-sessiond(8): the root daemon in
-// /var/run/lttng, a user's in $LTTNG_HOME/.lttng, else $HOME/.lttng).
-fs::path daemon_pid_file() {
-  if (getuid() == 0) return "/var/run/lttng/lttng-sessiond.pid";
-  const char* home = std::getenv("LTTNG_HOME");
-  if (home == nullptr || *home == '\0') home = std::getenv("HOME");
-  return fs::path(home ? home : "") / ".lttng" / "lttng-sessiond.pid";
+// Records the daemon this process started: beside its pid file for a later run, should this
+// process be killed, and for a forced exit.
+void own_started_daemon() {
+  const pid_t pid = daemon_pid();
+  if (pid == 0) return;
+  write_daemon_ownership({process_identity(pid), this_process()});
+  note_started_daemon(pid);
 }
 
 // Stops the session daemon once no recording session is left (another program may still use
-// it), so that a daemon robotperf started does not outlive its run.
+// it), so that a daemon robotperf started does not outlive its run. One left running is
+// stopped by a later run once idle (remove_leftovers).
 void stop_daemon_when_idle() {
-  const CommandResult sessions = run_command({"lttng", "list"});
-  // lttng-tools 2.13 says "recording session", earlier versions "tracing session".
-  const bool idle =
-      sessions.exit_code == 0 &&
-      (sessions.output.find("Currently no available recording session") != std::string::npos ||
-       sessions.output.find("Currently no available tracing session") != std::string::npos);
-  if (!idle) return;
-  std::ifstream in(daemon_pid_file());
-  pid_t pid = 0;
-  if (!(in >> pid) || pid <= 0 || kill(pid, SIGTERM) != 0) return;
-  // It removes its pid file last: wait for it, briefly.
-  for (int i = 0; i < 250 && kill(pid, 0) == 0; ++i)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-}
-
-std::string unique_name(const std::string& hint) {
-  static std::atomic<unsigned> counter{0};
-  std::string clean;
-  for (char c : hint) clean += (std::isalnum(static_cast<unsigned char>(c)) || c == '_') ? c : '_';
-  const auto now = std::chrono::system_clock::now().time_since_epoch();
-  return "robotperf-" + clean + "-" + std::to_string(getpid()) + "-" +
-         std::to_string(std::chrono::duration_cast<std::chrono::microseconds>(now).count()) + "-" +
-         std::to_string(counter++);
+  forget_started_daemon();
+  if (!daemon_idle()) return;
+  stop_daemon(daemon_pid());
+  std::error_code ec;
+  fs::remove(daemon_owner_file(), ec);
 }
 
 }  // namespace
@@ -194,6 +130,7 @@ RecordingSession::RecordingSession(SessionOptions options) : options_(std::move(
   options_.output_dir = fs::absolute(options_.output_dir);
   started_daemon_ = ensure_session_daemon();
   try {
+    if (started_daemon_) own_started_daemon();
     start();
   } catch (...) {
     // No destructor runs after a throwing constructor: a daemon started for this session ends
@@ -219,9 +156,10 @@ void RecordingSession::start() {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
 
-  name_ = unique_name(options_.name_hint);
+  name_ = new_session_name(options_.name_hint);
   lttng({"create", name_, "--output=" + options_.output_dir.string()});
   active_ = true;
+  note_session(name_);
   try {
     const std::string session = "--session=" + name_;
     lttng({"enable-channel", "--userspace", session,
@@ -239,14 +177,20 @@ void RecordingSession::start() {
     }
     lttng({"start", name_});
   } catch (...) {
-    run_command({"lttng", "destroy", name_});
-    active_ = false;
+    destroy();
     throw;
   }
 }
 
+bool RecordingSession::destroy() {
+  if (run_command({"lttng", "destroy", name_}).exit_code != 0) return false;
+  active_ = false;
+  forget_session();
+  return true;
+}
+
 RecordingSession::~RecordingSession() {
-  if (active_) run_command({"lttng", "destroy", name_});
+  if (active_) destroy();
   if (started_daemon_) stop_daemon_when_idle();
 }
 
@@ -257,11 +201,12 @@ void RecordingSession::stop() {
   try {
     lttng({"stop", name_});
   } catch (...) {
-    if (run_command({"lttng", "destroy", name_}).exit_code == 0) active_ = false;
+    destroy();
     throw;
   }
   lttng({"destroy", name_});
   active_ = false;
+  forget_session();
 }
 
 }  // namespace robotperf::tracing

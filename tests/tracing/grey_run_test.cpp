@@ -11,6 +11,9 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "../command_line.hpp"
 #include "../sanitized_build.hpp"
@@ -403,6 +406,148 @@ TEST_F(GreyRun, AnInterruptedRunDestroysItsSessionAndKeepsItsTrace) {
   EXPECT_EQ(traces, 1u);
   const auto sessions = robotperf::test_support::shell("lttng list");
   EXPECT_EQ(sessions.out.find("-" + std::to_string(pid) + "-"), std::string::npos) << sessions.out;
+}
+
+// The entries of `folder` whose name starts with ".trace-" (a run's temporary trace folders).
+std::vector<std::string> temporary_trace_folders(const fs::path& folder) {
+  std::vector<std::string> out;
+  for (const auto& e : fs::directory_iterator(folder)) {
+    if (e.path().filename().string().starts_with(".trace-"))
+      out.push_back(e.path().filename().string());
+  }
+  return out;
+}
+
+// Whether `lttng list` names a session made by process `pid`.
+bool session_of(pid_t pid) {
+  return robotperf::test_support::shell("lttng list").out.find("-" + std::to_string(pid) + "-") !=
+         std::string::npos;
+}
+
+// How many lines of `text` hold `part`.
+std::size_t lines_with(const std::string& text, const std::string& part) {
+  std::size_t n = 0;
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) n += line.find(part) != std::string::npos;
+  return n;
+}
+
+// A second Ctrl-C ends the run at once, yet leaves neither its session, nor the daemon it
+// started, nor its trace folder. Node per process, the relay holds every message ten minutes:
+// after the first Ctrl-C the runner waits for it, so that the second one forces the exit.
+TEST_F(GreyRun, ASecondInterruptStillRemovesTheSessionTheDaemonAndTheFolder) {
+  if (!stop_the_suites_daemon())
+    GTEST_SKIP() << "a session daemon this test did not start is running";
+  const fs::path package = dir_ / "pkg" / "test" / "t3_hung";
+  fs::create_directories(package);
+  std::ofstream(package / "benchmark.yaml")
+      << "id: t3\nname: t3_hung\nshort: test\ndescription: test\nresults: []\n";
+  std::ofstream(package / "graph.yaml")
+      << "dataset: perception/image\nrate_hz: 20\nwarmup: 0\n"
+         "validity: {min_samples: 5, max_loss_percent: 0.0}\n"
+         "inputs:\n  - {topic: /in, type: sensor_msgs/msg/Image, stream: image}\n"
+         "output: {topic: /out, type: sensor_msgs/msg/Image}\n"
+         "nodes:\n  - name: relay\n    kernel: util/relay\n    parameters: {delay_ms: 600000}\n"
+         "    topics: {input: /in, output: /out}\n";
+  const fs::path out = dir_ / "results";
+  const fs::path readings = dir_ / "readings";
+  robotperf::test_support::Background run(
+      std::string(ROBOTPERF_EXECUTABLE) + " --benchmarks " + (dir_ / "pkg").string() +
+          " run t3 --mode grey --count 2000 --rmw fastdds --processes per-node "
+          "--callback-timeout 1000 --quiet --power-meter 'echo x >> " +
+          readings.string() + "; echo 5' --domain " + std::to_string(rmw::reserved_domain()) +
+          " --output " + out.string(),
+      dir_ / "log");
+  // The meter is read once before the run, then in the measured window.
+  const bool measuring = robotperf::test_support::eventually(
+      [&] {
+        std::ifstream in(readings);
+        return std::count(std::istreambuf_iterator<char>(in), {}, '\n') >= 2;
+      },
+      std::chrono::seconds(60));
+  const bool daemon_started = daemon_running();
+  run.signal(SIGINT);
+  const bool first_seen = robotperf::test_support::eventually(
+      [&] { return run.output().find("interrupted: ending") != std::string::npos; },
+      std::chrono::seconds(30));
+  run.signal(SIGINT);
+  const int code = run.wait(std::chrono::seconds(60));
+  const bool session_left = session_of(run.pid());
+  const bool daemon_left = !robotperf::test_support::eventually([] { return !daemon_running(); },
+                                                                std::chrono::seconds(10));
+  if (daemon_left) robotperf::test_support::shell("pkill -x lttng-sessiond");
+  started_daemon_ = tracing::ensure_session_daemon();  // for the tests that follow
+  ASSERT_TRUE(measuring) << run.output();
+  ASSERT_TRUE(daemon_started) << "the run did not start a session daemon: " << run.output();
+  ASSERT_TRUE(first_seen) << run.output();
+  EXPECT_EQ(code, 130) << run.output();
+  EXPECT_NE(run.output().find("interrupted again: stopping now"), std::string::npos)
+      << run.output();
+  EXPECT_FALSE(session_left) << "its LTTng session is left";
+  EXPECT_FALSE(daemon_left) << "the session daemon it started is left";
+  EXPECT_TRUE(temporary_trace_folders(out).empty()) << temporary_trace_folders(out)[0];
+}
+
+// What a killed run left (its session, the daemon it started, its trace folder) the next grey
+// run removes, saying so on one line; a folder of the same kind of name that robotperf did not
+// make is left alone.
+TEST_F(GreyRun, TheNextRunRemovesWhatAKilledRunLeftAndNothingElse) {
+  if (!stop_the_suites_daemon())
+    GTEST_SKIP() << "a session daemon this test did not start is running";
+  const fs::path out = dir_ / "results";
+  const fs::path foreign = out / ".trace-foreign";
+  fs::create_directories(foreign);
+  std::ofstream(foreign / "notes") << "not robotperf's\n";
+  const fs::path readings = dir_ / "readings";
+  robotperf::test_support::Background killed(
+      std::string(ROBOTPERF_EXECUTABLE) + " run a2 --mode grey --count 3000 --quiet " +
+          "--power-meter 'echo x >> " + readings.string() + "; echo 5' --output " + out.string(),
+      dir_ / "log");
+  const bool measuring = robotperf::test_support::eventually(
+      [&] {
+        std::ifstream in(readings);
+        return std::count(std::istreambuf_iterator<char>(in), {}, '\n') >= 2;
+      },
+      std::chrono::seconds(60));
+  killed.signal(SIGKILL);
+  killed.wait(std::chrono::seconds(30));
+  const bool left_a_session = session_of(killed.pid());
+  const bool left_a_daemon = daemon_running();
+  const std::size_t left_folders = temporary_trace_folders(out).size();
+
+  const Outcome next =
+      robotperf_cli("run a2 --mode grey --count 40 --quiet --output " + out.string());
+  const bool session_left = session_of(killed.pid());
+  const bool daemon_left = daemon_running();
+  if (daemon_left) robotperf::test_support::shell("pkill -x lttng-sessiond");
+  started_daemon_ = tracing::ensure_session_daemon();  // for the tests that follow
+  ASSERT_TRUE(measuring) << killed.output();
+  ASSERT_TRUE(left_a_session && left_a_daemon && left_folders == 2)
+      << "the killed run left no session, daemon or trace folder to remove";
+  EXPECT_EQ(next.exit_code, 0) << next.out;
+  EXPECT_EQ(lines_with(next.out, "removed what killed grey runs left"), 1u) << next.out;
+  EXPECT_FALSE(session_left) << next.out;
+  EXPECT_FALSE(daemon_left) << next.out;
+  EXPECT_EQ(temporary_trace_folders(out), std::vector<std::string>{".trace-foreign"});
+  EXPECT_TRUE(fs::exists(foreign / "notes"));
+}
+
+// A folder named as the run's temporary trace folder used to be (.trace-<pid>) that the run did
+// not make neither stops the run nor is deleted by it.
+TEST_F(GreyRun, ARunNeverTouchesATraceFolderItDidNotMake) {
+  const fs::path out = dir_ / "results";
+  fs::create_directories(out);
+  // The shell's pid is robotperf's after exec.
+  const Outcome run = robotperf::test_support::shell(
+      "mkdir " + out.string() + "/.trace-$$ && echo mine > " + out.string() +
+      "/.trace-$$/notes && exec " + ROBOTPERF_EXECUTABLE + " run a2 --mode grey --count 40 " +
+      "--quiet --output " + out.string());
+  EXPECT_EQ(run.exit_code, 0) << run.out;
+  const std::vector<std::string> left = temporary_trace_folders(out);
+  ASSERT_EQ(left.size(), 1u) << "the planted folder was removed: " << run.out;
+  std::ifstream notes(out / left[0] / "notes");
+  std::string text;
+  EXPECT_TRUE(std::getline(notes, text) && text == "mine");
 }
 
 // A grey run that had to start the LTTng session daemon stops it again, so that it does not

@@ -73,6 +73,10 @@ void apply_workload(harness::BenchmarkSpec& spec, const RunArgs& args);
 harness::RunOptions run_options(const harness::BenchmarkSpec& spec, const RunArgs& args,
                                 const Context& context, std::optional<harness::NetworkLink>& link);
 
+// Before a grey run: removes what grey runs that were killed (or forced out before their
+// clean-up ended) left, saying so on one line (tracing::remove_leftovers).
+void remove_grey_leftovers(const RunArgs& args);
+
 // The drivers; each returns the exit status.
 int run_once(const harness::BenchmarkSpec& spec, const RunArgs& args,
              const harness::RunOptions& options);

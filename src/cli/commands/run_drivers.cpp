@@ -25,6 +25,7 @@
 #include "robotperf/report/series.hpp"
 #include "robotperf/report/sweep.hpp"
 #include "robotperf/sysinfo/machine.hpp"
+#include "robotperf/tracing/leftovers.hpp"
 #include "run.hpp"
 
 namespace robotperf::cli {
@@ -60,21 +61,11 @@ std::optional<fs::path> write_result_files(const fs::path& base,
   }
 }
 
-// One run of `spec`; a grey run's trace folder is removed when the run does not happen.
-harness::RunResult measure(const harness::BenchmarkSpec& spec, const harness::RunOptions& o) {
-  try {
-    return harness::run_benchmark(spec, o);
-  } catch (...) {
-    std::error_code ec;
-    if (!o.trace_dir.empty()) fs::remove_all(o.trace_dir, ec);
-    throw;
-  }
-}
-
-// The first name under --output no other run has; a grey run's trace folder is moved there.
+// The first name under --output no other run has; a grey run's trace is moved there (one that
+// could not be analysed too, to be looked at).
 fs::path name_run(const RunArgs& a, harness::RunResult& result) {
   fs::path base = files::path_inside(a.output, report::result_basename(result));
-  if (result.grey) {
+  if (!result.trace_dir.empty() && fs::exists(result.trace_dir)) {
     // The trace folder takes the first name no other run has; the files follow it.
     for (int n = 2; fs::exists(base.string() + ".trace") || fs::exists(base.string() + ".json");
          ++n)
@@ -139,6 +130,26 @@ WrittenRun write_run(const harness::BenchmarkSpec& spec, const RunArgs& a,
   return out;
 }
 
+struct MeasuredRun {
+  harness::RunResult result;
+  WrittenRun written;
+};
+
+// One run of `spec`, its summary and files written. A grey run records its trace in a temporary
+// folder of its own under --output (name_run moves the trace out), which goes once the run is
+// written or fails.
+MeasuredRun measure_and_write(const harness::BenchmarkSpec& spec, const RunArgs& a,
+                              harness::RunOptions o) {
+  std::optional<tracing::TemporaryTraceFolder> trace_folder;
+  if (o.mode == harness::RunMode::kGrey) {
+    trace_folder.emplace(a.output);
+    o.trace_dir = trace_folder->trace_path();
+  }
+  MeasuredRun run{harness::run_benchmark(spec, o), {}};
+  run.written = write_run(spec, a, run.result);
+  return run;
+}
+
 // Several runs of one benchmark (--repeat, --sweep), each with a fresh graph and written as usual.
 // Before run i, `prepare(i)` sets it up (it may change `spec`, which run i then measures) and
 // names it for the progress line; after it, `record` keeps its figures. Ends early on an interrupt
@@ -159,8 +170,7 @@ SeveralRuns run_several(
     const std::string label = prepare(i);
     if (g_interrupted.load() != 0) break;
     if (!a.quiet) std::fprintf(stderr, "[%s] %s\n", spec.id.c_str(), label.c_str());
-    harness::RunResult result = measure(spec, o);
-    const WrittenRun written = write_run(spec, a, result);
+    const auto [result, written] = measure_and_write(spec, a, o);
     record(result, written);
     if (!out.first) out.first = written.json;
     if (written.code != kExitOk && out.code == kExitOk) out.code = written.code;
@@ -224,8 +234,15 @@ harness::PeakSearchOptions peak_search_options(const RunArgs& a) {
 
 int run_once(const harness::BenchmarkSpec& spec, const RunArgs& args,
              const harness::RunOptions& options) {
-  harness::RunResult result = measure(spec, options);
-  return write_run(spec, args, result).code;
+  return measure_and_write(spec, args, options).written.code;
+}
+
+void remove_grey_leftovers(const RunArgs& args) {
+  const std::vector<std::string> removed = tracing::remove_leftovers(args.output);
+  if (removed.empty()) return;
+  std::string what;
+  for (const auto& r : removed) what += (what.empty() ? "" : "; ") + r;
+  std::cerr << "robotperf: removed what killed grey runs left: " << what << "\n";
 }
 
 // --repeat N: N runs; then the run-to-run view of the headline figures (report::series_summary).

@@ -170,9 +170,8 @@ void set_measurement_options(harness::RunOptions& o, const harness::BenchmarkSpe
   require_writable_folder(a.output, "--output");
   if (a.mode == "grey" && a.trace_subbuf != 0) tracing::check_subbuffer_bytes(a.trace_subbuf);
   if (a.mode == "grey") {
+    // Each run's trace folder is made when it starts (run_drivers.cpp).
     o.mode = harness::RunMode::kGrey;
-    // Recorded under a temporary name, renamed after the results file once the run is named.
-    o.trace_dir = fs::path(a.output) / (".trace-" + std::to_string(getpid()));
     o.trace_subbuf_bytes = a.trace_subbuf;
   }
 }

@@ -58,6 +58,8 @@ class RecordingSession {
  private:
   // Waits for this process to register, then creates, configures and starts the session.
   void start();
+  // `lttng destroy`; whether it succeeded (the session is then no longer active).
+  bool destroy();
 
   SessionOptions options_;
   std::string name_;
