@@ -95,11 +95,18 @@ bool lttng_available(std::string* why) {
 
 bool ensure_session_daemon() {
   if (daemon_answers()) return false;
-  const CommandResult r = run_command({"lttng-sessiond", "--daemonize"});
-  // Two processes may race to start one; the loser's daemon exits, which is fine.
-  if (r.exit_code != 0 && !daemon_answers())
-    throw TracingError("cannot start the LTTng session daemon: " + r.output);
-  return true;
+  // A daemon that is being stopped (another run's, ending with it) still holds its lock file for
+  // a moment and makes a new one refuse to start: try again until it is gone, at most 10 s.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  for (;;) {
+    const CommandResult r = run_command({"lttng-sessiond", "--daemonize"});
+    if (r.exit_code == 0) return true;
+    // Two processes may race to start one; the loser's daemon exits, which is fine.
+    if (daemon_answers()) return false;
+    if (std::chrono::steady_clock::now() > deadline)
+      throw TracingError("cannot start the LTTng session daemon: " + r.output);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
 }
 
 std::size_t subbuffer_bytes_for(double events_per_second) {

@@ -449,7 +449,8 @@ class ExternalMeter : public ::testing::Test {
     PowerOptions o;
     o.types = {"external"};
     o.meter_command = command;
-    o.meter_timeout_s = 0.5;
+    // Long enough for a shell to start on a loaded 2-core machine, short of "sleep 5".
+    o.meter_timeout_s = 2.0;
     return o;
   }
   FixtureRoot root_;
