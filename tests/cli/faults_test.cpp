@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -73,6 +74,18 @@ class Faults : public ::testing::Test {
     return n;
   }
 
+  // Starts `run f1 <args>` of benchmarks(`relay`) in the background, to --output results/, with
+  // a power meter that counts its readings in `readings`. The meter is read once before the run
+  // and then during the measured window: true once its second reading says timing has begun.
+  bool start_measuring(std::optional<Background>& run, const std::string& relay,
+                       const std::string& args, const fs::path& readings) {
+    run.emplace(std::string(ROBOTPERF_EXECUTABLE) + " " + benchmarks(relay) + " run f1 " + args +
+                    " --quiet --power-meter 'echo x >> " + readings.string() + "; echo 5'" +
+                    " --domain " + domain() + " --output " + (dir_ / "results").string(),
+                dir_ / "log");
+    return eventually([&] { return readings_of(readings) >= 2; }, std::chrono::seconds(60));
+  }
+
   // The pgrep/pkill pattern of this test's node processes (the brackets keep pgrep's own shell
   // out of the match; options such as --plugin may stand before `node`).
   std::string node_pattern() const { return "'[r]obotperf.* node " + dir_.string() + "'"; }
@@ -123,16 +136,11 @@ bool catches(pid_t pid, int signal_number) {
 TEST_F(Faults, InterruptsEndTheRunKeepingWhatItMeasured) {
   for (const int signal_number : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) {
     fs::remove_all(dir_ / "results");
-    // The meter is read once before the run and then during the measured window: its second
-    // reading says the run is under way.
-    const fs::path readings = dir_ / ("readings-" + std::to_string(signal_number));
-    const std::string meter = "--power-meter 'echo x >> " + readings.string() + "; echo 5'";
-    Background run(std::string(ROBOTPERF_EXECUTABLE) + " " + benchmarks("") +
-                       " run f1 --count 2000 --quiet " + meter + " --domain " + domain() +
-                       " --output " + (dir_ / "results").string(),
-                   dir_ / "log");
-    ASSERT_TRUE(eventually([&] { return readings_of(readings) >= 2; }, std::chrono::seconds(60)))
-        << run.output();
+    std::optional<Background> started;
+    ASSERT_TRUE(start_measuring(started, "", "--count 2000",
+                                dir_ / ("readings-" + std::to_string(signal_number))))
+        << started->output();
+    Background& run = *started;
     run.signal(signal_number);
     EXPECT_EQ(run.wait(std::chrono::seconds(30)), 128 + signal_number) << run.output();
     EXPECT_NE(run.output().find("interrupted: ending the run"), std::string::npos) << run.output();
@@ -166,14 +174,10 @@ TEST_F(Faults, ASignalBeforeTheRunStartsEndsItCleanly) {
 
 // An interrupted --repeat keeps the runs it made, and its series file says it ended early.
 TEST_F(Faults, AnInterruptedSeriesSaysItEndedEarly) {
-  const fs::path readings = dir_ / "readings";
-  Background run(std::string(ROBOTPERF_EXECUTABLE) + " " + benchmarks("") +
-                     " run f1 --repeat 3 --count 2000 --quiet --power-meter 'echo x >> " +
-                     readings.string() + "; echo 5' --domain " + domain() + " --output " +
-                     (dir_ / "results").string(),
-                 dir_ / "log");
-  ASSERT_TRUE(eventually([&] { return readings_of(readings) >= 2; }, std::chrono::seconds(60)))
-      << run.output();
+  std::optional<Background> started;
+  ASSERT_TRUE(start_measuring(started, "", "--repeat 3 --count 2000", dir_ / "readings"))
+      << started->output();
+  Background& run = *started;
   run.signal(SIGINT);
   EXPECT_EQ(run.wait(std::chrono::seconds(30)), 130) << run.output();
   EXPECT_NE(run.output().find("ended early after 1 of 3 runs: interrupted by SIGINT"),
@@ -194,15 +198,13 @@ TEST_F(Faults, AnInterruptedSeriesSaysItEndedEarly) {
 TEST_F(Faults, ASecondInterruptForcesAndStopsTheNodeProcesses) {
   // Per node, a child whose callback will not return for ten minutes: after the first Ctrl-C the
   // runner waits its shutdown grace for it; the second ends everything at once.
-  const fs::path readings = dir_ / "readings";
-  Background run(std::string(ROBOTPERF_EXECUTABLE) + " " + benchmarks("delay_ms: 600000") +
-                     " run f1 --count 2000 --rmw fastdds --processes per-node --callback-timeout "
-                     "1000 --quiet --power-meter 'echo x >> " +
-                     readings.string() + "; echo 5' --domain " + domain() + " --output " +
-                     (dir_ / "results").string(),
-                 dir_ / "log");
-  ASSERT_TRUE(eventually([&] { return readings_of(readings) >= 2; }, std::chrono::seconds(60)))
-      << run.output();
+  std::optional<Background> started;
+  ASSERT_TRUE(start_measuring(started, "delay_ms: 600000",
+                              "--count 2000 --rmw fastdds --processes per-node "
+                              "--callback-timeout 1000",
+                              dir_ / "readings"))
+      << started->output();
+  Background& run = *started;
   run.signal(SIGINT);
   ASSERT_TRUE(
       eventually([&] { return run.output().find("interrupted: ending") != std::string::npos; },
