@@ -71,8 +71,9 @@ class GreyRun : public ::testing::Test {
 
   // A relay between the camera stream and the monitor (the dataset has 68 frames).
   // A relay of camera images, or of the small CameraInfo messages of the same
-  // dataset when the test needs a high event rate rather than real payloads.
-  BenchmarkSpec relay_package(bool small_messages = false) {
+  // dataset when the test needs a high event rate rather than real payloads; `parameters` are
+  // the relay's further parameters (delay_ms: ...). The package is t1 under dir_/pkg.
+  BenchmarkSpec relay_package(bool small_messages = false, const std::string& parameters = "") {
     const std::string type =
         small_messages ? "sensor_msgs/msg/CameraInfo" : "sensor_msgs/msg/Image";
     const std::string stream = small_messages ? "camera_info" : "image";
@@ -87,6 +88,7 @@ class GreyRun : public ::testing::Test {
         << type << ", stream: " << stream << "}\n"
         << "output: {topic: /out, type: " << type << "}\n"
         << "nodes:\n  - name: relay\n    kernel: util/relay\n    parameters: {type: " << type
+        << (parameters.empty() ? "" : ", " + parameters)
         << "}\n"
            "    topics: {input: /in, output: /out}\n";
     return load_benchmark(pkg);
@@ -438,22 +440,12 @@ std::size_t lines_with(const std::string& text, const std::string& part) {
 TEST_F(GreyRun, ASecondInterruptStillRemovesTheSessionTheDaemonAndTheFolder) {
   if (!stop_the_suites_daemon())
     GTEST_SKIP() << "a session daemon this test did not start is running";
-  const fs::path package = dir_ / "pkg" / "test" / "t3_hung";
-  fs::create_directories(package);
-  std::ofstream(package / "benchmark.yaml")
-      << "id: t3\nname: t3_hung\nshort: test\ndescription: test\nresults: []\n";
-  std::ofstream(package / "graph.yaml")
-      << "dataset: perception/image\nrate_hz: 20\nwarmup: 0\n"
-         "validity: {min_samples: 5, max_loss_percent: 0.0}\n"
-         "inputs:\n  - {topic: /in, type: sensor_msgs/msg/Image, stream: image}\n"
-         "output: {topic: /out, type: sensor_msgs/msg/Image}\n"
-         "nodes:\n  - name: relay\n    kernel: util/relay\n    parameters: {delay_ms: 600000}\n"
-         "    topics: {input: /in, output: /out}\n";
+  relay_package(false, "delay_ms: 600000");
   const fs::path out = dir_ / "results";
   const fs::path readings = dir_ / "readings";
   robotperf::test_support::Background run(
       std::string(ROBOTPERF_EXECUTABLE) + " --benchmarks " + (dir_ / "pkg").string() +
-          " run t3 --mode grey --count 2000 --rmw fastdds --processes per-node "
+          " run t1 --mode grey --count 2000 --rmw fastdds --processes per-node "
           "--callback-timeout 1000 --quiet --power-meter 'echo x >> " +
           readings.string() + "; echo 5' --domain " + std::to_string(rmw::reserved_domain()) +
           " --output " + out.string(),
