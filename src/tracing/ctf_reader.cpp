@@ -816,20 +816,39 @@ StreamIndex Trace::index_stream(std::size_t index) const {
   return out;
 }
 
+namespace {
+
+// The packets' pages mapped in one call, on this thread: a page fault each 64 KiB costs
+// microseconds in a virtual machine. Without MADV_POPULATE_READ (Linux < 5.14), faults map them.
+void map_pages_of(const uint8_t* data, std::size_t size, std::span<const Packet> packets) {
+  const auto page = static_cast<uint64_t>(sysconf(_SC_PAGESIZE));
+  const uint64_t from = packets.front().start_bits / 8 / page * page;
+  const uint64_t to = std::min<uint64_t>(packets.back().end_bits / 8, size);
+  if (to > from) madvise(const_cast<uint8_t*>(data) + from, to - from, MADV_POPULATE_READ);
+}
+
+// Why an event at `cycles` cannot be where it is in packet `p`: after its end, before its begin,
+// or before the event before it (at `earliest`).
+std::string event_time_defect(const std::string& file, const Packet& p, const std::string& event,
+                              uint64_t cycles, uint64_t earliest, uint64_t freq) {
+  const std::string where = file + ": packet at byte " + std::to_string(p.start_bits / 8) +
+                            ": event '" + event + "' at " + clock_text(cycles, freq);
+  if (cycles > p.timestamp_end)
+    return where + " is after the packet's end at " + clock_text(p.timestamp_end, freq);
+  if (p.has_clock && cycles < p.timestamp_begin)
+    return where + " is before the packet's begin at " + clock_text(p.timestamp_begin, freq);
+  return where + " is before the event before it at " + clock_text(earliest, freq);
+}
+
+}  // namespace
+
 PacketsRead Trace::read_packets(std::size_t index, std::span<Packet> packets,
                                 const std::function<void(const Event&)>& on_event,
                                 const FieldSelection* selection) const {
   const Mapped& m = *mapped_.at(index);
   PacketsRead read;
   if (m.size == 0 || packets.empty()) return read;
-  // The packets' pages mapped in one call, on this thread: a page fault each 64 KiB costs
-  // microseconds in a virtual machine. Without MADV_POPULATE_READ (Linux < 5.14), faults map them.
-  {
-    const auto page = static_cast<uint64_t>(sysconf(_SC_PAGESIZE));
-    const uint64_t from = packets.front().start_bits / 8 / page * page;
-    const uint64_t to = std::min<uint64_t>(packets.back().end_bits / 8, m.size);
-    if (to > from) madvise(const_cast<uint8_t*>(m.data) + from, to - from, MADV_POPULATE_READ);
-  }
+  map_pages_of(m.data, m.size, packets);
   const Metadata& md = metadata_;
   const std::string file = stream_files_[index].string();
   Decoder d(m.data, m.size * 8, md.big_endian, file);
@@ -944,14 +963,7 @@ PacketsRead Trace::read_packets(std::size_t index, std::span<Packet> packets,
       // shows as a step back or, read as a wrap, as a step past the packet's end.
       const uint64_t cycles = d.clock();
       if (cycles < earliest || cycles > p.timestamp_end) [[unlikely]] {
-        const std::string at = clock_text(cycles, freq);
-        p.defect = file + ": packet at byte " + std::to_string(p.start_bits / 8) + ": event '" +
-                   ec->name + "' at " + at +
-                   (cycles > p.timestamp_end
-                        ? " is after the packet's end at " + clock_text(p.timestamp_end, freq)
-                    : p.has_clock && cycles < p.timestamp_begin
-                        ? " is before the packet's begin at " + clock_text(p.timestamp_begin, freq)
-                        : " is before the event before it at " + clock_text(earliest, freq));
+        p.defect = event_time_defect(file, p, ec->name, cycles, earliest, freq);
         ++read.defective_packets;
         after_defect = true;
         break;
