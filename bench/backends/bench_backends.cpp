@@ -58,10 +58,10 @@ struct StageSplit {
 // device.
 harness::RunOptions options(std::size_t count, const std::string& backend, bool resident) {
   harness::RunOptions o;
-  o.count = count;
-  o.backend = backend;
-  o.device_resident = resident;
-  if (backend != "cpu") o.connect_timeout_s = 60;
+  o.load.count = count;
+  o.nodes.backend = backend;
+  o.nodes.device_resident = resident;
+  if (backend != "cpu") o.processes.connect_timeout_s = 60;
   return o;
 }
 
@@ -75,9 +75,10 @@ bench::BackendRow measure(const harness::BenchmarkSpec& spec, const std::string&
 std::optional<StageSplit> split(const harness::BenchmarkSpec& spec, const std::string& backend,
                                 std::size_t count, bool resident) {
   harness::RunOptions o = options(count, backend, resident);
-  o.mode = harness::RunMode::kGrey;
-  o.trace_dir = std::filesystem::temp_directory_path() /
-                ("bench_backends-" + std::to_string(getpid()) + "-" + spec.id + "-" + backend);
+  o.tracing.mode = harness::RunMode::kGrey;
+  o.tracing.trace_dir =
+      std::filesystem::temp_directory_path() /
+      ("bench_backends-" + std::to_string(getpid()) + "-" + spec.id + "-" + backend);
   try {
     const harness::RunResult r = harness::run_benchmark(spec, o);
     std::filesystem::remove_all(r.trace_dir);
@@ -100,7 +101,7 @@ std::optional<StageSplit> split(const harness::BenchmarkSpec& spec, const std::s
     s.host_ms = kernels_ms - s.upload_ms - s.compute_ms - s.download_ms;
     return s;
   } catch (const std::exception& e) {
-    std::filesystem::remove_all(o.trace_dir);
+    std::filesystem::remove_all(o.tracing.trace_dir);
     std::printf("     (%s %s: no upload / compute / download split: %s)\n", spec.id.c_str(),
                 backend.c_str(), e.what());
     return std::nullopt;

@@ -110,16 +110,16 @@ harness::RunResult NodeReference::run_beside(
     harness::RunOptions options,
     const std::function<harness::RunResult(const harness::RunOptions&)>& run_graph,
     std::vector<double>& reference_ms) {
-  if (!options.rate_hz || !options.count || !options.warmup)
+  if (!options.load.rate_hz || !options.load.count || !options.load.warmup)
     throw std::invalid_argument("a round beside the graph needs its rate, count and warm-up");
-  const std::size_t count = *options.count, warmup = *options.warmup;
+  const std::size_t count = *options.load.count, warmup = *options.load.warmup;
   // The graph's first send, as a steady-clock count; -1 when the graph ended without one.
   std::atomic<Clock::rep> first_send{0};
   options.progress = [&](std::size_t sent, std::size_t, std::size_t) {
     if (sent == 1 && first_send == 0) first_send = Clock::now().time_since_epoch().count();
   };
   const auto period = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(1.0 / *options.rate_hz));
+      std::chrono::duration<double>(1.0 / *options.load.rate_hz));
   std::thread beside([&] {
     while (first_send == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     if (first_send < 0) return;

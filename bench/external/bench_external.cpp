@@ -188,9 +188,9 @@ int main(int argc, char** argv) {
   const fs::path root =
       fs::temp_directory_path() / ("robotperf-bench-external-" + std::to_string(getpid()));
   harness::RunOptions o;
-  o.rmw = "cyclonedds";
-  o.domain_id = domain;
-  o.log_dir = root;
+  o.transport.rmw = "cyclonedds";
+  o.transport.domain_id = domain;
+  o.processes.log_dir = root;
   const harness::RunResult r =
       harness::run_benchmark(harness::load_benchmark(write_package(root, count, warmup)), o);
   metrics::SampleStats ours = r.latency_from_sent;

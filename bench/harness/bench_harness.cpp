@@ -132,28 +132,28 @@ int main() {
               "machine floor", "", floor.p50_us, floor.p99_us, "1.00x", "1.00x");
 
   harness::RunOptions o;
-  o.count = kMessages + kWarmup;
-  o.warmup = kWarmup;
-  o.rate_hz = kRateHz;
+  o.load.count = kMessages + kWarmup;
+  o.load.warmup = kWarmup;
+  o.load.rate_hz = kRateHz;
 
   report("intra, one process",
          harness::run_benchmark(harness::load_benchmark(write_package(root, "intra", false)), o),
          floor, true);
-  o.monitor_wait = graph::WaitMode::kSpin;
+  o.transport.monitor_wait = graph::WaitMode::kSpin;
   report(
       "intra, Monitor spinning",
       harness::run_benchmark(harness::load_benchmark(write_package(root, "intra_spin", false)), o),
       floor, true);
-  o.monitor_wait = graph::WaitMode::kSleep;
+  o.transport.monitor_wait = graph::WaitMode::kSleep;
 
-  o.rmw = "fastdds";
-  o.domain_id = domain;
+  o.transport.rmw = "fastdds";
+  o.transport.domain_id = domain;
   report("fastdds, one process",
          harness::run_benchmark(harness::load_benchmark(write_package(root, "dds", false)), o),
          floor, false);
 
-  o.processes = harness::ProcessLayout::kPerNode;
-  o.node_command = {ROBOTPERF_EXECUTABLE, "node"};
+  o.processes.layout = harness::ProcessLayout::kPerNode;
+  o.processes.node_command = {ROBOTPERF_EXECUTABLE, "node"};
   report("fastdds, relay in a 2nd process",
          harness::run_benchmark(harness::load_benchmark(write_package(root, "dds2", true)), o),
          floor, false);

@@ -60,9 +60,9 @@ bool compare(const std::string& id, std::size_t frames, std::size_t rounds) {
   harness::RunResult last;
   for (std::size_t i = 0; i < rounds; ++i) {
     harness::RunOptions o;
-    o.rate_hz = 10;
-    o.count = kWarmup + frames;
-    o.warmup = kWarmup;
+    o.load.rate_hz = 10;
+    o.load.count = kWarmup + frames;
+    o.load.warmup = kWarmup;
     auto samples = bench::measure_overhead_round(spec, dataset, o, last);
     measured.push_back({std::move(samples.reference_ms), std::move(samples.graph_ms)});
   }

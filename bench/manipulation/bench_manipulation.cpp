@@ -63,9 +63,9 @@ double mean(const std::vector<double>& v) {
 
 harness::RunOptions run_options(std::size_t requests) {
   harness::RunOptions o;
-  o.rate_hz = kRateHz;
-  o.count = kWarmup + requests;
-  o.warmup = kWarmup;
+  o.load.rate_hz = kRateHz;
+  o.load.count = kWarmup + requests;
+  o.load.warmup = kWarmup;
   return o;
 }
 
@@ -96,9 +96,9 @@ bench::OverheadRound measure_round(const harness::BenchmarkSpec& spec,
 // of its own; nullopt where LTTng does not record.
 std::optional<double> node_time_us(const harness::BenchmarkSpec& spec, std::size_t requests) {
   harness::RunOptions o = run_options(requests);
-  o.mode = harness::RunMode::kGrey;
-  o.trace_dir = fs::temp_directory_path() /
-                ("robotperf-bench-manipulation-" + std::to_string(getpid()) + "-" + spec.id);
+  o.tracing.mode = harness::RunMode::kGrey;
+  o.tracing.trace_dir = fs::temp_directory_path() / ("robotperf-bench-manipulation-" +
+                                                     std::to_string(getpid()) + "-" + spec.id);
   std::optional<double> node;
   try {
     const harness::RunResult r = harness::run_benchmark(spec, o);
@@ -110,7 +110,7 @@ std::optional<double> node_time_us(const harness::BenchmarkSpec& spec, std::size
     std::fprintf(stderr, "%s: no grey-box run (%s)\n", spec.id.c_str(), e.what());
   }
   std::error_code ignored;
-  fs::remove_all(o.trace_dir, ignored);
+  fs::remove_all(o.tracing.trace_dir, ignored);
   return node;
 }
 

@@ -51,9 +51,9 @@ bench::OverheadRound measure_round(const harness::BenchmarkSpec& spec,
                                    const harness::Dataset& dataset, std::size_t frames,
                                    std::optional<double>& other_load) {
   harness::RunOptions o;
-  o.rate_hz = 10;
-  o.count = kWarmup + frames;
-  o.warmup = kWarmup;
+  o.load.rate_hz = 10;
+  o.load.count = kWarmup + frames;
+  o.load.warmup = kWarmup;
   harness::RunResult r;
   auto samples = bench::measure_overhead_round(spec, dataset, o, r);
   const auto load = r.resources.other_cpu_percent;

@@ -40,18 +40,19 @@ double control_loop_events_per_second(const BenchmarkSpec& spec) {
 
 GreyBoxRecording::GreyBoxRecording(const BenchmarkSpec& spec, const RunOptions& options,
                                    RunResult& result) {
-  if (options.trace_dir.empty()) throw std::invalid_argument("grey-box mode needs a trace folder");
+  if (options.tracing.trace_dir.empty())
+    throw std::invalid_argument("grey-box mode needs a trace folder");
   tracing::SessionOptions s;
-  s.output_dir = options.trace_dir;
+  s.output_dir = options.tracing.trace_dir;
   s.name_hint = spec.id;
-  s.subbuf_bytes = options.trace_subbuf_bytes != 0
-                       ? options.trace_subbuf_bytes
+  s.subbuf_bytes = options.tracing.subbuf_bytes != 0
+                       ? options.tracing.subbuf_bytes
                        : tracing::subbuffer_bytes_for(result.rate_hz * events_per_frame(spec) +
                                                       control_loop_events_per_second(spec));
   // Processes of the graph that are spawned later (per-node, an external graph's `launch:`)
   // start tracing before they could be added to a tracker, so only a single-process run of
   // robotperf's own nodes is recorded alone.
-  if (options.processes == ProcessLayout::kSingle && spec.launch.empty())
+  if (options.processes.layout == ProcessLayout::kSingle && spec.launch.empty())
     s.only_processes = {getpid()};
   session_ = std::make_unique<tracing::RecordingSession>(s);
   result.trace_dir = session_->output_dir();

@@ -91,9 +91,9 @@ PeakSearchResult find_peak(const BenchmarkSpec& spec, const RunOptions& options,
     throw std::invalid_argument("--peak-resolution must be from 0.1 to 100 percent");
   if (!(search.step_duration_s > 0 && std::isfinite(search.step_duration_s)))
     throw std::invalid_argument("--duration (per step) must be a positive number of seconds");
-  if (options.bag_timeline)
+  if (options.load.bag_timeline)
     throw std::invalid_argument("--find-peak searches over fixed rates: not with --rate bag");
-  if (options.count)
+  if (options.load.count)
     throw std::invalid_argument("--find-peak sizes each step by --duration: not with --count");
 
   PeakSearchResult out;
@@ -101,7 +101,7 @@ PeakSearchResult find_peak(const BenchmarkSpec& spec, const RunOptions& options,
   rec.loss_bound_percent = search.loss_bound_percent.value_or(spec.max_loss_percent);
   rec.latency_bound_ms = search.latency_bound_ms;
   rec.latency_percentile = search.latency_percentile;
-  rec.rate_low_hz = search.rate_low_hz.value_or(options.rate_hz.value_or(spec.rate_hz));
+  rec.rate_low_hz = search.rate_low_hz.value_or(options.load.rate_hz.value_or(spec.rate_hz));
   rec.rate_high_hz = search.rate_high_hz.value_or(std::max(kHighestRateHz, rec.rate_low_hz));
   rec.resolution_percent = search.resolution_percent;
   rec.step_duration_s = search.step_duration_s;
@@ -114,9 +114,9 @@ PeakSearchResult find_peak(const BenchmarkSpec& spec, const RunOptions& options,
   std::string failing_reason;
   auto step = [&](double rate) {
     RunOptions o = options;
-    o.rate_hz = rate;
-    o.duration_s =
-        search.step_duration_s + static_cast<double>(o.warmup.value_or(spec.warmup)) / rate;
+    o.load.rate_hz = rate;
+    o.load.duration_s =
+        search.step_duration_s + static_cast<double>(o.load.warmup.value_or(spec.warmup)) / rate;
     RunResult r;
     try {
       r = run_benchmark(spec, o);

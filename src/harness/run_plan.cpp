@@ -48,56 +48,25 @@ void check_seconds(double s, const std::string& what, bool zero_allowed, double 
                                 number_text(max_s) + " s robotperf allows");
 }
 
-// The values given to the run, before anything is loaded.
-void check_run_options(const RunOptions& o) {
-  if (o.rate_hz) check_rate(*o.rate_hz, "--rate");
-  if (o.duration_s) check_seconds(*o.duration_s, "--duration", false, kMaxSpanS);
-  if (o.drain_s) check_seconds(*o.drain_s, "--drain", true, kMaxWaitS);
-  check_seconds(o.connect_timeout_s, "--connect-timeout", false, kMaxWaitS);
-  check_seconds(o.callback_timeout_s, "--callback-timeout", false, kMaxWaitS);
-  if (o.bag_timeline && (!std::isfinite(o.rate_scale) || !(o.rate_scale > 0)))
-    throw std::invalid_argument("--rate-scale must be a positive number");
-  if (o.count && *o.count == 0) throw std::invalid_argument("--count must be at least 1");
-  if (o.bag_timeline && o.arrival.kind != ArrivalPattern::Kind::kFixed)
-    throw std::invalid_argument(
-        "--arrival " + o.arrival.name() +
-        " replaces the bag's timeline: give one of --rate bag and --arrival");
-  if (o.device_resident && (o.rmw != "intra" || o.processes != ProcessLayout::kSingle)) {
-    throw std::invalid_argument(
-        "--device-resident hands images from node to node inside one process: run it with --rmw "
-        "intra (and no --processes per-node)");
-  }
-  if (o.monitor_wait == graph::WaitMode::kSpin) {
-    // A single-process run's --cpus hold the Monitor too; per node, it runs where this process
-    // may. On one CPU, the spinning Monitor and everything else would take turns by time slice.
-    const std::size_t cpus = !o.scheduling.cpus.empty() && o.processes == ProcessLayout::kSingle
-                                 ? o.scheduling.cpus.size()
-                                 : allowed_cpus().size();
-    if (cpus < 2)
-      throw std::invalid_argument(
-          "--monitor-wait spin keeps a CPU busy for the whole run, and this run's Monitor may "
-          "use only one: give it two or more (--cpus), or let it sleep");
-  }
-}
-
 // The package with the overrides of `options` applied, when it asks for any.
 void apply_overrides(RunPlan& plan, const RunOptions& options) {
-  if (!options.update_rate_hz && !options.backend && !options.device_resident) return;
+  if (!options.nodes.any()) return;
   plan.overridden = *plan.package;
-  if (options.update_rate_hz) override_update_rate(*plan.overridden, *options.update_rate_hz);
-  if (options.backend) override_backend(*plan.overridden, *options.backend);
-  if (options.device_resident) plan.result.device_resident = keep_on_device(*plan.overridden);
+  if (options.nodes.update_rate_hz)
+    override_update_rate(*plan.overridden, *options.nodes.update_rate_hz);
+  if (options.nodes.backend) override_backend(*plan.overridden, *options.nodes.backend);
+  if (options.nodes.device_resident) plan.result.device_resident = keep_on_device(*plan.overridden);
 }
 
 // The graph's configuration as run, and the layouts, transports and security it cannot run with.
 void resolve_layout(const BenchmarkSpec& spec, const RunOptions& options, RunResult& r) {
-  r.update_rate_hz = options.update_rate_hz;
+  r.update_rate_hz = options.nodes.update_rate_hz;
   r.benchmark_id = spec.id;
   r.benchmark_name = spec.name;
   r.category = spec.category;
-  r.rmw = options.rmw;
-  r.processes = options.processes == ProcessLayout::kSingle ? "single" : "per-node";
-  r.monitor_wait = options.monitor_wait == graph::WaitMode::kSpin ? "spin" : "sleep";
+  r.rmw = options.transport.rmw;
+  r.processes = options.processes.layout == ProcessLayout::kSingle ? "single" : "per-node";
+  r.monitor_wait = options.transport.monitor_wait == graph::WaitMode::kSpin ? "spin" : "sleep";
   r.executor_threads = spec.executor_threads;
   r.output_topic = spec.output.topic;
   for (const auto& in : spec.inputs) r.qos.push_back({"playback", in.topic, in.qos});
@@ -105,58 +74,60 @@ void resolve_layout(const BenchmarkSpec& spec, const RunOptions& options, RunRes
   for (const auto& node : spec.nodes) {
     for (const auto& [port, topic] : node.topics) r.qos.push_back({node.name, topic, node.qos});
   }
-  if (spec.external() && options.rmw == "intra") {
+  if (spec.external() && options.transport.rmw == "intra") {
     throw std::invalid_argument(
         "an external graph (launch: or attach:) is reached through DDS: "
         "use --rmw fastdds or cyclonedds, the RMW of its nodes");
   }
-  if (options.processes == ProcessLayout::kPerNode && options.rmw == "intra") {
+  if (options.processes.layout == ProcessLayout::kPerNode && options.transport.rmw == "intra") {
     throw std::invalid_argument(
         "--processes per-node needs an inter-process transport (--rmw fastdds or cyclonedds)");
   }
-  if (spec.security_required && options.keystore.empty()) {
+  if (spec.security_required && options.transport.keystore.empty()) {
     throw std::invalid_argument(spec.id +
                                 " runs with DDS Security: give --security DIR (a keystore; "
                                 "robotperf security init DIR makes one)");
   }
-  if (!options.keystore.empty()) {
-    if (options.rmw == "intra")
+  if (!options.transport.keystore.empty()) {
+    if (options.transport.rmw == "intra")
       throw std::invalid_argument("--security secures DDS: use --rmw fastdds or cyclonedds");
-    if (options.domain_id > rmw::kLastSecuredDomain) {
-      throw std::invalid_argument("--security: domain " + std::to_string(options.domain_id) +
+    if (options.transport.domain_id > rmw::kLastSecuredDomain) {
+      throw std::invalid_argument("--security: domain " +
+                                  std::to_string(options.transport.domain_id) +
                                   " is beyond the keystore's permissions (domains 0 to " +
                                   std::to_string(rmw::kLastSecuredDomain) + ")");
     }
     // Checked here, before anything starts: a missing file is one line.
-    r.security = rmw::describe(rmw::enclave_files(options.keystore));
-    r.keystore = std::filesystem::absolute(options.keystore);
+    r.security = rmw::describe(rmw::enclave_files(options.transport.keystore));
+    r.keystore = std::filesystem::absolute(options.transport.keystore);
   }
-  if (options.rmw != "intra") r.ros_distro = rmw::to_string(options.ros_distro);
+  if (options.transport.rmw != "intra") r.ros_distro = rmw::to_string(options.transport.ros_distro);
 }
 
 // The hosts the graph places nodes on, each with its launcher.
 void resolve_hosts(const BenchmarkSpec& spec, const RunOptions& options, RunResult& r) {
   const auto hosts = spec.hosts();
   if (hosts.empty()) return;
-  if (options.processes != ProcessLayout::kPerNode) {
+  if (options.processes.layout != ProcessLayout::kPerNode) {
     throw std::invalid_argument("nodes placed on hosts (graph.yaml host: " + hosts.front() +
                                 ") run in processes of their own: use --processes per-node");
   }
-  if (options.mode == RunMode::kGrey) {
+  if (options.tracing.mode == RunMode::kGrey) {
     // Each host has its own clock and its own LTTng session: one trace cannot hold them.
     throw std::invalid_argument(
         "grey-box runs trace one host, and this graph places nodes on " + hosts.front() +
         ": run it black-box (ping-pong timing stays on the runner's clock)");
   }
   for (const auto& host : hosts)
-    r.host_launchers[host] = command_text(host_launcher(host, options.host_launchers));
+    r.host_launchers[host] = command_text(host_launcher(host, options.processes.host_launchers));
 }
 
 // Everything is loaded before timing starts (docs/design.md §3.4).
 void load_dataset_of(RunPlan& plan, const RunOptions& options) {
   const BenchmarkSpec& spec = plan.spec();
-  plan.dataset = options.bag ? load_bag_dataset(*options.bag, spec.inputs, &plan.corrupt_messages)
-                             : load_dataset(spec.dataset, spec.workload);
+  plan.dataset = options.load.bag
+                     ? load_bag_dataset(*options.load.bag, spec.inputs, &plan.corrupt_messages)
+                     : load_dataset(spec.dataset, spec.workload);
   RunResult& r = plan.result;
   r.dataset = plan.dataset.name;
   r.dataset_hash = plan.dataset.hash;
@@ -167,26 +138,26 @@ void load_dataset_of(RunPlan& plan, const RunOptions& options) {
 // The rate, and when messages are sent at it.
 void resolve_timeline(const BenchmarkSpec& spec, const Dataset& dataset, const RunOptions& options,
                       RunResult& r) {
-  if (options.bag_timeline) {
+  if (options.load.bag_timeline) {
     if (dataset.frame_times_ns.empty())
       throw std::invalid_argument("--rate bag needs a recorded dataset (--dataset <bag>)");
     // The mean recorded rate: what count, duration and the message IDs go by.
-    r.rate_hz = dataset.rate_hz * options.rate_scale;
+    r.rate_hz = dataset.rate_hz * options.load.rate_scale;
     r.timeline = "bag";
-    r.rate_scale = options.rate_scale;
+    r.rate_scale = options.load.rate_scale;
     if (!(r.rate_hz > 0))
       throw std::invalid_argument("--rate bag: the bag's frames all have the same time");
     check_rate(r.rate_hz, "the bag's mean rate times --rate-scale,");
     return;
   }
-  r.rate_hz = options.rate_hz.value_or(spec.rate_hz);
-  check_rate(r.rate_hz, options.rate_hz ? "--rate" : "the benchmark's rate_hz");
-  if (options.arrival.kind == ArrivalPattern::Kind::kPoisson) {
+  r.rate_hz = options.load.rate_hz.value_or(spec.rate_hz);
+  check_rate(r.rate_hz, options.load.rate_hz ? "--rate" : "the benchmark's rate_hz");
+  if (options.load.arrival.kind == ArrivalPattern::Kind::kPoisson) {
     r.timeline = "poisson";
-    r.arrival_seed = options.arrival.seed;
-  } else if (options.arrival.kind == ArrivalPattern::Kind::kBurst) {
+    r.arrival_seed = options.load.arrival.seed;
+  } else if (options.load.arrival.kind == ArrivalPattern::Kind::kBurst) {
     r.timeline = "burst";
-    r.burst = options.arrival.burst;
+    r.burst = options.load.arrival.burst;
   }
 }
 
@@ -237,25 +208,25 @@ void check_run_size(const RunResult& r, double frame_bytes) {
 // How many messages, how many of them warm up, and how long the drain waits.
 void resolve_counts(const BenchmarkSpec& spec, const Dataset& dataset, const RunOptions& options,
                     RunResult& r) {
-  if (options.count) {
-    r.count = *options.count;
-  } else if (options.duration_s) {
-    const double count = std::round(*options.duration_s * r.rate_hz);
+  if (options.load.count) {
+    r.count = *options.load.count;
+  } else if (options.load.duration_s) {
+    const double count = std::round(*options.load.duration_s * r.rate_hz);
     if (count > kMaxSpanS / kMinPeriodS)
-      throw std::invalid_argument("--duration " + number_text(*options.duration_s) + " s at " +
+      throw std::invalid_argument("--duration " + number_text(*options.load.duration_s) + " s at " +
                                   number_text(r.rate_hz) + " Hz is too many messages");
     r.count = static_cast<std::size_t>(count);
   } else {
     r.count = spec.count ? spec.count : dataset.frames;
   }
-  r.warmup = options.warmup.value_or(spec.warmup);
+  r.warmup = options.load.warmup.value_or(spec.warmup);
   if (r.warmup >= r.count) {
     // With --duration the count is derived: say from what, since a slow benchmark (c1 sends a
     // goal every few seconds) gives few messages in a short duration.
     std::string derived;
-    if (!options.count && options.duration_s) {
+    if (!options.load.count && options.load.duration_s) {
       std::ostringstream text;
-      text << " = " << *options.duration_s << " s x " << r.rate_hz
+      text << " = " << *options.load.duration_s << " s x " << r.rate_hz
            << " Hz; give a longer --duration or a --count";
       derived = text.str();
     }
@@ -264,8 +235,8 @@ void resolve_counts(const BenchmarkSpec& spec, const Dataset& dataset, const Run
                                 std::to_string(r.count) + derived + ")");
   }
   check_run_size(r, r.timeline == "burst" ? largest_frame_bytes(spec, dataset) : 0);
-  r.drain_s = options.drain_s.value_or(spec.drain_s);
-  check_seconds(r.drain_s, options.drain_s ? "--drain" : "the benchmark's drain_s", true,
+  r.drain_s = options.load.drain_s.value_or(spec.drain_s);
+  check_seconds(r.drain_s, options.load.drain_s ? "--drain" : "the benchmark's drain_s", true,
                 kMaxWaitS);
 }
 
@@ -278,8 +249,49 @@ std::string number_text(double value) {
   return text.str();
 }
 
+void LoadOptions::check() const {
+  if (rate_hz) check_rate(*rate_hz, "--rate");
+  if (duration_s) check_seconds(*duration_s, "--duration", false, kMaxSpanS);
+  if (drain_s) check_seconds(*drain_s, "--drain", true, kMaxWaitS);
+  if (bag_timeline && (!std::isfinite(rate_scale) || !(rate_scale > 0)))
+    throw std::invalid_argument("--rate-scale must be a positive number");
+  if (count && *count == 0) throw std::invalid_argument("--count must be at least 1");
+  if (bag_timeline && arrival.kind != ArrivalPattern::Kind::kFixed)
+    throw std::invalid_argument(
+        "--arrival " + arrival.name() +
+        " replaces the bag's timeline: give one of --rate bag and --arrival");
+}
+
+void ProcessOptions::check() const {
+  check_seconds(connect_timeout_s, "--connect-timeout", false, kMaxWaitS);
+  check_seconds(callback_timeout_s, "--callback-timeout", false, kMaxWaitS);
+}
+
+void RunOptions::check() const {
+  load.check();
+  processes.check();
+  if (nodes.device_resident &&
+      (transport.rmw != "intra" || processes.layout != ProcessLayout::kSingle)) {
+    throw std::invalid_argument(
+        "--device-resident hands images from node to node inside one process: run it with --rmw "
+        "intra (and no --processes per-node)");
+  }
+  if (transport.monitor_wait == graph::WaitMode::kSpin) {
+    // A single-process run's --cpus hold the Monitor too; per node, it runs where this process
+    // may. On one CPU, the spinning Monitor and everything else would take turns by time slice.
+    const std::size_t cpus =
+        !processes.scheduling.cpus.empty() && processes.layout == ProcessLayout::kSingle
+            ? processes.scheduling.cpus.size()
+            : allowed_cpus().size();
+    if (cpus < 2)
+      throw std::invalid_argument(
+          "--monitor-wait spin keeps a CPU busy for the whole run, and this run's Monitor may "
+          "use only one: give it two or more (--cpus), or let it sleep");
+  }
+}
+
 RunPlan plan_run(const BenchmarkSpec& package_spec, const RunOptions& options) {
-  check_run_options(options);
+  options.check();
   RunPlan plan;
   plan.package = &package_spec;
   apply_overrides(plan, options);
@@ -290,11 +302,11 @@ RunPlan plan_run(const BenchmarkSpec& package_spec, const RunOptions& options) {
   load_dataset_of(plan, options);
   resolve_timeline(spec, plan.dataset, options, r);
   resolve_counts(spec, plan.dataset, options, r);
-  r.domain_id = options.domain_id;
-  r.scheduling = options.scheduling;
+  r.domain_id = options.transport.domain_id;
+  r.scheduling = options.processes.scheduling;
   plan.period_ns = static_cast<int64_t>(std::llround(1e9 / r.rate_hz));
   // A bag brings no ground truth to check the outputs against.
-  plan.evaluate_outputs = spec.functional && !options.bag;
+  plan.evaluate_outputs = spec.functional && !options.load.bag;
   return plan;
 }
 

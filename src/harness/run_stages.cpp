@@ -38,11 +38,12 @@ std::string what_of(const std::exception_ptr& e) {
 std::unique_ptr<rmw::Transport> transport_for(const RunOptions& options,
                                               const std::string& user_data) {
   rmw::TransportOptions t;
-  t.domain_id = options.domain_id;
+  t.domain_id = options.transport.domain_id;
   t.user_data = user_data;
-  if (!options.keystore.empty()) t.security = rmw::enclave_files(options.keystore);
-  t.ros_distro = options.ros_distro;
-  return rmw::make_transport(options.rmw, t);
+  if (!options.transport.keystore.empty())
+    t.security = rmw::enclave_files(options.transport.keystore);
+  t.ros_distro = options.transport.ros_distro;
+  return rmw::make_transport(options.transport.rmw, t);
 }
 
 // The participants of `more` not yet in `seen`, added to it.
@@ -62,22 +63,23 @@ void add_peers(std::vector<rmw::PeerParticipant>& seen, std::vector<rmw::PeerPar
 // When the Playback sends each message; empty: every period.
 std::vector<int64_t> schedule_of(const RunPlan& plan, const RunOptions& options,
                                  const RunResult& r) {
-  if (options.bag_timeline)
-    return timeline_schedule(plan.dataset.frame_times_ns, options.rate_scale, r.count);
+  if (options.load.bag_timeline)
+    return timeline_schedule(plan.dataset.frame_times_ns, options.load.rate_scale, r.count);
   if (r.timeline == "fixed") return {};
-  return arrival_schedule(options.arrival, plan.period_ns, r.count);
+  return arrival_schedule(options.load.arrival, plan.period_ns, r.count);
 }
 
 // The arguments each node process gets beside its node's name, transport and domain: the graph's
 // nodes as resolved here (the overrides applied), and the run's settings.
 std::vector<std::string> node_arguments(const BenchmarkSpec& spec, const RunOptions& options,
                                         const RunResult& r) {
-  std::vector<std::string> arguments = options.scheduling.node_arguments();
+  std::vector<std::string> arguments = options.processes.scheduling.node_arguments();
   arguments.insert(arguments.end(), {"--nodes", encode_nodes(spec.nodes)});
-  arguments.insert(arguments.end(), {"--callback-timeout", number_text(options.callback_timeout_s),
-                                     "--run-token", r.run_token});
+  arguments.insert(arguments.end(),
+                   {"--callback-timeout", number_text(options.processes.callback_timeout_s),
+                    "--run-token", r.run_token});
   if (!r.keystore.empty()) arguments.insert(arguments.end(), {"--security", r.keystore.string()});
-  arguments.insert(arguments.end(), {"--ros-distro", rmw::to_string(options.ros_distro)});
+  arguments.insert(arguments.end(), {"--ros-distro", rmw::to_string(options.transport.ros_distro)});
   return arguments;
 }
 
@@ -90,8 +92,9 @@ std::optional<plugin::DeviceInfo> device_of(const graph::Node& node, const NodeS
 }
 
 RunEnvironment::RunEnvironment(const RunPlan& plan, const RunOptions& options, RunResult& r) {
-  if (options.processes == ProcessLayout::kSingle) scheduling.emplace(options.scheduling);
-  if (options.mode == RunMode::kGrey) grey.emplace(plan.spec(), options, r);
+  if (options.processes.layout == ProcessLayout::kSingle)
+    scheduling.emplace(options.processes.scheduling);
+  if (options.tracing.mode == RunMode::kGrey) grey.emplace(plan.spec(), options, r);
   r.started_unix_ns = rmw::wall_now_ns();
   ids = make_message_ids(plan.period_ns, r.count);
   r.id_base_ns = ids.base_ns;
@@ -99,7 +102,7 @@ RunEnvironment::RunEnvironment(const RunPlan& plan, const RunOptions& options, R
   const std::string user_data = run_user_data(r.run_token, &ids);
   context = std::make_unique<graph::Context>(transport_for(options, user_data));
   isolation.emplace(context->transport(), r.run_token);
-  if (options.bag.has_value() && options.rmw != "intra")
+  if (options.load.bag.has_value() && options.transport.rmw != "intra")
     playback_context = std::make_unique<graph::Context>(transport_for(options, user_data));
 }
 
@@ -109,7 +112,7 @@ Instruments::Instruments(const RunPlan& plan, const RunOptions& options, RunEnvi
                plan.dataset, env.ids, env.playback_context != nullptr,
                schedule_of(plan, options, r)),
       monitor(*env.context, plan.spec().output, env.ids, r.warmup, &*env.isolation),
-      monitor_executor(1, options.monitor_wait) {
+      monitor_executor(1, options.transport.monitor_wait) {
   const BenchmarkSpec& spec = plan.spec();
   if (plan.evaluate_outputs) {
     // A missing truth stream fails before timing.
@@ -145,7 +148,7 @@ GraphUnderTest::GraphUnderTest(const RunPlan& plan, const RunOptions& options, R
     : executor(std::make_unique<graph::Executor>(plan.spec().executor_threads)),
       local_nodes{instruments.playback.node(), instruments.monitor.node()} {
   const BenchmarkSpec& spec = plan.spec();
-  if (options.processes == ProcessLayout::kSingle) {
+  if (options.processes.layout == ProcessLayout::kSingle) {
     for (const auto& n : spec.nodes) {
       auto node = make_kernel_node(n, *env.context, spec.workload);
       executor->add_node(node);
@@ -155,16 +158,17 @@ GraphUnderTest::GraphUnderTest(const RunPlan& plan, const RunOptions& options, R
           {n.name, n.kernel, 0, "ok", -1, -1, {}, "", "", true, n.backend, device_of(*node, n)});
     }
   } else {
-    children =
-        std::make_unique<NodeProcesses>(spec, options.node_command, options.rmw, options.domain_id,
-                                        node_arguments(spec, options, r), options.host_launchers);
+    children = std::make_unique<NodeProcesses>(
+        spec, options.processes.node_command, options.transport.rmw, options.transport.domain_id,
+        node_arguments(spec, options, r), options.processes.host_launchers);
   }
   if (!spec.launch.empty()) {
     launched = std::make_unique<LaunchedProcesses>(
-        spec, options.rmw, options.domain_id, options.log_dir, spec.id + "-" + r.run_token + ".");
+        spec, options.transport.rmw, options.transport.domain_id, options.processes.log_dir,
+        spec.id + "-" + r.run_token + ".");
   }
   connect_deadline_ns =
-      rmw::steady_now_ns() + static_cast<int64_t>(options.connect_timeout_s * 1e9);
+      rmw::steady_now_ns() + static_cast<int64_t>(options.processes.connect_timeout_s * 1e9);
   instruments.monitor_executor.start();
   executor->start();
 }
@@ -233,7 +237,7 @@ std::vector<pid_t> sampled_with_descendants(const GraphUnderTest& graph) {
 MeasurementWindow::MeasurementWindow(const RunOptions& options, const BenchmarkSpec& spec,
                                      const GraphUnderTest& graph)
     : measurement(options, graph_processes(spec, graph), sampled_with_descendants(graph)) {
-  if (options.network_link) link_before = options.network_link->counters();
+  if (options.processes.network_link) link_before = options.processes.network_link->counters();
 }
 
 void check_before_timing(const RunPlan& plan, const RunOptions& options, RunEnvironment& env,
@@ -281,7 +285,7 @@ RunWatch::RunWatch(const RunOptions& options, const Instruments& instruments,
 
 const std::string& RunWatch::must_stop() {
   if (!stop_now_.empty()) return stop_now_;
-  const auto callback_limit_ns = static_cast<int64_t>(options_.callback_timeout_s * 1e9);
+  const auto callback_limit_ns = static_cast<int64_t>(options_.processes.callback_timeout_s * 1e9);
   if (options_.interrupted && options_.interrupted->load() != 0) {
     r_.interrupted = true;
     stop_now_ = interrupted_by(options_.interrupted->load());
@@ -290,7 +294,7 @@ const std::string& RunWatch::must_stop() {
     stop_now_ = "node '" + stuck->node + "' hung: its callback has run for " +
                 number_text(static_cast<double>(stuck->running_ns) * 1e-9) +
                 " s, longer than the callback timeout (" +
-                number_text(options_.callback_timeout_s) + " s, --callback-timeout)";
+                number_text(options_.processes.callback_timeout_s) + " s, --callback-timeout)";
   }
   return stop_now_;
 }
@@ -318,7 +322,7 @@ std::optional<Playback::DeliveryGate> delivery_gate(const BenchmarkSpec& spec,
                                                     DeviceWarmup& device_warmup,
                                                     const RunResult& r) {
   const int64_t deadline =
-      rmw::steady_now_ns() + static_cast<int64_t>(options.connect_timeout_s * 1e9);
+      rmw::steady_now_ns() + static_cast<int64_t>(options.processes.connect_timeout_s * 1e9);
   const Monitor* monitor = &instruments.monitor;
   if (spec.external()) {
     return Playback::DeliveryGate{
@@ -334,7 +338,7 @@ std::optional<Playback::DeliveryGate> delivery_gate(const BenchmarkSpec& spec,
       r.warmup,
       [&device_warmup, monitor] { return device_warmup.ready_after_round(monitor->received()); },
       deadline,
-      [monitor, timeout_s = options.connect_timeout_s] {
+      [monitor, timeout_s = options.processes.connect_timeout_s] {
         const std::size_t answers = monitor->received();
         const std::string within = " within --connect-timeout (" + number_text(timeout_s) + " s)";
         if (answers == 0) {
@@ -388,8 +392,9 @@ Monitor::Tally drain(const RunPlan& plan, const RunOptions& options, Instruments
   monitor.close();
   window.measurement.end(r);
   if (window.link_before) {
-    r.network_link = RunResult::LinkUse{options.network_link->description(),
-                                        options.network_link->counters() - *window.link_before};
+    r.network_link =
+        RunResult::LinkUse{options.processes.network_link->description(),
+                           options.processes.network_link->counters() - *window.link_before};
   }
   return monitor.tally();
 }

@@ -87,12 +87,12 @@ void expect_all_matched(const RunResult& r, std::size_t count) {
 
 RunOptions bag_run(const fs::path& bag, const std::string& rmw, std::size_t count) {
   RunOptions o;
-  o.bag = BagSelection{bag, {}, {}, {}};
-  o.rmw = rmw;
-  o.count = count;
-  o.warmup = 0;
-  o.rate_hz = test_rate(30, 10);
-  o.drain_s = 5;
+  o.load.bag = BagSelection{bag, {}, {}, {}};
+  o.transport.rmw = rmw;
+  o.load.count = count;
+  o.load.warmup = 0;
+  o.load.rate_hz = test_rate(30, 10);
+  o.load.drain_s = 5;
   return o;
 }
 
@@ -161,8 +161,8 @@ TEST(BagPlayback, A1OnFastddsPublishesRecordedBytesWithRemapping) {
   RunOptions o = bag_run(tmp.path() / "bag", "fastdds", 80);
   // A busy 2-core machine does not rectify and upscale 30 frames a second through Fast DDS in
   // every build: frames would queue and drop, which is not what this test is about.
-  o.rate_hz = test_rate(15, 5);
-  o.domain_id = rmw::reserved_domain();
+  o.load.rate_hz = test_rate(15, 5);
+  o.transport.domain_id = rmw::reserved_domain();
   // Without remapping, the bag has nothing for a1's inputs.
   try {
     run_benchmark(a1(), o);
@@ -170,7 +170,8 @@ TEST(BagPlayback, A1OnFastddsPublishesRecordedBytesWithRemapping) {
   } catch (const BenchmarkError& e) {
     EXPECT_NE(std::string(e.what()).find("--remap"), std::string::npos) << e.what();
   }
-  o.bag->remaps = {{"/front/image", "/camera/image_raw"}, {"/front/info", "/camera/camera_info"}};
+  o.load.bag->remaps = {{"/front/image", "/camera/image_raw"},
+                        {"/front/info", "/camera/camera_info"}};
   const RunResult r = run_benchmark(a1(), o);
   expect_all_matched(r, 80);
 }
@@ -231,9 +232,9 @@ TEST(BagPlayback, BagTimelinePacesSendsLikeTheRecording) {
                    time_of);
   testing::TestPackage p("timeline", testing::relay_graph("none"));
   RunOptions o = bag_run(tmp.path() / "bag", "intra", 12);
-  o.rate_hz.reset();
-  o.bag_timeline = true;
-  o.rate_scale = 2.0;
+  o.load.rate_hz.reset();
+  o.load.bag_timeline = true;
+  o.load.rate_scale = 2.0;
   const RunResult r = run_benchmark(load_benchmark(p.dir()), o);
   expect_all_matched(r, 12);
   ASSERT_EQ(r.records.size(), 12u);

@@ -108,7 +108,7 @@ TEST(BenchmarkSpec, RefusesValuesOutsideTheirLimits) {
   EXPECT_NE(error_of(none.dir()).find("min_samples must be >= 1"), std::string::npos);
   TestPackage fail_after("fail_after", relay_graph("fail_after: -1"));
   RunOptions o;
-  o.count = 5;
+  o.load.count = 5;
   try {
     run_benchmark(load_benchmark(fail_after.dir()), o);
     FAIL() << "a negative fail_after was accepted";

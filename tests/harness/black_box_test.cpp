@@ -27,8 +27,8 @@ RunResult run_package(const std::string& name, const std::string& graph, RunOpti
 
 RunOptions with_count(std::size_t n, double rate_hz) {
   RunOptions o;
-  o.count = n;
-  o.rate_hz = rate_hz;
+  o.load.count = n;
+  o.load.rate_hz = rate_hz;
   return o;
 }
 
@@ -95,7 +95,7 @@ TEST(BlackBox, DroppingEveryFourthMessageIsCountedExactly) {
 
 TEST(BlackBox, WarmupIsExcludedAndIdsStayUniqueWhenTheDatasetLoops) {
   RunOptions o = with_count(150, 300);  // the dataset has 68 frames: it loops twice
-  o.warmup = 10;
+  o.load.warmup = 10;
   const RunResult r = run_package("loop", relay_graph(""), o);
   expect_sane(r);
   EXPECT_EQ(r.sent, 150u);
@@ -136,7 +136,7 @@ TEST(BlackBox, FailingNodeEndsTheRunEarlyAndKeepsWhatWasMeasured) {
 // result (the command line then writes none), whatever the warm-up sent.
 TEST(BlackBox, AnInterruptDuringTheWarmupMeasuresNothing) {
   RunOptions o = with_count(40, 100);
-  o.warmup = 20;
+  o.load.warmup = 20;
   std::atomic<int> interrupted{0};
   o.interrupted = &interrupted;
   o.progress = [&](std::size_t sent, std::size_t, std::size_t) {
@@ -153,8 +153,8 @@ TEST(BlackBox, AnInterruptDuringTheWarmupMeasuresNothing) {
 
 TEST(BlackBox, FastDdsInOneProcessLosesNothing) {
   RunOptions o = with_count(40, 100);
-  o.rmw = "fastdds";
-  o.domain_id = rmw::reserved_domain();
+  o.transport.rmw = "fastdds";
+  o.transport.domain_id = rmw::reserved_domain();
   const RunResult r = run_package("fastdds", relay_graph(""), o);
   expect_sane(r);
   EXPECT_EQ(r.matched, 40u);
@@ -164,13 +164,13 @@ TEST(BlackBox, FastDdsInOneProcessLosesNothing) {
 
 TEST(BlackBox, BadOptionsAreRejectedBeforeTiming) {
   RunOptions o = with_count(10, 100);
-  o.warmup = 10;
+  o.load.warmup = 10;
   EXPECT_THROW(run_package("warm", relay_graph(""), o), std::invalid_argument);
   o = with_count(10, 100);
-  o.rmw = "carrier-pigeon";
+  o.transport.rmw = "carrier-pigeon";
   EXPECT_THROW(run_package("rmw", relay_graph(""), o), std::invalid_argument);
   o = with_count(10, 100);
-  o.processes = ProcessLayout::kPerNode;
+  o.processes.layout = ProcessLayout::kPerNode;
   EXPECT_THROW(run_package("layout", relay_graph(""), o), std::invalid_argument);
 }
 
@@ -182,34 +182,34 @@ TEST(BlackBox, OutOfRangeValuesAreRejectedWithTheOptionNamed) {
     std::function<void(RunOptions&)> set;
   };
   const std::vector<Case> cases = {
-      {"--rate", [](RunOptions& o) { o.rate_hz = 3e9; }},
-      {"--rate", [](RunOptions& o) { o.rate_hz = 1e-300; }},
-      {"--rate", [](RunOptions& o) { o.rate_hz = std::numeric_limits<double>::infinity(); }},
-      {"--rate", [](RunOptions& o) { o.rate_hz = -5; }},
-      {"--drain", [](RunOptions& o) { o.drain_s = 1e10; }},
-      {"--drain", [](RunOptions& o) { o.drain_s = -1; }},
+      {"--rate", [](RunOptions& o) { o.load.rate_hz = 3e9; }},
+      {"--rate", [](RunOptions& o) { o.load.rate_hz = 1e-300; }},
+      {"--rate", [](RunOptions& o) { o.load.rate_hz = std::numeric_limits<double>::infinity(); }},
+      {"--rate", [](RunOptions& o) { o.load.rate_hz = -5; }},
+      {"--drain", [](RunOptions& o) { o.load.drain_s = 1e10; }},
+      {"--drain", [](RunOptions& o) { o.load.drain_s = -1; }},
       {"--duration",
        [](RunOptions& o) {
-         o.count.reset();
-         o.duration_s = std::numeric_limits<double>::quiet_NaN();
+         o.load.count.reset();
+         o.load.duration_s = std::numeric_limits<double>::quiet_NaN();
        }},
       {"--duration",
        [](RunOptions& o) {
-         o.count.reset();
-         o.duration_s = 1e300;
+         o.load.count.reset();
+         o.load.duration_s = 1e300;
        }},
-      {"--count", [](RunOptions& o) { o.count = 0; }},
-      {"--callback-timeout", [](RunOptions& o) { o.callback_timeout_s = 0; }},
-      {"--connect-timeout", [](RunOptions& o) { o.connect_timeout_s = 1e12; }},
+      {"--count", [](RunOptions& o) { o.load.count = 0; }},
+      {"--callback-timeout", [](RunOptions& o) { o.processes.callback_timeout_s = 0; }},
+      {"--connect-timeout", [](RunOptions& o) { o.processes.connect_timeout_s = 1e12; }},
       {"messages need",
        [](RunOptions& o) {
-         o.rate_hz = 1e6;
-         o.count = 100'000'000'000;
+         o.load.rate_hz = 1e6;
+         o.load.count = 100'000'000'000;
        }},
       {"longer than a week",
        [](RunOptions& o) {
-         o.rate_hz = 0.01;
-         o.count = 10'000;
+         o.load.rate_hz = 0.01;
+         o.load.count = 10'000;
        }},
   };
   for (const auto& c : cases) {
@@ -231,7 +231,7 @@ TEST(BlackBox, OutOfRangeValuesAreRejectedWithTheOptionNamed) {
 TEST(BlackBox, ABurstThatWouldNotFitInMemoryIsRefusedBeforeTiming) {
   RunOptions o = with_count(1'000'000, 100'000);
   // 640x480 RGB frames: about 0.9 TB at once.
-  o.arrival = ArrivalPattern::parse("burst:1000000");
+  o.load.arrival = ArrivalPattern::parse("burst:1000000");
   try {
     run_package("huge_burst", relay_graph(""), o);
     ADD_FAILURE() << "accepted";
@@ -248,7 +248,7 @@ TEST(BlackBox, ABurstThatWouldNotFitInMemoryIsRefusedBeforeTiming) {
 // outputs a relay held back arrive.
 TEST(BlackBox, OutputsArrivingAfterTheDrainAreNotCounted) {
   RunOptions o = with_count(2, 100);
-  o.drain_s = 0;
+  o.load.drain_s = 0;
   o.power.types = {"external"};
   o.power.meter_command = "sleep 1.2; echo 10";
   const RunResult r = run_package("cut_off", relay_graph("delay_ms: 300"), o);
@@ -265,7 +265,7 @@ TEST(BlackBox, OutputsArrivingAfterTheDrainAreNotCounted) {
 
 TEST(BlackBox, BurstsAreSentBackToBackAtTheirDeadline) {
   RunOptions o = with_count(40, 100);
-  o.arrival = ArrivalPattern::parse("burst:4");
+  o.load.arrival = ArrivalPattern::parse("burst:4");
   const RunResult r = run_package("burst", relay_graph(""), o);
   expect_sane(r);
   EXPECT_EQ(r.matched, 40u);
@@ -282,6 +282,7 @@ TEST(BlackBox, BurstsAreSentBackToBackAtTheirDeadline) {
     }
   }
 }
+
 
 }  // namespace
 }  // namespace robotperf::harness

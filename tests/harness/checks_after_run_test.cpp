@@ -103,8 +103,8 @@ std::optional<RunResult> run_within_a_minute(const BenchmarkSpec& spec, const Ru
 
 RunOptions quick() {
   RunOptions o;
-  o.count = 20;
-  o.rate_hz = 100;
+  o.load.count = 20;
+  o.load.rate_hz = 100;
   return o;
 }
 

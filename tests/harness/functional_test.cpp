@@ -60,11 +60,11 @@ std::string replace_all(std::string s, const std::string& from, const std::strin
 
 RunOptions quick(std::size_t count, double rate_hz, const std::string& rmw = "intra") {
   RunOptions o;
-  o.count = count;
-  o.rate_hz = rate_hz;
-  o.warmup = 2;
-  o.rmw = rmw;
-  o.domain_id = rmw::reserved_domain();
+  o.load.count = count;
+  o.load.rate_hz = rate_hz;
+  o.load.warmup = 2;
+  o.transport.rmw = rmw;
+  o.transport.domain_id = rmw::reserved_domain();
   return o;
 }
 

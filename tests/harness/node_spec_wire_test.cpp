@@ -62,13 +62,13 @@ TEST(NodeSpecWire, RefusesWhatTheRunnerDoesNotWrite) {
 // --update-rate reaches the controller's own process with its node, not as a flag to re-apply.
 TEST(NodeSpecWire, APerNodeControllerRunsAtTheOverriddenRate) {
   RunOptions o;
-  o.count = 60;
-  o.warmup = 5;
-  o.update_rate_hz = 250;
-  o.rmw = "fastdds";
-  o.processes = ProcessLayout::kPerNode;
-  o.domain_id = rmw::reserved_domain();
-  o.node_command = {ROBOTPERF_EXECUTABLE, "node"};
+  o.load.count = 60;
+  o.load.warmup = 5;
+  o.nodes.update_rate_hz = 250;
+  o.transport.rmw = "fastdds";
+  o.processes.layout = ProcessLayout::kPerNode;
+  o.transport.domain_id = rmw::reserved_domain();
+  o.processes.node_command = {ROBOTPERF_EXECUTABLE, "node"};
   const RunResult r = run_benchmark(
       find_benchmark(std::filesystem::path(ROBOTPERF_SOURCE_DIR) / "benchmarks", "c3"), o);
   EXPECT_TRUE(r.errors.empty()) << r.errors.front();

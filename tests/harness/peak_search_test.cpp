@@ -21,7 +21,7 @@ TEST(PeakSearch, FindsTheServiceLimitOfARelay) {
   TestPackage p("peak", relay_graph("delay_ms: 10"));
   const BenchmarkSpec spec = load_benchmark(p.dir());
   RunOptions o;
-  o.rate_hz = 20;
+  o.load.rate_hz = 20;
   PeakSearchOptions search;
   search.step_duration_s = 1.5;
   search.rate_high_hz = 400;
@@ -67,7 +67,7 @@ TEST(PeakSearch, ALatencyBoundBelowTheServiceTimeStopsEveryRate) {
   TestPackage p("peak_latency", relay_graph("delay_ms: 5"));
   const BenchmarkSpec spec = load_benchmark(p.dir());
   RunOptions o;
-  o.rate_hz = 40;
+  o.load.rate_hz = 40;
   PeakSearchOptions search;
   search.step_duration_s = 1.0;
   search.latency_bound_ms = 3.0;
@@ -91,7 +91,7 @@ TEST(PeakSearch, ALossBoundStopsAGraphThatDropsAtEveryRate) {
   TestPackage p("peak_loss", relay_graph("drop_every: 4"));
   const BenchmarkSpec spec = load_benchmark(p.dir());
   RunOptions o;
-  o.rate_hz = 40;
+  o.load.rate_hz = 40;
   PeakSearchOptions search;
   search.step_duration_s = 1.0;
   search.loss_bound_percent = 10;
@@ -115,7 +115,7 @@ TEST(PeakSearch, AnInterruptedSearchReportsNoPeak) {
   const BenchmarkSpec spec = load_benchmark(p.dir());
   std::atomic<int> interrupted = 0;
   RunOptions o;
-  o.rate_hz = 20;
+  o.load.rate_hz = 20;
   o.interrupted = &interrupted;
   PeakSearchOptions search;
   search.step_duration_s = 1.0;
@@ -152,7 +152,7 @@ TEST(PeakSearch, BadBoundsAreRejectedBeforeAnyStep) {
   s.rate_high_hz = 10;
   EXPECT_THROW(find_peak(spec, o, s), std::invalid_argument);
   s = {};
-  o.count = 100;
+  o.load.count = 100;
   EXPECT_THROW(find_peak(spec, o, s), std::invalid_argument);
 }
 

@@ -51,8 +51,8 @@ std::vector<pid_t> children_of_this_process() {
 
 RunOptions small_fast_run() {
   RunOptions o;
-  o.count = 20;
-  o.rate_hz = 200;
+  o.load.count = 20;
+  o.load.rate_hz = 200;
   return o;
 }
 
@@ -60,10 +60,10 @@ TEST(RunPlan, ResolvesTheRunWithoutStartingIt) {
   TestPackage p("plan", relay_graph(""));
   const BenchmarkSpec spec = load_benchmark(p.dir());
   RunOptions o;
-  o.duration_s = 0.5;
-  o.rate_hz = 40;
-  o.drain_s = 0.25;
-  o.domain_id = 7;
+  o.load.duration_s = 0.5;
+  o.load.rate_hz = 40;
+  o.load.drain_s = 0.25;
+  o.transport.domain_id = 7;
   // Loading a dataset the first time may start a library's worker pool, which stays.
   plan_run(spec, o);
   const std::size_t threads_before = threads_of_this_process();
@@ -87,7 +87,7 @@ TEST(RunPlan, AnOverrideAppliesToACopyOfThePackage) {
   TestPackage p("plan_backend", relay_graph(""));
   const BenchmarkSpec spec = load_benchmark(p.dir());
   RunOptions o;
-  o.backend = "cpu";
+  o.nodes.backend = "cpu";
   const RunPlan plan = plan_run(spec, o);
   ASSERT_TRUE(plan.overridden.has_value());
   EXPECT_EQ(&plan.spec(), &*plan.overridden);
@@ -98,14 +98,14 @@ TEST(RunPlan, RefusesWhatTheRunCannotDo) {
   TestPackage p("plan_refused", relay_graph(""));
   const BenchmarkSpec spec = load_benchmark(p.dir());
   RunOptions per_node_intra;
-  per_node_intra.processes = ProcessLayout::kPerNode;
+  per_node_intra.processes.layout = ProcessLayout::kPerNode;
   EXPECT_THROW(plan_run(spec, per_node_intra), std::invalid_argument);
   RunOptions all_warmup;
-  all_warmup.count = 5;
-  all_warmup.warmup = 5;
+  all_warmup.load.count = 5;
+  all_warmup.load.warmup = 5;
   EXPECT_THROW(plan_run(spec, all_warmup), std::invalid_argument);
   RunOptions no_rate;
-  no_rate.rate_hz = 0;
+  no_rate.load.rate_hz = 0;
   EXPECT_THROW(plan_run(spec, no_rate), std::invalid_argument);
 }
 
@@ -139,7 +139,7 @@ void expect_outcome_of_interrupt_at(RunStage stage, const BenchmarkSpec& spec, R
     return;
   }
   const RunResult r = run_benchmark(spec, o);
-  EXPECT_EQ(r.sent, *o.count);
+  EXPECT_EQ(r.sent, *o.load.count);
   if (stage <= RunStage::kStopGraph) {
     EXPECT_TRUE(r.interrupted);
     EXPECT_FALSE(r.completed);
@@ -179,10 +179,10 @@ TEST_P(InterruptPerNode, LeavesNoNodeProcess) {
   const BenchmarkSpec spec = load_benchmark(p.dir());
   ASSERT_TRUE(children_of_this_process().empty());
   RunOptions o = small_fast_run();
-  o.rmw = "fastdds";
-  o.processes = ProcessLayout::kPerNode;
-  o.domain_id = rmw::reserved_domain();
-  o.node_command = {ROBOTPERF_EXECUTABLE, "node"};
+  o.transport.rmw = "fastdds";
+  o.processes.layout = ProcessLayout::kPerNode;
+  o.transport.domain_id = rmw::reserved_domain();
+  o.processes.node_command = {ROBOTPERF_EXECUTABLE, "node"};
   expect_outcome_of_interrupt_at(GetParam(), spec, o);
   EXPECT_TRUE(children_of_this_process().empty()) << "a node process of the run is left";
 }

@@ -33,7 +33,7 @@ class EmulatedPerception final : public ::testing::Environment {
 const auto* const environment = ::testing::AddGlobalTestEnvironment(new EmulatedPerception);
 
 harness::RunResult run_on_cuda(const std::string& id, harness::RunOptions o) {
-  o.backend = "cuda";
+  o.nodes.backend = "cuda";
   return harness::run_benchmark(
       harness::find_benchmark(std::string(ROBOTPERF_SOURCE_DIR) + "/benchmarks", id), o);
 }
@@ -69,8 +69,8 @@ TEST(CudaEmulatedRun, ImageBenchmarksGiveTheCpusAnswers) {
     // A rate the emulation keeps up with on a busy two-core machine: under the sanitizers, beside
     // another test, a1 kept 9 of 30 measured messages at 5 Hz.
     harness::RunOptions o;
-    o.count = 40;
-    o.rate_hz = test_rate(5, 1);
+    o.load.count = 40;
+    o.load.rate_hz = test_rate(5, 1);
     expect_cpus_answers_on_the_emulation(id, run_on_cuda(id, o));
   }
 }
@@ -79,17 +79,17 @@ TEST(CudaEmulatedRun, ImageBenchmarksGiveTheCpusAnswers) {
 // after rectify, no upload before resize), and the answers are still the cpu's.
 TEST(CudaEmulatedRun, DeviceResidentA1KeepsTheRectifiedImageOnTheDevice) {
   harness::RunOptions o;
-  o.count = 35;
-  o.rate_hz = test_rate(5, 1);
-  o.device_resident = true;
-  o.mode = harness::RunMode::kGrey;
-  o.trace_dir = std::filesystem::temp_directory_path() /
-                ("cuda-emulated-a1-resident-" + std::to_string(getpid()) + ".trace");
+  o.load.count = 35;
+  o.load.rate_hz = test_rate(5, 1);
+  o.nodes.device_resident = true;
+  o.tracing.mode = harness::RunMode::kGrey;
+  o.tracing.trace_dir = std::filesystem::temp_directory_path() /
+                        ("cuda-emulated-a1-resident-" + std::to_string(getpid()) + ".trace");
   std::string why;
   const bool grey = tracing::lttng_available(&why);
-  if (!grey) o.mode = harness::RunMode::kBlack;
+  if (!grey) o.tracing.mode = harness::RunMode::kBlack;
   const harness::RunResult r = run_on_cuda("a1", o);
-  std::filesystem::remove_all(o.trace_dir);
+  std::filesystem::remove_all(o.tracing.trace_dir);
   expect_cpus_answers_on_the_emulation("a1 device-resident", r);
   ASSERT_EQ(r.device_resident.size(), 1u);
   EXPECT_EQ(r.device_resident[0].topic, "/rectify/image_rect");
@@ -108,11 +108,11 @@ TEST(CudaEmulatedRun, DeviceResidentA1KeepsTheRectifiedImageOnTheDevice) {
 // machine, too few messages for a valid measurement (30) in a test's time.
 TEST(CudaEmulatedRun, StereoGivesTheCpusDisparity) {
   harness::RunOptions o;
-  o.count = 8;
-  o.warmup = 2;
-  o.rate_hz = test_rate(0.3, 0.1);
+  o.load.count = 8;
+  o.load.warmup = 2;
+  o.load.rate_hz = test_rate(0.3, 0.1);
   // There a pair's callback outlasts the benchmark's drain: the last one is waited for.
-  if (kSanitizedBuild) o.drain_s = 30.0;
+  if (kSanitizedBuild) o.load.drain_s = 30.0;
   expect_cpus_answers_on_the_emulation("a3", run_on_cuda("a3", o), true);
 }
 
@@ -122,13 +122,13 @@ TEST(CudaEmulatedRun, GreyBoxShowsTheTransfersAndComputation) {
   std::string why;
   if (!tracing::lttng_available(&why)) GTEST_SKIP() << why;
   harness::RunOptions o;
-  o.count = 35;
-  o.rate_hz = test_rate(5, 1);  // as the image benchmarks above
-  o.mode = harness::RunMode::kGrey;
-  o.trace_dir = std::filesystem::temp_directory_path() /
-                ("cuda-emulated-a5-" + std::to_string(getpid()) + ".trace");
+  o.load.count = 35;
+  o.load.rate_hz = test_rate(5, 1);  // as the image benchmarks above
+  o.tracing.mode = harness::RunMode::kGrey;
+  o.tracing.trace_dir = std::filesystem::temp_directory_path() /
+                        ("cuda-emulated-a5-" + std::to_string(getpid()) + ".trace");
   const harness::RunResult g = run_on_cuda("a5", o);
-  std::filesystem::remove_all(o.trace_dir);
+  std::filesystem::remove_all(o.tracing.trace_dir);
   ASSERT_TRUE(g.grey.has_value());
   expect_cpus_answers_on_the_emulation("a5 grey", g);
   test_support::expect_device_stages_inside_kernel(g, "resize", "image_proc/resize");

@@ -123,9 +123,9 @@ std::string plugin_graph(const std::string& plugins_line, const std::string& eva
 
 harness::RunOptions quick() {
   harness::RunOptions o;
-  o.count = 30;
-  o.rate_hz = 100;
-  o.domain_id = rmw::reserved_domain();
+  o.load.count = 30;
+  o.load.rate_hz = 100;
+  o.transport.domain_id = rmw::reserved_domain();
   return o;
 }
 

@@ -95,8 +95,8 @@ class GreyRun : public ::testing::Test {
   }
 
   RunOptions grey(RunOptions o, const std::string& name) {
-    o.mode = RunMode::kGrey;
-    o.trace_dir = dir_ / name;
+    o.tracing.mode = RunMode::kGrey;
+    o.tracing.trace_dir = dir_ / name;
     return o;
   }
 
@@ -125,7 +125,7 @@ TEST_F(GreyRun, A1AgreesWithBlackBoxAndExplainsWhereTheTimeGoes) {
   RunOptions o;
   // Below the rate at which a sanitized Debug build on a busy 2-core machine
   // starts queueing frames (queueing makes two runs differ, traced or not).
-  o.rate_hz = 15;
+  o.load.rate_hz = 15;
   const RunResult black = run_benchmark(spec, o);
   const RunResult g = run_benchmark(spec, grey(o, "a1.trace"));
   ASSERT_TRUE(black.valid) << reasons(black);
@@ -198,9 +198,9 @@ TEST_F(GreyRun, A1AgreesWithBlackBoxAndExplainsWhereTheTimeGoes) {
 TEST_F(GreyRun, A4PairsItsThreeInputsPerFrameAndTracesTheKernel) {
   const BenchmarkSpec spec = benchmark("a4");
   RunOptions o;
-  o.rate_hz = 15;  // far below what a busy 2-core machine sustains: no frame queues
-  o.count = 40;    // 35 measured: a4 asks for at least 30
-  o.warmup = 5;
+  o.load.rate_hz = 15;  // far below what a busy 2-core machine sustains: no frame queues
+  o.load.count = 40;    // 35 measured: a4 asks for at least 30
+  o.load.warmup = 5;
   const RunResult g = run_benchmark(spec, grey(o, "a4.trace"));
   ASSERT_TRUE(g.grey.has_value());
   ASSERT_TRUE(g.valid) << reasons(g);
@@ -264,9 +264,9 @@ TEST_F(GreyRun, AKernelOnADeviceShowsItsTransfersAndComputation) {
     GTEST_SKIP() << e.what();
   }
   RunOptions o;
-  o.rate_hz = 10;
-  o.count = 35;
-  o.backend = "opencl";
+  o.load.rate_hz = 10;
+  o.load.count = 35;
+  o.nodes.backend = "opencl";
   const RunResult g = run_benchmark(benchmark("a5"), grey(o, "a5-opencl.trace"));
   ASSERT_TRUE(g.grey.has_value());
   ASSERT_TRUE(g.valid) << reasons(g);
@@ -282,9 +282,9 @@ TEST_F(GreyRun, TinySubbuffersUnderLoadAreReportedAndInvalid) {
 #endif
   // Small messages as fast as the Playback can send them: far more events than
   // the consumer daemon can drain through 4 KiB sub-buffers.
-  o.count = 20000;
-  o.rate_hz = 20000;
-  o.trace_subbuf_bytes = 4096;
+  o.load.count = 20000;
+  o.load.rate_hz = 20000;
+  o.tracing.subbuf_bytes = 4096;
   const RunResult r = run_benchmark(relay_package(true), grey(o, "tiny.trace"));
   ASSERT_TRUE(r.grey.has_value());
   EXPECT_GT(r.grey->discarded_events, 0u);
@@ -302,8 +302,8 @@ TEST_F(GreyRun, TinySubbuffersUnderLoadAreReportedAndInvalid) {
 
 TEST_F(GreyRun, LoopedDatasetHasNoKeyCollisions) {
   RunOptions o;
-  o.count = 250;  // the 68-frame dataset loops three times
-  o.rate_hz = 100;
+  o.load.count = 250;  // the 68-frame dataset loops three times
+  o.load.rate_hz = 100;
   const RunResult r = run_benchmark(relay_package(), grey(o, "loop.trace"));
   ASSERT_TRUE(r.grey.has_value());
   EXPECT_EQ(r.grey->discarded_events, 0u);
@@ -321,12 +321,12 @@ class GreyRunPerNode : public GreyRun, public ::testing::WithParamInterface<std:
 
 TEST_P(GreyRunPerNode, ProcessesAreTracedAsPartOfTheRun) {
   RunOptions o;
-  o.count = 45;
-  o.rate_hz = test_rate(15, 2);
-  o.rmw = GetParam();
-  o.processes = ProcessLayout::kPerNode;
-  o.domain_id = rmw::reserved_domain();
-  o.node_command = {ROBOTPERF_EXECUTABLE, "node"};
+  o.load.count = 45;
+  o.load.rate_hz = test_rate(15, 2);
+  o.transport.rmw = GetParam();
+  o.processes.layout = ProcessLayout::kPerNode;
+  o.transport.domain_id = rmw::reserved_domain();
+  o.processes.node_command = {ROBOTPERF_EXECUTABLE, "node"};
   const RunResult r = run_benchmark(benchmark("a1"), grey(o, GetParam() + "-per-node.trace"));
   ASSERT_TRUE(r.grey.has_value());
   EXPECT_TRUE(r.valid) << reasons(r);
@@ -362,7 +362,7 @@ TEST_F(GreyRun, APluginKernelIsTracedThroughThePluginApi) {
          "nodes:\n  - name: scale\n    kernel: test_plugin/scale\n"
          "    topics: {input: /states, output: /scaled}\n";
   RunOptions o;
-  o.count = 30;
+  o.load.count = 30;
   const RunResult g = run_benchmark(load_benchmark(pkg), grey(o, "plugin.trace"));
   ASSERT_TRUE(g.grey.has_value());
   ASSERT_TRUE(g.valid) << reasons(g);
@@ -649,7 +649,7 @@ TEST_F(GreyRun, SessionOfOneProcessLeavesOtherProcessesOut) {
         robotperf_cli("run a5 --count 35 --rate 10 --quiet --output " + (dir_ / "other").string());
     ASSERT_EQ(other.exit_code, 0) << other.out;
     RunOptions o;
-    o.count = 40;
+    o.load.count = 40;
     ASSERT_TRUE(run_benchmark(relay_package(), o).valid);
     session.stop();
     const auto counts = events_by_process(so.output_dir);
@@ -713,7 +713,7 @@ TEST_F(GreyRun, MissingLttngIsOneLineSayingHowToInstallIt) {
 
 TEST_F(GreyRun, BlackBoxRunsNeedNoTracing) {
   RunOptions o;
-  o.count = 20;
+  o.load.count = 20;
   const RunResult r = run_benchmark(relay_package(), o);
   EXPECT_FALSE(r.grey.has_value());
   EXPECT_TRUE(r.trace_dir.empty());

@@ -35,7 +35,7 @@ class RunCommand : public Command {
     apply_workload(spec, args_);
     std::optional<harness::NetworkLink> link;
     const harness::RunOptions options = run_options(spec, args_, context, link);
-    if (options.mode == harness::RunMode::kGrey) remove_grey_leftovers(args_);
+    if (options.tracing.mode == harness::RunMode::kGrey) remove_grey_leftovers(args_);
     if (args_.find_peak) return run_peak_search(spec, args_, options);
     if (args_.sweep) {
       if (args_.repeat > 1)

@@ -69,7 +69,8 @@ fs::path name_run(const RunArgs& a, harness::RunResult& result) {
     // The trace folder takes the first name no other run has; the files follow it.
     for (int n = 2; fs::exists(base.string() + ".trace") || fs::exists(base.string() + ".json");
          ++n)
-      base = files::path_inside(a.output, report::result_basename(result) + "-" + std::to_string(n));
+      base =
+          files::path_inside(a.output, report::result_basename(result) + "-" + std::to_string(n));
     const fs::path trace = base.string() + ".trace";
     fs::rename(result.trace_dir, trace);
     result.trace_dir = trace;
@@ -141,9 +142,9 @@ struct MeasuredRun {
 MeasuredRun measure_and_write(const harness::BenchmarkSpec& spec, const RunArgs& a,
                               harness::RunOptions o) {
   std::optional<tracing::TemporaryTraceFolder> trace_folder;
-  if (o.mode == harness::RunMode::kGrey) {
+  if (o.tracing.mode == harness::RunMode::kGrey) {
     trace_folder.emplace(a.output);
-    o.trace_dir = trace_folder->trace_path();
+    o.tracing.trace_dir = trace_folder->trace_path();
   }
   MeasuredRun run{harness::run_benchmark(spec, o), {}};
   run.written = write_run(spec, a, run.result);
@@ -292,7 +293,7 @@ int run_peak_search(const harness::BenchmarkSpec& spec, const RunArgs& a, harnes
   if (a.mode == "grey") throw std::invalid_argument("--find-peak runs black-box only");
   if (a.repeat > 1) throw std::invalid_argument("--find-peak is one search: not with --repeat");
   harness::PeakSearchOptions search = peak_search_options(a);
-  o.duration_s.reset();
+  o.load.duration_s.reset();
   o.progress = nullptr;
   std::size_t steps = 0;
   auto found = harness::find_peak(spec, o, search, [&](const harness::PeakStep& s) {

@@ -87,32 +87,33 @@ void set_input_options(harness::RunOptions& o, const RunArgs& a) {
     if (!a.workload.empty() || a.sweep)
       throw std::invalid_argument(std::string(a.sweep ? "--sweep" : "--workload") +
                                   " sets the generated dataset's parameters: not with --dataset");
-    o.bag = bag_selection(a);
+    o.load.bag = bag_selection(a);
   }
   if (a.rate_scale != 1.0 && a.rate != "bag")
     throw std::invalid_argument("--rate-scale only applies with --rate bag");
   if (a.rate == "bag") {
-    o.bag_timeline = true;
-    o.rate_scale = a.rate_scale;
+    o.load.bag_timeline = true;
+    o.load.rate_scale = a.rate_scale;
   } else if (a.rate) {
-    o.rate_hz = decimal<double>(*a.rate);
-    if (!o.rate_hz)
+    o.load.rate_hz = decimal<double>(*a.rate);
+    if (!o.load.rate_hz)
       throw std::invalid_argument("--rate " + *a.rate + ": expected a rate in Hz or 'bag'");
   }
-  o.arrival = harness::ArrivalPattern::parse(a.arrival);
-  if (a.arrival_seed && o.arrival.kind != harness::ArrivalPattern::Kind::kPoisson)
+  o.load.arrival = harness::ArrivalPattern::parse(a.arrival);
+  if (a.arrival_seed && o.load.arrival.kind != harness::ArrivalPattern::Kind::kPoisson)
     throw std::invalid_argument("--arrival-seed only applies with --arrival poisson");
-  if (a.arrival_seed) o.arrival.seed = *a.arrival_seed;
-  o.monitor_wait = a.monitor_wait == "spin" ? graph::WaitMode::kSpin : graph::WaitMode::kSleep;
-  o.update_rate_hz = a.update_rate;
+  if (a.arrival_seed) o.load.arrival.seed = *a.arrival_seed;
+  o.transport.monitor_wait =
+      a.monitor_wait == "spin" ? graph::WaitMode::kSpin : graph::WaitMode::kSleep;
+  o.nodes.update_rate_hz = a.update_rate;
   // Said before anything else of the run: a backend this build lacks is named by no kernel.
   if (a.backend) harness::check_backend_available(*a.backend);
-  o.backend = a.backend;
-  o.device_resident = a.device_resident;
-  o.count = a.count;
-  o.duration_s = a.duration;
-  o.warmup = a.warmup;
-  o.drain_s = a.drain;
+  o.nodes.backend = a.backend;
+  o.nodes.device_resident = a.device_resident;
+  o.load.count = a.count;
+  o.load.duration_s = a.duration;
+  o.load.warmup = a.warmup;
+  o.load.drain_s = a.drain;
 }
 
 // The transport, processes, hosts and domain of the graph. The --netns link is made before any
@@ -121,43 +122,45 @@ void set_graph_options(harness::RunOptions& o, const harness::BenchmarkSpec& spe
                        const Context& context, std::optional<harness::NetworkLink>& link) {
   const std::string processes = a.processes.value_or(spec.processes);
   // An external graph's nodes are reached through DDS, as per-node children are.
-  o.rmw = a.rmw.value_or(processes == "per-node" || spec.external() ? "fastdds" : "intra");
-  o.log_dir = a.output;
-  o.host_launchers = host_launchers(spec, a);
-  o.keystore = a.security;
-  o.ros_distro = rmw::ros_distro_from_name(a.ros_distro);
+  o.transport.rmw =
+      a.rmw.value_or(processes == "per-node" || spec.external() ? "fastdds" : "intra");
+  o.processes.log_dir = a.output;
+  o.processes.host_launchers = host_launchers(spec, a);
+  o.transport.keystore = a.security;
+  o.transport.ros_distro = rmw::ros_distro_from_name(a.ros_distro);
   if (a.netns) {
     link.emplace(harness::LinkShaping{a.link_rate == "none" ? "" : a.link_rate, a.netem});
     link->enter_runner_side();
-    for (const auto& host : spec.hosts()) o.host_launchers[host] = link->launcher();
-    o.network_link = &*link;
+    for (const auto& host : spec.hosts()) o.processes.host_launchers[host] = link->launcher();
+    o.processes.network_link = &*link;
   }
   if (!a.domain) {
-    o.domain_id = rmw::domain_id_from_environment();
+    o.transport.domain_id = rmw::domain_id_from_environment();
   } else if (*a.domain == "auto") {
-    o.domain_id = rmw::find_quiet_domain(o.rmw);
-    if (!a.quiet) std::fprintf(stderr, "robotperf: --domain auto: domain %d\n", o.domain_id);
+    o.transport.domain_id = rmw::find_quiet_domain(o.transport.rmw);
+    if (!a.quiet)
+      std::fprintf(stderr, "robotperf: --domain auto: domain %d\n", o.transport.domain_id);
   } else {
-    o.domain_id = rmw::parse_domain_id(*a.domain).value();  // checked when parsed
+    o.transport.domain_id = rmw::parse_domain_id(*a.domain).value();  // checked when parsed
   }
-  o.processes =
+  o.processes.layout =
       processes == "per-node" ? harness::ProcessLayout::kPerNode : harness::ProcessLayout::kSingle;
   // Every child loads the plug-ins this process was given (the package's own `plugins:` it
   // loads with the package, ROBOTPERF_PLUGIN_PATH it inherits).
-  o.node_command = {self_executable().string()};
+  o.processes.node_command = {self_executable().string()};
   for (const auto& p : context.plugins)
-    o.node_command.insert(o.node_command.end(), {"--plugin", p});
-  o.node_command.push_back("node");
+    o.processes.node_command.insert(o.processes.node_command.end(), {"--plugin", p});
+  o.processes.node_command.push_back("node");
 }
 
 // Power, scheduling, limits, progress, and where the results and a grey run's trace go.
 void set_measurement_options(harness::RunOptions& o, const harness::BenchmarkSpec& spec,
                              const RunArgs& a) {
   o.power = a.power.options();
-  o.scheduling = a.scheduling.options();
+  o.processes.scheduling = a.scheduling.options();
   o.strict = a.strict;
-  o.callback_timeout_s = a.callback_timeout_s;
-  o.connect_timeout_s = a.connect_timeout_s;
+  o.processes.callback_timeout_s = a.callback_timeout_s;
+  o.processes.connect_timeout_s = a.connect_timeout_s;
   o.interrupted = &g_interrupted;
   if (!a.quiet && isatty(STDERR_FILENO)) {
     o.progress = [id = spec.id](std::size_t sent, std::size_t total, std::size_t received) {
@@ -171,8 +174,8 @@ void set_measurement_options(harness::RunOptions& o, const harness::BenchmarkSpe
   if (a.mode == "grey" && a.trace_subbuf != 0) tracing::check_subbuffer_bytes(a.trace_subbuf);
   if (a.mode == "grey") {
     // Each run's trace folder is made when it starts (run_drivers.cpp).
-    o.mode = harness::RunMode::kGrey;
-    o.trace_subbuf_bytes = a.trace_subbuf;
+    o.tracing.mode = harness::RunMode::kGrey;
+    o.tracing.subbuf_bytes = a.trace_subbuf;
   }
 }
 

@@ -18,6 +18,7 @@
 #include "robotperf/harness/dataset.hpp"
 #include "robotperf/harness/functional.hpp"
 #include "robotperf/harness/network_link.hpp"
+#include "robotperf/harness/run_options.hpp"
 #include "robotperf/harness/scheduling.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
 #include "robotperf/metrics/power.hpp"
@@ -28,112 +29,6 @@
 #include "robotperf/tracing/analysis.hpp"
 
 namespace robotperf::harness {
-
-enum class ProcessLayout { kSingle, kPerNode };
-
-// Black-box: Playback and Monitor measure around the graph. Grey-box: the run
-// is also recorded with LTTng and the results come from the trace (src/tracing).
-enum class RunMode { kBlack, kGrey };
-
-// When the Playback sends, beside a bag's recorded timeline (MLPerf LoadGen's scenarios).
-struct ArrivalPattern {
-  enum class Kind {
-    kFixed,    // every 1/rate
-    kPoisson,  // exponential intervals of mean 1/rate (a server's random clients)
-    kBurst     // `burst` messages back to back every burst/rate
-  };
-  Kind kind = Kind::kFixed;
-  std::size_t burst = 1;
-  uint64_t seed = 1;  // Poisson: the same seed gives the same schedule on every machine
-
-  // "fixed", "poisson" or "burst:N"; throws std::invalid_argument otherwise.
-  static ArrivalPattern parse(const std::string& text);
-  std::string name() const;  // as parse() reads it
-};
-
-// The stages of run_benchmark, in their order: each acquires what it needs for the run, and an
-// exception or interrupt at any point releases what the stages before it acquired.
-enum class RunStage {
-  kPlan,        // the options checked against the benchmark and resolved; the dataset loaded
-  kPrepare,     // scheduling, grey-box recording, transport, Playback and Monitor
-  kStartGraph,  // the graph's nodes: in this process, per node, or an external graph's launched
-  kConnect,     // discovery, the run rules (--strict)
-  kMeasure,     // the warm-up, then the measured messages
-  kDrain,       // the outputs still on their way
-  kStopGraph,   // executors, node processes, the nodes' reports
-  kSummarise,   // the figures, and the warnings about the run
-  kCheck        // the outputs against ground truth, other backends' against the cpu's
-};
-std::string to_string(RunStage stage);
-
-struct RunOptions {
-  std::optional<double> rate_hz;  // default: the benchmark's
-  // Control benchmarks: the controller managers' loop rate in Hz (default: the graph's).
-  std::optional<double> update_rate_hz;
-  // --backend: the nodes whose kernel has this backend run on it (override_backend).
-  std::optional<std::string> backend;
-  // --device-resident: images stay on the device between nodes that can hand them over there
-  // (keep_on_device), a configuration of its own; single-process intra runs only.
-  bool device_resident = false;
-  std::optional<std::size_t> count;   // messages to send, warm-up included
-  std::optional<double> duration_s;   // alternative to count: rate * duration
-  std::optional<std::size_t> warmup;  // default: the benchmark's
-  std::optional<double> drain_s;      // default: the benchmark's
-  std::string rmw = "intra";
-  ProcessLayout processes = ProcessLayout::kSingle;
-  int domain_id = 0;
-  double connect_timeout_s = 15.0;  // discovery and node start-up, before timing
-  // A callback running longer than this ends the run with its node named as hung.
-  double callback_timeout_s = 30.0;
-  // Set (to the signal's number) by whoever handles SIGINT/SIGTERM: the run ends at once, keeping
-  // what it measured, marked interrupted.
-  const std::atomic<int>* interrupted = nullptr;
-  // For per-node runs: the robotperf executable and the arguments that make it
-  // run one node ("node" subcommand); the runner appends its own.
-  std::vector<std::string> node_command;
-  // The command prefix that runs a command on each host nodes are placed on (graph.yaml
-  // `host:`), e.g. {"ssh", "robot-b", "--"} (the default) or {"ip", "netns", "exec", "ns"}.
-  std::map<std::string, std::vector<std::string>> host_launchers;
-  // The link between the runner's host and the others, when robotperf made it (--netns).
-  const NetworkLink* network_link = nullptr;
-  // Where the logs of an external graph's processes go (graph.yaml `launch:`); default: the
-  // working folder.
-  std::filesystem::path log_dir = ".";
-  // DDS Security: the keystore whose enclave rmw::kDefaultEnclave every participant of the run
-  // (Playback, Monitor, nodes, children) presents; empty: unsecured.
-  std::filesystem::path keystore;
-  // Whose ROS 2 graph conventions the DDS participants follow (GID layout on ros_discovery_info,
-  // endpoint type hashes): the release of the nodes they meet (--ros-distro).
-  rmw::RosDistro ros_distro = rmw::RosDistro::kJazzy;
-  // Power sources and their sampling period; sampled during the measured window only.
-  metrics::PowerOptions power;
-  // Where the graph runs: pinned CPUs, real-time priority, locked memory. In a single-process
-  // run they apply to the whole process (Playback and Monitor too); per node, to the children.
-  SchedulingOptions scheduling;
-  // Refuse to run (RunRefused) when a run rule is broken, instead of recording a warning.
-  bool strict = false;
-  RunMode mode = RunMode::kBlack;
-  // Grey-box: the folder the CTF trace is written to (must not exist yet), and
-  // the per-CPU sub-buffer size (0: sized for the workload).
-  std::filesystem::path trace_dir;
-  std::size_t trace_subbuf_bytes = 0;
-  // Replay this bag's topics instead of the benchmark's built-in dataset.
-  std::optional<BagSelection> bag;
-  // Bags: send frames on the bag's recorded timeline, `rate_scale` times as
-  // fast, instead of at a fixed rate.
-  bool bag_timeline = false;
-  double rate_scale = 1.0;
-  // Otherwise, when messages are sent at the rate.
-  ArrivalPattern arrival;
-  // How the Monitor waits for the graph's outputs. Asleep (the default), an output's latency
-  // includes the Monitor thread's wake-up, as a downstream ROS 2 node would pay it; spinning, it
-  // does not, and the Monitor keeps one core busy for the whole run (--monitor-wait spin).
-  graph::WaitMode monitor_wait = graph::WaitMode::kSleep;
-  // Called from the playback thread after each send.
-  std::function<void(std::size_t sent, std::size_t total, std::size_t received)> progress;
-  // Called from the thread of run_benchmark as each stage begins.
-  std::function<void(RunStage)> on_stage;
-};
 
 // One message the Playback sent. Times are CLOCK_MONOTONIC nanoseconds.
 struct MessageRecord {
