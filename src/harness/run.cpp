@@ -71,6 +71,28 @@ std::vector<double> scheduled_latencies_ms(const RunResult& r) {
   return out;
 }
 
+void move_trace(RunResult& r, const std::filesystem::path& to) {
+  const std::string from = r.trace_dir.string();
+  std::filesystem::rename(r.trace_dir, to);
+  r.trace_dir = to;
+  const std::string now = to.string();
+  auto rebase = [&](std::vector<std::string>& lines) {
+    for (std::string& line : lines) {
+      for (auto at = line.find(from); at != std::string::npos;
+           at = line.find(from, at + now.size()))
+        line.replace(at, from.size(), now);
+    }
+  };
+  rebase(r.invalid_reasons);
+  rebase(r.errors);
+  if (r.grey) {
+    rebase(r.grey->traces);
+    rebase(r.grey->packet_defects);
+    rebase(r.grey->unavailable);
+    rebase(r.grey->invalid_reasons);
+  }
+}
+
 nlohmann::json device_to_json(const plugin::DeviceInfo& device) {
   return {{"name", device.name},
           {"vendor", device.vendor},

@@ -8,6 +8,7 @@
 #include <set>
 #include <vector>
 
+#include "../fixture_root.hpp"
 #include "robotperf/harness/run.hpp"
 #include "robotperf/rmw/transport.hpp"
 #include "test_package.hpp"
@@ -283,6 +284,37 @@ TEST(BlackBox, BurstsAreSentBackToBackAtTheirDeadline) {
   }
 }
 
+// A grey run's trace is recorded in a temporary folder and moved beside the results: no line of
+// the result may go on naming the temporary folder once it is gone.
+TEST(MoveTrace, RewritesEveryLineThatNamedTheTemporaryFolder) {
+  robotperf::testing::FixtureRoot root;
+  const std::filesystem::path recorded = root.path() / ".trace-ab12cd" / "trace";
+  root.write(".trace-ab12cd/trace/ust/metadata", "");
+  RunResult r;
+  r.trace_dir = recorded;
+  const std::string stream = (recorded / "ust" / "channel0_0").string();
+  r.invalid_reasons = {"grey-box: the trace in " + recorded.string() + " could not be analysed (" +
+                       stream + ": bad packet magic)"};
+  r.errors = {"kept " + recorded.string()};
+  r.grey.emplace();
+  r.grey->traces = {(recorded / "ust").string()};
+  r.grey->packet_defects = {stream + ": packet at byte 0: event 'x' is after the packet's end"};
+
+  const std::filesystem::path kept = root.path() / "a1-intra.trace";
+  move_trace(r, kept);
+
+  EXPECT_EQ(r.trace_dir, kept);
+  EXPECT_TRUE(std::filesystem::exists(kept / "ust" / "metadata"));
+  EXPECT_FALSE(std::filesystem::exists(recorded));
+  const std::string moved = (kept / "ust" / "channel0_0").string();
+  EXPECT_EQ(r.invalid_reasons.front(), "grey-box: the trace in " + kept.string() +
+                                           " could not be analysed (" + moved +
+                                           ": bad packet magic)");
+  EXPECT_EQ(r.errors.front(), "kept " + kept.string());
+  EXPECT_EQ(r.grey->traces.front(), (kept / "ust").string());
+  EXPECT_EQ(r.grey->packet_defects.front(),
+            moved + ": packet at byte 0: event 'x' is after the packet's end");
+}
 
 }  // namespace
 }  // namespace robotperf::harness

@@ -71,9 +71,7 @@ fs::path name_run(const RunArgs& a, harness::RunResult& result) {
          ++n)
       base =
           files::path_inside(a.output, report::result_basename(result) + "-" + std::to_string(n));
-    const fs::path trace = base.string() + ".trace";
-    fs::rename(result.trace_dir, trace);
-    result.trace_dir = trace;
+    harness::move_trace(result, base.string() + ".trace");
   }
   return base;
 }

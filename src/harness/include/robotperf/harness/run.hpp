@@ -243,6 +243,12 @@ struct RunResult {
 // The latency from the scheduled send of every matched measured message, in ms, in message order.
 std::vector<double> scheduled_latencies_ms(const RunResult& result);
 
+// Moves a grey run's trace from where it was recorded (result.trace_dir) to `to`, and rewrites the
+// recorded path in every line of the result that names it (invalid reasons, errors, the trace
+// analysis' folders and defects), so that none points at the temporary folder once it is gone.
+// Throws std::filesystem::filesystem_error when the rename fails.
+void move_trace(RunResult& result, const std::filesystem::path& to);
+
 // Thrown by run_benchmark with --strict when a run rule is broken; what() lists them.
 class RunRefused : public std::runtime_error {
  public:
