@@ -49,14 +49,18 @@ class Slot {
 Slot g_session;
 Slot g_started_daemon;
 Slot g_trace_folder;
+Slot g_daemon_use_file;
+std::atomic<int> g_daemon_use_fd{-1};
 
 // What the destructors would do, as the forced exit may: the handler can only fork and exec,
 // so a fixed shell script does it with the recorded names as arguments ($1 session, $2 daemon
-// pid, $3 folder); the daemon is stopped only when no other session uses it.
+// pid, $3 folder, $4 the daemon's lock file); the daemon is stopped only when no other session
+// uses it and no other run holds the lock file (one about to use the daemon).
 constexpr const char* kForcedCleanupScript =
     "exec >/dev/null 2>&1\n"
     "[ -n \"$1\" ] && lttng destroy \"$1\"\n"
-    "[ -n \"$2\" ] && lttng list | grep -q 'Currently no available' && kill \"$2\"\n"
+    "[ -n \"$2\" ] && flock -n -x \"$4\" sh -c "
+    "'lttng list | grep -q \"Currently no available\" && kill \"$0\"' \"$2\"\n"
     "[ -n \"$3\" ] && rm -rf -- \"$3\"\n"
     "exit 0\n";
 
@@ -109,7 +113,10 @@ void stop_orphaned_daemon(std::vector<std::string>& removed) {
     fs::remove(daemon_owner_file(), ec);
     return;
   }
-  if (still_runs(ownership->starter) || !daemon_idle()) return;
+  if (still_runs(ownership->starter)) return;
+  // A run that found the daemon answering and has not made its session yet holds the lock.
+  const auto alone = DaemonUseLock::alone_if_unused();
+  if (!alone || !daemon_idle()) return;
   stop_daemon(ownership->daemon.pid);
   fs::remove(daemon_owner_file(), ec);
   removed.push_back("the LTTng session daemon (pid " + std::to_string(ownership->daemon.pid) +
@@ -131,6 +138,14 @@ void note_started_daemon(pid_t pid) {
 }
 void forget_started_daemon() {
   g_started_daemon.clear();
+}
+void note_daemon_use(int fd, const std::string& lock_file) {
+  g_daemon_use_file.hold(lock_file);
+  g_daemon_use_fd = fd;
+}
+void forget_daemon_use() {
+  g_daemon_use_fd = -1;
+  g_daemon_use_file.clear();
 }
 
 }  // namespace detail
@@ -163,9 +178,12 @@ void clean_up_at_forced_exit() noexcept {
   const char* session = g_session.text();
   const char* daemon = g_started_daemon.text();
   const char* folder = g_trace_folder.text();
+  const char* lock_file = g_daemon_use_file.text();
   if (*session == '\0' && *daemon == '\0' && *folder == '\0') return;
-  const char* argv[] = {"sh",   "-c",   kForcedCleanupScript, "robotperf", session, daemon,
-                        folder, nullptr};
+  // This process's own hold on the daemon goes first, or the script could never take it alone.
+  if (const int fd = g_daemon_use_fd.exchange(-1); fd >= 0) close(fd);
+  const char* argv[] = {
+      "sh", "-c", kForcedCleanupScript, "robotperf", session, daemon, folder, lock_file, nullptr};
   // _Fork, unlike fork, runs no atfork handlers: it is async-signal-safe.
   const pid_t child = _Fork();
   if (child == 0) {

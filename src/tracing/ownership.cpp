@@ -1,12 +1,18 @@
 #include "ownership.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cctype>
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
+#include <utility>
 
 #include "lttng_command.hpp"
 
@@ -122,6 +128,63 @@ std::optional<DaemonOwnership> read_daemon_ownership() {
   auto s = parse_identity(starter);
   if (!d || !s) return std::nullopt;
   return DaemonOwnership{*d, *s};
+}
+
+fs::path daemon_use_lock_file() {
+  return daemon_pid_file().parent_path() / "robotperf-sessiond-users.lock";
+}
+
+namespace {
+
+// The lock file opened (made when missing, never through a symlink), or -1 with `why`.
+int open_daemon_use_lock(std::string& why) {
+  const fs::path file = daemon_use_lock_file();
+  std::error_code ec;
+  fs::create_directories(file.parent_path(), ec);
+  const int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0600);
+  if (fd < 0) why = "cannot open " + file.string() + ": " + std::strerror(errno);
+  return fd;
+}
+
+}  // namespace
+
+DaemonUseLock DaemonUseLock::shared() {
+  std::string why;
+  const int fd = open_daemon_use_lock(why);
+  if (fd < 0) throw std::runtime_error(why);
+  while (::flock(fd, LOCK_SH) != 0) {
+    if (errno != EINTR) {
+      why = std::strerror(errno);
+      ::close(fd);
+      throw std::runtime_error("cannot lock " + daemon_use_lock_file().string() + ": " + why);
+    }
+  }
+  return DaemonUseLock(fd);
+}
+
+std::optional<DaemonUseLock> DaemonUseLock::alone_if_unused() {
+  std::string why;
+  const int fd = open_daemon_use_lock(why);
+  if (fd < 0) return std::nullopt;
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    ::close(fd);
+    return std::nullopt;
+  }
+  return DaemonUseLock(fd);
+}
+
+DaemonUseLock::DaemonUseLock(DaemonUseLock&& other) noexcept : fd_(std::exchange(other.fd_, -1)) {}
+
+DaemonUseLock& DaemonUseLock::operator=(DaemonUseLock&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = std::exchange(other.fd_, -1);
+  }
+  return *this;
+}
+
+DaemonUseLock::~DaemonUseLock() {
+  if (fd_ >= 0) ::close(fd_);
 }
 
 }  // namespace robotperf::tracing::detail

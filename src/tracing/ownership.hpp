@@ -44,4 +44,31 @@ struct DaemonOwnership {
 void write_daemon_ownership(const DaemonOwnership& ownership);
 std::optional<DaemonOwnership> read_daemon_ownership();
 
+// The session daemon's users: every recording session holds this lock shared, from before it
+// looks for a daemon until it is destroyed, and a process stops a daemon only while it holds the
+// lock alone. Without it, a run that found a daemon answering could lose it to another process
+// that saw no session yet and stopped it (a run ending, or one removing a killed run's leftovers).
+// An flock on a file beside the daemon's pid file: the kernel releases it with the process.
+class DaemonUseLock {
+ public:
+  // Waits while a process stopping a daemon holds it alone. Throws std::runtime_error, saying
+  // why, when the lock file cannot be opened.
+  static DaemonUseLock shared();
+  // The lock alone, or nothing when another process holds it (now, without waiting).
+  static std::optional<DaemonUseLock> alone_if_unused();
+
+  DaemonUseLock(DaemonUseLock&& other) noexcept;
+  DaemonUseLock& operator=(DaemonUseLock&& other) noexcept;
+  DaemonUseLock(const DaemonUseLock&) = delete;
+  DaemonUseLock& operator=(const DaemonUseLock&) = delete;
+  ~DaemonUseLock();
+
+  int fd() const { return fd_; }
+
+ private:
+  explicit DaemonUseLock(int fd) : fd_(fd) {}
+  int fd_ = -1;
+};
+std::filesystem::path daemon_use_lock_file();
+
 }  // namespace robotperf::tracing::detail

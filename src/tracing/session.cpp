@@ -74,7 +74,8 @@ void own_started_daemon() {
 // stopped by a later run once idle (remove_leftovers).
 void stop_daemon_when_idle() {
   forget_started_daemon();
-  if (!daemon_idle()) return;
+  const auto alone = DaemonUseLock::alone_if_unused();
+  if (!alone || !daemon_idle()) return;
   stop_daemon(daemon_pid());
   std::error_code ec;
   fs::remove(daemon_owner_file(), ec);
@@ -135,6 +136,12 @@ RecordingSession::RecordingSession(SessionOptions options) : options_(std::move(
   if (fs::exists(options_.output_dir))
     throw TracingError("trace folder " + options_.output_dir.string() + " already exists");
   options_.output_dir = fs::absolute(options_.output_dir);
+  try {
+    daemon_use_ = std::make_unique<DaemonUseLock>(DaemonUseLock::shared());
+    note_daemon_use(daemon_use_->fd(), daemon_use_lock_file().string());
+  } catch (const std::runtime_error& e) {
+    throw TracingError(e.what());
+  }
   started_daemon_ = ensure_session_daemon();
   try {
     if (started_daemon_) own_started_daemon();
@@ -142,6 +149,8 @@ RecordingSession::RecordingSession(SessionOptions options) : options_(std::move(
   } catch (...) {
     // No destructor runs after a throwing constructor: a daemon started for this session ends
     // with it here.
+    forget_daemon_use();
+    daemon_use_.reset();
     if (started_daemon_) stop_daemon_when_idle();
     throw;
   }
@@ -198,6 +207,8 @@ bool RecordingSession::destroy() {
 
 RecordingSession::~RecordingSession() {
   if (active_) destroy();
+  forget_daemon_use();
+  daemon_use_.reset();
   if (started_daemon_) stop_daemon_when_idle();
 }
 

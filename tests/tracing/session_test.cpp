@@ -12,10 +12,15 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "../test_file_name.hpp"
+#include "lttng_command.hpp"
+#include "ownership.hpp"
+#include "robotperf/tracing/leftovers.hpp"
 
 namespace robotperf::tracing {
 namespace {
@@ -91,44 +96,52 @@ class SessionWithFakeLttng : public ::testing::Test {
     for (const char* d : {"home", "state"}) fs::permissions(dir_ / d, fs::perms::all);
   }
 
-  // Makes a session in a child process and stops it, with the fakes first on PATH. Run as root,
-  // the child is nobody: root's daemon writes its pid in /var/run/lttng, where a real daemon's
-  // may be. The daemon inherits the write end of a pipe, whose end says it exited.
-  Outcome make_and_stop_session() {
-    int fds[2];
-    if (pipe(fds) != 0) throw std::runtime_error("pipe");
+  // Runs `body` in a child process with the fakes first on PATH; its exit status, -1 when it did
+  // not exit. Run as root, the child is nobody: root's daemon writes its pid in /var/run/lttng,
+  // where a real daemon's may be.
+  int in_child(const std::function<int()>& body) {
     const pid_t child = fork();
     if (child == 0) {
-      close(fds[0]);
       if (getuid() == 0 && (setgroups(0, nullptr) != 0 || setgid(65534) != 0 || setuid(65534) != 0))
         _exit(3);
       setenv("PATH", ((dir_ / "bin").string() + ":/usr/bin:/bin").c_str(), 1);
       setenv("LTTNG_HOME", (dir_ / "home").c_str(), 1);
-      int code = 0;
+      int code = 1;
       try {
-        SessionOptions options;
-        options.output_dir = dir_ / "trace";
-        RecordingSession session(options);
-        if (!session.started_daemon()) _exit(4);
-        try {
-          session.stop();
-        } catch (const TracingError& e) {
-          std::cerr << e.what() << "\n";
-          code = 10;
-        }
+        code = body();
       } catch (const std::exception& e) {
         std::cerr << e.what() << "\n";
-        code = 1;
       }
       _exit(code);
     }
-    close(fds[1]);
     int status = 0;
     waitpid(child, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+
+  // Makes a session in a child process and stops it. The daemon inherits the write end of a
+  // pipe, whose end says it exited.
+  Outcome make_and_stop_session() {
+    int fds[2];
+    if (pipe(fds) != 0) throw std::runtime_error("pipe");
+    const int code = in_child([&] {
+      close(fds[0]);
+      SessionOptions options;
+      options.output_dir = dir_ / "trace";
+      RecordingSession session(options);
+      if (!session.started_daemon()) return 4;
+      try {
+        session.stop();
+      } catch (const TracingError& e) {
+        std::cerr << e.what() << "\n";
+        return 10;
+      }
+      return 0;
+    });
+    close(fds[1]);
     Outcome out;
-    EXPECT_TRUE(WIFEXITED(status) && (WEXITSTATUS(status) == 0 || WEXITSTATUS(status) == 10))
-        << "the child failed with status " << status;
-    out.stop_threw = WIFEXITED(status) && WEXITSTATUS(status) == 10;
+    EXPECT_TRUE(code == 0 || code == 10) << "the child failed with status " << code;
+    out.stop_threw = code == 10;
     // End of file once every holder of the write end is gone: the daemon last.
     pollfd p{fds[0], POLLIN, 0};
     char byte;
@@ -171,6 +184,50 @@ TEST_F(SessionWithFakeLttng, ASessionThatFailedToBeDestroyedIsDestroyedByTheDest
   EXPECT_TRUE(out.stop_threw);
   EXPECT_FALSE(out.sessions_left);
   EXPECT_TRUE(out.daemon_exited);
+}
+
+// A run killed before it could stop the daemon it started leaves it to the next run's clean-up,
+// which must not stop it while another run holds it (found it answering and is about to make its
+// session there): only once no run holds it.
+TEST_F(SessionWithFakeLttng, LeftoversNeverStopADaemonARunIsAboutToUse) {
+  write_fakes({.session_noun = "recording"});
+  fs::create_directories(dir_ / "results");
+  const int code = in_child([&] {
+    if (!ensure_session_daemon()) return 4;
+    const pid_t daemon = detail::daemon_pid();
+    // Its starter: a process that no longer runs (no process started at tick 1 of this boot).
+    detail::ProcessIdentity starter = detail::this_process();
+    starter.start_ticks = 1;
+    detail::write_daemon_ownership({detail::process_identity(daemon), starter});
+    {
+      const detail::DaemonUseLock about_to_use = detail::DaemonUseLock::shared();
+      remove_leftovers(dir_ / "results");
+      if (kill(daemon, 0) != 0) return 5;
+    }
+    const std::vector<std::string> removed = remove_leftovers(dir_ / "results");
+    if (removed.size() != 1 || removed[0].find("session daemon") == std::string::npos) return 6;
+    return kill(daemon, 0) == 0 ? 7 : 0;
+  });
+  EXPECT_NE(code, 5) << "the clean-up stopped a daemon a run held";
+  EXPECT_NE(code, 6) << "the clean-up did not stop the daemon once no run held it";
+  EXPECT_EQ(code, 0);
+}
+
+// A session holds the daemon from before it looks for one until it is destroyed.
+TEST_F(SessionWithFakeLttng, ASessionHoldsTheDaemonForItsWholeLife) {
+  write_fakes({.session_noun = "recording"});
+  const int code = in_child([&] {
+    {
+      SessionOptions options;
+      options.output_dir = dir_ / "trace";
+      RecordingSession session(options);
+      if (detail::DaemonUseLock::alone_if_unused()) return 5;
+      session.stop();
+      if (detail::DaemonUseLock::alone_if_unused()) return 6;
+    }
+    return detail::DaemonUseLock::alone_if_unused() ? 0 : 7;
+  });
+  EXPECT_EQ(code, 0) << "5, 6: the lock was free while the session lived; 7: it stayed held";
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -39,6 +40,10 @@ struct SessionOptions {
   double register_timeout_s = 10.0;
 };
 
+namespace detail {
+class DaemonUseLock;
+}
+
 class RecordingSession {
  public:
   // Throws TracingUnavailable when lttng-tools is missing, TracingError when a step fails.
@@ -63,6 +68,9 @@ class RecordingSession {
 
   SessionOptions options_;
   std::string name_;
+  // Held from before the daemon is looked for until the session is gone: no other process stops
+  // the daemon meanwhile (docs/design.md §4).
+  std::unique_ptr<detail::DaemonUseLock> daemon_use_;
   bool started_daemon_ = false;
   bool active_ = false;
 };
