@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "command.hpp"
+#include "parse_errors.hpp"
 #include "registry_commands.hpp"
 #include "robotperf/build_info.hpp"
 #include "robotperf/cli/exit_codes.hpp"
@@ -45,7 +46,8 @@ int run_command_line(int argc, char** argv) {
   } catch (const CLI::Success& e) {  // --help, --help-all, --version
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "robotperf: %s (see robotperf --help)\n", e.what());
+    std::fprintf(stderr, "robotperf: %s\n",
+                 parse_error_line(app, std::vector<std::string>(argv + 1, argv + argc), e).c_str());
     return kExitUsage;
   }
 

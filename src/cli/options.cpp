@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
@@ -53,6 +54,62 @@ CLI::Validator whole_number(std::uint64_t min, std::uint64_t max) {
       range);
 }
 
+namespace {
+
+struct Unit {
+  const char* name;
+  double factor;  // to the option's unit
+};
+
+// "<number><unit>" in the option's unit, for a unit of `units` ("" the number alone); nothing for
+// anything else.
+std::optional<double> with_unit(const std::string& text, std::initializer_list<Unit> units) {
+  double value{};
+  const char* end = text.data() + text.size();
+  const auto [stop, error] = std::from_chars(text.data(), end, value);
+  if (error != std::errc() || stop == text.data()) return std::nullopt;
+  const std::string unit(stop, end);
+  for (const Unit& u : units) {
+    if (unit == u.name) return value * u.factor;
+  }
+  return std::nullopt;
+}
+
+// The shortest text that reads back as `value`.
+std::string plain_number(double value) {
+  std::array<char, 64> text{};
+  const auto [end, error] = std::to_chars(text.data(), text.data() + text.size(), value);
+  return std::string(text.data(), end);
+}
+
+}  // namespace
+
+CLI::Validator seconds_with_unit() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        const auto s = with_unit(
+            text, {{"", 1}, {"s", 1}, {"ms", 1e-3}, {"us", 1e-6}, {"min", 60}, {"h", 3600}});
+        if (!s)
+          return "must be seconds, or a duration with its unit: 5s, 500ms, 2min (got " + text + ")";
+        text = plain_number(*s);
+        return "";
+      },
+      "SECONDS");
+}
+
+CLI::Validator hertz_with_unit(std::vector<std::string> words) {
+  return CLI::Validator(
+      [words = std::move(words)](std::string& text) -> std::string {
+        if (std::ranges::find(words, text) != words.end()) return "";
+        const auto hz = with_unit(
+            text, {{"", 1}, {"Hz", 1}, {"hz", 1}, {"kHz", 1e3}, {"khz", 1e3}, {"MHz", 1e6}});
+        if (!hz) return "must be a rate in Hz, or with its unit: 30Hz, 1.5kHz (got " + text + ")";
+        text = plain_number(*hz);
+        return "";
+      },
+      "HZ");
+}
+
 CLI::Validator domain_id_check(bool auto_allowed) {
   const std::string range = "0 to " + std::to_string(rmw::kMaxDomainId);
   const std::string wanted = "a DDS domain id from " + range + (auto_allowed ? ", or auto" : "");
@@ -83,6 +140,7 @@ void add_power_options(CLI::App* command, PowerArgs& args, bool with_period) {
     command
         ->add_option("--power-period", args.period_s,
                      "seconds between power readings in the measured window (default 0.1)")
+        ->transform(seconds_with_unit())
         ->check(number_between(0.0005, 60.0));
   }
   command->add_option("--power-meter", args.meter,

@@ -46,6 +46,14 @@ CLI::Validator number_between(double low, double high);
 CLI::Validator whole_number(std::uint64_t min,
                             std::uint64_t max = std::numeric_limits<std::uint64_t>::max());
 
+// A duration option's check that also takes a unit: 5, 5s, 500ms, 250us, 2min or 1h, rewritten
+// as plain seconds (taken with transform(), as whole_number's is).
+CLI::Validator seconds_with_unit();
+
+// A rate option's check that also takes a unit: 30, 30Hz, 1.5kHz or 2MHz, rewritten as plain Hz;
+// the `words` ("bag") pass unchanged.
+CLI::Validator hertz_with_unit(std::vector<std::string> words = {});
+
 // A --domain option's check, rewritten and taken with transform() as whole_number's is.
 CLI::Validator domain_id_check(bool auto_allowed);
 

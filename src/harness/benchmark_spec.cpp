@@ -1,4 +1,5 @@
 #include "robotperf/harness/benchmark_spec.hpp"
+#include "robotperf/harness/suggestions.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -564,9 +565,14 @@ BenchmarkSpec find_benchmark(const std::vector<fs::path>& roots, const std::stri
     if (b.find("/" + id_or_name) != std::string::npos) throw BenchmarkError(b);
   }
   std::string ids;
-  for (const auto& s : all) ids += (ids.empty() ? "" : ", ") + s.id;
-  throw BenchmarkError("unknown benchmark '" + id_or_name + "' (available: " + ids +
-                       "; see 'robotperf list')");
+  std::vector<std::string> names;
+  for (const auto& s : all) {
+    ids += (ids.empty() ? "" : ", ") + s.id;
+    names.push_back(s.id);
+    names.push_back(s.name);
+  }
+  throw BenchmarkError("unknown benchmark '" + id_or_name + "'" + did_you_mean(id_or_name, names) +
+                       " (available: " + ids + "; see 'robotperf list')");
 }
 
 BenchmarkSpec find_benchmark(const fs::path& root, const std::string& id_or_name) {

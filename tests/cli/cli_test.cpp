@@ -526,8 +526,13 @@ TEST_F(Cli, NumberOutOfItsBoundsIsOneShortLine) {
            {"run a1 --count -3", "--count: must be a whole number, 1 or more (got -3)"},
            {"run a1 --callback-timeout 0", "must be a number greater than 0 (got 0)"},
            {"run a1 --rate-scale x", "must be a number greater than 0 (got x)"},
-           {"run a1 --callback-timeout 0x10", "must be a number greater than 0 (got 0x10)"},
-           {"run a1 --rate 0x10", "--rate 0x10: expected a rate in Hz or 'bag'"},
+           {"run a1 --callback-timeout 0x10",
+            "must be seconds, or a duration with its unit: 5s, 500ms, 2min (got 0x10)"},
+           {"run a1 --rate 0x10",
+            "--rate: must be a rate in Hz, or with its unit: 30Hz, 1.5kHz (got 0x10)"},
+           {"run a1 --duration 5parsecs",
+            "--duration: must be seconds, or a duration with its unit: 5s, 500ms, 2min (got "
+            "5parsecs)"},
            {"run a1 --warmup -1", "--warmup: must be a whole number, 0 or more (got -1)"},
            {"run a1 --repeat 10001",
             "--repeat: must be a whole number from 1 to 10000 (got 10001)"},
@@ -539,6 +544,57 @@ TEST_F(Cli, NumberOutOfItsBoundsIsOneShortLine) {
     EXPECT_NE(o.out.find(says), std::string::npos) << args << "\n" << o.out;
     EXPECT_LT(o.out.size(), 200u) << args << "\n" << o.out;
   }
+}
+
+// A mistyped verb, subcommand, option, choice or benchmark id is one line naming the nearest that
+// exists; a word near none (or near two alike) gets no guess.
+TEST_F(Cli, TyposAreOneLineWithTheirNearestName) {
+  for (const auto& [args, says] : std::vector<std::pair<std::string, std::string>>{
+           {"descrbe a1", "unknown command 'descrbe'; did you mean 'describe'?"},
+           {"lst", "unknown command 'lst'; did you mean 'list'?"},
+           {"results lsit",
+            "unknown command 'lsit'; did you mean 'list'? (robotperf results --help"},
+           {"run a1 --rat 60", "unknown option --rat for 'robotperf run'; did you mean '--rate'?"},
+           {"--benchmark /tmp list",
+            "unknown option --benchmark for 'robotperf'; did you mean "
+            "'--benchmarks'?"},
+           {"run a1 --rmw fastds",
+            "fastds not in {intra,fastdds,cyclonedds}; did you mean "
+            "'fastdds'?"},
+           {"list kernel", "did you mean 'kernels'?"},
+           {"describe a11", "unknown benchmark 'a11'; did you mean 'a1'?"},
+           {"help resuls", "unknown command 'resuls'; did you mean 'results'?"},
+           {"frobnicate", "unknown command 'frobnicate' (robotperf --help lists the commands)"},
+           {"describe a6", "unknown benchmark 'a6' (available:"}}) {
+    const Outcome o = robotperf_cli(args);
+    EXPECT_EQ(o.exit_code, 2) << args << "\n" << o.out;
+    EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << args << "\n" << o.out;
+    EXPECT_NE(o.out.find(says), std::string::npos) << args << "\n" << o.out;
+  }
+}
+
+// Durations and rates take their unit: 500ms is half a second, 1.5kHz is 1500 Hz.
+TEST_F(Cli, DurationsAndRatesTakeTheirUnit) {
+  const Outcome o = robotperf_cli(
+      "run a1 --rate 0.06kHz --duration 1500ms --warmup 2 --quiet "
+      "--output " +
+      out_.string());
+  EXPECT_EQ(o.exit_code, 0) << o.out;
+  EXPECT_NE(o.out.find("sent 90 "), std::string::npos) << o.out;
+}
+
+// `help COMMAND...` prints what `COMMAND... --help` does, under the command's full name.
+TEST_F(Cli, HelpOfACommand) {
+  const Outcome run = robotperf_cli("help run");
+  EXPECT_EQ(run.exit_code, 0) << run.out;
+  EXPECT_NE(run.out.find("Usage: robotperf run [OPTIONS] id"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("--find-peak"), std::string::npos) << run.out;
+  const Outcome list = robotperf_cli("help results list");
+  EXPECT_EQ(list.exit_code, 0) << list.out;
+  EXPECT_NE(list.out.find("Usage: robotperf results list"), std::string::npos) << list.out;
+  const Outcome all = robotperf_cli("help");
+  EXPECT_EQ(all.exit_code, 0) << all.out;
+  EXPECT_NE(all.out.find("Usage: robotperf [OPTIONS] SUBCOMMAND"), std::string::npos) << all.out;
 }
 
 // --device-resident refuses, in one line, a run with nothing to keep on the device and a run whose

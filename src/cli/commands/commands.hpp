@@ -21,5 +21,6 @@ std::unique_ptr<Command> sysinfo_command();
 std::unique_ptr<Command> node_command();
 std::unique_ptr<Command> graph_command();
 std::unique_ptr<Command> security_command();
+std::unique_ptr<Command> help_command();
 
 }  // namespace robotperf::cli

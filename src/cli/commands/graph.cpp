@@ -20,6 +20,7 @@ class GraphCommand : public Command {
     command
         ->add_option("--listen", options_.listen_s,
                      "seconds to listen to discovery before listing (default 3)")
+        ->transform(seconds_with_unit())
         ->check(number_between(0.1, 600.0));
     command->add_flag("--json", options_.json, "print JSON");
     command->footer("Example: robotperf graph --domain 7 --listen 5");

@@ -50,16 +50,21 @@ class RunCommand : public Command {
   // The benchmark, its rate and the input a bag gives.
   void declare_input() {
     command_->add_option("id", args_.id, "benchmark id or name, e.g. a1")->required();
-    command_->add_option("--rate", args_.rate,
-                         "input rate in Hz (default: the benchmark's), or 'bag': the bag's own "
-                         "timeline");
-    command_->add_option("--update-rate", args_.update_rate,
-                         "control benchmarks: the controller manager's loop rate in Hz (default: "
-                         "the graph's update_rate), e.g. 1000 to stress the loop");
+    command_
+        ->add_option("--rate", args_.rate,
+                     "input rate in Hz (30, 30Hz, 1.5kHz; default: the benchmark's), or 'bag': "
+                     "the bag's own timeline")
+        ->transform(hertz_with_unit({"bag"}));
+    command_
+        ->add_option("--update-rate", args_.update_rate,
+                     "control benchmarks: the controller manager's loop rate in Hz (default: "
+                     "the graph's update_rate), e.g. 1kHz to stress the loop")
+        ->transform(hertz_with_unit());
     command_
         ->add_option("--callback-timeout", args_.callback_timeout_s,
                      "seconds a node's callback may run before the run ends with the node named "
                      "as hung (default 30)")
+        ->transform(seconds_with_unit())
         ->check(kPositive);
     command_
         ->add_option("--rate-scale", args_.rate_scale,
@@ -115,6 +120,7 @@ class RunCommand : public Command {
         ->transform(whole_number(1, 10000));
     command_
         ->add_option("--repeat-pause", args_.repeat_pause, "with --repeat: seconds between runs")
+        ->transform(seconds_with_unit())
         ->check(number_between(0.0, 3600.0));
     command_->add_option("--workload", args_.workload,
                          "KEY=VALUE: a workload parameter of the benchmark's dataset, over "
@@ -144,13 +150,16 @@ class RunCommand : public Command {
                       ->transform(whole_number(1));
     find_peak_->excludes(count);
     command_
-        ->add_option("--duration", args_.duration, "seconds to send for (count = rate x duration)")
+        ->add_option("--duration", args_.duration,
+                     "seconds to send for (count = rate x duration): 20, 20s, 500ms, 2min")
+        ->transform(seconds_with_unit())
         ->excludes(count);
     command_
         ->add_option("--warmup", args_.warmup,
                      "first messages not counted (default: the benchmark's)")
         ->transform(whole_number(0));
-    command_->add_option("--drain", args_.drain, "seconds to wait for outputs after the last send");
+    command_->add_option("--drain", args_.drain, "seconds to wait for outputs after the last send")
+        ->transform(seconds_with_unit());
   }
 
   // Transport, backend, processes, domain, hosts and security of the graph.
@@ -195,6 +204,7 @@ class RunCommand : public Command {
         ->add_option("--connect-timeout", args_.connect_timeout_s,
                      "seconds the graph may take to start and connect before the run is refused "
                      "(default 15)")
+        ->transform(seconds_with_unit())
         ->check(number_between(0.1, 3600.0));
     command_
         ->add_option("--security", args_.security,
