@@ -181,8 +181,9 @@ class ParameterStruct {
   }
 
   // Every member read: the value given, else the declared default (std::nullopt for a computed
-  // one). `parameters` must have been built from declarations(); an integer beyond its member's
-  // range throws std::invalid_argument naming it.
+  // one); members without a field keep their initializers. `parameters` must have been built
+  // from declarations(); an integer beyond its member's range throws std::invalid_argument
+  // naming it.
   S read(const Parameters& parameters) const {
     S settings{};
     for (const auto& f : fields_) f.read(parameters, settings);
