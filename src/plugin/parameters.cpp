@@ -184,14 +184,6 @@ int Parameters::get_int32(const std::string& name) const {
   return static_cast<int>(v);
 }
 
-void detail::check_integer_range(const Parameters& parameters, const std::string& name,
-                                 int64_t value, int64_t min, int64_t max, const std::string& type) {
-  if (value < min || value > max) {
-    throw std::invalid_argument(parameters.owner() + ": parameter '" + name + "' is " +
-                                std::to_string(value) + ", beyond " + type);
-  }
-}
-
 double Parameters::get_double(const std::string& name) const {
   return read<double>(text(name, ParameterType::kDouble), owner_, name,
                       [](const std::string& t) { return parse_number<double>(t, "a number"); });

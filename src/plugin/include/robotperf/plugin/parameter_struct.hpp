@@ -48,9 +48,16 @@ struct ParameterField {
 namespace detail {
 
 // Throws std::invalid_argument naming the parameter when `value` lies outside min to max, the
-// range of the member it is read into, described as `type` ("a 32-bit integer").
-void check_integer_range(const Parameters& parameters, const std::string& name, int64_t value,
-                         int64_t min, int64_t max, const std::string& type);
+// range of the member it is read into, described as `type` ("a 32-bit integer"). Inline, as all
+// of this header is, so that a plug-in reading typed parameters needs no symbol of the plug-in
+// library that the untyped access did not already need.
+inline void check_integer_range(const Parameters& parameters, const std::string& name,
+                                int64_t value, int64_t min, int64_t max, const std::string& type) {
+  if (value < min || value > max) {
+    throw std::invalid_argument(parameters.owner() + ": parameter '" + name + "' is " +
+                                std::to_string(value) + ", beyond " + type);
+  }
+}
 
 // "a 16-bit unsigned integer".
 template <std::integral T>
