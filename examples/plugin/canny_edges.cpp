@@ -23,23 +23,21 @@ struct CannyParams {
   bool l2_gradient = false;
 };
 
-// The same parameters, declared once for the kernel and its evaluator.
-std::vector<plugin::ParameterInfo> canny_parameters() {
-  const CannyParams d;
-  return {
-      plugin::double_parameter("low_threshold", d.low_threshold, "hysteresis: weaker edges"),
-      plugin::double_parameter("high_threshold", d.high_threshold, "hysteresis: strong edges"),
-      plugin::int_parameter("aperture", d.aperture, "Sobel aperture: 3, 5 or 7"),
-      plugin::bool_parameter("l2_gradient", d.l2_gradient, "L2 gradient norm instead of L1"),
-  };
-}
+// The same parameters, declared once for the kernel and its evaluator: each one's type follows
+// from its member's, and the whole struct is read back (no parameter is read by name).
+const CannyParams kDefaults;
+const plugin::ParameterStruct<CannyParams> kCannyParameters{
+    plugin::field(&CannyParams::low_threshold, "low_threshold", kDefaults.low_threshold,
+                  "hysteresis: weaker edges"),
+    plugin::field(&CannyParams::high_threshold, "high_threshold", kDefaults.high_threshold,
+                  "hysteresis: strong edges"),
+    plugin::field(&CannyParams::aperture, "aperture", kDefaults.aperture,
+                  "Sobel aperture: 3, 5 or 7"),
+    plugin::field(&CannyParams::l2_gradient, "l2_gradient", kDefaults.l2_gradient,
+                  "L2 gradient norm instead of L1")};
 
 CannyParams canny_params(const plugin::Parameters& p, const std::string& who) {
-  CannyParams c;
-  c.low_threshold = p.get_double("low_threshold");
-  c.high_threshold = p.get_double("high_threshold");
-  c.aperture = static_cast<int>(p.get_int("aperture"));
-  c.l2_gradient = p.get_bool("l2_gradient");
+  const CannyParams c = kCannyParameters.read(p);
   if (c.aperture != 3 && c.aperture != 5 && c.aperture != 7)
     throw std::invalid_argument(who + ": aperture must be 3, 5 or 7");
   if (!(c.low_threshold >= 0 && c.low_threshold <= c.high_threshold))
@@ -200,7 +198,7 @@ ROBOTPERF_PLUGIN(registrar) {
        .backends = {"cpu", "opencl"},
        .inputs = {{"image", "sensor_msgs/msg/Image"}},
        .outputs = {{"edges", "sensor_msgs/msg/Image"}},
-       .parameters = canny_parameters()},
+       .parameters = kCannyParameters.declarations()},
       [](graph::Context& context, const plugin::KernelConfig& config) {
         return std::make_shared<CannyNode>(context, config);
       });
@@ -214,7 +212,7 @@ ROBOTPERF_PLUGIN(registrar) {
                    {"precision", "fraction", "edge pixels within 1 px of a reference edge"},
                    {"recall", "fraction", "reference edge pixels within 1 px of an edge"},
                    {"edge_density", "fraction", "share of pixels that are edges"}},
-       .parameters = canny_parameters()},
+       .parameters = kCannyParameters.declarations()},
       [](const plugin::TruthStreams& truth, const plugin::Parameters& parameters) {
         return std::make_unique<CannyEdgesEvaluator>(
             truth["image"], canny_params(parameters, "evaluator example/canny_edges"));

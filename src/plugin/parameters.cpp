@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "robotperf/plugin/parameter_struct.hpp"
+
 namespace robotperf::plugin {
 namespace {
 
@@ -177,10 +179,8 @@ int64_t Parameters::get_int(const std::string& name) const {
 
 int Parameters::get_int32(const std::string& name) const {
   const int64_t v = get_int(name);
-  if (v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max()) {
-    throw std::invalid_argument(owner_ + ": parameter '" + name + "' is " + std::to_string(v) +
-                                ", beyond a 32-bit integer");
-  }
+  detail::check_integer_range(*this, name, v, std::numeric_limits<int>::min(),
+                              std::numeric_limits<int>::max(), "a 32-bit integer");
   return static_cast<int>(v);
 }
 

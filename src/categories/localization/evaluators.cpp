@@ -270,6 +270,33 @@ class VisualOdometryEvaluator final : public FunctionalEvaluator {
   std::vector<Eigen::Isometry3d> estimate_, truth_poses_;
 };
 
+struct AprilTagScoring {
+  double match_px = 0;
+};
+
+const plugin::ParameterStruct<AprilTagScoring> kAprilTagScoring{
+    plugin::field(&AprilTagScoring::match_px, "match_px", 3.0,
+                  "largest mean corner distance (px) of a detection from its tag")};
+
+struct LocalizationScoring {
+  double max_position_error_m = 0;
+  double max_yaw_error_deg = 0;
+};
+
+const plugin::ParameterStruct<LocalizationScoring> kLocalizationScoring{
+    plugin::field(&LocalizationScoring::max_position_error_m, "max_position_error_m", 0.1,
+                  "a success is at most this far off"),
+    plugin::field(&LocalizationScoring::max_yaw_error_deg, "max_yaw_error_deg", 2.0,
+                  "and at most this many degrees off")};
+
+struct OdometryScoring {
+  double segment_m = 0;
+};
+
+const plugin::ParameterStruct<OdometryScoring> kOdometryScoring{
+    plugin::field(&OdometryScoring::segment_m, "segment_m", 1.0,
+                  "drift over segments of 1, 2, 4 and 8 times this length of path")};
+
 }  // namespace
 
 void register_evaluators(plugin::Registrar& registrar) {
@@ -289,10 +316,10 @@ void register_evaluators(plugin::Registrar& registrar) {
                     "median rotation between a detected tag's orientation and the truth"},
                    {"outputs_without_poses", "count", "outputs whose poses message never arrived"}},
        .observed_truth_type = "geometry_msgs/msg/PoseArray",
-       .parameters = {plugin::double_parameter(
-           "match_px", 3.0, "largest mean corner distance (px) of a detection from its tag")}},
+       .parameters = kAprilTagScoring.declarations()},
       [](const plugin::TruthStreams& t, const plugin::Parameters& p) {
-        return std::make_unique<AprilTagEvaluator>(t["tags"], t["poses"], p.get_double("match_px"));
+        return std::make_unique<AprilTagEvaluator>(t["tags"], t["poses"],
+                                                   kAprilTagScoring.read(p).match_px);
       });
   registrar.add_evaluator(
       {.name = "map_localization",
@@ -307,14 +334,12 @@ void register_evaluators(plugin::Registrar& registrar) {
                    {"covariance_coverage", "fraction",
                     "answers whose (x, y, yaw) error lies in the 99 % ellipsoid of their own "
                     "covariance"}},
-       .parameters = {plugin::double_parameter("max_position_error_m", 0.1,
-                                               "a success is at most this far off"),
-                      plugin::double_parameter("max_yaw_error_deg", 2.0,
-                                               "and at most this many degrees off")},
+       .parameters = kLocalizationScoring.declarations(),
        .on_arrival = true},
       [](const plugin::TruthStreams& t, const plugin::Parameters& p) {
-        return std::make_unique<MapLocalizationEvaluator>(
-            t["pose"], p.get_double("max_position_error_m"), p.get_double("max_yaw_error_deg"));
+        const LocalizationScoring s = kLocalizationScoring.read(p);
+        return std::make_unique<MapLocalizationEvaluator>(t["pose"], s.max_position_error_m,
+                                                          s.max_yaw_error_deg);
       });
   registrar.add_evaluator(
       {.name = "visual_odometry",
@@ -329,12 +354,10 @@ void register_evaluators(plugin::Registrar& registrar) {
                     "length"},
                    {"rotational_drift_deg_per_m", "deg/m",
                     "mean rotation error of the relative motion over path segments, per length"}},
-       .parameters = {plugin::double_parameter("segment_m", 1.0,
-                                               "drift over segments of 1, 2, 4 and 8 times this "
-                                               "length of path")},
+       .parameters = kOdometryScoring.declarations(),
        .on_arrival = true},
       [](const plugin::TruthStreams& t, const plugin::Parameters& p) {
-        const double unit = p.get_double("segment_m");
+        const double unit = kOdometryScoring.read(p).segment_m;
         if (!(unit > 0.0)) throw std::invalid_argument("visual_odometry: segment_m must be > 0");
         return std::make_unique<VisualOdometryEvaluator>(
             t["pose"], std::vector<double>{unit, 2 * unit, 4 * unit, 8 * unit});

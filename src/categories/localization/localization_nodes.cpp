@@ -65,18 +65,26 @@ const T& input(const std::shared_ptr<const void>& m) {
   return *std::static_pointer_cast<const T>(m);
 }
 
+const AprilTagParams kTag;
+const plugin::ParameterStruct<AprilTagParams> kAprilTagParameters{
+    plugin::field(&AprilTagParams::family, "family", kTag.family,
+                  "tag family: 16h5, 25h9 or 36h11"),
+    plugin::field(&AprilTagParams::size, "size", kTag.size, "edge of the black border square, m"),
+    plugin::field(&AprilTagParams::max_hamming, "max_hamming", kTag.max_hamming,
+                  "bits a detection may have corrected (0..2)"),
+    plugin::field(&AprilTagParams::decimate, "decimate", kTag.decimate,
+                  "find quads on the image decimated by this factor"),
+    plugin::field(&AprilTagParams::blur, "blur", kTag.blur,
+                  "Gaussian sigma (px) before segmentation; < 0 sharpens"),
+    plugin::field(&AprilTagParams::threads, "threads", kTag.threads, "libapriltag worker threads"),
+    plugin::field(&AprilTagParams::refine_edges, "refine_edges", kTag.refine_edges,
+                  "snap quad edges to the image gradients"),
+    plugin::field(&AprilTagParams::sharpening, "sharpening", kTag.sharpening, "decode sharpening"),
+    plugin::field(&AprilTagParams::rectify, "rectify", kTag.rectify,
+                  "undistort and rectify the image with its CameraInfo first")};
+
 AprilTagParams apriltag_params(const KernelConfig& c) {
-  const auto& p = c.parameters;
-  AprilTagParams out;
-  out.family = p.get_string("family");
-  out.size = p.get_double("size");
-  out.max_hamming = p.get_int32("max_hamming");
-  out.decimate = p.get_double("decimate");
-  out.blur = p.get_double("blur");
-  out.threads = p.get_int32("threads");
-  out.refine_edges = p.get_bool("refine_edges");
-  out.sharpening = p.get_double("sharpening");
-  out.rectify = p.get_bool("rectify");
+  const AprilTagParams out = kAprilTagParameters.read(c.parameters);
   try {
     validate(out);
   } catch (const std::invalid_argument& e) {
@@ -135,6 +143,27 @@ GridMap grid_map(const msgs::OccupancyGrid& grid) {
   return map;
 }
 
+const GlobalLocalizerOptions kMap;
+const plugin::ParameterStruct<GlobalLocalizerOptions> kMapLocalizationParameters{
+    plugin::field(&GlobalLocalizerOptions::max_range_m, "max_range", kMap.max_range_m,
+                  "returns farther are unused, m"),
+    plugin::field(&GlobalLocalizerOptions::min_score, "min_score", kMap.min_score,
+                  "score (mean likelihood of the scan's hits) for a pose"),
+    plugin::field(&GlobalLocalizerOptions::branch_and_bound_depth, "branch_and_bound_depth",
+                  kMap.branch_and_bound_depth, "levels of the search tree (1..10)"),
+    plugin::field(&GlobalLocalizerOptions::angular_step_rad, "angular_step", kMap.angular_step_rad,
+                  "yaw lattice step, rad, 2 pi / 262144 .. pi; 0 = one cell at the farthest point"),
+    plugin::field(&GlobalLocalizerOptions::max_points, "max_points", kMap.max_points,
+                  "scan points scored, thinned along the contour"),
+    plugin::field(&GlobalLocalizerOptions::likelihood_sigma_m, "likelihood_sigma",
+                  kMap.likelihood_sigma_m, "likelihood field's width, m"),
+    plugin::field(&GlobalLocalizerOptions::ambiguity_ratio, "ambiguity_ratio", kMap.ambiguity_ratio,
+                  "poses within this fraction of the best make the covariance"),
+    plugin::field(&GlobalLocalizerOptions::refinement_iterations, "refinement_iterations",
+                  kMap.refinement_iterations, "Gauss-Newton iterations of the sub-cell refinement"),
+    plugin::field(&GlobalLocalizerOptions::threads, "threads", kMap.threads,
+                  "threads the search is split over")};
+
 // Global localization of each scan in the latest map, as Isaac ROS's occupancy grid localizer:
 // the map arrives on its own topic (latched in ROS; here it may come with every frame) and the
 // search structures are rebuilt only when its content changes; each scan is localized from
@@ -161,17 +190,7 @@ class MapLocalizationNode final : public graph::Node, public plugin::NodeCounter
 
  private:
   static GlobalLocalizerOptions options_from(const KernelConfig& c) {
-    const auto& p = c.parameters;
-    GlobalLocalizerOptions o;
-    o.max_range_m = p.get_double("max_range");
-    o.min_score = p.get_double("min_score");
-    o.branch_and_bound_depth = p.get_int32("branch_and_bound_depth");
-    o.angular_step_rad = p.get_double("angular_step");
-    o.max_points = static_cast<std::size_t>(std::max<int64_t>(0, p.get_int("max_points")));
-    o.likelihood_sigma_m = p.get_double("likelihood_sigma");
-    o.ambiguity_ratio = p.get_double("ambiguity_ratio");
-    o.refinement_iterations = p.get_int32("refinement_iterations");
-    o.threads = static_cast<unsigned>(std::max<int64_t>(0, p.get_int("threads")));
+    const GlobalLocalizerOptions o = kMapLocalizationParameters.read(c.parameters);
     // Checked here, once, so that a bad value is one line when the graph is built.
     try {
       const GridMap probe{1, 1, 0.05, 0.0, 0.0, {0}};
@@ -241,19 +260,42 @@ class MapLocalizationNode final : public graph::Node, public plugin::NodeCounter
   std::shared_ptr<graph::GenericSubscription> map_sub_, scan_sub_;
 };
 
+const StereoOdometryOptions kOdometry;
+const plugin::ParameterStruct<StereoOdometryOptions> kOdometryOptionParameters{
+    plugin::field(&StereoOdometryOptions::max_features, "max_features", kOdometry.max_features,
+                  "features kept per image after grid bucketing"),
+    plugin::field(&StereoOdometryOptions::fast_threshold, "fast_threshold",
+                  kOdometry.fast_threshold, "FAST threshold (1..255)"),
+    plugin::field(&StereoOdometryOptions::max_disparity_px, "max_disparity",
+                  kOdometry.max_disparity_px, "largest stereo disparity searched, px"),
+    plugin::field(&StereoOdometryOptions::ratio, "ratio", kOdometry.ratio,
+                  "descriptor ratio test (0..1]"),
+    plugin::field(&StereoOdometryOptions::search_radius_px, "search_radius",
+                  kOdometry.search_radius_px, "tracking window around the predicted position, px"),
+    plugin::field(&StereoOdometryOptions::ransac_reprojection_px, "ransac_reprojection",
+                  kOdometry.ransac_reprojection_px, "PnP RANSAC inlier threshold, px"),
+    plugin::field(&StereoOdometryOptions::ransac_iterations, "ransac_iterations",
+                  kOdometry.ransac_iterations, "PnP RANSAC iterations"),
+    plugin::field(&StereoOdometryOptions::min_inliers, "min_inliers", kOdometry.min_inliers,
+                  "fewer PnP inliers: tracking lost"),
+    plugin::field(&StereoOdometryOptions::keyframe_inlier_fraction, "keyframe_inlier_fraction",
+                  kOdometry.keyframe_inlier_fraction,
+                  "new keyframe below this share of its points as inliers"),
+    plugin::field(&StereoOdometryOptions::keyframe_min_inliers, "keyframe_min_inliers",
+                  kOdometry.keyframe_min_inliers, "new keyframe below this many inliers")};
+
+struct StereoOdometrySettings {
+  StereoOdometryOptions options;
+  std::string odom_frame;
+};
+
+const plugin::ParameterStruct<StereoOdometrySettings> kStereoOdometryParameters{
+    plugin::nested(&StereoOdometrySettings::options, kOdometryOptionParameters),
+    plugin::field(&StereoOdometrySettings::odom_frame, "odom_frame", "odom",
+                  "the output's header frame")};
+
 StereoOdometryOptions odometry_options(const KernelConfig& c) {
-  const auto& p = c.parameters;
-  StereoOdometryOptions o;
-  o.max_features = p.get_int32("max_features");
-  o.fast_threshold = p.get_int32("fast_threshold");
-  o.max_disparity_px = p.get_double("max_disparity");
-  o.ratio = p.get_double("ratio");
-  o.search_radius_px = p.get_double("search_radius");
-  o.ransac_reprojection_px = p.get_double("ransac_reprojection");
-  o.ransac_iterations = p.get_int32("ransac_iterations");
-  o.min_inliers = p.get_int32("min_inliers");
-  o.keyframe_inlier_fraction = p.get_double("keyframe_inlier_fraction");
-  o.keyframe_min_inliers = p.get_int32("keyframe_min_inliers");
+  const StereoOdometryOptions o = kStereoOdometryParameters.read(c.parameters).options;
   try {
     StereoOdometry check(500.0, 500.0, 320.0, 240.0, 0.1, o);
   } catch (const std::invalid_argument& e) {
@@ -304,7 +346,7 @@ class StereoOdometryNode final : public SyncedNode<4> {
       : SyncedNode(context, config,
                    {"left_image", "left_camera_info", "right_image", "right_camera_info"}),
         options_(odometry_options(config)),
-        odom_frame_(config.parameters.get_string("odom_frame")) {
+        odom_frame_(kStereoOdometryParameters.read(config.parameters).odom_frame) {
     output_ = create_publisher<msgs::Odometry>(config.topic("odom"), config.qos);
     subscribe<msgs::Image>(config, kLeftImage);
     subscribe<msgs::CameraInfo>(config, kLeftInfo);
@@ -378,7 +420,6 @@ class StereoOdometryNode final : public SyncedNode<4> {
 }  // namespace
 
 void register_kernels(plugin::Registrar& registrar) {
-  const AprilTagParams tag;
   registrar.add_kernel(
       {.name = "apriltag/detect",
        .description = "AprilTag detection (libapriltag) and each tag's pose from its corners and "
@@ -387,25 +428,10 @@ void register_kernels(plugin::Registrar& registrar) {
                   {"camera_info", "sensor_msgs/msg/CameraInfo"}},
        .outputs = {{"detections", "apriltag_msgs/msg/AprilTagDetectionArray"},
                    {"poses", "geometry_msgs/msg/PoseArray"}},
-       .parameters =
-           {plugin::string_parameter("family", tag.family, "tag family: 16h5, 25h9 or 36h11"),
-            plugin::double_parameter("size", tag.size, "edge of the black border square, m"),
-            plugin::int_parameter("max_hamming", tag.max_hamming,
-                                  "bits a detection may have corrected (0..2)"),
-            plugin::double_parameter("decimate", tag.decimate,
-                                     "find quads on the image decimated by this factor"),
-            plugin::double_parameter("blur", tag.blur,
-                                     "Gaussian sigma (px) before segmentation; < 0 sharpens"),
-            plugin::int_parameter("threads", tag.threads, "libapriltag worker threads"),
-            plugin::bool_parameter("refine_edges", tag.refine_edges,
-                                   "snap quad edges to the image gradients"),
-            plugin::double_parameter("sharpening", tag.sharpening, "decode sharpening"),
-            plugin::bool_parameter("rectify", tag.rectify,
-                                   "undistort and rectify the image with its CameraInfo first")}},
+       .parameters = kAprilTagParameters.declarations()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<AprilTagNode>(context, config);
       });
-  const GlobalLocalizerOptions map;
   registrar.add_kernel(
       {.name = "localization/map_localization",
        .description = "global 2D localization of a laser scan in an occupancy grid (correlative "
@@ -413,28 +439,10 @@ void register_kernels(plugin::Registrar& registrar) {
                       "localizer",
        .inputs = {{"map", "nav_msgs/msg/OccupancyGrid"}, {"scan", "sensor_msgs/msg/LaserScan"}},
        .outputs = {{"pose", "geometry_msgs/msg/PoseWithCovarianceStamped"}},
-       .parameters =
-           {plugin::double_parameter("max_range", map.max_range_m, "returns farther are unused, m"),
-            plugin::double_parameter("min_score", map.min_score,
-                                     "score (mean likelihood of the scan's hits) for a pose"),
-            plugin::int_parameter("branch_and_bound_depth", map.branch_and_bound_depth,
-                                  "levels of the search tree (1..10)"),
-            plugin::double_parameter(
-                "angular_step", map.angular_step_rad,
-                "yaw lattice step, rad, 2 pi / 262144 .. pi; 0 = one cell at the farthest point"),
-            plugin::int_parameter("max_points", static_cast<int64_t>(map.max_points),
-                                  "scan points scored, thinned along the contour"),
-            plugin::double_parameter("likelihood_sigma", map.likelihood_sigma_m,
-                                     "likelihood field's width, m"),
-            plugin::double_parameter("ambiguity_ratio", map.ambiguity_ratio,
-                                     "poses within this fraction of the best make the covariance"),
-            plugin::int_parameter("refinement_iterations", map.refinement_iterations,
-                                  "Gauss-Newton iterations of the sub-cell refinement"),
-            plugin::int_parameter("threads", map.threads, "threads the search is split over")}},
+       .parameters = kMapLocalizationParameters.declarations()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<MapLocalizationNode>(context, config);
       });
-  const StereoOdometryOptions vo;
   registrar.add_kernel(
       {.name = "localization/stereo_odometry",
        .description = "stereo visual odometry (FAST + ORB features, row matching, triangulation, "
@@ -444,27 +452,7 @@ void register_kernels(plugin::Registrar& registrar) {
                   {"right_image", "sensor_msgs/msg/Image"},
                   {"right_camera_info", "sensor_msgs/msg/CameraInfo"}},
        .outputs = {{"odom", "nav_msgs/msg/Odometry"}},
-       .parameters = {plugin::int_parameter("max_features", vo.max_features,
-                                            "features kept per image after grid bucketing"),
-                      plugin::int_parameter("fast_threshold", vo.fast_threshold,
-                                            "FAST threshold (1..255)"),
-                      plugin::double_parameter("max_disparity", vo.max_disparity_px,
-                                               "largest stereo disparity searched, px"),
-                      plugin::double_parameter("ratio", vo.ratio, "descriptor ratio test (0..1]"),
-                      plugin::double_parameter("search_radius", vo.search_radius_px,
-                                               "tracking window around the predicted position, px"),
-                      plugin::double_parameter("ransac_reprojection", vo.ransac_reprojection_px,
-                                               "PnP RANSAC inlier threshold, px"),
-                      plugin::int_parameter("ransac_iterations", vo.ransac_iterations,
-                                            "PnP RANSAC iterations"),
-                      plugin::int_parameter("min_inliers", vo.min_inliers,
-                                            "fewer PnP inliers: tracking lost"),
-                      plugin::double_parameter(
-                          "keyframe_inlier_fraction", vo.keyframe_inlier_fraction,
-                          "new keyframe below this share of its points as inliers"),
-                      plugin::int_parameter("keyframe_min_inliers", vo.keyframe_min_inliers,
-                                            "new keyframe below this many inliers"),
-                      plugin::string_parameter("odom_frame", "odom", "the output's header frame")}},
+       .parameters = kStereoOdometryParameters.declarations()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<StereoOdometryNode>(context, config);
       });

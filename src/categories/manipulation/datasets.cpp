@@ -14,31 +14,24 @@ using plugin::make_stream;
 
 constexpr double kRateHz = 100;
 
-ManipulationWorkload workload_of(const plugin::Parameters& p) {
-  ManipulationWorkload w;
-  w.seed = static_cast<uint64_t>(p.get_int("seed"));
-  w.requests = static_cast<std::size_t>(p.get_int("requests"));  // >= 1: its bounds
-  return w;
-}
+const ManipulationWorkload kDefaults;
 
-std::vector<plugin::ParameterInfo> workload_parameters(bool near_fraction) {
-  const ManipulationWorkload w;
-  std::vector<plugin::ParameterInfo> p{
-      plugin::int_parameter("seed", static_cast<int64_t>(w.seed),
-                            "seed of the request generator (and of the planner's OMPL)"),
-      plugin::int_parameter("requests", static_cast<int64_t>(w.requests), "requests generated",
-                            {.minimum = 1})};
-  if (near_fraction) {
-    p.push_back(plugin::double_parameter("near_fraction", w.near_fraction,
-                                         "share of states with the flange within 0.15 m of the "
-                                         "box (the rest anywhere)",
-                                         {.minimum = 0, .maximum = 1}));
-  }
-  return p;
-}
+// Every manipulation dataset's workload.
+const plugin::ParameterStruct<ManipulationWorkload> kWorkload{
+    plugin::field(&ManipulationWorkload::seed, "seed", kDefaults.seed,
+                  "seed of the request generator (and of the planner's OMPL)"),
+    plugin::field(&ManipulationWorkload::requests, "requests", kDefaults.requests,
+                  "requests generated", {.minimum = 1})};
+
+// The collision dataset's: its states' mix as well.
+const plugin::ParameterStruct<ManipulationWorkload> kCollisionWorkload{
+    kWorkload.fields(),
+    plugin::field(&ManipulationWorkload::near_fraction, "near_fraction", kDefaults.near_fraction,
+                  "share of states with the flange within 0.15 m of the box (the rest anywhere)",
+                  {.minimum = 0, .maximum = 1})};
 
 std::vector<DatasetStream> kinematics_streams(const plugin::Parameters& p) {
-  auto r = generate_kinematics_requests(workload_of(p));
+  auto r = generate_kinematics_requests(kWorkload.read(p));
   auto states = make_stream<msgs::JointState>("joint_states", "/fk/joint_states");
   auto poses = make_stream<msgs::PoseStamped>("poses", "/ik/target_pose");
   for (auto& s : r.states) append(states, std::move(s));
@@ -47,9 +40,7 @@ std::vector<DatasetStream> kinematics_streams(const plugin::Parameters& p) {
 }
 
 std::vector<DatasetStream> collision_streams(const plugin::Parameters& p) {
-  ManipulationWorkload w = workload_of(p);
-  w.near_fraction = p.get_double("near_fraction");
-  auto r = generate_collision_requests(w);
+  auto r = generate_collision_requests(kCollisionWorkload.read(p));
   auto states = make_stream<msgs::JointState>("joint_states", "/collision/joint_states");
   auto truth = make_stream<msgs::CollisionResult>("truth", "/ground_truth/collision");
   for (auto& s : r.states) append(states, std::move(s));
@@ -59,14 +50,14 @@ std::vector<DatasetStream> collision_streams(const plugin::Parameters& p) {
 
 std::vector<DatasetStream> planning_streams(const plugin::Parameters& p) {
   auto queries = make_stream<msgs::JointTrajectory>("queries", "/plan/query");
-  for (auto& q : generate_planning_queries(workload_of(p))) append(queries, std::move(q));
+  for (auto& q : generate_planning_queries(kWorkload.read(p))) append(queries, std::move(q));
   return {std::move(queries)};
 }
 
 }  // namespace
 
 void register_datasets(plugin::Registrar& registrar) {
-  const std::size_t requests = ManipulationWorkload{}.requests;
+  const std::size_t requests = kDefaults.requests;
   registrar.add_dataset(
       {.name = "manipulation/kinematics",
        .description = "xArm6 joint states uniform within the joint limits and their flange poses "
@@ -78,7 +69,7 @@ void register_datasets(plugin::Registrar& registrar) {
                     "FK requests; the IK solutions' truth"},
                    {"poses", "/ik/target_pose", "geometry_msgs/msg/PoseStamped", false,
                     "their flange poses: IK targets and FK truth"}},
-       .workload = workload_parameters(false)},
+       .workload = kWorkload.declarations()},
       kinematics_streams);
   registrar.add_dataset(
       {.name = "manipulation/collision",
@@ -91,7 +82,7 @@ void register_datasets(plugin::Registrar& registrar) {
                     "the states to check"},
                    {"truth", "/ground_truth/collision", "robotperf_msgs/msg/CollisionResult", true,
                     "the sampled answer of each state"}},
-       .workload = workload_parameters(true)},
+       .workload = kCollisionWorkload.declarations()},
       collision_streams);
   registrar.add_dataset(
       {.name = "manipulation/planning",
@@ -102,7 +93,7 @@ void register_datasets(plugin::Registrar& registrar) {
        .frames = requests,
        .streams = {{"queries", "/plan/query", "trajectory_msgs/msg/JointTrajectory", false,
                     "start and goal"}},
-       .workload = workload_parameters(false)},
+       .workload = kWorkload.declarations()},
       planning_streams);
 }
 

@@ -20,8 +20,8 @@ namespace {
 
 using plugin::KernelConfig;
 
-double positive(const KernelConfig& c, const std::string& name) {
-  const double v = c.parameters.get_double(name);
+// `v`, the parameter `name`, when it is a positive number.
+double positive(const KernelConfig& c, const std::string& name, double v) {
   if (!(v > 0) || !std::isfinite(v))
     throw std::invalid_argument("node '" + c.node_name + "': " + name + " must be > 0");
   return v;
@@ -85,16 +85,33 @@ class ForwardKinematicsNode final : public RequestNode<msgs::JointState, msgs::P
   manipulation::ForwardKinematics fk_;
 };
 
+// As given: checked below before they become IkOptions' unsigned members.
+struct IkSettings {
+  int64_t max_iterations = 0;
+  double eps = 0;
+  double timeout_s = 0;
+  int64_t seed = 0;
+};
+
+const IkOptions kIk;
+const plugin::ParameterStruct<IkSettings> kIkParameters{
+    plugin::field(&IkSettings::max_iterations, "max_iterations", kIk.max_iterations,
+                  "solver iterations per attempt"),
+    plugin::field(&IkSettings::eps, "eps", kIk.eps, "the solver's convergence tolerance"),
+    plugin::field(&IkSettings::timeout_s, "timeout_s", kIk.timeout_s, "all attempts together, s"),
+    plugin::field(&IkSettings::seed, "seed", static_cast<int64_t>(kIk.seed),
+                  "seed of the random restarts")};
+
 manipulation::IkOptions ik_options(const KernelConfig& c, manipulation::IkSolver solver) {
+  const IkSettings s = kIkParameters.read(c.parameters);
   manipulation::IkOptions o;
   o.solver = solver;
-  const int64_t iterations = c.parameters.get_int("max_iterations");
-  if (iterations < 1 || iterations > 1000000)
+  if (s.max_iterations < 1 || s.max_iterations > 1000000)
     throw std::invalid_argument("node '" + c.node_name + "': max_iterations must be 1..1e6");
-  o.max_iterations = static_cast<unsigned>(iterations);
-  o.eps = positive(c, "eps");
-  o.timeout_s = positive(c, "timeout_s");
-  o.seed = static_cast<uint64_t>(c.parameters.get_int("seed"));
+  o.max_iterations = static_cast<unsigned>(s.max_iterations);
+  o.eps = positive(c, "eps", s.eps);
+  o.timeout_s = positive(c, "timeout_s", s.timeout_s);
+  o.seed = static_cast<uint64_t>(s.seed);
   return o;
 }
 
@@ -160,28 +177,62 @@ msgs::Duration duration_of(double seconds) {
   return d;
 }
 
+struct PlanSettings {
+  double planning_time_s = 0;
+  double longest_valid_segment_fraction = 0;
+  bool simplify = false;
+  std::optional<int64_t> seed;
+  double padding_m = 0;
+  double sample_period_s = 0;
+  double velocity_scaling = 0;
+  double acceleration_scaling = 0;
+};
+
+const PlanOptions kPlan;
+const plugin::ParameterStruct<PlanSettings> kPlanParameters{
+    plugin::field(&PlanSettings::planning_time_s, "planning_time_s", kPlan.planning_time_s,
+                  "RRTConnect's budget, s (simplification gets what is left)"),
+    plugin::field(&PlanSettings::longest_valid_segment_fraction, "longest_valid_segment_fraction",
+                  kPlan.longest_valid_segment_fraction,
+                  "motion check step as a fraction of the joint space's extent"),
+    plugin::field(&PlanSettings::simplify, "simplify", kPlan.simplify,
+                  "shortcut and smooth the path"),
+    plugin::field(&PlanSettings::seed, "seed",
+                  "OMPL's seed, [0, 2^32) (default: the workload seed, else 0: from the clock)"),
+    plugin::field(&PlanSettings::padding_m, "padding_m", 0,
+                  "link padding of the planner's collision checks, m"),
+    plugin::field(&PlanSettings::sample_period_s, "sample_period_s", 0.02,
+                  "time between the trajectory's points, s"),
+    plugin::field(&PlanSettings::velocity_scaling, "velocity_scaling", 1,
+                  "fraction of the joints' velocity limits used"),
+    plugin::field(&PlanSettings::acceleration_scaling, "acceleration_scaling", 1,
+                  "fraction of the joints' acceleration limits used")};
+
 // A planning query (JointTrajectory: first point start, last point goal) answered with the
 // time-parameterised trajectory; no points when planning failed.
 class PlanNode final : public RequestNode<msgs::JointTrajectory, msgs::JointTrajectory> {
  public:
   PlanNode(graph::Context& context, const KernelConfig& config)
+      : PlanNode(context, config, kPlanParameters.read(config.parameters)) {}
+
+ private:
+  PlanNode(graph::Context& context, const KernelConfig& config, const PlanSettings& s)
       : RequestNode(context, config, "query", "trajectory"),
         planner_(RobotModel::xarm6(),
                  manipulation::make_fcl_checker(RobotModel::xarm6(), manipulation::default_scene(),
-                                                padding(config)),
-                 plan_options(config)),
-        sample_period_s_(positive(config, "sample_period_s")),
-        velocity_scaling_(positive(config, "velocity_scaling")),
-        acceleration_scaling_(positive(config, "acceleration_scaling")) {}
+                                                padding(config, s.padding_m)),
+                 plan_options(config, s)),
+        sample_period_s_(positive(config, "sample_period_s", s.sample_period_s)),
+        velocity_scaling_(positive(config, "velocity_scaling", s.velocity_scaling)),
+        acceleration_scaling_(positive(config, "acceleration_scaling", s.acceleration_scaling)) {}
 
- private:
-  static manipulation::PlanOptions plan_options(const KernelConfig& c) {
+  static manipulation::PlanOptions plan_options(const KernelConfig& c, const PlanSettings& s) {
     manipulation::PlanOptions o;
-    o.planning_time_s = positive(c, "planning_time_s");
-    o.longest_valid_segment_fraction = positive(c, "longest_valid_segment_fraction");
-    o.simplify = c.parameters.get_bool("simplify");
-    const int64_t seed =
-        c.parameters.get_int("seed", static_cast<int64_t>(c.workload_seed.value_or(0)));
+    o.planning_time_s = positive(c, "planning_time_s", s.planning_time_s);
+    o.longest_valid_segment_fraction =
+        positive(c, "longest_valid_segment_fraction", s.longest_valid_segment_fraction);
+    o.simplify = s.simplify;
+    const int64_t seed = s.seed.value_or(static_cast<int64_t>(c.workload_seed.value_or(0)));
     if (seed < 0 || seed > static_cast<int64_t>(UINT32_MAX))
       throw std::invalid_argument("node '" + c.node_name + "': seed must be within [0, 2^32)");
     o.seed = static_cast<uint32_t>(seed);
@@ -189,8 +240,7 @@ class PlanNode final : public RequestNode<msgs::JointTrajectory, msgs::JointTraj
   }
   // Link padding of the planner's collision checker (m): motions are checked at discrete states,
   // and the padding keeps the links clear of contact between them.
-  static double padding(const KernelConfig& c) {
-    const double v = c.parameters.get_double("padding_m");
+  static double padding(const KernelConfig& c, double v) {
     if (!(v >= 0) || !std::isfinite(v))
       throw std::invalid_argument("node '" + c.node_name + "': padding_m must be >= 0");
     return v;
@@ -218,6 +268,15 @@ class PlanNode final : public RequestNode<msgs::JointTrajectory, msgs::JointTraj
   double sample_period_s_, velocity_scaling_, acceleration_scaling_;
 };
 
+const ExecutionOptions kExecution;
+const plugin::ParameterStruct<ExecutionOptions> kExecuteParameters{
+    plugin::field(&ExecutionOptions::control_rate_hz, "control_rate_hz", kExecution.control_rate_hz,
+                  "simulated controller rate, Hz"),
+    plugin::field(&ExecutionOptions::lag_s, "lag_s", kExecution.lag_s,
+                  "first-order lag of the joints, s"),
+    plugin::field(&ExecutionOptions::settle_s, "settle_s", kExecution.settle_s,
+                  "control time after the trajectory's end, s")};
+
 // Executes a trajectory on a simulated position-controlled arm in simulated time: publishes the
 // arm's JointState every control step on `joint_states`, then the result. The result's
 // planning_time stays 0: the trajectory does not say how long planning took.
@@ -229,9 +288,9 @@ class ExecuteNode final : public RequestNode<msgs::JointTrajectory, msgs::PlanEx
 
   ExecuteNode(graph::Context& context, const KernelConfig& config)
       : RequestNode(context, config, "trajectory", "result") {
-    options_.control_rate_hz = positive(config, "control_rate_hz");
-    options_.lag_s = positive(config, "lag_s");
-    options_.settle_s = config.parameters.get_double("settle_s");
+    options_ = kExecuteParameters.read(config.parameters);
+    positive(config, "control_rate_hz", options_.control_rate_hz);
+    positive(config, "lag_s", options_.lag_s);
     if (!(options_.settle_s >= 0) ||
         !(options_.settle_s * options_.control_rate_hz <= kMaxControlSteps)) {
       throw std::invalid_argument("node '" + config.node_name +
@@ -284,15 +343,6 @@ class ExecuteNode final : public RequestNode<msgs::JointTrajectory, msgs::PlanEx
   std::shared_ptr<graph::Publisher<msgs::JointState>> states_;
 };
 
-std::vector<plugin::ParameterInfo> ik_parameters() {
-  const IkOptions o;
-  return {
-      plugin::int_parameter("max_iterations", o.max_iterations, "solver iterations per attempt"),
-      plugin::double_parameter("eps", o.eps, "the solver's convergence tolerance"),
-      plugin::double_parameter("timeout_s", o.timeout_s, "all attempts together, s"),
-      plugin::int_parameter("seed", static_cast<int64_t>(o.seed), "seed of the random restarts")};
-}
-
 template <class Node, class... Args>
 plugin::KernelFactory factory(Args... args) {
   return [=](graph::Context& context, const KernelConfig& config) {
@@ -318,7 +368,7 @@ void register_kernels(plugin::Registrar& registrar) {
                       "KDL, random restarts within the timeout (MoveIt's KDL plugin)",
        .inputs = pose,
        .outputs = state_out,
-       .parameters = ik_parameters()},
+       .parameters = kIkParameters.declarations()},
       factory<InverseKinematicsNode>(IkSolver::kNewtonRaphsonJL));
   registrar.add_kernel(
       {.name = "manipulation/ik_lma",
@@ -326,7 +376,7 @@ void register_kernels(plugin::Registrar& registrar) {
                       "restarts within the timeout (MoveIt's LMA plugin)",
        .inputs = pose,
        .outputs = state_out,
-       .parameters = ik_parameters()},
+       .parameters = kIkParameters.declarations()},
       factory<InverseKinematicsNode>(IkSolver::kLevenbergMarquardt));
   const std::vector<plugin::PortInfo> collision_out{
       {"collision", "robotperf_msgs/msg/CollisionResult"}};
@@ -342,7 +392,6 @@ void register_kernels(plugin::Registrar& registrar) {
                         .inputs = state_in,
                         .outputs = collision_out},
                        factory<CollisionNode>(CollisionBackend::kBullet));
-  const PlanOptions plan;
   const std::vector<plugin::PortInfo> trajectory{
       {"trajectory", "trajectory_msgs/msg/JointTrajectory"}};
   registrar.add_kernel(
@@ -352,26 +401,8 @@ void register_kernels(plugin::Registrar& registrar) {
                       "acceleration limits",
        .inputs = {{"query", "trajectory_msgs/msg/JointTrajectory"}},
        .outputs = trajectory,
-       .parameters =
-           {plugin::double_parameter("planning_time_s", plan.planning_time_s,
-                                     "RRTConnect's budget, s (simplification gets what is left)"),
-            plugin::double_parameter("longest_valid_segment_fraction",
-                                     plan.longest_valid_segment_fraction,
-                                     "motion check step as a fraction of the joint space's extent"),
-            plugin::bool_parameter("simplify", plan.simplify, "shortcut and smooth the path"),
-            plugin::computed_parameter("seed", plugin::ParameterType::kInt,
-                                       "OMPL's seed, [0, 2^32) (default: the workload seed, else "
-                                       "0: from the clock)"),
-            plugin::double_parameter("padding_m", 0.0,
-                                     "link padding of the planner's collision checks, m"),
-            plugin::double_parameter("sample_period_s", 0.02,
-                                     "time between the trajectory's points, s"),
-            plugin::double_parameter("velocity_scaling", 1.0,
-                                     "fraction of the joints' velocity limits used"),
-            plugin::double_parameter("acceleration_scaling", 1.0,
-                                     "fraction of the joints' acceleration limits used")}},
+       .parameters = kPlanParameters.declarations()},
       factory<PlanNode>());
-  const ExecutionOptions execution;
   registrar.add_kernel(
       {.name = "manipulation/execute",
        .description = "execute a trajectory on a simulated position-controlled xArm6, "
@@ -379,12 +410,7 @@ void register_kernels(plugin::Registrar& registrar) {
        .inputs = trajectory,
        .outputs = {{"joint_states", "sensor_msgs/msg/JointState"},
                    {"result", "robotperf_msgs/msg/PlanExecutionResult"}},
-       .parameters = {plugin::double_parameter("control_rate_hz", execution.control_rate_hz,
-                                               "simulated controller rate, Hz"),
-                      plugin::double_parameter("lag_s", execution.lag_s,
-                                               "first-order lag of the joints, s"),
-                      plugin::double_parameter("settle_s", execution.settle_s,
-                                               "control time after the trajectory's end, s")}},
+       .parameters = kExecuteParameters.declarations()},
       factory<ExecuteNode>());
 }
 

@@ -22,10 +22,28 @@ constexpr int64_t kMaxPayloadBytes = int64_t{256} << 20;
 // Every frame's payload is held in memory for the run.
 constexpr int64_t kMaxDatasetBytes = int64_t{1} << 30;
 
+struct PayloadWorkload {
+  int64_t payload_bytes = 0;
+  int64_t frames = 0;
+  // As given: a negative seed is accepted as it always was, its bits seeding the generator.
+  int64_t seed = 0;
+};
+
+const plugin::ParameterStruct<PayloadWorkload> kPayloadWorkload{
+    plugin::field(&PayloadWorkload::payload_bytes, "payload_bytes", 64,
+                  "bytes of payload (the Image's data), up to 256 MiB",
+                  {.minimum = 1, .maximum = kMaxPayloadBytes}),
+    plugin::field(&PayloadWorkload::frames, "frames", 100,
+                  "distinct payloads (the run loops over them); "
+                  "payload_bytes x frames at most 1 GiB",
+                  {.minimum = 1, .maximum = 100000}),
+    plugin::field(&PayloadWorkload::seed, "seed", 1, "seed of the payload bytes")};
+
 // Each parameter's own range is its bounds; together they must fit in memory.
 void check_payload_workload(const plugin::Parameters& p) {
-  const int64_t bytes = p.get_int("payload_bytes");
-  const int64_t frames = p.get_int("frames");
+  const PayloadWorkload w = kPayloadWorkload.read(p);
+  const int64_t bytes = w.payload_bytes;
+  const int64_t frames = w.frames;
   if (bytes * frames > kMaxDatasetBytes) {
     throw std::invalid_argument(
         "payload_bytes x frames is " + std::to_string((bytes * frames) >> 20) +
@@ -36,9 +54,10 @@ void check_payload_workload(const plugin::Parameters& p) {
 }
 
 std::vector<DatasetStream> payload_streams(const plugin::Parameters& p) {
-  const int64_t bytes = p.get_int("payload_bytes");
-  const int64_t frames = p.get_int("frames");
-  std::mt19937_64 random(static_cast<uint64_t>(p.get_int("seed")));
+  const PayloadWorkload w = kPayloadWorkload.read(p);
+  const int64_t bytes = w.payload_bytes;
+  const int64_t frames = w.frames;
+  std::mt19937_64 random(static_cast<uint64_t>(w.seed));
   auto stream = plugin::make_stream<msgs::Image>("payload", "/ping");
   for (int64_t i = 0; i < frames; ++i) {
     msgs::Image ping;
@@ -104,14 +123,7 @@ void register_category(plugin::Registrar& registrar) {
        .frames = 100,
        .streams = {{"payload", "/ping", "sensor_msgs/msg/Image", false,
                     "what the ping side sends; the pong echoes it"}},
-       .workload = {plugin::int_parameter("payload_bytes", 64,
-                                          "bytes of payload (the Image's data), up to 256 MiB",
-                                          {.minimum = 1, .maximum = kMaxPayloadBytes}),
-                    plugin::int_parameter("frames", 100,
-                                          "distinct payloads (the run loops over them); "
-                                          "payload_bytes x frames at most 1 GiB",
-                                          {.minimum = 1, .maximum = 100000}),
-                    plugin::int_parameter("seed", 1, "seed of the payload bytes")},
+       .workload = kPayloadWorkload.declarations(),
        .check_workload = check_payload_workload},
       payload_streams);
   registrar.add_evaluator(

@@ -13,15 +13,41 @@ namespace {
 
 using plugin::KernelConfig;
 
-int interpolation_parameter(const KernelConfig& config) {
-  const int64_t v = config.parameters.get_int("interpolation");
+// The interpolation both kernels take, in their settings struct S.
+template <class S>
+plugin::ParameterField<S> interpolation_field(int S::*member) {
+  return plugin::field(member, "interpolation", cv::INTER_LINEAR,
+                       "cv::InterpolationFlags: 0 nearest, 1 linear, 2 cubic, 3 area, 4 lanczos4");
+}
+
+int checked_interpolation(const KernelConfig& config, int v) {
   if (v < cv::INTER_NEAREST || v > cv::INTER_LANCZOS4) {
     throw std::invalid_argument(
         "node '" + config.node_name +
         "': interpolation must be 0..4 (nearest, linear, cubic, area, lanczos4)");
   }
-  return static_cast<int>(v);
+  return v;
 }
+
+struct RectifySettings {
+  int interpolation = 0;
+};
+
+const plugin::ParameterStruct<RectifySettings> kRectifyParameters{
+    interpolation_field(&RectifySettings::interpolation)};
+
+const ResizeParams kResize;
+const plugin::ParameterStruct<ResizeParams> kResizeParameters{
+    plugin::field(&ResizeParams::use_scale, "use_scale", kResize.use_scale,
+                  "true: scale by scale_width x scale_height; false: resize to width x height"),
+    plugin::field(&ResizeParams::scale_height, "scale_height", kResize.scale_height,
+                  "height factor"),
+    plugin::field(&ResizeParams::scale_width, "scale_width", kResize.scale_width, "width factor"),
+    plugin::field(&ResizeParams::height, "height", kResize.height,
+                  "target height without use_scale; -1 keeps the input's"),
+    plugin::field(&ResizeParams::width, "width", kResize.width,
+                  "target width without use_scale; -1 keeps the input's"),
+    interpolation_field(&ResizeParams::interpolation)};
 
 // Subscribes `image` and `camera_info` and hands exact-time pairs to process(); a pair the kernel
 // refuses (an uncalibrated camera, an image of another size than its CameraInfo) is skipped.
@@ -54,7 +80,9 @@ class RectifyNode final : public CameraNode, public ImageDeviceNode {
   RectifyNode(graph::Context& context, const KernelConfig& config)
       : CameraNode(context, config),
         ImageDeviceNode(backend_of(config)),
-        rectifier_(interpolation_parameter(config), backend_),
+        rectifier_(
+            checked_interpolation(config, kRectifyParameters.read(config.parameters).interpolation),
+            backend_),
         resident_(config.device_resident_outputs.contains("image_rect")) {
     output_ = create_publisher<msgs::Image>(config.topic("image_rect"), config.qos);
   }
@@ -110,14 +138,8 @@ class ResizeNode final : public CameraNode, public ImageDeviceNode {
   }
 
   static ResizeParams params_from(const KernelConfig& config) {
-    const auto& p = config.parameters;
-    ResizeParams params;
-    params.use_scale = p.get_bool("use_scale");
-    params.scale_height = p.get_double("scale_height");
-    params.scale_width = p.get_double("scale_width");
-    params.height = p.get_int32("height");
-    params.width = p.get_int32("width");
-    params.interpolation = interpolation_parameter(config);
+    ResizeParams params = kResizeParameters.read(config.parameters);
+    checked_interpolation(config, params.interpolation);
     return params;
   }
 
@@ -127,12 +149,6 @@ class ResizeNode final : public CameraNode, public ImageDeviceNode {
   std::shared_ptr<graph::Publisher<msgs::Image>> image_out_;
   std::shared_ptr<graph::Publisher<msgs::CameraInfo>> info_out_;
 };
-
-plugin::ParameterInfo interpolation_declaration() {
-  return plugin::int_parameter("interpolation", cv::INTER_LINEAR,
-                               "cv::InterpolationFlags: 0 nearest, 1 linear, 2 cubic, 3 area, "
-                               "4 lanczos4");
-}
 
 // image_transport's camera subscriber: the image (which the node may take on its device, in a
 // device-resident run) and its CameraInfo.
@@ -151,12 +167,11 @@ void register_image_proc_kernels(plugin::Registrar& registrar) {
        .backends = perception_backends(),
        .inputs = camera_inputs(false),
        .outputs = {{"image_rect", "sensor_msgs/msg/Image", true}},
-       .parameters = {interpolation_declaration()},
+       .parameters = kRectifyParameters.declarations(),
        .device_resident_backends = image_resident_backends()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<RectifyNode>(context, config);
       });
-  const ResizeParams defaults;
   registrar.add_kernel(
       {.name = "image_proc/resize",
        .description = "resize an image and scale its CameraInfo (K, P, ROI), as image_proc",
@@ -164,17 +179,7 @@ void register_image_proc_kernels(plugin::Registrar& registrar) {
        .inputs = camera_inputs(true),
        .outputs = {{"resize", "sensor_msgs/msg/Image"},
                    {"resize_info", "sensor_msgs/msg/CameraInfo"}},
-       .parameters =
-           {plugin::bool_parameter("use_scale", defaults.use_scale,
-                                   "true: scale by scale_width x scale_height; false: resize to "
-                                   "width x height"),
-            plugin::double_parameter("scale_height", defaults.scale_height, "height factor"),
-            plugin::double_parameter("scale_width", defaults.scale_width, "width factor"),
-            plugin::int_parameter("height", defaults.height,
-                                  "target height without use_scale; -1 keeps the input's"),
-            plugin::int_parameter("width", defaults.width,
-                                  "target width without use_scale; -1 keeps the input's"),
-            interpolation_declaration()},
+       .parameters = kResizeParameters.declarations(),
        .device_resident_backends = image_resident_backends()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<ResizeNode>(context, config);

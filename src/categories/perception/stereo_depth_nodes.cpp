@@ -17,15 +17,78 @@ using plugin::KernelConfig;
 using plugin::SyncOptions;
 using plugin::SyncPolicy;
 
-SyncOptions sync_options(const KernelConfig& config, bool approximate) {
+// The queue both kernels take, in their settings struct S.
+template <class S>
+plugin::ParameterField<S> queue_size_field(int64_t S::*member) {
+  return plugin::field(member, "queue_size", 5,
+                       "frames (exact sync) or messages per input (approximate sync) waiting to "
+                       "be paired");
+}
+
+SyncOptions sync_options(const KernelConfig& config, bool approximate, int64_t queue) {
   SyncOptions o;
   o.policy = approximate ? SyncPolicy::kApproximate : SyncPolicy::kExact;
-  const int64_t queue = config.parameters.get_int("queue_size");
   if (queue < 1)
     throw std::invalid_argument("node '" + config.node_name + "': queue_size must be >= 1");
   o.queue_size = static_cast<std::size_t>(queue);
   return o;
 }
+
+struct DisparitySettings {
+  int stereo_algorithm = 0;  // StereoParams' algorithm, as its number
+  StereoParams stereo;       // the rest
+  bool approximate_sync = false;
+  int64_t queue_size = 0;
+};
+
+const StereoParams kStereo;
+const plugin::ParameterStruct<StereoParams> kStereoParameters{
+    plugin::field(&StereoParams::prefilter_size, "prefilter_size", kStereo.prefilter_size,
+                  "StereoBM: odd, 5..255"),
+    plugin::field(&StereoParams::prefilter_cap, "prefilter_cap", kStereo.prefilter_cap, "1..63"),
+    plugin::field(&StereoParams::correlation_window_size, "correlation_window_size",
+                  kStereo.correlation_window_size, "odd; StereoBM 5..255, StereoSGBM 1..255"),
+    plugin::field(&StereoParams::min_disparity, "min_disparity", kStereo.min_disparity,
+                  "smallest disparity searched, px"),
+    plugin::field(&StereoParams::disparity_range, "disparity_range", kStereo.disparity_range,
+                  "disparities searched, a positive multiple of 16"),
+    plugin::field(&StereoParams::texture_threshold, "texture_threshold", kStereo.texture_threshold,
+                  "StereoBM only"),
+    plugin::field(&StereoParams::speckle_size, "speckle_size", kStereo.speckle_size,
+                  "largest speckle filtered out, px"),
+    plugin::field(&StereoParams::speckle_range, "speckle_range", kStereo.speckle_range,
+                  "disparity spread within a speckle"),
+    plugin::field(&StereoParams::uniqueness_ratio, "uniqueness_ratio", kStereo.uniqueness_ratio,
+                  "margin of the best match, %"),
+    plugin::field(&StereoParams::p1, "P1", kStereo.p1,
+                  "StereoSGBM smoothness penalty, small changes"),
+    plugin::field(&StereoParams::p2, "P2", kStereo.p2,
+                  "StereoSGBM smoothness penalty, large changes"),
+    plugin::field(&StereoParams::disp12_max_diff, "disp12_max_diff", kStereo.disp12_max_diff,
+                  "StereoSGBM left-right check tolerance"),
+    plugin::field(&StereoParams::sgbm_mode, "sgbm_mode", kStereo.sgbm_mode,
+                  "cv::StereoSGBM mode: 0 SGBM, 1 HH, 2 SGBM_3WAY, 3 HH4")};
+
+const plugin::ParameterStruct<DisparitySettings> kDisparityParameters{
+    plugin::field(&DisparitySettings::stereo_algorithm, "stereo_algorithm",
+                  static_cast<int>(kStereo.algorithm), "0 StereoBM, 1 StereoSGBM"),
+    plugin::nested(&DisparitySettings::stereo, kStereoParameters),
+    plugin::field(&DisparitySettings::approximate_sync, "approximate_sync", false,
+                  "pair inputs by nearby stamps instead of equal ones"),
+    queue_size_field(&DisparitySettings::queue_size)};
+
+struct PointCloudSettings {
+  double range_max = 0;
+  bool exact_sync = false;
+  int64_t queue_size = 0;
+};
+
+const plugin::ParameterStruct<PointCloudSettings> kPointCloudParameters{
+    plugin::field(&PointCloudSettings::range_max, "range_max", PointCloudXyzrgbParams{}.range_max,
+                  "depth given to invalid pixels, m; 0 makes them NaN points"),
+    plugin::field(&PointCloudSettings::exact_sync, "exact_sync", false,
+                  "pair inputs by equal stamps instead of nearby ones"),
+    queue_size_field(&PointCloudSettings::queue_size)};
 
 class DisparityNode final : public SkippingNode, public ImageDeviceNode {
  public:
@@ -36,8 +99,7 @@ class DisparityNode final : public SkippingNode, public ImageDeviceNode {
         ImageDeviceNode(backend_of(config)),
         processor_(params_from(config), backend_),
         inputs_({"left_image", "left_camera_info", "right_image", "right_camera_info"},
-                sync_options(config, config.parameters.get_bool("approximate_sync")),
-                [this](const Inputs::Set& set) { process(set); }) {
+                sync_from(config), [this](const Inputs::Set& set) { process(set); }) {
     output_ = create_publisher<msgs::DisparityImage>(config.topic("disparity"), config.qos);
     inputs_.subscribe<msgs::Image>(*this, config, kLeftImage);
     inputs_.subscribe<msgs::CameraInfo>(*this, config, kLeftInfo);
@@ -53,32 +115,24 @@ class DisparityNode final : public SkippingNode, public ImageDeviceNode {
 
  private:
   static StereoParams params_from(const KernelConfig& c) {
-    StereoParams p;
-    const int algorithm = c.parameters.get_int32("stereo_algorithm");
-    if (algorithm != 0 && algorithm != 1) {
+    const DisparitySettings s = kDisparityParameters.read(c.parameters);
+    if (s.stereo_algorithm != 0 && s.stereo_algorithm != 1) {
       throw std::invalid_argument("node '" + c.node_name +
                                   "': stereo_algorithm must be 0 (StereoBM) or 1 (StereoSGBM)");
     }
-    p.algorithm = static_cast<StereoAlgorithm>(algorithm);
-    p.prefilter_size = c.parameters.get_int32("prefilter_size");
-    p.prefilter_cap = c.parameters.get_int32("prefilter_cap");
-    p.correlation_window_size = c.parameters.get_int32("correlation_window_size");
-    p.min_disparity = c.parameters.get_int32("min_disparity");
-    p.disparity_range = c.parameters.get_int32("disparity_range");
-    p.texture_threshold = c.parameters.get_int32("texture_threshold");
-    p.speckle_size = c.parameters.get_int32("speckle_size");
-    p.speckle_range = c.parameters.get_int32("speckle_range");
-    p.uniqueness_ratio = c.parameters.get_int32("uniqueness_ratio");
-    p.p1 = c.parameters.get_int32("P1");
-    p.p2 = c.parameters.get_int32("P2");
-    p.disp12_max_diff = c.parameters.get_int32("disp12_max_diff");
-    p.sgbm_mode = c.parameters.get_int32("sgbm_mode");
+    StereoParams p = s.stereo;
+    p.algorithm = static_cast<StereoAlgorithm>(s.stereo_algorithm);
     try {
       validate(p);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument("node '" + c.node_name + "': " + e.what());
     }
     return p;
+  }
+
+  static SyncOptions sync_from(const KernelConfig& c) {
+    const DisparitySettings s = kDisparityParameters.read(c.parameters);
+    return sync_options(c, s.approximate_sync, s.queue_size);
   }
 
   using Inputs = plugin::SyncedInputs<4>;
@@ -112,10 +166,9 @@ class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
       : SkippingNode(context, config.node_name),
         ImageDeviceNode(backend_of(config)),
         processor_(backend_),
-        inputs_({"depth", "image", "camera_info"},
-                sync_options(config, !config.parameters.get_bool("exact_sync")),
+        inputs_({"depth", "image", "camera_info"}, sync_from(config),
                 [this](const Inputs::Set& set) { process(set); }) {
-    params_.range_max = config.parameters.get_double("range_max");
+    params_.range_max = kPointCloudParameters.read(config.parameters).range_max;
     if (!(params_.range_max >= 0.0) || !std::isfinite(params_.range_max)) {
       throw std::invalid_argument("node '" + config.node_name + "': range_max must be >= 0");
     }
@@ -148,6 +201,11 @@ class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
     });
   }
 
+  static SyncOptions sync_from(const KernelConfig& c) {
+    const PointCloudSettings s = kPointCloudParameters.read(c.parameters);
+    return sync_options(c, !s.exact_sync, s.queue_size);
+  }
+
   static constexpr const char* kKernel = "depth_image_proc/point_cloud_xyzrgb";
   PointCloudXyzrgbParams params_;
   PointCloudXyzrgbProcessor processor_;
@@ -156,17 +214,9 @@ class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
   std::shared_ptr<graph::Publisher<msgs::PointCloud2>> output_;
 };
 
-plugin::ParameterInfo queue_size_declaration() {
-  return plugin::int_parameter("queue_size", 5,
-                               "frames (exact sync) or messages per input (approximate sync) "
-                               "waiting to be paired");
-}
-
 }  // namespace
 
 void register_stereo_depth_kernels(plugin::Registrar& registrar) {
-  const StereoParams d;
-  using plugin::int_parameter;
   registrar.add_kernel(
       {.name = "stereo_image_proc/disparity",
        .description = "disparity of a rectified stereo pair (StereoBM, or StereoSGBM), as "
@@ -177,29 +227,7 @@ void register_stereo_depth_kernels(plugin::Registrar& registrar) {
                   {"right_image", "sensor_msgs/msg/Image"},
                   {"right_camera_info", "sensor_msgs/msg/CameraInfo"}},
        .outputs = {{"disparity", "stereo_msgs/msg/DisparityImage"}},
-       .parameters =
-           {int_parameter("stereo_algorithm", static_cast<int>(d.algorithm),
-                          "0 StereoBM, 1 StereoSGBM"),
-            int_parameter("prefilter_size", d.prefilter_size, "StereoBM: odd, 5..255"),
-            int_parameter("prefilter_cap", d.prefilter_cap, "1..63"),
-            int_parameter("correlation_window_size", d.correlation_window_size,
-                          "odd; StereoBM 5..255, StereoSGBM 1..255"),
-            int_parameter("min_disparity", d.min_disparity, "smallest disparity searched, px"),
-            int_parameter("disparity_range", d.disparity_range,
-                          "disparities searched, a positive multiple of 16"),
-            int_parameter("texture_threshold", d.texture_threshold, "StereoBM only"),
-            int_parameter("speckle_size", d.speckle_size, "largest speckle filtered out, px"),
-            int_parameter("speckle_range", d.speckle_range, "disparity spread within a speckle"),
-            int_parameter("uniqueness_ratio", d.uniqueness_ratio, "margin of the best match, %"),
-            int_parameter("P1", d.p1, "StereoSGBM smoothness penalty, small changes"),
-            int_parameter("P2", d.p2, "StereoSGBM smoothness penalty, large changes"),
-            int_parameter("disp12_max_diff", d.disp12_max_diff,
-                          "StereoSGBM left-right check tolerance"),
-            int_parameter("sgbm_mode", d.sgbm_mode,
-                          "cv::StereoSGBM mode: 0 SGBM, 1 HH, 2 SGBM_3WAY, 3 HH4"),
-            plugin::bool_parameter("approximate_sync", false,
-                                   "pair inputs by nearby stamps instead of equal ones"),
-            queue_size_declaration()}},
+       .parameters = kDisparityParameters.declarations()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<DisparityNode>(context, config);
       });
@@ -212,12 +240,7 @@ void register_stereo_depth_kernels(plugin::Registrar& registrar) {
                   {"image", "sensor_msgs/msg/Image"},
                   {"camera_info", "sensor_msgs/msg/CameraInfo"}},
        .outputs = {{"points", "sensor_msgs/msg/PointCloud2"}},
-       .parameters = {plugin::double_parameter("range_max", PointCloudXyzrgbParams{}.range_max,
-                                               "depth given to invalid pixels, m; 0 makes them "
-                                               "NaN points"),
-                      plugin::bool_parameter("exact_sync", false,
-                                             "pair inputs by equal stamps instead of nearby ones"),
-                      queue_size_declaration()}},
+       .parameters = kPointCloudParameters.declarations()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<PointCloudXyzrgbNode>(context, config);
       });

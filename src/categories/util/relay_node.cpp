@@ -14,23 +14,37 @@ namespace {
 
 using plugin::KernelConfig;
 
+struct RelaySettings {
+  std::string type;
+  double delay_ms = 0;
+  int64_t drop_every = 0;
+  int64_t fail_after = 0;
+};
+
+const plugin::ParameterStruct<RelaySettings> kRelayParameters{
+    plugin::field(&RelaySettings::type, "type", "sensor_msgs/msg/Image",
+                  "ROS type of the messages relayed"),
+    plugin::field(&RelaySettings::delay_ms, "delay_ms", 0, "hold each message this long, ms"),
+    plugin::field(&RelaySettings::drop_every, "drop_every", 0, "drop every k-th message (0: none)"),
+    plugin::field(&RelaySettings::fail_after, "fail_after", 0,
+                  "throw from the callback on message n + 1 (0: never)")};
+
 class RelayNode final : public graph::Node {
  public:
   RelayNode(graph::Context& context, const KernelConfig& config) : Node(context, config.node_name) {
-    const std::string type = config.parameters.get_string("type");
+    const RelaySettings s = kRelayParameters.read(config.parameters);
     // Bounded before it becomes an integer (an hour: a relay that never answers is fail_after's).
-    const double delay_ms = config.parameters.get_double("delay_ms");
-    if (!(delay_ms >= 0 && delay_ms <= 3.6e6))
+    if (!(s.delay_ms >= 0 && s.delay_ms <= 3.6e6))
       throw std::invalid_argument("node '" + name() + "': delay_ms must be from 0 to 3600000");
-    delay_ = std::chrono::microseconds(static_cast<int64_t>(delay_ms * 1000.0));
-    drop_every_ = config.parameters.get_int("drop_every");
-    fail_after_ = config.parameters.get_int("fail_after");
+    delay_ = std::chrono::microseconds(static_cast<int64_t>(s.delay_ms * 1000.0));
+    drop_every_ = s.drop_every;
+    fail_after_ = s.fail_after;
     if (drop_every_ < 0)
       throw std::invalid_argument("node '" + name() + "': drop_every must be >= 0");
     if (fail_after_ < 0)
       throw std::invalid_argument("node '" + name() + "': fail_after must be >= 0");
 
-    bool known = msgs::with_message_type(type, [&]<class T>() {
+    bool known = msgs::with_message_type(s.type, [&]<class T>() {
       const auto& ts = msgs::type_support<T>();
       output_ = create_generic_publisher(config.topic("output"), ts, config.qos);
       input_ = create_generic_subscription(
@@ -38,7 +52,7 @@ class RelayNode final : public graph::Node {
           [this](rmw::MessagePtr m, const graph::MessageInfo&) { relay(std::move(m)); });
     });
     if (!known)
-      throw std::invalid_argument("node '" + name() + "': unsupported message type " + type);
+      throw std::invalid_argument("node '" + name() + "': unsupported message type " + s.type);
   }
 
  private:
@@ -70,12 +84,7 @@ void register_relay_kernel(plugin::Registrar& registrar) {
                       "harness checks",
        .inputs = {{"input", ""}},
        .outputs = {{"output", ""}},
-       .parameters = {plugin::string_parameter("type", "sensor_msgs/msg/Image",
-                                               "ROS type of the messages relayed"),
-                      plugin::double_parameter("delay_ms", 0.0, "hold each message this long, ms"),
-                      plugin::int_parameter("drop_every", 0, "drop every k-th message (0: none)"),
-                      plugin::int_parameter(
-                          "fail_after", 0, "throw from the callback on message n + 1 (0: never)")}},
+       .parameters = kRelayParameters.declarations()},
       [](graph::Context& context, const KernelConfig& config) {
         return std::make_shared<RelayNode>(context, config);
       });

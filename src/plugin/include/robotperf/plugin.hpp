@@ -27,6 +27,7 @@
 #include "robotperf/plugin/kernel.hpp"
 #include "robotperf/plugin/message_sync.hpp"
 #include "robotperf/plugin/output_comparison.hpp"
+#include "robotperf/plugin/parameter_struct.hpp"
 #include "robotperf/plugin/parameters.hpp"
 #include "robotperf/plugin/registry.hpp"
 #include "robotperf/plugin/version.hpp"

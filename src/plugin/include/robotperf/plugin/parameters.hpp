@@ -1,5 +1,8 @@
 // Parameters of kernels, dataset generators and evaluators: declared with a type, a default and
 // a one-line doc, given as text in graph.yaml or benchmark.yaml, checked when they are read in.
+// Kernels, generators and evaluators declare and read them as a struct (parameter_struct.hpp);
+// the declarations below and the reads by name of Parameters are that struct's storage, and the
+// untyped access for a plug-in that reads a parameter whose name is data.
 #pragma once
 
 #include <cstdint>
@@ -74,6 +77,8 @@ class Parameters {
   std::string get_string(const std::string& name, const std::string& fallback) const;
 
   const std::vector<ParameterInfo>& declared() const { return declared_; }
+  // Whose parameters these are ("node 'resize'"), as errors name it.
+  const std::string& owner() const { return owner_; }
   // The values given, as text.
   const std::map<std::string, std::string>& values() const { return values_; }
   // Every declared parameter with the value it takes: given, else its default; parameters
