@@ -29,6 +29,8 @@ packages=(
   chromium  # headless, for the report rendering test
   liborocos-kdl-dev liburdfdom-dev libfcl-dev libbullet-dev libompl-dev libeigen3-dev  # manipulation (d1-d6)
   libapriltag-dev  # localization b3
+  help2man  # the man page, made from --help
+  zsh  # to test the zsh completion script
 )
 
 # Debian's CUDA toolkit is in the non-free component, which a default sources.list leaves out.

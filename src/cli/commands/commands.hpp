@@ -22,5 +22,6 @@ std::unique_ptr<Command> node_command();
 std::unique_ptr<Command> graph_command();
 std::unique_ptr<Command> security_command();
 std::unique_ptr<Command> help_command();
+std::unique_ptr<Command> completion_command();
 
 }  // namespace robotperf::cli

@@ -12,9 +12,13 @@ namespace robotperf::cli {
 
 namespace {
 
-int list_benchmarks(const Roots& roots) {
+int list_benchmarks(const Roots& roots, bool ids_only) {
   std::vector<std::string> broken;
   const auto specs = harness::discover_benchmarks(roots, &broken);
+  if (ids_only) {
+    for (const auto& s : specs) std::printf("%s\n", s.id.c_str());
+    return kExitOk;
+  }
   // Columns as wide as their longest entry.
   int id_width = 2, name_width = 4, category_width = 8;
   for (const auto& s : specs) {
@@ -40,6 +44,8 @@ class ListCommand : public Command {
         "list", "list the benchmarks, or the registered kernels, datasets or evaluators");
     command->add_option("what", what_, "benchmarks (default), kernels, datasets or evaluators")
         ->check(CLI::IsMember({"benchmarks", "kernels", "datasets", "evaluators"}));
+    command->add_flag("--ids", ids_only_,
+                      "benchmarks: their ids alone, one a line (for scripts and shell completion)");
     command->footer("Example: robotperf list kernels");
     return command;
   }
@@ -48,11 +54,12 @@ class ListCommand : public Command {
     if (what_ == "kernels") return list_kernels(std::cout);
     if (what_ == "datasets") return list_datasets(std::cout);
     if (what_ == "evaluators") return list_evaluators(std::cout);
-    return list_benchmarks(context.roots);
+    return list_benchmarks(context.roots, ids_only_);
   }
 
  private:
   std::string what_ = "benchmarks";
+  bool ids_only_ = false;
 };
 
 }  // namespace
