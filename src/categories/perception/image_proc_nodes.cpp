@@ -51,10 +51,11 @@ class CameraNode : public SkippingNode {
 
 class RectifyNode final : public CameraNode, public ImageDeviceNode {
  public:
-  RectifyNode(graph::Context& context, const KernelConfig& config)
+  RectifyNode(graph::Context& context, const KernelConfig& config,
+              const RectifyImplementation& implementation)
       : CameraNode(context, config),
-        ImageDeviceNode(backend_of(config)),
-        rectifier_(interpolation_parameter(config), backend_),
+        ImageDeviceNode(implementation.device),
+        rectifier_(interpolation_parameter(config), implementation),
         resident_(config.device_resident_outputs.contains("image_rect")) {
     output_ = create_publisher<msgs::Image>(config.topic("image_rect"), config.qos);
   }
@@ -88,10 +89,11 @@ class RectifyNode final : public CameraNode, public ImageDeviceNode {
 
 class ResizeNode final : public CameraNode, public ImageDeviceNode {
  public:
-  ResizeNode(graph::Context& context, const KernelConfig& config)
+  ResizeNode(graph::Context& context, const KernelConfig& config,
+             const ResizeImplementation& implementation)
       : CameraNode(context, config),
-        ImageDeviceNode(backend_of(config)),
-        resizer_(params_from(config), backend_) {
+        ImageDeviceNode(implementation.device),
+        resizer_(params_from(config), implementation) {
     image_out_ = create_publisher<msgs::Image>(config.topic("resize"), config.qos);
     info_out_ = create_publisher<msgs::CameraInfo>(config.topic("resize_info"), config.qos);
   }
@@ -144,23 +146,23 @@ std::vector<plugin::PortInfo> camera_inputs(bool image_on_device) {
 }  // namespace
 
 void register_image_proc_kernels(plugin::Registrar& registrar) {
-  registrar.add_kernel(
+  register_implementations(
+      registrar,
       {.name = "image_proc/rectify",
        .description = "undistort and rectify an image with its CameraInfo (cached map, cv::remap), "
                       "as image_proc",
-       .backends = perception_backends(),
        .inputs = camera_inputs(false),
        .outputs = {{"image_rect", "sensor_msgs/msg/Image", true}},
-       .parameters = {interpolation_declaration()},
-       .device_resident_backends = image_resident_backends()},
-      [](graph::Context& context, const KernelConfig& config) {
-        return std::make_shared<RectifyNode>(context, config);
+       .parameters = {interpolation_declaration()}},
+      rectify_implementations(),
+      [](graph::Context& context, const KernelConfig& config, const RectifyImplementation& i) {
+        return std::make_shared<RectifyNode>(context, config, i);
       });
   const ResizeParams defaults;
-  registrar.add_kernel(
+  register_implementations(
+      registrar,
       {.name = "image_proc/resize",
        .description = "resize an image and scale its CameraInfo (K, P, ROI), as image_proc",
-       .backends = perception_backends(),
        .inputs = camera_inputs(true),
        .outputs = {{"resize", "sensor_msgs/msg/Image"},
                    {"resize_info", "sensor_msgs/msg/CameraInfo"}},
@@ -174,10 +176,10 @@ void register_image_proc_kernels(plugin::Registrar& registrar) {
                                   "target height without use_scale; -1 keeps the input's"),
             plugin::int_parameter("width", defaults.width,
                                   "target width without use_scale; -1 keeps the input's"),
-            interpolation_declaration()},
-       .device_resident_backends = image_resident_backends()},
-      [](graph::Context& context, const KernelConfig& config) {
-        return std::make_shared<ResizeNode>(context, config);
+            interpolation_declaration()}},
+      resize_implementations(),
+      [](graph::Context& context, const KernelConfig& config, const ResizeImplementation& i) {
+        return std::make_shared<ResizeNode>(context, config, i);
       });
 }
 
