@@ -23,8 +23,8 @@
 
 namespace robotperf::testing {
 
-// The kernels and evaluators the given registration functions add (datasets, output comparisons
-// and backends are left out).
+// The kernels (with their implementations on further backends) and evaluators the given
+// registration functions add (datasets, output comparisons and backends are left out).
 class CategoryUnderTest final : public plugin::Registrar {
  public:
   CategoryUnderTest(std::initializer_list<void (*)(plugin::Registrar&)> registrations) {
@@ -33,6 +33,9 @@ class CategoryUnderTest final : public plugin::Registrar {
   void add_kernel(plugin::KernelInfo info, plugin::KernelFactory factory) override {
     const std::string name = info.name;
     kernels_[name] = {std::move(info), std::move(factory)};
+  }
+  void add_kernel_backend(plugin::KernelBackendInfo info, plugin::KernelFactory factory) override {
+    implementations_[{info.kernel, info.backend}] = std::move(factory);
   }
   void add_dataset(plugin::DatasetInfo, plugin::DatasetGenerator) override {}
   void add_output_comparison(plugin::OutputComparisonInfo, plugin::OutputComparison) override {}
@@ -53,8 +56,11 @@ class CategoryUnderTest final : public plugin::Registrar {
       for (const auto& port : ports) config.topics[port.name] = "/test/" + port.name;
     return config;
   }
+  // The node of `kernel` on config.backend: its implementation there, else the kernel's factory.
   std::shared_ptr<graph::Node> build(graph::Context& context, const std::string& kernel,
                                      const plugin::KernelConfig& config) const {
+    const auto it = implementations_.find({kernel, config.backend});
+    if (it != implementations_.end()) return it->second(context, config);
     return kernels_.at(kernel).second(context, config);
   }
   std::unique_ptr<plugin::FunctionalEvaluator> evaluator(
@@ -66,6 +72,7 @@ class CategoryUnderTest final : public plugin::Registrar {
 
  private:
   std::map<std::string, std::pair<plugin::KernelInfo, plugin::KernelFactory>> kernels_;
+  std::map<std::pair<std::string, std::string>, plugin::KernelFactory> implementations_;
   std::map<std::string, std::pair<plugin::EvaluatorInfo, plugin::EvaluatorFactory>> evaluators_;
 };
 

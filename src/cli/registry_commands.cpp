@@ -47,6 +47,11 @@ int list_kernels(std::ostream& out) {
     const std::string backends = report::joined(i.backends, ", ");
     out << i.name << "  (" << origin(k->origin) << "; backends: " << backends << ")\n";
     out << "  " << i.description << "\n";
+    // Implementations another plug-in brought (Registrar::add_kernel_backend).
+    for (const auto& [backend, implementation] : k->implementations) {
+      if (implementation.origin != k->origin)
+        out << "  on " << backend << ": " << origin(implementation.origin) << "\n";
+    }
     out << "  in:  " << ports(i.inputs) << "\n";
     out << "  out: " << ports(i.outputs) << "\n";
     if (!i.device_resident_backends.empty()) {

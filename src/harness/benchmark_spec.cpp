@@ -621,19 +621,19 @@ std::shared_ptr<graph::Node> make_kernel_node(const NodeSpec& node, graph::Conte
   const std::string who = "node '" + node.name + "'";
   std::shared_ptr<graph::Node> built;
   try {
-    built = entry.factory(context, kernel_config(node, workload));
+    built = entry.factory_on(node.backend)(context, kernel_config(node, workload));
   } catch (const std::invalid_argument& e) {
     const std::string what = e.what();
     throw std::invalid_argument(what.starts_with(who) ? what : who + ": " + what);
   } catch (const std::exception& e) {
     // A kernel that cannot start (a missing device, a plug-in's own failure) is named with where
     // it came from.
-    throw std::runtime_error(who + ": kernel " + node.kernel + " (" + entry.origin +
-                             ") failed to start: " + e.what());
+    throw std::runtime_error(who + ": kernel " + node.kernel + " (" +
+                             entry.origin_on(node.backend) + ") failed to start: " + e.what());
   }
   if (!built) {
     throw std::runtime_error("node '" + node.name + "': kernel " + node.kernel + " (" +
-                             entry.origin + ") built no node");
+                             entry.origin_on(node.backend) + ") built no node");
   }
   return built;
 }

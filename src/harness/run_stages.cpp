@@ -486,7 +486,7 @@ void stop_graph(const RunPlan& plan, RunEnvironment& env, Instruments& instrumen
   for (auto& n : r.nodes) {
     const auto node = std::ranges::find(plan.spec().nodes, n.name, &NodeSpec::name);
     if (node == plan.spec().nodes.end()) continue;
-    n.origin = kernel_of(*node).origin;
+    n.origin = kernel_of(*node).origin_on(node->backend);
     n.parameters = kernel_config(*node, plan.spec().workload).parameters.effective();
   }
 }

@@ -192,12 +192,30 @@ void check_backend(const BackendInfo& info) {
   }
 }
 
+void check_kernel_backend(const KernelBackendInfo& info, const KernelFactory& factory) {
+  check_name("kernel", info.kernel);
+  check_name("kernel " + info.kernel + ": backend", info.backend);
+  if (!factory) {
+    throw std::invalid_argument("kernel " + info.kernel + " on backend " + info.backend +
+                                ": no factory");
+  }
+}
+
+struct StagedKernelBackend {
+  KernelBackendInfo info;
+  KernelFactory factory;
+};
+
 // Collects what one registration adds, checking each description as it comes.
 class StagingRegistrar final : public Registrar {
  public:
   void add_kernel(KernelInfo info, KernelFactory factory) override {
     check_kernel(info, factory);
     kernels.push_back({std::move(info), std::move(factory), {}});
+  }
+  void add_kernel_backend(KernelBackendInfo info, KernelFactory factory) override {
+    check_kernel_backend(info, factory);
+    kernel_backends.push_back({std::move(info), std::move(factory)});
   }
   void add_dataset(DatasetInfo info, DatasetGenerator generator) override {
     check_dataset(info, generator);
@@ -217,6 +235,7 @@ class StagingRegistrar final : public Registrar {
   }
 
   std::vector<KernelEntry> kernels;
+  std::vector<StagedKernelBackend> kernel_backends;
   std::vector<DatasetEntry> datasets;
   std::vector<EvaluatorEntry> evaluators;
   std::vector<OutputComparisonEntry> output_comparisons;
@@ -271,7 +290,70 @@ void commit(std::vector<Entry>& staged, std::map<std::string, Entry>& into,
   }
 }
 
+// The entry of the kernel an implementation is for: staged in the same registration (committed
+// before the implementations) or registered already. Throws when there is none, or when it has the
+// backend already.
+const KernelEntry& kernel_for(const KernelBackendInfo& info, const std::vector<KernelEntry>& staged,
+                              const std::map<std::string, KernelEntry>& existing) {
+  const KernelEntry* kernel = nullptr;
+  const auto named = [&](const KernelEntry& e) { return e.info.name == info.kernel; };
+  if (auto it = std::ranges::find_if(staged, named); it != staged.end()) {
+    kernel = &*it;
+  } else if (auto found = existing.find(info.kernel); found != existing.end()) {
+    kernel = &found->second;
+  }
+  if (kernel == nullptr) {
+    throw std::invalid_argument("an implementation of kernel '" + info.kernel + "' on backend '" +
+                                info.backend + "': no such kernel is registered");
+  }
+  if (std::ranges::count(kernel->info.backends, info.backend) > 0) {
+    throw std::invalid_argument("kernel '" + info.kernel + "' already has backend '" +
+                                info.backend + "' (" +
+                                (kernel->origin.empty() ? std::string("this registration")
+                                                        : kernel->origin_on(info.backend)) +
+                                ")");
+  }
+  return *kernel;
+}
+
+// Checks the staged implementations against the kernels they extend (and each other).
+void check_kernel_backends(const std::vector<StagedKernelBackend>& staged,
+                           const std::vector<KernelEntry>& staged_kernels,
+                           const std::map<std::string, KernelEntry>& existing) {
+  std::set<std::pair<std::string, std::string>> seen;
+  for (const auto& s : staged) {
+    kernel_for(s.info, staged_kernels, existing);
+    if (!seen.emplace(s.info.kernel, s.info.backend).second) {
+      throw std::invalid_argument("kernel '" + s.info.kernel + "' on backend '" + s.info.backend +
+                                  "' registered twice");
+    }
+  }
+}
+
+// Adds the implementations to their kernels' entries, which then list their backends.
+void commit_kernel_backends(std::vector<StagedKernelBackend>& staged,
+                            std::map<std::string, KernelEntry>& kernels,
+                            const std::string& origin) {
+  for (auto& s : staged) {
+    KernelEntry& kernel = kernels.at(s.info.kernel);
+    kernel.info.backends.push_back(s.info.backend);
+    if (s.info.device_resident) kernel.info.device_resident_backends.push_back(s.info.backend);
+    kernel.implementations.emplace(s.info.backend,
+                                   KernelImplementation{std::move(s.factory), origin});
+  }
+}
+
 }  // namespace
+
+const KernelFactory& KernelEntry::factory_on(const std::string& backend) const {
+  const auto it = implementations.find(backend);
+  return it == implementations.end() ? factory : it->second.factory;
+}
+
+const std::string& KernelEntry::origin_on(const std::string& backend) const {
+  const auto it = implementations.find(backend);
+  return it == implementations.end() ? origin : it->second.origin;
+}
 
 struct Registry::State {
   // std::map: entries never move, so the pointers handed out stay valid.
@@ -307,6 +389,7 @@ void Registry::add_as(const std::string& origin, const std::string& label,
   std::lock_guard lock(mutex_);
   try {
     check_unique("kernel", staged.kernels, state_->kernels);
+    check_kernel_backends(staged.kernel_backends, staged.kernels, state_->kernels);
     check_unique("dataset", staged.datasets, state_->datasets);
     check_unique("evaluator", staged.evaluators, state_->evaluators);
     check_unique("output comparison of", staged.output_comparisons, state_->output_comparisons);
@@ -315,6 +398,7 @@ void Registry::add_as(const std::string& origin, const std::string& label,
     throw PluginError(label + ": " + e.what());
   }
   commit(staged.kernels, state_->kernels, origin);
+  commit_kernel_backends(staged.kernel_backends, state_->kernels, origin);
   commit(staged.datasets, state_->datasets, origin);
   commit(staged.evaluators, state_->evaluators, origin);
   commit(staged.output_comparisons, state_->output_comparisons, origin);

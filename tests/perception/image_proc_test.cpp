@@ -685,7 +685,7 @@ std::string without_opencl() {
 
 TEST_F(RectifySynthetic, OpenClRectifiesAsTheCpuDoes) {
   if (const std::string why = without_opencl(); !why.empty()) GTEST_SKIP() << why;
-  Rectifier cpu, device(cv::INTER_LINEAR, ImageBackend::kOpenCl);
+  Rectifier cpu, device(cv::INTER_LINEAR, "opencl");
   for (const uint32_t index : {0u, 5u, 9u}) {
     const CameraFrame& frame = (*frames_)[index];
     for (const std::string encoding : {"rgb8", "mono16", "32FC1"}) {
@@ -709,7 +709,7 @@ TEST_F(RectifySynthetic, OpenClResizesAsTheCpuDoes) {
       msgs::Image expected, got;
       msgs::CameraInfo expected_info, got_info;
       resize(image, frame.info, p, expected, expected_info);
-      resize(image, frame.info, p, got, got_info, ImageBackend::kOpenCl);
+      resize(image, frame.info, p, got, got_info, "opencl");
       ASSERT_EQ(got.width, expected.width);
       ASSERT_EQ(got.height, expected.height);
       EXPECT_EQ(got_info.k, expected_info.k);
@@ -765,33 +765,33 @@ TEST(ImageBackend, OpenClHasTheInterpolationsOpenCvsOpenClKernelsCompute) {
     }
   };
   for (const int interpolation : {cv::INTER_CUBIC, cv::INTER_AREA, cv::INTER_LANCZOS4}) {
-    expect_refused([&] { Rectifier(interpolation, ImageBackend::kOpenCl); },
+    expect_refused([&] { Rectifier(interpolation, "opencl"); },
                    "interpolation " + std::to_string(interpolation));
   }
   for (const int interpolation : {cv::INTER_CUBIC, cv::INTER_LANCZOS4}) {
     ResizeParams params;
     params.interpolation = interpolation;
-    expect_refused([&] { Resizer(params, ImageBackend::kOpenCl); },
+    expect_refused([&] { Resizer(params, "opencl"); },
                    "interpolation " + std::to_string(interpolation));
   }
   ResizeParams area;
   area.interpolation = cv::INTER_AREA;
   area.scale_width = 2.0;
-  expect_refused([&] { Resizer(area, ImageBackend::kOpenCl); }, "interpolation 3 (INTER_AREA)");
-  EXPECT_THROW(Rectifier(cv::INTER_CUBIC, ImageBackend::kOpenCl), std::invalid_argument);
+  expect_refused([&] { Resizer(area, "opencl"); }, "interpolation 3 (INTER_AREA)");
+  EXPECT_THROW(Rectifier(cv::INTER_CUBIC, "opencl"), std::invalid_argument);
   ResizeParams lanczos;
   lanczos.interpolation = cv::INTER_LANCZOS4;
-  EXPECT_THROW(Resizer(lanczos, ImageBackend::kOpenCl), std::invalid_argument);
+  EXPECT_THROW(Resizer(lanczos, "opencl"), std::invalid_argument);
 
   for (const int interpolation : {cv::INTER_NEAREST, cv::INTER_LINEAR}) {
-    EXPECT_NO_THROW(Rectifier(interpolation, ImageBackend::kOpenCl));
+    EXPECT_NO_THROW(Rectifier(interpolation, "opencl"));
     ResizeParams params;
     params.interpolation = interpolation;
     params.scale_width = params.scale_height = 2.0;
-    EXPECT_NO_THROW(Resizer(params, ImageBackend::kOpenCl));
+    EXPECT_NO_THROW(Resizer(params, "opencl"));
   }
   area.scale_width = area.scale_height = 0.5;
-  EXPECT_NO_THROW(Resizer(area, ImageBackend::kOpenCl));
+  EXPECT_NO_THROW(Resizer(area, "opencl"));
 }
 
 // What OpenCV's OpenCL remap and resize would compute on the CPU is refused image by image (the
@@ -799,7 +799,7 @@ TEST(ImageBackend, OpenClHasTheInterpolationsOpenCvsOpenClKernelsCompute) {
 // an image of 10 px or less either way, INTER_AREA enlarging to a given size. An image just over
 // those limits is computed, as the cpu computes it.
 TEST_F(RectifySynthetic, OpenClRefusesTheImagesOpenCvWouldComputeOnTheCpu) {
-  // The device is chosen before the first OpenCL work (a node's backend_of() does so), else
+  // The device is chosen before the first OpenCL work (making a processor on opencl does so), else
   // OpenCV settles on its default, GPUs only; the refusals need none.
   const std::string without_device = without_opencl();
   const CameraFrame& frame = frames_->front();
@@ -818,8 +818,8 @@ TEST_F(RectifySynthetic, OpenClRefusesTheImagesOpenCvWouldComputeOnTheCpu) {
   image_view(as_encoding(frame.image, "32FC1"))
       .convertTo(prepare_image(doubles, frame.image.header, "64FC1", 640, 480), CV_64F);
   const msgs::Image five_channels = make_image("8UC5", 640, 480, 5);
-  Rectifier rectifier(cv::INTER_LINEAR, ImageBackend::kOpenCl);
-  Resizer resizer(ResizeParams{}, ImageBackend::kOpenCl);
+  Rectifier rectifier(cv::INTER_LINEAR, "opencl");
+  Resizer resizer(ResizeParams{}, "opencl");
   for (const msgs::Image* image : {&std::as_const(doubles), &five_channels}) {
     msgs::Image out;
     msgs::CameraInfo out_info;
@@ -831,13 +831,13 @@ TEST_F(RectifySynthetic, OpenClRefusesTheImagesOpenCvWouldComputeOnTheCpu) {
 
   ResizeParams twice;
   twice.scale_width = twice.scale_height = 2.0;
-  Resizer enlarging(twice, ImageBackend::kOpenCl);
+  Resizer enlarging(twice, "opencl");
   ResizeParams area_to_size;
   area_to_size.interpolation = cv::INTER_AREA;
   area_to_size.use_scale = false;
   area_to_size.width = 20;
   area_to_size.height = 12;
-  Resizer area(area_to_size, ImageBackend::kOpenCl);
+  Resizer area(area_to_size, "opencl");
   msgs::CameraInfo small_info = make_pinhole_camera_info(10, 30, 1.0, {}, "cam");
   for (const auto& [width, height] : {std::pair{10u, 30u}, {30u, 10u}}) {
     small_info.width = width;
@@ -862,7 +862,7 @@ TEST_F(RectifySynthetic, OpenClRefusesTheImagesOpenCvWouldComputeOnTheCpu) {
   resize(eleven, small_info, twice, expected, expected_info);
   expect_the_cpus_answer(out, expected, "resize 11x11 to 22x22");
   area_to_size.width = area_to_size.height = 10;
-  Resizer(area_to_size, ImageBackend::kOpenCl).resize(eleven, small_info, out, out_info);
+  Resizer(area_to_size, "opencl").resize(eleven, small_info, out, out_info);
   resize(eleven, small_info, area_to_size, expected, expected_info);
   expect_the_cpus_answer(out, expected, "INTER_AREA 11x11 to 10x10");
 }
@@ -873,7 +873,7 @@ TEST_F(RectifySynthetic, OpenClRefusesTheImagesOpenCvWouldComputeOnTheCpu) {
 
 TEST_F(RectifySynthetic, CudaRectifiesAsTheCpuDoes) {
   if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
-  Rectifier cpu, device(cv::INTER_LINEAR, ImageBackend::kCuda);
+  Rectifier cpu, device(cv::INTER_LINEAR, "cuda");
   for (const uint32_t index : {0u, 5u, 9u}) {
     const CameraFrame& frame = (*frames_)[index];
     for (const std::string encoding : {"rgb8", "bgra8", "mono8", "mono16", "32FC1"}) {
@@ -901,7 +901,7 @@ TEST_F(RectifySynthetic, CudaResizesAsTheCpuDoes) {
   }
   for (const auto& [name, params] : cases) {
     // One Resizer per geometry, as a node has: its taps are computed once.
-    Resizer device(params, ImageBackend::kCuda);
+    Resizer device(params, "cuda");
     for (const std::string encoding : {"rgb8", "bgra8", "mono8", "mono16", "32FC1"}) {
       const msgs::Image image =
           encoding == "rgb8" ? frame.image : as_encoding(frame.image, encoding);
@@ -927,10 +927,10 @@ TEST_F(RectifySynthetic, CudaResizesAsTheCpuDoes) {
 // resize takes it there, and the answer is the cpu's rectify then resize.
 TEST_F(RectifySynthetic, CudaHandsTheRectifiedImageToResizeOnTheDevice) {
   if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
-  Rectifier cpu, device(cv::INTER_LINEAR, ImageBackend::kCuda);
+  Rectifier cpu, device(cv::INTER_LINEAR, "cuda");
   ResizeParams twice;
   twice.scale_width = twice.scale_height = 2.0;
-  Resizer device_resizer(twice, ImageBackend::kCuda);
+  Resizer device_resizer(twice, "cuda");
   for (const uint32_t index : {0u, 7u}) {
     const CameraFrame& frame = (*frames_)[index];
     msgs::Image header_only;
@@ -989,9 +989,8 @@ TEST(ImageBackend, CudaHasInterLinearOnly) {
     ResizeParams params;
     params.interpolation = interpolation;
     const std::string named = "interpolation " + std::to_string(interpolation);
-    for (const auto& make :
-         std::vector<std::function<void()>>{[&] { Rectifier(interpolation, ImageBackend::kCuda); },
-                                            [&] { Resizer(params, ImageBackend::kCuda); }}) {
+    for (const auto& make : std::vector<std::function<void()>>{
+             [&] { Rectifier(interpolation, "cuda"); }, [&] { Resizer(params, "cuda"); }}) {
       try {
         make();
         ADD_FAILURE() << named << " was accepted on cuda";
@@ -1004,14 +1003,9 @@ TEST(ImageBackend, CudaHasInterLinearOnly) {
 
 TEST(ImageBackend, CudaWithoutItsBuildOrDeviceIsOneLine) {
   if (without_cuda().empty()) GTEST_SKIP() << "a CUDA device is there: " << cuda_device().name;
-  expect_cuda_missing_line(
-      [] {
-        image_backend("cuda");
-        cuda_device();
-      },
-      "the cuda backend's device");
-  expect_cuda_missing_line([] { Rectifier(cv::INTER_LINEAR, ImageBackend::kCuda); }, "Rectifier");
-  expect_cuda_missing_line([] { Resizer(ResizeParams{}, ImageBackend::kCuda); }, "Resizer");
+  expect_cuda_missing_line([] { cuda_device(); }, "the cuda backend's device");
+  expect_cuda_missing_line([] { Rectifier(cv::INTER_LINEAR, "cuda"); }, "Rectifier");
+  expect_cuda_missing_line([] { Resizer(ResizeParams{}, "cuda"); }, "Resizer");
   expect_cuda_missing_line([] { cuda_transfer_floor(1024, 1); }, "cuda_transfer_floor");
 }
 
@@ -1030,18 +1024,28 @@ TEST(CudaTransferFloor, EachWayMovesTheBytesThereAndBack) {
   EXPECT_THROW(cuda_transfer_floor(1024, 0), std::invalid_argument);
 }
 
-TEST(ImageBackend, NamesAreCpuOpenclAndCuda) {
-  EXPECT_EQ(image_backend("cpu"), ImageBackend::kCpu);
-  EXPECT_EQ(image_backend("opencl"), ImageBackend::kOpenCl);
-  if (cuda_backend_built()) {
-    EXPECT_EQ(image_backend("cuda"), ImageBackend::kCuda);
-  } else {
-    expect_cuda_missing_line([] { image_backend("cuda"); }, "image_backend(\"cuda\")");
+// Each processor's implementations are found by backend name, cpu first; a name none has is
+// refused naming those there are.
+TEST(ImageBackend, ImplementationsAreFoundByName) {
+  const auto names = [](const auto& table) {
+    std::vector<std::string> out;
+    for (const auto& i : table) out.emplace_back(i.backend);
+    return out;
+  };
+  const std::vector<std::string> all{"cpu", "opencl", "cuda"};
+  EXPECT_EQ(names(rectify_implementations()), all);
+  EXPECT_EQ(names(resize_implementations()), all);
+  EXPECT_EQ(&implementation_on(rectify_implementations(), "opencl"), &rectify_implementations()[1]);
+  EXPECT_EQ(rectify_implementations()[0].device, nullptr);
+  if (!cuda_backend_built()) {
+    expect_cuda_missing_line([] { Rectifier(cv::INTER_LINEAR, "cuda"); }, "Rectifier on cuda");
   }
-  EXPECT_THROW(image_backend("vulkan"), std::invalid_argument);
-  EXPECT_STREQ(image_backend_name(ImageBackend::kCuda), "cuda");
-  EXPECT_STREQ(image_backend_name(ImageBackend::kOpenCl), "opencl");
-  EXPECT_STREQ(image_backend_name(ImageBackend::kCpu), "cpu");
+  try {
+    Rectifier(cv::INTER_LINEAR, "vulkan");
+    ADD_FAILURE() << "no vulkan backend, yet a Rectifier was made on it";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "no image backend 'vulkan' (cpu, opencl, cuda)");
+  }
 }
 
 // ---------------------------------------------------------------------------------------------

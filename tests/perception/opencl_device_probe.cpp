@@ -16,7 +16,7 @@ namespace perception = robotperf::perception;
 
 int main(int argc, char** argv) {
   const std::string kernel = argc > 1 ? argv[1] : "";
-  constexpr auto kOpenCl = perception::ImageBackend::kOpenCl;
+  constexpr const char* kOpenCl = "opencl";
   try {
     if (kernel.empty()) {
       std::cout << perception::opencl_device().name << "\n";

@@ -506,7 +506,7 @@ TEST(PointCloudXyzrgb, ScenePointsMatchTheTruth) {
 // as NaN and as range_max, every colour layout, and the synthetic scene; a colour image of another
 // size is resized on the device (coordinates still identical, colours within 1). One processor
 // for all, as a node keeps one: its buffers are reused, and grown for larger images.
-void expect_the_cpus_cloud(ImageBackend backend) {
+void expect_the_cpus_cloud(std::string_view backend) {
   PointCloudXyzrgbProcessor device_processor(backend);
   auto both = [&](const msgs::Image& depth, const msgs::Image& colour, const msgs::CameraInfo& info,
                   PointCloudXyzrgbParams params) {
@@ -565,23 +565,21 @@ TEST(PointCloudXyzrgb, OpenClGivesTheCpusCloud) {
   } catch (const std::invalid_argument& e) {
     GTEST_SKIP() << e.what();
   }
-  expect_the_cpus_cloud(ImageBackend::kOpenCl);
+  expect_the_cpus_cloud("opencl");
 }
 
 TEST(PointCloudXyzrgb, CudaGivesTheCpusCloud) {
   if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
-  expect_the_cpus_cloud(ImageBackend::kCuda);
+  expect_the_cpus_cloud("cuda");
 }
 
 TEST(PointCloudXyzrgb, CudaWithoutItsBuildOrDeviceIsOneLine) {
   if (without_cuda().empty()) GTEST_SKIP() << "a CUDA device is there: " << cuda_device().name;
-  expect_cuda_missing_line([] { PointCloudXyzrgbProcessor(ImageBackend::kCuda); },
-                           "PointCloudXyzrgbProcessor");
+  expect_cuda_missing_line([] { PointCloudXyzrgbProcessor("cuda"); }, "PointCloudXyzrgbProcessor");
   Tiny t("32FC1", "rgb8");
   msgs::PointCloud2 c;
-  expect_cuda_missing_line(
-      [&] { point_cloud_xyzrgb(t.depth, t.colour, t.info, {}, c, ImageBackend::kCuda); },
-      "point_cloud_xyzrgb");
+  expect_cuda_missing_line([&] { point_cloud_xyzrgb(t.depth, t.colour, t.info, {}, c, "cuda"); },
+                           "point_cloud_xyzrgb");
 }
 
 }  // namespace
@@ -602,7 +600,7 @@ struct DisparityAgreement {
 // StereoBM on a device backend against OpenCV's StereoBM on the CPU, on the synthetic pair (of
 // `height` rows) at stereo_image_proc's defaults and with another window, range, texture and
 // uniqueness; the valid window is the cpu's. One result per parameter set and frame.
-std::vector<DisparityAgreement> device_disparity_agreement(ImageBackend backend,
+std::vector<DisparityAgreement> device_disparity_agreement(std::string_view backend,
                                                            uint32_t height = 480) {
   SyntheticStereoConfig config;
   config.frames = 2;
@@ -654,7 +652,7 @@ TEST(DisparityOpenCl, GivesTheCpusDisparity) {
   } catch (const std::invalid_argument& e) {
     GTEST_SKIP() << e.what();
   }
-  const auto results = device_disparity_agreement(ImageBackend::kOpenCl);
+  const auto results = device_disparity_agreement("opencl");
   EXPECT_EQ(results.size(), 4u);
   for (const DisparityAgreement& d : results) {
     EXPECT_GE(d.within, d.valid - d.valid / 1000);
@@ -663,7 +661,7 @@ TEST(DisparityOpenCl, GivesTheCpusDisparity) {
   }
   StereoParams sgbm;
   sgbm.algorithm = StereoAlgorithm::kSemiGlobal;
-  EXPECT_THROW(DisparityProcessor(sgbm, ImageBackend::kOpenCl), std::invalid_argument);
+  EXPECT_THROW(DisparityProcessor(sgbm, "opencl"), std::invalid_argument);
 }
 
 // A cols x rows mono8 pair of noise and its CameraInfo, for the disparity's input checks.
@@ -682,15 +680,15 @@ MonoPair mono_pair(uint32_t cols, uint32_t rows) {
 // OpenCV's StereoBM refuses a window not smaller than the images' width and height; a device
 // backend refuses it as the cpu does (its kernels gave an all-invalid image), in one line naming
 // the window. A smaller window on the same pair is computed.
-void expect_a_window_as_large_as_the_images_refused(ImageBackend backend) {
+void expect_a_window_as_large_as_the_images_refused(std::string_view backend) {
   const MonoPair pair = mono_pair(12, 12);
   StereoParams window_15;  // stereo_image_proc's default window
   ASSERT_EQ(window_15.correlation_window_size, 15);
   StereoParams window_5;
   window_5.correlation_window_size = 5;
   window_5.disparity_range = 16;
-  for (const ImageBackend b : {backend, ImageBackend::kCpu}) {
-    const std::string name = image_backend_name(b);
+  for (const std::string_view b : {backend, std::string_view("cpu")}) {
+    const std::string name(b);
     msgs::DisparityImage out;
     DisparityProcessor matcher(window_15, b);
     try {
@@ -712,12 +710,12 @@ TEST(DisparityOpenCl, RefusesAWindowAsLargeAsTheImagesAsTheCpuDoes) {
   } catch (const std::invalid_argument& e) {
     GTEST_SKIP() << e.what();
   }
-  expect_a_window_as_large_as_the_images_refused(ImageBackend::kOpenCl);
+  expect_a_window_as_large_as_the_images_refused("opencl");
 }
 
 TEST(DisparityCuda, RefusesAWindowAsLargeAsTheImagesAsTheCpuDoes) {
   if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
-  expect_a_window_as_large_as_the_images_refused(ImageBackend::kCuda);
+  expect_a_window_as_large_as_the_images_refused("cuda");
 }
 
 // The opencl StereoBM keeps its two cost volumes (an int per pixel and disparity) whole on the
@@ -736,7 +734,7 @@ TEST(DisparityOpenCl, RefusesACostVolumeLargerThanTheDeviceAllocates) {
   wide.disparity_range = 1024;
   while ((wide.disparity_range + 1) * std::size_t{1920 * 1200 * 4} <= max_alloc)
     wide.disparity_range += 1024;
-  DisparityProcessor matcher(wide, ImageBackend::kOpenCl);
+  DisparityProcessor matcher(wide, "opencl");
   msgs::DisparityImage out;
   try {
     matcher.compute(pair.left, pair.right, pair.info, pair.info, out);
@@ -755,7 +753,7 @@ TEST(DisparityOpenCl, RefusesACostVolumeLargerThanTheDeviceAllocates) {
 // An odd height: OpenCV's pre-filter leaves the last row at the cap (it filters rows in pairs),
 // and so do the device kernels; at the defaults the disparities are then the cpu's (a pre-filter
 // of that row made 339 pixels differ). A few pixels of slack for the cpu's own variation.
-void expect_cpus_disparity_at_an_odd_height(ImageBackend backend) {
+void expect_cpus_disparity_at_an_odd_height(std::string_view backend) {
   const auto results = device_disparity_agreement(backend, 479);
   ASSERT_EQ(results.size(), 4u);
   for (std::size_t i = 0; i < 2; ++i) {  // the defaults' two frames
@@ -770,7 +768,7 @@ TEST(DisparityOpenCl, GivesTheCpusDisparityAtAnOddHeight) {
   } catch (const std::invalid_argument& e) {
     GTEST_SKIP() << e.what();
   }
-  expect_cpus_disparity_at_an_odd_height(ImageBackend::kOpenCl);
+  expect_cpus_disparity_at_an_odd_height("opencl");
 }
 
 // The cuda kernels are the OpenCL kernels' port (the same integer arithmetic): held to the backend
@@ -779,7 +777,7 @@ TEST(DisparityOpenCl, GivesTheCpusDisparityAtAnOddHeight) {
 // with the share identical for the record.
 TEST(DisparityCuda, GivesTheCpusDisparity) {
   if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
-  const auto results = device_disparity_agreement(ImageBackend::kCuda);
+  const auto results = device_disparity_agreement("cuda");
   EXPECT_EQ(results.size(), 4u);
   for (const DisparityAgreement& d : results) {
     EXPECT_GE(d.within, d.valid - d.valid / 20);
@@ -792,7 +790,7 @@ TEST(DisparityCuda, GivesTheCpusDisparity) {
 // As the opencl kernels, the last row of an odd height pre-filtered to the cap, as OpenCV does.
 TEST(DisparityCuda, GivesTheCpusDisparityAtAnOddHeight) {
   if (const std::string why = without_cuda(); !why.empty()) GTEST_SKIP() << why;
-  expect_cpus_disparity_at_an_odd_height(ImageBackend::kCuda);
+  expect_cpus_disparity_at_an_odd_height("cuda");
 }
 
 // The pair is written as mono8 straight into the memory the device uploads from, the left image
@@ -814,7 +812,7 @@ TEST(DisparityCuda, GivesAMono8PairTheDisparityOfItsRgb8Twin) {
   grey.copyTo(prepare_image(right_mono, frame.right.header, "mono8", 160, 120));
   StereoParams params;
   params.disparity_range = 32;
-  DisparityProcessor device(params, ImageBackend::kCuda);
+  DisparityProcessor device(params, "cuda");
   msgs::DisparityImage from_rgb, from_mono;
   // The twin first: its pixels are not in that memory already.
   device.compute(left_mono, right_mono, frame.left_info, frame.right_info, from_mono);
@@ -851,7 +849,7 @@ TEST(DisparityCuda, HasStereoBmWithoutNegativeDisparitiesOnly) {
   negative.min_disparity = -4;
   for (const auto& [params, named] : {std::pair{sgbm, "StereoSGBM"}, {negative, "min_disparity"}}) {
     try {
-      DisparityProcessor(params, ImageBackend::kCuda);
+      DisparityProcessor(params, "cuda");
       ADD_FAILURE() << named << " was accepted on cuda";
     } catch (const std::invalid_argument& e) {
       EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
@@ -868,7 +866,7 @@ TEST(DisparityCuda, RefusesAWindowAndRangeItsTilesCannotHold) {
   wide.correlation_window_size = 121;
   wide.disparity_range = 256;
   try {
-    DisparityProcessor(wide, ImageBackend::kCuda);
+    DisparityProcessor(wide, "cuda");
     ADD_FAILURE() << "a window of 121 px with 256 disparities was accepted on cuda";
   } catch (const std::invalid_argument& e) {
     const std::string line = e.what();
@@ -880,14 +878,13 @@ TEST(DisparityCuda, RefusesAWindowAndRangeItsTilesCannotHold) {
   a3_like.correlation_window_size = 15;
   a3_like.disparity_range = 64;
   if (without_cuda().empty()) {
-    EXPECT_NO_THROW(DisparityProcessor(a3_like, ImageBackend::kCuda));
+    EXPECT_NO_THROW(DisparityProcessor(a3_like, "cuda"));
   }
 }
 
 TEST(DisparityCuda, WithoutItsBuildOrDeviceIsOneLine) {
   if (without_cuda().empty()) GTEST_SKIP() << "a CUDA device is there: " << cuda_device().name;
-  expect_cuda_missing_line([] { DisparityProcessor({}, ImageBackend::kCuda); },
-                           "DisparityProcessor");
+  expect_cuda_missing_line([] { DisparityProcessor({}, "cuda"); }, "DisparityProcessor");
 }
 
 }  // namespace

@@ -1,10 +1,14 @@
 // A plug-in that brings a backend of its own and judges its answers itself: the kernel
-// backend_plugin/offset copies joint states, adding `accelerator_error` to every position on the
-// test_accelerator backend (an accelerator that computes another answer); the plug-in registers
-// test_accelerator, with one device, and the comparison of sensor_msgs/JointState answers, and
-// test_unbuilt, a backend this robotperf cannot run. The backend plug-in tests load it.
+// backend_plugin/offset copies joint states, and its implementation on the test_accelerator
+// backend adds `accelerator_error` to every position (an accelerator that computes another
+// answer); it also brings an implementation of the built-in util/relay on test_accelerator, for
+// joint states. The plug-in registers test_accelerator, with one device, and the comparison of
+// sensor_msgs/JointState answers, and test_unbuilt, a backend this robotperf cannot run. The
+// backend plug-in tests load it.
 #include <cmath>
 #include <random>
+#include <stdexcept>
+#include <string>
 
 #include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/plugin.hpp"
@@ -17,10 +21,8 @@ constexpr const char* kAccelerator = "test_accelerator";
 
 class OffsetNode final : public graph::Node {
  public:
-  OffsetNode(graph::Context& context, const plugin::KernelConfig& config)
-      : Node(context, config.node_name),
-        error_(config.backend == kAccelerator ? config.parameters.get_double("accelerator_error")
-                                              : 0.0) {
+  OffsetNode(graph::Context& context, const plugin::KernelConfig& config, double error)
+      : Node(context, config.node_name), error_(error) {
     output_ = create_publisher<msgs::JointState>(config.topic("output"), config.qos);
     input_ = create_subscription<msgs::JointState>(
         config.topic("input"), config.qos, [this](std::shared_ptr<const msgs::JointState> in) {
@@ -66,20 +68,37 @@ plugin::Agreement compare_joint_states(const void* accelerated, const void* cpu)
   return agreement;
 }
 
+// util/relay on the accelerator: joint states only, relayed as they came.
+std::shared_ptr<graph::Node> accelerated_relay(graph::Context& context,
+                                               const plugin::KernelConfig& config) {
+  if (config.parameters.get_string("type") != "sensor_msgs/msg/JointState") {
+    throw std::invalid_argument("util/relay on " + std::string(kAccelerator) +
+                                " relays sensor_msgs/msg/JointState only");
+  }
+  return std::make_shared<OffsetNode>(context, config, 0.0);
+}
+
 }  // namespace
 
 ROBOTPERF_PLUGIN(registrar) {
   registrar.add_kernel(
       {.name = "backend_plugin/offset",
        .description = "copy joint states, off by accelerator_error on test_accelerator",
-       .backends = {"cpu", kAccelerator},
        .inputs = {{"input", "sensor_msgs/msg/JointState"}},
        .outputs = {{"output", "sensor_msgs/msg/JointState"}},
        .parameters = {plugin::double_parameter("accelerator_error", 0.0,
                                                "added to every position on test_accelerator")}},
       [](graph::Context& context, const plugin::KernelConfig& config) {
-        return std::make_shared<OffsetNode>(context, config);
+        return std::make_shared<OffsetNode>(context, config, 0.0);
       });
+  registrar.add_kernel_backend({.kernel = "backend_plugin/offset", .backend = kAccelerator},
+                               [](graph::Context& context, const plugin::KernelConfig& config) {
+                                 return std::make_shared<OffsetNode>(
+                                     context, config,
+                                     config.parameters.get_double("accelerator_error"));
+                               });
+  registrar.add_kernel_backend({.kernel = "util/relay", .backend = kAccelerator},
+                               accelerated_relay);
   registrar.add_dataset({.name = "backend_plugin/joints",
                          .description = "seeded joint states",
                          .rate_hz = 50,

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 
 #include "../command_line.hpp"
@@ -33,6 +34,13 @@ class BackendPlugin : public ::testing::Test {
   // Package `id` under dir_/benchmarks/tests/, running the plug-in's kernel with its
   // accelerator off by `accelerator_error`.
   void add_package(const std::string& id, double accelerator_error) {
+    std::ostringstream parameters;
+    parameters << "{accelerator_error: " << accelerator_error << "}";
+    add_package(id, "backend_plugin/offset", parameters.str());
+  }
+  // Package `id` running `kernel` with `parameters` (a YAML map) on the plug-in's joint states.
+  void add_package(const std::string& id, const std::string& kernel,
+                   const std::string& parameters) {
     const fs::path package = dir_ / "benchmarks" / "tests" / (id + "_offset");
     fs::create_directories(package);
     std::ofstream(package / "benchmark.yaml")
@@ -43,10 +51,10 @@ class BackendPlugin : public ::testing::Test {
            "validity: {min_samples: 10, max_loss_percent: 0.0}\n"
            "inputs:\n  - {topic: /states, type: sensor_msgs/msg/JointState, stream: states}\n"
            "output: {topic: /offset, type: sensor_msgs/msg/JointState}\n"
-           "nodes:\n  - name: offset\n    kernel: backend_plugin/offset\n"
-           "    topics: {input: /states, output: /offset}\n"
-           "    parameters: {accelerator_error: "
-        << accelerator_error << "}\n";
+           "nodes:\n  - name: offset\n    kernel: "
+        << kernel
+        << "\n    topics: {input: /states, output: /offset}\n    parameters: " << parameters
+        << "\n";
   }
 
   std::string with_plugin(const std::string& command) const {
@@ -88,6 +96,28 @@ TEST_F(BackendPlugin, RunOnItsBackendIsJudgedByItsComparison) {
   EXPECT_GT(check["compared"].get<int>(), 0);
   EXPECT_EQ(check["agreement"], 1.0);
   EXPECT_EQ(check["passed"], true) << check.dump();
+}
+
+// The plug-in's implementation of a built-in kernel (util/relay) on its backend: the node on
+// test_accelerator is the plug-in's, recorded as its origin, and answers as the cpu's relay does.
+TEST_F(BackendPlugin, ItsImplementationOfABuiltInKernelRunsOnItsBackend) {
+  add_package("x4", "util/relay", "{type: sensor_msgs/msg/JointState}");
+  Outcome o;
+  const nlohmann::json j = run_on_accelerator("x4", o);
+  ASSERT_EQ(o.exit_code, 0) << o.out;
+  ASSERT_TRUE(j.is_object()) << o.out;
+  const nlohmann::json& node = j["nodes"][0];
+  EXPECT_EQ(node["kernel"], "util/relay") << node.dump();
+  EXPECT_EQ(node["backend"], "test_accelerator") << node.dump();
+  EXPECT_EQ(node["origin"], fs::canonical(BACKEND_PLUGIN).string()) << node.dump();
+  EXPECT_EQ(j["backend_check"]["passed"], true) << j["backend_check"].dump();
+
+  // Its kernel list names the backend the plug-in added to the built-in kernel.
+  const Outcome list = robotperf_cli(with_plugin("list kernels"));
+  ASSERT_EQ(list.exit_code, 0) << list.out;
+  const std::size_t relay = list.out.find("util/relay");
+  ASSERT_NE(relay, std::string::npos) << list.out;
+  EXPECT_NE(list.out.find("cpu, test_accelerator", relay), std::string::npos) << list.out;
 }
 
 TEST_F(BackendPlugin, AnAnswerItsComparisonRejectsMakesTheRunInvalid) {

@@ -236,6 +236,57 @@ TEST(Backends, CpuIsImplicitAndNamesAreUniqueAndPrintable) {
       << again;
 }
 
+// An implementation on a further backend, registered with the kernel or by a later registration,
+// is what its entry builds on that backend, and the entry lists the backend.
+TEST(KernelBackends, AreListedAndBuildTheirBackendsNodes) {
+  Registry r;
+  r.add("lib_a.so", [](Registrar& reg) {
+    reg.add_kernel_backend({.kernel = "a/k", .backend = "device"}, no_node());
+    reg.add_kernel(kernel("a/k"), no_node());
+  });
+  r.add("lib_b.so", [](Registrar& reg) {
+    reg.add_kernel_backend({.kernel = "a/k", .backend = "other", .device_resident = true},
+                           no_node());
+  });
+  const KernelEntry* k = r.find_kernel("a/k");
+  ASSERT_NE(k, nullptr);
+  EXPECT_EQ(k->info.backends, (std::vector<std::string>{"cpu", "device", "other"}));
+  EXPECT_EQ(k->info.device_resident_backends, std::vector<std::string>{"other"});
+  EXPECT_EQ(k->origin_on("cpu"), "lib_a.so");
+  EXPECT_EQ(k->origin_on("other"), "lib_b.so");
+  EXPECT_EQ(&k->factory_on("other"), &k->implementations.at("other").factory);
+  EXPECT_EQ(&k->factory_on("cpu"), &k->factory);
+}
+
+TEST(KernelBackends, AnUnknownKernelOrATakenBackendAddsNothing) {
+  Registry r;
+  r.add("lib_a.so", [](Registrar& reg) {
+    reg.add_kernel(kernel("a/k"), no_node());
+    reg.add_kernel_backend({.kernel = "a/k", .backend = "device"}, no_node());
+  });
+  std::string e = error_of(r, "lib_b.so", [](Registrar& reg) {
+    reg.add_kernel_backend({.kernel = "a/k", .backend = "other"}, no_node());
+    reg.add_kernel_backend({.kernel = "a/none", .backend = "other"}, no_node());
+  });
+  EXPECT_NE(e.find("kernel 'a/none' on backend 'other': no such kernel is registered"),
+            std::string::npos)
+      << e;
+  EXPECT_EQ(r.find_kernel("a/k")->info.backends, (std::vector<std::string>{"cpu", "device"}));
+  e = error_of(r, "lib_c.so", [](Registrar& reg) {
+    reg.add_kernel_backend({.kernel = "a/k", .backend = "device"}, no_node());
+  });
+  EXPECT_NE(e.find("kernel 'a/k' already has backend 'device' (lib_a.so)"), std::string::npos) << e;
+  e = error_of(r, "lib_d.so", [](Registrar& reg) {
+    reg.add_kernel_backend({.kernel = "a/k", .backend = "twice"}, no_node());
+    reg.add_kernel_backend({.kernel = "a/k", .backend = "twice"}, no_node());
+  });
+  EXPECT_NE(e.find("kernel 'a/k' on backend 'twice' registered twice"), std::string::npos) << e;
+  e = error_of(r, "lib_e.so", [](Registrar& reg) {
+    reg.add_kernel_backend({.kernel = "a/k", .backend = "none"}, nullptr);
+  });
+  EXPECT_NE(e.find("kernel a/k on backend none: no factory"), std::string::npos) << e;
+}
+
 // Registered by the test program's built-in categories (BUILTINS).
 TEST(BuiltinCategories, PerceptionBringsItsComparisonsAndBackends) {
   for (const char* type :
@@ -251,6 +302,11 @@ TEST(BuiltinCategories, PerceptionBringsItsComparisonsAndBackends) {
     EXPECT_TRUE(b->hooks.devices) << name;
   }
   EXPECT_EQ(registry().find_backend("cpu"), nullptr);
+  // Its kernels' implementations, one per backend, each registered with the registry.
+  const KernelEntry* rectify = registry().find_kernel("image_proc/rectify");
+  ASSERT_NE(rectify, nullptr);
+  EXPECT_EQ(rectify->info.backends.front(), "cpu");
+  EXPECT_TRUE(rectify->implementations.contains("opencl"));
 }
 
 }  // namespace

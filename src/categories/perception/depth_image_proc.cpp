@@ -1,19 +1,12 @@
 #include "robotperf/perception/depth_image_proc.hpp"
 
-#include <algorithm>
-#include <cmath>
-#include <cstring>
-#include <limits>
-#include <opencv2/core/ocl.hpp>
-#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
 
-#include "cuda/cuda_backend.hpp"
-#include "device_stage.hpp"
+#include "depth_image_proc_computations.hpp"
+#include "robotperf/perception/cuda_device.hpp"
 #include "robotperf/perception/image_proc.hpp"
 #include "robotperf/perception/opencl_device.hpp"
-#include "xyzrgb_model.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -32,26 +25,6 @@ ColourLayout colour_layout(const std::string& encoding) {
                               "' is not supported (rgb8, rgba8, bgr8, bgra8, mono8)");
 }
 
-// Depth in the image's own unit: metres for float, millimetres for uint16.
-template <class T>
-struct DepthTraits;
-template <>
-struct DepthTraits<float> {
-  static bool valid(float d) { return std::isfinite(d); }
-  static float to_metres(float d) { return d; }
-  static float from_metres(double m) { return static_cast<float>(m); }
-};
-template <>
-struct DepthTraits<uint16_t> {
-  static bool valid(uint16_t d) { return d != 0; }
-  static float to_metres(uint16_t d) { return d * 0.001f; }
-  // Rounded to the nearest millimetre in float, as depth_image_proc's fromMeters (2.01 m is 2010,
-  // not 2009); a range beyond the encoding's 65.535 m saturates instead of wrapping.
-  static uint16_t from_metres(double m) {
-    return static_cast<uint16_t>(std::min(static_cast<float>(m) * 1000.0f + 0.5f, 65535.0f));
-  }
-};
-
 // As depth_image_proc takes it from image_geometry: the principal point in float, the focal
 // lengths in double.
 struct Pinhole {
@@ -65,50 +38,8 @@ float unit_over(float unit, double focal_length) {
   return static_cast<float>(static_cast<double>(unit) / focal_length);
 }
 
-template <class T>
-void convert_depth(const cv::Mat& depth, const Pinhole& model, double range_max,
-                   msgs::PointCloud2& cloud) {
-  using Traits = DepthTraits<T>;
-  const float unit = Traits::to_metres(T(1));
-  const float constant_x = unit_over(unit, model.fx);
-  const float constant_y = unit_over(unit, model.fy);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  const bool fill_invalid = range_max != 0.0;
-  const T fill = Traits::from_metres(range_max);
-  uint8_t* out = cloud.data.data();
-  for (int v = 0; v < depth.rows; ++v) {
-    const T* row = depth.ptr<T>(v);
-    for (int u = 0; u < depth.cols; ++u, out += kXyzrgbPointStep) {
-      T d = row[u];
-      float xyz[3];
-      if (!Traits::valid(d) && !fill_invalid) {
-        xyz[0] = xyz[1] = xyz[2] = nan;
-      } else {
-        if (!Traits::valid(d)) d = fill;
-        xyz[0] = (static_cast<float>(u) - model.cx) * d * constant_x;
-        xyz[1] = (static_cast<float>(v) - model.cy) * d * constant_y;
-        xyz[2] = Traits::to_metres(d);
-      }
-      std::memcpy(out + kXyzrgbOffsetX, xyz, sizeof xyz);
-    }
-  }
-}
-
-void convert_colour(const cv::Mat& colour, const ColourLayout& layout, msgs::PointCloud2& cloud) {
-  uint8_t* out = cloud.data.data() + kXyzrgbOffsetRgb;
-  for (int v = 0; v < colour.rows; ++v) {
-    const uint8_t* px = colour.ptr<uint8_t>(v);
-    for (int u = 0; u < colour.cols; ++u, px += layout.step, out += kXyzrgbPointStep) {
-      // Packed as PointCloud2Iterator's "b", "g", "r" views of the rgb field place them.
-      out[0] = px[layout.blue];
-      out[1] = px[layout.green];
-      out[2] = px[layout.red];
-    }
-  }
-}
-
-// The constants convert_depth computes with and the colour layout, for the device kernels.
-XyzrgbModel device_model(bool is_float, const Pinhole& model, double range_max,
+// The constants every backend computes a point with, and the colour layout.
+XyzrgbModel xyzrgb_model(bool is_float, const Pinhole& model, double range_max,
                          const ColourLayout& layout) {
   XyzrgbModel m;
   m.metres = is_float;
@@ -128,99 +59,21 @@ XyzrgbModel device_model(bool is_float, const Pinhole& model, double range_max,
   return m;
 }
 
-// The OpenCL twin of convert_depth and convert_colour: one work item per point, writing all of
-// its 32 bytes (padding zero) so that the downloaded cloud is complete.
-constexpr const char* kXyzrgbSource = R"CL(
-#pragma OPENCL FP_CONTRACT OFF
-__kernel void xyzrgb(__global const uchar* depth, int depth_step, int depth_offset,
-                     __global const uchar* colour, int colour_step, int colour_offset,
-                     __global uchar* cloud, int cloud_step, int cloud_offset,
-                     int rows, int cols, int is_float, float cx, float cy, float constant_x,
-                     float constant_y, int fill_invalid, float fill, int red, int green,
-                     int blue, int colour_px) {
-  const int u = get_global_id(0), v = get_global_id(1);
-  if (u >= cols || v >= rows) return;
-  float d;
-  int valid;
-  if (is_float) {
-    d = *(__global const float*)(depth + depth_offset + v * depth_step + u * 4);
-    valid = isfinite(d);
-  } else {
-    const ushort raw = *(__global const ushort*)(depth + depth_offset + v * depth_step + u * 2);
-    d = (float)raw;
-    valid = raw != 0;
-  }
-  float x, y, z;
-  if (!valid && !fill_invalid) {
-    x = y = z = as_float(0x7fc00000u);
-  } else {
-    if (!valid) d = fill;
-    x = ((float)u - cx) * d * constant_x;
-    y = ((float)v - cy) * d * constant_y;
-    z = is_float ? d : d * 0.001f;
-  }
-  __global uchar* p = cloud + cloud_offset + v * cloud_step + u * 32;
-  __global float* f = (__global float*)p;
-  f[0] = x;
-  f[1] = y;
-  f[2] = z;
-  f[3] = 0.0f;
-  __global const uchar* px = colour + colour_offset + v * colour_step + u * colour_px;
-  p[16] = px[blue];
-  p[17] = px[green];
-  p[18] = px[red];
-  p[19] = 0;
-  f[5] = f[6] = f[7] = 0.0f;
-}
-)CL";
-
-void convert_on_opencl(const cv::Mat& depth, const cv::Mat& colour, const XyzrgbModel& m,
-                       OpenClCloudBuffers& device, msgs::PointCloud2& cloud) {
-  cv::ocl::Kernel& kernel = device.xyzrgb;
-  if (kernel.empty()) {
-    static const cv::ocl::ProgramSource source(kXyzrgbSource);
-    if (!kernel.create("xyzrgb", source, cv::String()))
-      throw std::runtime_error("point_cloud_xyzrgb: the OpenCL kernel did not build");
-  }
-  {
-    DeviceStage upload("upload",
-                       depth.total() * depth.elemSize() + colour.total() * colour.elemSize(),
-                       opencl_queue());
-    depth.copyTo(device.depth);
-    colour.copyTo(device.colour);
-  }
-  device.cloud.create(depth.rows, static_cast<int>(cloud.row_step), CV_8UC1);
-  {
-    DeviceStage stage("compute", 0, opencl_queue());
-    const cv::UMat* pixel_colours = &device.colour;
-    if (device.colour.size() != device.depth.size()) {
-      cv::resize(device.colour, device.resized_colour, device.depth.size(), 0, 0, cv::INTER_LINEAR);
-      pixel_colours = &device.resized_colour;
-    }
-    kernel.args(cv::ocl::KernelArg::ReadOnlyNoSize(device.depth),
-                cv::ocl::KernelArg::ReadOnlyNoSize(*pixel_colours),
-                cv::ocl::KernelArg::WriteOnlyNoSize(device.cloud), depth.rows, depth.cols,
-                static_cast<int>(m.metres), m.cx, m.cy, m.constant_x, m.constant_y,
-                static_cast<int>(m.fill_invalid), m.fill, m.red, m.green, m.blue, m.colour_bytes);
-    size_t global[2] = {static_cast<size_t>(depth.cols), static_cast<size_t>(depth.rows)};
-    if (!kernel.run(2, global, nullptr, true))
-      throw std::runtime_error("point_cloud_xyzrgb: the OpenCL kernel did not run");
-  }
-  cv::Mat out(depth.rows, static_cast<int>(cloud.row_step), CV_8UC1, cloud.data.data());
-  {
-    DeviceStage download("download", cloud.data.size(), opencl_queue());
-    device.cloud.copyTo(out);
-  }
-  if (out.data != cloud.data.data())
-    throw std::logic_error("point_cloud_xyzrgb: the device's cloud has another size");
-}
-
 }  // namespace
 
-PointCloudXyzrgbProcessor::PointCloudXyzrgbProcessor(ImageBackend backend) : backend_(backend) {
-  if (backend == ImageBackend::kOpenCl) opencl_device();
-  if (backend == ImageBackend::kCuda) cuda_ = cuda::make_point_cloud_maker();
+std::span<const PointCloudImplementation> point_cloud_implementations() {
+  static const PointCloudImplementation table[] = {
+      {"cpu", make_cpu_point_cloud},
+      {"opencl", make_opencl_point_cloud, opencl_device},
+      {"cuda", make_cuda_point_cloud, cuda_device}};
+  return table;
 }
+
+PointCloudXyzrgbProcessor::PointCloudXyzrgbProcessor(std::string_view backend)
+    : PointCloudXyzrgbProcessor(implementation_on(point_cloud_implementations(), backend)) {}
+
+PointCloudXyzrgbProcessor::PointCloudXyzrgbProcessor(const PointCloudImplementation& backend)
+    : computation_(backend.make()) {}
 
 PointCloudXyzrgbProcessor::~PointCloudXyzrgbProcessor() = default;
 PointCloudXyzrgbProcessor::PointCloudXyzrgbProcessor(PointCloudXyzrgbProcessor&&) noexcept =
@@ -255,7 +108,7 @@ void PointCloudXyzrgbProcessor::compute(const msgs::Image& depth, const msgs::Im
                                 ")");
   }
   const cv::Mat depth_view = image_view(depth);
-  cv::Mat colour_view = image_view(colour);
+  const cv::Mat colour_view = image_view(colour);
 
   Pinhole model{static_cast<float>(info.p[2]), static_cast<float>(info.p[6]), info.p[0], info.p[5]};
   if (colour.width != depth.width || colour.height != depth.height) {
@@ -264,11 +117,6 @@ void PointCloudXyzrgbProcessor::compute(const msgs::Image& depth, const msgs::Im
     const float ratio = static_cast<float>(depth.width) / static_cast<float>(colour.width);
     model = {static_cast<float>(info.p[2] * ratio), static_cast<float>(info.p[6] * ratio),
              info.p[0] * ratio, info.p[5] * ratio};
-    if (backend_ == ImageBackend::kCpu) {
-      cv::Mat resized;
-      cv::resize(colour_view, resized, depth_view.size(), 0, 0, cv::INTER_LINEAR);
-      colour_view = resized;
-    }
   }
 
   cloud.header = depth.header;
@@ -288,28 +136,13 @@ void PointCloudXyzrgbProcessor::compute(const msgs::Image& depth, const msgs::Im
   const std::size_t bytes = static_cast<std::size_t>(cloud.row_step) * depth.height;
   if (cloud.data.size() != bytes) cloud.data.assign(bytes, 0);
   if (depth_view.empty()) return;
-  if (backend_ == ImageBackend::kOpenCl) {
-    convert_on_opencl(depth_view, colour_view,
-                      device_model(is_float, model, params.range_max, layout), opencl_, cloud);
-    return;
-  }
-  if (backend_ == ImageBackend::kCuda) {
-    cv::Mat points(depth_view.rows, static_cast<int>(cloud.row_step), CV_8UC1, cloud.data.data());
-    cuda_->xyzrgb(depth_view, colour_view, device_model(is_float, model, params.range_max, layout),
-                  points);
-    return;
-  }
-  if (is_float) {
-    convert_depth<float>(depth_view, model, params.range_max, cloud);
-  } else {
-    convert_depth<uint16_t>(depth_view, model, params.range_max, cloud);
-  }
-  convert_colour(colour_view, layout, cloud);
+  computation_->xyzrgb(depth_view, colour_view,
+                       xyzrgb_model(is_float, model, params.range_max, layout), cloud);
 }
 
 void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
                         const msgs::CameraInfo& info, const PointCloudXyzrgbParams& params,
-                        msgs::PointCloud2& cloud, ImageBackend backend) {
+                        msgs::PointCloud2& cloud, std::string_view backend) {
   PointCloudXyzrgbProcessor(backend).compute(depth, colour, info, params, cloud);
 }
 

@@ -1,56 +1,60 @@
-// Private to the perception category: the backend a node's config names, and what the node
-// records about the device that backend runs on.
+// Private to the perception category: how a kernel registers its implementations, one per
+// backend, and what its node records about the device the implementation runs on.
 #pragma once
 
+#include <span>
 #include <string>
-#include <vector>
+#include <string_view>
+#include <utility>
 
 #include "device_stage.hpp"
 #include "robotperf/perception/cuda_device.hpp"
 #include "robotperf/perception/image_proc.hpp"
-#include "robotperf/perception/opencl_device.hpp"
-#include "robotperf/plugin/kernel.hpp"
+#include "robotperf/plugin/registry.hpp"
 
 namespace robotperf::perception {
 
-// The backends of the perception kernels that have device code: cuda only in a build with the
-// CUDA toolkit, so that a run asking for it elsewhere is refused before any node is built.
-inline std::vector<std::string> perception_backends() {
-  std::vector<std::string> names{"cpu", "opencl"};
-  if (cuda_backend_built()) names.push_back("cuda");
-  return names;
+// Whether this robotperf has `backend`'s implementations: cuda only in a build with the CUDA
+// toolkit, so that a run asking for it elsewhere is refused, with the backend's line, before any
+// node is built.
+inline bool implementation_built(std::string_view backend) {
+  return backend != "cuda" || cuda_backend_built();
 }
 
-// The backends on which rectify and resize hand images to each other on the device (a
-// device-resident run): cuda, in a build that has it.
-inline std::vector<std::string> image_resident_backends() {
-  if (cuda_backend_built()) return {"cuda"};
-  return {};
+// Registers a kernel on the backends of its processor's `table`: on the first (cpu) with
+// add_kernel, on each other with add_kernel_backend, so that each backend's node is built with its
+// own implementation. `make_node(context, config, implementation)` builds the node.
+template <class I, class MakeNode>
+void register_implementations(plugin::Registrar& registrar, plugin::KernelInfo info,
+                              std::span<const I> table, MakeNode make_node) {
+  const auto factory = [make_node](const I& implementation) -> plugin::KernelFactory {
+    return
+        [make_node, &implementation](graph::Context& context, const plugin::KernelConfig& config) {
+          return make_node(context, config, implementation);
+        };
+  };
+  const std::string kernel = info.name;
+  info.backends = {table.front().backend};
+  registrar.add_kernel(std::move(info), factory(table.front()));
+  for (const I& implementation : table.subspan(1)) {
+    if (!implementation_built(implementation.backend)) continue;
+    registrar.add_kernel_backend({.kernel = kernel,
+                                  .backend = implementation.backend,
+                                  .device_resident = implementation.image_resident},
+                                 factory(implementation));
+  }
 }
 
-// The backend a node's config names. Its device is asked for when the node builds its kernel (a
-// device backend needs it then, not at the first frame).
-inline ImageBackend backend_of(const plugin::KernelConfig& config) {
-  return image_backend(config.backend);
-}
-
+// A node whose implementation computes on the device `device` gives (none on the host).
 class ImageDeviceNode : public plugin::DeviceNode {
  public:
-  explicit ImageDeviceNode(ImageBackend backend) : backend_(backend) {}
+  explicit ImageDeviceNode(const plugin::DeviceInfo& (*device)()) : device_(device) {}
   plugin::DeviceInfo device() const override {
-    switch (backend_) {
-      case ImageBackend::kOpenCl:
-        return opencl_device();
-      case ImageBackend::kCuda:
-        return cuda_device();
-      case ImageBackend::kCpu:
-        break;
-    }
-    return {};
+    return device_ != nullptr ? device_() : plugin::DeviceInfo{};
   }
 
- protected:
-  ImageBackend backend_;
+ private:
+  const plugin::DeviceInfo& (*device_)();
 };
 
 }  // namespace robotperf::perception

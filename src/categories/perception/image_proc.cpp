@@ -8,8 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "cuda/cuda_backend.hpp"
-#include "device_stage.hpp"
+#include "image_proc_computations.hpp"
 #include "robotperf/perception/camera_model.hpp"
 #include "robotperf/perception/cuda_device.hpp"
 #include "robotperf/perception/opencl_device.hpp"
@@ -49,51 +48,6 @@ int cv_type_from_generic_name(std::string_view encoding) {
 bool starts_with_any(std::string_view s, std::initializer_list<std::string_view> prefixes) {
   return std::any_of(prefixes.begin(), prefixes.end(),
                      [s](std::string_view p) { return s.starts_with(p); });
-}
-
-// OpenCV's OpenCL remap and resize (ocl_remap, ocl_resize) compute INTER_NEAREST and INTER_LINEAR,
-// and resize INTER_AREA when it does not enlarge; any other interpolation they hand to the CPU
-// without saying, which the opencl backend must not time under its name.
-void require_valid_interpolation(int interpolation, ImageBackend backend, bool is_resize) {
-  const std::string named = "interpolation " + std::to_string(interpolation);
-  if (interpolation < cv::INTER_NEAREST || interpolation > cv::INTER_LANCZOS4) {
-    throw std::invalid_argument(named + " is not one of INTER_NEAREST(0) .. INTER_LANCZOS4(4)");
-  }
-  if (backend == ImageBackend::kCuda && interpolation != cv::INTER_LINEAR) {
-    throw std::invalid_argument(named + " has no cuda backend: it has INTER_LINEAR (1) only");
-  }
-  const bool on_opencl = interpolation == cv::INTER_NEAREST || interpolation == cv::INTER_LINEAR ||
-                         (is_resize && interpolation == cv::INTER_AREA);
-  if (backend == ImageBackend::kOpenCl && !on_opencl) {
-    throw std::invalid_argument(
-        named + " has no opencl backend: OpenCV's OpenCL " +
-        (is_resize ? "resize has INTER_NEAREST (0), INTER_LINEAR (1) and, to shrink, INTER_AREA (3)"
-                   : "remap has INTER_NEAREST (0) and INTER_LINEAR (1)") +
-        " and computes the others on the CPU; use one of those or the cpu backend");
-  }
-}
-
-// The pixels OpenCV's OpenCL remap and resize compute: 1 to 4 channels, not doubles (fp64 is
-// optional in OpenCL, and PoCL fails to build remap's kernel for them). Others they hand to the
-// CPU without saying, so the opencl backend refuses them.
-void require_opencl_pixels(const cv::Mat& image, const std::string& encoding, const char* what) {
-  if (image.channels() > 4 || image.depth() == CV_64F) {
-    throw std::invalid_argument(std::string(what) + ": encoding '" + encoding +
-                                "' has no opencl backend: OpenCV's OpenCL remap and resize take "
-                                "1 to 4 channels, not 64F, and compute others on the CPU; use the "
-                                "cpu backend");
-  }
-}
-
-// OpenCV's OpenCL resize uses INTER_AREA to shrink only (x and y scales at most 1); enlarging it
-// does on the CPU.
-void require_opencl_area_shrinks(double scale_x, double scale_y, const std::string& resizing) {
-  if (scale_x > 1.0 || scale_y > 1.0) {
-    throw std::invalid_argument("resize: interpolation 3 (INTER_AREA) enlarging " + resizing +
-                                " has no opencl backend: OpenCV's OpenCL resize uses it to shrink "
-                                "only and enlarges on the CPU; use INTER_LINEAR (1) or the cpu "
-                                "backend");
-  }
 }
 
 template <class ImageT>
@@ -272,28 +226,6 @@ cv::Mat prepare_image(msgs::Image& image, const msgs::Header& header, std::strin
 // Rectifier
 // ---------------------------------------------------------------------------------------------
 
-ImageBackend image_backend(std::string_view name) {
-  if (name == "cpu") return ImageBackend::kCpu;
-  if (name == "opencl") return ImageBackend::kOpenCl;
-  if (name == "cuda") {
-    if (!cuda_backend_built()) throw std::invalid_argument(kCudaNotBuilt);
-    return ImageBackend::kCuda;
-  }
-  throw std::invalid_argument("no image backend '" + std::string(name) + "' (cpu, opencl, cuda)");
-}
-
-const char* image_backend_name(ImageBackend backend) {
-  switch (backend) {
-    case ImageBackend::kOpenCl:
-      return "opencl";
-    case ImageBackend::kCuda:
-      return "cuda";
-    case ImageBackend::kCpu:
-      break;
-  }
-  return "cpu";
-}
-
 namespace {
 
 // A resident image's message holds its pixels in its deleter, where std::get_deleter finds them
@@ -317,37 +249,18 @@ const ResidentPixels* resident_pixels(const std::shared_ptr<const msgs::Image>& 
   return deleter != nullptr ? &deleter->pixels : nullptr;
 }
 
-namespace {
-
-// Computes `compute(device_in, device_out)` on the OpenCL device: uploads `in` into `device_in`,
-// and downloads `device_out` into `out` (already the output's size and type: written in place).
-template <class Compute>
-void on_device(const cv::Mat& in, cv::UMat& device_in, cv::UMat& device_out, cv::Mat& out,
-               const Compute& compute) {
-  {
-    DeviceStage upload("upload", in.total() * in.elemSize(), opencl_queue());
-    in.copyTo(device_in);
-  }
-  {
-    DeviceStage stage("compute", 0, opencl_queue());
-    compute(device_in, device_out);
-  }
-  uint8_t* const data = out.data;
-  {
-    DeviceStage download("download", out.total() * out.elemSize(), opencl_queue());
-    device_out.copyTo(out);
-  }
-  if (out.data != data) throw std::logic_error("the device's output has another size or type");
+std::span<const RectifyImplementation> rectify_implementations() {
+  static const RectifyImplementation table[] = {{"cpu", make_cpu_rectify},
+                                                {"opencl", make_opencl_rectify, opencl_device},
+                                                {"cuda", make_cuda_rectify, cuda_device, true}};
+  return table;
 }
 
-}  // namespace
+Rectifier::Rectifier(int interpolation, std::string_view backend)
+    : Rectifier(interpolation, implementation_on(rectify_implementations(), backend)) {}
 
-Rectifier::Rectifier(int interpolation, ImageBackend backend)
-    : interpolation_(interpolation), backend_(backend) {
-  require_valid_interpolation(interpolation, backend, false);
-  if (backend == ImageBackend::kOpenCl) opencl_device();
-  if (backend == ImageBackend::kCuda) cuda_ = cuda::make_remapper();
-}
+Rectifier::Rectifier(int interpolation, const RectifyImplementation& backend)
+    : interpolation_(interpolation), computation_(backend.make(interpolation)) {}
 
 Rectifier::~Rectifier() = default;
 Rectifier::Rectifier(Rectifier&&) noexcept = default;
@@ -444,11 +357,7 @@ void Rectifier::update_maps(const msgs::CameraInfo& info) {
     cv::subtract(full_map_xy_(binned_roi), cv::Scalar(binned_roi.x, binned_roi.y), map_xy_);
     map_fraction_ = full_map_fraction_(binned_roi).clone();
   }
-  if (backend_ == ImageBackend::kOpenCl) {
-    map_xy_.copyTo(device_map_xy_);
-    map_fraction_.copyTo(device_map_fraction_);
-  }
-  if (backend_ == ImageBackend::kCuda) cuda_->set_maps(map_xy_, map_fraction_);
+  computation_->set_maps(map_xy_, map_fraction_);
 }
 
 bool Rectifier::prepare(const msgs::Image& raw, const msgs::CameraInfo& info,
@@ -475,8 +384,6 @@ bool Rectifier::prepare(const msgs::Image& raw, const msgs::CameraInfo& info,
 std::optional<ResidentPixels> Rectifier::rectify_on_device(const msgs::Image& raw,
                                                            const msgs::CameraInfo& info,
                                                            msgs::Image& rectified) {
-  if (backend_ != ImageBackend::kCuda)
-    throw std::logic_error("rectify: only the cuda backend leaves images on the device");
   if (!prepare(raw, info, rectified)) return std::nullopt;
   // The rectified message's header, size and encoding, without its pixels.
   prepare_image(rectified, raw.header, raw.encoding, 0, 0);
@@ -484,38 +391,17 @@ std::optional<ResidentPixels> Rectifier::rectify_on_device(const msgs::Image& ra
   rectified.width = raw.width;
   rectified.step =
       raw.width * static_cast<uint32_t>(CV_ELEM_SIZE(cv_type_from_encoding(raw.encoding)));
-  return cuda_->remap_to_device(image_view(raw));
+  return computation_->remap_to_device(image_view(raw));
 }
 
 void Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& info,
                         msgs::Image& rectified) {
   if (!prepare(raw, info, rectified)) return;
-  const cv::Mat raw_view = image_view(raw);
-  const auto make_output = [&] {
+  // The output message is made while a device works.
+  computation_->remap(image_view(raw), raw.encoding, [&] {
     return prepare_image(rectified, raw.header, raw.encoding, static_cast<int>(raw.width),
                          static_cast<int>(raw.height));
-  };
-  if (backend_ == ImageBackend::kCuda) {
-    // The output message is made while the device works.
-    cuda_->remap(raw_view, make_output);
-    return;
-  }
-  if (backend_ == ImageBackend::kOpenCl) require_opencl_pixels(raw_view, raw.encoding, "rectify");
-  cv::Mat rectified_view = make_output();
-  // Float images get NaN outside the field of view (no data), as image_geometry does.
-  const bool is_float = raw_view.depth() == CV_32F || raw_view.depth() == CV_64F;
-  const cv::Scalar border =
-      cv::Scalar::all(is_float ? std::numeric_limits<float>::quiet_NaN() : 0.0);
-  if (backend_ == ImageBackend::kOpenCl) {
-    on_device(raw_view, device_in_, device_out_, rectified_view,
-              [&](const cv::UMat& in, cv::UMat& out) {
-                cv::remap(in, out, device_map_xy_, device_map_fraction_, interpolation_,
-                          cv::BORDER_CONSTANT, border);
-              });
-    return;
-  }
-  cv::remap(raw_view, rectified_view, map_xy_, map_fraction_, interpolation_, cv::BORDER_CONSTANT,
-            border);
+  });
 }
 
 msgs::Image Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& info) {
@@ -528,18 +414,18 @@ msgs::Image Rectifier::rectify(const msgs::Image& raw, const msgs::CameraInfo& i
 // Resize
 // ---------------------------------------------------------------------------------------------
 
-Resizer::Resizer(const ResizeParams& params, ImageBackend backend)
-    : params_(params), backend_(backend) {
-  require_valid_interpolation(params.interpolation, backend, true);
-  if (backend == ImageBackend::kOpenCl && params.interpolation == cv::INTER_AREA &&
-      params.use_scale) {
-    require_opencl_area_shrinks(
-        params.scale_width, params.scale_height,
-        cv::format("by scale_width %g, scale_height %g", params.scale_width, params.scale_height));
-  }
-  if (backend == ImageBackend::kOpenCl) opencl_device();
-  if (backend == ImageBackend::kCuda) cuda_ = cuda::make_resizer();
+std::span<const ResizeImplementation> resize_implementations() {
+  static const ResizeImplementation table[] = {{"cpu", make_cpu_resize},
+                                               {"opencl", make_opencl_resize, opencl_device},
+                                               {"cuda", make_cuda_resize, cuda_device, true}};
+  return table;
 }
+
+Resizer::Resizer(const ResizeParams& params, std::string_view backend)
+    : Resizer(params, implementation_on(resize_implementations(), backend)) {}
+
+Resizer::Resizer(const ResizeParams& params, const ResizeImplementation& backend)
+    : params_(params), computation_(backend.make(params)) {}
 
 Resizer::~Resizer() = default;
 Resizer::Resizer(Resizer&&) noexcept = default;
@@ -552,8 +438,6 @@ void Resizer::resize(const msgs::Image& image, const msgs::CameraInfo& info, msg
   cv::Mat in_view;
   cv::Size in_size;
   if (pixels != nullptr) {
-    if (backend_ != ImageBackend::kCuda)
-      throw std::logic_error("resize: only the cuda backend takes images left on the device");
     if (pixels->cols != static_cast<int64_t>(image.width) ||
         pixels->rows != static_cast<int64_t>(image.height) ||
         pixels->type != cv_type_from_encoding(image.encoding)) {
@@ -604,53 +488,15 @@ void Resizer::resize(const msgs::Image& image, const msgs::CameraInfo& info, msg
       params.use_scale ? scale_x : static_cast<double>(out_size.width) / in_size.width;
   const double inv_scale_y =
       params.use_scale ? scale_y : static_cast<double>(out_size.height) / in_size.height;
-  if (backend_ == ImageBackend::kOpenCl) {
-    require_opencl_pixels(in_view, image.encoding, "resize");
-    // OpenCV's OpenCL resize takes images over 10 px each way.
-    if (in_size.width <= 10 || in_size.height <= 10) {
-      throw std::invalid_argument("resize: a " + std::to_string(in_size.width) + "x" +
-                                  std::to_string(in_size.height) +
-                                  " image has no opencl backend: OpenCV's OpenCL resize takes "
-                                  "images over 10 px each way and resizes smaller ones on the "
-                                  "CPU; use the cpu backend");
-    }
-    if (params.interpolation == cv::INTER_AREA) {
-      require_opencl_area_shrinks(
-          inv_scale_x, inv_scale_y,
-          std::to_string(in_size.width) + "x" + std::to_string(in_size.height) + " to " +
-              std::to_string(out_size.width) + "x" + std::to_string(out_size.height));
-    }
-  }
-
-  cv::Mat out_view;
+  const ResizeShape shape{in_size, out_size, inv_scale_x, inv_scale_y, params.use_scale};
+  // The output message is made while a device works; the computation writes into its pixels.
   const auto make_output = [&] {
-    out_view = prepare_image(out, image.header, image.encoding, out_size.width, out_size.height);
-    return out_view;
+    return prepare_image(out, image.header, image.encoding, out_size.width, out_size.height);
   };
-  auto compute = [&](cv::InputArray in, cv::OutputArray to) {
-    if (params.use_scale) {
-      cv::resize(in, to, cv::Size(), scale_x, scale_y, params.interpolation);
-    } else {
-      cv::resize(in, to, out_size, 0.0, 0.0, params.interpolation);
-    }
-  };
-  if (backend_ == ImageBackend::kOpenCl) {
-    make_output();
-    on_device(in_view, device_in_, device_out_, out_view, compute);
-  } else if (backend_ == ImageBackend::kCuda) {
-    // The output message is made while the device works.
-    if (pixels != nullptr) {
-      cuda_->resize(*pixels, out_size, inv_scale_x, inv_scale_y, make_output);
-    } else {
-      cuda_->resize(in_view, out_size, inv_scale_x, inv_scale_y, make_output);
-    }
+  if (pixels != nullptr) {
+    computation_->resize(*pixels, shape, make_output);
   } else {
-    make_output();
-    compute(in_view, out_view);
-  }
-  if (out_view.data != out.data.data()) {
-    throw std::logic_error("resize: cv::resize chose another output size than " +
-                           std::to_string(out_size.width) + "x" + std::to_string(out_size.height));
+    computation_->resize(in_view, image.encoding, shape, make_output);
   }
 
   out_info = info;
@@ -672,8 +518,42 @@ void Resizer::resize(const msgs::Image& image, const msgs::CameraInfo& info, msg
 }
 
 void resize(const msgs::Image& image, const msgs::CameraInfo& info, const ResizeParams& params,
-            msgs::Image& out, msgs::CameraInfo& out_info, ImageBackend backend) {
+            msgs::Image& out, msgs::CameraInfo& out_info, std::string_view backend) {
   Resizer(params, backend).resize(image, info, out, out_info);
+}
+
+// ---------------------------------------------------------------------------------------------
+// What the backends' implementations share
+// ---------------------------------------------------------------------------------------------
+
+ResidentPixels RectifyComputation::remap_to_device(const cv::Mat& /*raw*/) {
+  throw std::logic_error("rectify: only the cuda backend leaves images on the device");
+}
+
+void ResizeComputation::resize(const ResidentPixels& /*in*/, const ResizeShape& /*shape*/,
+                               const std::function<cv::Mat()>& /*make_output*/) {
+  throw std::logic_error("resize: only the cuda backend takes images left on the device");
+}
+
+void require_interpolation_in_range(int interpolation) {
+  if (interpolation < cv::INTER_NEAREST || interpolation > cv::INTER_LANCZOS4) {
+    throw std::invalid_argument("interpolation " + std::to_string(interpolation) +
+                                " is not one of INTER_NEAREST(0) .. INTER_LANCZOS4(4)");
+  }
+}
+
+void resize_as(cv::InputArray in, cv::OutputArray out, const ResizeShape& shape,
+               int interpolation) {
+  if (shape.given_scales) {
+    cv::resize(in, out, cv::Size(), shape.inv_scale_x, shape.inv_scale_y, interpolation);
+  } else {
+    cv::resize(in, out, shape.out_size, 0.0, 0.0, interpolation);
+  }
+}
+
+cv::Scalar remap_border(int depth) {
+  const bool is_float = depth == CV_32F || depth == CV_64F;
+  return cv::Scalar::all(is_float ? std::numeric_limits<float>::quiet_NaN() : 0.0);
 }
 
 }  // namespace robotperf::perception

@@ -77,12 +77,13 @@ class CameraNode : public SkippingNode {
 
 class RectifyNode final : public CameraNode, public ImageDeviceNode {
  public:
-  RectifyNode(graph::Context& context, const KernelConfig& config)
+  RectifyNode(graph::Context& context, const KernelConfig& config,
+              const RectifyImplementation& implementation)
       : CameraNode(context, config),
-        ImageDeviceNode(backend_of(config)),
+        ImageDeviceNode(implementation.device),
         rectifier_(
             checked_interpolation(config, kRectifyParameters.read(config.parameters).interpolation),
-            backend_),
+            implementation),
         resident_(config.device_resident_outputs.contains("image_rect")) {
     output_ = create_publisher<msgs::Image>(config.topic("image_rect"), config.qos);
   }
@@ -116,10 +117,11 @@ class RectifyNode final : public CameraNode, public ImageDeviceNode {
 
 class ResizeNode final : public CameraNode, public ImageDeviceNode {
  public:
-  ResizeNode(graph::Context& context, const KernelConfig& config)
+  ResizeNode(graph::Context& context, const KernelConfig& config,
+             const ResizeImplementation& implementation)
       : CameraNode(context, config),
-        ImageDeviceNode(backend_of(config)),
-        resizer_(params_from(config), backend_) {
+        ImageDeviceNode(implementation.device),
+        resizer_(params_from(config), implementation) {
     image_out_ = create_publisher<msgs::Image>(config.topic("resize"), config.qos);
     info_out_ = create_publisher<msgs::CameraInfo>(config.topic("resize_info"), config.qos);
   }
@@ -160,29 +162,29 @@ std::vector<plugin::PortInfo> camera_inputs(bool image_on_device) {
 }  // namespace
 
 void register_image_proc_kernels(plugin::Registrar& registrar) {
-  registrar.add_kernel(
+  register_implementations(
+      registrar,
       {.name = "image_proc/rectify",
        .description = "undistort and rectify an image with its CameraInfo (cached map, cv::remap), "
                       "as image_proc",
-       .backends = perception_backends(),
        .inputs = camera_inputs(false),
        .outputs = {{"image_rect", "sensor_msgs/msg/Image", true}},
-       .parameters = kRectifyParameters.declarations(),
-       .device_resident_backends = image_resident_backends()},
-      [](graph::Context& context, const KernelConfig& config) {
-        return std::make_shared<RectifyNode>(context, config);
+       .parameters = kRectifyParameters.declarations()},
+      rectify_implementations(),
+      [](graph::Context& context, const KernelConfig& config, const RectifyImplementation& i) {
+        return std::make_shared<RectifyNode>(context, config, i);
       });
-  registrar.add_kernel(
+  register_implementations(
+      registrar,
       {.name = "image_proc/resize",
        .description = "resize an image and scale its CameraInfo (K, P, ROI), as image_proc",
-       .backends = perception_backends(),
        .inputs = camera_inputs(true),
        .outputs = {{"resize", "sensor_msgs/msg/Image"},
                    {"resize_info", "sensor_msgs/msg/CameraInfo"}},
-       .parameters = kResizeParameters.declarations(),
-       .device_resident_backends = image_resident_backends()},
-      [](graph::Context& context, const KernelConfig& config) {
-        return std::make_shared<ResizeNode>(context, config);
+       .parameters = kResizeParameters.declarations()},
+      resize_implementations(),
+      [](graph::Context& context, const KernelConfig& config, const ResizeImplementation& i) {
+        return std::make_shared<ResizeNode>(context, config, i);
       });
 }
 

@@ -94,10 +94,11 @@ class DisparityNode final : public SkippingNode, public ImageDeviceNode {
  public:
   enum Input { kLeftImage, kLeftInfo, kRightImage, kRightInfo };
 
-  DisparityNode(graph::Context& context, const KernelConfig& config)
+  DisparityNode(graph::Context& context, const KernelConfig& config,
+                const DisparityImplementation& implementation)
       : SkippingNode(context, config.node_name),
-        ImageDeviceNode(backend_of(config)),
-        processor_(params_from(config), backend_),
+        ImageDeviceNode(implementation.device),
+        processor_(params_from(config), implementation),
         inputs_({"left_image", "left_camera_info", "right_image", "right_camera_info"},
                 sync_from(config), [this](const Inputs::Set& set) { process(set); }) {
     output_ = create_publisher<msgs::DisparityImage>(config.topic("disparity"), config.qos);
@@ -162,10 +163,11 @@ class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
  public:
   enum Input { kDepth, kImage, kInfo };
 
-  PointCloudXyzrgbNode(graph::Context& context, const KernelConfig& config)
+  PointCloudXyzrgbNode(graph::Context& context, const KernelConfig& config,
+                       const PointCloudImplementation& implementation)
       : SkippingNode(context, config.node_name),
-        ImageDeviceNode(backend_of(config)),
-        processor_(backend_),
+        ImageDeviceNode(implementation.device),
+        processor_(implementation),
         inputs_({"depth", "image", "camera_info"}, sync_from(config),
                 [this](const Inputs::Set& set) { process(set); }) {
     params_.range_max = kPointCloudParameters.read(config.parameters).range_max;
@@ -217,32 +219,34 @@ class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
 }  // namespace
 
 void register_stereo_depth_kernels(plugin::Registrar& registrar) {
-  registrar.add_kernel(
+  register_implementations(
+      registrar,
       {.name = "stereo_image_proc/disparity",
        .description = "disparity of a rectified stereo pair (StereoBM, or StereoSGBM), as "
                       "stereo_image_proc",
-       .backends = perception_backends(),
        .inputs = {{"left_image", "sensor_msgs/msg/Image"},
                   {"left_camera_info", "sensor_msgs/msg/CameraInfo"},
                   {"right_image", "sensor_msgs/msg/Image"},
                   {"right_camera_info", "sensor_msgs/msg/CameraInfo"}},
        .outputs = {{"disparity", "stereo_msgs/msg/DisparityImage"}},
        .parameters = kDisparityParameters.declarations()},
-      [](graph::Context& context, const KernelConfig& config) {
-        return std::make_shared<DisparityNode>(context, config);
+      disparity_implementations(),
+      [](graph::Context& context, const KernelConfig& config, const DisparityImplementation& i) {
+        return std::make_shared<DisparityNode>(context, config, i);
       });
-  registrar.add_kernel(
+  register_implementations(
+      registrar,
       {.name = "depth_image_proc/point_cloud_xyzrgb",
        .description = "organised xyz + rgb point cloud from registered depth and colour, as "
                       "depth_image_proc",
-       .backends = perception_backends(),
        .inputs = {{"depth", "sensor_msgs/msg/Image"},
                   {"image", "sensor_msgs/msg/Image"},
                   {"camera_info", "sensor_msgs/msg/CameraInfo"}},
        .outputs = {{"points", "sensor_msgs/msg/PointCloud2"}},
        .parameters = kPointCloudParameters.declarations()},
-      [](graph::Context& context, const KernelConfig& config) {
-        return std::make_shared<PointCloudXyzrgbNode>(context, config);
+      point_cloud_implementations(),
+      [](graph::Context& context, const KernelConfig& config, const PointCloudImplementation& i) {
+        return std::make_shared<PointCloudXyzrgbNode>(context, config, i);
       });
 }
 

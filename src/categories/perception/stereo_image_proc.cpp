@@ -5,10 +5,10 @@
 #include <stdexcept>
 #include <string>
 
-#include "cuda/cuda_backend.hpp"
+#include "robotperf/perception/cuda_device.hpp"
 #include "robotperf/perception/image_proc.hpp"
 #include "robotperf/perception/opencl_device.hpp"
-#include "stereo_bm_opencl.hpp"
+#include "stereo_image_proc_computations.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -49,43 +49,31 @@ void validate(const StereoParams& p) {
   require(p.speckle_range >= 0, "speckle_range must be >= 0");
 }
 
-DisparityProcessor::DisparityProcessor(const StereoParams& params, ImageBackend backend)
-    : params_(params), backend_(backend) {
+void require_device_block_matching(const char* backend, const StereoParams& params) {
+  const std::string name = backend;
+  require(params.algorithm == StereoAlgorithm::kBlockMatching,
+          "stereo_algorithm 1 (StereoSGBM) has no " + name + " backend; use 0 (StereoBM)");
+  require(params.min_disparity >= 0, "the " + name + " backend needs min_disparity >= 0");
+}
+
+std::span<const DisparityImplementation> disparity_implementations() {
+  static const DisparityImplementation table[] = {{"cpu", make_cpu_disparity},
+                                                  {"opencl", make_opencl_disparity, opencl_device},
+                                                  {"cuda", make_cuda_disparity, cuda_device}};
+  return table;
+}
+
+DisparityProcessor::DisparityProcessor(const StereoParams& params, std::string_view backend)
+    : DisparityProcessor(params, implementation_on(disparity_implementations(), backend)) {}
+
+DisparityProcessor::DisparityProcessor(const StereoParams& params,
+                                       const DisparityImplementation& backend)
+    : params_(params) {
   validate(params_);
   // stereo_image_proc gives disp12_max_diff to its StereoSGBM only: its StereoBM keeps OpenCV's
   // -1, no left-right check (on every backend, which all follow the cpu's StereoBM).
   if (params_.algorithm == StereoAlgorithm::kBlockMatching) params_.disp12_max_diff = -1;
-  if (backend_ != ImageBackend::kCpu) {
-    const std::string name = image_backend_name(backend_);
-    require(params_.algorithm == StereoAlgorithm::kBlockMatching,
-            "stereo_algorithm 1 (StereoSGBM) has no " + name + " backend; use 0 (StereoBM)");
-    require(params_.min_disparity >= 0, "the " + name + " backend needs min_disparity >= 0");
-  }
-  if (backend_ == ImageBackend::kCuda) cuda_ = cuda::make_block_matcher(params_);
-  if (backend_ == ImageBackend::kOpenCl) {
-    opencl_device();
-    opencl_ = std::make_unique<OpenClBlockMatcher>();
-  }
-  if (params_.algorithm == StereoAlgorithm::kBlockMatching) {
-    auto bm = cv::StereoBM::create(params_.disparity_range, params_.correlation_window_size);
-    bm->setPreFilterSize(params_.prefilter_size);
-    bm->setPreFilterCap(params_.prefilter_cap);
-    bm->setTextureThreshold(params_.texture_threshold);
-    bm->setUniquenessRatio(params_.uniqueness_ratio);
-    matcher_ = bm;
-  } else {
-    auto sgbm = cv::StereoSGBM::create(
-        params_.min_disparity, params_.disparity_range, params_.correlation_window_size, params_.p1,
-        params_.p2, params_.disp12_max_diff, params_.prefilter_cap, params_.uniqueness_ratio,
-        params_.speckle_size, params_.speckle_range, params_.sgbm_mode);
-    matcher_ = sgbm;
-  }
-  matcher_->setMinDisparity(params_.min_disparity);
-  matcher_->setNumDisparities(params_.disparity_range);
-  matcher_->setBlockSize(params_.correlation_window_size);
-  matcher_->setSpeckleWindowSize(params_.speckle_size);
-  matcher_->setSpeckleRange(params_.speckle_range);
-  matcher_->setDisp12MaxDiff(params_.disp12_max_diff);
+  computation_ = backend.make(params_);
 }
 
 DisparityProcessor::~DisparityProcessor() = default;
@@ -117,30 +105,12 @@ void DisparityProcessor::compute(const msgs::Image& left, const msgs::Image& rig
 
   const int width = static_cast<int>(left.width);
   const int height = static_cast<int>(left.height);
-  const std::string left_what = "disparity: left image", right_what = "disparity: right image";
   cv::Mat disparity;
-  const auto make_output = [&] {
+  // The output message is made while a device works.
+  const cv::Mat disparity16 = computation_->disparity16(left, right, [&] {
     out.header = left_info.header;
     disparity = prepare_image(out.image, left_info.header, "32FC1", width, height);
-  };
-  cv::Mat disparity16;  // the fixed-point disparity, 1/16 px
-  if (backend_ == ImageBackend::kCuda) {
-    // The pair is written into the device's upload memory, and the output message made while the
-    // device works.
-    disparity16 = cuda_->compute(
-        cv::Size(width, height), [&](cv::Mat& into) { write_mono8(left, left_what, into); },
-        [&](cv::Mat& into) { write_mono8(right, right_what, into); }, params_, make_output);
-  } else {
-    to_mono8(left, left_what, left_mono_);
-    to_mono8(right, right_what, right_mono_);
-    if (backend_ == ImageBackend::kOpenCl) {
-      opencl_->compute(left_mono_, right_mono_, params_, disparity16_);
-    } else {
-      matcher_->compute(left_mono_, right_mono_, disparity16_);
-    }
-    disparity16 = disparity16_;
-    make_output();
-  }
+  });
   // Principal points of a rectified pair may differ in x; disparities are relative to them.
   const double cx_offset = left_info.p[2] - right_info.p[2];
   disparity16.convertTo(disparity, CV_32F, 1.0 / kDisparitiesPerPixel, -cx_offset);

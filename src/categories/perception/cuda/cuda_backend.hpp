@@ -1,6 +1,7 @@
-// Private to the perception category: the kernels' work on a CUDA device, for the
-// ImageBackend::kCuda paths of Rectifier, Resizer, PointCloudXyzrgbProcessor and
-// DisparityProcessor. Free of CUDA's headers, so that those compile in every build; the make_*
+// Private to the perception category: the kernels' work on a CUDA device, for the cuda
+// implementations of Rectifier's, Resizer's, PointCloudXyzrgbProcessor's and DisparityProcessor's
+// computations (cuda_image_proc.cpp, cuda_depth_image_proc.cpp, cuda_stereo_image_proc.cpp). Free
+// of CUDA's headers, so that those compile in every build; the make_*
 // functions give the CUDA build's objects (cuda_image_ops.cpp, cuda_stereo_bm.cpp) or, in a build
 // without the toolkit, throw (cuda_missing.cpp).
 //

@@ -38,6 +38,9 @@ struct ControlLoopInfo {
 struct KernelInfo {
   std::string name{};         // "image_proc/rectify": <package>/<kernel>
   std::string description{};  // one line
+  // The backends the kernel's factory computes on. The registry adds each backend an
+  // implementation is registered for (Registrar::add_kernel_backend), so that in an entry it is
+  // every backend the kernel has.
   std::vector<std::string> backends{"cpu"};
   std::vector<PortInfo> inputs{};
   std::vector<PortInfo> outputs{};
@@ -45,7 +48,8 @@ struct KernelInfo {
   std::optional<ControlLoopInfo> control_loop{};
   // The backends on which the kernel's device_resident ports can leave data on the device for
   // the next node of its process, or take data another node left there (device-resident runs,
-  // docs/design.md §6: type adaptation, as REP 2007 and NITROS do).
+  // docs/design.md §6: type adaptation, as REP 2007 and NITROS do); the registry adds those of
+  // the implementations registered as device-resident.
   std::vector<std::string> device_resident_backends{};
 
   const PortInfo* find_port(const std::string& port) const;
@@ -73,6 +77,16 @@ struct KernelConfig {
 // use (the harness reports it naming the node).
 using KernelFactory =
     std::function<std::shared_ptr<graph::Node>(graph::Context&, const KernelConfig&)>;
+
+// An implementation of a kernel on one more backend, registered apart from the kernel
+// (Registrar::add_kernel_backend): by the kernel's category, one implementation unit per backend,
+// or by a plug-in that brings its accelerator's implementation of a kernel it did not register.
+struct KernelBackendInfo {
+  std::string kernel{};   // the kernel's name, registered before or in the same registration
+  std::string backend{};  // a backend the kernel does not have yet
+  // Its node can keep or take the data of the kernel's device_resident ports on the device.
+  bool device_resident = false;
+};
 
 // Implemented by kernel nodes that count inputs they received but could not use (frames whose
 // inputs never paired, inputs rejected as malformed). The harness reports the counts with the

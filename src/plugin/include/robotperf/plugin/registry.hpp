@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -25,7 +26,11 @@ namespace robotperf::plugin {
 class Registrar {
  public:
   virtual ~Registrar();
+  // `factory` builds the kernel's node on each of info.backends.
   virtual void add_kernel(KernelInfo info, KernelFactory factory) = 0;
+  // `factory` builds the node of a kernel registered with add_kernel (by this registration or an
+  // earlier one) on info.backend, which the kernel's entry then lists.
+  virtual void add_kernel_backend(KernelBackendInfo info, KernelFactory factory) = 0;
   virtual void add_dataset(DatasetInfo info, DatasetGenerator generator) = 0;
   virtual void add_evaluator(EvaluatorInfo info, EvaluatorFactory factory) = 0;
   // One comparison per message type, whoever registers it.
@@ -41,10 +46,20 @@ class PluginError : public std::runtime_error {
 };
 
 // `origin` is "built-in" or the plug-in file the entry came from.
-struct KernelEntry {
-  KernelInfo info;
+struct KernelImplementation {
   KernelFactory factory;
   std::string origin;
+};
+struct KernelEntry {
+  KernelInfo info;
+  KernelFactory factory;  // on the backends add_kernel gave
+  std::string origin;
+  // What add_kernel_backend registered, by backend.
+  std::map<std::string, KernelImplementation> implementations{};
+
+  // The factory of the node on `backend` (one of info.backends), and where it came from.
+  const KernelFactory& factory_on(const std::string& backend) const;
+  const std::string& origin_on(const std::string& backend) const;
 };
 struct DatasetEntry {
   DatasetInfo info;

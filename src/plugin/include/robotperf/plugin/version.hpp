@@ -6,8 +6,9 @@
 // Raised whenever a type or function a plug-in sees changes incompatibly.
 // 2: EvaluatorInfo::on_arrival; 3: PortInfo::device_resident,
 // KernelInfo::device_resident_backends, KernelConfig::device_resident_outputs;
-// 4: Registrar::add_output_comparison and add_backend.
-#define ROBOTPERF_PLUGIN_API_VERSION 4
+// 4: Registrar::add_output_comparison and add_backend; 5: Registrar::add_kernel_backend,
+// KernelEntry::implementations.
+#define ROBOTPERF_PLUGIN_API_VERSION 5
 
 // The ELF section in which ROBOTPERF_PLUGIN records the version (an int), read from the file
 // before it is loaded.

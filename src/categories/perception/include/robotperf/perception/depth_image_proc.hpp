@@ -5,16 +5,13 @@
 
 #include <cstdint>
 #include <memory>
-#include <opencv2/core/ocl.hpp>
+#include <span>
+#include <string_view>
 
 #include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/perception/image_proc.hpp"
 
 namespace robotperf::perception {
-
-namespace cuda {
-class PointCloudMaker;
-}  // namespace cuda
 
 // Byte layout of the cloud, as sensor_msgs' PointCloud2Modifier lays out fields "xyz", "rgb":
 // x, y, z float32 at 0, 4, 8, padding to 16; rgb (packed b, g, r, 0 bytes in a float32) at 16,
@@ -44,28 +41,28 @@ struct PointCloudXyzrgbParams {
 //   bytes are then left as they are: zero when this function made the cloud).
 // Throws std::invalid_argument for other encodings, differing frame_ids, a CameraInfo without a
 // focal length, or a bad image.
-// With ImageBackend::kOpenCl or kCuda the points are computed on the device by a kernel of
+// With the opencl or cuda backend the points are computed on the device by a kernel of
 // robotperf's own (same float operations, no contraction into fused multiply-adds: the same bits
 // as the CPU's), the depth and colour uploaded and the cloud downloaded per call; a colour image
 // of another size is resized on the device (bilinear, within 1 of the CPU's per channel).
 void point_cloud_xyzrgb(const msgs::Image& depth, const msgs::Image& colour,
                         const msgs::CameraInfo& info, const PointCloudXyzrgbParams& params,
-                        msgs::PointCloud2& cloud, ImageBackend backend = ImageBackend::kCpu);
+                        msgs::PointCloud2& cloud, std::string_view backend = "cpu");
 
-// The opencl backend's images on the device (OpenCV's transparent API), and its kernel, built at
-// the first message.
-struct OpenClCloudBuffers {
-  cv::UMat depth, colour, resized_colour, cloud;
-  cv::ocl::Kernel xyzrgb;
-};
+class PointCloudComputation;
+using PointCloudImplementation = Implementation<PointCloudComputation>;
+// The implementations of PointCloudXyzrgbProcessor's computation: cpu first, then opencl and cuda.
+std::span<const PointCloudImplementation> point_cloud_implementations();
 
 // point_cloud_xyzrgb() keeping what a node keeps from message to message on its backend (with
-// ImageBackend::kCuda its stream and buffers, with kOpenCl its device images and kernel; the free
-// function's are for its call only). Not thread-safe: one per node.
+// cuda its stream and buffers, with opencl its device images and kernel; the free function's are
+// for its call only). Not thread-safe: one per node.
 class PointCloudXyzrgbProcessor {
  public:
-  // Throws std::invalid_argument without its backend's device (cuda_device(), opencl_device()).
-  explicit PointCloudXyzrgbProcessor(ImageBackend backend = ImageBackend::kCpu);
+  // `backend`: an entry of point_cloud_implementations(), by name or itself. Throws
+  // std::invalid_argument without its backend's device (cuda_device(), opencl_device()).
+  explicit PointCloudXyzrgbProcessor(std::string_view backend = "cpu");
+  explicit PointCloudXyzrgbProcessor(const PointCloudImplementation& backend);
   ~PointCloudXyzrgbProcessor();
   PointCloudXyzrgbProcessor(PointCloudXyzrgbProcessor&&) noexcept;
   PointCloudXyzrgbProcessor& operator=(PointCloudXyzrgbProcessor&&) noexcept;
@@ -74,11 +71,8 @@ class PointCloudXyzrgbProcessor {
                const PointCloudXyzrgbParams& params, msgs::PointCloud2& cloud);
 
  private:
-  ImageBackend backend_;
-  // kOpenCl: the depth, colour (and resized colour) and cloud on the device, and the kernel,
-  // kept from one message to the next.
-  OpenClCloudBuffers opencl_;
-  std::unique_ptr<cuda::PointCloudMaker> cuda_;
+  // The points on the backend, with what it keeps there from one message to the next.
+  std::unique_ptr<PointCloudComputation> computation_;
 };
 
 }  // namespace robotperf::perception

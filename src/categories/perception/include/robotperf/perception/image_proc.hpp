@@ -9,18 +9,16 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <optional>
+#include <span>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/plugin/kernel.hpp"
 
 namespace robotperf::perception {
-
-namespace cuda {
-class Remapper;
-class ImageResizer;
-}  // namespace cuda
 
 // ---------------------------------------------------------------------------------------------
 // sensor_msgs/Image <-> cv::Mat
@@ -62,18 +60,44 @@ void write_mono8(const msgs::Image& image, const std::string& what, cv::Mat& int
 // Backends
 // ---------------------------------------------------------------------------------------------
 
-// Where an image function computes: on the host CPU, on the OpenCL device (opencl_device())
-// through OpenCV's transparent API, or on the CUDA device (cuda_device()) with kernels of
-// robotperf's own, each object on a CUDA stream of its own. With a device every call uploads its
-// input and downloads its output, as a node whose messages live in host memory must
-// (docs/design.md §6).
-enum class ImageBackend { kCpu, kOpenCl, kCuda };
+// Each processor here and in depth_image_proc.hpp and stereo_image_proc.hpp computes through an
+// implementation of its computation on one backend, chosen by name when it is made: "cpu" (the
+// host), "opencl" (opencl_device(), through OpenCV's transparent API) or "cuda" (cuda_device(),
+// kernels of robotperf's own, each object on a CUDA stream of its own), each in an implementation
+// unit of its own. With a device every call uploads its input and downloads its output, as a node
+// whose messages live in host memory must (docs/design.md §6).
+template <class Computation, class... Settings>
+struct Implementation {
+  const char* backend = "";
+  // Throws std::invalid_argument for settings the backend does not compute (naming them), and
+  // without its device; for cuda in a robotperf built without it, with kCudaNotBuilt's line.
+  std::unique_ptr<Computation> (*make)(Settings...) = nullptr;
+  // The device it computes on, as results record it; null for the host's cpu.
+  const plugin::DeviceInfo& (*device)() = nullptr;
+  // Rectify hands images to resize on this backend's device (a device-resident run).
+  bool image_resident = false;
+};
 
-// "cpu", "opencl" or "cuda"; throws std::invalid_argument for any other name, and for "cuda" in a
-// robotperf built without the CUDA toolkit (kCudaNotBuilt's one line).
-ImageBackend image_backend(std::string_view name);
-// The name image_backend() takes.
-const char* image_backend_name(ImageBackend backend);
+// The implementation on `backend` in `table`; throws std::invalid_argument naming the table's
+// backends when it has none there.
+template <class I>
+const I& implementation_on(std::span<const I> table, std::string_view backend) {
+  std::string names;
+  for (const I& i : table) {
+    if (i.backend == backend) return i;
+    names += (names.empty() ? "" : ", ") + std::string(i.backend);
+  }
+  throw std::invalid_argument("no image backend '" + std::string(backend) + "' (" + names + ")");
+}
+
+class RectifyComputation;
+class ResizeComputation;
+struct ResizeParams;
+using RectifyImplementation = Implementation<RectifyComputation, int>;
+using ResizeImplementation = Implementation<ResizeComputation, const ResizeParams&>;
+// The implementations of Rectifier's and Resizer's computations: cpu first, then opencl and cuda.
+std::span<const RectifyImplementation> rectify_implementations();
+std::span<const ResizeImplementation> resize_implementations();
 
 // An image's pixels left on the CUDA device for the next node of the process, in a
 // device-resident run (docs/design.md §6: type adaptation, as REP 2007 and NITROS do): dense
@@ -111,17 +135,18 @@ const ResidentPixels* resident_pixels(const std::shared_ptr<const msgs::Image>& 
 class Rectifier {
  public:
   // `interpolation`: cv::InterpolationFlags value, INTER_NEAREST .. INTER_LANCZOS4
-  // (image_proc's "interpolation" parameter, default 1 = INTER_LINEAR).
-  // With a device backend the maps are uploaded once per camera model. ImageBackend::kCuda has
+  // (image_proc's "interpolation" parameter, default 1 = INTER_LINEAR); `backend`: an entry of
+  // rectify_implementations(), by name or itself.
+  // With a device backend the maps are uploaded once per camera model. The cuda backend has
   // INTER_LINEAR only (std::invalid_argument naming the interpolation otherwise), OpenCV's CPU
   // arithmetic (8-bit images within 1 of the cpu's, as a rule the same) for 8-bit, 16-bit
   // unsigned and float images of 1 to 4 channels; it throws std::invalid_argument without its
-  // device (cuda_device()). ImageBackend::kOpenCl has what OpenCV's OpenCL remap computes:
+  // device (cuda_device()). The opencl backend has what OpenCV's OpenCL remap computes:
   // INTER_NEAREST and INTER_LINEAR (std::invalid_argument naming another), and per image 1 to 4
   // channels, not 64F (rectify() throws std::invalid_argument for others); it throws
   // std::invalid_argument without its device (opencl_device()), which it chooses if none was.
-  explicit Rectifier(int interpolation = cv::INTER_LINEAR,
-                     ImageBackend backend = ImageBackend::kCpu);
+  explicit Rectifier(int interpolation = cv::INTER_LINEAR, std::string_view backend = "cpu");
+  Rectifier(int interpolation, const RectifyImplementation& backend);
   ~Rectifier();
   Rectifier(Rectifier&&) noexcept;
   Rectifier& operator=(Rectifier&&) noexcept;
@@ -130,7 +155,7 @@ class Rectifier {
   // buffer. `rectified` must not be `raw`.
   void rectify(const msgs::Image& raw, const msgs::CameraInfo& info, msgs::Image& rectified);
   msgs::Image rectify(const msgs::Image& raw, const msgs::CameraInfo& info);
-  // As rectify(), with the rectified pixels left on the device (kCuda only, else
+  // As rectify(), with the rectified pixels left on the device (cuda only, else
   // std::logic_error): `rectified` gets the header, size and encoding but no data. Where
   // rectifying is a copy (D all zero) there is nothing to compute on the device: `rectified` then
   // holds the pixels, on the host, and the result is empty.
@@ -173,11 +198,8 @@ class Rectifier {
   cv::Mat full_map_xy_, full_map_fraction_;
   // The maps cropped to the ROI (the full maps themselves when the ROI is the full image).
   cv::Mat map_xy_, map_fraction_;
-  ImageBackend backend_;
-  // kOpenCl: the maps, and the input and output images, on the device.
-  cv::UMat device_map_xy_, device_map_fraction_, device_in_, device_out_;
-  // kCuda: the stream, the maps and the buffers on the device.
-  std::unique_ptr<cuda::Remapper> cuda_;
+  // The remap on the backend, with what it keeps there (maps, buffers, a stream).
+  std::unique_ptr<RectifyComputation> computation_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -198,14 +220,16 @@ struct ResizeParams {
 };
 
 // Resizes images as image_proc's ResizeNode, keeping what a node keeps from message to message on
-// its backend (with ImageBackend::kCuda: its stream and buffers). Not thread-safe: one per node.
+// its backend (with cuda: its stream and buffers). Not thread-safe: one per node.
 class Resizer {
  public:
-  // Throws std::invalid_argument for an interpolation out of range, with kCuda for any but
+  // `backend`: an entry of resize_implementations(), by name or itself. Throws
+  // std::invalid_argument for an interpolation out of range, with cuda for any but
   // INTER_LINEAR (naming it), without its backend's device (cuda_device(), opencl_device()), and
-  // with kOpenCl for what OpenCV's OpenCL resize does not compute (naming it): any but
+  // with opencl for what OpenCV's OpenCL resize does not compute (naming it): any but
   // INTER_NEAREST, INTER_LINEAR and INTER_AREA, and INTER_AREA by a scale over 1.
-  explicit Resizer(const ResizeParams& params, ImageBackend backend = ImageBackend::kCpu);
+  explicit Resizer(const ResizeParams& params, std::string_view backend = "cpu");
+  Resizer(const ResizeParams& params, const ResizeImplementation& backend);
   ~Resizer();
   Resizer(Resizer&&) noexcept;
   Resizer& operator=(Resizer&&) noexcept;
@@ -216,27 +240,24 @@ class Resizer {
   // scale, ROI offsets and size scaled (truncated), as image_proc does. With use_scale, the image
   // size is rounded (cv::resize) and the CameraInfo size truncated, as in image_proc.
   // Throws std::invalid_argument for non-positive scales or sizes, or a bad image, and with
-  // kOpenCl for an image OpenCV's OpenCL resize would resize on the CPU: more than 4 channels,
-  // 64F, 10 px or less either way, or enlarged with INTER_AREA. kCuda follows
+  // opencl for an image OpenCV's OpenCL resize would resize on the CPU: more than 4 channels,
+  // 64F, 10 px or less either way, or enlarged with INTER_AREA. cuda follows
   // OpenCV's CPU arithmetic for INTER_LINEAR (8-bit images within 1 of the cpu's, as a rule the
   // same) for 8-bit, 16-bit unsigned and float images of 1 to 4 channels.
-  // With `pixels` (kCuda only, else std::logic_error), `image`'s pixels are those on the device
+  // With `pixels` (cuda only, else std::logic_error), `image`'s pixels are those on the device
   // (ResidentPixels of its size and type) and image.data is not read.
   void resize(const msgs::Image& image, const msgs::CameraInfo& info, msgs::Image& out,
               msgs::CameraInfo& out_info, const ResidentPixels* pixels = nullptr);
 
  private:
   ResizeParams params_;
-  ImageBackend backend_;
-  // kOpenCl: the input and output images on the device, kept from one message to the next.
-  cv::UMat device_in_, device_out_;
-  std::unique_ptr<cuda::ImageResizer> cuda_;
+  // The resize on the backend, with what it keeps there from one message to the next.
+  std::unique_ptr<ResizeComputation> computation_;
 };
 
 // Resizer(params, backend).resize(image, info, out, out_info): a device backend's buffers (and
-// with kCuda, its stream) for this call only.
+// with cuda, its stream) for this call only.
 void resize(const msgs::Image& image, const msgs::CameraInfo& info, const ResizeParams& params,
-            msgs::Image& out, msgs::CameraInfo& out_info,
-            ImageBackend backend = ImageBackend::kCpu);
+            msgs::Image& out, msgs::CameraInfo& out_info, std::string_view backend = "cpu");
 
 }  // namespace robotperf::perception

@@ -13,11 +13,6 @@
 
 namespace robotperf::perception {
 
-namespace cuda {
-class BlockMatcher;
-}  // namespace cuda
-class OpenClBlockMatcher;
-
 enum class StereoAlgorithm {
   kBlockMatching = 0,  // cv::StereoBM
   kSemiGlobal = 1,     // cv::StereoSGBM
@@ -58,7 +53,8 @@ void validate(const StereoParams& params);
 // are (StereoBM, on every backend) no wider or taller than correlation_window_size, or the right
 // CameraInfo has no focal length.
 //
-// With ImageBackend::kOpenCl or kCuda, StereoBM runs on the device (kernels of robotperf's own:
+// The backend is an entry of disparity_implementations(), by name or itself. With opencl or cuda,
+// StereoBM runs on the device (kernels of robotperf's own:
 // OpenCV's OpenCL StereoBM has no texture check; the cuda kernels are their port, on a CUDA
 // stream of the processor's own); each pair is uploaded and its disparity downloaded; the
 // speckle filter runs on the host for opencl, on the device for cuda (StereoBM makes no
@@ -70,10 +66,15 @@ void validate(const StereoParams& params);
 // opencl_device()).
 //
 // Not thread-safe: one processor per stream.
+class DisparityComputation;
+using DisparityImplementation = Implementation<DisparityComputation, const StereoParams&>;
+// cpu first, then opencl and cuda.
+std::span<const DisparityImplementation> disparity_implementations();
+
 class DisparityProcessor {
  public:
-  explicit DisparityProcessor(const StereoParams& params = {},
-                              ImageBackend backend = ImageBackend::kCpu);
+  explicit DisparityProcessor(const StereoParams& params = {}, std::string_view backend = "cpu");
+  DisparityProcessor(const StereoParams& params, const DisparityImplementation& backend);
   ~DisparityProcessor();
   DisparityProcessor(DisparityProcessor&&) noexcept;
   DisparityProcessor& operator=(DisparityProcessor&&) noexcept;
@@ -83,11 +84,8 @@ class DisparityProcessor {
 
  private:
   StereoParams params_;
-  ImageBackend backend_;
-  cv::Ptr<cv::StereoMatcher> matcher_;
-  std::unique_ptr<cuda::BlockMatcher> cuda_;
-  std::unique_ptr<OpenClBlockMatcher> opencl_;
-  cv::Mat left_mono_, right_mono_, disparity16_;
+  // The matcher on the backend, with what it keeps there from one pair to the next.
+  std::unique_ptr<DisparityComputation> computation_;
 };
 
 }  // namespace robotperf::perception
