@@ -595,6 +595,13 @@ TEST_F(Cli, HelpOfACommand) {
   const Outcome all = robotperf_cli("help");
   EXPECT_EQ(all.exit_code, 0) << all.out;
   EXPECT_NE(all.out.find("Usage: robotperf [OPTIONS] SUBCOMMAND"), std::string::npos) << all.out;
+  // Every command's help ends with at least one example.
+  for (const char* command : {"list", "describe", "run", "results", "results list", "readme",
+                              "report", "compare", "trace", "trace analyze", "bag", "bag info",
+                              "dataset", "sysinfo", "graph", "security", "completion"}) {
+    const Outcome help = robotperf_cli(std::string("help ") + command);
+    EXPECT_NE(help.out.find("Example"), std::string::npos) << command << "\n" << help.out;
+  }
 }
 
 // --device-resident refuses, in one line, a run with nothing to keep on the device and a run whose

@@ -11,6 +11,9 @@ class BagCommand : public Command {
   CLI::App* declare(CLI::App& app) override {
     auto* command = app.add_subcommand("bag", "inspect, print and convert rosbag2 bags");
     command->require_subcommand(1);
+    command->footer(
+        "Examples: robotperf bag info my_bag --verify\n"
+        "          robotperf bag convert my_bag my_bag_mcap --storage mcap");
     info_ = command->add_subcommand("info", "storage, duration, topics, counts, QoS");
     info_->add_option("bag", path_, "bag directory, .db3 or .mcap file")->required();
     info_->add_flag(

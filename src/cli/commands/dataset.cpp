@@ -11,6 +11,7 @@ class DatasetCommand : public Command {
   CLI::App* declare(CLI::App& app) override {
     auto* command = app.add_subcommand("dataset", "the built-in datasets");
     command->require_subcommand(1);
+    command->footer("Example: robotperf dataset generate perception/image --storage sqlite3");
     auto* generate = command->add_subcommand("generate", "write a built-in dataset as a bag");
     generate->add_option("name", name_, "a registered dataset (robotperf list datasets)")
         ->required();

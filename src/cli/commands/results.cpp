@@ -175,6 +175,9 @@ class ResultsCommand : public Command {
   CLI::App* declare(CLI::App& app) override {
     auto* command = app.add_subcommand("results", "the results folder: list, export, import");
     command->require_subcommand(1);
+    command->footer(
+        "Examples: robotperf results list results/\n"
+        "          robotperf results export results --merge-package");
     declare_list(*command);
     declare_export(*command);
     declare_import(*command);

@@ -15,6 +15,8 @@ class SecurityCommand : public Command {
   CLI::App* declare(CLI::App& app) override {
     auto* command = app.add_subcommand("security", "DDS Security keystores (SROS2 layout)");
     command->require_subcommand(1);
+    command->footer(
+        "Example: robotperf security init keystore && robotperf run n4 --security keystore");
     auto* init = command->add_subcommand(
         "init",
         "make a keystore: a CA, and per enclave a certificate, key, and signed governance and "

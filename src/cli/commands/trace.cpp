@@ -37,6 +37,7 @@ class TraceCommand : public Command {
   CLI::App* declare(CLI::App& app) override {
     auto* command = app.add_subcommand("trace", "work with LTTng traces");
     command->require_subcommand(1);
+    command->footer("Example: robotperf trace analyze results/a1-intra-20261129T040000.trace");
     auto* analyze = command->add_subcommand(
         "analyze", "grey-box analysis of a CTF trace (robotperf or ros2_tracing)");
     analyze->add_option("dir", dir_, "the trace folder (searched for CTF metadata)")->required();
