@@ -30,6 +30,7 @@ packages=(
   liborocos-kdl-dev liburdfdom-dev libfcl-dev libbullet-dev libompl-dev libeigen3-dev  # manipulation (d1-d6)
   libapriltag-dev  # localization b3
   help2man  # the man page, made from --help
+  mkdocs  # the manual (docs/), built by scripts/docs.sh
   zsh  # to test the zsh completion script
 )
 

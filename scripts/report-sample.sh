@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Makes the README's sample report from real runs on this machine: several benchmarks and
+# Makes the manual's sample report from real runs on this machine: several benchmarks and
 # configurations (two transports, both process layouts, two rates, a grey-box run, an INVALID
 # run, control and manipulation) beside the published RobotPerf rows, then its screenshot.
 #   scripts/report-sample.sh [OUT_DIR]   (default: build/report-sample)
@@ -50,6 +50,6 @@ if command -v chromium > /dev/null; then
   chromium --headless --no-sandbox --disable-gpu --no-first-run --hide-scrollbars \
     --user-data-dir="$out/chromium-profile" --window-size=1600,1800 \
     --screenshot="$out/report-sample.png" "file://$out/report.html" 2> /dev/null
-  echo "screenshot: $out/report-sample.png (copy it to docs/ to update the README's)"
+  echo "screenshot: $out/report-sample.png (copy it to docs/ to update the manual's)"
 fi
 echo "report: $out/report.html"

@@ -13,7 +13,7 @@ std::vector<std::string> delivery_invalid_reasons(const DeliveryCounts& c, std::
     out.push_back("all " + std::to_string(c.unknown) +
                   " outputs carry a header.stamp that no input had: the graph does not copy its "
                   "input's header into its output, and robotperf's message IDs travel in the "
-                  "stamp (see the README, \"a node that does not copy the header\")");
+                  "stamp (see docs/guides/your-own-graphs.md, \"A node that does not copy the header\")");
     return out;
   }
   if (c.matched < min_samples) {

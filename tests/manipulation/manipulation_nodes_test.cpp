@@ -159,7 +159,7 @@ TEST(PlanExecution, ReversedJointOrderExecutesAndIsJudgedTheSame) {
   EXPECT_EQ(turned.max_tracking_error, straight.max_tracking_error);
   EXPECT_EQ(turned.final_error, straight.final_error);
   EXPECT_EQ(turned.path_length, straight.path_length);
-  EXPECT_EQ(turned.planning_time, 0.0);  // not measured (README)
+  EXPECT_EQ(turned.planning_time, 0.0);  // not measured (docs/benchmarks/manipulation.md)
   EXPECT_LT(straight.final_error, 1e-3);
   const Verdict a = judge_plan(turned), b = judge_plan(straight);
   EXPECT_EQ(a.metrics, b.metrics);

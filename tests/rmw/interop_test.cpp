@@ -79,7 +79,7 @@ TEST_P(Interop, VgaColourStreamAt30Hz) {
   const int received = stream(640, 480, 60, 30.0);
   if (GetParam().first == "fastdds" && GetParam().second == "cyclonedds") {
     // Cyclone DDS 0.10.2 readers now and then never deliver a sample Fast DDS 2.9 fragmented,
-    // though every fragment arrived (README, "Choosing a transport"): some loss, but bounded.
+    // though every fragment arrived (docs/reference/measurement.md, "Choosing a transport"): some loss, but bounded.
     EXPECT_GE(received, 54) << "more than one frame in ten lost";
   } else {
     EXPECT_EQ(received, 60);

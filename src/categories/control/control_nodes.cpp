@@ -313,7 +313,7 @@ class DiffDriveControllerNode final : public ControlNode {
           });
     } else {
       // geometry_msgs/Twist has no header: the command is identified by its arrival time,
-      // which no Playback ID matches (see the README).
+      // which no Playback ID matches (see docs/benchmarks/control.md).
       subscription_ = create_subscription<msgs::Twist>(
           config.topic("cmd_vel"), config.qos, [this](std::shared_ptr<const msgs::Twist> m) {
             const int64_t now = rmw::steady_now_ns();

@@ -1,4 +1,4 @@
-// The exit codes of the robotperf command (documented in the README), and the one place that
+// The exit codes of the robotperf command (documented in docs/reference/cli.md), and the one place that
 // turns an error into its line on stderr and its code.
 #pragma once
 
