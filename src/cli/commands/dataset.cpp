@@ -11,7 +11,8 @@ class DatasetCommand : public Command {
   CLI::App* declare(CLI::App& app) override {
     auto* command = app.add_subcommand("dataset", "the built-in datasets");
     command->require_subcommand(1);
-    command->footer("Example: robotperf dataset generate perception/image --storage sqlite3");
+    command->footer(
+        "Example: robotperf list datasets && robotperf dataset generate NAME --out my_bag");
     auto* generate = command->add_subcommand("generate", "write a built-in dataset as a bag");
     generate->add_option("name", name_, "a registered dataset (robotperf list datasets)")
         ->required();
