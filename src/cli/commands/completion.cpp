@@ -71,17 +71,66 @@ std::string joined(const std::vector<std::string>& words) {
   return out;
 }
 
-// What each command path offers, as the body of a `case "$cmdpath"`; zsh's patterns open with a
-// parenthesis, bash's need not.
-void write_offers(std::ostream& out, const std::map<std::string, CompletionEntry>& entries,
-                  const char* open) {
+// How one shell writes what both scripts do.
+struct ShellSyntax {
+  const char* open;  // before a case pattern: "" in bash, "(" in zsh
+  // Completes one of `values` (space-separated words) and returns.
+  std::string (*complete_words)(const std::string& values);
+  const char* complete_files;  // completes a file name and returns
+};
+
+// The case bodies both scripts share: which command path the words so far name (`case
+// "$next"`), what an option's value may be (`case "$cmdpath|$prev"`), and what each path offers
+// (`case "$cmdpath"`).
+void write_command_paths(std::ostream& s, const std::map<std::string, CompletionEntry>& entries,
+                         const ShellSyntax& shell) {
+  for (const auto& [path, entry] : entries)
+    if (!path.empty()) s << "      " << shell.open << "\"" << path << "\") cmdpath=\"$next\" ;;\n";
+}
+
+void write_option_values(std::ostream& s, const std::map<std::string, CompletionEntry>& entries,
+                         const ShellSyntax& shell) {
+  for (const auto& [path, entry] : entries) {
+    for (const auto& [option, members] : entry.choices)
+      s << "    " << shell.open << "\"" << path << "|" << option << "\") "
+        << shell.complete_words(joined(members)) << " ;;\n";
+    for (const auto& option : entry.path_options)
+      s << "    " << shell.open << "\"" << path << "|" << option << "\") " << shell.complete_files
+        << " ;;\n";
+  }
+}
+
+void write_offers(std::ostream& s, const std::map<std::string, CompletionEntry>& entries,
+                  const ShellSyntax& shell) {
   for (const auto& [path, entry] : entries) {
     std::vector<std::string> words = entry.words;
     words.insert(words.end(), entry.positional_choices.begin(), entry.positional_choices.end());
-    out << "    " << open << "\"" << path << "\") offer=\"" << joined(words) << "\""
-        << (entry.takes_benchmark ? "; ids=1" : "") << " ;;\n";
+    s << "    " << shell.open << "\"" << path << "\") offer=\"" << joined(words) << "\""
+      << (entry.takes_benchmark ? "; ids=1" : "") << " ;;\n";
   }
 }
+
+// The loop over the words before the cursor, then the two cases.
+void write_cases(std::ostream& s, const std::map<std::string, CompletionEntry>& entries,
+                 const ShellSyntax& shell) {
+  s << "    case \"$next\" in\n";
+  write_command_paths(s, entries, shell);
+  s << "    esac\n  done\n  case \"$cmdpath|$prev\" in\n";
+  write_option_values(s, entries, shell);
+  s << "  esac\n  case \"$cmdpath\" in\n";
+  write_offers(s, entries, shell);
+  s << "  esac\n";
+}
+
+const ShellSyntax kBash{"",
+                        [](const std::string& values) {
+                          return "COMPREPLY=($(compgen -W \"" + values + "\" -- \"$cur\")); return";
+                        },
+                        "COMPREPLY=($(compgen -f -- \"$cur\")); return"};
+
+const ShellSyntax kZsh{
+    "(", [](const std::string& values) { return "compadd -- " + values + "; return"; },
+    "_files; return"};
 
 std::string bash_script(const std::map<std::string, CompletionEntry>& entries) {
   std::ostringstream s;
@@ -90,23 +139,9 @@ std::string bash_script(const std::map<std::string, CompletionEntry>& entries) {
        "  local cur=\"${COMP_WORDS[COMP_CWORD]}\" prev=\"${COMP_WORDS[COMP_CWORD-1]}\"\n"
        "  local cmdpath=\"\" next w i offer=\"\" ids=0\n"
        "  for ((i = 1; i < COMP_CWORD; i++)); do\n"
-       "    w=\"${COMP_WORDS[i]}\"; next=\"${cmdpath:+$cmdpath }$w\"\n"
-       "    case \"$next\" in\n";
-  for (const auto& [path, entry] : entries)
-    if (!path.empty()) s << "      \"" << path << "\") cmdpath=\"$next\" ;;\n";
-  s << "    esac\n  done\n  case \"$cmdpath|$prev\" in\n";
-  for (const auto& [path, entry] : entries) {
-    for (const auto& [option, members] : entry.choices)
-      s << "    \"" << path << "|" << option << "\") COMPREPLY=($(compgen -W \"" << joined(members)
-        << "\" -- \"$cur\")); return ;;\n";
-    for (const auto& option : entry.path_options)
-      s << "    \"" << path << "|" << option
-        << "\") COMPREPLY=($(compgen -f -- \"$cur\")); return ;;\n";
-  }
-  s << "  esac\n  case \"$cmdpath\" in\n";
-  write_offers(s, entries, "");
-  s << "  esac\n"
-       "  if [[ $ids == 1 && $cur != -* ]]; then\n"
+       "    w=\"${COMP_WORDS[i]}\"; next=\"${cmdpath:+$cmdpath }$w\"\n";
+  write_cases(s, entries, kBash);
+  s << "  if [[ $ids == 1 && $cur != -* ]]; then\n"
        "    offer=\"$offer $(\"${COMP_WORDS[0]}\" list --ids 2>/dev/null)\"\n"
        "  fi\n"
        "  COMPREPLY=($(compgen -W \"$offer\" -- \"$cur\"))\n"
@@ -123,22 +158,9 @@ std::string zsh_script(const std::map<std::string, CompletionEntry>& entries) {
        "_robotperf() {\n"
        "  local cmdpath=\"\" next w i offer=\"\" ids=0 prev=\"${words[CURRENT-1]}\"\n"
        "  for ((i = 2; i < CURRENT; i++)); do\n"
-       "    w=\"${words[i]}\"; next=\"${cmdpath:+$cmdpath }$w\"\n"
-       "    case \"$next\" in\n";
-  for (const auto& [path, entry] : entries)
-    if (!path.empty()) s << "      (\"" << path << "\") cmdpath=\"$next\" ;;\n";
-  s << "    esac\n  done\n  case \"$cmdpath|$prev\" in\n";
-  for (const auto& [path, entry] : entries) {
-    for (const auto& [option, members] : entry.choices)
-      s << "    (\"" << path << "|" << option << "\") compadd -- " << joined(members)
-        << "; return ;;\n";
-    for (const auto& option : entry.path_options)
-      s << "    (\"" << path << "|" << option << "\") _files; return ;;\n";
-  }
-  s << "  esac\n  case \"$cmdpath\" in\n";
-  write_offers(s, entries, "(");
-  s << "  esac\n"
-       "  local -a offered=(${=offer})\n"
+       "    w=\"${words[i]}\"; next=\"${cmdpath:+$cmdpath }$w\"\n";
+  write_cases(s, entries, kZsh);
+  s << "  local -a offered=(${=offer})\n"
        "  if [[ $ids == 1 && ${words[CURRENT]} != -* ]]; then\n"
        "    offered+=(${(f)\"$(${words[1]} list --ids 2>/dev/null)\"})\n"
        "  fi\n"
