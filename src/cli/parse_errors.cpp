@@ -1,6 +1,7 @@
 #include "parse_errors.hpp"
 
 #include <algorithm>
+#include <sstream>
 #include <stdexcept>
 
 #include "robotperf/harness/suggestions.hpp"
@@ -50,20 +51,13 @@ std::string unknown_command(CLI::App& app, const std::string& word) {
 // "VALUE not in {A,B,C}" (CLI11's IsMember), with the member VALUE is a typo of.
 std::string with_member_suggestion(const std::string& message) {
   const auto not_in = message.find(" not in {");
-  const auto close = message.rfind('}');
-  if (not_in == std::string::npos || close == std::string::npos || close < not_in) return message;
-  const auto value_start = message.rfind(": ", not_in);
-  const std::string value =
-      message.substr(value_start == std::string::npos ? 0 : value_start + 2,
-                     not_in - (value_start == std::string::npos ? 0 : value_start + 2));
-  std::vector<std::string> members;
-  const std::string set = message.substr(not_in + 9, close - not_in - 9);
-  for (std::size_t start = 0; start <= set.size();) {
-    const std::size_t comma = std::min(set.find(',', start), set.size());
-    members.push_back(set.substr(start, comma - start));
-    start = comma + 1;
-  }
-  return message.substr(0, close + 1) + harness::did_you_mean(value, members) +
+  const auto close = message.find('}', not_in);
+  if (not_in == std::string::npos || close == std::string::npos) return message;
+  const auto colon = message.rfind(": ", not_in);
+  const auto value_start = colon == std::string::npos ? 0 : colon + 2;
+  const std::string value = message.substr(value_start, not_in - value_start);
+  return message.substr(0, close + 1) +
+         harness::did_you_mean(value, members_in_braces(message.substr(not_in))) +
          message.substr(close + 1);
 }
 
@@ -94,6 +88,16 @@ std::string unknown_word(CLI::App*& at, const std::vector<std::string>& args) {
 }
 
 }  // namespace
+
+std::vector<std::string> members_in_braces(const std::string& text) {
+  std::vector<std::string> members;
+  const auto open = text.find('{');
+  const auto close = text.find('}', open);
+  if (open == std::string::npos || close == std::string::npos) return members;
+  std::istringstream items(text.substr(open + 1, close - open - 1));
+  for (std::string item; std::getline(items, item, ',');) members.push_back(item);
+  return members;
+}
 
 std::string command_path(const CLI::App* app) {
   std::string path;

@@ -12,6 +12,10 @@ namespace robotperf::cli {
 std::string parse_error_line(CLI::App& app, const std::vector<std::string>& args,
                              const CLI::ParseError& error);
 
+// The members of the first "{a,b,c}" in `text`: an IsMember check's, as CLI11 writes them in a
+// type name ("TEXT:{black,grey}") and in the error it throws ("x not in {black,grey}").
+std::vector<std::string> members_in_braces(const std::string& text);
+
 // "robotperf results list": the command `app` stands for.
 std::string command_path(const CLI::App* app);
 

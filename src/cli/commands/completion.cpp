@@ -21,17 +21,6 @@ struct CompletionEntry {
   bool takes_benchmark = false;                             // a positional benchmark id
 };
 
-// "TEXT:{black,grey}" -> black, grey: an IsMember check's members, as CLI11 names the type.
-std::vector<std::string> members_of(const std::string& type_name) {
-  std::vector<std::string> out;
-  const auto open = type_name.find('{');
-  const auto close = type_name.find('}', open);
-  if (open == std::string::npos || close == std::string::npos) return out;
-  std::istringstream items(type_name.substr(open + 1, close - open - 1));
-  for (std::string item; std::getline(items, item, ',');) out.push_back(item);
-  return out;
-}
-
 bool takes_a_path(const CLI::Option& option) {
   const std::string text = option.get_description();
   for (const char* word : {"folder", "file", "directory", "bag", "keystore"})
@@ -47,7 +36,7 @@ void collect(CLI::App& app, const std::string& path, std::map<std::string, Compl
   }
   for (const CLI::Option* o : app.get_options()) {
     if (o->get_positional()) {
-      const auto members = members_of(o->get_type_name());
+      const auto members = members_in_braces(o->get_type_name());
       entry.positional_choices.insert(entry.positional_choices.end(), members.begin(),
                                       members.end());
       entry.takes_benchmark |= o->get_name() == "id";
@@ -57,7 +46,7 @@ void collect(CLI::App& app, const std::string& path, std::map<std::string, Compl
       const std::string name = "--" + l;
       entry.words.push_back(name);
       if (o->get_items_expected_min() == 0) continue;
-      if (auto members = members_of(o->get_type_name()); !members.empty())
+      if (auto members = members_in_braces(o->get_type_name()); !members.empty())
         entry.choices[name] = members;
       else if (takes_a_path(*o))
         entry.path_options.push_back(name);
