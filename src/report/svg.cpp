@@ -331,7 +331,9 @@ std::string hops_svg(const std::vector<StoredRun::Hop>& hops, const std::string&
   // The colours of the kinds drawn, under the bars.
   double lx = kBarsLeft;
   for (const auto& [kind, colour] : kKinds) {
-    if (std::none_of(hops.begin(), hops.end(), [&](const auto& h) { return h.kind == kind; }))
+    // A named copy: clang before 16 cannot capture a structured binding.
+    const auto& drawn = kind;
+    if (std::none_of(hops.begin(), hops.end(), [&](const auto& h) { return h.kind == drawn; }))
       continue;
     s << "<rect x=\"" << num(lx) << "\" y=\"" << num(y + 12)
       << "\" width=\"14\" height=\"10\" fill=\"" << colour << "\"/><text class=\"legend\" x=\""
