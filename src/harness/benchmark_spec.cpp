@@ -1,5 +1,4 @@
 #include "robotperf/harness/benchmark_spec.hpp"
-#include "robotperf/harness/suggestions.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -10,6 +9,8 @@
 #include <map>
 #include <set>
 #include <sstream>
+
+#include "robotperf/harness/suggestions.hpp"
 
 namespace robotperf::harness {
 namespace {
@@ -180,6 +181,7 @@ void load_settings(const YamlFile& file, BenchmarkSpec& spec) {
   spec.count = file.get<std::size_t>(root, "count", 0);
   spec.warmup = file.get<std::size_t>(root, "warmup", 0);
   spec.drain_s = file.get<double>(root, "drain_s", 2.0);
+  spec.sample = file.get<std::string>(root, "sample", "");
   spec.processes = file.get<std::string>(root, "processes", "single");
   if (spec.processes != "single" && spec.processes != "per-node")
     file.fail(root["processes"], "processes must be 'single' or 'per-node'");
@@ -389,7 +391,7 @@ void check_wiring(const YamlFile& file, const BenchmarkSpec& spec) {
 void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   const YamlFile file(path);
   const YAML::Node& root = file.root();
-  file.allow_keys(root, {"plugins", "dataset", "rate_hz", "count", "warmup", "drain_s",
+  file.allow_keys(root, {"plugins", "dataset", "rate_hz", "count", "warmup", "drain_s", "sample",
                          "executor_threads", "processes", "security", "validity", "inputs",
                          "output", "nodes", "launch", "attach", "functional"});
   load_plugins(file, spec);

@@ -63,6 +63,7 @@ void resolve_layout(const BenchmarkSpec& spec, const RunOptions& options, RunRes
   r.update_rate_hz = options.nodes.update_rate_hz;
   r.benchmark_id = spec.id;
   r.benchmark_name = spec.name;
+  r.sample = spec.sample;
   r.category = spec.category;
   r.rmw = options.transport.rmw;
   r.processes = options.processes.layout == ProcessLayout::kSingle ? "single" : "per-node";

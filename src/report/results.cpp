@@ -29,30 +29,39 @@ std::string utc_time(int64_t unix_ns, const char* format) {
   return buf;
 }
 
+// One short line: the figures, the sources in the total; what failed or was estimated is in the
+// results file (power.sources, power.estimated).
 std::string power_line(const harness::RunResult& r) {
   const auto& p = r.power;
-  if (!p.available) return "power: unavailable — " + p.unavailable_reason + "\n";
-  std::ostringstream out;
-  out << "power: " << format_fixed(p.total_average_w, 2) << " W";
-  std::string parts;
-  bool whole_machine = false;
-  for (const auto& s : p.sources) {
-    if (!s.available || !s.info.in_total) continue;
-    parts += (parts.empty() ? "" : ", ") + s.info.name + " " + format_fixed(s.average_w, 2) + " W";
-    whole_machine = whole_machine || s.info.whole_machine;
+  if (!p.available) {
+    // The reason's first clause ("no power source found"); each source's own is in the results.
+    const std::string& why = p.unavailable_reason;
+    return "power: not measured (" + why.substr(0, why.find(": ")) +
+           "; why, per source: the results file's power section)\n";
   }
-  if (whole_machine && p.sources.size() > 1) parts += ": the whole machine, the others inside it";
-  out << " (" << parts << "), " << format_fixed(p.total_energy_j, 3) << " J";
+  std::ostringstream out;
+  out << "power: " << format_fixed(p.total_average_w, 2) << " W, "
+      << format_fixed(p.total_energy_j, 3) << " J";
   if (r.matched > 0) {
     out << ", " << format_fixed(p.total_energy_j * 1e3 / static_cast<double>(r.matched), 3)
         << " mJ/msg";
   }
-  if (r.throughput_hz > 0 && p.total_average_w > 0) {
+  if (r.throughput_hz > 0 && p.total_average_w > 0)
     out << ", " << format_fixed(r.throughput_hz / p.total_average_w, 3) << " msg/s per W";
-  }
-  for (const auto& e : p.estimated) out << "; estimated: " << e;
+  std::string parts;
+  std::size_t unavailable = 0;
   for (const auto& s : p.sources) {
-    if (!s.available) out << "; " << s.info.name << " unavailable: " << s.unavailable_reason;
+    unavailable += !s.available;
+    if (s.available && s.info.in_total)
+      parts +=
+          (parts.empty() ? "" : ", ") + s.info.name + " " + format_fixed(s.average_w, 2) + " W";
+  }
+  out << " (" << parts << ")";
+  if (!p.estimated.empty() || unavailable > 0) {
+    out << "; " << (p.estimated.empty() ? "" : "partly estimated")
+        << (!p.estimated.empty() && unavailable > 0 ? ", " : "")
+        << (unavailable > 0 ? std::to_string(unavailable) + " source(s) unavailable" : "")
+        << ": see the results file";
   }
   out << "\n";
   return out.str();
@@ -640,19 +649,12 @@ void write_latency(std::ostream& out, const harness::RunResult& r) {
   }
 }
 
-// Throughput (and the peak search that found it), the grey-box breakdown, the headline.
-void write_throughput(std::ostream& out, const harness::RunResult& r) {
-  out << "\nthroughput: " << format_fixed(r.throughput_hz, 3) << " Hz out, "
-      << format_fixed(r.offered_rate_hz, 3) << " Hz offered"
-      << (r.throughput_kind == "peak" ? " (peak: the highest rate the search found sustained)"
-          : r.peak_search ? " (the highest rate sustained before the search was cut short: not "
-                            "the peak)"
-                          : "")
-      << "\n";
-  if (r.peak_search) out << peak_search_table(*r.peak_search);
+// The peak search's steps, the grey-box breakdown, and RobotPerf's headline, named as what it is.
+void write_throughput_details(std::ostream& out, const harness::RunResult& r) {
+  if (r.peak_search) out << "\n" << peak_search_table(*r.peak_search);
   if (r.grey) out << "\n" << tracing::breakdown_table(*r.grey) << "\n";
-  out << "headline (RobotPerf): latency "
-      << format_fixed(r.latency_from_scheduled.max / kNsPerMs, 3) << " ms (max), throughput "
+  out << "\nRobotPerf headline (its latency is the maximum, not a typical message): latency "
+      << format_fixed(r.latency_from_scheduled.max / kNsPerMs, 3) << " ms, throughput "
       << format_fixed(r.throughput_hz, 3) << " Hz\n";
 }
 
@@ -680,11 +682,30 @@ void write_control_loops(std::ostream& out, const harness::RunResult& r) {
   }
 }
 
-// Run-rule warnings, and the inputs each node received but could not use.
+// Run-rule warnings, and the inputs each node received but could not use. The warnings that hold
+// for every run on this machine (a VM, a container, ...) are one line of a few words: repeated in
+// full on every run they would hide the ones about this run; the results file keeps them whole.
 void write_warnings(std::ostream& out, const harness::RunResult& r) {
-  if (!r.warnings.empty()) {
-    out << "warnings (run rules):\n";
-    for (const auto& w : r.warnings) out << "  " << w.rule << ": " << w.message << "\n";
+  std::string conditions;
+  std::vector<const sysinfo::RunWarning*> this_run;
+  for (const auto& w : r.warnings) {
+    if (const std::string c = sysinfo::machine_condition(w); !c.empty())
+      conditions += (conditions.empty() ? "" : ", ") + c;
+    else
+      this_run.push_back(&w);
+  }
+  if (!conditions.empty()) {
+    out << "machine conditions (every run here; in full in the results file and `robotperf "
+           "sysinfo`): "
+        << conditions << "\n";
+  }
+  if (!this_run.empty()) {
+    out << "warnings (this run):\n";
+    for (const auto* w : this_run) {
+      out << "  " << w->rule << ": " << w->message;
+      if (w->rule == "samples" && !r.sample.empty()) out << " (one sample: " << r.sample << ")";
+      out << "\n";
+    }
   }
   for (const auto& n : r.nodes) {
     std::string unused;
@@ -704,8 +725,11 @@ void write_answers(std::ostream& out, const harness::RunResult& r) {
     const auto& f = *r.functional;
     out << "\nfunctional (" << f.evaluator << ", " << f.evaluated << " of " << f.requested
         << (f.on_arrival ? " chosen outputs, each checked on arrival):\n" : " sampled outputs):\n");
+    // The names' column as wide as the longest, so that the values line up.
+    int width = 20;
+    for (const auto& m : f.metrics) width = std::max(width, static_cast<int>(m.name.size()));
     for (const auto& m : f.metrics) {
-      std::snprintf(line, sizeof line, "  %-20s %12s %-9s", m.name.c_str(),
+      std::snprintf(line, sizeof line, "  %-*s %12s %-9s", width, m.name.c_str(),
                     general(m.value).c_str(), m.unit.c_str());
       out << line;
       if (m.threshold.min) out << "  min " << general(*m.threshold.min);
@@ -728,30 +752,65 @@ void write_answers(std::ostream& out, const harness::RunResult& r) {
   }
 }
 
-// The errors that ended the run and the verdict with its reasons.
-void write_verdict(std::ostream& out, const harness::RunResult& r) {
-  for (const auto& e : r.errors) out << "error: " << e << "\n";
-  out << "result: " << (r.valid ? "VALID" : "INVALID");
-  for (std::size_t i = 0; i < r.invalid_reasons.size(); ++i) {
-    out << (i == 0 ? " — " : "; ") << r.invalid_reasons[i];
+// "p99 12.896 ms (11.403 .. 12.915)": a percentile and its 95 % interval, an end the samples
+// cannot give written as "?" with the samples that would give it.
+std::string percentile_with_interval(const char* name, double q, double value_ns,
+                                     const metrics::PercentileInterval& ci) {
+  std::string out = std::string(name) + " " + format_fixed(value_ns / kNsPerMs, 3) + " ms (";
+  out += std::isnan(ci.lower) ? "?" : format_fixed(ci.lower / kNsPerMs, 3);
+  out += " .. ";
+  out += std::isnan(ci.upper)
+             ? "?: " + std::to_string(metrics::samples_for_upper_bound(q)) + " samples give it"
+             : format_fixed(ci.upper / kNsPerMs, 3);
+  return out + ")";
+}
+
+// The lead: the typical and the tail latency with their intervals, the throughput and its kind,
+// then one verdict line (valid or not, and where the run stands against the published results),
+// the errors that ended the run under it.
+void write_lead(std::ostream& out, const harness::RunResult& r, const std::string& standing) {
+  const auto& s = r.latency_from_scheduled;
+  if (s.count == 0) {
+    out << "latency: none measured (no measured message came out of the graph)\n";
+  } else {
+    out << "latency: " << percentile_with_interval("p50", 0.50, s.p50, s.p50_ci) << " · "
+        << percentile_with_interval("p99", 0.99, s.p99, s.p99_ci)
+        << " · 95 % intervals, from the scheduled send\n";
   }
+  if (!r.sample.empty() && r.measured < metrics::samples_for_upper_bound(0.99))
+    out << "samples: " << r.measured << " by the benchmark's nature: one is " << r.sample << "\n";
+  out << "throughput: " << format_fixed(r.throughput_hz, 3) << " Hz out at "
+      << format_fixed(r.offered_rate_hz, 3) << " Hz offered"
+      << (r.throughput_kind == "peak" ? " (peak: the highest rate the search found sustained)"
+          : r.peak_search
+              ? " (the highest rate sustained before the search was cut short: not the peak)"
+              : " (keeping up with the offered load; --find-peak searches for the peak)")
+      << "\n";
+  const bool answers_ok = !r.functional || r.functional->valid;
+  out << "result: " << (r.valid && answers_ok ? "VALID" : "INVALID");
+  std::vector<std::string> reasons = r.invalid_reasons;
+  if (!answers_ok) reasons.push_back("wrong answers (functional check below)");
+  for (std::size_t i = 0; i < reasons.size(); ++i) out << (i == 0 ? " — " : "; ") << reasons[i];
+  if (!standing.empty()) out << " · " << standing;
   out << "\n";
+  for (const auto& e : r.errors) out << "error: " << e << "\n";
 }
 
 }  // namespace
 
-std::string summary_table(const harness::RunResult& r) {
+std::string summary_table(const harness::RunResult& r, const std::string& standing) {
   std::ostringstream out;
   write_configuration(out, r);
   write_placement(out, r);
+  write_lead(out, r, standing);
+  out << "\n";
   write_messages(out, r);
   write_latency(out, r);
-  write_throughput(out, r);
+  write_throughput_details(out, r);
   write_control_loops(out, r);
   out << power_line(r) << resources_line(r);
   write_warnings(out, r);
   write_answers(out, r);
-  write_verdict(out, r);
   return out.str();
 }
 

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <system_error>
 
@@ -126,6 +127,18 @@ std::vector<RunWarning> check_run_rules(const RunRuleInputs& in) {
                         "give); use --count or --duration");
   }
   return warnings;
+}
+
+std::string machine_condition(const RunWarning& warning) {
+  static const std::map<std::string, std::string> kConditions = {
+      {"governor", "governor not 'performance'"},
+      {"frequency", "CPU clock not visible"},
+      {"turbo", "turbo boost on"},
+      {"smt", "SMT on"},
+      {"virtual_machine", "virtual machine"},
+      {"container", "container"}};
+  const auto found = kConditions.find(warning.rule);
+  return found == kConditions.end() ? std::string() : found->second;
 }
 
 }  // namespace robotperf::sysinfo

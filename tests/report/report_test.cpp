@@ -15,6 +15,7 @@
 #include "robotperf/report/readme.hpp"
 #include "robotperf/report/run_store.hpp"
 #include "robotperf/report/significance.hpp"
+#include "robotperf/report/standing.hpp"
 #include "sample_runs.hpp"
 
 namespace robotperf::report {
@@ -1075,4 +1076,108 @@ TEST(Summary, DeviceResidentRunNamesWhatStayedOnTheDevice) {
   EXPECT_EQ(j["configuration"]["device_resident"][0]["to"], nlohmann::json::array({"resize"}));
   const nlohmann::json baseline = report::result_to_json(report::testing::make_run({}), machine);
   EXPECT_TRUE(baseline["configuration"]["device_resident"].empty());
+}
+
+// The summary leads with what a reader takes away: p50 and p99 with their intervals, the
+// throughput and its kind, then the verdict; RobotPerf's max comes later, named as a maximum.
+TEST(Summary, LeadsWithTheMedianAndTheTailThenTheVerdict) {
+  using namespace robotperf;
+  const harness::RunResult r = report::testing::make_run({.messages = 400});
+  const std::string text = report::summary_table(r);
+  const auto lead = text.find("latency: p50 ");
+  const auto throughput = text.find("throughput: 30.000 Hz out at 30.000 Hz offered (keeping up");
+  const auto verdict = text.find("result: VALID\n");
+  const auto table = text.find("latency (ms) ");
+  const auto headline = text.find("RobotPerf headline (its latency is the maximum");
+  ASSERT_NE(lead, std::string::npos) << text;
+  EXPECT_EQ(text.find('\n') + 1, lead) << "the lead follows the configuration line\n" << text;
+  EXPECT_LT(lead, throughput) << text;
+  EXPECT_LT(throughput, verdict) << text;
+  EXPECT_LT(verdict, table) << text;
+  EXPECT_LT(table, headline) << text;
+  // 400 samples bound both ends of the p99.
+  const std::regex p99(R"(p99 [0-9.]+ ms \([0-9.]+ \.\. [0-9.]+\))");
+  EXPECT_TRUE(std::regex_search(text.substr(lead, throughput - lead), p99)) << text;
+
+  // Too few samples: the end they cannot give says how many would.
+  const std::string few = report::summary_table(report::testing::make_run({.messages = 60}));
+  EXPECT_NE(few.find(" .. ?: 368 samples give it) · 95 % intervals"), std::string::npos) << few;
+}
+
+// An invalid run says so in the lead with its reasons; wrong answers make the verdict INVALID
+// even when the timing was valid.
+TEST(Summary, TheVerdictCountsLossAndWrongAnswers) {
+  using namespace robotperf;
+  const std::string lossy = report::summary_table(report::testing::make_run({.lost = 3}));
+  EXPECT_NE(lossy.find("result: INVALID — lost messages\n"), std::string::npos) << lossy;
+  harness::RunResult wrong = report::testing::make_run({});
+  wrong.functional.emplace();
+  wrong.functional->valid = false;
+  const std::string text = report::summary_table(wrong);
+  EXPECT_NE(text.find("result: INVALID — wrong answers (functional check below)\n"),
+            std::string::npos)
+      << text;
+}
+
+// Warnings that hold for every run on this machine are one line of a few words; those about the
+// run stay whole, a benchmark's `sample:` said beside a low count.
+TEST(Summary, MachineConditionsAreOneLine) {
+  using namespace robotperf;
+  harness::RunResult r = report::testing::make_run(
+      {.warnings = {{"virtual_machine", "running in a virtual machine: the hypervisor ..."},
+                    {"container", "running in a container (docker): CPU and memory ..."},
+                    {"system_busy", "system busy: other processes used 150 % of a core"},
+                    {"samples", "60 measured messages: the p99's ..."}}});
+  r.sample = "a goal, every 6 s";
+  const std::string text = report::summary_table(r);
+  EXPECT_NE(text.find("): virtual machine, container\n"), std::string::npos) << text;
+  EXPECT_EQ(text.find("the hypervisor"), std::string::npos) << text;
+  EXPECT_NE(text.find("warnings (this run):\n  system_busy: system busy: other processes used "
+                      "150 % of a core\n  samples: 60 measured messages: the p99's ... (one "
+                      "sample: a goal, every 6 s)\n"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("samples: 100 by the benchmark's nature: one is a goal, every 6 s\n"),
+            std::string::npos)
+      << text;
+}
+
+// The verdict ranks the run's max among the published platforms' black-box rows at its rate,
+// each platform by its median; flagged rows, grey rows and other rates are left out.
+TEST(Summary, TheVerdictRanksTheRunAgainstThePublishedPlatforms) {
+  using namespace robotperf;
+  harness::RunResult r = report::testing::make_run({.base_latency_ms = 5.0});
+  const double max_ms = r.latency_from_scheduled.max / 1e6;  // about 10 ms
+  report::PublishedBenchmark b;
+  b.id = "a1";
+  b.name = "a1_perception_2nodes";
+  auto row = [&](std::string hardware, double ms, std::string type = "black", double hz = 30) {
+    report::PublishedResult x;
+    x.type = std::move(type);
+    x.metric = "latency";
+    x.metric_unit = "ms";
+    x.hardware = std::move(hardware);
+    x.value = ms;
+    x.note_rate_hz = std::pair{hz, hz};
+    return x;
+  };
+  b.results = {row("fast", 2.0),         row("slow", 40.0),
+               row("slow", 60.0),        row("slower", max_ms * 3),
+               row("grey", 1.0, "grey"), row("other rate", 1.0, "black", 60),
+               row("flagged", 1.0)};
+  b.results.back().flags.push_back("negative min latency");
+  const std::string line = report::published_standing(r, {b});
+  EXPECT_EQ(line.rfind("RobotPerf max " + report::format_fixed(max_ms, 3) +
+                           " ms: lower than 2 of 3 published platforms (black-box, 30 Hz; best "
+                           "2.000 ms, median " +
+                           report::format_fixed(max_ms * 3, 3) + " ms)",
+                       0),
+            0u)
+      << line;
+  EXPECT_NE(report::summary_table(r, line).find("result: VALID · " + line + "\n"),
+            std::string::npos);
+  // Another benchmark's rows, or none at this rate: no standing rather than a wrong one.
+  b.id = "a2";
+  b.name = "a2_rectify";
+  EXPECT_EQ(report::published_standing(r, {b}), "");
 }

@@ -17,12 +17,12 @@ struct SampleRun {
   std::string name = "a1_perception_2nodes";
   std::string rmw = "intra";
   std::string cpu = "AMD Ryzen 7 5800X 8-Core Processor";
-  std::string gpu;               // NVIDIA model, empty for none
+  std::string gpu{};             // NVIDIA model, empty for none
   double base_latency_ms = 5.0;  // latencies spread from base to about 2x base
   std::size_t messages = 100;
   std::size_t lost = 0;
   int64_t start_unix_ns = 1'790'000'000'000'000'000;
-  std::vector<std::pair<std::string, std::string>> warnings;  // run rules: (rule, message)
+  std::vector<std::pair<std::string, std::string>> warnings{};  // run rules: (rule, message)
 };
 
 inline harness::RunResult make_run(const SampleRun& s) {

@@ -23,6 +23,7 @@
 #include "robotperf/report/results.hpp"
 #include "robotperf/report/run_store.hpp"
 #include "robotperf/report/series.hpp"
+#include "robotperf/report/standing.hpp"
 #include "robotperf/report/sweep.hpp"
 #include "robotperf/sysinfo/machine.hpp"
 #include "robotperf/tracing/leftovers.hpp"
@@ -89,6 +90,33 @@ void write_run_report(const harness::BenchmarkSpec& spec, const harness::RunResu
   std::cout << "report: " << base.string() << ".report.html\n";
 }
 
+// The published rows this run is ranked against: the package's accepted results and those
+// `results import --into` stored in the output folder (published-<category>-<name>.json). A file
+// that cannot be read is named on stderr and left out: a reference, not the run.
+std::vector<report::PublishedBenchmark> published_rows(const harness::BenchmarkSpec& spec,
+                                                       const fs::path& output) {
+  std::vector<report::PublishedBenchmark> rows;
+  const fs::path accepted = spec.dir / "benchmark.yaml";
+  const fs::path imported = output / ("published-" + spec.category + "-" + spec.name + ".json");
+  try {
+    rows.push_back(report::import_benchmark_yaml(accepted, spec.category));
+    if (fs::exists(imported)) {
+      for (auto& b : report::load_report_inputs({imported}).published) rows.push_back(std::move(b));
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "robotperf: published rows left out of the verdict: " << e.what() << "\n";
+  }
+  return rows;
+}
+
+// A progress line: on stderr when it is a terminal (a log gets the summaries alone, in order),
+// after what stdout holds so far, so that the two never interleave on one screen.
+void progress_line(const RunArgs& a, const std::string& line) {
+  if (a.quiet || !isatty(STDERR_FILENO)) return;
+  std::cout.flush();
+  std::cerr << line << std::endl;
+}
+
 struct WrittenRun {
   int code = kExitOk;            // the exit status this run alone would give
   std::optional<fs::path> json;  // where its results file went, when it was written
@@ -100,7 +128,12 @@ WrittenRun write_run(const harness::BenchmarkSpec& spec, const RunArgs& a,
   fs::path base = name_run(a, result);
   const auto machine = sysinfo::collect_machine_info();
   // The summary first: whatever happens to the files, what was measured is on the screen.
-  std::cout << report::summary_table(result);
+  std::string standing = report::published_standing(result, published_rows(spec, a.output));
+  if (standing.empty() && result.matched > 0) {
+    standing = "not ranked: no published row of " + spec.id +
+               " to compare with (robotperf results import puts them in " + a.output + "/)";
+  }
+  std::cout << report::summary_table(result, standing);
   std::cout << "machine: " << sysinfo::summary_line(machine) << "\n";
   std::map<std::string, std::string> files = {
       {".json", json_text(report::result_to_json(result, machine), 2) + "\n"}};
@@ -168,7 +201,7 @@ SeveralRuns run_several(
   for (std::size_t i = 0; i < runs; ++i) {
     const std::string label = prepare(i);
     if (g_interrupted.load() != 0) break;
-    if (!a.quiet) std::fprintf(stderr, "[%s] %s\n", spec.id.c_str(), label.c_str());
+    progress_line(a, "[" + spec.id + "] " + label);
     const auto [result, written] = measure_and_write(spec, a, o);
     record(result, written);
     if (!out.first) out.first = written.json;
@@ -295,9 +328,10 @@ int run_peak_search(const harness::BenchmarkSpec& spec, const RunArgs& a, harnes
   o.progress = nullptr;
   std::size_t steps = 0;
   auto found = harness::find_peak(spec, o, search, [&](const harness::PeakStep& s) {
-    if (a.quiet) return;
-    std::fprintf(stderr, "[%s] peak search step %zu: %.1f Hz: %s\n", spec.id.c_str(), ++steps,
-                 s.rate_hz, s.passed ? "sustained" : ("failed: " + s.reason).c_str());
+    char rate[32];
+    std::snprintf(rate, sizeof rate, "%.1f", s.rate_hz);
+    progress_line(a, "[" + spec.id + "] peak search step " + std::to_string(++steps) + ": " + rate +
+                         " Hz: " + (s.passed ? "sustained" : "failed: " + s.reason));
   });
   if (!found.peak) {
     std::cout << report::peak_search_table(found.record);

@@ -78,6 +78,9 @@ struct BenchmarkSpec {
   std::size_t count = 0;  // messages to send; 0: as many as the dataset has frames
   std::size_t warmup = 0;
   double drain_s = 2.0;
+  // graph.yaml `sample:` what one measured message is, for a benchmark whose nature keeps a run
+  // to fewer than a p99 interval needs (one goal every 6 s): the summary says it beside the count.
+  std::string sample;
   // The process layout the benchmark is defined with ("single" or "per-node"); --processes
   // overrides it (e.g. n2, a ping-pong between two processes, says per-node).
   std::string processes = "single";

@@ -123,6 +123,7 @@ struct PeakSearchRecord {
 struct RunResult {
   std::string benchmark_id;
   std::string benchmark_name;
+  std::string sample;  // the package's `sample:` (BenchmarkSpec::sample)
   std::string category;
   // Configuration as run.
   double rate_hz = 0;  // with the bag's timeline: its mean recorded rate times rate_scale

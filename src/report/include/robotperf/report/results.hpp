@@ -38,8 +38,10 @@ nlohmann::json peak_search_json(const harness::PeakSearchRecord& search);
 std::string percentile_intervals_line(const metrics::SampleStats& stats, double scale,
                                       const std::string& unit, const std::string& of);
 
-// A human-readable summary: configuration, counts, latency distribution, throughput, verdict.
-std::string summary_table(const harness::RunResult& result);
+// A human-readable summary: what ran, then the lead (p50 and p99 with their intervals, throughput
+// and its kind, the verdict with `standing`, published_standing's line), then the details:
+// counts, the latency distribution, power, resources, warnings, the answers' checks.
+std::string summary_table(const harness::RunResult& result, const std::string& standing = {});
 
 // "<benchmark>-<rmw>-<UTC time>", unique per run start, safe as a file name.
 std::string result_basename(const harness::RunResult& result);

@@ -39,6 +39,11 @@ inline constexpr double kBusyThresholdPercent = 25.0;
 
 std::vector<RunWarning> check_run_rules(const RunRuleInputs& inputs);
 
+// A few words for a warning that holds for every run on this machine as it is set up (a virtual
+// machine, a container, the governor, turbo, SMT, an unknown clock), which a summary condenses to
+// one line; empty for a warning about this run (load, tracing, samples, the build).
+std::string machine_condition(const RunWarning& warning);
+
 // The rules on robotperf's own build alone (an unoptimised or sanitized one), for the benches,
 // whose figures such a build makes as wrong as a run's.
 std::vector<RunWarning> build_warnings(const std::string& build_type, bool sanitized);
