@@ -666,12 +666,12 @@ void write_control_loops(std::ostream& out, const harness::RunResult& r) {
         << (c.cpu >= 0 ? ", CPU " + std::to_string(c.cpu) : std::string())
         << (c.rt_priority ? ", SCHED_FIFO " + std::to_string(c.rt_priority) : std::string()) << ": "
         << c.cycles << " cycles, deadline misses " << c.deadline_misses << "\n";
-    std::snprintf(line, sizeof line, "%-24s %9s %9s %9s %9s %9s\n", "  loop (us)", "mean", "p50",
+    std::snprintf(line, sizeof line, "%-28s %9s %9s %9s %9s %9s\n", "  loop (us)", "mean", "p50",
                   "p99", "max", "min");
     out << line;
     auto loop_row = [&](const char* name, const metrics::SampleStats& s) {
       auto v = [](double ns) { return format_fixed(ns / 1e3, 1); };
-      std::snprintf(line, sizeof line, "  %-22s %9s %9s %9s %9s %9s\n", name, v(s.mean).c_str(),
+      std::snprintf(line, sizeof line, "  %-26s %9s %9s %9s %9s %9s\n", name, v(s.mean).c_str(),
                     v(s.p50).c_str(), v(s.p99).c_str(), v(s.max).c_str(), v(s.min).c_str());
       out << line;
     };
