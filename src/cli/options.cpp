@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
@@ -36,6 +37,44 @@ CLI::Validator number_between(double low, double high) {
         return "must be " + wanted + " (got " + text + ")";
       },
       "NUMBER");
+}
+
+namespace {
+
+bool printable(const std::string& text) {
+  return std::ranges::none_of(text, [](unsigned char c) { return c < 0x20 || c == 0x7f; });
+}
+
+}  // namespace
+
+CLI::Validator label_check() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        const auto equals = text.find('=');
+        const std::string key = text.substr(0, equals);
+        const bool key_ok =
+            !key.empty() && key.size() <= 64 && std::ranges::all_of(key, [](unsigned char c) {
+              return std::isalnum(c) || c == '_' || c == '.' || c == '-';
+            });
+        if (equals == std::string::npos || !key_ok)
+          return "expected KEY=VALUE, the key of letters, digits, '_', '.' and '-' (got " + text +
+                 ")";
+        const std::string value = text.substr(equals + 1);
+        if (value.empty() || value.size() > 256 || !printable(value))
+          return "the value of " + key + " must be 1 to 256 printable characters";
+        return "";
+      },
+      "KEY=VALUE");
+}
+
+CLI::Validator display_name_check() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        if (text.empty() || text.size() > 128 || !printable(text))
+          return "must be 1 to 128 printable characters";
+        return "";
+      },
+      "NAME");
 }
 
 CLI::Validator whole_number(std::uint64_t min, std::uint64_t max) {

@@ -54,6 +54,13 @@ CLI::Validator seconds_with_unit();
 // the `words` ("bag") pass unchanged.
 CLI::Validator hertz_with_unit(std::vector<std::string> words = {});
 
+// A --label KEY=VALUE check: the key of letters, digits, '_', '.' and '-' (up to 64), the value
+// printable (up to 256, no control characters), since both become report series and filters.
+CLI::Validator label_check();
+
+// A name shown in reports (--system): 1 to 128 printable characters.
+CLI::Validator display_name_check();
+
 // A --domain option's check, rewritten and taken with transform() as whole_number's is.
 CLI::Validator domain_id_check(bool auto_allowed);
 

@@ -459,15 +459,17 @@ struct Side {
 using Configuration = std::vector<std::pair<std::string, std::string>>;
 
 Configuration configuration_of(const StoredRun& r) {
-  return {{"hardware", r.hardware},
-          {"rmw", r.rmw},
-          {"processes", r.processes},
-          {"backend", r.backend.empty() ? "cpu" : r.backend},
-          {"mode", r.type},
-          {"arrivals", r.timeline},
-          {"monitor", r.monitor_wait},
-          {"rate", rate_text(r)},
-          {"node settings", r.node_settings}};
+  Configuration c = {{"hardware", r.hardware},
+                     {"rmw", r.rmw},
+                     {"processes", r.processes},
+                     {"backend", r.backend.empty() ? "cpu" : r.backend},
+                     {"mode", r.type},
+                     {"arrivals", r.timeline},
+                     {"monitor", r.monitor_wait},
+                     {"rate", rate_text(r)},
+                     {"node settings", r.node_settings}};
+  for (const auto& [key, value] : r.labels) c.emplace_back("label." + key, value);
+  return c;
 }
 
 Configuration configuration_of(const PublishedResult& row) {
@@ -504,11 +506,13 @@ struct FieldSelector {
     std::string part;
     while (std::getline(parts, part, ',')) {
       const auto eq = part.find('=');
-      const std::string key = lower(part.substr(0, eq));
-      if (eq == std::string::npos || !kKeys.contains(key)) {
+      std::string key = lower(part.substr(0, eq));
+      // system= is hardware= under the name --system gives it; label.KEY= a run's label.
+      if (key == "system") key = "hardware";
+      if (eq == std::string::npos || !(kKeys.contains(key) || key.starts_with("label."))) {
         throw ReportError("'" + selector + "': '" + part +
-                          "' is not a field=value (fields: hardware, rmw, processes, backend, "
-                          "mode, arrivals, monitor, rate)");
+                          "' is not a field=value (fields: hardware or system, rmw, processes, "
+                          "backend, mode, arrivals, monitor, rate, label.KEY)");
       }
       f.fields[key] = lower(part.substr(eq + 1));
     }
@@ -516,6 +520,11 @@ struct FieldSelector {
   }
   bool matches(const StoredRun& r) const {
     for (const auto& [key, want] : fields) {
+      if (key.starts_with("label.")) {
+        const auto label = r.labels.find(key.substr(6));
+        if (label == r.labels.end() || lower(label->second) != want) return false;
+        continue;
+      }
       if (key == "rate") {
         // A control benchmark's run is named by its input rate (its series) and by its
         // controller loop's (its notes, as published rows state theirs): either picks it. Two
@@ -588,7 +597,17 @@ Side select(const std::string& selector, const ReportInput& in) {
     for (const auto& [key, value] : by_fields->fields) side.selected_fields.insert(key);
   }
   for (const auto& r : in.runs) {
-    if (by_fields ? by_fields->matches(r) : run_named(r)) side.runs.push_back(&r);
+    if (by_fields ? by_fields->matches(r) : run_named(r)) {
+      side.runs.push_back(&r);
+      // A name chooses what it spells: "a1-fastdds" chooses the transport, so that comparing it
+      // with "a1-intra" is not called unlike in the very field compared.
+      if (!by_fields) {
+        for (const auto& [field, value] : configuration_of(r)) {
+          if (!value.empty() && want.find(lower(value)) != std::string::npos)
+            side.selected_fields.insert(field);
+        }
+      }
+    }
     if (!by_fields && lower(r.hardware) == want) side.selected_fields.insert("hardware");
   }
   for (const auto& b : in.published) {

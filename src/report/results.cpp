@@ -404,6 +404,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"dataset", dataset_json(r)},
       {"machine", sysinfo::to_json(machine)},
       {"software", software_of(r)},
+      {"labels", r.labels},
       {"warnings", warnings},
       {"domain_peers", peers_json(r)},
       {"counts",
@@ -438,6 +439,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
       {"functional", functional_json(r.functional)},
       {"backend_check", backend_check_json(r.backend_check)},
   };
+  if (!r.system.empty()) out["system"] = r.system;
   if (!r.host_launchers.empty()) out["network"] = network_json(r);
   if (!r.launched.empty()) out["launched"] = launched_json(r);
   if (!r.control_loops.empty()) out["control_loops"] = control_loops_json(r);
@@ -561,6 +563,13 @@ void write_configuration(std::ostream& out, const harness::RunResult& r) {
     out << " (" << parameters << ")";
   }
   out << "\n";
+  // What the user named the run by (the automatic labels are in the results file).
+  std::string named;
+  if (!r.system.empty()) named = "system " + r.system;
+  for (const auto& [key, value] : r.labels) {
+    if (!key.starts_with("robotperf.")) named += (named.empty() ? "" : " · ") + key + "=" + value;
+  }
+  if (!named.empty()) out << "labels: " << named << "\n";
 }
 
 // Where the graph ran: backends, device-resident topics, hosts, the network link, launched

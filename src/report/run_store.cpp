@@ -346,7 +346,12 @@ void read_run(const json& j, StoredRun& run) {
   run.robotperf_version = string_or(software, "robotperf_version", "?");
   run.git_revision = string_or(software, "git_revision", "?");
   const json& machine = member(j, "machine");
-  run.hardware = hardware_label(machine);
+  run.hardware = string_or(j, "system", hardware_label(machine));
+  if (const json& labels = member(j, "labels"); labels.is_object()) {
+    for (const auto& [key, value] : labels.items()) {
+      if (value.is_string()) run.labels[key] = value.get<std::string>();
+    }
+  }
   run.hardware_category = hardware_category(machine);
   const json& counts = member(j, "counts");
   const json& latency = member(j, "latency_ms");
@@ -545,6 +550,13 @@ std::string runs_table(const std::vector<StoredRun>& runs) {
 
 namespace {
 
+// "key=value,key=value", in key order.
+std::string labels_text(const std::map<std::string, std::string>& labels) {
+  std::string out;
+  for (const auto& [key, value] : labels) out += (out.empty() ? "" : ",") + key + "=" + value;
+  return out;
+}
+
 // One row of `results list --format json|csv`: (field, value) in column order.
 std::vector<std::pair<const char*, json>> run_fields(const StoredRun& r) {
   auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
@@ -555,6 +567,7 @@ std::vector<std::pair<const char*, json>> run_fields(const StoredRun& r) {
           {"category", r.category},
           {"mode", r.type},
           {"hardware", r.hardware},
+          {"labels", labels_text(r.labels)},
           {"rmw", r.rmw},
           {"processes", r.processes},
           {"backend", r.backend.empty() ? "cpu" : r.backend},

@@ -223,6 +223,15 @@ class RunCommand : public Command {
     command_->add_option("--output", args_.output,
                          "folder for the results files (default: ./results)");
     command_->add_flag("--csv", args_.csv, "also write the per-message latencies as CSV");
+    command_
+        ->add_option("--label", args_.labels,
+                     "KEY=VALUE recorded with the results, a series key in reports and a filter "
+                     "of compare (label.KEY=VALUE); repeatable")
+        ->check(label_check());
+    command_
+        ->add_option("--system", args_.system,
+                     "what reports call this machine (default: its CPU and GPU models)")
+        ->check(display_name_check());
     command_->add_flag("--quiet", args_.quiet, "no progress line");
     command_->add_flag("--report", args_.report,
                        "also write the HTML report of the run next to its results");

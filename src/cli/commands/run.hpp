@@ -45,6 +45,8 @@ struct RunArgs {
   std::vector<std::string> workload;
   std::optional<std::string> sweep;
   std::string output = "results";
+  std::vector<std::string> labels;  // --label KEY=VALUE
+  std::string system;               // --system NAME
   bool csv = false;
   bool quiet = false;
   bool report = false;

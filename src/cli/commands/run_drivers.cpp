@@ -25,6 +25,7 @@
 #include "robotperf/report/series.hpp"
 #include "robotperf/report/standing.hpp"
 #include "robotperf/report/sweep.hpp"
+#include "robotperf/sysinfo/git_revision.hpp"
 #include "robotperf/sysinfo/machine.hpp"
 #include "robotperf/tracing/leftovers.hpp"
 #include "run.hpp"
@@ -117,6 +118,24 @@ void progress_line(const RunArgs& a, const std::string& line) {
   std::cerr << line << std::endl;
 }
 
+// The run's labels: the automatic ones (robotperf's version and revision; for an external graph
+// the git revision its package is checked out at), then --label's, which may replace them (the
+// software section keeps what really ran), and --system.
+void label_run(const harness::BenchmarkSpec& spec, const RunArgs& a, harness::RunResult& result) {
+  const nlohmann::json software = report::software_json();
+  result.labels["robotperf.version"] = software["robotperf_version"];
+  result.labels["robotperf.revision"] = software["git_revision"];
+  if (spec.external()) {
+    if (const auto revision = sysinfo::git_revision_of(spec.dir))
+      result.labels["package.revision"] = *revision;
+  }
+  for (const auto& label : a.labels) {
+    const auto equals = label.find('=');
+    result.labels[label.substr(0, equals)] = label.substr(equals + 1);
+  }
+  result.system = a.system;
+}
+
 struct WrittenRun {
   int code = kExitOk;            // the exit status this run alone would give
   std::optional<fs::path> json;  // where its results file went, when it was written
@@ -125,6 +144,7 @@ struct WrittenRun {
 // Prints the run's summary, then writes its results (and report, trace, CSV as asked).
 WrittenRun write_run(const harness::BenchmarkSpec& spec, const RunArgs& a,
                      harness::RunResult& result) {
+  label_run(spec, a, result);
   fs::path base = name_run(a, result);
   const auto machine = sysinfo::collect_machine_info();
   // The summary first: whatever happens to the files, what was measured is on the screen.

@@ -124,6 +124,11 @@ struct RunResult {
   std::string benchmark_id;
   std::string benchmark_name;
   std::string sample;  // the package's `sample:` (BenchmarkSpec::sample)
+  // run --label KEY=VALUE and the automatic ones (robotperf's version and revision, an external
+  // package's git revision): series keys in reports and filters of every read verb.
+  std::map<std::string, std::string> labels;
+  std::string
+      system;  // run --system: what reports call the hardware; empty: named from the machine
   std::string category;
   // Configuration as run.
   double rate_hz = 0;  // with the bag's timeline: its mean recorded rate times rate_scale

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <stdexcept>
@@ -46,8 +47,11 @@ struct StoredRun {
   // differ in it did different work. Empty for results written before nodes recorded it.
   std::string node_settings;
   std::string robotperf_version = "?", git_revision = "?";  // of the robotperf that ran it
-  std::string hardware;           // short platform name: CPU model, plus GPU models
-  std::string hardware_category;  // RobotPerf category guessed from the machine
+  // The run's --system name when it has one, else a short platform name: CPU model, plus GPU
+  // models.
+  std::string hardware;
+  std::string hardware_category;              // RobotPerf category guessed from the machine
+  std::map<std::string, std::string> labels;  // run --label and the automatic labels
   std::size_t measured = 0, matched = 0, lost = 0;
   std::size_t unobserved = 0;  // grey-box: messages whose trace events may have been discarded
   double loss_percent = kNoValue;
