@@ -1006,6 +1006,16 @@ Comparison build_comparison(const ReportInput& in, const std::string& a, const s
   return compare(a, b, in);
 }
 
+Selection select_runs(const std::string& selector, const ReportInput& in) {
+  Side side = select(selector, in);
+  return {std::move(side.runs), std::move(side.selected_fields)};
+}
+
+std::vector<std::string> unlike(const StoredRun& a, const StoredRun& b,
+                                const std::set<std::string>& chosen) {
+  return differences(configuration_of(a), configuration_of(b), chosen);
+}
+
 Model build_model(const ReportInput& in, const ReportOptions& options) {
   Model model;
   model.title = options.title;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -92,6 +93,17 @@ Model build_model(const ReportInput& input, const ReportOptions& options);
 // The comparison of two selectors alone (what build_model puts in Model::comparison); throws
 // ReportError as it does.
 Comparison build_comparison(const ReportInput& input, const std::string& a, const std::string& b);
+
+// The local runs a selector (as compare takes it) chooses, and the configuration fields it names.
+struct Selection {
+  std::vector<const StoredRun*> runs;
+  std::set<std::string> fields;
+};
+Selection select_runs(const std::string& selector, const ReportInput& input);
+
+// How two runs' configurations differ ("rmw intra vs fastdds"), besides the `chosen` fields.
+std::vector<std::string> unlike(const StoredRun& a, const StoredRun& b,
+                                const std::set<std::string>& chosen);
 
 // "2 INVALID runs · 5 machine warnings (1 machine) · 12 run warnings · 1 other": the line that
 // stands for all of them.

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -23,6 +24,7 @@ struct SampleRun {
   std::size_t lost = 0;
   int64_t start_unix_ns = 1'790'000'000'000'000'000;
   std::vector<std::pair<std::string, std::string>> warnings{};  // run rules: (rule, message)
+  std::map<std::string, std::string> labels{};                  // run --label
 };
 
 inline harness::RunResult make_run(const SampleRun& s) {
@@ -30,6 +32,7 @@ inline harness::RunResult make_run(const SampleRun& s) {
   r.benchmark_id = s.id;
   r.benchmark_name = s.name;
   r.category = "perception";
+  r.labels = s.labels;
   for (const auto& [rule, message] : s.warnings) r.warnings.push_back({rule, message});
   r.rate_hz = 30;
   r.count = s.messages + 5;

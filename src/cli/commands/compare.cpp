@@ -1,9 +1,14 @@
 // `robotperf compare A B`: the report's comparison of two sides, in the terminal.
 #include <cstdio>
 #include <iostream>
+#include <optional>
+#include <stdexcept>
 
+#include "../options.hpp"
 #include "commands.hpp"
 #include "robotperf/cli/exit_codes.hpp"
+#include "robotperf/files/atomic_file.hpp"
+#include "robotperf/report/gate.hpp"
 #include "robotperf/report/report.hpp"
 #include "robotperf/report/run_store.hpp"
 
@@ -11,51 +16,98 @@ namespace robotperf::cli {
 
 namespace {
 
-// A side that is a results file is read even when it is not in the results folders.
-int compare_in_terminal(const std::string& a, const std::string& b,
-                        const std::vector<std::string>& results) {
+// The results to read: --results, else ./results and the sides that are results files.
+std::vector<fs::path> results_paths(const std::vector<std::string>& results,
+                                    const std::vector<std::string>& sides) {
   std::vector<fs::path> paths;
   for (const auto& p : results) paths.emplace_back(p);
   if (results.empty()) {
     std::error_code ec;
     if (fs::is_directory("results", ec)) paths.emplace_back("results");
-    for (const auto& side : {a, b}) {
+    for (const auto& side : sides) {
       if (side.ends_with(".json") && fs::is_regular_file(side, ec)) paths.emplace_back(side);
     }
   }
   if (paths.empty())
     throw report::ReportError(
         "compare: no ./results folder here; name the results with --results DIR");
-  const auto input = report::load_report_inputs(paths);
-  for (const auto& s : input.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
-  std::cout << report::render_comparison_text(input, a, b);
-  return kExitOk;
+  return paths;
+}
+
+struct GateArgs {
+  std::optional<double> fail_on_regression;  // percent
+  std::string junit, markdown;               // files to write, when named
+};
+
+// The regression gate: exit 1 on a regression, 0 without; its JUnit and Markdown written
+// atomically where asked.
+int gate(const report::ReportInput& input, const std::string& baseline,
+         const std::string& candidate, const GateArgs& g) {
+  const report::GateResult result =
+      report::run_gate(input, baseline, candidate, g.fail_on_regression.value_or(0));
+  std::cout << report::gate_text(result);
+  if (!g.junit.empty()) files::write_file_atomically(g.junit, report::gate_junit(result));
+  if (!g.markdown.empty()) files::write_file_atomically(g.markdown, report::gate_markdown(result));
+  if (result.judged() == 0)
+    throw report::ReportError("the gate judged nothing: each side needs at least " +
+                              std::to_string(report::kGateMinRuns) +
+                              " valid runs of a benchmark (run with --repeat)");
+  return result.regressions() > 0 ? kExitRegression : kExitOk;
 }
 
 class CompareCommand : public Command {
  public:
   CLI::App* declare(CLI::App& app) override {
-    auto* command = app.add_subcommand(
-        "compare",
-        "compare two runs or configurations in the terminal: medians, ratio B/A, significance");
+    auto* command =
+        app.add_subcommand("compare",
+                           "compare two runs or configurations: medians, ratio, significance; with "
+                           "--fail-on-regression a CI gate");
+    command->add_option("A", a_,
+                        "a results file, a file-name prefix (a1-intra), a hardware or series "
+                        "name, or fields: hardware= (or system=),rmw=,processes=,backend=,mode=,"
+                        "arrivals=,monitor=,rate=,label.KEY=");
+    command->add_option("B", b_, "the other side, as A");
+    command->add_option("--baseline", baseline_, "the gate's baseline, as A")
+        ->excludes(command->get_option("A"));
+    command->add_option("--candidate", candidate_, "the gate's candidate, as A")
+        ->excludes(command->get_option("B"));
     command
-        ->add_option("A", a_,
-                     "a results file, a file-name prefix (a1-intra), a hardware or series name, "
-                     "or fields: hardware=,rmw=,processes=,backend=,mode=,arrivals=,monitor=,"
-                     "rate=")
-        ->required();
-    command->add_option("B", b_, "the other side, as A")->required();
+        ->add_option("--fail-on-regression", gate_.fail_on_regression,
+                     "PCT: exit 1 when a figure of the candidate is worse than the baseline's, "
+                     "beyond the run-to-run noise and by more than PCT percent")
+        ->check(number_between(0, 1000));
+    command->add_option("--junit", gate_.junit, "with the gate: also write JUnit XML to FILE");
+    command->add_option("--markdown", gate_.markdown,
+                        "with the gate: also write a Markdown summary to FILE (a CI job summary)");
     command->add_option("--results", results_,
                         "results files or folders, imported published rows included (default: "
-                        "./results, and A and B where they are files)");
-    command->footer("Example: robotperf compare rmw=intra rmw=fastdds --results results");
+                        "./results, and the sides where they are files)");
+    command->footer(
+        "Examples:\n  robotperf compare rmw=intra rmw=fastdds --results results\n"
+        "  robotperf compare --baseline label.rev=main --candidate label.rev=pr42 "
+        "--fail-on-regression 10 --junit gate.xml");
     return command;
   }
 
-  int run(const Context&) override { return compare_in_terminal(a_, b_, results_); }
+  int run(const Context&) override {
+    const std::string a = baseline_.empty() ? a_ : baseline_;
+    const std::string b = candidate_.empty() ? b_ : candidate_;
+    if (a.empty() || b.empty())
+      throw std::invalid_argument(
+          "compare needs two sides: A and B, or --baseline and --candidate");
+    const bool gating = gate_.fail_on_regression.has_value();
+    if (!gating && (!gate_.junit.empty() || !gate_.markdown.empty()))
+      throw std::invalid_argument("--junit and --markdown go with --fail-on-regression");
+    const auto input = report::load_report_inputs(results_paths(results_, {a, b}));
+    for (const auto& s : input.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
+    if (gating) return gate(input, a, b, gate_);
+    std::cout << report::render_comparison_text(input, a, b);
+    return kExitOk;
+  }
 
  private:
-  std::string a_, b_;
+  std::string a_, b_, baseline_, candidate_;
+  GateArgs gate_;
   std::vector<std::string> results_;
 };
 

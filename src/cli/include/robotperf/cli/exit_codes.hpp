@@ -11,6 +11,8 @@ constexpr int kExitError = 1;
 constexpr int kExitUsage = 2;
 constexpr int kExitInvalidResult = 3;
 constexpr int kExitRefused = 4;
+// compare --fail-on-regression found a regression (1, as a failed check is in CI; bad input is 2).
+constexpr int kExitRegression = 1;
 
 // Prints "robotperf: <what>" for `error` and returns its exit code: kExitUsage for what the
 // command line asked wrongly (a bad benchmark, bag, trace, plug-in, keystore, ...), kExitRefused
