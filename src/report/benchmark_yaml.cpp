@@ -316,12 +316,20 @@ std::vector<PublishedResult> export_entries(const StoredRun& run, const ExportOp
   // Worded as check_published reads a rate back ("input rate 30.0 Hz"), so that an exported row
   // is matched on its rate as RobotPerf's own are. A peak search states no rate it was fed at.
   const bool peak = run.throughput_kind == "peak";
-  std::string context = (peak ? "peak search (the highest input rate that met its bounds: " +
-                                    format_fixed(run.rate_hz, 1) + " Hz)"
-                              : "input rate " + format_fixed(run.rate_hz, 1) + " Hz") +
-                        ", rmw " + run.rmw + ", " + run.processes +
-                        (run.processes == "single" ? " process" : " processes") + ", robotperf " +
-                        run.robotperf_version + " (" + run.git_revision + ")";
+  // The entry names its benchmark and configuration: a folder's exported entries all come from
+  // one dataset name, which says neither.
+  std::string context =
+      "benchmark " + run.benchmark_id + ", " +
+      (peak ? "peak search (the highest input rate that met its bounds: " +
+                  format_fixed(run.rate_hz, 1) + " Hz)"
+            : "input rate " + format_fixed(run.rate_hz, 1) + " Hz") +
+      ", rmw " + run.rmw + ", " + run.processes +
+      (run.processes == "single" ? " process" : " processes") +
+      (run.backend.empty() || run.backend == "cpu" ? "" : ", backend " + run.backend) +
+      ", robotperf " + run.robotperf_version + " (" + run.git_revision + ")";
+  for (const auto& [key, value] : run.labels) {
+    if (!key.starts_with("robotperf.")) context += ", label " + key + "=" + value;
+  }
   if (!run.valid) {
     std::string why;
     for (const auto& r : run.invalid_reasons) why += (why.empty() ? "" : "; ") + r;
