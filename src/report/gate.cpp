@@ -166,29 +166,6 @@ std::string change_text(const GateFinding& f) {
   return (f.change_percent >= 0 ? "+" : "") + format_fixed(f.change_percent, 1) + " %";
 }
 
-std::string xml_escaped(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
 std::string outcome_line(const GateResult& g) {
   const std::size_t n = g.regressions();
   if (n > 0)
@@ -337,12 +314,12 @@ std::string gate_junit(const GateResult& g) {
   out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
       << "<testsuites name=\"robotperf gate\" tests=\"" << g.findings.size() << "\" failures=\""
       << g.regressions() << "\">\n"
-      << "  <testsuite name=\"" << xml_escaped(g.candidate + " vs " + g.baseline) << "\" tests=\""
-      << g.findings.size() << "\" failures=\"" << g.regressions() << "\" skipped=\"" << skipped
-      << "\">\n";
+      << "  <testsuite name=\"" << detail::html_escape(g.candidate + " vs " + g.baseline)
+      << "\" tests=\"" << g.findings.size() << "\" failures=\"" << g.regressions()
+      << "\" skipped=\"" << skipped << "\">\n";
   for (const auto& f : g.findings) {
-    out << "    <testcase classname=\"" << xml_escaped(f.benchmark) << "\" name=\""
-        << xml_escaped(f.metric) << "\">";
+    out << "    <testcase classname=\"" << detail::html_escape(f.benchmark) << "\" name=\""
+        << detail::html_escape(f.metric) << "\">";
     const std::string what =
         f.metric == "validity"
             ? f.basis
@@ -351,11 +328,11 @@ std::string gate_junit(const GateResult& g) {
                   with_interval(f, f.candidate, f.candidate_interval, f.candidate_runs) + "; " +
                   f.basis;
     if (f.verdict == Verdict::kRegression)
-      out << "<failure message=\"" << xml_escaped(what) << "\"/>";
+      out << "<failure message=\"" << detail::html_escape(what) << "\"/>";
     else if (f.verdict == Verdict::kNotJudged)
-      out << "<skipped message=\"" << xml_escaped(f.basis) << "\"/>";
+      out << "<skipped message=\"" << detail::html_escape(f.basis) << "\"/>";
     else
-      out << "<system-out>" << xml_escaped(what) << "</system-out>";
+      out << "<system-out>" << detail::html_escape(what) << "</system-out>";
     out << "</testcase>\n";
   }
   out << "  </testsuite>\n</testsuites>\n";

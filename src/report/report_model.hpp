@@ -121,6 +121,7 @@ std::string configuration_series(const StoredRun& run);
 // Series label of published rows: "<hardware> (RobotPerf)", "<hardware> · grey (RobotPerf)".
 std::string published_series(const PublishedResult& row);
 
+// For HTML, and for XML too (the JUnit of the gate).
 std::string html_escape(const std::string& text);
 std::string format_value(double value);  // 4 significant digits, "-" for NaN
 
