@@ -35,11 +35,12 @@ svg .axis-scale, svg .tick, svg .legend, svg .marker-label { font-size: 11px; fi
 p.note { font-size: 12px; color: #555; }
 section.summary { background: #f6f8fa; border: 1px solid #d8dee4; padding: 4px 18px 12px; }
 ul.findings li { margin: 4px 0; }
-div.filters { position: sticky; top: 0; background: #fff; border-bottom: 1px solid #ccc;
-              padding: 6px 0; z-index: 1; font-size: 13px; }
-div.filters fieldset { display: inline-block; border: 1px solid #ccc; margin: 2px 6px 2px 0;
+details.filters { border-bottom: 1px solid #ccc; padding: 6px 0; margin-top: 12px;
+                  font-size: 13px; }
+details.filters summary { font-size: 14px; }
+details.filters fieldset { display: inline-block; border: 1px solid #ccc; margin: 2px 6px 2px 0;
                        padding: 2px 8px; vertical-align: top; max-width: 100%; }
-div.filters label { margin-right: 10px; white-space: nowrap; }
+details.filters label { margin-right: 10px; white-space: nowrap; }
 ul.key { list-style: none; padding: 0; display: flex; flex-wrap: wrap; gap: 4px 18px;
          font-size: 13px; }
 span.swatch { display: inline-block; width: 14px; height: 10px; margin-right: 6px;
@@ -209,7 +210,11 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
   }
   s << "</section>\n";
   if (!m.filters.empty()) {
-    s << "<div class=\"filters\" id=\"filters\"><strong>Show:</strong>\n";
+    // Folded: the page reads whole first; a reader narrows it on purpose.
+    std::vector<std::string> groups;
+    for (const auto& [group, values] : m.filters) groups.push_back(group);
+    s << "<details class=\"filters\" id=\"filters\"><summary><strong>Filter</strong> by "
+      << html_escape(joined(groups, ", ")) << " — <span id=\"filter-status\"></span></summary>\n";
     for (const auto& [group, values] : m.filters) {
       s << "<fieldset><legend>" << html_escape(group) << "</legend>";
       for (const auto& v : values) {
@@ -218,7 +223,7 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
       }
       s << "</fieldset>\n";
     }
-    s << "<span id=\"filter-status\"></span></div>\n";
+    s << "</details>\n";
   }
   if (!m.key.empty()) {
     // The page's one legend of colours: each series keeps its colour on every plot.
@@ -263,6 +268,10 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
                     "from 0); one polygon per series "
                     "(solid: local runs, median of valid runs; dashed: published RobotPerf rows, "
                     "median of the rows that pass the measurement rules).");
+        if (radar.metric == "throughput") {
+          s << " A series named “· peak” is the peak --find-peak found; the others are "
+               "the output rate at the rate they were fed, a lower bound on what they sustain.";
+        }
         for (const auto& note : radar.notes) {
           s << "<br><span class=\"difference\">Not alike: " << html_escape(note) << "</span>";
         }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <map>
 #include <optional>
@@ -1145,7 +1146,8 @@ void summarise(detail::Model& model, const ReportInput& in, std::size_t publishe
   } largest;
   std::vector<std::string> standing;
   std::size_t below_median = 0, with_standing = 0;
-  for (const auto& [category, sections] : model.benchmarks) {
+  for (const auto& category : model.categories) {  // in the page's order
+    const auto& sections = model.benchmarks.at(category);
     for (const auto& section : sections) {
       std::size_t runs = 0, valid_runs = 0;
       for (const auto& r : in.runs) {
@@ -1501,16 +1503,17 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
                                "; left out of the plots and comparisons)");
     }
   }
-  // What ran here first: categories and benchmarks with local runs before those with published
-  // rows alone.
+  // What ran here first: the categories with the most local runs, and in each the benchmarks with
+  // local runs, before those with published rows alone.
   std::set<std::string> ran;
-  for (const auto& r : in.runs) ran.insert(r.benchmark_id);
-  auto has_runs = [&](const std::string& category) {
-    return std::ranges::any_of(ids_by_category[category],
-                               [&](const std::string& id) { return ran.contains(id); });
-  };
+  std::map<std::string, std::size_t> runs_in;
+  for (const auto& r : in.runs) {
+    ran.insert(r.benchmark_id);
+    ++runs_in[r.category];
+  }
   model.categories.assign(categories.begin(), categories.end());
-  std::ranges::stable_partition(model.categories, has_runs);
+  std::ranges::stable_sort(model.categories, std::greater<>{},
+                           [&](const std::string& c) { return runs_in[c]; });
 
   const auto obs = observations(in);
   for (const auto& category : model.categories) {
