@@ -582,7 +582,7 @@ std::vector<detail::BarChart> charts_for(const std::string& id,
 // latency rows that pass the measurement rules and state the rate the configuration ran at, or
 // state none. Both sides are maxima, as RobotPerf reports latency.
 Table versus_published_for(const std::string& id, const std::vector<const StoredRun*>& runs,
-                           const ReportInput& in) {
+                           const ReportInput& in, std::vector<double>& ratios) {
   Table t;
   t.css_class = "versus-published";
   t.header = {"configuration",
@@ -638,6 +638,7 @@ Table versus_published_for(const std::string& id, const std::vector<const Stored
                           std::to_string(by_hardware.size()) + " published systems"});
     t.row_warning.push_back(false);
     t.row_tags.push_back(tags_of(first));
+    ratios.push_back(value / published_median);
   }
   return t;
 }
@@ -1191,11 +1192,10 @@ void summarise(detail::Model& model, const ReportInput& in, std::size_t publishe
       const auto& vs = section.versus_published;
       if (!vs.rows.empty()) {
         // The configuration that stands best against the published rows measured alike.
-        std::size_t best = 0;
-        for (std::size_t i = 1; i < vs.rows.size(); ++i) {
-          if (std::stod(vs.rows[i][4]) < std::stod(vs.rows[best][4])) best = i;
-        }
-        const double ratio = std::stod(vs.rows[best][4]);
+        const auto& ratios = section.versus_ratios;
+        const auto best =
+            static_cast<std::size_t>(std::ranges::min_element(ratios) - ratios.begin());
+        const double ratio = ratios[best];
         versus = times(ratio) + " the published median (" + vs.rows[best][2] + " rows alike)";
         ++with_standing;
         below_median += ratio < 1;
@@ -1533,7 +1533,7 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
       }
       section.runs = runs_table_for(runs);
       section.charts = charts_for(id, runs, in, obs);
-      section.versus_published = versus_published_for(id, runs, in);
+      section.versus_published = versus_published_for(id, runs, in, section.versus_ratios);
       section.also_measured = also_measured_table_for(runs);
       section.hops = hops_table_for(runs);
       section.callbacks = callbacks_table_for(runs);

@@ -92,8 +92,9 @@ struct BenchmarkSection {
   std::vector<BarChart> charts;  // p50 of the local runs; max beside the published rows
   // Each local configuration against the published rows measured alike (black-box, same rate).
   Table versus_published;
-  Table published;  // per published hardware: medians of unflagged rows
-  Table flagged;    // published rows that break the measurement rules
+  std::vector<double> versus_ratios;  // per row of it: this configuration / the published median
+  Table published;                    // per published hardware: medians of unflagged rows
+  Table flagged;                      // published rows that break the measurement rules
   std::size_t published_rows = 0;
 };
 
