@@ -1017,6 +1017,15 @@ TEST_F(Report, PublishedRowsArePlottedAndComparedLikeWithLike) {
   const std::string svg = detail::bar_chart_svg(section.charts[1]);
   EXPECT_NE(svg.find("class=\"bar published\""), std::string::npos);
   EXPECT_NE(svg.find("fill=\"url(#hatch-a1-max)\""), std::string::npos);
+  // The published maxima span boards and servers (over 50x): a logarithmic axis, said so; the
+  // local p50s alone stay linear.
+  EXPECT_NE(svg.find(">max latency (ms, log scale)<title>"), std::string::npos);
+  EXPECT_EQ(detail::bar_chart_svg(section.charts[0]).find("log scale"), std::string::npos);
+  // Published rows name no transport: the transport filter leaves them alone.
+  for (const auto& bar : section.charts[1].bars) {
+    EXPECT_EQ(bar.tags.contains("transport"), bar.local) << bar.series;
+    EXPECT_EQ(bar.tags.at("source"), bar.local ? "local runs" : "published RobotPerf");
+  }
   // The rows alike: black-box latency rows that pass the rules, at 30 Hz or stating no rate.
   std::size_t alike = 0;
   for (const auto& row : input.published.at(0).results) {
