@@ -354,8 +354,9 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
   s << "<p class=\"note\">Latency is measured from the scheduled send time (immune to "
        "coordinated omission); the RobotPerf headline latency is its maximum. Throughput is the "
        "output rate; power is the average over the measured window, reported only when a real "
-       "sensor was read.</p>\n"
-    << kFilterScript << "</body>\n</html>\n";
+       "sensor was read.</p>\n";
+  if (!m.filters.empty()) s << kFilterScript;  // it drives the filters, when there are any
+  s << "</body>\n</html>\n";
   return s.str();
 }
 

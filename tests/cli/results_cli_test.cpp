@@ -463,8 +463,9 @@ TEST_F(ResultsCli, RunWritesItsReport) {
     if (e.path().string().ends_with(".report.html")) {
       ++reports;
       const std::string html = read_text(e.path());
-      // One benchmark, one run, no published rows: its p50 alone.
+      // One benchmark, one run, no published rows: its p50 alone, and nothing to filter.
       EXPECT_EQ(count(html, "<svg class=\"barchart\""), 1u);
+      EXPECT_EQ(html.find("<script"), std::string::npos);
       EXPECT_NE(html.find("<table class=\"runs\""), std::string::npos);
     }
   }
