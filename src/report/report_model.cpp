@@ -297,18 +297,16 @@ std::vector<detail::Distribution> distributions(const std::vector<const StoredRu
 Table runs_table_for(const std::vector<const StoredRun*>& runs) {
   Table t;
   t.css_class = "runs";
-  t.header = {"run",    "hardware",       "transport", "rate Hz", "matched",
-              "loss %", "min ms",         "mean ms",   "p50 ms",  "p99 ms",
-              "max ms", "throughput fps", "power W",   "validity"};
-  t.numeric = {false, false, false, true, true, true, true,
-               true,  true,  true,  true, true, true, false};
+  // The configuration as every plot and legend of the page names it: which bar a run is in.
+  t.header = {"run",     "configuration", "rate Hz", "matched", "loss %",         "min ms",
+              "mean ms", "p50 ms",        "p99 ms",  "max ms",  "throughput fps", "power W",
+              "validity"};
+  t.numeric = {false, false, true, true, true, true, true, true, true, true, true, true, false};
   for (const StoredRun* r : runs) {
     std::string validity = r->valid ? "valid" : "INVALID";
     for (std::size_t i = 0; i < r->invalid_reasons.size(); ++i)
       validity += (i ? "; " : ": ") + r->invalid_reasons[i];
-    t.rows.push_back({r->stem(), r->hardware,
-                      r->rmw + (r->processes == "per-node" ? " (per-node)" : ""),
-                      format_fixed(r->rate_hz, 1),
+    t.rows.push_back({r->stem(), detail::local_series(*r), format_fixed(r->rate_hz, 1),
                       std::to_string(r->matched) + "/" + std::to_string(r->measured),
                       format_fixed(r->loss_percent, 2), format_fixed(r->latency.min, 3),
                       format_fixed(r->latency.mean, 3), format_fixed(r->latency.p50, 3),

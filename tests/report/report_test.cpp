@@ -980,6 +980,12 @@ TEST_F(Report, ARepeatSeriesIsOneBarWithItsRunsAndBarsAreSorted) {
   EXPECT_EQ(bars[1].series, "AMD Ryzen 7 5800X · intra · 30 Hz");
   EXPECT_EQ(bars[1].points.size(), 6u);
   EXPECT_EQ(bars[1].count, "6 runs");
+  // The runs table names each run's configuration as its bar does.
+  const auto& runs = model.benchmarks.at("perception").at(0).runs;
+  ASSERT_EQ(runs.header[1], "configuration");
+  ASSERT_EQ(runs.rows.size(), 7u);
+  for (std::size_t i = 0; i < 6; ++i) EXPECT_EQ(runs.rows[i][1], bars[1].series);
+  EXPECT_EQ(runs.rows[6][1], bars[0].series);  // the fast run ran last
   std::vector<double> p50s;
   for (const auto& r : input.runs) {
     if (r.hardware != "Fast CPU") p50s.push_back(r.latency.p50);
