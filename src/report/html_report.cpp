@@ -14,7 +14,7 @@ using detail::Table;
 constexpr const char* kStyle = R"(
 body { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; margin: 24px; color: #222;
        max-width: 1600px; }
-h1 { margin-bottom: 4px; } h2 { border-bottom: 2px solid #1f77b4; padding-bottom: 4px;
+h1 { margin-bottom: 4px; } h2 { border-bottom: 2px solid #444; padding-bottom: 4px;
        margin-top: 36px; } h3 { margin-top: 28px; }
 p.summary { color: #555; margin-top: 0; }
 table { border-collapse: collapse; margin: 8px 0 16px; font-size: 13px; }
