@@ -526,8 +526,9 @@ std::string distribution_svg(const std::vector<Distribution>& curves, const std:
   for (std::size_t i = 0; i < curves.size(); ++i) {
     const auto& c = curves[i];
     const char* colour = curve_colour(i);
-    s << "<polyline class=\"curve" << (c.valid ? "" : " invalid") << "\" fill=\"none\" stroke=\""
-      << colour << "\" stroke-width=\"2\"" << dashes[i] << " points=\"";
+    s << "<polyline class=\"curve" << (c.valid ? "" : " invalid") << "\" data-series=\""
+      << html_escape(c.series) << "\" fill=\"none\" stroke=\"" << colour << "\" stroke-width=\"2\""
+      << dashes[i] << " points=\"";
     // A CDF is a step function: draw each rise at its x.
     double last_y = 0;
     bool first = true;

@@ -302,8 +302,9 @@ TEST_F(ResultsCli, ReportRendersInHeadlessChromium) {
 
 // Run in the page by Chromium, with the page as loaded, with a transport filtered out, and with it
 // back: every text of every plot lies inside its plot and overlaps no other text of it; every bar's
-// series is in the page's key, drawn in its key's colour (a published bar without a colour is
-// hatched, named beside it and said so in the key), and no colour stands for two series;
+// series and every valid latency curve's is in the page's key, drawn in its key's colour (a
+// published bar without a colour is hatched, named beside it and said so in the key), and no
+// colour stands for two series;
 // the filter hides exactly the rows and bars of that transport and shows them again. The result
 // is written into the DOM, which --dump-dom prints.
 constexpr const char* kLayoutCheck = R"(<script>
@@ -365,6 +366,14 @@ window.addEventListener('load', () => {
     if (rect.classList.contains('local') && g.dataset.colour !== 'none' &&
         rect.getAttribute('fill') !== g.dataset.colour)
       problems.push('bar drawn in another colour: ' + g.dataset.series);
+  });
+  // The latency curves are drawn in their configuration's colour, INVALID runs' in grey.
+  document.querySelectorAll('polyline.curve:not(.invalid)').forEach(curve => {
+    const series = curve.dataset.series;
+    if (!key.has(series)) problems.push('curve not in the key: ' + series);
+    else if (key.get(series) !== 'none' && key.get(series) !== curve.getAttribute('stroke'))
+      problems.push('curve in another colour than its key: ' + series);
+    note(curve.getAttribute('stroke'), series);
   });
   seriesOfColour.forEach((series, colour) => {
     if (series.size > 1) problems.push(colour + ' stands for ' + Array.from(series).join(' and '));
