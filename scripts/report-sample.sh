@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Makes the manual's sample report from real runs on this machine: several benchmarks and
-# configurations (two transports, both process layouts, two rates, a grey-box run, an INVALID
-# run, control and manipulation) beside the published RobotPerf rows, then its screenshot.
+# configurations (a --repeat series, two transports, both process layouts, two rates, a grey-box
+# run, an INVALID run, control and manipulation) beside the published RobotPerf rows, then its
+# screenshot.
 #   scripts/report-sample.sh [OUT_DIR]   (default: build/report-sample)
 # The DDS runs take a domain no other participant uses (--domain auto).
 # Needs a built robotperf (scripts/build.sh; ROBOTPERF=path picks another) and chromium for the
@@ -16,8 +17,8 @@ rm -rf "$results"
 mkdir -p "$results"
 
 run() { "$robotperf" run "$@" --quiet --output "$results" > /dev/null; }
-run a1
-run a1
+# A --repeat series: one configuration, drawn as one bar with its runs as dots.
+run a1 --repeat 3
 run a1 --rmw fastdds --domain auto
 run a1 --processes per-node --domain auto
 run a1 --rate 60

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "report_model.hpp"
@@ -13,7 +14,7 @@ using detail::Table;
 constexpr const char* kStyle = R"(
 body { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; margin: 24px; color: #222;
        max-width: 1600px; }
-h1 { margin-bottom: 4px; } h2 { border-bottom: 2px solid #1f77b4; padding-bottom: 4px;
+h1 { margin-bottom: 4px; } h2 { border-bottom: 2px solid #444; padding-bottom: 4px;
        margin-top: 36px; } h3 { margin-top: 28px; }
 p.summary { color: #555; margin-top: 0; }
 table { border-collapse: collapse; margin: 8px 0 16px; font-size: 13px; }
@@ -27,11 +28,67 @@ div.warnings ul.invalid li { color: #a00000; font-weight: bold; }
 span.difference { color: #a05000; }
 div.warnings details p { margin: 6px 0 0 0; }
 div.radars { display: flex; flex-wrap: wrap; gap: 12px; }
-figure { margin: 0; } figcaption { font-size: 12px; color: #555; max-width: 480px; }
+figure { margin: 0; } figcaption { font-size: 12px; color: #555; max-width: 760px; }
 svg text { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; }
 svg .plot-title { font-size: 13px; font-weight: bold; } svg .axis-label { font-size: 12px; }
 svg .axis-scale, svg .tick, svg .legend, svg .marker-label { font-size: 11px; fill: #444; }
 p.note { font-size: 12px; color: #555; }
+section.summary { background: #f6f8fa; border: 1px solid #d8dee4; padding: 4px 18px 12px; }
+ul.findings li { margin: 4px 0; }
+details.filters { border-bottom: 1px solid #ccc; padding: 6px 0; margin-top: 12px;
+                  font-size: 13px; }
+details.filters summary { font-size: 14px; }
+details.filters fieldset { display: inline-block; border: 1px solid #ccc; margin: 2px 6px 2px 0;
+                       padding: 2px 8px; vertical-align: top; max-width: 100%; }
+details.filters label { margin-right: 10px; white-space: nowrap; }
+ul.key { list-style: none; padding: 0; display: flex; flex-wrap: wrap; gap: 4px 18px;
+         font-size: 13px; }
+span.swatch { display: inline-block; width: 14px; height: 10px; margin-right: 6px;
+              border: 2px solid; vertical-align: middle; }
+span.swatch.published { background: repeating-linear-gradient(45deg, #fff 0 2px, #666 2px 4px); }
+.filtered { display: none; }
+)";
+
+// Hides the rows and bars that an unticked filter value tags, and closes the gaps in the bar
+// charts. No network, no library: the page stays one file.
+constexpr const char* kFilterScript = R"(<script>
+(() => {
+  const boxes = Array.from(document.querySelectorAll('#filters input[type=checkbox]'));
+  const status = document.getElementById('filter-status');
+  function apply() {
+    const off = {};
+    for (const box of boxes) {
+      if (!box.checked) (off[box.dataset.group] = off[box.dataset.group] || new Set()).add(box.value);
+    }
+    let shown = 0, all = 0;
+    document.querySelectorAll('[data-source]').forEach(element => {
+      const hide = Object.keys(off).some(
+          group => element.dataset[group] !== undefined && off[group].has(element.dataset[group]));
+      element.classList.toggle('filtered', hide);
+      if (element.classList.contains('bar-row')) {
+        ++all;
+        shown += !hide;
+      }
+    });
+    document.querySelectorAll('svg.barchart').forEach(svg => {
+      const row = Number(svg.dataset.row);
+      let y = Number(svg.dataset.top);
+      svg.querySelectorAll('g.bar-row').forEach(g => {
+        if (g.classList.contains('filtered')) return;
+        g.setAttribute('transform', 'translate(0,' + y + ')');
+        y += row;
+      });
+      svg.querySelector('g.axis').setAttribute('transform', 'translate(0,' + (y + 4) + ')');
+      const width = svg.viewBox.baseVal.width;
+      svg.setAttribute('height', y + 48);
+      svg.setAttribute('viewBox', '0 0 ' + width + ' ' + (y + 48));
+    });
+    status.textContent = 'showing ' + shown + ' of ' + all + ' bars';
+  }
+  boxes.forEach(box => box.addEventListener('change', apply));
+  apply();
+})();
+</script>
 )";
 
 std::string table_html(const Table& t) {
@@ -40,7 +97,12 @@ std::string table_html(const Table& t) {
   for (const auto& h : t.header) s << "<th>" << html_escape(h) << "</th>";
   s << "</tr></thead>\n<tbody>\n";
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
-    s << "<tr" << (r < t.row_warning.size() && t.row_warning[r] ? " class=\"warn\"" : "") << ">";
+    s << "<tr" << (r < t.row_warning.size() && t.row_warning[r] ? " class=\"warn\"" : "");
+    if (r < t.row_tags.size()) {
+      for (const auto& [group, value] : t.row_tags[r])
+        s << " data-" << group << "=\"" << html_escape(value) << "\"";
+    }
+    s << ">";
     for (std::size_t c = 0; c < t.rows[r].size(); ++c) {
       s << "<td" << (c < t.numeric.size() && t.numeric[c] ? " class=\"num\"" : "") << ">"
         << html_escape(t.rows[r][c]) << "</td>";
@@ -49,6 +111,46 @@ std::string table_html(const Table& t) {
   }
   s << "</tbody></table>\n";
   return s.str();
+}
+
+// The numbers behind a bar chart, for the page's folded table and the Markdown file.
+Table chart_table(const detail::BarChart& chart) {
+  Table t;
+  t.css_class = "chart-data";
+  t.header = {"configuration", chart.figure + " latency ms", "95 % interval", "from", "source"};
+  t.numeric = {false, true, true, true, false};
+  for (const auto& b : chart.bars) {
+    const bool interval = std::isfinite(b.lower) && std::isfinite(b.upper);
+    t.rows.push_back(
+        {b.series, detail::format_value(b.value),
+         interval ? detail::format_value(b.lower) + " – " + detail::format_value(b.upper) : "-",
+         b.count, b.local ? "local runs" : "published RobotPerf"});
+    t.row_warning.push_back(false);
+    t.row_tags.push_back(b.tags);
+  }
+  return t;
+}
+
+std::string chart_caption(const detail::BarChart& chart) {
+  return chart.axis +
+         ". Solid: local runs; hatched: published RobotPerf rows that pass the measurement rules. "
+         "Whiskers: the 95 % interval where known (one run: of its p50; six or more runs or rows: "
+         "of their median); dots: each run of a configuration that ran more than once.";
+}
+
+// Whether any bar of the page is published rows drawn without a colour of their own.
+bool published_bars(const detail::Model& m) {
+  for (const auto& [category, sections] : m.benchmarks) {
+    for (const auto& section : sections) {
+      for (const auto& chart : section.charts) {
+        if (std::ranges::any_of(chart.bars, [](const detail::Bar& b) {
+              return !b.local && b.colour == detail::kNoColour;
+            }))
+          return true;
+      }
+    }
+  }
+  return false;
 }
 
 constexpr const char* kSignificanceNote =
@@ -76,6 +178,14 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
     << "</title>\n<style>" << kStyle << "</style>\n</head>\n<body>\n";
   s << "<h1>" << html_escape(m.title) << "</h1>\n<p class=\"summary\">" << html_escape(m.summary)
     << "</p>\n";
+  s << "<section class=\"summary\" id=\"summary\">\n<h2>Summary</h2>\n";
+  for (const auto& line : m.overview) s << "<p>" << html_escape(line) << "</p>\n";
+  if (!m.findings.empty()) {
+    s << "<ul class=\"findings\">\n";
+    for (const auto& f : m.findings) s << "<li>" << html_escape(f) << "</li>\n";
+    s << "</ul>\n";
+  }
+  if (!m.at_a_glance.rows.empty()) s << table_html(m.at_a_glance);
   if (const std::string summary = detail::warning_summary(m); !summary.empty()) {
     // INVALID runs in view; the warnings behind one line, grouped by machine and by run.
     s << "<div class=\"warnings\" id=\"warnings\"><strong>Validity:</strong> "
@@ -98,9 +208,46 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
     }
     s << "</div>\n";
   }
+  s << "</section>\n";
+  if (!m.filters.empty()) {
+    // Folded: the page reads whole first; a reader narrows it on purpose.
+    std::vector<std::string> groups;
+    for (const auto& [group, values] : m.filters) groups.push_back(group);
+    s << "<details class=\"filters\" id=\"filters\"><summary><strong>Filter</strong> by "
+      << html_escape(joined(groups, ", ")) << " — <span id=\"filter-status\"></span></summary>\n";
+    for (const auto& [group, values] : m.filters) {
+      s << "<fieldset><legend>" << html_escape(group) << "</legend>";
+      for (const auto& v : values) {
+        s << "<label><input type=\"checkbox\" checked data-group=\"" << html_escape(group)
+          << "\" value=\"" << html_escape(v) << "\">" << html_escape(v) << "</label>";
+      }
+      s << "</fieldset>\n";
+    }
+    s << "</details>\n";
+  }
+  if (!m.key.empty()) {
+    // The page's one legend of colours: each series keeps its colour on every plot.
+    s << "<ul class=\"key\" id=\"series-key\">\n";
+    for (const auto& k : m.key) {
+      const bool coloured = k.colour != detail::kNoColour;
+      const char* colour = detail::colour_of(k.colour);
+      s << "<li data-series=\"" << html_escape(k.series) << "\" data-colour=\""
+        << (coloured ? colour : "none") << "\"><span class=\"swatch"
+        << (k.local ? "" : " published") << "\" style=\"border-color: " << colour
+        << (k.local ? std::string("; background: ") + (coloured ? colour : "#fff") : "")
+        << "\"></span>" << html_escape(k.series) << "</li>\n";
+    }
+    if (published_bars(m)) {
+      s << "<li class=\"published-key\"><span class=\"swatch published\" style=\"border-color: "
+           "#333\"></span>published RobotPerf rows: hatched, each named beside its bar</li>\n";
+    }
+    s << "</ul>\n";
+  }
   for (const auto& category : m.categories) {
     s << "<h2 id=\"category-" << html_escape(category) << "\">" << html_escape(category)
-      << "</h2>\n<div class=\"radars\">\n";
+      << "</h2>\n";
+    const bool radars = !m.radars.at(category).empty();  // asked for with --radar
+    if (radars) s << "<div class=\"radars\">\n";
     for (const auto& radar : m.radars.at(category)) {
       s << "<figure>\n";
       if (radar.axes.empty()) {
@@ -121,6 +268,10 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
                     "from 0); one polygon per series "
                     "(solid: local runs, median of valid runs; dashed: published RobotPerf rows, "
                     "median of the rows that pass the measurement rules).");
+        if (radar.metric == "throughput") {
+          s << " A series named “· peak” is the peak --find-peak found; the others are "
+               "the output rate at the rate they were fed, a lower bound on what they sustain.";
+        }
         for (const auto& note : radar.notes) {
           s << "<br><span class=\"difference\">Not alike: " << html_escape(note) << "</span>";
         }
@@ -128,7 +279,7 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
       }
       s << "</figure>\n";
     }
-    s << "</div>\n";
+    if (radars) s << "</div>\n";
     for (const auto& radar : m.radars.at(category)) {
       if (radar.axes.empty()) continue;
       s << "<details><summary>" << html_escape(radar.metric)
@@ -138,6 +289,22 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
     for (const auto& b : m.benchmarks.at(category)) {
       s << "<h3 id=\"benchmark-" << html_escape(b.id) << "\">" << html_escape(b.id) << " — "
         << html_escape(b.name) << "</h3>\n";
+      for (const auto& chart : b.charts) {
+        s << "<figure>\n"
+          << detail::bar_chart_svg(chart) << "<figcaption>" << html_escape(chart_caption(chart));
+        for (const auto& note : chart.notes) {
+          s << "<br><span class=\"difference\">Not alike: " << html_escape(note) << "</span>";
+        }
+        s << "</figcaption>\n</figure>\n<details><summary>" << html_escape(chart.figure)
+          << " latency values behind the plot</summary>\n"
+          << table_html(chart_table(chart)) << "</details>\n";
+      }
+      if (!b.versus_published.rows.empty()) {
+        s << "<p class=\"note\">This system against the published RobotPerf rows measured alike "
+             "(black-box latency rows that pass the measurement rules, at the configuration's rate "
+             "or stating none; maximum latency on both sides):</p>\n"
+          << table_html(b.versus_published);
+      }
       if (!b.runs.rows.empty()) {
         s << table_html(b.runs);
         if (!b.also_measured.rows.empty()) {
@@ -177,6 +344,9 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
       << table_html(m.comparison->table) << "<p class=\"note\">";
     for (const auto& n : m.comparison->notes) s << html_escape(n) << "<br>";
     s << html_escape(kSignificanceNote) << "</p>\n";
+  } else if (!m.no_comparison.empty()) {
+    s << "<h2 id=\"comparison\">Comparison</h2>\n<p class=\"note\">" << html_escape(m.no_comparison)
+      << "</p>\n";
   }
   if (!m.machines.rows.empty()) {
     s << "<h2 id=\"machines\">Machines</h2>\n" << table_html(m.machines);
@@ -184,7 +354,9 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
   s << "<p class=\"note\">Latency is measured from the scheduled send time (immune to "
        "coordinated omission); the RobotPerf headline latency is its maximum. Throughput is the "
        "output rate; power is the average over the measured window, reported only when a real "
-       "sensor was read.</p>\n</body>\n</html>\n";
+       "sensor was read.</p>\n";
+  if (!m.filters.empty()) s << kFilterScript;  // it drives the filters, when there are any
+  s << "</body>\n</html>\n";
   return s.str();
 }
 
@@ -208,7 +380,11 @@ std::string render_markdown(const ReportInput& input, const ReportOptions& optio
     }
     s << "\n";
   };
-  s << "# " << m.title << "\n\n" << m.summary << "\n\n";
+  s << "# " << m.title << "\n\n" << m.summary << "\n\n## Summary\n\n";
+  for (const auto& line : m.overview) s << line << "\n\n";
+  for (const auto& f : m.findings) s << "- " << markdown_cell(f) << "\n";
+  if (!m.findings.empty()) s << "\n";
+  if (!m.at_a_glance.rows.empty()) table(m.at_a_glance);
   if (const std::string summary = detail::warning_summary(m); !summary.empty()) {
     s << "## Validity\n\n" << summary << "\n\n";
     for (const auto& w : m.invalid_runs) s << "- " << markdown_cell(w) << "\n";
@@ -225,7 +401,7 @@ std::string render_markdown(const ReportInput& input, const ReportOptions& optio
     s << "## " << category << "\n\n";
     for (const auto& radar : m.radars.at(category)) {
       if (radar.axes.empty()) continue;
-      s << "**" << radar.metric << " (" << radar.unit << "), "
+      s << "**" << radar.figure << " (" << radar.unit << "), "
         << (radar.smaller_is_better ? "smaller" : "larger")
         << " is better** — the values of the radar plot\n\n";
       for (const auto& note : radar.notes) s << "Not alike: " << markdown_cell(note) << "\n\n";
@@ -233,6 +409,16 @@ std::string render_markdown(const ReportInput& input, const ReportOptions& optio
     }
     for (const auto& b : m.benchmarks.at(category)) {
       s << "### " << b.id << " — " << b.name << "\n\n";
+      for (const auto& chart : b.charts) {
+        s << "**" << chart.axis << "**\n\n";
+        for (const auto& note : chart.notes) s << "Not alike: " << markdown_cell(note) << "\n\n";
+        table(chart_table(chart));
+      }
+      if (!b.versus_published.rows.empty()) {
+        s << "Against the published RobotPerf rows measured alike (black-box, same rate, maximum "
+             "latency):\n\n";
+        table(b.versus_published);
+      }
       if (!b.runs.rows.empty()) table(b.runs);
       if (!b.also_measured.rows.empty()) {
         s << "What the runs also measured:\n\n";
@@ -267,6 +453,8 @@ std::string render_markdown(const ReportInput& input, const ReportOptions& optio
     table(m.comparison->table);
     for (const auto& n : m.comparison->notes) s << "- " << markdown_cell(n) << "\n";
     s << "\n" << kSignificanceNote << "\n\n";
+  } else if (!m.no_comparison.empty()) {
+    s << "## Comparison\n\n" << m.no_comparison << "\n\n";
   }
   if (!m.machines.rows.empty()) {
     s << "## Machines\n\n";

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <set>
@@ -57,9 +59,11 @@ struct MetricInfo {
   const char* metric;
   const char* unit;
   bool smaller_is_better;
+  const char* figure;  // what a plot's title calls it: the latency radars plot the maximum
 };
-constexpr MetricInfo kRadarMetrics[] = {
-    {"latency", "ms", true}, {"throughput", "fps", false}, {"power", "W", true}};
+constexpr MetricInfo kRadarMetrics[] = {{"latency", "ms", true, "maximum latency"},
+                                        {"throughput", "fps", false, "throughput"},
+                                        {"power", "W", true, "power"}};
 
 std::vector<Observation> observations(const ReportInput& in) {
   std::vector<Observation> out;
@@ -78,13 +82,10 @@ std::vector<Observation> observations(const ReportInput& in) {
     const std::string rate = rate_text(r);
     out.push_back(
         {r.benchmark_id, r.category, series, "latency", true, r.latency.max, &r, r.type, rate});
-    const bool peak = r.throughput_kind == "peak";
-    if (peak) {
-      out.push_back({r.benchmark_id, r.category, detail::configuration_series(r) + " (peak)",
-                     "throughput", true, r.throughput_hz, &r, r.type, rate});
-    } else if (!with_peak.contains({r.benchmark_id, detail::configuration_series(r)})) {
-      out.push_back({r.benchmark_id, r.category, series + " (offered)", "throughput", true,
-                     r.throughput_hz, &r, r.type, rate});
+    if (r.throughput_kind == "peak" ||
+        !with_peak.contains({r.benchmark_id, detail::configuration_series(r)})) {
+      out.push_back({r.benchmark_id, r.category, series, "throughput", true, r.throughput_hz, &r,
+                     r.type, rate});
     }
     if (r.power_w) {
       out.push_back(
@@ -151,6 +152,7 @@ std::vector<detail::Radar> radars_for(const std::string& category,
     detail::Radar radar;
     radar.category = category;
     radar.metric = m.metric;
+    radar.figure = m.figure;
     radar.unit = m.unit;
     radar.smaller_is_better = m.smaller_is_better;
     std::set<std::string> axes;
@@ -183,8 +185,9 @@ std::vector<detail::Radar> radars_for(const std::string& category,
       }
       return row;
     };
+    const std::size_t shown = std::min(options.max_radar_series, kMaxRadarSeries);
     for (std::size_t i = 0; i < names.size(); ++i) {
-      if (i >= options.max_radar_series) {
+      if (i >= shown) {
         radar.omitted.push_back(names[i]);
         continue;
       }
@@ -214,12 +217,28 @@ std::vector<detail::Radar> radars_for(const std::string& category,
   return out;
 }
 
+// What the page's filters match a local run or a published row by.
+std::map<std::string, std::string> tags_of(const StoredRun& r) {
+  return {{"system", r.hardware},
+          {"transport", r.rmw},
+          {"source", "local runs"},
+          {"mode", r.type.empty() ? "black" : r.type}};
+}
+
+std::map<std::string, std::string> tags_of(const PublishedResult& row) {
+  // A published row names no transport: the transport filter leaves it alone.
+  return {{"system", row.hardware},
+          {"source", "published RobotPerf"},
+          {"mode", row.type.empty() ? "black" : row.type}};
+}
+
 std::vector<detail::Distribution> distributions(const std::vector<const StoredRun*>& runs,
                                                 std::vector<std::string>& warnings) {
   std::vector<detail::Distribution> out;
   for (const StoredRun* r : runs) {
     detail::Distribution d;
     d.label = r->stem() + (r->valid ? "" : " (INVALID)");
+    d.series = detail::local_series(*r);
     d.valid = r->valid;
     d.p50 = r->latency.p50;
     d.p99 = r->latency.p99;
@@ -278,18 +297,16 @@ std::vector<detail::Distribution> distributions(const std::vector<const StoredRu
 Table runs_table_for(const std::vector<const StoredRun*>& runs) {
   Table t;
   t.css_class = "runs";
-  t.header = {"run",    "hardware",       "transport", "rate Hz", "matched",
-              "loss %", "min ms",         "mean ms",   "p50 ms",  "p99 ms",
-              "max ms", "throughput fps", "power W",   "validity"};
-  t.numeric = {false, false, false, true, true, true, true,
-               true,  true,  true,  true, true, true, false};
+  // The configuration as every plot and legend of the page names it: which bar a run is in.
+  t.header = {"run",     "configuration", "rate Hz", "matched", "loss %",         "min ms",
+              "mean ms", "p50 ms",        "p99 ms",  "max ms",  "throughput fps", "power W",
+              "validity"};
+  t.numeric = {false, false, true, true, true, true, true, true, true, true, true, true, false};
   for (const StoredRun* r : runs) {
     std::string validity = r->valid ? "valid" : "INVALID";
     for (std::size_t i = 0; i < r->invalid_reasons.size(); ++i)
       validity += (i ? "; " : ": ") + r->invalid_reasons[i];
-    t.rows.push_back({r->stem(), r->hardware,
-                      r->rmw + (r->processes == "per-node" ? " (per-node)" : ""),
-                      format_fixed(r->rate_hz, 1),
+    t.rows.push_back({r->stem(), detail::local_series(*r), format_fixed(r->rate_hz, 1),
                       std::to_string(r->matched) + "/" + std::to_string(r->measured),
                       format_fixed(r->loss_percent, 2), format_fixed(r->latency.min, 3),
                       format_fixed(r->latency.mean, 3), format_fixed(r->latency.p50, 3),
@@ -297,6 +314,7 @@ Table runs_table_for(const std::vector<const StoredRun*>& runs) {
                       format_fixed(r->throughput_hz, 2),
                       r->power_w ? format_fixed(*r->power_w, 2) : "-", validity});
     t.row_warning.push_back(!r->valid);
+    t.row_tags.push_back(tags_of(*r));
   }
   return t;
 }
@@ -429,6 +447,9 @@ void published_tables(const PublishedBenchmark& b, Table& summary, Table& flagge
                             detail::format_value(median(values[key]["power"])),
                             stated.empty() ? "-" : stated, std::to_string(flags[key])});
     summary.row_warning.push_back(false);
+    summary.row_tags.push_back({{"system", key.first},
+                                {"source", "published RobotPerf"},
+                                {"mode", key.second.empty() ? "black" : key.second}});
   }
   flagged.css_class = "flagged";
   flagged.header = {"line", "hardware", "metric", "value", "why it breaks the measurement rules"};
@@ -440,6 +461,184 @@ void published_tables(const PublishedBenchmark& b, Table& summary, Table& flagge
          (r.value_text.empty() ? "?" : r.value_text) + " " + r.metric_unit, joined(r.flags, "; ")});
     flagged.row_warning.push_back(true);
   }
+}
+
+// --- per-benchmark bars and the published standing -----------------------------------------
+
+// Several values as one bar: their median, with its distribution-free 95 % interval where the
+// values bound it (six or more), and each value as a point when there are several.
+detail::Bar bar_of(const std::vector<double>& values, const char* one, const char* several) {
+  detail::Bar bar;
+  bar.value = median(values);
+  bar.count = std::to_string(values.size()) + " " + (values.size() == 1 ? one : several);
+  if (values.size() > 1) {
+    bar.points = values;
+    const auto ci = metrics::compute_stats(values).p50_ci;
+    bar.lower = ci.lower;
+    bar.upper = ci.upper;
+  }
+  return bar;
+}
+
+// A configuration's valid runs of one benchmark, in the order they ran: a --repeat series is one
+// configuration, and so one bar.
+std::vector<std::pair<std::string, std::vector<const StoredRun*>>> configurations_of(
+    const std::vector<const StoredRun*>& runs) {
+  std::vector<std::pair<std::string, std::vector<const StoredRun*>>> out;
+  for (const StoredRun* r : runs) {
+    if (!r->valid) continue;
+    const std::string name = detail::local_series(*r);
+    auto it = std::ranges::find(out, name, &decltype(out)::value_type::first);
+    if (it == out.end()) it = out.emplace(out.end(), name, std::vector<const StoredRun*>{});
+    it->second.push_back(r);
+  }
+  return out;
+}
+
+void sort_bars(detail::BarChart& chart) {
+  std::erase_if(chart.bars, [](const detail::Bar& b) { return !std::isfinite(b.value); });
+  std::ranges::stable_sort(chart.bars, {}, &detail::Bar::value);
+}
+
+// The latency bars of a benchmark: the local configurations' p50 (what a run's latency is like),
+// and, where published rows exist, the maximum beside them, since RobotPerf reports the maximum:
+// a p50 beside a published maximum would compare two figures.
+std::vector<detail::BarChart> charts_for(const std::string& id,
+                                         const std::vector<const StoredRun*>& runs,
+                                         const ReportInput& in,
+                                         const std::vector<Observation>& obs) {
+  std::vector<detail::BarChart> out;
+  const auto configurations = configurations_of(runs);
+  detail::BarChart p50{id,
+                       "p50",
+                       "p50 latency from the scheduled send (ms); several runs: the median of "
+                       "their p50s",
+                       {},
+                       {}};
+  for (const auto& [name, of] : configurations) {
+    std::vector<double> values;
+    for (const StoredRun* r : of) values.push_back(r->latency.p50);
+    detail::Bar bar = bar_of(values, "run", "runs");
+    if (of.size() == 1) {  // one run: the interval of its own p50
+      bar.lower = of.front()->latency.p50_lower;
+      bar.upper = of.front()->latency.p50_upper;
+    }
+    bar.series = name;
+    bar.tags = tags_of(*of.front());
+    p50.bars.push_back(std::move(bar));
+  }
+  sort_bars(p50);
+  if (!p50.bars.empty()) out.push_back(std::move(p50));
+
+  std::vector<std::pair<std::string, std::vector<const PublishedResult*>>> published;
+  for (const auto& b : in.published) {
+    if (b.id != id) continue;
+    for (const auto& row : b.results) {
+      if (!row.flags.empty() || row.metric != "latency" || !std::isfinite(row.value)) continue;
+      const std::string name = detail::published_series(row);
+      auto it = std::ranges::find(published, name, &decltype(published)::value_type::first);
+      if (it == published.end())
+        it = published.emplace(published.end(), name, std::vector<const PublishedResult*>{});
+      it->second.push_back(&row);
+    }
+  }
+  if (published.empty()) return out;
+  detail::BarChart max{id,
+                       "max",
+                       "maximum latency (ms), as RobotPerf reports it; several runs or rows: the "
+                       "median of their maxima",
+                       {},
+                       {}};
+  for (const auto& [name, of] : configurations) {
+    std::vector<double> values;
+    for (const StoredRun* r : of) values.push_back(r->latency.max);
+    detail::Bar bar = bar_of(values, "run", "runs");
+    bar.series = name;
+    bar.tags = tags_of(*of.front());
+    max.bars.push_back(std::move(bar));
+  }
+  for (const auto& [name, rows] : published) {
+    std::vector<double> values;
+    for (const PublishedResult* row : rows) values.push_back(row->value);
+    detail::Bar bar = bar_of(values, "row", "rows");
+    bar.points.clear();  // dozens of rows would hide the bar; their spread is the whisker
+    bar.series = name;
+    bar.local = false;
+    bar.tags = tags_of(*rows.front());
+    max.bars.push_back(std::move(bar));
+  }
+  std::vector<Observation> mine;
+  std::ranges::copy_if(obs, std::back_inserter(mine),
+                       [&](const Observation& o) { return o.benchmark_id == id; });
+  if (!mine.empty()) max.notes = differences_on_axes(mine.front().category, "latency", "ms", mine);
+  sort_bars(max);
+  out.push_back(std::move(max));
+  return out;
+}
+
+// Each local black-box configuration against the published rows measured alike: black-box
+// latency rows that pass the measurement rules and state the rate the configuration ran at, or
+// state none. Both sides are maxima, as RobotPerf reports latency.
+Table versus_published_for(const std::string& id, const std::vector<const StoredRun*>& runs,
+                           const ReportInput& in, std::vector<double>& ratios) {
+  Table t;
+  t.css_class = "versus-published";
+  t.header = {"configuration",
+              "max latency ms (median)",
+              "published rows alike",
+              "published median ms",
+              "this / median",
+              "best published",
+              "best ms",
+              "standing"};
+  t.numeric = {false, true, true, true, true, false, true, false};
+  for (const auto& [name, of] : configurations_of(runs)) {
+    const StoredRun& first = *of.front();
+    if (first.type == "grey" || first.throughput_kind == "peak") continue;
+    const std::string rate = rate_text(first);
+    std::map<std::string, std::vector<double>> by_hardware;
+    std::size_t alike = 0;
+    for (const auto& b : in.published) {
+      if (b.id != id) continue;
+      for (const auto& row : b.results) {
+        const std::string stated = row.stated_rate();
+        if (!row.flags.empty() || row.metric != "latency" || row.type == "grey" ||
+            !std::isfinite(row.value) || (!stated.empty() && stated != rate))
+          continue;
+        by_hardware[row.hardware].push_back(row.value);
+        ++alike;
+      }
+    }
+    if (alike == 0) continue;
+    std::vector<double> mine;
+    for (const StoredRun* r : of) mine.push_back(r->latency.max);
+    const double value = median(mine);
+    if (!std::isfinite(value)) continue;  // an older file without a maximum has no standing
+    std::vector<double> all;
+    std::string best;
+    double best_value = kNoValue;
+    std::size_t slower = 0;
+    for (const auto& [hardware, values] : by_hardware) {
+      all.insert(all.end(), values.begin(), values.end());
+      const double m = median(values);
+      if (!(m >= best_value)) {
+        best_value = m;
+        best = hardware;
+      }
+      slower += m > value;
+    }
+    const double published_median = median(all);
+    t.rows.push_back({name, detail::format_value(value), std::to_string(alike),
+                      detail::format_value(published_median),
+                      format_fixed(value / published_median, 2), best,
+                      detail::format_value(best_value),
+                      "lower than " + std::to_string(slower) + " of " +
+                          std::to_string(by_hardware.size()) + " published systems"});
+    t.row_warning.push_back(false);
+    t.row_tags.push_back(tags_of(first));
+    ratios.push_back(value / published_median);
+  }
+  return t;
 }
 
 // --- comparison ----------------------------------------------------------------------------
@@ -802,6 +1001,265 @@ detail::Comparison compare(const std::string& a_sel, const std::string& b_sel,
   return c;
 }
 
+// Without --compare: the two local configurations that share the most benchmarks, and among those
+// the pair that differs in the fewest settings (the difference is then the one to read), or why
+// there is none. Two configurations with nothing in common are never compared.
+void automatic_comparison(detail::Model& model, const ReportInput& in) {
+  std::vector<std::string> names;
+  std::map<std::string, std::set<std::string>> ids;
+  std::map<std::string, Configuration> configuration;
+  for (const auto& r : in.runs) {
+    if (!r.valid) continue;
+    const std::string name = detail::local_series(r);
+    if (!ids.contains(name)) names.push_back(name);
+    ids[name].insert(r.benchmark_id);
+    configuration[name] = configuration_of(r);
+  }
+  if (names.size() < 2) return;
+  struct Candidate {
+    std::size_t shared, differences, a, b;
+  };
+  std::vector<Candidate> candidates;
+  for (std::size_t a = 0; a < names.size(); ++a) {
+    for (std::size_t b = a + 1; b < names.size(); ++b) {
+      std::size_t shared = 0;
+      for (const auto& id : ids[names[a]]) shared += ids[names[b]].contains(id);
+      if (shared == 0) continue;
+      candidates.push_back(
+          {shared, differences(configuration[names[a]], configuration[names[b]], {}).size(), a, b});
+    }
+  }
+  std::ranges::stable_sort(candidates, [](const Candidate& x, const Candidate& y) {
+    return std::tie(y.shared, x.differences) < std::tie(x.shared, y.differences);
+  });
+  for (const auto& c : candidates) {
+    try {
+      detail::Comparison comparison = compare(names[c.a], names[c.b], in);
+      if (comparison.table.rows.empty()) continue;
+      model.comparison = std::move(comparison);
+      return;
+    } catch (const ReportError&) {
+      // A series whose runs' node settings differ is no one side: try the next pair.
+    }
+  }
+  model.no_comparison =
+      "No automatic comparison: no two local configurations ran a benchmark in common "
+      "(--compare A --compare B compares any two sides).";
+}
+
+// --- the executive summary -----------------------------------------------------------------
+
+// One colour per series across the page: local configurations in the order they first ran, then
+// the published series of the radars (a polygon needs a colour to be told apart). The palette's
+// eight go to the first eight; the others are drawn in outline, named where they are drawn, so no
+// colour means two series. A published bar is hatched and named beside it: it takes a colour only
+// where a radar gave its series one.
+void assign_colours(detail::Model& model, const ReportInput& in) {
+  std::map<std::string, std::size_t> colour;
+  auto give = [&](const std::string& name, bool local) {
+    const std::size_t next =
+        model.key.size() < std::size(detail::kPalette) ? model.key.size() : detail::kNoColour;
+    const auto [it, added] = colour.try_emplace(name, next);
+    if (added) model.key.push_back({name, next, local});
+    return it->second;
+  };
+  for (const auto& r : in.runs) {
+    if (r.valid) give(detail::local_series(r), true);
+  }
+  for (auto& [category, radars] : model.radars) {
+    for (auto& radar : radars) {
+      for (std::size_t i = 0; i < radar.series.size(); ++i)
+        radar.colours.push_back(give(radar.series[i], radar.series_local[i]));
+    }
+  }
+  for (auto& [category, sections] : model.benchmarks) {
+    for (auto& section : sections) {
+      for (auto& chart : section.charts) {
+        for (auto& bar : chart.bars) {
+          const auto it = colour.find(bar.series);
+          bar.colour = bar.local            ? give(bar.series, true)
+                       : it == colour.end() ? detail::kNoColour
+                                            : it->second;
+        }
+      }
+      for (auto& curve : section.distribution) {
+        if (curve.valid) curve.colour = give(curve.series, true);
+      }
+    }
+  }
+}
+
+// The filters offer what the page's rows and bars are tagged with, where there is a choice.
+void collect_filters(detail::Model& model) {
+  std::map<std::string, std::set<std::string>> values;
+  auto add = [&](const std::map<std::string, std::string>& tags) {
+    for (const auto& [group, value] : tags) values[group].insert(value);
+  };
+  for (const auto& [category, sections] : model.benchmarks) {
+    for (const auto& section : sections) {
+      for (const auto& chart : section.charts) {
+        for (const auto& bar : chart.bars) add(bar.tags);
+      }
+      for (const auto& tags : section.runs.row_tags) add(tags);
+      for (const auto& tags : section.published.row_tags) add(tags);
+    }
+  }
+  for (const char* group : {"system", "transport", "source", "mode"}) {
+    const auto& v = values[group];
+    if (v.size() >= 2)
+      model.filters.emplace_back(group, std::vector<std::string>(v.begin(), v.end()));
+  }
+}
+
+// "1 run", "3 runs".
+std::string counted(std::size_t n, const std::string& what) {
+  return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
+}
+
+std::string times(double ratio) {
+  return format_fixed(ratio, ratio < 10 ? 2 : 1) + "×";
+}
+
+void summarise(detail::Model& model, const ReportInput& in, std::size_t published_rows,
+               std::size_t flagged_rows) {
+  std::vector<std::string> ids, systems, published_systems;
+  std::set<std::string> configurations;
+  for (const auto& r : in.runs) {
+    if (std::ranges::find(ids, r.benchmark_id) == ids.end()) ids.push_back(r.benchmark_id);
+    if (std::ranges::find(systems, r.hardware) == systems.end()) systems.push_back(r.hardware);
+    configurations.insert(detail::local_series(r));
+  }
+  std::set<std::string> published_ids, published_hardware;
+  for (const auto& b : in.published) {
+    published_ids.insert(b.id);
+    for (const auto& row : b.results) published_hardware.insert(row.hardware);
+  }
+  const auto valid = std::ranges::count_if(in.runs, [](const auto& r) { return r.valid; });
+  if (!in.runs.empty()) {
+    model.overview.push_back(
+        "Ran " + counted(in.runs.size(), "run") + " (" + std::to_string(valid) + " valid) of " +
+        counted(ids.size(), "benchmark") + " (" + joined(ids, ", ") + ") in " +
+        counted(configurations.size(), "configuration") + " on " + joined(systems, ", ") + ".");
+  } else {
+    model.overview.push_back("No local runs: the published rows alone.");
+  }
+  if (!in.published.empty()) {
+    model.overview.push_back("Beside them: " + counted(published_rows, "published RobotPerf row") +
+                             " of " + counted(published_ids.size(), "benchmark") + " from " +
+                             counted(published_hardware.size(), "system") + " (" +
+                             std::to_string(flagged_rows) +
+                             " break the measurement rules and are left out of every figure).");
+  }
+
+  model.at_a_glance.css_class = "at-a-glance";
+  model.at_a_glance.header = {"benchmark",      "valid runs",
+                              "configurations", "fastest (p50 latency)",
+                              "p50 ms",         "vs published (max latency)"};
+  model.at_a_glance.numeric = {false, true, true, false, true, false};
+  std::map<std::string, std::vector<std::string>> wins;  // configuration -> benchmarks
+  std::vector<std::string> wins_order;
+  struct Difference {
+    double ratio = 0;
+    std::string text;
+  } largest;
+  std::vector<std::string> standing;
+  std::size_t below_median = 0, with_standing = 0;
+  for (const auto& category : model.categories) {  // in the page's order
+    const auto& sections = model.benchmarks.at(category);
+    for (const auto& section : sections) {
+      std::size_t runs = 0, valid_runs = 0;
+      for (const auto& r : in.runs) {
+        if (r.benchmark_id != section.id) continue;
+        ++runs;
+        valid_runs += r.valid;
+      }
+      if (runs == 0) continue;
+      const auto p50 =
+          std::ranges::find(section.charts, std::string("p50"), &detail::BarChart::figure);
+      std::string fastest = "-", fastest_value = "-", versus = "-";
+      std::size_t configurations_here = 0;
+      if (p50 != section.charts.end()) {
+        const auto& bars = p50->bars;
+        configurations_here = bars.size();
+        fastest = bars.front().series;
+        fastest_value = detail::format_value(bars.front().value);
+        if (!wins.contains(fastest)) wins_order.push_back(fastest);
+        wins[fastest].push_back(section.id);
+        for (std::size_t i = 0; i < bars.size(); ++i) {
+          for (std::size_t j = i + 1; j < bars.size(); ++j) {
+            const auto& a = bars[i];  // the faster: bars are sorted
+            const auto& b = bars[j];
+            if (!std::isfinite(a.upper) || !std::isfinite(b.lower) || a.upper >= b.lower ||
+                !(a.value > 0) || b.value / a.value <= largest.ratio)
+              continue;
+            largest.ratio = b.value / a.value;
+            const bool within_run = a.points.empty() || b.points.empty();
+            largest.text = "Largest significant difference: " + section.id + ": " + a.series +
+                           " has " + times(largest.ratio) + " lower p50 latency than " + b.series +
+                           " (" + detail::format_value(a.value) + " vs " +
+                           detail::format_value(b.value) + " ms; their 95 % intervals do not " +
+                           "overlap" +
+                           (within_run ? "; from the spread within single runs: --repeat the runs "
+                                         "to judge run-to-run)"
+                                       : ")") +
+                           ".";
+          }
+        }
+      }
+      const auto& vs = section.versus_published;
+      if (!vs.rows.empty()) {
+        // The configuration that stands best against the published rows measured alike.
+        const auto& ratios = section.versus_ratios;
+        const auto best =
+            static_cast<std::size_t>(std::ranges::min_element(ratios) - ratios.begin());
+        const double ratio = ratios[best];
+        versus = times(ratio) + " the published median (" + vs.rows[best][2] + " rows alike)";
+        ++with_standing;
+        below_median += ratio < 1;
+        standing.push_back(section.id + " " + times(ratio));
+      }
+      model.at_a_glance.rows.push_back(
+          {section.id, std::to_string(valid_runs) + " of " + std::to_string(runs),
+           std::to_string(configurations_here), fastest, fastest_value, versus});
+      model.at_a_glance.row_warning.push_back(valid_runs < runs);
+    }
+  }
+  if (!wins_order.empty()) {
+    std::ranges::stable_sort(
+        wins_order, [&](const auto& a, const auto& b) { return wins[a].size() > wins[b].size(); });
+    std::vector<std::string> parts;
+    for (std::size_t i = 0; i < wins_order.size() && i < 3; ++i)
+      parts.push_back(wins_order[i] + " in " + joined(wins[wins_order[i]], ", "));
+    if (wins_order.size() > 3) parts.push_back("others in the table below");
+    model.findings.push_back("Fastest configuration (p50 latency): " + joined(parts, "; ") + ".");
+  }
+  if (!largest.text.empty()) {
+    model.findings.push_back(largest.text);
+  } else if (configurations.size() >= 2) {
+    model.findings.push_back(
+        "No difference between configurations of a benchmark is significant: their p50s' 95 % "
+        "intervals overlap or are unknown.");
+  }
+  if (with_standing > 0) {
+    model.findings.push_back(
+        "Against the published RobotPerf rows measured alike (black-box, the same rate, maximum "
+        "latency): below the published median in " +
+        std::to_string(below_median) + " of " + std::to_string(with_standing) + " benchmarks (" +
+        joined(standing, ", ") + " the median).");
+  } else if (!in.published.empty() && !in.runs.empty()) {
+    model.findings.push_back(
+        "No local configuration has published rows measured alike (black-box, at the same rate): "
+        "the published rows are shown beside the runs, not compared with them.");
+  }
+  if (!model.invalid_runs.empty()) {
+    model.findings.push_back(std::to_string(model.invalid_runs.size()) + " INVALID run" +
+                             (model.invalid_runs.size() == 1 ? " is" : "s are") +
+                             " left out of every figure (listed under Validity).");
+  } else if (!in.runs.empty()) {
+    model.findings.push_back("All " + std::to_string(in.runs.size()) + " runs are valid.");
+  }
+}
+
 // --- machines ------------------------------------------------------------------------------
 
 std::string yes_no(const nlohmann::json& j) {
@@ -900,8 +1358,13 @@ Table machines_table(const std::vector<StoredRun>& runs) {
 
 namespace detail {
 
-const char* const kPalette[12] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b",
-                                  "#e377c2", "#17becf", "#7f7f7f", "#bcbd22", "#393b79", "#637939"};
+// Okabe & Ito (2008), ordered so that the first series get the colours farthest from white.
+const char* const kPalette[8] = {"#0072b2", "#e69f00", "#009e73", "#cc79a7",
+                                 "#56b4e9", "#d55e00", "#000000", "#f0e442"};
+
+const char* colour_of(std::size_t colour) {
+  return colour < std::size(kPalette) ? kPalette[colour] : "#555555";
+}
 
 std::string configuration_series(const StoredRun& run) {
   // What makes two runs comparable (docs/design.md §3.9), the rate aside: the machine, the
@@ -918,6 +1381,8 @@ std::string configuration_series(const StoredRun& run) {
 }
 
 std::string local_series(const StoredRun& run) {
+  // A peak search ends at whatever rate it found: the configuration's peak, not a rate's run.
+  if (run.throughput_kind == "peak") return configuration_series(run) + " · peak";
   if (!std::isfinite(run.rate_hz)) return configuration_series(run);
   char rate[32];
   std::snprintf(rate, sizeof rate, "%.4g", run.rate_hz);  // 30, 29.97, 1000
@@ -987,9 +1452,6 @@ std::string warning_summary(const Model& model) {
       run_items += g.items.size();
     }
   }
-  auto counted = [](std::size_t n, const std::string& what) {
-    return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
-  };
   std::vector<std::string> parts;
   if (!model.invalid_runs.empty())
     parts.push_back(counted(model.invalid_runs.size(), "INVALID run"));
@@ -1068,23 +1530,26 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
                                "; left out of the plots and comparisons)");
     }
   }
+  // What ran here first: the categories with the most local runs, and in each the benchmarks with
+  // local runs, before those with published rows alone.
+  std::set<std::string> ran;
+  std::map<std::string, std::size_t> runs_in;
+  for (const auto& r : in.runs) {
+    ran.insert(r.benchmark_id);
+    ++runs_in[r.category];
+  }
   model.categories.assign(categories.begin(), categories.end());
+  std::ranges::stable_sort(model.categories, std::greater<>{},
+                           [&](const std::string& c) { return runs_in[c]; });
 
   const auto obs = observations(in);
-  std::map<std::string, std::size_t> colour_of;  // series -> palette index, in order of appearance
   for (const auto& category : model.categories) {
-    model.radars[category] = radars_for(category, obs, options);
-    // One colour per series across the page: a platform's latency and offered throughput alike.
-    for (auto& radar : model.radars[category]) {
-      for (const auto& name : radar.series) {
-        std::string key = name;
-        for (const char* suffix : {" (peak)", " (offered)"}) {
-          if (key.ends_with(suffix)) key.resize(key.size() - std::string_view(suffix).size());
-        }
-        radar.colours.push_back(colour_of.try_emplace(key, colour_of.size()).first->second);
-      }
-    }
-    for (const auto& id : ids_by_category[category]) {
+    model.radars[category] =
+        options.radar ? radars_for(category, obs, options) : std::vector<Radar>{};
+    std::vector<std::string> ids(ids_by_category[category].begin(),
+                                 ids_by_category[category].end());
+    std::ranges::stable_partition(ids, [&](const std::string& id) { return ran.contains(id); });
+    for (const auto& id : ids) {
       BenchmarkSection section;
       section.id = id;
       section.name = names[id];
@@ -1094,6 +1559,8 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
         if (r.benchmark_id == id) runs.push_back(&r);
       }
       section.runs = runs_table_for(runs);
+      section.charts = charts_for(id, runs, in, obs);
+      section.versus_published = versus_published_for(id, runs, in, section.versus_ratios);
       section.also_measured = also_measured_table_for(runs);
       section.hops = hops_table_for(runs);
       section.callbacks = callbacks_table_for(runs);
@@ -1120,6 +1587,7 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
           for (std::size_t i = 0; i < summary.rows.size(); ++i) {
             section.published.rows.push_back(summary.rows[i]);
             section.published.row_warning.push_back(false);
+            section.published.row_tags.push_back(summary.row_tags[i]);
           }
           for (std::size_t i = 0; i < flagged.rows.size(); ++i) {
             section.flagged.rows.push_back(flagged.rows[i]);
@@ -1135,24 +1603,14 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
   if (options.compare) {
     model.comparison = compare(options.compare->first, options.compare->second, in);
   } else {
-    std::vector<std::string> series;
-    for (const auto& r : in.runs) {
-      const auto s = local_series(r);
-      if (std::ranges::find(series, s) == series.end()) series.push_back(s);
-    }
-    if (series.size() >= 2) model.comparison = compare(series[0], series[1], in);
+    automatic_comparison(model, in);
   }
   model.machines = machines_table(in.runs);
+  assign_colours(model, in);
+  collect_filters(model);
+  summarise(model, in, published_rows, flagged_rows);
 
-  std::set<std::string> machines;
-  for (const auto& r : in.runs) machines.insert(r.hardware);
-  const auto valid = std::ranges::count_if(in.runs, [](const auto& r) { return r.valid; });
-  model.summary = std::to_string(in.runs.size()) + " local runs (" + std::to_string(valid) +
-                  " valid) on " + std::to_string(machines.size()) + " machine" +
-                  (machines.size() == 1 ? "" : "s") + "; " + std::to_string(in.published.size()) +
-                  " published benchmark files with " + std::to_string(published_rows) + " rows (" +
-                  std::to_string(flagged_rows) + " flagged). robotperf " + build_info::kVersion +
-                  ".";
+  model.summary = std::string("robotperf ") + build_info::kVersion + ".";
   return model;
 }
 

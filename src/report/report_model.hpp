@@ -1,6 +1,7 @@
 // What the HTML and Markdown reports show, computed once (private to the report piece).
 #pragma once
 
+#include <limits>
 #include <map>
 #include <set>
 #include <string>
@@ -17,6 +18,8 @@ struct Table {
   std::vector<bool> numeric;  // right-aligned columns
   std::vector<std::vector<std::string>> rows;
   std::vector<bool> row_warning;  // rows to highlight (invalid runs, flagged rows)
+  // Per row, what the page's filters match it by (filter group -> value); empty: always shown.
+  std::vector<std::map<std::string, std::string>> row_tags;
 };
 
 // A table as aligned plain text for a terminal: each column as wide as its widest cell, numeric
@@ -26,16 +29,44 @@ std::string table_text(const Table& table);
 // One radar plot: axes = benchmarks of a category, one polygon per hardware series.
 struct Radar {
   std::string category, metric, unit;
+  std::string figure;  // the metric as its title names it ("maximum latency")
   bool smaller_is_better = true;
   std::vector<std::string> axes;
   std::vector<std::string> series;
   std::vector<bool> series_local;
-  std::vector<std::size_t> colours;  // per series: its index in kPalette, one per series page-wide
+  std::vector<std::size_t> colours;  // per series: its page-wide colour (kPalette or kNoColour)
   std::vector<std::vector<double>> values;  // [series][axis], NaN where there is no value
   std::vector<std::string> omitted;         // series left out to keep the plot readable
   // Where local and published values on an axis are not the same measurement: said beside it.
   std::vector<std::string> notes;
   Table data;  // the same numbers as a table
+};
+
+// No colour: a series beyond the palette is drawn in outline and named where it is drawn, so that
+// no colour stands for two series on one page.
+inline constexpr std::size_t kNoColour = static_cast<std::size_t>(-1);
+
+// One bar of a benchmark's bar chart: a configuration's local runs, or one published series.
+struct Bar {
+  std::string series;  // its name, the same in every plot and table of the page
+  bool local = true;
+  double value = std::numeric_limits<double>::quiet_NaN();
+  // The whisker: the value's 95 % interval, NaN where it is not known (open, or too few samples).
+  double lower = std::numeric_limits<double>::quiet_NaN();
+  double upper = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> points;  // each run's value, when the series has more than one run
+  std::string count;           // "3 runs", "12 rows"
+  std::size_t colour = kNoColour;
+  std::map<std::string, std::string> tags;  // what the filters match it by
+};
+
+// A benchmark's configurations and published series as sorted horizontal bars of one figure.
+struct BarChart {
+  std::string benchmark;
+  std::string figure;              // "p50", "max": which latency figure each bar is
+  std::string axis;                // the axis title, naming the figure and how runs were combined
+  std::vector<Bar> bars;           // smallest (best) first
+  std::vector<std::string> notes;  // what the bars' measurements differ in, said under the plot
 };
 
 // One latency distribution curve.
@@ -44,7 +75,9 @@ struct Distribution {
   std::string source;  // "per-message CSV", "stored histogram", "stored percentiles"
   std::vector<std::pair<double, double>> points;  // (latency ms, cumulative fraction)
   double p50 = 0, p99 = 0;
-  bool valid = true;  // an INVALID run's curve is drawn grey and dashed, and labelled so
+  bool valid = true;   // an INVALID run's curve is drawn grey and dashed, and labelled so
+  std::string series;  // its run's configuration, whose colour it is drawn in
+  std::size_t colour = kNoColour;
 };
 
 struct BenchmarkSection {
@@ -57,8 +90,12 @@ struct BenchmarkSection {
   Table callbacks;    // the newest grey-box run's callback durations
   Table peak_search;  // the steps of each --find-peak run
   std::vector<Distribution> distribution;
-  Table published;  // per published hardware: medians of unflagged rows
-  Table flagged;    // published rows that break the measurement rules
+  std::vector<BarChart> charts;  // p50 of the local runs; max beside the published rows
+  // Each local configuration against the published rows measured alike (black-box, same rate).
+  Table versus_published;
+  std::vector<double> versus_ratios;  // per row of it: this configuration / the published median
+  Table published;                    // per published hardware: medians of unflagged rows
+  Table flagged;                      // published rows that break the measurement rules
   std::size_t published_rows = 0;
 };
 
@@ -74,9 +111,22 @@ struct WarningGroup {
   std::vector<std::string> items;
 };
 
+// A series on the page: its colour, and whether it is local runs or published rows.
+struct KeyEntry {
+  std::string series;
+  std::size_t colour = kNoColour;
+  bool local = true;
+};
+
 struct Model {
   std::string title;
   std::string summary;
+  std::vector<std::string> overview;  // what was run, on which systems
+  std::vector<std::string> findings;  // the few that matter, most important first
+  Table at_a_glance;                  // per benchmark: fastest configuration, standing, validity
+  std::vector<KeyEntry> key;          // every series drawn, in the order its colour was given
+  // The filters' groups and values ("system" -> {"AMD EPYC", ...}), in the page's order.
+  std::vector<std::pair<std::string, std::vector<std::string>>> filters;
   std::vector<std::string> invalid_runs;  // "run X is INVALID: why": shown first, never folded
   // Machine-level warnings once per machine, then each run's own.
   std::vector<WarningGroup> warning_groups;
@@ -86,6 +136,7 @@ struct Model {
   std::map<std::string, std::vector<Radar>> radars;                 // by category
   std::map<std::string, std::vector<BenchmarkSection>> benchmarks;  // by category
   std::optional<Comparison> comparison;
+  std::string no_comparison;  // why no automatic comparison was made, when none was
   Table machines;
 };
 
@@ -141,6 +192,11 @@ void place_labels(std::vector<Label>& labels);
 std::string distribution_svg(const std::vector<Distribution>& curves, const std::string& id);
 // One stacked bar of a grey-box run's hops: where the mean latency of a message goes.
 std::string hops_svg(const std::vector<StoredRun::Hop>& hops, const std::string& run);
-extern const char* const kPalette[12];
+// Okabe and Ito's colour-blind-safe palette.
+extern const char* const kPalette[8];
+// A series' colour, or the outline colour of one without.
+const char* colour_of(std::size_t colour);
+// Sorted horizontal bars with whiskers and run points; "" when no bar has a value.
+std::string bar_chart_svg(const BarChart& chart);
 
 }  // namespace robotperf::report::detail

@@ -208,6 +208,12 @@ LatencySummary latency_summary(const json& block) {
   s.p99 = number_or_nan(block, "p99");
   s.p999 = number_or_nan(block, "p999");
   s.max = number_or_nan(block, "max");
+  // Older files have no interval; an open end is null: both read as NaN.
+  if (const auto it = block.find("p50_ci95");
+      it != block.end() && it->is_array() && it->size() == 2) {
+    if ((*it)[0].is_number()) s.p50_lower = (*it)[0].get<double>();
+    if ((*it)[1].is_number()) s.p50_upper = (*it)[1].get<double>();
+  }
   return s;
 }
 

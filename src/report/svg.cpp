@@ -1,4 +1,4 @@
-// Inline SVG plots for the HTML report: radar charts and latency CDFs.
+// Inline SVG plots for the HTML report: bar charts, radar charts and latency CDFs.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -50,7 +50,7 @@ std::string legend_label(const std::string& name, std::size_t max = 68) {
 void legend(std::ostringstream& s, const Radar& r, double top) {
   double ly = top;
   for (std::size_t si = 0; si < r.series.size(); ++si) {
-    const char* colour = kPalette[r.colours[si] % 12];
+    const char* colour = colour_of(r.colours[si]);
     s << "<rect x=\"20\" y=\"" << num(ly - 10) << "\" width=\"14\" height=\"10\" fill=\"" << colour
       << "\"/><text class=\"legend\" x=\"40\" y=\"" << num(ly) << "\">"
       << html_escape(legend_label(r.series[si])) << "<title>" << html_escape(r.series[si])
@@ -84,7 +84,7 @@ std::string bars_svg(const Radar& r) {
     << num(total) << "\" viewBox=\"0 0 " << kWidth << " " << num(total) << "\" role=\"img\">\n";
   s << "<title>" << html_escape(r.category + ": " + r.metric + " (" + r.unit + ")") << "</title>\n";
   s << "<text x=\"" << kWidth / 2 << "\" y=\"22\" text-anchor=\"middle\" class=\"plot-title\">"
-    << html_escape(r.metric + " (" + r.unit + ") — " +
+    << html_escape((r.figure.empty() ? r.metric : r.figure) + " (" + r.unit + ") — " +
                    (r.smaller_is_better ? "smaller is better" : "larger is better"))
     << "</text>\n";
   double y = 40;
@@ -100,7 +100,7 @@ std::string bars_svg(const Radar& r) {
     for (std::size_t si = 0; si < r.series.size(); ++si) {
       const double v = r.values[si][a];
       if (!std::isfinite(v)) continue;
-      const char* colour = kPalette[r.colours[si] % 12];
+      const char* colour = colour_of(r.colours[si]);
       const double w = axis_max > 0 && v > 0 ? kBarsWidth * (v / axis_max) : 0;
       s << "<rect class=\"bar\" x=\"" << kBarsLeft << "\" y=\"" << num(y) << "\" width=\""
         << num(std::max(w, 1.0)) << "\" height=\"" << kBar << "\" fill=\"" << colour
@@ -173,7 +173,7 @@ std::string radar_svg(const Radar& r) {
     << "\" role=\"img\">\n";
   s << "<title>" << html_escape(r.category + ": " + r.metric + " (" + r.unit + ")") << "</title>\n";
   s << "<text x=\"" << kCx << "\" y=\"22\" text-anchor=\"middle\" class=\"plot-title\">"
-    << html_escape(r.metric + " (" + r.unit + ") — " +
+    << html_escape((r.figure.empty() ? r.metric : r.figure) + " (" + r.unit + ") — " +
                    (r.smaller_is_better ? "smaller is better" : "larger is better"))
     << "</text>\n";
   // Each axis has its own scale so that benchmarks of different magnitude share the plot: linear
@@ -238,7 +238,7 @@ std::string radar_svg(const Radar& r) {
   // One polygon per series; a series without a value on some axis is a gap there: lines join only
   // neighbouring axes that both have one, so no line crosses an axis it has no value on.
   for (std::size_t si = 0; si < r.series.size(); ++si) {
-    const char* colour = kPalette[r.colours[si] % 12];
+    const char* colour = colour_of(r.colours[si]);
     std::vector<std::optional<std::pair<double, double>>> at(n);
     std::vector<std::pair<double, double>> pts;
     for (std::size_t a = 0; a < n; ++a) {
@@ -273,18 +273,135 @@ std::string radar_svg(const Radar& r) {
   return s.str();
 }
 
+std::string bar_chart_svg(const BarChart& chart) {
+  // Names left of the bars (the bars' legend: no colour is needed to tell them apart), one scale,
+  // the value right of each bar's whisker. The page's filter script hides rows and closes the
+  // gaps: it reads the row pitch and the top from the svg's data attributes.
+  constexpr double kWidth = 760, kBarsLeft = 330, kBarsWidth = 340, kTop = 34, kRow = 22;
+  constexpr double kBar = 14;
+  if (chart.bars.empty()) return "";
+  double x_min = std::numeric_limits<double>::max(), x_max = 0;
+  for (const auto& b : chart.bars) {
+    std::vector<double> drawn = b.points;
+    drawn.insert(drawn.end(), {b.value, b.lower, b.upper});
+    for (double v : drawn) {
+      if (!std::isfinite(v) || v <= 0) continue;
+      x_min = std::min(x_min, v);
+      x_max = std::max(x_max, v);
+    }
+  }
+  if (!(x_max > 0)) return "";
+  x_max = std::min(x_max, std::numeric_limits<double>::max() / 4);
+  // Published rows span boards and servers: beyond 50x, a linear scale would flatten all but the
+  // slowest bars, so the scale is logarithmic, from the power of ten below the smallest value
+  // (where every bar starts) to the one above the largest, and the axis says so.
+  const bool logarithmic = x_max > 50 * x_min;
+  const double step = nice_step(x_max, 5);
+  // The decade below the smallest value, also when that value is a power of ten: its bar shows.
+  const double decade_low = std::ceil(std::log10(x_min)) - 1;
+  const double decade_high = std::ceil(std::log10(x_max));
+  if (!logarithmic) x_max = std::max(step, std::ceil(x_max / step) * step);
+  auto px = [&](double v) {
+    if (!logarithmic) return kBarsLeft + kBarsWidth * (std::max(v, 0.0) / x_max);
+    const double at =
+        (std::max(std::log10(v), decade_low) - decade_low) / (decade_high - decade_low);
+    return kBarsLeft + kBarsWidth * at;
+  };
+  std::vector<double> ticks;
+  if (logarithmic) {
+    for (double d = decade_low; d <= decade_high; ++d) ticks.push_back(std::pow(10.0, d));
+  } else {
+    for (int k = 0; k <= static_cast<int>(std::lround(x_max / step)); ++k)
+      ticks.push_back(k * step);
+  }
+  const double rows = static_cast<double>(chart.bars.size());
+  const double height = kTop + kRow * rows + 48;
+  std::ostringstream s;
+  s << "<svg class=\"barchart\" data-benchmark=\"" << html_escape(chart.benchmark)
+    << "\" data-figure=\"" << chart.figure << "\" data-top=\"" << kTop << "\" data-row=\"" << kRow
+    << "\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kWidth << "\" height=\"" << num(height)
+    << "\" viewBox=\"0 0 " << kWidth << " " << num(height) << "\" role=\"img\">\n";
+  const std::string pattern = "hatch-" + chart.benchmark + "-" + chart.figure;
+  s << "<defs><pattern id=\"" << html_escape(pattern)
+    << "\" width=\"6\" height=\"6\" patternUnits=\"userSpaceOnUse\" "
+       "patternTransform=\"rotate(45)\"><rect width=\"6\" height=\"6\" fill=\"#fff\"/><line "
+       "x1=\"0\" y1=\"0\" x2=\"0\" y2=\"6\" stroke=\"#666\" "
+       "stroke-width=\"2.5\"/></pattern></defs>\n";
+  s << "<title>" << html_escape(chart.benchmark + ": " + chart.axis) << "</title>\n";
+  s << "<text class=\"plot-title\" x=\"8\" y=\"18\">"
+    << html_escape(chart.benchmark + ": " + chart.figure +
+                   " latency per configuration — smaller is better")
+    << "</text>\n";
+  double y = kTop;
+  for (const auto& b : chart.bars) {
+    const char* colour = colour_of(b.colour);
+    const bool coloured = b.colour != kNoColour;
+    s << "<g class=\"bar-row\" data-series=\"" << html_escape(b.series) << "\" data-colour=\""
+      << (coloured ? colour : "none") << "\"";
+    for (const auto& [group, value] : b.tags)
+      s << " data-" << group << "=\"" << html_escape(value) << "\"";
+    s << " transform=\"translate(0," << num(y) << ")\">\n";
+    s << "<text class=\"tick\" x=\"" << num(kBarsLeft - 8) << "\" y=\"12\" text-anchor=\"end\">"
+      << html_escape(legend_label(b.series, 42)) << "<title>"
+      << html_escape(b.series + (b.local ? " (local runs, " : " (published RobotPerf rows, ") +
+                     b.count + ")")
+      << "</title></text>\n";
+    // Local runs solid, published rows hatched: told apart by more than colour.
+    const double end = px(b.value);
+    s << "<rect class=\"bar" << (b.local ? " local" : " published") << "\" x=\"" << kBarsLeft
+      << "\" y=\"" << num((kRow - kBar) / 2 - 2) << "\" width=\""
+      << num(std::max(end - kBarsLeft, 1.0)) << "\" height=\"" << kBar << "\" fill=\""
+      << (b.local ? (coloured ? colour : "#ffffff") : "url(#" + html_escape(pattern) + ")")
+      << "\" stroke=\"" << (coloured ? colour : "#333333") << "\" stroke-width=\""
+      << (b.local ? "1" : "2.5") << "\"><title>" << html_escape(b.series) << ": "
+      << format_value(b.value) << " ms (" << html_escape(b.count) << ")</title></rect>\n";
+    double right = end;
+    if (std::isfinite(b.lower) && std::isfinite(b.upper)) {
+      const double mid = kRow / 2 - 2;
+      s << "<path class=\"whisker\" d=\"M" << num(px(b.lower)) << " " << num(mid) << "H"
+        << num(px(b.upper)) << "M" << num(px(b.lower)) << " " << num(mid - 5) << "v10M"
+        << num(px(b.upper)) << " " << num(mid - 5) << "v10\" stroke=\"#222\" fill=\"none\"/>\n";
+      right = std::max(right, px(b.upper));
+    }
+    for (double v : b.points) {
+      if (!std::isfinite(v)) continue;
+      s << "<circle class=\"run\" cx=\"" << num(px(v)) << "\" cy=\"" << num(kRow / 2 - 2)
+        << "\" r=\"3\" fill=\"#fff\" stroke=\"#222\"/>\n";
+      right = std::max(right, px(v));
+    }
+    s << "<text class=\"tick\" x=\"" << num(right + 5) << "\" y=\"12\">" << format_value(b.value)
+      << "</text>\n</g>\n";
+    y += kRow;
+  }
+  s << "<g class=\"axis\" transform=\"translate(0," << num(y + 4) << ")\">\n";
+  s << "<line x1=\"" << kBarsLeft << "\" x2=\"" << num(kBarsLeft + kBarsWidth)
+    << "\" y1=\"0\" y2=\"0\" stroke=\"#666\"/>\n";
+  for (double tick : ticks) {
+    const double x = px(tick);
+    s << "<line x1=\"" << num(x) << "\" x2=\"" << num(x) << "\" y1=\"0\" y2=\"4\" stroke=\"#666\"/>"
+      << "<text class=\"tick\" x=\"" << num(x) << "\" y=\"16\" text-anchor=\"middle\">"
+      << format_value(tick) << "</text>\n";
+  }
+  s << "<text class=\"axis-label\" x=\"" << num(kBarsLeft + kBarsWidth / 2) << "\" y=\"36\" "
+    << "text-anchor=\"middle\">"
+    << html_escape(chart.figure + " latency (ms" + (logarithmic ? ", log scale)" : ")"))
+    << "<title>" << html_escape(chart.axis) << "</title></text>\n</g>\n</svg>\n";
+  return s.str();
+}
+
 std::string hops_svg(const std::vector<StoredRun::Hop>& hops, const std::string& run) {
   // A graph's hops are no chain (a node has a path per input and output, a kernel runs inside its
   // node), so their durations are drawn side by side, never stacked: one bar per hop, its mean,
   // with a whisker to its p99, coloured by kind, on one linear scale from 0.
   constexpr double kWidth = 760, kLabelsLeft = 10, kBarsLeft = 370, kBarsWidth = 300, kRow = 18;
+  // Shades of grey: a hop's kind is no series, and must not take a series' colour.
   constexpr std::pair<const char*, const char*> kKinds[] = {
-      {"transport", "#1f77b4"}, {"node", "#ff7f0e"}, {"kernel", "#2ca02c"}, {"device", "#9467bd"}};
+      {"transport", "#333333"}, {"node", "#777777"}, {"kernel", "#aaaaaa"}, {"device", "#cccccc"}};
   auto colour_of = [&](const std::string& kind) {
     for (const auto& [k, c] : kKinds) {
       if (kind == k) return c;
     }
-    return "#7f7f7f";
+    return "#e6e6e6";
   };
   double x_max = 0;
   for (const auto& h : hops) {
@@ -392,14 +509,26 @@ std::string distribution_svg(const std::vector<Distribution>& curves, const std:
   s << "<rect x=\"" << kLeft << "\" y=\"" << kTop << "\" width=\"" << num(plot_width)
     << "\" height=\"" << kPlotHeight << "\" fill=\"none\" stroke=\"#666\"/>\n";
   std::vector<Label> labels;  // the p50 and p99 markers' values, placed once all are known
-  // INVALID runs: grey and dashed, never a colour a valid run could be read as.
-  auto colour_of = [&](std::size_t i) { return curves[i].valid ? kPalette[i % 12] : "#999999"; };
+  // Each curve in its configuration's colour; INVALID runs grey and dashed, never a colour a
+  // valid run could be read as. Further runs of one configuration are told apart by their dashes.
+  auto curve_colour = [&](std::size_t i) {
+    return curves[i].valid ? colour_of(curves[i].colour) : "#999999";
+  };
+  std::vector<const char*> dashes;
+  for (std::size_t i = 0; i < curves.size(); ++i) {
+    constexpr const char* kDashes[] = {"", " stroke-dasharray=\"2,2\"", " stroke-dasharray=\"8,3\"",
+                                       " stroke-dasharray=\"8,3,2,3\""};
+    std::size_t before = 0;
+    for (std::size_t j = 0; j < i; ++j)
+      before += curves[j].valid && curves[j].series == curves[i].series;
+    dashes.push_back(curves[i].valid ? kDashes[before % 4] : " stroke-dasharray=\"6,4\"");
+  }
   for (std::size_t i = 0; i < curves.size(); ++i) {
     const auto& c = curves[i];
-    const char* colour = colour_of(i);
-    s << "<polyline class=\"curve" << (c.valid ? "" : " invalid") << "\" fill=\"none\" stroke=\""
-      << colour << "\" stroke-width=\"2\"" << (c.valid ? "" : " stroke-dasharray=\"6,4\"")
-      << " points=\"";
+    const char* colour = curve_colour(i);
+    s << "<polyline class=\"curve" << (c.valid ? "" : " invalid") << "\" data-series=\""
+      << html_escape(c.series) << "\" fill=\"none\" stroke=\"" << colour << "\" stroke-width=\"2\""
+      << dashes[i] << " points=\"";
     // A CDF is a step function: draw each rise at its x.
     double last_y = 0;
     bool first = true;
@@ -433,9 +562,10 @@ std::string distribution_svg(const std::vector<Distribution>& curves, const std:
   }
   double ly = kTop + kPlotHeight + 60;
   for (std::size_t i = 0; i < curves.size(); ++i) {
-    s << "<rect x=\"" << kLeft << "\" y=\"" << num(ly - 10)
-      << "\" width=\"14\" height=\"10\" fill=\"" << colour_of(i)
-      << "\"/><text class=\"legend\" x=\"" << num(kLeft + 20) << "\" y=\"" << num(ly) << "\">"
+    s << "<line x1=\"" << kLeft << "\" x2=\"" << num(kLeft + 16) << "\" y1=\"" << num(ly - 4)
+      << "\" y2=\"" << num(ly - 4) << "\" stroke=\"" << curve_colour(i) << "\" stroke-width=\"3\""
+      << dashes[i] << "/><text class=\"legend\" x=\"" << num(kLeft + 22) << "\" y=\"" << num(ly)
+      << "\">"
       << html_escape(legend_label(curves[i].label + " — from the " + curves[i].source, 100))
       << "<title>" << html_escape(curves[i].label + " — from the " + curves[i].source)
       << "</title></text>\n";

@@ -210,8 +210,11 @@ TEST_F(ResultsCli, PublishedLocalizationRowsPlotBesideALocalRun) {
                     " --html " + html.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   const std::string page = read_text(html);
-  EXPECT_NE(page.find("NVIDIA AGX Orin Dev. Kit (ROBOTCORE® Perception) (RobotPerf)"),
+  // The published latency rows are bars beside the run's maximum, hatched.
+  EXPECT_NE(page.find("data-series=\"Intel i7-12700H + NVIDIA GeForce RTX 3060 (ROBOTCORE® "
+                      "Perception) (RobotPerf)\""),
             std::string::npos);
+  EXPECT_NE(page.find("class=\"bar published\""), std::string::npos);
   EXPECT_NE(page.find("b3-intra-"), std::string::npos);
 }
 
@@ -254,11 +257,16 @@ TEST_F(ResultsCli, ReportRendersInHeadlessChromium) {
       "--disable-background-networking --disable-component-update --disable-sync "
       "--hide-scrollbars --user-data-dir=" +
       (dir_ / "chromium-profile").string();
-  // The DOM as the browser parsed it: the plots and tables are there.
+  // The DOM as the browser parsed it: the summary, the plots and the tables are there; radars only
+  // when asked.
   const auto dom = shell(chromium + " --dump-dom file://" + html.string() + " 2>/dev/null");
   ASSERT_EQ(dom.exit_code, 0) << dom.out;
-  EXPECT_EQ(count(dom.out, "<svg class=\"radar\""), 3u);
-  EXPECT_EQ(count(dom.out, "<svg class=\"cdf\""), 2u);  // a2 and a5
+  EXPECT_NE(dom.out.find("<section class=\"summary\""), std::string::npos);
+  EXPECT_NE(dom.out.find("<table class=\"at-a-glance\""), std::string::npos);
+  EXPECT_EQ(count(dom.out, "<svg class=\"radar\""), 0u);
+  EXPECT_EQ(count(dom.out, "data-figure=\"p50\""), 2u);  // a2 and a5 ran here
+  EXPECT_GE(count(dom.out, "data-figure=\"max\""), 4u);  // beside the published rows
+  EXPECT_EQ(count(dom.out, "<svg class=\"cdf\""), 2u);   // a2 and a5
   EXPECT_GE(count(dom.out, "<table class=\"runs\""), 2u);
   EXPECT_GE(count(dom.out, "<table class=\"published\""), 4u);
   EXPECT_NE(dom.out.find("<table class=\"machines\""), std::string::npos);
@@ -273,8 +281,8 @@ TEST_F(ResultsCli, ReportRendersInHeadlessChromium) {
   ASSERT_FALSE(image.empty()) << "no screenshot at " << png;
   EXPECT_EQ(image.cols, 1600);
   EXPECT_EQ(image.rows, 1400);
-  // The first series' colour (#1f77b4, the local runs) is drawn in the radar area, the table
-  // header colour (#eef3f8) further down, and the page is not blank.
+  // The first series' colour (#0072b2, the first local configuration) is drawn, the table
+  // header colour (#eef3f8) too, and the page is not blank.
   std::size_t series = 0, header = 0, ink = 0;
   for (int y = 0; y < image.rows; ++y) {
     for (int x = 0; x < image.cols; ++x) {
@@ -282,48 +290,119 @@ TEST_F(ResultsCli, ReportRendersInHeadlessChromium) {
       auto near = [&](int r, int g, int b) {
         return std::abs(p[2] - r) < 12 && std::abs(p[1] - g) < 12 && std::abs(p[0] - b) < 12;
       };
-      series += near(0x1f, 0x77, 0xb4);
+      series += near(0x00, 0x72, 0xb2);
       header += near(0xee, 0xf3, 0xf8);
       ink += p[0] < 128 && p[1] < 128 && p[2] < 128;
     }
   }
-  EXPECT_GT(series, 300u);
+  EXPECT_GT(series, 100u);
   EXPECT_GT(header, 1000u);
   EXPECT_GT(ink, 5000u);
 }
 
-// Run in the page by Chromium: every text of every plot lies inside its plot and overlaps no
-// other text of it. The result is written into the DOM, which --dump-dom prints.
+// Run in the page by Chromium, with the page as loaded, with a transport filtered out, and with it
+// back: every text of every plot lies inside its plot and overlaps no other text of it; every bar's
+// series and every valid latency curve's is in the page's key, drawn in its key's colour (a
+// published bar without a colour is hatched, named beside it and said so in the key), and no
+// colour stands for two series;
+// the filter hides exactly the rows and bars of that transport and shows them again. The result
+// is written into the DOM, which --dump-dom prints.
 constexpr const char* kLayoutCheck = R"(<script>
 window.addEventListener('load', () => {
   const problems = [];
   let texts = 0;
-  document.querySelectorAll('svg').forEach((svg, i) => {
-    const box = svg.getBoundingClientRect();
-    const plot = (svg.getAttribute('class') || 'svg') + ' ' + i + ' ' +
-                 (svg.dataset.category || svg.dataset.benchmark || '') + ' ' +
-                 (svg.dataset.metric || '');
-    const placed = [];
-    svg.querySelectorAll('text').forEach(t => {
-      const r = t.getBoundingClientRect();
-      if (r.width === 0) return;
-      ++texts;
-      const label = t.childNodes[0] ? t.childNodes[0].textContent : t.textContent;
-      if (r.left < box.left - 1 || r.right > box.right + 1 || r.top < box.top - 1 ||
-          r.bottom > box.bottom + 1)
-        problems.push('clipped in ' + plot + ': ' + label);
-      for (const [o, other] of placed) {
-        const w = Math.min(r.right, o.right) - Math.max(r.left, o.left);
-        const h = Math.min(r.bottom, o.bottom) - Math.max(r.top, o.top);
-        if (w > 1 && h > 2) problems.push('overlap in ' + plot + ': ' + label + ' / ' + other);
-      }
-      placed.push([r, label]);
+  const shown = e => e.getBoundingClientRect().height > 0;
+  function layout(when) {
+    document.querySelectorAll('svg').forEach((svg, i) => {
+      if (!shown(svg)) return;
+      const box = svg.getBoundingClientRect();
+      const plot = when + ': ' + (svg.getAttribute('class') || 'svg') + ' ' + i + ' ' +
+                   (svg.dataset.category || svg.dataset.benchmark || '') + ' ' +
+                   (svg.dataset.metric || svg.dataset.figure || '');
+      const placed = [];
+      svg.querySelectorAll('text').forEach(t => {
+        const r = t.getBoundingClientRect();
+        if (r.width === 0) return;
+        ++texts;
+        const label = t.childNodes[0] ? t.childNodes[0].textContent : t.textContent;
+        if (r.left < box.left - 1 || r.right > box.right + 1 || r.top < box.top - 1 ||
+            r.bottom > box.bottom + 1)
+          problems.push('clipped in ' + plot + ': ' + label);
+        for (const [o, other] of placed) {
+          const w = Math.min(r.right, o.right) - Math.max(r.left, o.left);
+          const h = Math.min(r.bottom, o.bottom) - Math.max(r.top, o.top);
+          if (w > 1 && h > 2) problems.push('overlap in ' + plot + ': ' + label + ' / ' + other);
+        }
+        placed.push([r, label]);
+      });
     });
+  }
+  layout('as loaded');
+
+  const key = new Map();
+  const seriesOfColour = new Map();
+  const note = (colour, series) => {
+    if (colour === 'none') return;
+    if (!seriesOfColour.has(colour)) seriesOfColour.set(colour, new Set());
+    seriesOfColour.get(colour).add(series);
+  };
+  document.querySelectorAll('#series-key li[data-series]').forEach(li => {
+    key.set(li.dataset.series, li.dataset.colour);
+    note(li.dataset.colour, li.dataset.series);
+    if (!shown(li)) problems.push('key entry not visible: ' + li.dataset.series);
   });
+  const bars = document.querySelectorAll('g.bar-row');
+  bars.forEach(g => {
+    // A published bar without a colour is hatched and named beside it; any other is in the key.
+    const named = g.dataset.colour === 'none' && g.dataset.source === 'published RobotPerf';
+    if (named) {
+      if (!document.querySelector('#series-key li.published-key'))
+        problems.push('no key entry for the hatched published bars');
+    } else if (!key.has(g.dataset.series)) problems.push('not in the key: ' + g.dataset.series);
+    else if (key.get(g.dataset.series) !== g.dataset.colour)
+      problems.push('colour unlike its key: ' + g.dataset.series);
+    note(g.dataset.colour, g.dataset.series);
+    const rect = g.querySelector('rect.bar');
+    if (rect.classList.contains('local') && g.dataset.colour !== 'none' &&
+        rect.getAttribute('fill') !== g.dataset.colour)
+      problems.push('bar drawn in another colour: ' + g.dataset.series);
+  });
+  // The latency curves are drawn in their configuration's colour, INVALID runs' in grey.
+  document.querySelectorAll('polyline.curve:not(.invalid)').forEach(curve => {
+    const series = curve.dataset.series;
+    if (!key.has(series)) problems.push('curve not in the key: ' + series);
+    else if (key.get(series) !== 'none' && key.get(series) !== curve.getAttribute('stroke'))
+      problems.push('curve in another colour than its key: ' + series);
+    note(curve.getAttribute('stroke'), series);
+  });
+  seriesOfColour.forEach((series, colour) => {
+    if (series.size > 1) problems.push(colour + ' stands for ' + Array.from(series).join(' and '));
+  });
+
+  const box = document.querySelector('#filters input[data-group="transport"][value="fastdds"]');
+  const tagged = Array.from(document.querySelectorAll('[data-transport]'))
+                     .filter(e => !e.closest('details:not([open])'));
+  const fastdds = tagged.filter(e => e.dataset.transport === 'fastdds');
+  const others = tagged.filter(e => e.dataset.transport !== 'fastdds');
+  if (!box) problems.push('no fastdds filter');
+  if (fastdds.length < 2 || others.length < 2) problems.push('too few tagged rows to filter');
+  if (box && fastdds.every(shown) && others.every(shown)) {
+    box.checked = false;
+    box.dispatchEvent(new Event('change'));
+    fastdds.filter(shown).forEach(e => problems.push('filtered but shown: ' + e.outerHTML.slice(0, 80)));
+    others.filter(e => !shown(e)).forEach(e => problems.push('hidden by another filter: ' + e.outerHTML.slice(0, 80)));
+    layout('fastdds filtered out');
+    box.checked = true;
+    box.dispatchEvent(new Event('change'));
+    fastdds.filter(e => !shown(e)).forEach(e => problems.push('not shown again: ' + e.outerHTML.slice(0, 80)));
+    layout('fastdds back');
+  } else if (box) {
+    problems.push('rows hidden before any filter');
+  }
   const out = document.createElement('pre');
   out.id = 'layout-check';
   out.textContent = (problems.length ? 'PROBLEMS\n' + problems.join('\n') : 'OK') + '\n' +
-                    texts + ' texts';
+                    bars.length + ' bars\n' + texts + ' texts';
   document.body.appendChild(out);
 });
 </script>)";
@@ -376,9 +455,12 @@ TEST_F(ResultsCli, MixedReportLabelsNeitherOverlapNorClipInChromium) {
   ASSERT_NE(at, std::string::npos) << "the check did not run";
   const std::string result = dom.out.substr(at, dom.out.find("</pre>", at) - at);
   EXPECT_NE(result.find(">OK\n"), std::string::npos) << result;
-  // The plots were there to check: radars or bars of two categories, distributions, legends.
+  // The plots were there to check: bars of two categories, distributions, legends.
   const auto texts = std::stoul(result.substr(result.rfind('\n') + 1));
   EXPECT_GT(texts, 150u) << result;
+  const auto bars_at = result.rfind(" bars\n");
+  ASSERT_NE(bars_at, std::string::npos) << result;
+  EXPECT_GT(std::stoul(result.substr(result.rfind('\n', bars_at - 1) + 1)), 20u) << result;
 }
 
 TEST_F(ResultsCli, RunWritesItsReport) {
@@ -390,8 +472,9 @@ TEST_F(ResultsCli, RunWritesItsReport) {
     if (e.path().string().ends_with(".report.html")) {
       ++reports;
       const std::string html = read_text(e.path());
-      // One benchmark: bars for latency and throughput; no power here.
-      EXPECT_EQ(count(html, "<svg class=\"bars\""), 2u);
+      // One benchmark, one run, no published rows: its p50 alone, and nothing to filter.
+      EXPECT_EQ(count(html, "<svg class=\"barchart\""), 1u);
+      EXPECT_EQ(html.find("<script"), std::string::npos);
       EXPECT_NE(html.find("<table class=\"runs\""), std::string::npos);
     }
   }

@@ -6,11 +6,14 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <regex>
+#include <set>
 #include <sstream>
 
 #include "../shared_data.hpp"
 #include "report_model.hpp"
+#include "robotperf/metrics/latency_stats.hpp"
 #include "robotperf/report/histogram.hpp"
 #include "robotperf/report/readme.hpp"
 #include "robotperf/report/run_store.hpp"
@@ -232,7 +235,7 @@ TEST_F(Report, ResultsJsonCarriesTheHistogram) {
   EXPECT_EQ(without.power_note, "no RAPL, hwmon or NVML source");
 }
 
-TEST_F(Report, HtmlHasRadarsTablesDistributionsAndComparison) {
+TEST_F(Report, HtmlHasSummaryBarsTablesDistributionsAndComparison) {
   write_two_machines(10.0, 10.2);
   ReportInput input = load_report_inputs({dir_, published_a1()});
   ASSERT_EQ(input.runs.size(), 4u);
@@ -240,23 +243,25 @@ TEST_F(Report, HtmlHasRadarsTablesDistributionsAndComparison) {
   ReportOptions options;
   options.compare = std::pair{"AMD Ryzen 7 5800X", "Intel Core i7-12700H"};
   const std::string html = render_html(input, options);
-  // One benchmark (a1) is no polygon: bars, for latency, throughput and power.
-  EXPECT_EQ(count(html, "<svg class=\"bars\""), 3u);
-  for (const char* metric : {"latency", "throughput", "power"})
-    EXPECT_NE(html.find("data-metric=\"" + std::string(metric) + "\""), std::string::npos);
-  EXPECT_NE(html.find("a1 (ms)"), std::string::npos);  // axes labelled with id and unit
+  // No radar unless asked; a1's p50 bars, and its maxima beside the published rows'.
+  EXPECT_EQ(count(html, "<svg class=\"radar\""), 0u);
+  EXPECT_EQ(count(html, "<svg class=\"barchart\""), 2u);
+  EXPECT_NE(html.find("data-figure=\"p50\""), std::string::npos);
+  EXPECT_NE(html.find("data-figure=\"max\""), std::string::npos);
   EXPECT_EQ(count(html, "<svg class=\"cdf\""), 1u);
   EXPECT_NE(html.find("from the per-message CSV"), std::string::npos);
   EXPECT_NE(html.find("from the stored histogram"), std::string::npos);
   EXPECT_NE(html.find("p50 "), std::string::npos);
   EXPECT_NE(html.find("p99 "), std::string::npos);
-  for (const char* table : {"runs", "published", "flagged", "comparison", "machines"})
+  for (const char* table : {"at-a-glance", "versus-published", "runs", "published", "flagged",
+                            "comparison", "machines"})
     EXPECT_NE(html.find("<table class=\"" + std::string(table) + "\""), std::string::npos) << table;
   // 40 rows of the published a1 file break the rules: said, and listed.
   EXPECT_NE(html.find("40 of 308 published rows break the measurement rules"), std::string::npos);
-  // Self-contained: no script, no external resource.
-  EXPECT_EQ(html.find("<script"), std::string::npos);
+  // Self-contained: one inline script (the filters), no external resource.
+  EXPECT_EQ(count(html, "<script>"), 1u);
   EXPECT_EQ(html.find("src="), std::string::npos);
+  EXPECT_EQ(html.find("href="), std::string::npos);
   EXPECT_EQ(std::regex_search(html, std::regex("https?://(?!www\\.w3\\.org/2000/svg)")), false);
   // The comparison: B twice as slow with little spread is significant.
   const std::regex row("<td>a1</td><td>latency max \\(ms\\)</td>.*?significant: B worse");
@@ -273,7 +278,8 @@ TEST_F(Report, HtmlHasRadarsTablesDistributionsAndComparison) {
   }
   EXPECT_NE(md.find("## Comparison"), std::string::npos);
   EXPECT_NE(md.find("significant: B worse"), std::string::npos);
-  EXPECT_NE(md.find("| hardware | a1 (ms) |"), std::string::npos);
+  EXPECT_NE(md.find("| configuration | max latency ms | 95 % interval |"), std::string::npos);
+  EXPECT_NE(md.find("## Summary"), std::string::npos);
   EXPECT_NE(md.find("## Machines"), std::string::npos);
 }
 
@@ -330,12 +336,16 @@ TEST_F(Report, InvalidRunsAreWarnedAboutAndNotPlotted) {
   const auto input = load_report_inputs({dir_});
   const std::string html = render_html(input, {});
   EXPECT_NE(html.find("is INVALID: lost messages"), std::string::npos);
-  EXPECT_NE(html.find("<tr class=\"warn\"><td>a1-intra"), std::string::npos);
+  EXPECT_TRUE(std::regex_search(html, std::regex("<tr class=\"warn\"[^>]*><td>a1-intra")));
   // Only the valid run's series is in the radar's legend.
   EXPECT_NE(html.find("AMD Ryzen 7 5800X · intra · 30 Hz<title>"), std::string::npos);
   EXPECT_EQ(html.find("Lossy CPU · intra · 30 Hz<title>"), std::string::npos);
   // Its latency curve is drawn apart: grey, dashed, labelled INVALID.
-  EXPECT_EQ(count(html, "<polyline class=\"curve invalid\" fill=\"none\" stroke=\"#999999\""), 1u);
+  const std::regex invalid_curve(
+      "<polyline class=\"curve invalid\" data-series=\"[^\"]*\" fill=\"none\" stroke=\"#999999\"");
+  EXPECT_EQ(std::distance(std::sregex_iterator(html.begin(), html.end(), invalid_curve),
+                          std::sregex_iterator()),
+            1);
   EXPECT_NE(html.find(" (INVALID) — from the "), std::string::npos);
 }
 
@@ -374,8 +384,8 @@ TEST_F(Report, WarningsAreGroupedByMachineAndRunBehindOneLine) {
 }
 
 // A 30 Hz run says only that the graph kept up with 30 Hz: where a peak search found its limit,
-// the throughput radar shows the peak, labelled so, and never pools the two.
-TEST_F(Report, ThroughputRadarUsesPeaksWhereFoundAndSaysWhichIsWhich) {
+// the throughput radar shows the peak, named so on every plot, and never pools the two.
+TEST_F(Report, ThroughputRadarUsesPeaksWhereFoundAndNamesThemOneWay) {
   testing::write_sample(dir_, {});
   testing::SampleRun peak_run;
   peak_run.start_unix_ns += 1'000'000'000;
@@ -391,10 +401,20 @@ TEST_F(Report, ThroughputRadarUsesPeaksWhereFoundAndSaysWhichIsWhich) {
 
   const auto input = load_report_inputs({dir_});
   EXPECT_EQ(std::ranges::count(input.runs, std::string("peak"), &StoredRun::throughput_kind), 1);
-  const std::string html = render_html(input, {});
-  EXPECT_NE(html.find("AMD Ryzen 7 5800X · intra (peak)<title>"), std::string::npos);
-  EXPECT_EQ(html.find("AMD Ryzen 7 5800X · intra · 30 Hz (offered)<title>"), std::string::npos);
-  EXPECT_NE(html.find("Intel Core i7-12700H · intra · 30 Hz (offered)<title>"), std::string::npos);
+  ReportOptions options;
+  options.radar = true;
+  const detail::Model model = detail::build_model(input, options);
+  const auto& radars = model.radars.at("perception");
+  const auto throughput =
+      std::ranges::find(radars, std::string("throughput"), &detail::Radar::metric);
+  ASSERT_NE(throughput, radars.end());
+  // The peak run has one name on the page: its configuration's, with "peak" for its rate.
+  EXPECT_EQ(throughput->series, (std::vector<std::string>{"AMD Ryzen 7 5800X · intra · peak",
+                                                          "Intel Core i7-12700H · intra · 30 Hz"}));
+  const auto p50 = model.benchmarks.at("perception").at(0).charts.at(0);
+  EXPECT_TRUE(std::ranges::any_of(p50.bars, [](const detail::Bar& b) {
+    return b.series == "AMD Ryzen 7 5800X · intra · peak";
+  }));
 }
 
 // A series keeps its colour on every plot of the page, and series left out of a radar are in the
@@ -402,6 +422,7 @@ TEST_F(Report, ThroughputRadarUsesPeaksWhereFoundAndSaysWhichIsWhich) {
 TEST_F(Report, SeriesKeepTheirColourAndOmittedOnesAreInTheTable) {
   write_two_machines(9.0, 9.5);
   ReportOptions options;
+  options.radar = true;
   options.max_radar_series = 1;
   const std::string html = render_html(load_report_inputs({dir_}), options);
   EXPECT_NE(html.find("+ 1 more platforms (in the table below)"), std::string::npos);
@@ -415,7 +436,7 @@ TEST_F(Report, SeriesKeepTheirColourAndOmittedOnesAreInTheTable) {
        it != std::sregex_iterator(); ++it) {
     colours.insert((*it)[1]);
   }
-  EXPECT_EQ(colours, std::set<std::string>{"#1f77b4"}) << "one series, one colour";
+  EXPECT_EQ(colours, std::set<std::string>{"#0072b2"}) << "one series, one colour";
 }
 
 // A series without a value on an axis has a gap there: no line joins the axes either side of it.
@@ -432,7 +453,9 @@ TEST_F(Report, AMissingValueIsAGapNotALineAcrossIt) {
       testing::write_sample(dir_, run);
     }
   }
-  const std::string html = render_html(load_report_inputs({dir_}), {});
+  ReportOptions options;
+  options.radar = true;
+  const std::string html = render_html(load_report_inputs({dir_}), options);
   // Per radar: the full series a polygon, the gappy one a single line from a1 to a2.
   const std::size_t polygons = count(html, "<polygon class=\"series\"");
   EXPECT_GE(polygons, 2u);
@@ -451,7 +474,9 @@ TEST_F(Report, SingleValuesAreNeverDrawnAsTheWorst) {
     run.start_unix_ns = (t += 60'000'000'000);
     testing::write_sample(dir_, run);
   }
-  const std::string single = render_html(load_report_inputs({dir_}), {});
+  ReportOptions options;
+  options.radar = true;
+  const std::string single = render_html(load_report_inputs({dir_}), options);
   EXPECT_EQ(count(single, "<svg class=\"radar\""), 0u);
   EXPECT_EQ(count(single, "<svg class=\"bars\""), 2u);  // latency and throughput
   EXPECT_NE(single.find("or one value per benchmark, make no radar"), std::string::npos);
@@ -463,7 +488,7 @@ TEST_F(Report, SingleValuesAreNeverDrawnAsTheWorst) {
   other.base_latency_ms = 9;
   other.start_unix_ns = (t += 60'000'000'000);
   testing::write_sample(dir_, other);
-  const std::string two = render_html(load_report_inputs({dir_}), {});
+  const std::string two = render_html(load_report_inputs({dir_}), options);
   EXPECT_EQ(count(two, "<svg class=\"radar\""), 2u);
   // a1 has two values and a real scale; a2 and a3 have one each, written as such.
   EXPECT_EQ(count(two, ">only "), 4u) << two;
@@ -723,7 +748,9 @@ TEST(Published, BlackAndGreyRowsAreSeparateSeries) {
     b.results.push_back(row);
   }
   input.published.push_back(b);
-  const detail::Model model = detail::build_model(input, {});
+  ReportOptions options;
+  options.radar = true;
+  const detail::Model model = detail::build_model(input, options);
   const detail::Radar& latency = model.radars.at("perception").at(0);
   ASSERT_EQ(latency.metric, "latency");
   ASSERT_EQ(latency.series.size(), 2u);
@@ -839,14 +866,14 @@ TEST_F(Report, RunsOfDifferentConfigurationsAreSeparateSeries) {
   }
   testing::write_sample(dir_, base);
   const std::string html = render_html(load_report_inputs({dir_}), {});
-  for (const char* series : {"AMD Ryzen 7 5800X · intra · 60 Hz<title>",
-                             "AMD Ryzen 7 5800X · intra · per-node · grey · 30 Hz<title>",
-                             "AMD Ryzen 7 5800X · intra · opencl · 30 Hz<title>",
-                             "AMD Ryzen 7 5800X · intra · monitor spinning · 30 Hz<title>",
-                             "AMD Ryzen 7 5800X · intra · cuda · 30 Hz<title>",
-                             "AMD Ryzen 7 5800X · intra · cuda-resident · 30 Hz<title>",
-                             "AMD Ryzen 7 5800X · intra · 30 Hz<title>"}) {
-    EXPECT_NE(html.find(series), std::string::npos) << series;
+  for (const std::string series :
+       {"AMD Ryzen 7 5800X · intra · 60 Hz", "AMD Ryzen 7 5800X · intra · per-node · grey · 30 Hz",
+        "AMD Ryzen 7 5800X · intra · opencl · 30 Hz",
+        "AMD Ryzen 7 5800X · intra · monitor spinning · 30 Hz",
+        "AMD Ryzen 7 5800X · intra · cuda · 30 Hz",
+        "AMD Ryzen 7 5800X · intra · cuda-resident · 30 Hz", "AMD Ryzen 7 5800X · intra · 30 Hz"}) {
+    // Each a bar of its own, an entry of the key and a latency curve.
+    EXPECT_EQ(count(html, "data-series=\"" + series + "\""), 3u) << series;
   }
 }
 
@@ -905,6 +932,214 @@ TEST_F(Report, AHardwareNameWithAnEqualsSignIsAName) {
   const std::string md = render_markdown(input, options);
   EXPECT_EQ(md.find("no benchmark and metric in common"), std::string::npos) << md;
   EXPECT_NE(md.find("ACME x=1"), std::string::npos) << md;
+}
+
+// The page opens on what was run and what it found: the summary comes before any benchmark, and
+// names the fastest configuration of each benchmark.
+TEST_F(Report, TheSummaryComesFirstWithTheFindings) {
+  write_two_machines(10.0, 10.2);
+  const auto input = load_report_inputs({dir_, published_a1()});
+  const detail::Model model = detail::build_model(input, {});
+  ASSERT_FALSE(model.findings.empty());
+  EXPECT_LE(model.findings.size(), 5u);
+  EXPECT_EQ(model.findings.front(),
+            "Fastest configuration (p50 latency): AMD Ryzen 7 5800X · intra · 30 Hz in a1.");
+  ASSERT_EQ(model.at_a_glance.rows.size(), 1u);
+  EXPECT_EQ(model.at_a_glance.rows[0][0], "a1");
+  EXPECT_EQ(model.at_a_glance.rows[0][1], "4 of 4");
+  EXPECT_EQ(model.at_a_glance.rows[0][3], "AMD Ryzen 7 5800X · intra · 30 Hz");
+  EXPECT_NE(
+      model.overview.front().find("Ran 4 runs (4 valid) of 1 benchmark (a1) in 2 "
+                                  "configurations on AMD Ryzen 7 5800X, Intel Core i7-12700H"),
+      std::string::npos)
+      << model.overview.front();
+  const std::string html = render_html(input, {});
+  const auto summary = html.find("<section class=\"summary\"");
+  ASSERT_NE(summary, std::string::npos);
+  EXPECT_LT(summary, html.find("<h2 id=\"category-"));
+  EXPECT_LT(summary, html.find("<svg"));
+}
+
+// A --repeat series is one configuration: one bar at the median of its runs' p50s, each run a
+// point, the median's 95 % interval as whiskers; bars are sorted, the fastest first.
+TEST_F(Report, ARepeatSeriesIsOneBarWithItsRunsAndBarsAreSorted) {
+  int64_t t = 1'790'000'000'000'000'000;
+  for (int k = 0; k < 6; ++k) {
+    testing::SampleRun s;
+    s.base_latency_ms = 8.0 + 0.1 * k;
+    s.start_unix_ns = (t += 60'000'000'000);
+    testing::write_sample(dir_, s);
+  }
+  testing::SampleRun fast;
+  fast.cpu = "Fast CPU";
+  fast.base_latency_ms = 2.0;
+  fast.start_unix_ns = (t += 60'000'000'000);
+  testing::write_sample(dir_, fast);
+  const auto input = load_report_inputs({dir_});
+  const detail::Model model = detail::build_model(input, {});
+  const auto& charts = model.benchmarks.at("perception").at(0).charts;
+  ASSERT_EQ(charts.size(), 1u);  // no published rows: no maximum beside them
+  const auto& bars = charts[0].bars;
+  ASSERT_EQ(bars.size(), 2u);
+  EXPECT_EQ(bars[0].series, "Fast CPU · intra · 30 Hz");
+  EXPECT_EQ(bars[1].series, "AMD Ryzen 7 5800X · intra · 30 Hz");
+  EXPECT_EQ(bars[1].points.size(), 6u);
+  EXPECT_EQ(bars[1].count, "6 runs");
+  // The runs table names each run's configuration as its bar does.
+  const auto& runs = model.benchmarks.at("perception").at(0).runs;
+  ASSERT_EQ(runs.header[1], "configuration");
+  ASSERT_EQ(runs.rows.size(), 7u);
+  for (std::size_t i = 0; i < 6; ++i) EXPECT_EQ(runs.rows[i][1], bars[1].series);
+  EXPECT_EQ(runs.rows[6][1], bars[0].series);  // the fast run ran last
+  std::vector<double> p50s;
+  for (const auto& r : input.runs) {
+    if (r.hardware != "Fast CPU") p50s.push_back(r.latency.p50);
+  }
+  EXPECT_DOUBLE_EQ(bars[1].value, metrics::median(p50s));
+  ASSERT_TRUE(std::isfinite(bars[1].lower) && std::isfinite(bars[1].upper));
+  EXPECT_LE(bars[1].lower, bars[1].value);
+  EXPECT_GE(bars[1].upper, bars[1].value);
+  // One run: the interval of its own p50, as its results file states it.
+  EXPECT_TRUE(bars[0].points.empty());
+  EXPECT_TRUE(std::isfinite(bars[0].lower) && std::isfinite(bars[0].upper));
+  const std::string svg = detail::bar_chart_svg(charts[0]);
+  EXPECT_EQ(count(svg, "<circle class=\"run\""), 6u);
+  EXPECT_EQ(count(svg, "<path class=\"whisker\""), 2u);
+  EXPECT_LT(svg.find("data-series=\"Fast CPU"), svg.find("data-series=\"AMD Ryzen"));
+  // The figure is named on the axis: never "latency" alone.
+  EXPECT_NE(svg.find(">p50 latency (ms)<title>"), std::string::npos);
+}
+
+// RobotPerf reports the maximum latency: the published rows are drawn beside the local maxima,
+// hatched, never beside a p50; the table compares like with like, without flagged rows.
+TEST_F(Report, PublishedRowsArePlottedAndComparedLikeWithLike) {
+  testing::write_sample(dir_, {});
+  const auto input = load_report_inputs({dir_, published_a1()});
+  const detail::Model model = detail::build_model(input, {});
+  const auto& section = model.benchmarks.at("perception").at(0);
+  ASSERT_EQ(section.charts.size(), 2u);
+  EXPECT_EQ(section.charts[0].figure, "p50");
+  EXPECT_TRUE(std::ranges::all_of(section.charts[0].bars, &detail::Bar::local));
+  EXPECT_EQ(section.charts[1].figure, "max");
+  EXPECT_NE(section.charts[1].axis.find("maximum latency"), std::string::npos);
+  EXPECT_TRUE(std::ranges::any_of(section.charts[1].bars, [](const detail::Bar& b) {
+    return !b.local && b.series == "Intel i7-12700H (RobotPerf)";
+  }));
+  const std::string svg = detail::bar_chart_svg(section.charts[1]);
+  EXPECT_NE(svg.find("class=\"bar published\""), std::string::npos);
+  EXPECT_NE(svg.find("fill=\"url(#hatch-a1-max)\""), std::string::npos);
+  // The published maxima span boards and servers (over 50x): a logarithmic axis, said so; the
+  // local p50s alone stay linear.
+  EXPECT_NE(svg.find(">max latency (ms, log scale)<title>"), std::string::npos);
+  EXPECT_EQ(detail::bar_chart_svg(section.charts[0]).find("log scale"), std::string::npos);
+  // Published rows name no transport: the transport filter leaves them alone.
+  for (const auto& bar : section.charts[1].bars) {
+    EXPECT_EQ(bar.tags.contains("transport"), bar.local) << bar.series;
+    EXPECT_EQ(bar.tags.at("source"), bar.local ? "local runs" : "published RobotPerf");
+  }
+  // The rows alike: black-box latency rows that pass the rules, at 30 Hz or stating no rate.
+  std::size_t alike = 0;
+  for (const auto& row : input.published.at(0).results) {
+    const std::string rate = row.stated_rate();
+    alike += row.flags.empty() && row.metric == "latency" && row.type != "grey" &&
+             (rate.empty() || rate == "30 Hz");
+  }
+  ASSERT_GT(alike, 0u);
+  const auto& vs = section.versus_published;
+  ASSERT_EQ(vs.rows.size(), 1u);
+  EXPECT_EQ(vs.rows[0][0], "AMD Ryzen 7 5800X · intra · 30 Hz");
+  EXPECT_EQ(vs.rows[0][2], std::to_string(alike));
+  EXPECT_TRUE(vs.rows[0][7].starts_with("lower than ")) << vs.rows[0][7];
+}
+
+// Eight series take the palette's eight colours; the ninth and after are drawn in outline, so no
+// colour stands for two series; every bar's series is in the page's key.
+TEST_F(Report, NoColourIsReusedAndEveryBarIsInTheKey) {
+  int64_t t = 1'790'000'000'000'000'000;
+  for (int k = 0; k < 10; ++k) {
+    testing::SampleRun s;
+    s.cpu = "CPU " + std::to_string(k);
+    s.base_latency_ms = 3.0 + k;
+    s.start_unix_ns = (t += 60'000'000'000);
+    testing::write_sample(dir_, s);
+  }
+  const std::string html = render_html(load_report_inputs({dir_}), {});
+  const std::regex entry("<li data-series=\"([^\"]+)\" data-colour=\"([^\"]+)\"");
+  std::map<std::string, std::string> key;
+  std::map<std::string, std::set<std::string>> series_of_colour;
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), entry);
+       it != std::sregex_iterator(); ++it) {
+    key[(*it)[1]] = (*it)[2];
+    series_of_colour[(*it)[2]].insert((*it)[1]);
+  }
+  ASSERT_EQ(key.size(), 10u);
+  for (const auto& [colour, series] : series_of_colour) {
+    if (colour != "none") {
+      EXPECT_EQ(series.size(), 1u) << colour << " is reused";
+    }
+  }
+  EXPECT_EQ(series_of_colour["none"].size(), 2u);
+  const std::regex bar("<g class=\"bar-row\" data-series=\"([^\"]+)\" data-colour=\"([^\"]+)\"");
+  std::size_t bars = 0;
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), bar); it != std::sregex_iterator();
+       ++it, ++bars) {
+    ASSERT_TRUE(key.contains((*it)[1])) << (*it)[1] << " is not in the key";
+    EXPECT_EQ(key[(*it)[1]], (*it)[2]) << (*it)[1] << " has another colour than its key's";
+  }
+  EXPECT_EQ(bars, 10u);
+}
+
+// Without --compare, the report compares two configurations that ran a benchmark in common, or
+// says there are none; never two sides with nothing in common.
+TEST_F(Report, TheAutomaticComparisonPicksConfigurationsWithABenchmarkInCommon) {
+  int64_t t = 1'790'000'000'000'000'000;
+  auto run = [&](const char* id, const char* cpu) {
+    testing::SampleRun s;
+    s.id = id;
+    s.name = std::string(id) + "_bench";
+    s.cpu = cpu;
+    s.start_unix_ns = (t += 60'000'000'000);
+    testing::write_sample(dir_, s);
+  };
+  run("a1", "First CPU");
+  run("a2", "Second CPU");
+  const detail::Model none = detail::build_model(load_report_inputs({dir_}), {});
+  EXPECT_FALSE(none.comparison);
+  EXPECT_NE(none.no_comparison.find("no two local configurations ran a benchmark in common"),
+            std::string::npos);
+  run("a2", "Third CPU");
+  const detail::Model model = detail::build_model(load_report_inputs({dir_}), {});
+  ASSERT_TRUE(model.comparison);
+  EXPECT_EQ(model.comparison->a, "Second CPU · intra · 30 Hz");
+  EXPECT_EQ(model.comparison->b, "Third CPU · intra · 30 Hz");
+  EXPECT_FALSE(model.comparison->table.rows.empty());
+}
+
+// Radars only when asked, and never with more series than can be told apart.
+TEST_F(Report, RadarsAreAnOptionWithAFewSeriesAtMost) {
+  int64_t t = 1'790'000'000'000'000'000;
+  for (const char* id : {"a1", "a2", "a3"}) {
+    for (int k = 0; k < 9; ++k) {
+      testing::SampleRun s;
+      s.id = id;
+      s.name = std::string(id) + "_bench";
+      s.cpu = "CPU " + std::to_string(k);
+      s.start_unix_ns = (t += 60'000'000'000);
+      testing::write_sample(dir_, s);
+    }
+  }
+  const auto input = load_report_inputs({dir_});
+  EXPECT_EQ(count(render_html(input, {}), "<svg class=\"radar\""), 0u);
+  ReportOptions options;
+  options.radar = true;
+  options.max_radar_series = 12;
+  const detail::Model model = detail::build_model(input, options);
+  for (const auto& radar : model.radars.at("perception")) {
+    if (radar.axes.empty()) continue;
+    EXPECT_EQ(radar.series.size(), kMaxRadarSeries) << radar.metric;
+    EXPECT_EQ(radar.omitted.size(), 9u - kMaxRadarSeries) << radar.metric;
+  }
+  EXPECT_EQ(count(render_html(input, options), "<svg class=\"radar\""), 2u);
 }
 
 // A link that loops, named like a results file: one line, and the folder's other runs are read

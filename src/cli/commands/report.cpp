@@ -18,6 +18,7 @@ struct ReportArgs {
   std::vector<std::string> inputs;
   std::string html, md, title = "robotperf report";
   std::vector<std::string> compare;
+  bool radar = false;
 };
 
 // What the report cannot be asked, before anything is read.
@@ -41,6 +42,7 @@ int make_report(const ReportArgs& a) {
         "nothing to report: no results files or benchmark.yaml in the given paths");
   report::ReportOptions options;
   options.title = a.title;
+  options.radar = a.radar;
   if (a.compare.size() == 2) options.compare = std::pair{a.compare[0], a.compare[1]};
   if (!a.html.empty() && !a.md.empty() && files::is_standard_output(a.html) &&
       files::is_standard_output(a.md)) {
@@ -64,7 +66,9 @@ class ReportCommand : public Command {
  public:
   CLI::App* declare(CLI::App& app) override {
     auto* command = app.add_subcommand(
-        "report", "HTML and Markdown report: radar plots across hardware, runs, distributions");
+        "report",
+        "HTML and Markdown report: a summary, per benchmark sorted bars beside the published "
+        "results, runs, distributions");
     command->add_option("results", args_.inputs,
                         "results files, imported files, benchmark.yaml files or folders "
                         "(default: ./results)");
@@ -74,6 +78,9 @@ class ReportCommand : public Command {
     command->add_option("--compare", args_.compare,
                         "compare two sides (give it twice): a results file or name prefix, "
                         "or a hardware name");
+    command->add_flag("--radar", args_.radar,
+                      "add radar plots per category, RobotPerf's presentation (at most 6 series "
+                      "each)");
     command->footer("Example: robotperf report results --html report.html --md report.md");
     return command;
   }

@@ -1,8 +1,9 @@
-// The comparison report: per category, radar plots of latency, throughput and power across
-// hardware (RobotPerf's presentation); per benchmark, every run and its latency distribution; a
-// comparison of two runs or platforms with a significance judgement; machine descriptions and
-// validity warnings. As one self-contained HTML page (inline SVG and CSS, no script, no network)
-// and as Markdown with the same tables.
+// The comparison report: an executive summary (what was run, on which systems, the findings that
+// matter, validity); per benchmark, sorted bars of its configurations and the published rows, a
+// table of this system against the published ones, every run and its latency distribution;
+// optionally radar plots per category (RobotPerf's presentation); a comparison of two
+// configurations with a significance judgement; machine descriptions. As one self-contained HTML
+// page (inline SVG, CSS and a filtering script, no network) and as Markdown with the same tables.
 #pragma once
 
 #include <filesystem>
@@ -27,13 +28,19 @@ struct ReportInput {
 // ReportError; unreadable files inside a folder are listed in `skipped`.
 ReportInput load_report_inputs(const std::vector<std::filesystem::path>& paths);
 
+// More polygons than this on one radar cannot be told apart.
+inline constexpr std::size_t kMaxRadarSeries = 6;
+
 struct ReportOptions {
   std::string title = "robotperf report";
   // Two selectors: a results file (path, name or name prefix such as "a1-fastdds"), a hardware
-  // name (local or published), or a series name as the radar legend shows it. Without it, the
-  // first two local series are compared when there are two or more.
+  // name (local or published), or a series name as the report names it. Without it, two local
+  // configurations that ran a benchmark in common are compared, when there are such.
   std::optional<std::pair<std::string, std::string>> compare;
-  std::size_t max_radar_series = 12;
+  // Radar plots per category (RobotPerf's presentation); off by default, at most
+  // kMaxRadarSeries series each.
+  bool radar = false;
+  std::size_t max_radar_series = 6;
   std::size_t max_distribution_runs = 8;
 };
 

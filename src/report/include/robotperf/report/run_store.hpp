@@ -29,6 +29,8 @@ struct LatencySummary {
   std::size_t count = 0;
   double min = kNoValue, mean = kNoValue, rms = kNoValue, stddev = kNoValue, p50 = kNoValue,
          p90 = kNoValue, p99 = kNoValue, p999 = kNoValue, max = kNoValue;
+  // The p50's distribution-free 95 % interval (docs/design.md §3.6); NaN where open or not stored.
+  double p50_lower = kNoValue, p50_upper = kNoValue;
 };
 
 // A run as its results file records it.
