@@ -1377,6 +1377,11 @@ std::string configuration_series(const StoredRun& run) {
   if (run.type == "grey") label += " · grey";
   if (run.timeline != "fixed") label += " · " + run.timeline;
   if (run.monitor_wait == "spin") label += " · monitor spinning";
+  // The user's labels (run --label) name series of their own; the automatic ones (robotperf's
+  // version) are in the results but would split every series at each robotperf build.
+  for (const auto& [key, value] : run.labels) {
+    if (!key.starts_with("robotperf.")) label += " · " + key + "=" + value;
+  }
   return label;
 }
 

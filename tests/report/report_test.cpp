@@ -1416,3 +1416,19 @@ TEST(Summary, TheVerdictRanksTheRunAgainstThePublishedPlatforms) {
   b.name = "a2_rectify";
   EXPECT_EQ(report::published_standing(r, {b}), "");
 }
+
+// A user's labels name series of their own; robotperf's automatic labels do not split them.
+TEST(Series, UserLabelsNameSeriesTheAutomaticOnesDoNot) {
+  using namespace robotperf::report;
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("robotperf-series-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  robotperf::report::testing::SampleRun s;
+  s.labels = {{"rev", "pr42"}, {"robotperf.version", "0.1.0"}};
+  const StoredRun run = load_run(robotperf::report::testing::write_sample(dir, s));
+  EXPECT_EQ(run.labels.at("rev"), "pr42");
+  const std::string series = detail::local_series(run);
+  EXPECT_NE(series.find(" · rev=pr42"), std::string::npos) << series;
+  EXPECT_EQ(series.find("robotperf.version"), std::string::npos) << series;
+  fs::remove_all(dir);
+}
