@@ -556,10 +556,11 @@ std::string runs_table(const std::vector<StoredRun>& runs) {
 
 namespace {
 
-// "key=value,key=value", in key order.
+// "key=value;key=value", in key order (no comma: the CSV stays one field per comma for programs
+// that split it so).
 std::string labels_text(const std::map<std::string, std::string>& labels) {
   std::string out;
-  for (const auto& [key, value] : labels) out += (out.empty() ? "" : ",") + key + "=" + value;
+  for (const auto& [key, value] : labels) out += (out.empty() ? "" : ";") + key + "=" + value;
   return out;
 }
 
