@@ -75,8 +75,12 @@ void record_in_database(const fs::path& output, const nlohmann::json& result,
     std::string why = e.what();
     if (why.starts_with(database.string() + ": ")) why.erase(0, database.string().size() + 2);
     std::cerr << "robotperf: the run is not in " << database.string() << " (" << why
-              << "); its results file is kept: robotperf results rebuild-db " << output.string()
-              << " makes the database again from the files\n";
+              << "); its results file is kept";
+    // The error may name the fix already (a database of an unknown schema does).
+    if (why.find("rebuild-db") == std::string::npos)
+      std::cerr << ": robotperf results rebuild-db " << output.string()
+                << " makes the database again from the files";
+    std::cerr << "\n";
   }
 }
 
