@@ -266,6 +266,42 @@ TEST_F(ResultsDb, ADatabaseOfAnUnknownSchemaVersionIsRefusedUntouched) {
   EXPECT_EQ(Database::open(database()).runs().size(), 1u);  // its rows were left as they were
 }
 
+// The query plan SQLite chooses for `sql` on the database at `path`, one line per step.
+std::string query_plan(const fs::path& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  sqlite3_stmt* statement = nullptr;
+  std::string plan;
+  if (sqlite3_prepare_v2(db, ("EXPLAIN QUERY PLAN " + sql).c_str(), -1, &statement, nullptr) ==
+      SQLITE_OK) {
+    while (sqlite3_step(statement) == SQLITE_ROW)
+      plan += reinterpret_cast<const char*>(sqlite3_column_text(statement, 3)) + std::string("\n");
+  }
+  sqlite3_finalize(statement);
+  sqlite3_close(db);
+  return plan;
+}
+
+// What reports and compare ask for is found through an index, not a scan of every run.
+TEST_F(ResultsDb, TheQueriesReportsNeedUseIndexes) {
+  Database::open(database());
+  for (const auto& [sql, index] : std::vector<std::pair<std::string, std::string>>{
+           {"SELECT id FROM runs WHERE benchmark_id = 'a1' AND started_utc >= '2026' ORDER BY "
+            "started_utc",
+            "runs_by_benchmark_and_time"},
+           {"SELECT id FROM runs WHERE configuration_key = 'k' ORDER BY started_utc",
+            "runs_by_configuration"},
+           {"SELECT run_id FROM labels WHERE key = 'board' AND value = 'rev-b'",
+            "labels_by_key_and_value"},
+           {"SELECT value FROM metrics WHERE run_id = 1 AND name = 'latency.p99'", "PRIMARY KEY"},
+           {"SELECT run_id, value FROM metrics WHERE name = 'latency.p99'", "metrics_by_name"},
+           {"SELECT latency_ns FROM samples WHERE run_id = 1 ORDER BY seq", "PRIMARY KEY"}}) {
+    const std::string plan = query_plan(database(), sql);
+    EXPECT_NE(plan.find(index), std::string::npos) << sql << "\n" << plan;
+    EXPECT_EQ(plan.find("TEMP B-TREE"), std::string::npos) << sql << "\n" << plan;
+  }
+}
+
 // A file that exists but holds no schema yet (version 0, as sqlite3 leaves an empty file) is
 // migrated like a new one.
 TEST_F(ResultsDb, AnEmptyFileIsMigratedToTheCurrentSchema) {
