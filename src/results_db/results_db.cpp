@@ -205,11 +205,24 @@ void migrate(sqlite3* db, const fs::path& path) {
   t.commit();
 }
 
+// A database file and the log files SQLite may keep beside it.
+void remove_with_logs(const fs::path& path) {
+  std::error_code ignored;
+  for (const char* suffix : {"", "-wal", "-shm", "-journal"})
+    fs::remove(path.string() + suffix, ignored);
+}
+
 const json& member(const json& j, const char* key) {
   static const json null_json;
   if (!j.is_object()) return null_json;
   const auto it = j.find(key);
   return it == j.end() ? null_json : *it;
+}
+
+// JSON text as the results file has it: a string that is not UTF-8 (a machine's odd model name)
+// with replacement characters.
+std::string json_text(const json& j) {
+  return j.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
 double number(const json& j) {
@@ -351,9 +364,9 @@ void insert_run(sqlite3* db, const fs::path& path, const report::StoredRun& run,
       .text(19, run.hardware_category)
       .text(20, run.robotperf_version)
       .text(21, run.git_revision)
-      .text(22, member(run.json, "machine").dump())
-      .text(23, member(run.json, "software").dump())
-      .text(24, member(run.json, "configuration").dump())
+      .text(22, json_text(member(run.json, "machine")))
+      .text(23, json_text(member(run.json, "software")))
+      .text(24, json_text(member(run.json, "configuration")))
       .text(25, configuration_key(run))
       .text(26, samples.source)
       .execute();
@@ -374,7 +387,7 @@ void insert_run(sqlite3* db, const fs::path& path, const report::StoredRun& run,
     for (const auto& [key, value] : labels.items())
       label.integer(1, id)
           .text(2, key)
-          .text(3, value.is_string() ? value.get<std::string>() : value.dump())
+          .text(3, value.is_string() ? value.get<std::string>() : json_text(value))
           .execute();
   }
   if (samples.source == "csv") {
@@ -418,10 +431,23 @@ Database& Database::operator=(Database&&) noexcept = default;
 Database::~Database() = default;
 
 Database Database::open(const fs::path& path) {
-  return open(path, true);
+  // A new database is made whole (schema, WAL mode) in a file of this process's own, then linked
+  // into place. Processes that start together thus never switch one new file to WAL at once,
+  // which SQLite may refuse at once, busy timeout or not (each holds a read lock and wants the
+  // file to itself).
+  if (!fs::exists(path)) {
+    const fs::path fresh = path.string() + "." + std::to_string(getpid()) + ".new";
+    remove_with_logs(fresh);
+    open_file(fresh);  // closed at once: its log files go with its last connection
+    // Not linked: another process's was linked first (EEXIST), and it is the one used; or the file
+    // system has no hard links, and open_file makes the database in place.
+    [[maybe_unused]] const int linked = ::link(fresh.c_str(), path.c_str());
+    remove_with_logs(fresh);
+  }
+  return open_file(path);
 }
 
-Database Database::open(const fs::path& path, bool wal) {
+Database Database::open_file(const fs::path& path) {
   sqlite3* raw = nullptr;
   const int rc =
       sqlite3_open_v2(path.c_str(), &raw, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr);
@@ -431,8 +457,9 @@ Database Database::open(const fs::path& path, bool wal) {
                         (raw ? sqlite3_errmsg(raw) : sqlite3_errstr(rc)));
   sqlite3_busy_timeout(raw, kBusyTimeoutMs);
   exec(raw, path, "PRAGMA foreign_keys = ON");
-  if (wal) {
-    // Readers do not block the writer nor it them; the mode is kept in the file.
+  {
+    // Readers do not block the writer nor it them; the mode is kept in the file. (A block: the
+    // statement is finished before migrate's transaction, which it would keep from committing.)
     Statement mode(raw, path, "PRAGMA journal_mode = WAL");
     if (!mode.step() || mode.text(0) != "wal")
       throw DatabaseError(path.string() + ": cannot use write-ahead logging (journal mode " +
@@ -443,7 +470,9 @@ Database Database::open(const fs::path& path, bool wal) {
 }
 
 void Database::record(const json& result, const fs::path& json_file) {
-  const report::StoredRun run = report::run_from_json(result, json_file);
+  // Read as the file's text reads (NaN as null, odd bytes replaced), so that recording and
+  // rebuilding from the file give the same rows.
+  const report::StoredRun run = report::run_from_json(json::parse(json_text(result)), json_file);
   const Samples samples = samples_of(run);
   Transaction t(db_.get(), path_);
   insert_run(db_.get(), path_, run, samples);
@@ -552,15 +581,10 @@ Rebuilt rebuild(const fs::path& folder) {
   Rebuilt out{folder / kDatabaseFile, 0, std::move(scan.skipped)};
   const fs::path temporary =
       folder / ("." + std::string(kDatabaseFile) + "." + std::to_string(getpid()) + ".tmp");
-  auto remove_temporary = [&] {
-    std::error_code ignored;
-    fs::remove(temporary, ignored);
-    fs::remove(temporary.string() + "-journal", ignored);
-  };
-  remove_temporary();
+  remove_with_logs(temporary);
   try {
     {
-      Database db = Database::open(temporary, false);
+      Database db = Database::open_file(temporary);
       Transaction all(db.db_.get(), temporary);
       for (const report::StoredRun& run : scan.runs) {
         Samples samples;
@@ -575,15 +599,16 @@ Rebuilt rebuild(const fs::path& folder) {
       }
       all.commit();
     }
-    // The old database's write-ahead log would be replayed into the new file: it goes first.
+    // The database is closed: its log files are gone and the file holds everything. The old
+    // database's log would be replayed into the new file: it goes first.
     for (const char* suffix : {"-wal", "-shm"}) fs::remove(out.database.string() + suffix);
     fs::rename(temporary, out.database);
   } catch (const fs::filesystem_error& e) {
-    remove_temporary();
+    remove_with_logs(temporary);
     throw DatabaseError(out.database.string() +
                         ": cannot put the rebuilt database in place: " + e.what());
   } catch (...) {
-    remove_temporary();
+    remove_with_logs(temporary);
     throw;
   }
   return out;

@@ -198,6 +198,14 @@ TEST_F(ResultsDb, SeveralProcessesRecordIntoOneDatabaseAtOnce) {
       EXPECT_EQ(db.samples_ns(r.id).size(), stored.matched);
     }
   }
+  // The database each process made before linking it into place is gone.
+  for (const auto& e : fs::directory_iterator(dir_)) {
+    const std::string name = e.path().filename().string();
+    EXPECT_TRUE(name.ends_with(".json") || name.ends_with(".csv") ||
+                name.starts_with(kDatabaseFile))
+        << "left behind: " << name;
+    EXPECT_FALSE(name.ends_with(".new")) << "left behind: " << name;
+  }
 }
 
 TEST_F(ResultsDb, RebuildingFromTheFilesGivesTheRowsRecordingGave) {

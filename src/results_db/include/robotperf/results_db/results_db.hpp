@@ -99,9 +99,9 @@ class Database {
     void operator()(sqlite3* db) const;
   };
   Database(std::unique_ptr<sqlite3, Closer> db, std::filesystem::path path);
-  // `wal` false: a database file that holds everything itself once closed (rebuild's, renamed into
-  // place); open() turns WAL on at its next opening.
-  static Database open(const std::filesystem::path& path, bool wal);
+  // Opens the file at `path` as it is, creating it there when it does not exist (open() makes a
+  // new one beside it first).
+  static Database open_file(const std::filesystem::path& path);
   friend Rebuilt rebuild(const std::filesystem::path& folder);
 
   std::unique_ptr<sqlite3, Closer> db_;
