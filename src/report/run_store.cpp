@@ -392,14 +392,20 @@ void read_run(const json& j, StoredRun& run) {
 StoredRun load_run(const fs::path& path) {
   std::ifstream in(path);
   if (!in) throw ReportError(path.string() + ": cannot open the results file");
-  StoredRun run;
-  run.path = path;
+  json j;
   try {
-    run.json = json::parse(in);
+    j = json::parse(in);
   } catch (const json::exception& e) {  // parse_error, and out_of_range for a number too large
     throw ReportError(path.string() + ": not valid JSON (" + e.what() +
                       "); is it a robotperf results file?");
   }
+  return run_from_json(std::move(j), path);
+}
+
+StoredRun run_from_json(json j, const fs::path& path) {
+  StoredRun run;
+  run.path = path;
+  run.json = std::move(j);
   // The one place where what is wrong with a file's content becomes the line naming the file:
   // callers skip it, never the folder it is in.
   try {

@@ -1,5 +1,5 @@
-// `robotperf results list|export|import`: the results folder, and RobotPerf's benchmark.yaml
-// result entries out of it and into it.
+// `robotperf results list|export|import|rebuild-db`: the results folder, RobotPerf's
+// benchmark.yaml result entries out of it and into it, and its database made again from its files.
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
@@ -12,6 +12,7 @@
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/report/benchmark_yaml.hpp"
 #include "robotperf/report/run_store.hpp"
+#include "robotperf/results_db/results_db.hpp"
 
 namespace robotperf::cli {
 
@@ -170,10 +171,21 @@ int import_published(const std::vector<std::string>& paths, const std::string& i
   return kExitOk;
 }
 
+int rebuild_database(const std::string& dir) {
+  const auto rebuilt = results_db::rebuild(dir);
+  for (const auto& s : rebuilt.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
+  std::cout << rebuilt.database.string() << ": rebuilt from " << dir << ": " << rebuilt.recorded
+            << " run(s) recorded";
+  if (!rebuilt.skipped.empty()) std::cout << ", " << rebuilt.skipped.size() << " file(s) skipped";
+  std::cout << "\n";
+  return kExitOk;
+}
+
 class ResultsCommand : public Command {
  public:
   CLI::App* declare(CLI::App& app) override {
-    auto* command = app.add_subcommand("results", "the results folder: list, export, import");
+    auto* command =
+        app.add_subcommand("results", "the results folder: list, export, import, rebuild-db");
     command->require_subcommand(1);
     command->footer(
         "Examples: robotperf results list results/\n"
@@ -181,12 +193,14 @@ class ResultsCommand : public Command {
     declare_list(*command);
     declare_export(*command);
     declare_import(*command);
+    declare_rebuild_db(*command);
     return command;
   }
 
   int run(const Context& context) override {
     if (*list_) return list_results(list_dir_, list_format_);
     if (*export_) return export_results(context.roots, export_args_);
+    if (*rebuild_db_) return rebuild_database(rebuild_dir_);
     return import_published(import_paths_, import_into_);
   }
 
@@ -240,6 +254,15 @@ class ResultsCommand : public Command {
     import->footer("Example: robotperf results import benchmarks --into published");
   }
 
+  void declare_rebuild_db(CLI::App& results) {
+    rebuild_db_ = results.add_subcommand(
+        "rebuild-db",
+        "make the folder's database (robotperf.db) again from its results files, replacing it "
+        "at once");
+    rebuild_db_->add_option("dir", rebuild_dir_, "results folder (default: ./results)");
+    rebuild_db_->footer("Example: robotperf results rebuild-db results");
+  }
+
   std::string list_dir_ = "results";
   std::string list_format_ = "table";
   ExportArgs export_args_;
@@ -247,6 +270,8 @@ class ResultsCommand : public Command {
   std::string import_into_;
   CLI::App* list_ = nullptr;
   CLI::App* export_ = nullptr;
+  std::string rebuild_dir_ = "results";
+  CLI::App* rebuild_db_ = nullptr;
 };
 
 }  // namespace

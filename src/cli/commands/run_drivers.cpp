@@ -25,6 +25,7 @@
 #include "robotperf/report/series.hpp"
 #include "robotperf/report/standing.hpp"
 #include "robotperf/report/sweep.hpp"
+#include "robotperf/results_db/results_db.hpp"
 #include "robotperf/sysinfo/git_revision.hpp"
 #include "robotperf/sysinfo/machine.hpp"
 #include "robotperf/tracing/leftovers.hpp"
@@ -60,6 +61,27 @@ std::optional<fs::path> write_result_files(const fs::path& base,
     std::cerr << "robotperf: the results could not be kept anywhere (" << e.what()
               << "): the summary above is all there is\n";
     return std::nullopt;
+  }
+}
+
+// Records a written run in the results folder's database too (docs/design.md §8). The JSON file
+// is the record: a database that cannot take the run costs one line on stderr naming the fix,
+// never the run's files or exit status.
+void record_in_database(const fs::path& output, const nlohmann::json& result,
+                        const fs::path& json_file) {
+  const fs::path database = output / results_db::kDatabaseFile;
+  try {
+    results_db::Database::open(database).record(result, json_file);
+  } catch (const std::exception& e) {
+    std::string why = e.what();
+    if (why.starts_with(database.string() + ": ")) why.erase(0, database.string().size() + 2);
+    std::cerr << "robotperf: the run is not in " << database.string() << " (" << why
+              << "); its results file is kept";
+    // The error may name the fix already (a database of an unknown schema does).
+    if (why.find("rebuild-db") == std::string::npos)
+      std::cerr << ": robotperf results rebuild-db " << output.string()
+                << " makes the database again from the files";
+    std::cerr << "\n";
   }
 }
 
@@ -155,8 +177,8 @@ WrittenRun write_run(const harness::BenchmarkSpec& spec, const RunArgs& a,
   }
   std::cout << report::summary_table(result, standing);
   std::cout << "machine: " << sysinfo::summary_line(machine) << "\n";
-  std::map<std::string, std::string> files = {
-      {".json", json_text(report::result_to_json(result, machine), 2) + "\n"}};
+  const nlohmann::json result_json = report::result_to_json(result, machine);
+  std::map<std::string, std::string> files = {{".json", json_text(result_json, 2) + "\n"}};
   if (a.csv) files[".latencies.csv"] = report::latencies_csv(result);
   const auto kept = write_result_files(base, files);
   const bool moved = kept && kept->parent_path() != base.parent_path();
@@ -164,6 +186,7 @@ WrittenRun write_run(const harness::BenchmarkSpec& spec, const RunArgs& a,
   if (kept)
     std::cout << "results: " << base.string() << ".json" << (a.csv ? " (+ .latencies.csv)" : "")
               << (result.grey ? " (+ .trace)" : "") << "\n";
+  if (kept && !moved) record_in_database(a.output, result_json, base.string() + ".json");
   if (a.report && kept && !moved) write_run_report(spec, result, base);
   WrittenRun out;
   const bool functional_ok = !result.functional || result.functional->valid;

@@ -115,6 +115,10 @@ struct StoredRun {
 // read from the file afterwards comes from the StoredRun's fields, or is type-checked.
 StoredRun load_run(const std::filesystem::path& path);
 
+// The same for a results file's content already parsed (`path` is where it is, or will be,
+// written): for a writer that records the run it has just written without reading it back.
+StoredRun run_from_json(nlohmann::json j, const std::filesystem::path& path);
+
 // True when `path` holds a JSON object with "schema": "robotperf.result/1" (cheap check).
 bool looks_like_result(const std::filesystem::path& path);
 
