@@ -62,8 +62,10 @@ constexpr const char* kFilterScript = R"(<script>
     }
     let shown = 0, all = 0;
     document.querySelectorAll('[data-source]').forEach(element => {
-      const hide = Object.keys(off).some(
-          group => element.dataset[group] !== undefined && off[group].has(element.dataset[group]));
+      const hide = Object.keys(off).some(group => {
+        const value = element.getAttribute('data-' + group);
+        return value !== null && off[group].has(value);
+      });
       element.classList.toggle('filtered', hide);
       if (element.classList.contains('bar-row')) {
         ++all;

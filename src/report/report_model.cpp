@@ -219,10 +219,15 @@ std::vector<detail::Radar> radars_for(const std::string& category,
 
 // What the page's filters match a local run or a published row by.
 std::map<std::string, std::string> tags_of(const StoredRun& r) {
-  return {{"system", r.hardware},
-          {"transport", r.rmw},
-          {"source", "local runs"},
-          {"mode", r.type.empty() ? "black" : r.type}};
+  std::map<std::string, std::string> tags = {{"system", r.hardware},
+                                             {"transport", r.rmw},
+                                             {"source", "local runs"},
+                                             {"mode", r.type.empty() ? "black" : r.type}};
+  // The user's labels, one filter each (label-KEY); robotperf's own are not a choice to make.
+  for (const auto& [key, value] : r.labels) {
+    if (!key.starts_with("robotperf.")) tags["label-" + key] = value;
+  }
+  return tags;
 }
 
 std::map<std::string, std::string> tags_of(const PublishedResult& row) {
@@ -1104,7 +1109,11 @@ void collect_filters(detail::Model& model) {
       for (const auto& tags : section.published.row_tags) add(tags);
     }
   }
-  for (const char* group : {"system", "transport", "source", "mode"}) {
+  std::vector<std::string> groups = {"system", "transport", "source", "mode"};
+  for (const auto& [group, v] : values) {
+    if (group.starts_with("label-")) groups.push_back(group);
+  }
+  for (const auto& group : groups) {
     const auto& v = values[group];
     if (v.size() >= 2)
       model.filters.emplace_back(group, std::vector<std::string>(v.begin(), v.end()));

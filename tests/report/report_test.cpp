@@ -1432,3 +1432,23 @@ TEST(Series, UserLabelsNameSeriesTheAutomaticOnesDoNot) {
   EXPECT_EQ(series.find("robotperf.version"), std::string::npos) << series;
   fs::remove_all(dir);
 }
+
+// A user's label is a filter of its own on the page; robotperf's automatic labels are not.
+TEST(Series, UserLabelsAreFiltersOfThePage) {
+  using namespace robotperf::report;
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("robotperf-filter-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  for (const char* rev : {"main", "pr42"}) {
+    robotperf::report::testing::SampleRun s;
+    s.labels = {{"rev", rev}, {"robotperf.version", "0.1.0"}};
+    s.start_unix_ns += rev[0] == 'm' ? 0 : 1'000'000'000;
+    robotperf::report::testing::write_sample(dir, s);
+  }
+  const std::string html = render_html(load_report_inputs({dir}), {});
+  EXPECT_NE(html.find("<legend>label-rev</legend>"), std::string::npos);
+  EXPECT_NE(html.find("data-group=\"label-rev\" value=\"pr42\""), std::string::npos);
+  EXPECT_NE(html.find("data-label-rev=\"main\""), std::string::npos);
+  EXPECT_EQ(html.find("label-robotperf"), std::string::npos);
+  fs::remove_all(dir);
+}
