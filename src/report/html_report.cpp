@@ -160,26 +160,8 @@ constexpr const char* kSignificanceNote =
     "intervals; with two to five, Welch's t-test at the 5 % level over the per-run values; with "
     "one run per side only the mean latency is judged, from the spread within the runs.";
 
-}  // namespace
-
-std::string render_comparison_text(const ReportInput& input, const std::string& a,
-                                   const std::string& b) {
-  const detail::Comparison c = detail::build_comparison(input, a, b);
-  std::ostringstream s;
-  s << "A = " << a << "\nB = " << b << "\n\n" << table_text(c.table) << "\n";
-  for (const auto& n : c.notes) s << n << "\n";
-  s << kSignificanceNote << "\n";
-  return s.str();
-}
-
-std::string render_html(const ReportInput& input, const ReportOptions& options) {
-  const detail::Model m = detail::build_model(input, options);
-  std::ostringstream s;
-  s << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-    << "<meta name=\"generator\" content=\"robotperf\">\n<title>" << html_escape(m.title)
-    << "</title>\n<style>" << kStyle << "</style>\n</head>\n<body>\n";
-  s << "<h1>" << html_escape(m.title) << "</h1>\n<p class=\"summary\">" << html_escape(m.summary)
-    << "</p>\n";
+// The summary section: what ran, the findings, the table per benchmark, validity.
+void write_summary(std::ostream& s, const detail::Model& m) {
   s << "<section class=\"summary\" id=\"summary\">\n<h2>Summary</h2>\n";
   for (const auto& line : m.overview) s << "<p>" << html_escape(line) << "</p>\n";
   if (!m.findings.empty()) {
@@ -211,6 +193,10 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
     s << "</div>\n";
   }
   s << "</section>\n";
+}
+
+// The folded filters and the page's one key of colours.
+void write_filters_and_key(std::ostream& s, const detail::Model& m) {
   if (!m.filters.empty()) {
     // Folded: the page reads whole first; a reader narrows it on purpose.
     std::vector<std::string> groups;
@@ -245,101 +231,105 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
     }
     s << "</ul>\n";
   }
-  for (const auto& category : m.categories) {
-    s << "<h2 id=\"category-" << html_escape(category) << "\">" << html_escape(category)
-      << "</h2>\n";
-    const bool radars = !m.radars.at(category).empty();  // asked for with --radar
-    if (radars) s << "<div class=\"radars\">\n";
-    for (const auto& radar : m.radars.at(category)) {
-      s << "<figure>\n";
-      if (radar.axes.empty()) {
-        s << "<p class=\"note\">No " << radar.metric << " figures in " << html_escape(category)
-          << (radar.metric == "power" ? " (power is reported only where a real sensor was read)"
-                                      : "")
-          << ".</p>\n";
-      } else {
-        s << detail::radar_svg(radar);
-        s << (detail::drawn_as_bars(radar)
-                  ? "<figcaption>One group of bars per benchmark, each on its own scale from 0 "
-                    "(fewer than three benchmarks, or one value per benchmark, make no radar); "
-                    "one bar per series (solid: "
-                    "local runs, median of valid runs; pale and dashed: published RobotPerf rows, "
-                    "median of the rows that pass the measurement rules)."
-                  : "<figcaption>Each axis is one benchmark with its own scale (written at its "
-                    "end; logarithmic where that axis's values span more than 20x, else linear "
-                    "from 0); one polygon per series "
-                    "(solid: local runs, median of valid runs; dashed: published RobotPerf rows, "
-                    "median of the rows that pass the measurement rules).");
-        if (radar.metric == "throughput") {
-          s << " A series named “· peak” is the peak --find-peak found; the others are "
-               "the output rate at the rate they were fed, a lower bound on what they sustain.";
-        }
-        for (const auto& note : radar.notes) {
-          s << "<br><span class=\"difference\">Not alike: " << html_escape(note) << "</span>";
-        }
-        s << "</figcaption>\n";
+}
+
+// A category's radars (report --radar) and the values behind them.
+void write_radars(std::ostream& s, const detail::Model& m, const std::string& category) {
+  const bool radars = !m.radars.at(category).empty();  // asked for with --radar
+  if (radars) s << "<div class=\"radars\">\n";
+  for (const auto& radar : m.radars.at(category)) {
+    s << "<figure>\n";
+    if (radar.axes.empty()) {
+      s << "<p class=\"note\">No " << radar.metric << " figures in " << html_escape(category)
+        << (radar.metric == "power" ? " (power is reported only where a real sensor was read)" : "")
+        << ".</p>\n";
+    } else {
+      s << detail::radar_svg(radar);
+      s << (detail::drawn_as_bars(radar)
+                ? "<figcaption>One group of bars per benchmark, each on its own scale from 0 "
+                  "(fewer than three benchmarks, or one value per benchmark, make no radar); "
+                  "one bar per series (solid: "
+                  "local runs, median of valid runs; pale and dashed: published RobotPerf rows, "
+                  "median of the rows that pass the measurement rules)."
+                : "<figcaption>Each axis is one benchmark with its own scale (written at its "
+                  "end; logarithmic where that axis's values span more than 20x, else linear "
+                  "from 0); one polygon per series "
+                  "(solid: local runs, median of valid runs; dashed: published RobotPerf rows, "
+                  "median of the rows that pass the measurement rules).");
+      if (radar.metric == "throughput") {
+        s << " A series named “· peak” is the peak --find-peak found; the others are "
+             "the output rate at the rate they were fed, a lower bound on what they sustain.";
       }
-      s << "</figure>\n";
+      for (const auto& note : radar.notes) {
+        s << "<br><span class=\"difference\">Not alike: " << html_escape(note) << "</span>";
+      }
+      s << "</figcaption>\n";
     }
-    if (radars) s << "</div>\n";
-    for (const auto& radar : m.radars.at(category)) {
-      if (radar.axes.empty()) continue;
-      s << "<details><summary>" << html_escape(radar.metric)
-        << " values behind the plot</summary>\n"
-        << table_html(radar.data) << "</details>\n";
-    }
-    for (const auto& b : m.benchmarks.at(category)) {
-      s << "<h3 id=\"benchmark-" << html_escape(b.id) << "\">" << html_escape(b.id) << " — "
-        << html_escape(b.name) << "</h3>\n";
-      for (const auto& chart : b.charts) {
-        s << "<figure>\n"
-          << detail::bar_chart_svg(chart) << "<figcaption>" << html_escape(chart_caption(chart));
-        for (const auto& note : chart.notes) {
-          s << "<br><span class=\"difference\">Not alike: " << html_escape(note) << "</span>";
-        }
-        s << "</figcaption>\n</figure>\n<details><summary>" << html_escape(chart.figure)
-          << " latency values behind the plot</summary>\n"
-          << table_html(chart_table(chart)) << "</details>\n";
-      }
-      if (!b.versus_published.rows.empty()) {
-        s << "<p class=\"note\">This system against the published RobotPerf rows measured alike "
-             "(black-box latency rows that pass the measurement rules, at the configuration's rate "
-             "or stating none; maximum latency on both sides):</p>\n"
-          << table_html(b.versus_published);
-      }
-      if (!b.runs.rows.empty()) {
-        s << table_html(b.runs);
-        if (!b.also_measured.rows.empty()) {
-          s << "<p class=\"note\">What the runs also measured:</p>\n"
-            << table_html(b.also_measured);
-        }
-        if (!b.hops.rows.empty()) {
-          s << "<p class=\"note\">Where the time goes (grey-box, per hop):</p>\n"
-            << detail::hops_svg(b.hop_bars, b.hops_run) << table_html(b.hops);
-        }
-        if (!b.callbacks.rows.empty()) {
-          s << "<p class=\"note\">Callback durations (grey-box):</p>\n" << table_html(b.callbacks);
-        }
-        if (!b.peak_search.rows.empty()) {
-          s << "<p class=\"note\">Peak search (--find-peak), step by step:</p>\n"
-            << table_html(b.peak_search);
-        }
-        if (!b.distribution.empty()) s << detail::distribution_svg(b.distribution, b.id);
-      } else {
-        s << "<p class=\"note\">No local runs of " << html_escape(b.id) << ".</p>\n";
-      }
-      if (!b.published.rows.empty()) {
-        s << "<p class=\"note\">Published RobotPerf results: " << b.published_rows
-          << " rows; medians over the rows that pass the measurement rules.</p>\n"
-          << table_html(b.published);
-      }
-      if (!b.flagged.rows.empty()) {
-        s << "<details><summary>" << b.flagged.rows.size()
-          << " published rows break the measurement rules</summary>\n"
-          << table_html(b.flagged) << "</details>\n";
-      }
-    }
+    s << "</figure>\n";
   }
+  if (radars) s << "</div>\n";
+  for (const auto& radar : m.radars.at(category)) {
+    if (radar.axes.empty()) continue;
+    s << "<details><summary>" << html_escape(radar.metric) << " values behind the plot</summary>\n"
+      << table_html(radar.data) << "</details>\n";
+  }
+}
+
+// One benchmark: its bar charts, the table against the published rows, its runs and what else
+// they measured, and the published rows.
+void write_benchmark(std::ostream& s, const detail::BenchmarkSection& b) {
+  s << "<h3 id=\"benchmark-" << html_escape(b.id) << "\">" << html_escape(b.id) << " — "
+    << html_escape(b.name) << "</h3>\n";
+  for (const auto& chart : b.charts) {
+    s << "<figure>\n"
+      << detail::bar_chart_svg(chart) << "<figcaption>" << html_escape(chart_caption(chart));
+    for (const auto& note : chart.notes) {
+      s << "<br><span class=\"difference\">Not alike: " << html_escape(note) << "</span>";
+    }
+    s << "</figcaption>\n</figure>\n<details><summary>" << html_escape(chart.figure)
+      << " latency values behind the plot</summary>\n"
+      << table_html(chart_table(chart)) << "</details>\n";
+  }
+  if (!b.versus_published.rows.empty()) {
+    s << "<p class=\"note\">This system against the published RobotPerf rows measured alike "
+         "(black-box latency rows that pass the measurement rules, at the configuration's rate "
+         "or stating none; maximum latency on both sides):</p>\n"
+      << table_html(b.versus_published);
+  }
+  if (!b.runs.rows.empty()) {
+    s << table_html(b.runs);
+    if (!b.also_measured.rows.empty()) {
+      s << "<p class=\"note\">What the runs also measured:</p>\n" << table_html(b.also_measured);
+    }
+    if (!b.hops.rows.empty()) {
+      s << "<p class=\"note\">Where the time goes (grey-box, per hop):</p>\n"
+        << detail::hops_svg(b.hop_bars, b.hops_run) << table_html(b.hops);
+    }
+    if (!b.callbacks.rows.empty()) {
+      s << "<p class=\"note\">Callback durations (grey-box):</p>\n" << table_html(b.callbacks);
+    }
+    if (!b.peak_search.rows.empty()) {
+      s << "<p class=\"note\">Peak search (--find-peak), step by step:</p>\n"
+        << table_html(b.peak_search);
+    }
+    if (!b.distribution.empty()) s << detail::distribution_svg(b.distribution, b.id);
+  } else {
+    s << "<p class=\"note\">No local runs of " << html_escape(b.id) << ".</p>\n";
+  }
+  if (!b.published.rows.empty()) {
+    s << "<p class=\"note\">Published RobotPerf results: " << b.published_rows
+      << " rows; medians over the rows that pass the measurement rules.</p>\n"
+      << table_html(b.published);
+  }
+  if (!b.flagged.rows.empty()) {
+    s << "<details><summary>" << b.flagged.rows.size()
+      << " published rows break the measurement rules</summary>\n"
+      << table_html(b.flagged) << "</details>\n";
+  }
+}
+
+// The comparison (or why there is none) and the machines.
+void write_comparison_and_machines(std::ostream& s, const detail::Model& m) {
   if (m.comparison) {
     s << "<h2 id=\"comparison\">Comparison</h2>\n<p>A = <strong>" << html_escape(m.comparison->a)
       << "</strong>, B = <strong>" << html_escape(m.comparison->b) << "</strong>.</p>\n"
@@ -353,6 +343,37 @@ std::string render_html(const ReportInput& input, const ReportOptions& options) 
   if (!m.machines.rows.empty()) {
     s << "<h2 id=\"machines\">Machines</h2>\n" << table_html(m.machines);
   }
+}
+
+}  // namespace
+
+std::string render_comparison_text(const ReportInput& input, const std::string& a,
+                                   const std::string& b) {
+  const detail::Comparison c = detail::build_comparison(input, a, b);
+  std::ostringstream s;
+  s << "A = " << a << "\nB = " << b << "\n\n" << table_text(c.table) << "\n";
+  for (const auto& n : c.notes) s << n << "\n";
+  s << kSignificanceNote << "\n";
+  return s.str();
+}
+
+std::string render_html(const ReportInput& input, const ReportOptions& options) {
+  const detail::Model m = detail::build_model(input, options);
+  std::ostringstream s;
+  s << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+    << "<meta name=\"generator\" content=\"robotperf\">\n<title>" << html_escape(m.title)
+    << "</title>\n<style>" << kStyle << "</style>\n</head>\n<body>\n";
+  s << "<h1>" << html_escape(m.title) << "</h1>\n<p class=\"summary\">" << html_escape(m.summary)
+    << "</p>\n";
+  write_summary(s, m);
+  write_filters_and_key(s, m);
+  for (const auto& category : m.categories) {
+    s << "<h2 id=\"category-" << html_escape(category) << "\">" << html_escape(category)
+      << "</h2>\n";
+    write_radars(s, m, category);
+    for (const auto& b : m.benchmarks.at(category)) write_benchmark(s, b);
+  }
+  write_comparison_and_machines(s, m);
   s << "<p class=\"note\">Latency is measured from the scheduled send time (immune to "
        "coordinated omission); the RobotPerf headline latency is its maximum. Throughput is the "
        "output rate; power is the average over the measured window, reported only when a real "
