@@ -292,8 +292,8 @@ void write_benchmark(std::ostream& s, const detail::BenchmarkSection& b) {
   }
   if (!b.versus_published.rows.empty()) {
     s << "<p class=\"note\">This system against the published RobotPerf rows measured alike "
-         "(black-box latency rows that pass the measurement rules, at the configuration's rate "
-         "or stating none; maximum latency on both sides):</p>\n"
+         "(black-box latency rows that pass the measurement rules and state the configuration's "
+         "rate; maximum latency on both sides; each system by the median of its rows):</p>\n"
       << table_html(b.versus_published);
   }
   if (!b.runs.rows.empty()) {

@@ -17,6 +17,7 @@
 #include "robotperf/build_info.hpp"
 #include "robotperf/metrics/latency_stats.hpp"
 #include "robotperf/report/significance.hpp"
+#include "robotperf/report/standing.hpp"
 
 namespace robotperf::report {
 namespace {
@@ -581,9 +582,10 @@ std::vector<detail::BarChart> charts_for(const std::string& id,
   return out;
 }
 
-// Each local black-box configuration against the published rows measured alike: black-box
-// latency rows that pass the measurement rules and state the rate the configuration ran at, or
-// state none. Both sides are maxima, as RobotPerf reports latency.
+// Each local black-box configuration against the published rows measured alike, by the rule the
+// summary's verdict uses (report/standing.hpp): black-box latency rows that pass the measurement
+// rules and state the rate the configuration ran at; maxima on both sides, as RobotPerf reports
+// latency.
 Table versus_published_for(const std::string& id, const std::vector<const StoredRun*>& runs,
                            const ReportInput& in, std::vector<double>& ratios) {
   Table t;
@@ -600,48 +602,22 @@ Table versus_published_for(const std::string& id, const std::vector<const Stored
   for (const auto& [name, of] : configurations_of(runs)) {
     const StoredRun& first = *of.front();
     if (first.type == "grey" || first.throughput_kind == "peak") continue;
-    const std::string rate = rate_text(first);
-    std::map<std::string, std::vector<double>> by_hardware;
-    std::size_t alike = 0;
-    for (const auto& b : in.published) {
-      if (b.id != id) continue;
-      for (const auto& row : b.results) {
-        const std::string stated = row.stated_rate();
-        if (!row.flags.empty() || row.metric != "latency" || row.type == "grey" ||
-            !std::isfinite(row.value) || (!stated.empty() && stated != rate))
-          continue;
-        by_hardware[row.hardware].push_back(row.value);
-        ++alike;
-      }
-    }
-    if (alike == 0) continue;
+    std::vector<double> rates = {first.rate_hz};
+    if (first.update_rate_hz) rates.push_back(*first.update_rate_hz);
     std::vector<double> mine;
     for (const StoredRun* r : of) mine.push_back(r->latency.max);
-    const double value = median(mine);
-    if (!std::isfinite(value)) continue;  // an older file without a maximum has no standing
-    std::vector<double> all;
-    std::string best;
-    double best_value = kNoValue;
-    std::size_t slower = 0;
-    for (const auto& [hardware, values] : by_hardware) {
-      all.insert(all.end(), values.begin(), values.end());
-      const double m = median(values);
-      if (!(m >= best_value)) {
-        best_value = m;
-        best = hardware;
-      }
-      slower += m > value;
-    }
-    const double published_median = median(all);
-    t.rows.push_back({name, detail::format_value(value), std::to_string(alike),
-                      detail::format_value(published_median),
-                      format_fixed(value / published_median, 2), best,
-                      detail::format_value(best_value),
-                      "lower than " + std::to_string(slower) + " of " +
-                          std::to_string(by_hardware.size()) + " published systems"});
+    // An older file without a maximum has no standing.
+    const auto s = standing_among(median(mine), id, first.benchmark_name, rates, in.published);
+    if (!s) continue;
+    t.rows.push_back({name, detail::format_value(s->value_ms), std::to_string(s->rows),
+                      detail::format_value(s->median_ms),
+                      format_fixed(s->value_ms / s->median_ms, 2), s->best_platform,
+                      detail::format_value(s->best_ms),
+                      "lower than " + std::to_string(s->slower) + " of " +
+                          std::to_string(s->platforms) + " published systems"});
     t.row_warning.push_back(false);
     t.row_tags.push_back(tags_of(first));
-    ratios.push_back(value / published_median);
+    ratios.push_back(s->value_ms / s->median_ms);
   }
   return t;
 }

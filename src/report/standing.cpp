@@ -14,16 +14,6 @@ bool same_rate(double a, double b) {
   return std::fabs(a - b) <= 1e-6 * std::max(1.0, b);
 }
 
-// The rates a published row of this run's benchmark may state for it: the input rate, or a
-// control loop's update rate (RobotPerf's control rows state the controller's).
-bool at_the_run_rate(const PublishedResult& row, const harness::RunResult& run) {
-  if (!row.note_rate_hz || row.note_rate_hz->first != row.note_rate_hz->second) return false;
-  const double hz = row.note_rate_hz->first;
-  if (same_rate(hz, run.rate_hz)) return true;
-  return std::ranges::any_of(run.control_loops,
-                             [&](const auto& loop) { return same_rate(hz, loop.update_rate_hz); });
-}
-
 double median(std::vector<double> v) {
   std::ranges::sort(v);
   const std::size_t n = v.size();
@@ -32,37 +22,56 @@ double median(std::vector<double> v) {
 
 }  // namespace
 
-std::string published_standing(const harness::RunResult& run,
-                               const std::vector<PublishedBenchmark>& published) {
-  if (run.matched == 0 || !std::isfinite(run.latency_from_scheduled.max)) return {};
+std::optional<Standing> standing_among(double max_ms, const std::string& id,
+                                       const std::string& name, const std::vector<double>& rates_hz,
+                                       const std::vector<PublishedBenchmark>& published) {
+  if (!std::isfinite(max_ms)) return std::nullopt;
+  Standing s;
+  s.value_ms = max_ms;
   std::map<std::string, std::vector<double>> by_platform;
-  std::string rate;  // as the rows state it
   for (const auto& benchmark : published) {
-    if (benchmark.id != run.benchmark_id && benchmark.name != run.benchmark_name) continue;
+    if (benchmark.id != id && benchmark.name != name) continue;
     for (const auto& row : benchmark.results) {
       if (row.metric != "latency" || row.type != "black" || !row.flags.empty() ||
-          !(row.value > 0) || !at_the_run_rate(row, run))
+          !(row.value > 0) || !row.note_rate_hz ||
+          row.note_rate_hz->first != row.note_rate_hz->second ||
+          std::ranges::none_of(rates_hz,
+                               [&](double hz) { return same_rate(row.note_rate_hz->first, hz); }))
         continue;
       by_platform[row.hardware].push_back(row.value);
-      rate = row.stated_rate();
+      ++s.rows;
+      s.rate = row.stated_rate();
     }
   }
-  if (by_platform.empty()) return {};
-  const double ours = run.latency_from_scheduled.max / 1e6;
-  std::size_t slower = 0;
-  double fastest = std::numeric_limits<double>::infinity();
+  if (by_platform.empty()) return std::nullopt;
+  s.platforms = by_platform.size();
+  s.best_ms = std::numeric_limits<double>::infinity();
   std::vector<double> medians;
-  for (const auto& platform : by_platform) {
-    const double m = median(platform.second);
+  for (const auto& [platform, values] : by_platform) {
+    const double m = median(values);
     medians.push_back(m);
-    slower += m > ours;
-    fastest = std::min(fastest, m);
+    s.slower += m > max_ms;
+    if (m < s.best_ms) {
+      s.best_ms = m;
+      s.best_platform = platform;
+    }
   }
-  const std::size_t n = by_platform.size();
-  return "RobotPerf max " + format_fixed(ours, 3) + " ms: lower than " + std::to_string(slower) +
-         " of " + std::to_string(n) + " published platform" + (n == 1 ? "" : "s") +
-         " (black-box, " + rate + "; best " + format_fixed(fastest, 3) + " ms, median " +
-         format_fixed(median(medians), 3) + " ms)";
+  s.median_ms = median(medians);
+  return s;
+}
+
+std::string published_standing(const harness::RunResult& run,
+                               const std::vector<PublishedBenchmark>& published) {
+  if (run.matched == 0) return {};
+  std::vector<double> rates = {run.rate_hz};
+  for (const auto& loop : run.control_loops) rates.push_back(loop.update_rate_hz);
+  const auto s = standing_among(run.latency_from_scheduled.max / 1e6, run.benchmark_id,
+                                run.benchmark_name, rates, published);
+  if (!s) return {};
+  return "RobotPerf max " + format_fixed(s->value_ms, 3) + " ms: lower than " +
+         std::to_string(s->slower) + " of " + std::to_string(s->platforms) + " published platform" +
+         (s->platforms == 1 ? "" : "s") + " (black-box, " + s->rate + "; best " +
+         format_fixed(s->best_ms, 3) + " ms, median " + format_fixed(s->median_ms, 3) + " ms)";
 }
 
 }  // namespace robotperf::report
