@@ -71,6 +71,12 @@ TEST(LaunchedProcesses, TheCpuOfALaunchedCommandsChildrenIsItsOwn) {
   LaunchedProcesses launched(launching(scratch.path(), {"sh", "-c", "yes > /dev/null; true"}),
                              "fastdds", 0, scratch.path(), "cpu.");
   const auto [pid, name] = launched.processes().at(0);
+  // The window opens once the busy child runs: on a loaded machine the shell may take a while to
+  // start it, and a window before that measures nothing of it.
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (running_members(pid).size() < 2 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(5ms);
+  ASSERT_GE(running_members(pid).size(), 2u) << "the shell never started its child";
   RunOptions options;
   WindowMeasurement measurement(options, {{pid, name}}, {pid});
   measurement.begin();
