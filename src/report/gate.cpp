@@ -18,15 +18,10 @@ namespace {
 using Verdict = GateFinding::Verdict;
 using Runs = std::vector<const StoredRun*>;
 
-// A run's answers were right: no functional check, or one that passed.
-bool answers_ok(const StoredRun& r) {
-  const auto& f = r.json.contains("functional") ? r.json["functional"] : nlohmann::json();
-  return !f.is_object() || !f.contains("valid") || !f["valid"].is_boolean() ||
-         f["valid"].get<bool>();
-}
-
+// A valid run whose answers were right: no functional check, or one that passed (the store
+// reads a failed one as "INVALID: why").
 bool usable(const StoredRun& r) {
-  return r.valid && answers_ok(r);
+  return r.valid && !r.functional.starts_with("INVALID");
 }
 
 std::optional<double> json_number(const nlohmann::json& j) {

@@ -5,6 +5,7 @@
 #include <limits>
 #include <map>
 
+#include "robotperf/metrics/latency_stats.hpp"
 #include "robotperf/report/run_store.hpp"
 
 namespace robotperf::report {
@@ -12,12 +13,6 @@ namespace {
 
 bool same_rate(double a, double b) {
   return std::fabs(a - b) <= 1e-6 * std::max(1.0, b);
-}
-
-double median(std::vector<double> v) {
-  std::ranges::sort(v);
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2;
 }
 
 }  // namespace
@@ -48,7 +43,7 @@ std::optional<Standing> standing_among(double max_ms, const std::string& id,
   s.best_ms = std::numeric_limits<double>::infinity();
   std::vector<double> medians;
   for (const auto& [platform, values] : by_platform) {
-    const double m = median(values);
+    const double m = metrics::median(values);
     medians.push_back(m);
     s.slower += m > max_ms;
     if (m < s.best_ms) {
@@ -56,7 +51,7 @@ std::optional<Standing> standing_among(double max_ms, const std::string& id,
       s.best_platform = platform;
     }
   }
-  s.median_ms = median(medians);
+  s.median_ms = metrics::median(medians);
   return s;
 }
 
