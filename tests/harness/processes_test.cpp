@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 #include <linux/filter.h>
 #include <linux/seccomp.h>
+#include <poll.h>
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstddef>
 #include <cstdio>
@@ -15,7 +17,6 @@
 #include <fstream>
 #include <future>
 #include <memory>
-#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -52,13 +53,32 @@ std::vector<pid_t> running_members(pid_t group) {
   return out;
 }
 
-// The process groups of the running processes whose command line holds `marker`.
-std::set<pid_t> groups_running(const std::string& marker) {
-  std::set<pid_t> out;
+// The running processes whose command line holds `marker`.
+std::vector<pid_t> processes_running(const std::string& marker) {
+  std::vector<pid_t> out;
   for (const auto& p : list_processes()) {
     std::ifstream in("/proc/" + std::to_string(p.pid) + "/cmdline");
     const std::string cmdline(std::istreambuf_iterator<char>(in), {});
-    if (p.state != 'Z' && cmdline.find(marker) != std::string::npos) out.insert(p.pgrp);
+    if (p.state != 'Z' && cmdline.find(marker) != std::string::npos) out.push_back(p.pid);
+  }
+  return out;
+}
+
+// The processes of `pids` that have not ended within `limit`. kill() returns before the signal
+// is delivered, so a process killed a moment ago can still be listed as running; its pidfd
+// becomes readable when it ends, which is the event to await.
+std::vector<pid_t> outliving(const std::vector<pid_t>& pids, std::chrono::milliseconds limit) {
+  std::vector<pid_t> out;
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  for (const pid_t pid : pids) {
+    const int fd = static_cast<int>(syscall(SYS_pidfd_open, pid, 0));
+    if (fd < 0) continue;  // already gone
+    pollfd ended{fd, POLLIN, 0};
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    if (poll(&ended, 1, static_cast<int>(std::max<long long>(left.count(), 0))) != 1)
+      out.push_back(pid);
+    close(fd);
   }
   return out;
 }
@@ -109,7 +129,8 @@ TEST(LaunchedProcesses, StoppingKillsTheWholeGroupEvenAfterTheLaunchedProcessEnd
     std::this_thread::sleep_for(10ms);
   ASSERT_EQ(running_members(group).size(), 2u);
   EXPECT_EQ(launched.stop(0.2).size(), 1u);
-  EXPECT_EQ(running_members(group), std::vector<pid_t>{}) << "a member of the group still runs";
+  EXPECT_EQ(outliving(running_members(group), 10s), std::vector<pid_t>{})
+      << "a member of the group still runs";
   kill(-group, SIGKILL);
 }
 
@@ -191,9 +212,9 @@ TEST(NodeProcesses, AChildThatCannotStartTakesTheOthersWithIt) {
                              {"sh", "-c", "sleep 1000; true # " + marker}, "fastdds", 0, {},
                              {{"nowhere", {"/nonexistent/robotperf-test-launcher"}}}),
                std::runtime_error);
-  const std::set<pid_t> left = groups_running(marker);
+  const std::vector<pid_t> left = outliving(processes_running(marker), 10s);
   EXPECT_TRUE(left.empty()) << "the first node's process still runs";
-  for (const pid_t group : left) kill(-group, SIGKILL);
+  for (const pid_t pid : left) kill(pid, SIGKILL);
 }
 
 // A node process waits for its peers as long as the runner does: when the runner gives up (its
