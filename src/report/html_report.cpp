@@ -275,6 +275,23 @@ void write_radars(std::ostream& s, const detail::Model& m, const std::string& ca
   }
 }
 
+// What a trend shows, in words: its runs and each change point, or that there is none.
+std::string trend_caption(const HistorySeries& trend) {
+  std::size_t runs = 0;
+  for (const auto& p : trend.points) runs += p.runs;
+  std::string text = std::to_string(runs) + " runs of " + trend.name + ". ";
+  if (trend.changes.empty()) return text + "No change point: one level throughout.";
+  for (const auto& c : trend.changes) {
+    char line[160];
+    std::snprintf(line, sizeof line, "From run %zu (%s): %s -> %s ms, %+.1f %% (p = %.3g). ",
+                  c.index + 1, short_revision(trend.points[c.index].revision, 10).c_str(),
+                  detail::format_value(c.before).c_str(), detail::format_value(c.after).c_str(),
+                  c.change_percent(), c.p_value);
+    text += line;
+  }
+  return text + "Change points by E-divisive means.";
+}
+
 // One benchmark: its bar charts, the table against the published rows, its runs and what else
 // they measured, and the published rows.
 void write_benchmark(std::ostream& s, const detail::BenchmarkSection& b) {
@@ -313,6 +330,11 @@ void write_benchmark(std::ostream& s, const detail::BenchmarkSection& b) {
         << table_html(b.peak_search);
     }
     if (!b.distribution.empty()) s << detail::distribution_svg(b.distribution, b.id);
+    for (const auto& trend : b.trends) {
+      s << "<figure>\n"
+        << detail::trend_svg(trend, b.id) << "<figcaption>" << html_escape(trend_caption(trend))
+        << "</figcaption>\n</figure>\n";
+    }
   } else {
     s << "<p class=\"note\">No local runs of " << html_escape(b.id) << ".</p>\n";
   }

@@ -391,6 +391,23 @@ Table callbacks_table_for(const std::vector<const StoredRun*>& runs) {
   return t;
 }
 
+// The benchmark's configurations with enough runs for a trend, each with its change points.
+std::vector<HistorySeries> trends_for(const std::string& id, const std::vector<StoredRun>& runs) {
+  HistoryOptions options;
+  options.benchmark_id = id;
+  History h;
+  try {
+    h = history(runs, options);
+  } catch (const ReportError&) {
+    return {};  // no valid run with a p50: nothing to draw
+  }
+  std::vector<HistorySeries> out;
+  for (auto& series : h.series) {
+    if (series.points.size() >= detail::kTrendPoints) out.push_back(std::move(series));
+  }
+  return out;
+}
+
 // Each --find-peak run's search, step by step, as its terminal summary shows it.
 Table peak_search_table_for(const std::vector<const StoredRun*>& runs) {
   Table t;
@@ -1565,6 +1582,7 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
               static_cast<std::ptrdiff_t>(std::min(runs.size(), options.max_distribution_runs)),
           runs.end());
       section.distribution = distributions(recent, model.warnings);
+      section.trends = trends_for(id, in.runs);
       for (const auto& b : in.published) {
         if (b.id != id) continue;
         Table summary, flagged;

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "robotperf/report/history.hpp"
 #include "robotperf/report/report.hpp"
 
 namespace robotperf::report::detail {
@@ -97,7 +98,12 @@ struct BenchmarkSection {
   Table published;                    // per published hardware: medians of unflagged rows
   Table flagged;                      // published rows that break the measurement rules
   std::size_t published_rows = 0;
+  // The p50 of each configuration run at least kTrendPoints times, over its runs, with change
+  // points: a --repeat series, or the configuration's history.
+  std::vector<HistorySeries> trends;
 };
+
+inline constexpr std::size_t kTrendPoints = 3;
 
 struct Comparison {
   std::string a, b;  // labels of the two sides
@@ -198,5 +204,8 @@ extern const char* const kPalette[8];
 const char* colour_of(std::size_t colour);
 // Sorted horizontal bars with whiskers and run points; "" when no bar has a value.
 std::string bar_chart_svg(const BarChart& chart);
+// A configuration's p50 run after run: each run's value with its interval, its revisions below,
+// and its change points marked with the change's size.
+std::string trend_svg(const HistorySeries& series, const std::string& benchmark);
 
 }  // namespace robotperf::report::detail

@@ -30,13 +30,6 @@ std::string string_or_empty(const json& j, const char* key) {
   return string_or(j, key, {});
 }
 
-const json& member(const json& j, const char* key) {
-  static const json null_json;
-  if (!j.is_object()) return null_json;
-  const auto it = j.find(key);
-  return it == j.end() ? null_json : *it;
-}
-
 std::vector<std::string> strings(const json& j) {
   std::vector<std::string> out;
   if (!j.is_array()) return out;
@@ -304,6 +297,13 @@ std::vector<std::string> impossible_figures(const StoredRun& run) {
 }
 
 }  // namespace
+
+const json& member(const json& j, const char* key) {
+  static const json null_json;
+  if (!j.is_object()) return null_json;
+  const auto it = j.find(key);
+  return it == j.end() ? null_json : *it;
+}
 
 std::string StoredRun::stem() const {
   return path.stem().string();

@@ -575,4 +575,102 @@ std::string distribution_svg(const std::vector<Distribution>& curves, const std:
   return s.str();
 }
 
+std::string trend_svg(const HistorySeries& series, const std::string& benchmark) {
+  // Runs left to right, oldest first, evenly spaced (a run's place, not its date: runs come in
+  // bursts); the value axis from 0, so that a step reads at its true size.
+  constexpr double kWidth = 760, kLeft = 60, kRight = 24, kTop = 40, kPlot = 150;
+  const auto& points = series.points;
+  if (points.empty()) return "";
+  double top = 0;
+  for (const auto& p : points) {
+    for (double v : {p.value, p.high}) {
+      if (std::isfinite(v)) top = std::max(top, v);
+    }
+  }
+  if (!(top > 0)) return "";
+  const double step = nice_step(top, 4);
+  top = std::ceil(top / step) * step;
+  const double span = kWidth - kLeft - kRight;
+  auto px = [&](std::size_t i) {
+    return points.size() == 1
+               ? kLeft + span / 2
+               : kLeft + span * static_cast<double>(i) / static_cast<double>(points.size() - 1);
+  };
+  auto py = [&](double v) { return kTop + kPlot * (1 - std::max(v, 0.0) / top); };
+  const double height = kTop + kPlot + 62;
+  std::ostringstream s;
+  s << "<svg class=\"trend\" data-benchmark=\"" << html_escape(benchmark) << "\" data-series=\""
+    << html_escape(series.name) << "\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kWidth
+    << "\" height=\"" << num(height) << "\" viewBox=\"0 0 " << kWidth << " " << num(height)
+    << "\" role=\"img\">\n<title>"
+    << html_escape(benchmark + ": latency p50 run after run, " + series.name) << "</title>\n";
+  s << "<text class=\"plot-title\" x=\"8\" y=\"18\">"
+    << html_escape(legend_label(benchmark + ": p50 latency run after run — " + series.name, 110))
+    << "</text>\n";
+  for (int k = 0; k <= static_cast<int>(std::lround(top / step)); ++k) {
+    const double y = py(k * step);
+    s << "<line x1=\"" << kLeft << "\" x2=\"" << num(kWidth - kRight) << "\" y1=\"" << num(y)
+      << "\" y2=\"" << num(y) << "\" stroke=\"#e4e4e4\"/><text class=\"tick\" x=\""
+      << num(kLeft - 6) << "\" y=\"" << num(y + 4) << "\" text-anchor=\"end\">"
+      << format_value(k * step) << "</text>\n";
+  }
+  // Change points: a dashed line between the last run of a level and the first of the next,
+  // with the size of the step.
+  for (const auto& c : series.changes) {
+    const double x = (px(c.index - 1) + px(c.index)) / 2;
+    char change[48];
+    std::snprintf(change, sizeof change, "%+.1f %%", c.change_percent());
+    s << "<g class=\"change-point\"><line x1=\"" << num(x) << "\" x2=\"" << num(x) << "\" y1=\""
+      << num(kTop - 8) << "\" y2=\"" << num(kTop + kPlot) << "\" stroke=\"#d55e00\" "
+      << "stroke-dasharray=\"5 3\" stroke-width=\"1.5\"/><text class=\"tick\" x=\"" << num(x + 4)
+      << "\" y=\"" << num(kTop - 2) << "\" fill=\"#d55e00\">" << change << "<title>change point "
+      << "(E-divisive means, p = " << c.p_value << "): " << format_value(c.before) << " -> "
+      << format_value(c.after) << " ms</title></text></g>\n";
+  }
+  std::string line;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!std::isfinite(points[i].value)) continue;
+    line += (line.empty() ? "M" : "L") + num(px(i)) + " " + num(py(points[i].value));
+  }
+  s << "<path class=\"trend-line\" d=\"" << line << "\" stroke=\"#0072b2\" fill=\"none\" "
+    << "stroke-width=\"1.5\"/>\n";
+  // Revision labels under the axis, as many as fit side by side, evenly chosen: a git hash by its
+  // first 7 digits, other labels shortened to 10 characters.
+  std::vector<std::string> labels;
+  std::size_t widest = 1;
+  for (const auto& p : points) {
+    const std::string revision = short_revision(p.revision, 7);
+    labels.push_back(revision == p.revision ? legend_label(p.revision, 10) : revision);
+    widest = std::max(widest, labels.back().size());
+  }
+  const auto fit = std::max<std::size_t>(
+      1, static_cast<std::size_t>(span / (static_cast<double>(widest) * kLabelCharWidth + 12)));
+  const std::size_t every = (points.size() + fit - 1) / fit;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto& p = points[i];
+    const double x = px(i);
+    if (std::isfinite(p.low) && std::isfinite(p.high)) {
+      s << "<path class=\"whisker\" d=\"M" << num(x) << " " << num(py(p.low)) << "V"
+        << num(py(p.high)) << "\" stroke=\"#222\" fill=\"none\"/>\n";
+    }
+    s << "<circle class=\"point\" cx=\"" << num(x) << "\" cy=\"" << num(py(p.value))
+      << "\" r=\"3.5\" fill=\"#0072b2\" stroke=\"#fff\"><title>" << html_escape(p.revision) << ", "
+      << html_escape(p.started_utc) << ": " << format_value(p.value) << " ms";
+    if (std::isfinite(p.low) && std::isfinite(p.high))
+      s << " (" << format_value(p.low) << " .. " << format_value(p.high) << ")";
+    s << ", " << p.runs << (p.runs == 1 ? " run" : " runs") << "</title></circle>\n";
+    if (i % every == 0) {
+      s << "<text class=\"tick\" x=\"" << num(x) << "\" y=\"" << num(kTop + kPlot + 16)
+        << "\" text-anchor=\"middle\">" << html_escape(labels[i]) << "</text>\n";
+    }
+  }
+  s << "<line x1=\"" << kLeft << "\" x2=\"" << num(kWidth - kRight) << "\" y1=\""
+    << num(kTop + kPlot) << "\" y2=\"" << num(kTop + kPlot) << "\" stroke=\"#666\"/>\n"
+    << "<text class=\"axis-label\" x=\"" << num(kLeft + span / 2) << "\" y=\""
+    << num(kTop + kPlot + 40)
+    << "\" text-anchor=\"middle\">runs, oldest first (their revisions); p50 latency (ms) with "
+       "its 95 % interval</text>\n</svg>\n";
+  return s.str();
+}
+
 }  // namespace robotperf::report::detail

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <iterator>
 
+#include "robotperf/report/run_metrics.hpp"
 #include "robotperf/report/run_store.hpp"
 
 namespace robotperf::results_db {
@@ -15,6 +16,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using report::member;
 
 // How long a writer waits for another process's transaction before it gives up: a run records
 // in milliseconds, so only a stuck process makes anyone wait this long.
@@ -212,77 +214,10 @@ void remove_with_logs(const fs::path& path) {
     fs::remove(path.string() + suffix, ignored);
 }
 
-const json& member(const json& j, const char* key) {
-  static const json null_json;
-  if (!j.is_object()) return null_json;
-  const auto it = j.find(key);
-  return it == j.end() ? null_json : *it;
-}
-
 // JSON text as the results file has it: a string that is not UTF-8 (a machine's odd model name)
 // with replacement characters.
 std::string json_text(const json& j) {
   return j.dump(-1, ' ', false, json::error_handler_t::replace);
-}
-
-double number(const json& j) {
-  return j.is_number() ? j.get<double>() : std::nan("");
-}
-
-struct Metric {
-  std::string name;
-  double value = std::nan("");
-  std::string unit;
-  double low = std::nan(""), high = std::nan("");
-};
-
-// A latency block of the results file (robotperf's statistics, in ms) as metrics "<prefix>.<stat>",
-// each percentile with its distribution-free 95 % interval.
-void latency_metrics(const json& block, const std::string& prefix, std::vector<Metric>& out) {
-  for (const char* stat : {"min", "mean", "rms", "stddev", "p50", "p90", "p99", "p999", "max"}) {
-    Metric m{prefix + "." + stat, number(member(block, stat)), "ms"};
-    const json& interval = member(block, (std::string(stat) + "_ci95").c_str());
-    if (interval.is_array() && interval.size() == 2) {
-      m.low = number(interval[0]);
-      m.high = number(interval[1]);
-    }
-    out.push_back(std::move(m));
-  }
-}
-
-std::vector<Metric> metrics_of(const report::StoredRun& run) {
-  std::vector<Metric> out;
-  const json& latency = member(run.json, "latency_ms");
-  latency_metrics(member(latency, "from_scheduled"), "latency", out);
-  latency_metrics(member(latency, "from_sent"), "latency_from_sent", out);
-  latency_metrics(member(latency, "send_lateness"), "send_lateness", out);
-  const json& counts = member(run.json, "counts");
-  for (const char* count :
-       {"sent", "measured", "matched", "lost", "unobserved", "duplicates", "unknown", "foreign"})
-    out.push_back({std::string("count.") + count, number(member(counts, count)), "messages"});
-  out.push_back({"loss", run.loss_percent, "%"});
-  out.push_back({"throughput", run.throughput_hz, "Hz"});
-  out.push_back({"throughput.offered", run.offered_hz, "Hz"});
-  if (run.power_w) {
-    out.push_back({"power", *run.power_w, "W"});
-    out.push_back({"energy", run.energy_j.value_or(std::nan("")), "J"});
-    out.push_back(
-        {"energy_per_message",
-         number(member(member(member(run.json, "power"), "total"), "energy_per_message_mj")),
-         "mJ"});
-  }
-  if (run.cpu_percent) out.push_back({"cpu", *run.cpu_percent, "% of one core"});
-  if (run.peak_rss_mib) out.push_back({"peak_rss", *run.peak_rss_mib, "MiB"});
-  if (run.update_rate_hz) out.push_back({"control.update_rate", *run.update_rate_hz, "Hz"});
-  const json& functional = member(member(run.json, "functional"), "metrics");
-  if (functional.is_object()) {
-    for (const auto& [name, metric] : functional.items()) {
-      const json& unit = member(metric, "unit");
-      out.push_back({"functional." + name, number(member(metric, "value")),
-                     unit.is_string() ? unit.get<std::string>() : ""});
-    }
-  }
-  return out;
 }
 
 // One text naming what makes runs comparable (docs/design.md §3.9), with the benchmark: runs that
@@ -375,7 +310,7 @@ void insert_run(sqlite3* db, const fs::path& path, const report::StoredRun& run,
   Statement metric(db, path,
                    "INSERT INTO metrics (run_id, name, value, unit, low, high) "
                    "VALUES (?, ?, ?, ?, ?, ?)");
-  for (const Metric& m : metrics_of(run)) {
+  for (const report::RunMetric& m : report::run_metrics(run)) {
     if (!std::isfinite(m.value)) continue;  // a figure the run has no value for has no row
     metric.integer(1, id).text(2, m.name).real(3, m.value).text(4, m.unit).real(5, m.low);
     metric.real(6, m.high).execute();

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "../command_line.hpp"
+#include "../report/sample_runs.hpp"
 #include "../sanitized_build.hpp"
 #include "../shared_data.hpp"
 #include "robotperf/rmw/transport.hpp"
@@ -430,12 +431,22 @@ TEST_F(ResultsCli, MixedReportLabelsNeitherOverlapNorClipInChromium) {
                           (shared / "control").string() + " --into " + mixed.string())
                 .exit_code,
             0);
+  // A configuration's history of 12 runs, slower from the 8th: its trend and change point.
+  for (int i = 0; i < 12; ++i) {
+    robotperf::report::testing::SampleRun s;
+    s.base_latency_ms = i < 7 ? 4.0 + 0.05 * (i % 3) : 5.0 + 0.05 * (i % 3);
+    s.start_unix_ns += i * 3'600'000'000'000LL;
+    robotperf::report::testing::write_sample(mixed, s);
+  }
   const fs::path html = dir_ / "mixed.html";
   const auto o = robotperf_cli("report " + mixed.string() + " --html " + html.string());
   ASSERT_EQ(o.exit_code, 0) << o.out;
   std::string page = read_text(html);
   EXPECT_NE(page.find("1 INVALID run"), std::string::npos);
   EXPECT_NE(page.find("class=\"curve invalid\""), std::string::npos);
+  EXPECT_EQ(count(page, "<svg class=\"trend\""), 1u);
+  EXPECT_EQ(count(page, "<g class=\"change-point\""), 1u);
+  EXPECT_NE(page.find("From run 8 ("), std::string::npos);
   const auto body_end = page.rfind("</body>");
   ASSERT_NE(body_end, std::string::npos);
   page.insert(body_end, kLayoutCheck);

@@ -14,6 +14,7 @@ std::unique_ptr<Command> results_command();
 std::unique_ptr<Command> readme_command();
 std::unique_ptr<Command> report_command();
 std::unique_ptr<Command> compare_command();
+std::unique_ptr<Command> history_command();
 std::unique_ptr<Command> trace_command();
 std::unique_ptr<Command> bag_command();
 std::unique_ptr<Command> dataset_command();

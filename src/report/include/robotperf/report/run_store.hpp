@@ -119,6 +119,9 @@ StoredRun load_run(const std::filesystem::path& path);
 // written): for a writer that records the run it has just written without reading it back.
 StoredRun run_from_json(nlohmann::json j, const std::filesystem::path& path);
 
+// The member `key` of the object `j`; null when `j` is no object or has no such member.
+const nlohmann::json& member(const nlohmann::json& j, const char* key);
+
 // True when `path` holds a JSON object with "schema": "robotperf.result/1" (cheap check).
 bool looks_like_result(const std::filesystem::path& path);
 

@@ -1,0 +1,85 @@
+// `robotperf history ID`: a benchmark's figure over time or revisions, per configuration, with
+// the change points where it moved (docs/design.md §8).
+#include "robotperf/report/history.hpp"
+
+#include <cstdio>
+#include <iostream>
+#include <stdexcept>
+
+#include "../options.hpp"
+#include "commands.hpp"
+#include "robotperf/cli/exit_codes.hpp"
+#include "robotperf/report/report.hpp"
+
+namespace robotperf::cli {
+
+namespace {
+
+class HistoryCommand : public Command {
+ public:
+  CLI::App* declare(CLI::App& app) override {
+    auto* command = app.add_subcommand(
+        "history",
+        "a benchmark's figure across runs or revisions, per configuration, with change points");
+    command->add_option("id", options_.benchmark_id, "the benchmark (a1, d6, ...)")->required();
+    command->add_option("--metric", options_.metric,
+                        "the figure: latency.p50 (default), latency.p99, throughput, "
+                        "energy_per_message, cpu, functional.NAME, ... (as the results "
+                        "database names them)");
+    command->add_option("--by", options_.by,
+                        "a label KEY (run --label KEY=VALUE, or package.revision): one point per "
+                        "value of it, its runs pooled");
+    command
+        ->add_option("--label", labels_,
+                     "KEY=VALUE: only the runs with this label (repeatable); a configuration's "
+                     "series is not split by labels")
+        ->check(label_check());
+    command
+        ->add_option("--significance", options_.change_points.significance,
+                     "a change point is kept at this permutation-test p-value or below "
+                     "(default 0.01: about 1 % of series without a change show one)")
+        ->check(number_between(0.002, 0.5));
+    command->add_option("--results", results_, "results folders or files (default: ./results)");
+    command->add_option("--format", format_, "text (default) or json")
+        ->check(CLI::IsMember({"text", "json"}));
+    command->footer(
+        "Examples:\n  robotperf history a1\n"
+        "  robotperf history a5 --metric latency.p99 --by rev --results results");
+    return command;
+  }
+
+  int run(const Context&) override {
+    for (const auto& label : labels_) {
+      const auto eq = label.find('=');
+      options_.labels.emplace_back(label.substr(0, eq), label.substr(eq + 1));
+    }
+    std::vector<fs::path> paths(results_.begin(), results_.end());
+    if (paths.empty()) {
+      if (!fs::is_directory("results"))
+        throw report::ReportError(
+            "history: no ./results folder here; name the results with --results DIR");
+      paths.emplace_back("results");
+    }
+    const auto input = report::load_report_inputs(paths);
+    for (const auto& s : input.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
+    const report::History h = report::history(input.runs, options_);
+    if (format_ == "json")
+      std::cout << json_text(report::history_json(h), 1) << "\n";
+    else
+      std::cout << report::history_text(h);
+    return kExitOk;
+  }
+
+ private:
+  report::HistoryOptions options_;
+  std::vector<std::string> results_, labels_;
+  std::string format_ = "text";
+};
+
+}  // namespace
+
+std::unique_ptr<Command> history_command() {
+  return std::make_unique<HistoryCommand>();
+}
+
+}  // namespace robotperf::cli
