@@ -158,6 +158,14 @@ TEST_F(ResultsDbPostgresCli, ReadVerbsFromTheDatabaseShowWhatTheFilesShow) {
                                           "ROBOTPERF_RESULTS_URL=" + url());
   EXPECT_EQ(folder_first.exit_code, 0) << folder_first.out;
   EXPECT_EQ(folder_first.out.find("a1-intra-"), std::string::npos) << folder_first.out;
+  // And beats --from, saying so.
+  const auto both =
+      robotperf_cli("results list " + (server_->dir() / "empty").string() + " --from " + url());
+  EXPECT_EQ(both.exit_code, 0) << both.out;
+  EXPECT_EQ(both.out.find("a1-intra-"), std::string::npos) << both.out;
+  EXPECT_NE(both.out.find("robotperf: reading the results named; --from is left aside"),
+            std::string::npos)
+      << both.out;
 
   const std::string sides = "compare rmw=intra rmw=fastdds ";
   const auto compared_files = robotperf_cli(sides + "--results " + dir.string());
