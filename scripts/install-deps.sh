@@ -22,6 +22,8 @@ packages=(
   pocl-opencl-icd clinfo  # an OpenCL CPU device: the opencl backend runs and is tested everywhere
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   libsqlite3-dev ros2-test-interface-files
+  libpq-dev  # results push and --from: a lab's shared PostgreSQL results database
+  postgresql  # its server binaries, which the PostgreSQL tests and bench start themselves
   libzstd-dev liblz4-dev libdeflate-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libboost-context-dev  # fibers: the cuda emulation's kernels whose threads wait for each other

@@ -11,6 +11,7 @@
 #include "robotperf/msgs/dynamic.hpp"
 #include "robotperf/plugin/registry.hpp"
 #include "robotperf/report/run_store.hpp"
+#include "robotperf/results_db/postgres_store.hpp"
 #include "robotperf/rmw/security.hpp"
 #include "robotperf/tracing/ctf.hpp"
 #include "robotperf/tracing/session.hpp"
@@ -29,7 +30,7 @@ bool is_usage_error(const std::exception& error) {
   return is_one_of<plugin::PluginError, bag::BagError, msgs::dynamic::DefinitionError,
                    tracing::TracingUnavailable, tracing::ctf::CtfError, harness::BenchmarkError,
                    harness::GraphNotConnected, rmw::SecurityError, harness::NetworkSetupError,
-                   report::ReportError, std::invalid_argument>(error);
+                   report::ReportError, results_db::ConnectionError, std::invalid_argument>(error);
 }
 
 int exit_code(const std::exception& error) {

@@ -6,9 +6,12 @@
 #include <cmath>
 #include <cstdio>
 #include <iterator>
+#include <type_traits>
+#include <variant>
 
 #include "robotperf/report/run_metrics.hpp"
 #include "robotperf/report/run_store.hpp"
+#include "run_rows.hpp"
 
 namespace robotperf::results_db {
 
@@ -16,14 +19,15 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-using report::member;
 
 // How long a writer waits for another process's transaction before it gives up: a run records
 // in milliseconds, so only a stuck process makes anyone wait this long.
 constexpr int kBusyTimeoutMs = 10'000;
 
 // kMigrations[v] takes a database from schema version v to v + 1 (version 0: a new, empty file).
-// A released migration never changes; a schema change is a new one at the end.
+// A released migration never changes; a schema change is a new one at the end. 1: the tables;
+// 2: the whole results document, so that a run reads back as its file (NULL for runs recorded
+// before).
 constexpr const char* kMigrations[] = {R"sql(
 CREATE TABLE runs (
   id INTEGER PRIMARY KEY,
@@ -87,6 +91,9 @@ CREATE TABLE histogram (
   count INTEGER NOT NULL,
   PRIMARY KEY (run_id, upper_ns)
 ) WITHOUT ROWID;
+)sql",
+                                       R"sql(
+ALTER TABLE runs ADD COLUMN document TEXT;
 )sql"};
 static_assert(std::size(kMigrations) == kSchemaVersion);
 
@@ -214,47 +221,6 @@ void remove_with_logs(const fs::path& path) {
     fs::remove(path.string() + suffix, ignored);
 }
 
-// JSON text as the results file has it: a string that is not UTF-8 (a machine's odd model name)
-// with replacement characters.
-std::string json_text(const json& j) {
-  return j.dump(-1, ' ', false, json::error_handler_t::replace);
-}
-
-// One text naming what makes runs comparable (docs/design.md §3.9), with the benchmark: runs that
-// share it may be pooled, so that equality or GROUP BY finds them.
-std::string configuration_key(const report::StoredRun& run) {
-  char rate[48] = "rate ?";
-  if (run.throughput_kind == "peak")
-    std::snprintf(rate, sizeof rate, "peak");
-  else if (std::isfinite(run.rate_hz))
-    std::snprintf(rate, sizeof rate, "%.6g Hz", run.rate_hz);
-  return report::joined(
-      std::vector<std::string>{run.benchmark_id, run.hardware, run.rmw, run.processes,
-                               run.backend.empty() ? "cpu" : run.backend, run.type, run.timeline,
-                               "monitor " + run.monitor_wait, rate, run.node_settings},
-      " | ");
-}
-
-// The latency samples of a run, read before its transaction begins (a bad CSV fails the run
-// before anything is written).
-struct Samples {
-  std::string source;  // "csv", "histogram" or "none"
-  std::vector<std::int64_t> ns;
-};
-
-Samples samples_of(const report::StoredRun& run) {
-  // The results JSON (robotperf.result/1) holds no per-message records: the CSV is the exact
-  // record, the histogram the summary every file has.
-  if (run.csv_path) {
-    Samples s{"csv", {}};
-    // The CSV's integer ns, through read_latency_csv's ms: exact, far below 2^53 ns.
-    for (double ms : report::read_latency_csv(*run.csv_path))
-      s.ns.push_back(std::llround(ms * 1e6));
-    return s;
-  }
-  return {run.histogram ? "histogram" : "none", {}};
-}
-
 // Where the results file is, as the runs table keeps it: relative to the database's folder when
 // it is inside it (the folder can move), else absolute.
 std::string file_column(const fs::path& database, const fs::path& file) {
@@ -266,91 +232,61 @@ std::string file_column(const fs::path& database, const fs::path& file) {
 }
 
 // The run's rows, inside the caller's transaction.
-void insert_run(sqlite3* db, const fs::path& path, const report::StoredRun& run,
-                const Samples& samples) {
-  const std::string file = file_column(path, run.path);
+void insert_run(sqlite3* db, const fs::path& path, const fs::path& json_file,
+                const detail::RunRows& rows) {
+  const std::string file = file_column(path, json_file);
   Statement remove(db, path, "DELETE FROM runs WHERE file = ?");
   remove.text(1, file).execute();
-  Statement insert(db, path,
-                   "INSERT INTO runs (file, benchmark_id, benchmark_name, category, started_utc, "
-                   "valid, invalid_reasons, functional, mode, rmw, processes, backend, arrivals, "
-                   "monitor_wait, rate_hz, throughput_kind, dataset, hardware, hardware_category, "
-                   "robotperf_version, git_revision, machine, software, configuration, "
-                   "configuration_key, samples_source) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, "
-                   "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
-  insert.text(1, file)
-      .text(2, run.benchmark_id)
-      .text(3, run.benchmark_name)
-      .text(4, run.category)
-      .text(5, run.started_utc)
-      .integer(6, run.valid ? 1 : 0)
-      .text(7, report::joined(run.invalid_reasons, "; "))
-      .text(8, run.functional)
-      .text(9, run.type)
-      .text(10, run.rmw)
-      .text(11, run.processes)
-      .text(12, run.backend.empty() ? "cpu" : run.backend)
-      .text(13, run.timeline)
-      .text(14, run.monitor_wait)
-      .real(15, run.rate_hz)
-      .text(16, run.throughput_kind)
-      .text(17, run.dataset)
-      .text(18, run.hardware)
-      .text(19, run.hardware_category)
-      .text(20, run.robotperf_version)
-      .text(21, run.git_revision)
-      .text(22, json_text(member(run.json, "machine")))
-      .text(23, json_text(member(run.json, "software")))
-      .text(24, json_text(member(run.json, "configuration")))
-      .text(25, configuration_key(run))
-      .text(26, samples.source)
-      .execute();
+  std::string columns = "file", values = "?";
+  for (const detail::Column& c : rows.run) {
+    columns += std::string(", ") + c.name;
+    values += ", ?";
+  }
+  Statement insert(db, path, "INSERT INTO runs (" + columns + ") VALUES (" + values + ")");
+  insert.text(1, file);
+  for (std::size_t i = 0; i < rows.run.size(); ++i) {
+    const int index = static_cast<int>(i) + 2;
+    std::visit(
+        [&](const auto& v) {
+          using T = std::decay_t<decltype(v)>;
+          if constexpr (std::is_same_v<T, std::string>)
+            insert.text(index, v);
+          else if constexpr (std::is_same_v<T, std::int64_t>)
+            insert.integer(index, v);
+          else if constexpr (std::is_same_v<T, double>)
+            insert.real(index, v);
+          else
+            insert.text(index, v.text);
+        },
+        rows.run[i].value);
+  }
+  insert.execute();
   const std::int64_t id = sqlite3_last_insert_rowid(db);
 
   Statement metric(db, path,
                    "INSERT INTO metrics (run_id, name, value, unit, low, high) "
                    "VALUES (?, ?, ?, ?, ?, ?)");
-  for (const report::RunMetric& m : report::run_metrics(run)) {
-    if (!std::isfinite(m.value)) continue;  // a figure the run has no value for has no row
+  for (const detail::Metric& m : rows.metrics) {
     metric.integer(1, id).text(2, m.name).real(3, m.value).text(4, m.unit).real(5, m.low);
     metric.real(6, m.high).execute();
   }
-  // Labels: a top-level "labels" object, read now so that files which carry one later need no
-  // migration.
-  if (const json& labels = member(run.json, "labels"); labels.is_object()) {
-    Statement label(db, path, "INSERT INTO labels (run_id, key, value) VALUES (?, ?, ?)");
-    for (const auto& [key, value] : labels.items())
-      label.integer(1, id)
-          .text(2, key)
-          .text(3, value.is_string() ? value.get<std::string>() : json_text(value))
-          .execute();
-  }
-  if (samples.source == "csv") {
-    Statement sample(db, path, "INSERT INTO samples (run_id, seq, latency_ns) VALUES (?, ?, ?)");
-    for (std::size_t i = 0; i < samples.ns.size(); ++i)
-      sample.integer(1, id)
-          .integer(2, static_cast<std::int64_t>(i))
-          .integer(3, samples.ns[i])
-          .execute();
-  } else if (samples.source == "histogram") {
-    Statement bin(db, path,
-                  "INSERT INTO histogram (run_id, lower_ns, upper_ns, count) VALUES (?, ?, ?, ?)");
-    const report::LogHistogram& h = *run.histogram;
-    if (h.nonpositive > 0)
-      bin.integer(1, id)
-          .real(2, std::nan(""))
-          .real(3, 0)
-          .integer(4, static_cast<std::int64_t>(h.nonpositive))
-          .execute();
-    for (std::size_t i = 0; i < h.counts.size(); ++i) {
-      if (h.counts[i] == 0) continue;  // empty bins are left out
-      bin.integer(1, id)
-          .real(2, h.lower_edge(i) * 1e6)
-          .real(3, h.upper_edge(i) * 1e6)
-          .integer(4, static_cast<std::int64_t>(h.counts[i]))
-          .execute();
-    }
-  }
+  Statement label(db, path, "INSERT INTO labels (run_id, key, value) VALUES (?, ?, ?)");
+  for (const auto& [key, value] : rows.labels)
+    label.integer(1, id).text(2, key).text(3, value).execute();
+  Statement sample(db, path, "INSERT INTO samples (run_id, seq, latency_ns) VALUES (?, ?, ?)");
+  for (std::size_t i = 0; i < rows.samples_ns.size(); ++i)
+    sample.integer(1, id)
+        .integer(2, static_cast<std::int64_t>(i))
+        .integer(3, rows.samples_ns[i])
+        .execute();
+  Statement bin(db, path,
+                "INSERT INTO histogram (run_id, lower_ns, upper_ns, count) VALUES (?, ?, ?, ?)");
+  for (const HistogramBin& b : rows.histogram)
+    bin.integer(1, id)
+        .real(2, b.lower_ns.value_or(std::nan("")))
+        .real(3, b.upper_ns)
+        .integer(4, b.count)
+        .execute();
 }
 
 }  // namespace
@@ -407,10 +343,11 @@ Database Database::open_file(const fs::path& path) {
 void Database::record(const json& result, const fs::path& json_file) {
   // Read as the file's text reads (NaN as null, odd bytes replaced), so that recording and
   // rebuilding from the file give the same rows.
-  const report::StoredRun run = report::run_from_json(json::parse(json_text(result)), json_file);
-  const Samples samples = samples_of(run);
+  const report::StoredRun run =
+      report::run_from_json(json::parse(detail::json_text(result)), json_file);
+  const detail::RunRows rows = detail::rows_of(run);
   Transaction t(db_.get(), path_);
-  insert_run(db_.get(), path_, run, samples);
+  insert_run(db_.get(), path_, json_file, rows);
   t.commit();
 }
 
@@ -522,14 +459,14 @@ Rebuilt rebuild(const fs::path& folder) {
       Database db = Database::open_file(temporary);
       Transaction all(db.db_.get(), temporary);
       for (const report::StoredRun& run : scan.runs) {
-        Samples samples;
+        detail::RunRows rows;
         try {
-          samples = samples_of(run);
+          rows = detail::rows_of(run);
         } catch (const report::ReportError& e) {
           out.skipped.push_back(run.path.string() + ": " + e.what());
           continue;
         }
-        insert_run(db.db_.get(), temporary, run, samples);
+        insert_run(db.db_.get(), temporary, run.path, rows);
         ++out.recorded;
       }
       all.commit();

@@ -274,6 +274,66 @@ TEST_F(ResultsDb, ADatabaseOfAnUnknownSchemaVersionIsRefusedUntouched) {
   EXPECT_EQ(Database::open(database()).runs().size(), 1u);  // its rows were left as they were
 }
 
+// A database of schema 1 (no document column) is migrated on open: its runs keep their rows, with
+// no document until rebuilt, and runs recorded after hold theirs, which reads back as the file.
+TEST_F(ResultsDb, ASchema1DatabaseIsMigratedAndRunsRecordedAfterHoldTheirDocument) {
+  const fs::path old_run = write_sample(dir_, sample(0));
+  const fs::path new_run = write_sample(dir_, sample(1), /*csv=*/true);
+  {
+    auto db = Database::open(database());
+    record_file(db, old_run);
+  }
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(database().c_str(), &db), SQLITE_OK);
+    EXPECT_EQ(sqlite3_exec(db, "ALTER TABLE runs DROP COLUMN document", nullptr, nullptr, nullptr),
+              SQLITE_OK);
+    sqlite3_close(db);
+  }
+  set_user_version(database(), 1);
+  auto db = Database::open(database());
+  EXPECT_EQ(db.schema_version(), 2);
+  record_file(db, new_run);
+  ASSERT_EQ(db.runs().size(), 2u);
+
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open(database().c_str(), &raw), SQLITE_OK);
+  sqlite3_stmt* statement = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(raw, "SELECT file, document FROM runs ORDER BY started_utc", -1,
+                               &statement, nullptr),
+            SQLITE_OK);
+  std::vector<std::pair<std::string, std::optional<std::string>>> documents;
+  while (sqlite3_step(statement) == SQLITE_ROW) {
+    const auto* document = sqlite3_column_text(statement, 1);
+    documents.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(statement, 0)),
+                           document
+                               ? std::optional<std::string>(reinterpret_cast<const char*>(document))
+                               : std::nullopt);
+  }
+  sqlite3_finalize(statement);
+  sqlite3_close(raw);
+  ASSERT_EQ(documents.size(), 2u);
+  EXPECT_EQ(documents[0].first, old_run.filename().string());
+  EXPECT_FALSE(documents[0].second);
+  ASSERT_TRUE(documents[1].second);
+  const report::StoredRun from_file = report::load_run(new_run);
+  const report::StoredRun from_database =
+      report::run_from_json(json::parse(*documents[1].second), new_run);
+  EXPECT_EQ(from_database.json, from_file.json);
+  EXPECT_EQ(report::runs_table({from_database}), report::runs_table({from_file}));
+
+  EXPECT_EQ(rebuild(dir_).recorded, 2u);  // and rebuilding gives the old run its document
+  sqlite3* rebuilt = nullptr;
+  ASSERT_EQ(sqlite3_open(database().c_str(), &rebuilt), SQLITE_OK);
+  ASSERT_EQ(sqlite3_prepare_v2(rebuilt, "SELECT count(*) FROM runs WHERE document IS NULL", -1,
+                               &statement, nullptr),
+            SQLITE_OK);
+  ASSERT_EQ(sqlite3_step(statement), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(statement, 0), 0);
+  sqlite3_finalize(statement);
+  sqlite3_close(rebuilt);
+}
+
 // The query plan SQLite chooses for `sql` on the database at `path`, one line per step.
 std::string query_plan(const fs::path& path, const std::string& sql) {
   sqlite3* db = nullptr;

@@ -6,6 +6,7 @@
 
 #include "../options.hpp"
 #include "commands.hpp"
+#include "results_source.hpp"
 #include "robotperf/cli/exit_codes.hpp"
 #include "robotperf/files/atomic_file.hpp"
 #include "robotperf/report/gate.hpp"
@@ -79,13 +80,20 @@ class CompareCommand : public Command {
     command->add_option("--junit", gate_.junit, "with the gate: also write JUnit XML to FILE");
     command->add_option("--markdown", gate_.markdown,
                         "with the gate: also write a Markdown summary to FILE (a CI job summary)");
-    command->add_option("--results", results_,
-                        "results files or folders, imported published rows included (default: "
-                        "./results, and the sides where they are files)");
+    command->add_option(
+        "--results", results_,
+        "results files or folders, imported published rows included (default: "
+        "the database --from or ROBOTPERF_RESULTS_URL names, else ./results and the "
+        "sides where they are files)");
+    command->add_option("--from", from_,
+                        "read the runs from this PostgreSQL database (postgresql://...; "
+                        "credentials from PGPASSWORD, ~/.pgpass or PGPASSFILE)");
     command->footer(
         "Examples:\n  robotperf compare rmw=intra rmw=fastdds --results results\n"
         "  robotperf compare --baseline label.rev=main --candidate label.rev=pr42 "
-        "--fail-on-regression 10 --junit gate.xml");
+        "--fail-on-regression 10 --junit gate.xml\n"
+        "  robotperf compare rmw=intra rmw=fastdds --from "
+        "postgresql://ci@db.lab.example/robotperf");
     return command;
   }
 
@@ -98,7 +106,9 @@ class CompareCommand : public Command {
     const bool gating = gate_.fail_on_regression.has_value();
     if (!gating && (!gate_.junit.empty() || !gate_.markdown.empty()))
       throw std::invalid_argument("--junit and --markdown go with --fail-on-regression");
-    const auto input = report::load_report_inputs(results_paths(results_, {a, b}));
+    const auto url = database_to_read(from_, !results_.empty());
+    const auto input = url ? report_input_from_database(*url)
+                           : report::load_report_inputs(results_paths(results_, {a, b}));
     for (const auto& s : input.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
     if (gating) return gate(input, a, b, gate_);
     std::cout << report::render_comparison_text(input, a, b);
@@ -109,6 +119,7 @@ class CompareCommand : public Command {
   std::string a_, b_, baseline_, candidate_;
   GateArgs gate_;
   std::vector<std::string> results_;
+  std::string from_;
 };
 
 }  // namespace

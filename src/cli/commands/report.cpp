@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "results_source.hpp"
 #include "robotperf/cli/exit_codes.hpp"
 #include "robotperf/files/atomic_file.hpp"
 #include "robotperf/report/run_store.hpp"
@@ -16,6 +17,7 @@ namespace {
 
 struct ReportArgs {
   std::vector<std::string> inputs;
+  std::string from;  // a PostgreSQL database's URL
   std::string html, md, title = "robotperf report";
   std::vector<std::string> compare;
   bool radar = false;
@@ -35,7 +37,8 @@ int make_report(const ReportArgs& a) {
   std::vector<fs::path> paths;
   for (const auto& p : a.inputs.empty() ? std::vector<std::string>{"results"} : a.inputs)
     paths.emplace_back(p);
-  const auto input = report::load_report_inputs(paths);
+  const auto url = database_to_read(a.from, !a.inputs.empty());
+  const auto input = url ? report_input_from_database(*url) : report::load_report_inputs(paths);
   for (const auto& s : input.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
   if (input.runs.empty() && input.published.empty())
     throw report::ReportError(
@@ -71,7 +74,11 @@ class ReportCommand : public Command {
         "results, runs, distributions");
     command->add_option("results", args_.inputs,
                         "results files, imported files, benchmark.yaml files or folders "
-                        "(default: ./results)");
+                        "(default: the database --from or ROBOTPERF_RESULTS_URL names, else "
+                        "./results)");
+    command->add_option("--from", args_.from,
+                        "read the runs from this PostgreSQL database (postgresql://...; "
+                        "credentials from PGPASSWORD, ~/.pgpass or PGPASSFILE)");
     command->add_option("--html", args_.html, "write the HTML report here (- : standard output)");
     command->add_option("--md", args_.md, "write the Markdown report here (- : standard output)");
     command->add_option("--title", args_.title, "report title");
@@ -81,7 +88,9 @@ class ReportCommand : public Command {
     command->add_flag("--radar", args_.radar,
                       "add radar plots per category, RobotPerf's presentation (at most 6 series "
                       "each)");
-    command->footer("Example: robotperf report results --html report.html --md report.md");
+    command->footer(
+        "Examples: robotperf report results --html report.html --md report.md\n"
+        "          robotperf report --from postgresql://ci@db.lab.example/robotperf --html r.html");
     return command;
   }
 

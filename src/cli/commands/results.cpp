@@ -1,17 +1,21 @@
-// `robotperf results list|export|import|rebuild-db`: the results folder, RobotPerf's
-// benchmark.yaml result entries out of it and into it, and its database made again from its files.
+// `robotperf results list|export|import|rebuild-db|push`: the results folder, RobotPerf's
+// benchmark.yaml result entries out of it and into it, its database made again from its files,
+// and its runs pushed into a lab's shared PostgreSQL database.
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iostream>
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "results_source.hpp"
 #include "robotperf/cli/exit_codes.hpp"
 #include "robotperf/files/atomic_file.hpp"
 #include "robotperf/harness/benchmark_spec.hpp"
 #include "robotperf/report/benchmark_yaml.hpp"
 #include "robotperf/report/run_store.hpp"
+#include "robotperf/results_db/postgres_store.hpp"
 #include "robotperf/results_db/results_db.hpp"
 
 namespace robotperf::cli {
@@ -45,13 +49,22 @@ std::vector<report::StoredRun> collect_runs(const std::vector<std::string>& path
   return runs;
 }
 
-int list_results(const std::string& dir, const std::string& format) {
-  const auto scan = report::scan_results(dir);
-  for (const auto& sk : scan.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", sk.c_str());
-  if (format == "json") {
-    std::cout << json_text(report::runs_json(scan.runs), 1) << "\n";
+// The runs of the folder `dir`, or of the database --from or ROBOTPERF_RESULTS_URL names when no
+// folder is named.
+int list_results(const std::string& dir, bool dir_named, const std::string& from,
+                 const std::string& format) {
+  std::vector<report::StoredRun> runs;
+  if (const auto url = database_to_read(from, dir_named)) {
+    runs = runs_from_database(*url);
   } else {
-    std::cout << (format == "csv" ? report::runs_csv(scan.runs) : report::runs_table(scan.runs));
+    auto scan = report::scan_results(dir);
+    for (const auto& sk : scan.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", sk.c_str());
+    runs = std::move(scan.runs);
+  }
+  if (format == "json") {
+    std::cout << json_text(report::runs_json(runs), 1) << "\n";
+  } else {
+    std::cout << (format == "csv" ? report::runs_csv(runs) : report::runs_table(runs));
   }
   return kExitOk;
 }
@@ -181,39 +194,91 @@ int rebuild_database(const std::string& dir) {
   return kExitOk;
 }
 
+// The runs of `paths` (folders and results files; ./results when none is named) pushed into the
+// database `to` names, else ROBOTPERF_RESULTS_URL. A file that is not a readable run is skipped.
+int push_results(const std::string& to, const std::vector<std::string>& paths) {
+  const char* environment = std::getenv(results_db::kResultsUrlVariable);
+  std::string url;
+  if (!to.empty())
+    url = results_db::checked_url(to, "--to");
+  else if (environment != nullptr && *environment != '\0')
+    url = results_db::checked_url(environment, results_db::kResultsUrlVariable);
+  else
+    throw std::invalid_argument(
+        std::string("results push: say where to: --to postgresql://... or ") +
+        results_db::kResultsUrlVariable);
+  std::vector<report::StoredRun> runs;
+  std::vector<std::string> skipped;
+  for (const auto& p : paths.empty() ? std::vector<std::string>{"results"} : paths) {
+    if (fs::is_directory(p)) {
+      auto scan = report::scan_results(p);
+      for (auto& r : scan.runs) runs.push_back(std::move(r));
+      for (auto& sk : scan.skipped) skipped.push_back(std::move(sk));
+    } else if (!fs::exists(p)) {
+      throw report::ReportError(p + ": no such file or folder");
+    } else {
+      try {
+        runs.push_back(report::load_run(p));
+      } catch (const report::ReportError& e) {
+        skipped.emplace_back(e.what());
+      }
+    }
+  }
+  auto store = results_db::PostgresStore::connect(url);
+  const results_db::Pushed pushed = store.push(runs);
+  skipped.insert(skipped.end(), pushed.skipped.begin(), pushed.skipped.end());
+  for (const auto& s : skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
+  std::cout << store.target() << ": pushed " << pushed.pushed << " run(s)";
+  if (!skipped.empty()) std::cout << ", " << skipped.size() << " file(s) skipped";
+  std::cout << "\n";
+  return kExitOk;
+}
+
 class ResultsCommand : public Command {
  public:
   CLI::App* declare(CLI::App& app) override {
     auto* command =
-        app.add_subcommand("results", "the results folder: list, export, import, rebuild-db");
+        app.add_subcommand("results", "the results folder: list, export, import, rebuild-db, push");
     command->require_subcommand(1);
     command->footer(
         "Examples: robotperf results list results/\n"
-        "          robotperf results export results --merge-package");
+        "          robotperf results export results --merge-package\n"
+        "          robotperf results push --to postgresql://ci@db.lab.example/robotperf results");
     declare_list(*command);
     declare_export(*command);
     declare_import(*command);
     declare_rebuild_db(*command);
+    declare_push(*command);
     return command;
   }
 
   int run(const Context& context) override {
-    if (*list_) return list_results(list_dir_, list_format_);
+    if (*list_)
+      return list_results(list_dir_, list_dir_option_->count() > 0, list_from_, list_format_);
     if (*export_) return export_results(context.roots, export_args_);
     if (*rebuild_db_) return rebuild_database(rebuild_dir_);
+    if (*push_) return push_results(push_to_, push_paths_);
     return import_published(import_paths_, import_into_);
   }
 
  private:
   void declare_list(CLI::App& results) {
     list_ = results.add_subcommand("list", "show the runs of a results folder");
-    list_->add_option("dir", list_dir_, "results folder (default: ./results)");
+    list_dir_option_ = list_->add_option(
+        "dir", list_dir_,
+        "results folder (default: the database --from or ROBOTPERF_RESULTS_URL names, else "
+        "./results)");
+    list_->add_option("--from", list_from_,
+                      "read the runs from this PostgreSQL database (postgresql://...; credentials "
+                      "from PGPASSWORD, ~/.pgpass or PGPASSFILE)");
     list_
         ->add_option("--format", list_format_,
                      "table (default), json (an array of objects) or csv (a header line, then "
                      "one line per run)")
         ->check(CLI::IsMember({"table", "json", "csv"}));
-    list_->footer("Example: robotperf results list results --format csv");
+    list_->footer(
+        "Examples: robotperf results list results --format csv\n"
+        "          robotperf results list --from postgresql://ci@db.lab.example/robotperf");
   }
 
   void declare_export(CLI::App& results) {
@@ -263,7 +328,20 @@ class ResultsCommand : public Command {
     rebuild_db_->footer("Example: robotperf results rebuild-db results");
   }
 
+  void declare_push(CLI::App& results) {
+    push_ = results.add_subcommand(
+        "push", "push runs into a shared PostgreSQL database (pushing a run again replaces it)");
+    push_->add_option("results", push_paths_, "results folders or files (default: ./results)");
+    push_->add_option("--to", push_to_,
+                      "the database: postgresql://[user@]host[:port]/db[?sslmode=...] (default: "
+                      "ROBOTPERF_RESULTS_URL); credentials from PGPASSWORD, ~/.pgpass or "
+                      "PGPASSFILE, never the URL");
+    push_->footer("Example: robotperf results push --to postgresql://ci@db.lab.example/robotperf");
+  }
+
   std::string list_dir_ = "results";
+  CLI::Option* list_dir_option_ = nullptr;
+  std::string list_from_;
   std::string list_format_ = "table";
   ExportArgs export_args_;
   std::vector<std::string> import_paths_;
@@ -272,6 +350,9 @@ class ResultsCommand : public Command {
   CLI::App* export_ = nullptr;
   std::string rebuild_dir_ = "results";
   CLI::App* rebuild_db_ = nullptr;
+  std::string push_to_;
+  std::vector<std::string> push_paths_;
+  CLI::App* push_ = nullptr;
 };
 
 }  // namespace

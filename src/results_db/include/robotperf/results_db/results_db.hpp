@@ -21,7 +21,7 @@ namespace robotperf::results_db {
 // The database's file name in a results folder.
 inline constexpr const char* kDatabaseFile = "robotperf.db";
 // The schema this robotperf writes (PRAGMA user_version); older databases are migrated on open.
-inline constexpr int kSchemaVersion = 1;
+inline constexpr int kSchemaVersion = 2;
 
 // A database that cannot be opened, migrated, written or read; the message names its file.
 class DatabaseError : public std::runtime_error {

@@ -1,0 +1,32 @@
+#include "results_source.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+
+#include "robotperf/results_db/postgres_store.hpp"
+
+namespace robotperf::cli {
+
+std::optional<std::string> database_to_read(const std::string& from, bool paths_named) {
+  if (paths_named) {
+    if (!from.empty())
+      std::fprintf(stderr, "robotperf: reading the results named; --from is left aside\n");
+    return std::nullopt;
+  }
+  if (!from.empty()) return results_db::checked_url(from, "--from");
+  const char* environment = std::getenv(results_db::kResultsUrlVariable);
+  if (environment == nullptr || *environment == '\0') return std::nullopt;
+  return results_db::checked_url(environment, results_db::kResultsUrlVariable);
+}
+
+std::vector<report::StoredRun> runs_from_database(const std::string& url) {
+  report::RunScan scan = results_db::PostgresStore::connect(url).runs();
+  for (const auto& s : scan.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
+  return std::move(scan.runs);
+}
+
+report::ReportInput report_input_from_database(const std::string& url) {
+  return report::ReportInput{runs_from_database(url), {}, {}};
+}
+
+}  // namespace robotperf::cli
