@@ -9,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 #include <vector>
@@ -172,6 +173,13 @@ TEST_F(ResultsDbPostgresCli, ReadVerbsFromTheDatabaseShowWhatTheFilesShow) {
   ASSERT_EQ(compared_files.exit_code, 0) << compared_files.out;
   EXPECT_EQ(robotperf_cli(sides + "--from " + url()).out, compared_files.out);
 
+  const auto history_files = robotperf_cli("history a1 --format json --results " + dir.string());
+  ASSERT_EQ(history_files.exit_code, 0) << history_files.out;
+  const auto history_from = robotperf_cli("history a1 --format json --from " + url());
+  ASSERT_EQ(history_from.exit_code, 0) << history_from.out;
+  // The same points; a point's files are named without their folder either way.
+  EXPECT_EQ(nlohmann::json::parse(history_from.out), nlohmann::json::parse(history_files.out));
+
   const fs::path md = server_->dir() / "report.md";
   const auto reported = robotperf_cli("report --from " + url() + " --md " + md.string());
   ASSERT_EQ(reported.exit_code, 0) << reported.out;
@@ -185,7 +193,8 @@ TEST_F(ResultsDbPostgresCli, ReadVerbsFromTheDatabaseShowWhatTheFilesShow) {
 TEST(ResultsDbPostgresCliUrl, AUrlWithAPasswordIsRefusedInOneLineThatDoesNotRepeatIt) {
   for (const std::string& verb :
        {std::string("results push --to "), std::string("results list --from "),
-        std::string("compare a b --from "), std::string("report --md - --from ")}) {
+        std::string("compare a b --from "), std::string("report --md - --from "),
+        std::string("history a1 --from ")}) {
     const auto o = robotperf_cli(verb + "postgresql://ci:s3cret-pw@127.0.0.1:1/results");
     EXPECT_EQ(o.exit_code, 2) << verb << o.out;
     EXPECT_EQ(o.out.find("s3cret"), std::string::npos) << o.out;

@@ -8,6 +8,7 @@
 
 #include "../options.hpp"
 #include "commands.hpp"
+#include "results_source.hpp"
 #include "robotperf/cli/exit_codes.hpp"
 #include "robotperf/report/report.hpp"
 
@@ -39,12 +40,18 @@ class HistoryCommand : public Command {
                      "a change point is kept at this permutation-test p-value or below "
                      "(default 0.01: about 1 % of series without a change show one)")
         ->check(number_between(0.002, 0.5));
-    command->add_option("--results", results_, "results folders or files (default: ./results)");
+    command->add_option("--results", results_,
+                        "results folders or files (default: the database --from or "
+                        "ROBOTPERF_RESULTS_URL names, else ./results)");
+    command->add_option("--from", from_,
+                        "read the runs from this PostgreSQL database (postgresql://...; "
+                        "credentials from PGPASSWORD, ~/.pgpass or PGPASSFILE)");
     command->add_option("--format", format_, "text (default) or json")
         ->check(CLI::IsMember({"text", "json"}));
     command->footer(
         "Examples:\n  robotperf history a1\n"
-        "  robotperf history a5 --metric latency.p99 --by rev --results results");
+        "  robotperf history a5 --metric latency.p99 --by rev --results results\n"
+        "  robotperf history a1 --by rev --from postgresql://robotperf@lab-db/results");
     return command;
   }
 
@@ -53,14 +60,19 @@ class HistoryCommand : public Command {
       const auto eq = label.find('=');
       options_.labels.emplace_back(label.substr(0, eq), label.substr(eq + 1));
     }
-    std::vector<fs::path> paths(results_.begin(), results_.end());
-    if (paths.empty()) {
-      if (!fs::is_directory("results"))
-        throw report::ReportError(
-            "history: no ./results folder here; name the results with --results DIR");
-      paths.emplace_back("results");
+    report::ReportInput input;
+    if (const auto url = database_to_read(from_, !results_.empty())) {
+      input = report_input_from_database(*url);
+    } else {
+      std::vector<fs::path> paths(results_.begin(), results_.end());
+      if (paths.empty()) {
+        if (!fs::is_directory("results"))
+          throw report::ReportError(
+              "history: no ./results folder here; name the results with --results DIR");
+        paths.emplace_back("results");
+      }
+      input = report::load_report_inputs(paths);
     }
-    const auto input = report::load_report_inputs(paths);
     for (const auto& s : input.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
     const report::History h = report::history(input.runs, options_);
     if (format_ == "json")
@@ -73,6 +85,7 @@ class HistoryCommand : public Command {
  private:
   report::HistoryOptions options_;
   std::vector<std::string> results_, labels_;
+  std::string from_;
   std::string format_ = "text";
 };
 
