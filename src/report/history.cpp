@@ -83,7 +83,7 @@ std::vector<HistoryPoint> points_of(const std::vector<Measured>& runs, const std
   return points;
 }
 
-const char* better_text(RunMetric::Better better) {
+const char* better_phrase(RunMetric::Better better) {
   switch (better) {
     case RunMetric::Better::kSmaller:
       return "smaller is better";
@@ -124,31 +124,45 @@ std::string short_revision(const std::string& revision, std::size_t digits) {
   return hash ? revision.substr(0, digits) : revision;
 }
 
+MetricSource metrics_from_files(const std::vector<StoredRun>& runs) {
+  return {[](const StoredRun& run, const std::string& name) { return run_metric(run, name); },
+          [&runs](const std::string& benchmark_id) {
+            std::set<std::string> names;
+            for (const StoredRun& run : runs) {
+              if (run.benchmark_id != benchmark_id) continue;
+              for (const RunMetric& m : run_metrics(run)) {
+                if (std::isfinite(m.value)) names.insert(m.name);
+              }
+            }
+            return std::vector<std::string>(names.begin(), names.end());
+          }};
+}
+
 History history(const std::vector<StoredRun>& runs, const HistoryOptions& options) {
+  return history(runs, options, metrics_from_files(runs));
+}
+
+History history(const std::vector<StoredRun>& runs, const HistoryOptions& options,
+                const MetricSource& source) {
   History out;
   out.benchmark_id = options.benchmark_id;
   out.metric = options.metric;
   out.by = options.by;
   out.change_points = options.change_points;
   std::map<std::string, std::vector<Measured>> by_series;
-  std::size_t of_benchmark = 0, invalid = 0, unlabelled = 0;
-  std::set<std::string> names;  // the metrics the benchmark's runs have, for an unknown one
+  std::size_t of_benchmark = 0, with_metric = 0, invalid = 0, unlabelled = 0;
   for (const StoredRun& run : runs) {
     if (run.benchmark_id != options.benchmark_id) continue;
+    ++of_benchmark;
     const bool labelled =
         std::all_of(options.labels.begin(), options.labels.end(), [&](const auto& label) {
           const auto it = run.labels.find(label.first);
           return it != run.labels.end() && it->second == label.second;
         });
     if (!labelled) continue;
-    ++of_benchmark;
-    std::optional<RunMetric> metric;
-    for (RunMetric& m : run_metrics(run)) {
-      if (!std::isfinite(m.value)) continue;
-      names.insert(m.name);
-      if (m.name == options.metric) metric = std::move(m);
-    }
+    std::optional<RunMetric> metric = source.of(run, options.metric);
     if (!metric) continue;
+    ++with_metric;
     if (!run.valid) {
       ++invalid;
       continue;
@@ -163,12 +177,19 @@ History history(const std::vector<StoredRun>& runs, const HistoryOptions& option
   }
   if (of_benchmark == 0)
     throw ReportError("history: no runs of " + options.benchmark_id + " in the results read");
-  if (!names.contains(options.metric)) {
+  if (with_metric == 0) {
     std::string known;
-    for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
+    for (const auto& n : source.names(options.benchmark_id))
+      known += (known.empty() ? "" : ", ") + n;
     throw ReportError("history: no run of " + options.benchmark_id + " has the metric " +
                       options.metric + "; its runs have: " + known);
   }
+  if (by_series.empty())
+    throw ReportError("history: no valid run of " + options.benchmark_id + " has " +
+                      options.metric + " (" + std::to_string(invalid) + " INVALID, " +
+                      std::to_string(unlabelled) + " without the label " +
+                      (options.by.empty() ? "asked for" : options.by) + ")" +
+                      (invalid ? ": `robotperf results list` shows why runs are INVALID" : ""));
   if (invalid) out.notes.push_back(std::to_string(invalid) + " INVALID run(s) left out");
   if (unlabelled)
     out.notes.push_back(std::to_string(unlabelled) + " run(s) without the label " + options.by +
@@ -192,7 +213,7 @@ std::string history_text(const History& h) {
   for (const auto& series : h.series) {
     for (const auto& p : series.points) runs += p.runs;
   }
-  s << h.benchmark_id << " " << h.metric << " (" << h.unit << ", " << better_text(h.better)
+  s << h.benchmark_id << " " << h.metric << " (" << h.unit << ", " << better_phrase(h.better)
     << "): " << runs << " valid run(s) in " << h.series.size() << " configuration(s)";
   if (!h.by.empty()) s << ", one point per value of " << h.by;
   s << "\n";

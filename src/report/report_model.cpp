@@ -910,7 +910,15 @@ detail::Comparison compare(const std::string& a_sel, const std::string& b_sel,
         (*configuration)[id] = configuration_of(*row);
       }
       if (configurations.size() > 1) {
-        const std::string list = joined(configurations, "; ");
+        // A few of them name the choice; a lab's folder can hold thousands.
+        constexpr std::size_t kNamed = 4;
+        std::vector<std::string> named(
+            configurations.begin(),
+            std::next(configurations.begin(),
+                      static_cast<std::ptrdiff_t>(std::min(kNamed, configurations.size()))));
+        std::string list = joined(named, "; ");
+        if (configurations.size() > kNamed)
+          list += "; and " + std::to_string(configurations.size() - kNamed) + " more";
         throw ReportError("'" + selector + "' selects " + std::to_string(configurations.size()) +
                           " configurations of " + id + " (" + list +
                           "): name one series, or narrow the side with fields, e.g. "

@@ -70,6 +70,24 @@ std::vector<RunMetric> run_metrics(const StoredRun& run) {
   return out;
 }
 
+std::string better_text(RunMetric::Better better) {
+  switch (better) {
+    case RunMetric::Better::kSmaller:
+      return "smaller";
+    case RunMetric::Better::kLarger:
+      return "larger";
+    case RunMetric::Better::kUnknown:
+      break;
+  }
+  return "";
+}
+
+RunMetric::Better better_from_text(const std::string& text) {
+  if (text == "smaller") return RunMetric::Better::kSmaller;
+  if (text == "larger") return RunMetric::Better::kLarger;
+  return RunMetric::Better::kUnknown;
+}
+
 std::optional<RunMetric> run_metric(const StoredRun& run, const std::string& name) {
   for (RunMetric& m : run_metrics(run)) {
     if (m.name == name && std::isfinite(m.value)) return std::move(m);

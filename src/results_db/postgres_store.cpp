@@ -57,6 +57,7 @@ CREATE TABLE runs (
   configuration JSONB NOT NULL,
   configuration_key TEXT NOT NULL,
   samples_source TEXT NOT NULL,
+  warnings JSONB NOT NULL,
   document JSONB NOT NULL,
   UNIQUE (file, document_sha256)
 );
@@ -70,6 +71,7 @@ CREATE TABLE metrics (
   unit TEXT NOT NULL,
   low DOUBLE PRECISION,
   high DOUBLE PRECISION,
+  better TEXT,
   PRIMARY KEY (run_id, name)
 );
 CREATE INDEX metrics_by_name ON metrics (name, run_id);
@@ -364,7 +366,9 @@ void push_batch(PGconn* c, const std::string& target, const std::vector<PushKey>
     const std::string& id = ids[i];
     for (const detail::Metric& m : rows[i].metrics) {
       metrics.field(id).field(m.name).field(real_text(m.value)).field(m.unit);
-      metrics.field(real_text(m.low)).field(real_text(m.high)).end_row();
+      const std::string better = report::better_text(m.better);
+      metrics.field(real_text(m.low)).field(real_text(m.high));
+      metrics.field(better.empty() ? std::nullopt : std::optional(better)).end_row();
     }
     for (const auto& [key, label] : rows[i].labels)
       labels.field(id).field(key).field(label).end_row();
@@ -377,7 +381,7 @@ void push_batch(PGconn* c, const std::string& target, const std::vector<PushKey>
       histogram.field(real_text(b.upper_ns)).field(b.count).end_row();
     }
   }
-  copy_in(c, target, "COPY metrics (run_id, name, value, unit, low, high) FROM STDIN",
+  copy_in(c, target, "COPY metrics (run_id, name, value, unit, low, high, better) FROM STDIN",
           metrics.text());
   copy_in(c, target, "COPY labels (run_id, key, value) FROM STDIN", labels.text());
   copy_in(c, target, "COPY samples (run_id, seq, latency_ns) FROM STDIN", samples.text());

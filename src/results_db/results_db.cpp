@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iterator>
+#include <set>
 #include <type_traits>
 #include <variant>
 
@@ -94,6 +95,8 @@ CREATE TABLE histogram (
 )sql",
                                        R"sql(
 ALTER TABLE runs ADD COLUMN document TEXT;
+ALTER TABLE runs ADD COLUMN warnings TEXT;
+ALTER TABLE metrics ADD COLUMN better TEXT;
 )sql"};
 static_assert(std::size(kMigrations) == kSchemaVersion);
 
@@ -121,6 +124,7 @@ class Statement {
         sqlite3_bind_text(statement_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT));
   }
   Statement& integer(int i, std::int64_t v) { return check(sqlite3_bind_int64(statement_, i, v)); }
+  Statement& null(int i) { return check(sqlite3_bind_null(statement_, i)); }
   // NaN and infinities are no value: NULL.
   Statement& real(int i, double v) {
     return check(std::isfinite(v) ? sqlite3_bind_double(statement_, i, v)
@@ -264,11 +268,16 @@ void insert_run(sqlite3* db, const fs::path& path, const fs::path& json_file,
   const std::int64_t id = sqlite3_last_insert_rowid(db);
 
   Statement metric(db, path,
-                   "INSERT INTO metrics (run_id, name, value, unit, low, high) "
-                   "VALUES (?, ?, ?, ?, ?, ?)");
+                   "INSERT INTO metrics (run_id, name, value, unit, low, high, better) "
+                   "VALUES (?, ?, ?, ?, ?, ?, ?)");
   for (const detail::Metric& m : rows.metrics) {
     metric.integer(1, id).text(2, m.name).real(3, m.value).text(4, m.unit).real(5, m.low);
-    metric.real(6, m.high).execute();
+    metric.real(6, m.high);
+    if (const std::string better = report::better_text(m.better); better.empty())
+      metric.null(7);
+    else
+      metric.text(7, better);
+    metric.execute();
   }
   Statement label(db, path, "INSERT INTO labels (run_id, key, value) VALUES (?, ?, ?)");
   for (const auto& [key, value] : rows.labels)
@@ -403,20 +412,24 @@ std::vector<RunRow> Database::runs(const RunQuery& query) const {
 
 std::vector<MetricRow> Database::metrics(std::int64_t run) const {
   Statement s(db_.get(), path_,
-              "SELECT name, value, unit, low, high FROM metrics WHERE run_id = ? ORDER BY name");
+              "SELECT name, value, unit, low, high, better FROM metrics WHERE run_id = ? ORDER BY "
+              "name");
   s.integer(1, run);
   std::vector<MetricRow> out;
   while (s.step())
-    out.push_back({s.text(0), s.real(1), s.text(2), s.optional_real(3), s.optional_real(4)});
+    out.push_back(
+        {s.text(0), s.real(1), s.text(2), s.optional_real(3), s.optional_real(4), s.text(5)});
   return out;
 }
 
 std::optional<MetricRow> Database::metric(std::int64_t run, const std::string& name) const {
   Statement s(db_.get(), path_,
-              "SELECT name, value, unit, low, high FROM metrics WHERE run_id = ? AND name = ?");
+              "SELECT name, value, unit, low, high, better FROM metrics WHERE run_id = ? AND "
+              "name = ?");
   s.integer(1, run).text(2, name);
   if (!s.step()) return std::nullopt;
-  return MetricRow{s.text(0), s.real(1), s.text(2), s.optional_real(3), s.optional_real(4)};
+  return MetricRow{s.text(0),          s.real(1),          s.text(2),
+                   s.optional_real(3), s.optional_real(4), s.text(5)};
 }
 
 std::vector<std::int64_t> Database::samples_ns(std::int64_t run) const {
@@ -441,6 +454,147 @@ std::map<std::string, std::string> Database::labels(std::int64_t run) const {
   s.integer(1, run);
   std::map<std::string, std::string> out;
   while (s.step()) out.emplace(s.text(0), s.text(1));
+  return out;
+}
+
+std::vector<report::StoredRun> Database::listed_runs() const {
+  const fs::path folder = path_.parent_path();
+  std::vector<report::StoredRun> out;
+  std::map<std::int64_t, std::size_t> index;  // run id -> its place in out
+  {
+    // An INVALID run's reasons come from its document, exactly as the file has them: the column
+    // joins them with "; ", which a reason may hold itself.
+    Statement s(db_.get(), path_,
+                "SELECT id, file, benchmark_id, benchmark_name, category, started_utc, valid, "
+                "CASE WHEN valid THEN NULL ELSE json_extract(document, '$.validity.reasons') END, "
+                "functional, mode, rmw, processes, backend, arrivals, monitor_wait, rate_hz, "
+                "throughput_kind, dataset, hardware, hardware_category, robotperf_version, "
+                "git_revision, warnings FROM runs ORDER BY started_utc, file");
+    while (s.step()) {
+      report::StoredRun r;
+      r.path = folder / s.text(1);
+      r.benchmark_id = s.text(2);
+      r.benchmark_name = s.text(3);
+      r.category = s.text(4);
+      r.started_utc = s.text(5);
+      r.valid = s.integer(6) != 0;
+      if (!r.valid) {
+        const json reasons = json::parse(s.text(7), nullptr, false);
+        if (reasons.is_array()) {
+          for (const auto& reason : reasons) {
+            if (reason.is_string()) r.invalid_reasons.push_back(reason.get<std::string>());
+          }
+        }
+      }
+      r.functional = s.text(8);
+      r.type = s.text(9);
+      r.rmw = s.text(10);
+      r.processes = s.text(11);
+      r.backend = s.text(12) == "cpu" ? "" : s.text(12);
+      r.timeline = s.text(13);
+      r.monitor_wait = s.text(14);
+      r.rate_hz = s.optional_real(15).value_or(report::kNoValue);
+      r.throughput_kind = s.text(16);
+      r.dataset = s.text(17);
+      r.hardware = s.text(18);
+      r.hardware_category = s.text(19);
+      r.robotperf_version = s.text(20);
+      r.git_revision = s.text(21);
+      const json warnings = json::parse(s.text(22), nullptr, false);
+      if (warnings.is_array()) {
+        for (const auto& w : warnings) {
+          if (w.is_string()) r.warnings.push_back(w.get<std::string>());
+        }
+      }
+      index.emplace(s.integer(0), out.size());
+      out.push_back(std::move(r));
+    }
+  }
+  // The figures the list shows, into the fields the results file fills.
+  Statement m(db_.get(), path_,
+              "SELECT run_id, name, value, low, high FROM metrics WHERE name IN ('latency.min', "
+              "'latency.mean', 'latency.rms', 'latency.stddev', 'latency.p50', 'latency.p90', "
+              "'latency.p99', 'latency.p999', 'latency.max', 'count.measured', 'count.matched', "
+              "'count.lost', 'count.unobserved', 'loss', 'throughput', 'throughput.offered', "
+              "'power', 'energy', 'cpu', 'peak_rss', 'control.update_rate')");
+  while (m.step()) {
+    const auto at = index.find(m.integer(0));
+    if (at == index.end()) continue;
+    report::StoredRun& r = out[at->second];
+    const std::string name = m.text(1);
+    const double v = m.real(2);
+    auto count = [v] { return static_cast<std::size_t>(std::llround(v)); };
+    report::LatencySummary& l = r.latency;
+    if (name == "latency.p50") {
+      l.p50 = v;
+      l.p50_lower = m.optional_real(3).value_or(report::kNoValue);
+      l.p50_upper = m.optional_real(4).value_or(report::kNoValue);
+    } else if (name.starts_with("latency.")) {
+      const std::string stat = name.substr(8);
+      double* field = stat == "min"      ? &l.min
+                      : stat == "mean"   ? &l.mean
+                      : stat == "rms"    ? &l.rms
+                      : stat == "stddev" ? &l.stddev
+                      : stat == "p90"    ? &l.p90
+                      : stat == "p99"    ? &l.p99
+                      : stat == "p999"   ? &l.p999
+                                         : &l.max;
+      *field = v;
+    } else if (name == "count.measured") {
+      r.measured = count();
+    } else if (name == "count.matched") {
+      r.matched = count();
+    } else if (name == "count.lost") {
+      r.lost = count();
+    } else if (name == "count.unobserved") {
+      r.unobserved = count();
+    } else if (name == "loss") {
+      r.loss_percent = v;
+    } else if (name == "throughput") {
+      r.throughput_hz = v;
+    } else if (name == "throughput.offered") {
+      r.offered_hz = v;
+    } else if (name == "power") {
+      r.power_w = v;
+    } else if (name == "energy") {
+      r.energy_j = v;
+    } else if (name == "cpu") {
+      r.cpu_percent = v;
+    } else if (name == "peak_rss") {
+      r.peak_rss_mib = v;
+    } else {
+      r.update_rate_hz = v;
+    }
+  }
+  Statement l(db_.get(), path_, "SELECT run_id, key, value FROM labels");
+  while (l.step()) {
+    const auto at = index.find(l.integer(0));
+    if (at != index.end()) out[at->second].labels.emplace(l.text(1), l.text(2));
+  }
+  return out;
+}
+
+std::map<fs::path, MetricRow> Database::metric_of_runs(const std::string& name) const {
+  Statement s(db_.get(), path_,
+              "SELECT runs.file, metrics.name, metrics.value, metrics.unit, metrics.low, "
+              "metrics.high, metrics.better FROM metrics JOIN runs ON runs.id = metrics.run_id "
+              "WHERE metrics.name = ?");
+  s.text(1, name);
+  std::map<fs::path, MetricRow> out;
+  const fs::path folder = path_.parent_path();
+  while (s.step())
+    out.emplace(folder / s.text(0), MetricRow{s.text(1), s.real(2), s.text(3), s.optional_real(4),
+                                              s.optional_real(5), s.text(6)});
+  return out;
+}
+
+std::vector<std::string> Database::metric_names(const std::string& benchmark_id) const {
+  Statement s(db_.get(), path_,
+              "SELECT DISTINCT metrics.name FROM metrics JOIN runs ON runs.id = metrics.run_id "
+              "WHERE runs.benchmark_id = ? ORDER BY metrics.name");
+  s.text(1, benchmark_id);
+  std::vector<std::string> out;
+  while (s.step()) out.push_back(s.text(0));
   return out;
 }
 
@@ -484,6 +638,80 @@ Rebuilt rebuild(const fs::path& folder) {
     throw;
   }
   return out;
+}
+
+report::MetricSource metric_source(const Database& database) {
+  auto by_name = std::make_shared<std::map<std::string, std::map<fs::path, MetricRow>>>();
+  return {
+      [&database, by_name](const report::StoredRun& run,
+                           const std::string& name) -> std::optional<report::RunMetric> {
+        auto rows = by_name->find(name);
+        if (rows == by_name->end())
+          rows = by_name->emplace(name, database.metric_of_runs(name)).first;
+        const auto row = rows->second.find(run.path);
+        if (row == rows->second.end()) return std::nullopt;
+        const MetricRow& m = row->second;
+        return report::RunMetric{m.name,
+                                 m.value,
+                                 m.unit,
+                                 m.low.value_or(report::kNoValue),
+                                 m.high.value_or(report::kNoValue),
+                                 report::better_from_text(m.better)};
+      },
+      [&database](const std::string& benchmark_id) { return database.metric_names(benchmark_id); }};
+}
+
+std::optional<Synced> open_synced(const fs::path& folder) {
+  const fs::path path = folder / kDatabaseFile;
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return std::nullopt;
+  try {
+    Synced out{Database::open_file(path), {}};
+    sqlite3* db = out.database.db_.get();
+    // What the database holds, and which of it needs its file read again.
+    std::map<std::string, bool> recorded;  // file -> whole (document and warnings kept)
+    {
+      Statement s(db, path, "SELECT file, document IS NOT NULL AND warnings IS NOT NULL FROM runs");
+      while (s.step()) recorded.emplace(s.text(0), s.integer(1) != 0);
+    }
+    std::vector<fs::path> to_record;
+    std::set<std::string> present;
+    // The files a scan of the folder reads (report::scan_results), and what it skips.
+    for (const auto& entry : fs::directory_iterator(folder)) {
+      if (!report::may_be_run_file(entry.path()) ||
+          !report::is_regular_file_or_skip(entry, out.skipped))
+        continue;
+      const std::string file = file_column(path, entry.path());
+      present.insert(file);
+      const auto it = recorded.find(file);
+      if (it == recorded.end() || !it->second) to_record.push_back(entry.path());
+    }
+    std::vector<std::string> gone;
+    for (const auto& [file, whole] : recorded) {
+      if (!present.contains(file)) gone.push_back(file);
+    }
+    // Files are read before the transaction, so that a slow disk holds no lock.
+    std::vector<std::pair<fs::path, detail::RunRows>> rows;
+    std::ranges::sort(to_record);
+    for (const fs::path& file : to_record) {
+      try {
+        rows.emplace_back(file, detail::rows_of(report::load_run(file)));
+      } catch (const report::ReportError& e) {
+        out.skipped.push_back(e.what());
+      }
+    }
+    if (rows.empty() && gone.empty()) return out;
+    Transaction t(db, path);
+    Statement remove(db, path, "DELETE FROM runs WHERE file = ?");
+    for (const std::string& file : gone) remove.text(1, file).execute();
+    for (const auto& [file, run_rows] : rows) insert_run(db, path, file, run_rows);
+    t.commit();
+    return out;
+  } catch (const DatabaseError&) {
+    return std::nullopt;  // a locked, damaged or read-only database: the files are read instead
+  } catch (const fs::filesystem_error&) {
+    return std::nullopt;
+  }
 }
 
 }  // namespace robotperf::results_db

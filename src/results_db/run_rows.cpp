@@ -93,6 +93,7 @@ RunRows rows_of(const report::StoredRun& run) {
               {"configuration", JsonText{json_text(member(run.json, "configuration"))}},
               {"configuration_key", configuration_key(run)},
               {"samples_source", rows.samples_source},
+              {"warnings", JsonText{json_text(json(run.warnings))}},
               {"document", JsonText{json_text(run.json)}}};
   rows.metrics = metrics_of(run);
   // Labels: a top-level "labels" object, read now so that files which carry one later need no

@@ -11,6 +11,7 @@
 #include <set>
 
 #include "../report/sample_runs.hpp"
+#include "robotperf/report/history.hpp"
 #include "robotperf/report/run_store.hpp"
 #include "snapshot.hpp"
 
@@ -286,8 +287,11 @@ TEST_F(ResultsDb, ASchema1DatabaseIsMigratedAndRunsRecordedAfterHoldTheirDocumen
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open(database().c_str(), &db), SQLITE_OK);
-    EXPECT_EQ(sqlite3_exec(db, "ALTER TABLE runs DROP COLUMN document", nullptr, nullptr, nullptr),
-              SQLITE_OK);
+    // Schema 1, as an older robotperf left it: what schema 2 added taken away.
+    for (const char* drop :
+         {"ALTER TABLE runs DROP COLUMN document", "ALTER TABLE runs DROP COLUMN warnings",
+          "ALTER TABLE metrics DROP COLUMN better"})
+      EXPECT_EQ(sqlite3_exec(db, drop, nullptr, nullptr, nullptr), SQLITE_OK) << drop;
     sqlite3_close(db);
   }
   set_user_version(database(), 1);
@@ -377,6 +381,66 @@ TEST_F(ResultsDb, AnEmptyFileIsMigratedToTheCurrentSchema) {
   auto db = Database::open(database());
   EXPECT_EQ(db.schema_version(), kSchemaVersion);
   EXPECT_TRUE(db.runs().empty());
+}
+
+// A folder's runs listed from its database read as the files read: every field `results list`
+// shows in any format, and history's figures and series.
+TEST_F(ResultsDb, RunsListedFromTheDatabaseReadAsTheirFiles) {
+  SampleRun invalid = sample(1);
+  invalid.lost = 40;  // too lossy: INVALID, with its reasons
+  SampleRun labelled = sample(2);
+  labelled.labels = {{"rev", "abc; def"}, {"board", "orin-3"}};
+  labelled.warnings = {{"governor", "CPU governor is powersave; pin it"}};
+  write_sample(dir_, sample(0), /*csv=*/true, /*power_w=*/7.5);
+  write_sample(dir_, invalid);
+  write_sample(dir_, labelled);
+  rebuild(dir_);
+  const report::RunScan files = report::scan_results(dir_);
+  auto synced = open_synced(dir_);
+  ASSERT_TRUE(synced.has_value());
+  EXPECT_TRUE(synced->skipped.empty());
+  const std::vector<report::StoredRun> listed = synced->database.listed_runs();
+  ASSERT_EQ(listed.size(), 3u);
+  EXPECT_EQ(report::runs_json(listed), report::runs_json(files.runs));
+  EXPECT_EQ(report::runs_table(listed), report::runs_table(files.runs));
+  EXPECT_FALSE(listed[1].valid);
+  EXPECT_EQ(listed[1].invalid_reasons, files.runs[1].invalid_reasons);
+  EXPECT_EQ(listed[2].warnings, files.runs[2].warnings);
+
+  report::HistoryOptions options;
+  options.benchmark_id = "a1";
+  options.metric = "latency.p99";
+  const auto from_files = report::history_json(report::history(files.runs, options));
+  const auto from_database =
+      report::history_json(report::history(listed, options, metric_source(synced->database)));
+  EXPECT_EQ(from_database, from_files);
+  EXPECT_EQ(from_database["better"], "smaller");
+}
+
+// The database follows its folder: a file copied in is recorded, a file deleted leaves, a file
+// that is no result is skipped as a scan of the folder skips it.
+TEST_F(ResultsDb, ASyncedDatabaseFollowsItsFolder) {
+  const fs::path first = write_sample(dir_, sample(0));
+  const fs::path second = write_sample(dir_, sample(1));
+  rebuild(dir_);
+  fs::remove(first);
+  const fs::path third = write_sample(dir_, sample(2));
+  std::ofstream(dir_ / "notes.json") << "{\"not\": \"a result\"}";
+  auto synced = open_synced(dir_);
+  ASSERT_TRUE(synced.has_value());
+  ASSERT_EQ(synced->skipped.size(), 1u);
+  EXPECT_NE(synced->skipped[0].find("notes.json"), std::string::npos) << synced->skipped[0];
+  std::vector<std::string> names;
+  for (const auto& r : synced->database.listed_runs()) names.push_back(r.path.filename());
+  EXPECT_EQ(names, (std::vector<std::string>{second.filename(), third.filename()}));
+  // What was recorded stays: a second reader has nothing to record.
+  EXPECT_EQ(Database::open(database()).runs().size(), 2u);
+}
+
+TEST_F(ResultsDb, AFolderWithoutADatabaseIsReadFromItsFiles) {
+  write_sample(dir_, sample(0));
+  EXPECT_FALSE(open_synced(dir_).has_value());
+  EXPECT_FALSE(fs::exists(database())) << "reading made a database";
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "results_source.hpp"
 #include "robotperf/cli/exit_codes.hpp"
 #include "robotperf/report/report.hpp"
+#include "robotperf/report/run_store.hpp"
 
 namespace robotperf::cli {
 
@@ -60,21 +61,34 @@ class HistoryCommand : public Command {
       const auto eq = label.find('=');
       options_.labels.emplace_back(label.substr(0, eq), label.substr(eq + 1));
     }
-    report::ReportInput input;
+    std::vector<report::StoredRun> runs;
+    std::optional<report::MetricSource> source;
+    std::optional<FolderRuns> folder;  // holds the database the source reads
     if (const auto url = database_to_read(from_, !results_.empty())) {
-      input = report_input_from_database(*url);
+      runs = runs_from_database(*url);
+    } else if (results_.size() <= 1 && (results_.empty() || fs::is_directory(results_[0]))) {
+      const fs::path dir = results_.empty() ? fs::path("results") : fs::path(results_[0]);
+      if (results_.empty() && !fs::is_directory(dir))
+        throw report::ReportError(
+            "history: no ./results folder here; name the results with --results DIR");
+      folder = folder_runs(dir);
+      if (folder->database) source = results_db::metric_source(folder->database->database);
+      runs = std::move(folder->runs);
     } else {
-      std::vector<fs::path> paths(results_.begin(), results_.end());
-      if (paths.empty()) {
-        if (!fs::is_directory("results"))
-          throw report::ReportError(
-              "history: no ./results folder here; name the results with --results DIR");
-        paths.emplace_back("results");
+      // Several folders, or files: read whole (the figures come from the files).
+      for (const auto& path : results_) {
+        if (fs::is_directory(path)) {
+          report::RunScan scan = report::scan_results(path);
+          for (const auto& s : scan.skipped)
+            std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
+          for (auto& run : scan.runs) runs.push_back(std::move(run));
+        } else {
+          runs.push_back(report::load_run(path));
+        }
       }
-      input = report::load_report_inputs(paths);
     }
-    for (const auto& s : input.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
-    const report::History h = report::history(input.runs, options_);
+    const report::History h =
+        source ? report::history(runs, options_, *source) : report::history(runs, options_);
     if (format_ == "json")
       std::cout << json_text(report::history_json(h), 1) << "\n";
     else

@@ -57,9 +57,7 @@ int list_results(const std::string& dir, bool dir_named, const std::string& from
   if (const auto url = database_to_read(from, dir_named)) {
     runs = runs_from_database(*url);
   } else {
-    auto scan = report::scan_results(dir);
-    for (const auto& sk : scan.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", sk.c_str());
-    runs = std::move(scan.runs);
+    runs = folder_runs(dir).runs;
   }
   if (format == "json") {
     std::cout << json_text(report::runs_json(runs), 1) << "\n";

@@ -25,6 +25,21 @@ std::vector<report::StoredRun> runs_from_database(const std::string& url) {
   return std::move(scan.runs);
 }
 
+FolderRuns folder_runs(const std::filesystem::path& folder) {
+  FolderRuns out;
+  out.database = results_db::open_synced(folder);
+  if (out.database) {
+    for (const auto& s : out.database->skipped)
+      std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
+    out.runs = out.database->database.listed_runs();
+    return out;
+  }
+  report::RunScan scan = report::scan_results(folder);
+  for (const auto& s : scan.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
+  out.runs = std::move(scan.runs);
+  return out;
+}
+
 report::ReportInput report_input_from_database(const std::string& url) {
   return report::ReportInput{runs_from_database(url), {}, {}};
 }

@@ -3,7 +3,9 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -51,9 +53,21 @@ struct History {
   ChangePointOptions change_points;   // how the change points were found
 };
 
+// Where history reads a run's figure: from the run's file (run_metrics), or, for runs listed from
+// the results database, from its metrics table.
+struct MetricSource {
+  std::function<std::optional<RunMetric>(const StoredRun& run, const std::string& name)> of;
+  // The figures the runs of a benchmark have: named when the one asked for is not among them.
+  std::function<std::vector<std::string>(const std::string& benchmark_id)> names;
+};
+MetricSource metrics_from_files(const std::vector<StoredRun>& runs);
+
 // The valid runs of `options.benchmark_id` that have `options.metric`, as one series per
 // configuration (comparable only with like: design §3.9), each with its change points. Throws
-// ReportError when no run of the benchmark has the metric (naming the metrics it has).
+// ReportError when no run of the benchmark has the metric (naming the metrics it has), or no such
+// run is valid.
+History history(const std::vector<StoredRun>& runs, const HistoryOptions& options,
+                const MetricSource& source);
 History history(const std::vector<StoredRun>& runs, const HistoryOptions& options);
 
 // A git hash as its first `digits` digits; any other revision (a user's label) whole.

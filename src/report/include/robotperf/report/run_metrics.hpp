@@ -22,6 +22,10 @@ struct RunMetric {
   enum class Better { kSmaller, kLarger, kUnknown } better = Better::kUnknown;
 };
 
+// "smaller", "larger", or "" when unknown: as the results database's metrics.better holds it.
+std::string better_text(RunMetric::Better better);
+RunMetric::Better better_from_text(const std::string& text);
+
 // Every figure the run has, NaN values included (a figure its file holds as null).
 std::vector<RunMetric> run_metrics(const StoredRun& run);
 

@@ -14,6 +14,9 @@
 #include <utility>
 #include <vector>
 
+#include "robotperf/report/history.hpp"
+#include "robotperf/report/run_store.hpp"
+
 struct sqlite3;
 
 namespace robotperf::results_db {
@@ -48,6 +51,7 @@ struct MetricRow {
   double value = 0;
   std::string unit;
   std::optional<double> low, high;
+  std::string better;  // which way is better: "smaller", "larger", or "" (unknown)
 };
 
 // One bin of a run's latency histogram, in ns; the non-positive latencies are the bin with no
@@ -87,6 +91,17 @@ class Database {
   std::vector<std::int64_t> samples_ns(std::int64_t run) const;  // in message order
   std::vector<HistogramBin> histogram(std::int64_t run) const;
   std::map<std::string, std::string> labels(std::int64_t run) const;
+
+  // Every run with the fields `results list` and `history` read, from the runs, metrics and labels
+  // tables, without reading a results file: for listing and choosing among many runs. Its `path`
+  // is the file under the database's folder (as `file` names it), its `json` is empty, and what
+  // only the file holds (per-hop and callback tables, peak steps, the histogram) is left out. In
+  // start order, then file name.
+  std::vector<report::StoredRun> listed_runs() const;
+  // The figure `name` of each run that has it, keyed by the run's path as listed_runs gives it.
+  std::map<std::filesystem::path, MetricRow> metric_of_runs(const std::string& name) const;
+  // The names of the figures the runs of `benchmark_id` have.
+  std::vector<std::string> metric_names(const std::string& benchmark_id) const;
   int schema_version() const;
   const std::filesystem::path& path() const { return path_; }
 
@@ -103,6 +118,7 @@ class Database {
   // new one beside it first).
   static Database open_file(const std::filesystem::path& path);
   friend Rebuilt rebuild(const std::filesystem::path& folder);
+  friend std::optional<struct Synced> open_synced(const std::filesystem::path& folder);
 
   std::unique_ptr<sqlite3, Closer> db_;
   std::filesystem::path path_;
@@ -120,5 +136,23 @@ struct Rebuilt {
 // new one. Throws report::ReportError when `folder` does not exist, DatabaseError when the
 // database cannot be written.
 Rebuilt rebuild(const std::filesystem::path& folder);
+
+// History's figures of the runs `database.listed_runs()` gives, from its metrics table (one query
+// per figure asked for). The database must outlive the source.
+report::MetricSource metric_source(const Database& database);
+
+// A folder's database brought up to date with the folder's results files, for reading many runs
+// without reading every file.
+struct Synced {
+  Database database;
+  std::vector<std::string> skipped;  // results files that could not be recorded, and why
+};
+
+// Opens <folder>/robotperf.db and brings it up to date with the results files directly in
+// `folder`, matched by name: files it does not hold yet (copied in, or written when the database
+// could not take them) and runs recorded before the schema kept whole documents are recorded from
+// their files; rows whose file is gone are removed. nullopt when the folder has no database, or
+// it cannot be opened or written: the caller reads the files.
+std::optional<Synced> open_synced(const std::filesystem::path& folder);
 
 }  // namespace robotperf::results_db
