@@ -15,6 +15,11 @@ namespace {
 class RankedSums {
  public:
   explicit RankedSums(std::size_t ranks) : count_(ranks + 1, 0), sum_(ranks + 1, 0) {}
+  void clear() {
+    std::fill(count_.begin(), count_.end(), 0);
+    std::fill(sum_.begin(), sum_.end(), 0);
+    total_count_ = total_sum_ = 0;
+  }
   void add(std::size_t rank, double value) {
     for (std::size_t i = rank + 1; i < count_.size(); i += i & (~i + 1)) {
       count_[i] += 1;
@@ -39,28 +44,50 @@ class RankedSums {
   double total_count_ = 0, total_sum_ = 0;
 };
 
+// A segment's values with what does not change when they are shuffled: their ranks, each one's
+// distance to all the others, and the sum of the distances of every pair.
+struct Segment {
+  std::vector<double> values;
+  std::vector<std::size_t> rank;  // of each value among the sorted values (the first equal one)
+  std::vector<double> to_all;     // sum over j of |values[i] - values[j]|
+  double every_pair = 0;
+
+  explicit Segment(std::vector<double> v) : values(std::move(v)) {
+    const std::size_t n = values.size();
+    std::vector<double> sorted(values);
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<double> prefix(n + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) prefix[i + 1] = prefix[i] + sorted[i];
+    for (std::size_t i = 0; i < n; ++i)
+      every_pair += sorted[i] * (2.0 * static_cast<double>(i) - static_cast<double>(n) + 1);
+    for (double x : values) {
+      rank.push_back(static_cast<std::size_t>(std::lower_bound(sorted.begin(), sorted.end(), x) -
+                                              sorted.begin()));
+      const auto above = static_cast<std::size_t>(
+          std::upper_bound(sorted.begin(), sorted.end(), x) - sorted.begin());
+      to_all.push_back((x * static_cast<double>(above) - prefix[above]) +
+                       ((prefix[n] - prefix[above]) - x * static_cast<double>(n - above)));
+    }
+  }
+};
+
 struct Split {
   std::size_t at = 0;  // within the segment; 0 when the segment has no admissible split
   double statistic = -1;
 };
 
-// The split of `x` maximising Q(tau) = m k / n * (2/(m k) B - W_L / C(m,2) - W_R / C(k,2)), where
-// m = tau and k = n - tau are the sides' sizes, B the sum of distances between the sides and W the
-// sums within each side (Matteson & James 2014, alpha = 1). One pass moves each point from the
-// right side to the left, updating the three sums.
-Split best_split(const std::vector<double>& x, std::size_t min_segment) {
-  const std::size_t n = x.size();
+// The split of the segment's values, taken in `order`, maximising
+// Q(tau) = m k / n * (2/(m k) B - W_L / C(m,2) - W_R / C(k,2)), where m = tau and k = n - tau are
+// the sides' sizes, B the sum of distances between the sides and W the sums within each side
+// (Matteson & James 2014, alpha = 1). One pass moves each value from the right side to the left,
+// updating the three sums; `left` is scratch space.
+Split best_split(const Segment& segment, const std::vector<std::size_t>& order,
+                 std::size_t min_segment, RankedSums& left) {
+  const std::size_t n = order.size();
   Split best;
   if (n < 2 * min_segment) return best;
-  std::vector<double> sorted(x);
-  std::sort(sorted.begin(), sorted.end());
-  std::vector<double> prefix(n + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) prefix[i + 1] = prefix[i] + sorted[i];
-  double within_right = 0;  // every pair at first
-  for (std::size_t i = 0; i < n; ++i)
-    within_right += sorted[i] * (2.0 * static_cast<double>(i) - static_cast<double>(n) + 1);
-  double within_left = 0, between = 0;
-  RankedSums left(n);
+  left.clear();
+  double within_left = 0, within_right = segment.every_pair, between = 0;
   for (std::size_t tau = 0; tau < n; ++tau) {
     if (tau >= min_segment && n - tau >= min_segment) {
       const double m = static_cast<double>(tau), k = static_cast<double>(n - tau);
@@ -69,21 +96,22 @@ Split best_split(const std::vector<double>& x, std::size_t min_segment) {
                         2 * within_right / (k * (k - 1)));
       if (q > best.statistic) best = {tau, q};
     }
-    const double v = x[tau];
-    const auto rank = static_cast<std::size_t>(std::lower_bound(sorted.begin(), sorted.end(), v) -
-                                               sorted.begin());
-    const auto above = static_cast<std::size_t>(std::upper_bound(sorted.begin(), sorted.end(), v) -
-                                                sorted.begin());
-    const double to_all = (v * static_cast<double>(above) - prefix[above]) +
-                          ((prefix[n] - prefix[above]) - v * static_cast<double>(n - above));
-    const double to_left = left.distance_to(rank, v);
-    const double to_right = to_all - to_left;
+    const std::size_t i = order[tau];
+    const double v = segment.values[i];
+    const double to_left = left.distance_to(segment.rank[i], v);
+    const double to_right = segment.to_all[i] - to_left;
     within_left += to_left;
     within_right -= to_right;
     between += to_right - to_left;
-    left.add(rank, v);
+    left.add(segment.rank[i], v);
   }
   return best;
+}
+
+std::vector<std::size_t> identity(std::size_t n) {
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  return order;
 }
 
 double median_of(std::vector<double> v) {
@@ -117,10 +145,15 @@ std::vector<ChangePoint> change_points(const std::vector<double>& values,
   };
   while (true) {
     // The best split over all segments (E-divisive's iteration).
+    std::vector<Segment> segments;
+    for (std::size_t i = 0; i + 1 < bounds.size(); ++i) segments.emplace_back(segment(i));
+    std::vector<RankedSums> scratch;  // one per segment, as large as it
+    for (const Segment& seg : segments) scratch.emplace_back(seg.values.size());
     std::size_t chosen = 0;
     Split best;
-    for (std::size_t i = 0; i + 1 < bounds.size(); ++i) {
-      const Split s = best_split(segment(i), options.min_segment);
+    for (std::size_t i = 0; i < segments.size(); ++i) {
+      const Split s = best_split(segments[i], identity(segments[i].values.size()),
+                                 options.min_segment, scratch[i]);
       if (s.at > 0 && s.statistic > best.statistic) {
         best = s;
         chosen = i;
@@ -131,13 +164,15 @@ std::vector<ChangePoint> change_points(const std::vector<double>& values,
     // is as large. Stops as soon as the p-value can no longer reach the significance level.
     const auto allowed = static_cast<std::size_t>(
         std::floor(options.significance * static_cast<double>(options.permutations + 1)));
+    std::vector<std::vector<std::size_t>> orders;
+    for (const Segment& seg : segments) orders.push_back(identity(seg.values.size()));
     std::size_t as_large = 0, done = 0;
     for (; done < options.permutations && as_large + 1 <= allowed; ++done) {
       double largest = -1;
-      for (std::size_t i = 0; i + 1 < bounds.size(); ++i) {
-        std::vector<double> shuffled = segment(i);
-        std::shuffle(shuffled.begin(), shuffled.end(), random);
-        largest = std::max(largest, best_split(shuffled, options.min_segment).statistic);
+      for (std::size_t i = 0; i < segments.size(); ++i) {
+        std::shuffle(orders[i].begin(), orders[i].end(), random);
+        largest = std::max(
+            largest, best_split(segments[i], orders[i], options.min_segment, scratch[i]).statistic);
       }
       // A tolerance: a shuffle that leaves the series as it was gives the same statistic.
       if (largest >= best.statistic * (1 - 1e-12)) ++as_large;

@@ -1665,6 +1665,15 @@ std::string table_text(const Table& t) {
 
 }  // namespace detail
 
+std::vector<fs::path> files_of_runs_chosen(const ReportInput& input,
+                                           const std::vector<std::string>& selectors) {
+  std::set<fs::path> files;
+  for (const auto& selector : selectors) {
+    for (const StoredRun* r : select(selector, input).runs) files.insert(r->path);
+  }
+  return {files.begin(), files.end()};
+}
+
 ReportInput load_report_inputs(const std::vector<fs::path>& paths) {
   ReportInput in;
   std::set<fs::path> seen;

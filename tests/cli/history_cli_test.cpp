@@ -104,18 +104,27 @@ TEST_F(History, ConfigurationsAreSeriesOfTheirOwn) {
   EXPECT_TRUE(j["series"][1]["changes"].empty()) << o.out;
 }
 
-// A folder with a results database is read through it (fast for many runs): history and the
-// list read as they do from the files.
+// A folder with a results database is read through it (fast for many runs): history, the list
+// and compare read as they do from the files.
 TEST_F(History, AFoldersDatabaseReadsAsItsFiles) {
   for (int rev = 0; rev < 8; ++rev) write_runs(1, 5.0, "r" + std::to_string(rev));
   for (int rev = 8; rev < 14; ++rev) write_runs(1, 6.5, "r" + std::to_string(rev));
   const auto history_files = robotperf_cli(history("--format json --by rev"));
   const auto list_files = robotperf_cli("results list " + dir_.string() + " --format csv");
+  const std::string compare = "compare label.rev=r1 label.rev=r12 --results " + dir_.string();
+  const auto compare_files = robotperf_cli(compare);
+  ASSERT_EQ(compare_files.exit_code, 0) << compare_files.out;
+  const std::string unknown = "compare label.rev=r1 no-such-board --results " + dir_.string();
+  const auto unknown_files = robotperf_cli(unknown);
   ASSERT_EQ(history_files.exit_code, 0) << history_files.out;
   ASSERT_FALSE(fs::exists(dir_ / "robotperf.db"));
   ASSERT_EQ(robotperf_cli("results rebuild-db " + dir_.string()).exit_code, 0);
   EXPECT_EQ(robotperf_cli(history("--format json --by rev")).out, history_files.out);
   EXPECT_EQ(robotperf_cli("results list " + dir_.string() + " --format csv").out, list_files.out);
+  EXPECT_EQ(robotperf_cli(compare).out, compare_files.out);
+  const auto unknown_database = robotperf_cli(unknown);
+  EXPECT_EQ(unknown_database.exit_code, 2);
+  EXPECT_EQ(unknown_database.out, unknown_files.out);
   // A run added after the database was made is read as well.
   write_runs(1, 6.5, "r14");
   const auto j = nlohmann::json::parse(robotperf_cli(history("--format json")).out);

@@ -1,8 +1,10 @@
 // `robotperf compare A B`: the report's comparison of two sides, in the terminal.
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <optional>
 #include <stdexcept>
+#include <tuple>
 
 #include "../options.hpp"
 #include "commands.hpp"
@@ -33,6 +35,47 @@ std::vector<fs::path> results_paths(const std::vector<std::string>& results,
     throw report::ReportError(
         "compare: no ./results folder here; name the results with --results DIR");
   return paths;
+}
+
+// A folder of many runs read through its database (docs/reference/results-database.md): the
+// runs are listed from it, and only those the sides choose are read whole from their files, with
+// the folder's published rows. nullopt when the folder has subfolders (compare reads them too) or
+// no database it can use: then every file is read.
+std::optional<report::ReportInput> sides_through_database(const fs::path& folder,
+                                                          const std::vector<std::string>& sides) {
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) return std::nullopt;
+  std::vector<fs::path> published;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    if (entry.is_directory(ec)) return std::nullopt;
+    if (report::may_be_imported_file(entry.path()) || entry.path().filename() == "benchmark.yaml")
+      published.push_back(entry.path());
+  }
+  auto synced = results_db::open_synced(folder);
+  if (!synced) return std::nullopt;
+  report::ReportInput out;
+  out.skipped = std::move(synced->skipped);
+  std::ranges::sort(published);
+  for (const auto& file : published) {
+    try {
+      auto read = report::load_report_inputs({file});
+      for (auto& p : read.published) out.published.push_back(std::move(p));
+    } catch (const report::ReportError& e) {
+      out.skipped.push_back(e.what());
+    }
+  }
+  const report::ReportInput listed{synced->database.listed_runs(), out.published, {}};
+  for (const auto& file : report::files_of_runs_chosen(listed, sides)) {
+    try {
+      out.runs.push_back(report::load_run(file));
+    } catch (const report::ReportError& e) {
+      out.skipped.push_back(e.what());
+    }
+  }
+  std::ranges::stable_sort(out.runs, [](const report::StoredRun& x, const report::StoredRun& y) {
+    return std::tie(x.started_utc, x.path) < std::tie(y.started_utc, y.path);
+  });
+  return out;
 }
 
 struct GateArgs {
@@ -107,8 +150,12 @@ class CompareCommand : public Command {
     if (!gating && (!gate_.junit.empty() || !gate_.markdown.empty()))
       throw std::invalid_argument("--junit and --markdown go with --fail-on-regression");
     const auto url = database_to_read(from_, !results_.empty());
-    const auto input = url ? report_input_from_database(*url)
-                           : report::load_report_inputs(results_paths(results_, {a, b}));
+    const auto paths = url ? std::vector<fs::path>{} : results_paths(results_, {a, b});
+    std::optional<report::ReportInput> through_database;
+    if (paths.size() == 1) through_database = sides_through_database(paths[0], {a, b});
+    const auto input = url                ? report_input_from_database(*url)
+                       : through_database ? std::move(*through_database)
+                                          : report::load_report_inputs(paths);
     for (const auto& s : input.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
     if (gating) return gate(input, a, b, gate_);
     std::cout << report::render_comparison_text(input, a, b);

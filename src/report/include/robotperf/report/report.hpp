@@ -28,6 +28,13 @@ struct ReportInput {
 // ReportError; unreadable files inside a folder are listed in `skipped`.
 ReportInput load_report_inputs(const std::vector<std::filesystem::path>& paths);
 
+// The files of the local runs that the selectors choose (as `compare` takes them): for a caller
+// that lists many runs from the results database and reads only these whole. Selection reads
+// only what a listed run has (its file, configuration, labels, rates), so it chooses as it would
+// among the runs read whole.
+std::vector<std::filesystem::path> files_of_runs_chosen(const ReportInput& input,
+                                                        const std::vector<std::string>& selectors);
+
 // More polygons than this on one radar cannot be told apart.
 inline constexpr std::size_t kMaxRadarSeries = 6;
 
