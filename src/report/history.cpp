@@ -16,7 +16,7 @@ namespace {
 
 // The configuration of a run as a series of its history: the report's series name without the
 // labels, which mark what changes along a history (a revision, a build) as often as what splits
-// it (runs are chosen by label with HistoryOptions::labels; --system names the machine).
+// it (the CLI chooses runs by label; --system names the machine).
 std::string series_of(StoredRun run) {
   run.labels.clear();
   return detail::local_series(run);
@@ -154,12 +154,6 @@ History history(const std::vector<StoredRun>& runs, const HistoryOptions& option
   for (const StoredRun& run : runs) {
     if (run.benchmark_id != options.benchmark_id) continue;
     ++of_benchmark;
-    const bool labelled =
-        std::all_of(options.labels.begin(), options.labels.end(), [&](const auto& label) {
-          const auto it = run.labels.find(label.first);
-          return it != run.labels.end() && it->second == label.second;
-        });
-    if (!labelled) continue;
     std::optional<RunMetric> metric = source.of(run, options.metric);
     if (!metric) continue;
     ++with_metric;

@@ -132,6 +132,31 @@ TEST_F(History, AFoldersDatabaseReadsAsItsFiles) {
   EXPECT_EQ(j["series"][0]["changes"].size(), 1u);
 }
 
+// --label chooses runs in every read verb: the list, history and the report.
+TEST_F(History, LabelsChooseTheRunsOfEveryReadVerb) {
+  write_runs(4, 5.0, "main");
+  write_runs(3, 5.0, "pr");
+  const auto listed =
+      robotperf_cli("results list " + dir_.string() + " --label rev=pr --format json");
+  ASSERT_EQ(listed.exit_code, 0) << listed.out;
+  const auto rows = nlohmann::json::parse(listed.out);
+  ASSERT_EQ(rows.size(), 3u) << listed.out;
+  for (const auto& row : rows) EXPECT_EQ(row["labels"], "rev=pr");
+
+  const auto h =
+      nlohmann::json::parse(robotperf_cli(history("--label rev=main --format json")).out);
+  EXPECT_EQ(h["series"][0]["points"].size(), 4u);
+
+  const auto md = robotperf_cli("report " + dir_.string() + " --label rev=pr --md -");
+  ASSERT_EQ(md.exit_code, 0) << md.out;
+  EXPECT_NE(md.out.find("rev=pr"), std::string::npos);
+  EXPECT_EQ(md.out.find("rev=main"), std::string::npos) << md.out;
+
+  const auto bad = robotperf_cli("results list " + dir_.string() + " --label rev");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.out.find("expected KEY=VALUE"), std::string::npos) << bad.out;
+}
+
 TEST_F(History, AnUnknownMetricOrBenchmarkIsOneLine) {
   write_runs(3, 5.0, "a");
   const auto metric = robotperf_cli(history("--metric latency.p51"));

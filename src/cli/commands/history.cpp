@@ -57,10 +57,6 @@ class HistoryCommand : public Command {
   }
 
   int run(const Context&) override {
-    for (const auto& label : labels_) {
-      const auto eq = label.find('=');
-      options_.labels.emplace_back(label.substr(0, eq), label.substr(eq + 1));
-    }
     std::vector<report::StoredRun> runs;
     std::optional<report::MetricSource> source;
     std::optional<FolderRuns> folder;  // holds the database the source reads
@@ -87,6 +83,7 @@ class HistoryCommand : public Command {
         }
       }
     }
+    keep_labelled(runs, labels_);
     const report::History h =
         source ? report::history(runs, options_, *source) : report::history(runs, options_);
     if (format_ == "json")

@@ -5,6 +5,7 @@
 #include <iostream>
 #include <stdexcept>
 
+#include "../options.hpp"
 #include "commands.hpp"
 #include "results_source.hpp"
 #include "robotperf/cli/exit_codes.hpp"
@@ -20,6 +21,7 @@ struct ReportArgs {
   std::string from;  // a PostgreSQL database's URL
   std::string html, md, title = "robotperf report";
   std::vector<std::string> compare;
+  std::vector<std::string> labels;  // KEY=VALUE: only the runs with these
   bool radar = false;
 };
 
@@ -38,7 +40,8 @@ int make_report(const ReportArgs& a) {
   for (const auto& p : a.inputs.empty() ? std::vector<std::string>{"results"} : a.inputs)
     paths.emplace_back(p);
   const auto url = database_to_read(a.from, !a.inputs.empty());
-  const auto input = url ? report_input_from_database(*url) : report::load_report_inputs(paths);
+  auto input = url ? report_input_from_database(*url) : report::load_report_inputs(paths);
+  keep_labelled(input.runs, a.labels);
   for (const auto& s : input.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
   if (input.runs.empty() && input.published.empty())
     throw report::ReportError(
@@ -85,6 +88,10 @@ class ReportCommand : public Command {
     command->add_option("--compare", args_.compare,
                         "compare two sides (give it twice): a results file or name prefix, "
                         "or a hardware name");
+    command
+        ->add_option("--label", args_.labels,
+                     "KEY=VALUE: only the runs with this label (repeatable); published rows stay")
+        ->check(label_check());
     command->add_flag("--radar", args_.radar,
                       "add radar plots per category, RobotPerf's presentation (at most 6 series "
                       "each)");

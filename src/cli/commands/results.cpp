@@ -52,13 +52,14 @@ std::vector<report::StoredRun> collect_runs(const std::vector<std::string>& path
 // The runs of the folder `dir`, or of the database --from or ROBOTPERF_RESULTS_URL names when no
 // folder is named.
 int list_results(const std::string& dir, bool dir_named, const std::string& from,
-                 const std::string& format) {
+                 const std::string& format, const std::vector<std::string>& labels) {
   std::vector<report::StoredRun> runs;
   if (const auto url = database_to_read(from, dir_named)) {
     runs = runs_from_database(*url);
   } else {
     runs = folder_runs(dir).runs;
   }
+  keep_labelled(runs, labels);
   if (format == "json") {
     std::cout << json_text(report::runs_json(runs), 1) << "\n";
   } else {
@@ -252,7 +253,8 @@ class ResultsCommand : public Command {
 
   int run(const Context& context) override {
     if (*list_)
-      return list_results(list_dir_, list_dir_option_->count() > 0, list_from_, list_format_);
+      return list_results(list_dir_, list_dir_option_->count() > 0, list_from_, list_format_,
+                          list_labels_);
     if (*export_) return export_results(context.roots, export_args_);
     if (*rebuild_db_) return rebuild_database(rebuild_dir_);
     if (*push_) return push_results(push_to_, push_paths_);
@@ -269,6 +271,10 @@ class ResultsCommand : public Command {
     list_->add_option("--from", list_from_,
                       "read the runs from this PostgreSQL database (postgresql://...; credentials "
                       "from PGPASSWORD, ~/.pgpass or PGPASSFILE)");
+    list_
+        ->add_option("--label", list_labels_,
+                     "KEY=VALUE: only the runs with this label (repeatable)")
+        ->check(label_check());
     list_
         ->add_option("--format", list_format_,
                      "table (default), json (an array of objects) or csv (a header line, then "
@@ -341,6 +347,7 @@ class ResultsCommand : public Command {
   CLI::Option* list_dir_option_ = nullptr;
   std::string list_from_;
   std::string list_format_ = "table";
+  std::vector<std::string> list_labels_;
   ExportArgs export_args_;
   std::vector<std::string> import_paths_;
   std::string import_into_;

@@ -1,5 +1,6 @@
 #include "results_source.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 
@@ -38,6 +39,20 @@ FolderRuns folder_runs(const std::filesystem::path& folder) {
   for (const auto& s : scan.skipped) std::fprintf(stderr, "robotperf: skipped %s\n", s.c_str());
   out.runs = std::move(scan.runs);
   return out;
+}
+
+void keep_labelled(std::vector<report::StoredRun>& runs, const std::vector<std::string>& labels) {
+  std::vector<std::pair<std::string, std::string>> wanted;
+  for (const auto& label : labels) {
+    const auto eq = label.find('=');
+    wanted.emplace_back(label.substr(0, eq), label.substr(eq + 1));
+  }
+  std::erase_if(runs, [&](const report::StoredRun& run) {
+    return !std::ranges::all_of(wanted, [&](const auto& w) {
+      const auto it = run.labels.find(w.first);
+      return it != run.labels.end() && it->second == w.second;
+    });
+  });
 }
 
 report::ReportInput report_input_from_database(const std::string& url) {

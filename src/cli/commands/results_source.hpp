@@ -32,6 +32,10 @@ struct FolderRuns {
 };
 FolderRuns folder_runs(const std::filesystem::path& folder);
 
+// Keeps the runs that carry every label of `labels` ("KEY=VALUE", as --label takes them): the
+// read verbs' label filter.
+void keep_labelled(std::vector<report::StoredRun>& runs, const std::vector<std::string>& labels);
+
 // The same as the report's input: runs, no published rows.
 report::ReportInput report_input_from_database(const std::string& url);
 

@@ -7,7 +7,6 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "robotperf/report/change_points.hpp"
@@ -22,8 +21,6 @@ struct HistoryOptions {
   // A label key: one point per value of that label (its runs pooled), in the order of their first
   // run; runs without the label are left out. Empty: one point per run.
   std::string by;
-  // Only the runs that carry every one of these labels (key, value).
-  std::vector<std::pair<std::string, std::string>> labels;
   ChangePointOptions change_points;
 };
 
