@@ -6,6 +6,8 @@
 #include <random>
 #include <stdexcept>
 
+#include "robotperf/metrics/latency_stats.hpp"
+
 namespace robotperf::report {
 
 namespace {
@@ -114,12 +116,6 @@ std::vector<std::size_t> identity(std::size_t n) {
   return order;
 }
 
-double median_of(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2;
-}
-
 }  // namespace
 
 double ChangePoint::change_percent() const {
@@ -191,8 +187,8 @@ std::vector<ChangePoint> change_points(const std::vector<double>& values,
     ChangePoint c;
     c.index = at;
     c.p_value = p;
-    c.before = median_of(segment(i - 1));
-    c.after = median_of(segment(i));
+    c.before = metrics::median(segment(i - 1));
+    c.after = metrics::median(segment(i));
     out.push_back(c);
   }
   return out;

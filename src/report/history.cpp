@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "report_model.hpp"
+#include "robotperf/metrics/latency_stats.hpp"
 
 namespace robotperf::report {
 
@@ -28,12 +29,6 @@ std::string revision_of(const StoredRun& run) {
   if (const auto it = run.labels.find("robotperf.revision"); it != run.labels.end())
     return it->second;
   return run.git_revision;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2;
 }
 
 struct Measured {
@@ -73,7 +68,7 @@ std::vector<HistoryPoint> points_of(const std::vector<Measured>& runs, const std
     }
   }
   for (std::size_t i = 0; i < points.size(); ++i) {
-    points[i].value = median(values[i]);
+    points[i].value = metrics::median(values[i]);
     if (values[i].size() > 1) {
       const auto [low, high] = std::minmax_element(values[i].begin(), values[i].end());
       points[i].low = *low;
@@ -83,16 +78,9 @@ std::vector<HistoryPoint> points_of(const std::vector<Measured>& runs, const std
   return points;
 }
 
-const char* better_phrase(RunMetric::Better better) {
-  switch (better) {
-    case RunMetric::Better::kSmaller:
-      return "smaller is better";
-    case RunMetric::Better::kLarger:
-      return "larger is better";
-    case RunMetric::Better::kUnknown:
-      break;
-  }
-  return "no better direction";
+std::string better_phrase(RunMetric::Better better) {
+  const std::string which = better_text(better);
+  return which.empty() ? "no better direction" : which + " is better";
 }
 
 // "worse", "better" or "" for a change of the figure by `percent`.
