@@ -43,7 +43,7 @@ class Gate : public ::testing::Test {
       SampleRun s;
       s.base_latency_ms = 5.0 * scale * (1.0 + spread(random));
       s.labels = {{"rev", rev}};
-      s.start_unix_ns += (next_++) * 1'000'000'000;
+      s.start_unix_ns += static_cast<int64_t>(next_++) * 1'000'000'000;
       write_sample(folder, s);
     }
   }
