@@ -86,8 +86,8 @@ struct ReadOptions {
   std::optional<int64_t> end_time_ns;    // inclusive
   bool verify_crc = true;                // MCAP chunk and summary CRCs
   // MCAP: threads that decompress and check chunks ahead of the reading, each on its own chunk,
-  // with twice as many chunks in flight as threads (memory: that many chunks, whatever the
-  // bag's size). Messages come in the same order whatever the number. 0: one per online CPU;
+  // with one chunk more in flight than threads (memory: about twice that many chunks, whatever
+  // the bag's size). Messages come in the same order whatever the number. 0: one per online CPU;
   // 1: no thread, each chunk decompressed on the reading thread when its turn comes.
   std::size_t chunk_threads = 0;
 };
