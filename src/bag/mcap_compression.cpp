@@ -20,6 +20,43 @@ LZ4F_dctx* new_lz4_context() {
   return LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION)) ? nullptr : ctx;
 }
 
+// Output allocated up front for a zstd chunk, per compressed byte: far above what recorded data
+// reaches (the synthetic images: 20), while a frame header's claim of more is only believed as
+// the bytes come.
+constexpr uint64_t kPlausibleRatio = 64;
+
+// The compressed bytes given to zstd at a time when it decodes straight into the output: at the
+// synthetic images' 20:1, about a piece of output.
+constexpr std::size_t kInputSlice = kPiece / 16;
+
+// Decodes zstd frames straight into `out`, sized to the claim already (zstd's streaming otherwise
+// decodes into a window of its own and copies from there), feeding the input a slice at a time so
+// that each piece of output is checksummed while in cache. False when the frames do not come to
+// exactly `out`; the caller then decodes again the other way, for its precise error.
+bool zstd_into_sized_output(ZSTD_DCtx* ctx, std::span<const uint8_t> in, std::vector<uint8_t>& out,
+                            uint32_t* crc) {
+  if (ZSTD_isError(ZSTD_DCtx_setParameter(ctx, ZSTD_d_stableOutBuffer, 1))) return false;
+  ZSTD_outBuffer output{out.data(), out.size(), 0};
+  ZSTD_inBuffer input{in.data(), 0, 0};
+  uint32_t running_crc = 0;
+  std::size_t left = 0;
+  do {
+    const std::size_t produced = output.pos;
+    const std::size_t consumed = input.pos;
+    input.size = std::min(in.size(), input.size + kInputSlice);
+    left = ZSTD_decompressStream(ctx, &output, &input);
+    if (ZSTD_isError(left)) return false;
+    if (crc != nullptr && output.pos > produced) {
+      running_crc = crc32(std::span<const uint8_t>(out.data() + produced, output.pos - produced),
+                          running_crc);
+    }
+    if (output.pos == produced && input.pos == consumed && input.size == in.size()) return false;
+  } while (left != 0 || input.pos < in.size());
+  if (output.pos != out.size()) return false;
+  if (crc != nullptr) *crc = running_crc;
+  return true;
+}
+
 // The most `in` can decompress to. zstd frames say it in their headers: no fixed ratio bounds
 // them (a run of zero bytes compresses about 32000:1), and a header can lie, which only decoding
 // finds out. lz4 expands at most about 255x per input byte; an unknown codec, refused later, gets
@@ -65,6 +102,14 @@ void decompress(const std::string& compression, std::span<const uint8_t> in,
     ZSTD_DCtx* ctx = context.get();
     // A chunk that failed may have left it mid-frame.
     ZSTD_DCtx_reset(ctx, ZSTD_reset_session_only);
+    // Sized to the claim at once when that needs no allocation (an output reused from an earlier
+    // chunk) or a plausible one: growing it piece by piece costs a copy and fresh pages each time.
+    if (out.capacity() >= uncompressed_size || uncompressed_size <= kPlausibleRatio * in.size()) {
+      out.resize(static_cast<std::size_t>(uncompressed_size));
+      if (zstd_into_sized_output(ctx, in, out, crc)) return;
+      ZSTD_DCtx_reset(ctx, ZSTD_reset_session_only);
+    }
+    ZSTD_DCtx_setParameter(ctx, ZSTD_d_stableOutBuffer, 0);
     // Streamed into an output that grows as the bytes come: a frame header may claim gigabytes
     // that its blocks never hold, and zstd finds that out only at the frame's end. A piece at a
     // time, so that each is checksummed while still in cache. The output is reused from the last

@@ -149,9 +149,9 @@ uint32_t crc32(std::span<const uint8_t> bytes, uint32_t crc = 0);
 
 // Decompresses a chunk's records (or a rosbag2 message compressed on its own), which must come
 // to exactly `uncompressed_size` bytes; throws FormatError for an unknown compression or corrupt
-// data. Memory grows with the bytes actually decoded, never to a size only claimed. With `crc`,
-// also returns the CRC-32 of the output there, computed piece by piece while each piece is still
-// in cache.
+// data. Memory grows with the bytes actually decoded, never to a size only claimed beyond 64
+// bytes per compressed byte. With `crc`, also returns the CRC-32 of the output there, computed
+// piece by piece while each piece is still in cache.
 void decompress(const std::string& compression, std::span<const uint8_t> in,
                 uint64_t uncompressed_size, std::vector<uint8_t>& out, uint32_t* crc = nullptr);
 // Compresses `in` with "zstd" or "lz4" (frame format).

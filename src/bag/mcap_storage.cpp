@@ -16,6 +16,7 @@
 #include <tuple>
 
 #include "mcap_format.hpp"
+#include "read_ahead.hpp"
 #include "robotperf/bag/bag.hpp"
 #include "robotperf/build_info.hpp"
 
@@ -134,6 +135,7 @@ class McapReader final : public StorageReader {
   int64_t end_time_ns() const override { return static_cast<int64_t>(end_); }
 
   bool next(Message& out) override {
+    if (!read_ahead_) start_read_ahead();
     try {
       while (next_unit_ < units_.size() &&
              (heap_.empty() || units_[next_unit_].start_time <= heap_.front().log_time)) {
@@ -149,9 +151,8 @@ class McapReader final : public StorageReader {
     out.timestamp_ns = static_cast<int64_t>(p.log_time);
     // Into the caller's buffer, whose capacity is reused from message to message.
     out.data.assign(p.data.begin(), p.data.end());
-    // The last message of a buffer hands it back for the next unit: large
-    // buffers allocated afresh would cost a page fault per 4 KiB.
-    if (p.buffer.use_count() == 1 && spare_.size() < 2) spare_.push_back(std::move(p.buffer));
+    // The last message of a buffer hands it back for a later chunk.
+    if (p.buffer.use_count() == 1) read_ahead_->give_back(std::move(p.buffer));
     heap_.pop_back();
     return true;
   }
@@ -426,7 +427,8 @@ class McapReader final : public StorageReader {
 
   // The records of the chunk record `r`: in place when uncompressed, else
   // decompressed into `plain`. Checks the CRC of the uncompressed records.
-  std::span<const uint8_t> chunk_records(uint64_t offset, Cursor& r, std::vector<uint8_t>& plain) {
+  std::span<const uint8_t> chunk_records(uint64_t offset, Cursor& r,
+                                         std::vector<uint8_t>& plain) const {
     r.u64();  // message_start_time
     r.u64();  // message_end_time
     const uint64_t uncompressed_size = r.u64();
@@ -467,14 +469,35 @@ class McapReader final : public StorageReader {
     }
   }
 
-  std::shared_ptr<std::vector<uint8_t>> take_buffer() {
-    if (spare_.empty()) return std::make_shared<std::vector<uint8_t>>();
-    auto b = std::move(spare_.back());
-    spare_.pop_back();
-    return b;
+  // Started on the first message, not on opening: a reader opened for its topics alone starts
+  // no thread.
+  void start_read_ahead() {
+    const std::size_t threads =
+        options_.chunk_threads == 0 ? online_cpus() : options_.chunk_threads;
+    // One thread: everything on the reading thread, as without read-ahead. One chunk in flight
+    // per worker and one more, ready for the reader while the workers start the next ones: each
+    // buffer more is a chunk of fresh pages to fault in, and bought nothing measurable.
+    const std::size_t workers = threads == 1 ? 0 : threads;
+    read_ahead_ = std::make_unique<ReadAhead>(
+        units_.size(), workers, workers + 1, [this](std::size_t unit, std::vector<uint8_t>& plain) {
+          return unit_records(unit, plain);
+        });
+  }
+
+  // What the read-ahead does for each unit, on any thread: a chunk's records, decompressed and
+  // checked. Throws what load_unit() would throw there.
+  std::span<const uint8_t> unit_records(std::size_t index, std::vector<uint8_t>& plain) const {
+    const Unit& u = units_[index];
+    Cursor record(file_.view(u.offset, u.length));
+    const uint8_t op = record.u8();
+    Cursor r(record.bytes64());
+    if (op != mcap::kChunk) return {};
+    return chunk_records(u.offset, r, plain);
   }
 
   void load_unit(std::size_t index) {
+    // Units are taken in order, so this one is the read-ahead's next.
+    ReadAhead::Prepared prepared = read_ahead_->take();
     const Unit& u = units_[index];
     Cursor record(file_.view(u.offset, u.length));
     const uint8_t op = record.u8();
@@ -482,7 +505,7 @@ class McapReader final : public StorageReader {
     std::size_t position = 0;
     // Messages point into the mapped file, or into `holder` when their chunk
     // had to be decompressed.
-    std::shared_ptr<std::vector<uint8_t>> holder;
+    ReadAhead::Buffer holder;
     auto take_message = [&](Cursor& c) {
       const uint16_t channel = c.u16();
       c.u32();  // sequence
@@ -501,18 +524,16 @@ class McapReader final : public StorageReader {
     if (op == mcap::kMessage) {
       take_message(r);
     } else if (op == mcap::kChunk) {
-      std::shared_ptr<std::vector<uint8_t>> plain = take_buffer();
-      const auto records_span = chunk_records(u.offset, r, *plain);
-      if (!plain->empty() && records_span.data() == plain->data()) holder = plain;
-      Cursor records(records_span);
+      holder = prepared.buffer;
+      Cursor records(prepared.bytes);
       while (!records.done()) {
         const uint8_t inner = records.u8();
         Cursor c(records.bytes64());
         if (inner == mcap::kMessage) take_message(c);
       }
-      // Unused, or no message pointed into it: back for the next chunk.
+      // No message pointed into it: back for a later chunk.
       holder.reset();
-      if (plain.use_count() == 1 && spare_.size() < 2) spare_.push_back(std::move(plain));
+      if (prepared.buffer.use_count() == 1) read_ahead_->give_back(std::move(prepared.buffer));
     } else {
       fail("chunk index points to a record of opcode " + std::to_string(op) + " at offset " +
            std::to_string(u.offset) + ", not a chunk");
@@ -535,7 +556,8 @@ class McapReader final : public StorageReader {
   std::vector<Pending> heap_;
   std::vector<uint8_t> buffer_;  // magic, footer and summary being read
   std::vector<uint8_t> chunk_;   // the decompressed records of a chunk (scanning)
-  std::vector<std::shared_ptr<std::vector<uint8_t>>> spare_;  // buffers to reuse
+  // Last: its workers, which read the file and the units, stop before those go.
+  std::unique_ptr<ReadAhead> read_ahead_;
 };
 
 class McapWriter final : public StorageWriter {

@@ -2,8 +2,9 @@
 // (sqlite3 `.db3` or MCAP `.mcap`), or a single storage file on its own.
 //
 // Reading streams: messages come one at a time in timestamp order and only the
-// current chunk (MCAP) or row (sqlite3) is held in memory, so a bag larger than
-// memory can be inspected or converted.
+// current chunk (MCAP, plus a bounded number decompressed ahead: ReadOptions::chunk_threads)
+// or row (sqlite3) is held in memory, so a bag larger than memory can be inspected or
+// converted.
 #pragma once
 
 #include <cstdint>
@@ -84,6 +85,11 @@ struct ReadOptions {
   std::optional<int64_t> start_time_ns;  // inclusive
   std::optional<int64_t> end_time_ns;    // inclusive
   bool verify_crc = true;                // MCAP chunk and summary CRCs
+  // MCAP: threads that decompress and check chunks ahead of the reading, each on its own chunk,
+  // with one chunk more in flight than threads (memory: about twice that many chunks, whatever
+  // the bag's size). Messages come in the same order whatever the number. 0: one per online CPU;
+  // 1: no thread, each chunk decompressed on the reading thread when its turn comes.
+  std::size_t chunk_threads = 0;
 };
 
 // One storage file.
