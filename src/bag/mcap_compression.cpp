@@ -24,6 +24,9 @@ LZ4F_dctx* new_lz4_context() {
 // reaches (the synthetic images: 20), while a frame header's claim of more is only believed as
 // the bytes come.
 constexpr uint64_t kPlausibleRatio = 64;
+// And never more than this before a byte is decoded, whatever the compressed size: a forged claim
+// in a large bag must not make the reader touch gigabytes up front (recorded chunks are a few MiB).
+constexpr uint64_t kMostUpFront = uint64_t{256} << 20;
 
 // The compressed bytes given to zstd at a time when it decodes straight into the output: at the
 // synthetic images' 20:1, about a piece of output.
@@ -104,7 +107,8 @@ void decompress(const std::string& compression, std::span<const uint8_t> in,
     ZSTD_DCtx_reset(ctx, ZSTD_reset_session_only);
     // Sized to the claim at once when that needs no allocation (an output reused from an earlier
     // chunk) or a plausible one: growing it piece by piece costs a copy and fresh pages each time.
-    if (out.capacity() >= uncompressed_size || uncompressed_size <= kPlausibleRatio * in.size()) {
+    if (out.capacity() >= uncompressed_size ||
+        (uncompressed_size <= kPlausibleRatio * in.size() && uncompressed_size <= kMostUpFront)) {
       out.resize(static_cast<std::size_t>(uncompressed_size));
       if (zstd_into_sized_output(ctx, in, out, crc)) return;
       ZSTD_DCtx_reset(ctx, ZSTD_reset_session_only);
