@@ -1723,9 +1723,7 @@ ReportInput load_report_inputs(const std::vector<fs::path>& paths) {
       throw ReportError(p.string() + ": no such file or folder");
     }
   }
-  std::ranges::stable_sort(in.runs, [](const StoredRun& a, const StoredRun& b) {
-    return std::tie(a.started_utc, a.path) < std::tie(b.started_utc, b.path);
-  });
+  sort_by_start(in.runs);
   return in;
 }
 

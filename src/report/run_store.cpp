@@ -461,10 +461,14 @@ RunScan scan_results(const fs::path& dir) {
       scan.skipped.push_back(e.what());
     }
   }
-  std::ranges::stable_sort(scan.runs, [](const StoredRun& a, const StoredRun& b) {
+  sort_by_start(scan.runs);
+  return scan;
+}
+
+void sort_by_start(std::vector<StoredRun>& runs) {
+  std::ranges::stable_sort(runs, [](const StoredRun& a, const StoredRun& b) {
     return std::tie(a.started_utc, a.path) < std::tie(b.started_utc, b.path);
   });
-  return scan;
 }
 
 std::string hardware_label(const json& machine) {

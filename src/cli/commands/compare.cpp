@@ -4,7 +4,6 @@
 #include <iostream>
 #include <optional>
 #include <stdexcept>
-#include <tuple>
 
 #include "../options.hpp"
 #include "commands.hpp"
@@ -72,9 +71,7 @@ std::optional<report::ReportInput> sides_through_database(const fs::path& folder
       out.skipped.push_back(e.what());
     }
   }
-  std::ranges::stable_sort(out.runs, [](const report::StoredRun& x, const report::StoredRun& y) {
-    return std::tie(x.started_utc, x.path) < std::tie(y.started_utc, y.path);
-  });
+  report::sort_by_start(out.runs);
   return out;
 }
 

@@ -125,6 +125,9 @@ const nlohmann::json& member(const nlohmann::json& j, const char* key);
 // True when `path` holds a JSON object with "schema": "robotperf.result/1" (cheap check).
 bool looks_like_result(const std::filesystem::path& path);
 
+// Sorts runs as every reader lists them: by start time, then file.
+void sort_by_start(std::vector<StoredRun>& runs);
+
 struct RunScan {
   std::vector<StoredRun> runs;       // sorted by start time, then file name
   std::vector<std::string> skipped;  // one line per unreadable results file
