@@ -279,6 +279,7 @@ static_assert(sizeof(CallbackEvent) == 16);
 struct RmwEvent {
   int64_t ts;
   int32_t vpid;
+  int32_t vtid;  // for callback causality (paths); fills what was padding
   uint64_t handle;
   int64_t stamp;
 };
@@ -545,11 +546,11 @@ uint64_t collect_once(StreamPart& part) {
                              d->handler == Handler::kCallbackStart});
         break;
       case Handler::kRmwPublish:
-        rmw_publishes.push_back({ts, vpid, field(0).u, field(1).as_int()});
+        rmw_publishes.push_back({ts, vpid, vtid(), field(0).u, field(1).as_int()});
         break;
       case Handler::kRmwTake:
         if (d->f[2] < 0 || field(2).as_int() != 0)
-          rmw_takes.push_back({ts, vpid, field(0).u, field(1).as_int()});
+          rmw_takes.push_back({ts, vpid, vtid(), field(0).u, field(1).as_int()});
         break;
       case Handler::kControllerUpdateBegin:
       case Handler::kControllerUpdateEnd:
@@ -1077,8 +1078,41 @@ std::string node_name(const Collected& c, int32_t vpid, uint64_t node_handle) {
   return it != c.node_names.end() ? it->second : "?";
 }
 
-// Callback durations from ros2:callback_start/end, per node and source.
-void callback_durations(TraceAnalysis& a, const Collected& c, const std::optional<RunInfo>& run) {
+// A callback's node, source (its topic, or "timer <period>") and symbol, from the init events.
+using CallbackName = std::tuple<std::string, std::string, std::string>;
+CallbackName callback_name(const Collected& c, int32_t vpid, uint64_t cb) {
+  std::string symbol;
+  if (auto sym = c.callback_symbol.find({vpid, cb}); sym != c.callback_symbol.end())
+    symbol = sym->second;
+  if (auto s = c.callback_subscription.find({vpid, cb}); s != c.callback_subscription.end()) {
+    uint64_t handle = s->second;
+    if (auto r = c.rclcpp_subscriptions.find({vpid, handle}); r != c.rclcpp_subscriptions.end())
+      handle = r->second;
+    if (auto ep = c.subscriptions_by_handle.find({vpid, handle});
+        ep != c.subscriptions_by_handle.end()) {
+      return {node_name(c, vpid, ep->second.node_handle), std::string(c.names[ep->second.topic]),
+              symbol};
+    }
+  }
+  if (auto t = c.callback_timer.find({vpid, cb}); t != c.callback_timer.end()) {
+    std::string node = "?";
+    if (auto n = c.timer_node.find({vpid, t->second}); n != c.timer_node.end())
+      node = node_name(c, vpid, n->second);
+    std::string source = "timer";
+    if (auto p = c.timer_period.find({vpid, t->second}); p != c.timer_period.end()) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "timer %g ms", static_cast<double>(p->second) / kNsPerMs);
+      source = buf;
+    }
+    return {node, source, symbol};
+  }
+  return {"?", "callback " + hex(cb), symbol};
+}
+
+// Calls visit(site, start_ts, end_ts) for each callback of the run's threads that started and
+// ended in the trace, thread by thread, each thread's in time order.
+template <class Visit>
+void for_each_callback(const Collected& c, const std::optional<RunInfo>& run, Visit visit) {
   // The run's events grouped by thread (a counting sort on the thread's number), then in time
   // order within one: a thread's events are in order already unless it moved between CPUs'
   // streams.
@@ -1104,48 +1138,6 @@ void callback_durations(TraceAnalysis& a, const Collected& c, const std::optiona
     const auto to = ev.begin() + static_cast<std::ptrdiff_t>(starts[t + 1]);
     if (!std::is_sorted(from, to, earlier)) std::stable_sort(from, to, earlier);
   }
-  using Name = std::tuple<std::string, std::string, std::string>;  // node, source, symbol
-  auto name_of = [&](int32_t vpid, uint64_t cb) -> Name {
-    std::string symbol;
-    if (auto sym = c.callback_symbol.find({vpid, cb}); sym != c.callback_symbol.end())
-      symbol = sym->second;
-    if (auto s = c.callback_subscription.find({vpid, cb}); s != c.callback_subscription.end()) {
-      uint64_t handle = s->second;
-      if (auto r = c.rclcpp_subscriptions.find({vpid, handle}); r != c.rclcpp_subscriptions.end())
-        handle = r->second;
-      if (auto ep = c.subscriptions_by_handle.find({vpid, handle});
-          ep != c.subscriptions_by_handle.end()) {
-        return {node_name(c, vpid, ep->second.node_handle), std::string(c.names[ep->second.topic]),
-                symbol};
-      }
-    }
-    if (auto t = c.callback_timer.find({vpid, cb}); t != c.callback_timer.end()) {
-      std::string node = "?";
-      if (auto n = c.timer_node.find({vpid, t->second}); n != c.timer_node.end())
-        node = node_name(c, vpid, n->second);
-      std::string source = "timer";
-      if (auto p = c.timer_period.find({vpid, t->second}); p != c.timer_period.end()) {
-        char buf[64];
-        std::snprintf(buf, sizeof buf, "timer %g ms", static_cast<double>(p->second) / kNsPerMs);
-        source = buf;
-      }
-      return {node, source, symbol};
-    }
-    return {"?", "callback " + hex(cb), symbol};
-  };
-  // Callbacks with the same name make one series; each callback's series is named once.
-  std::map<Name, std::size_t> series_of_name;
-  std::vector<Samples> series;
-  HandleMap<std::size_t> series_of_callback;
-  auto samples_of = [&](int32_t vpid, uint64_t cb) -> Samples& {
-    auto [it, inserted] = series_of_callback.try_emplace({vpid, cb}, 0);
-    if (inserted) {
-      auto [named, added] = series_of_name.try_emplace(name_of(vpid, cb), series.size());
-      if (added) series.emplace_back();
-      it->second = named->second;
-    }
-    return series[it->second];
-  };
   std::vector<std::pair<uint64_t, int64_t>> stack;
   for (uint32_t t = 0; t < threads; ++t) {
     stack.clear();
@@ -1154,16 +1146,66 @@ void callback_durations(TraceAnalysis& a, const Collected& c, const std::optiona
       if (ev[i].start) {
         stack.emplace_back(site.callback, ev[i].ts);
       } else if (!stack.empty() && stack.back().first == site.callback) {
-        samples_of(site.vpid, site.callback)
-            .push_back(static_cast<double>(ev[i].ts - stack.back().second));
+        visit(site, stack.back().second, ev[i].ts);
         stack.pop_back();
       }
     }
   }
+}
+
+// Callback durations from ros2:callback_start/end, per node and source.
+void callback_durations(TraceAnalysis& a, const Collected& c, const std::optional<RunInfo>& run) {
+  // Callbacks with the same name make one series; each callback's series is named once.
+  std::map<CallbackName, std::size_t> series_of_name;
+  std::vector<Samples> series;
+  HandleMap<std::size_t> series_of_callback;
+  auto samples_of = [&](int32_t vpid, uint64_t cb) -> Samples& {
+    auto [it, inserted] = series_of_callback.try_emplace({vpid, cb}, 0);
+    if (inserted) {
+      auto [named, added] = series_of_name.try_emplace(callback_name(c, vpid, cb), series.size());
+      if (added) series.emplace_back();
+      it->second = named->second;
+    }
+    return series[it->second];
+  };
+  for_each_callback(c, run, [&](const CallbackSite& site, int64_t start, int64_t end) {
+    samples_of(site.vpid, site.callback).push_back(static_cast<double>(end - start));
+  });
   for (auto& [name, index] : series_of_name) {
     a.callbacks.push_back(
         {std::get<0>(name), std::get<1>(name), std::get<2>(name), stats_of(series[index])});
   }
+}
+
+// Every callback, publish and take of the run's processes (of all, without a run), in time order.
+void timeline(TraceAnalysis& a, const Collected& c, const std::optional<RunInfo>& run) {
+  HandleMap<std::pair<std::string, std::string>> names;  // (node, source) of each callback
+  for_each_callback(c, run, [&](const CallbackSite& site, int64_t start, int64_t end) {
+    auto [it, inserted] = names.try_emplace({site.vpid, site.callback});
+    if (inserted) {
+      auto [node, source, symbol] = callback_name(c, site.vpid, site.callback);
+      it->second = {std::move(node), std::move(source)};
+    }
+    a.timeline.push_back({TimelineEvent::Kind::kCallback, start, end - start, site.vpid, site.vtid,
+                          it->second.first, it->second.second});
+  });
+  auto add = [&](const PartedVector<RmwEvent>& events, const HandleMap<Endpoint>& endpoints,
+                 TimelineEvent::Kind kind) {
+    for (const RmwEvent& e : events) {
+      if (run && !run->processes.contains(e.vpid)) continue;
+      auto ep = endpoints.find({e.vpid, e.handle});
+      std::string node = "?", topic = "?";
+      if (ep != endpoints.end()) {
+        node = node_name(c, e.vpid, ep->second.node_handle);
+        topic = std::string(c.names[ep->second.topic]);
+      }
+      a.timeline.push_back({kind, e.ts, 0, e.vpid, e.vtid, std::move(node), std::move(topic)});
+    }
+  };
+  add(c.rmw_publishes, c.publishers_by_rmw, TimelineEvent::Kind::kPublish);
+  add(c.rmw_takes, c.subscriptions_by_rmw, TimelineEvent::Kind::kTake);
+  std::stable_sort(a.timeline.begin(), a.timeline.end(),
+                   [](const TimelineEvent& x, const TimelineEvent& y) { return x.ts < y.ts; });
 }
 
 }  // namespace
@@ -1310,6 +1352,95 @@ void topic_latencies(TraceAnalysis& a, const Collected& c, const std::optional<R
   }
 }
 
+// The graph the trace's init events show: topics with their publishing and subscribing nodes.
+// ROS 2's /rosout and /parameter_events, which every node has, would join every path.
+TracedGraph traced_graph(const Collected& c, const std::optional<RunInfo>& run) {
+  std::map<std::string_view, std::pair<std::set<std::string>, std::set<std::string>>> topics;
+  auto add = [&](const HandleMap<Endpoint>& endpoints, bool publisher) {
+    for (const auto& [key, ep] : endpoints) {
+      if (run && !run->processes.contains(key.vpid)) continue;
+      const std::string_view topic = c.names[ep.topic];
+      if (topic == "/rosout" || topic == "/parameter_events") continue;
+      auto& [pubs, subs] = topics[topic];
+      (publisher ? pubs : subs).insert(node_name(c, key.vpid, ep.node_handle));
+    }
+  };
+  add(c.publishers_by_rmw, true);
+  add(c.subscriptions_by_handle, false);
+  TracedGraph g;
+  for (auto& [name, ends] : topics) {
+    g.topics.push_back({std::string(name),
+                        {ends.first.begin(), ends.first.end()},
+                        {ends.second.begin(), ends.second.end()}});
+  }
+  return g;
+}
+
+// The events path latency reads, for the topics of `path`: publishes and takes on them, and the
+// callbacks of the threads that made those (docs/design.md §3.13).
+PathEvents path_events(const Collected& c, const std::vector<std::string>& path,
+                       const std::optional<RunInfo>& run) {
+  PathEvents pe;
+  pe.topics = path;
+  if (run) pe.since = measurement_start(c, *run);
+  std::unordered_map<std::string_view, uint32_t> topic_number;
+  for (std::size_t i = 0; i < path.size(); ++i)
+    topic_number.try_emplace(path[i], static_cast<uint32_t>(i));
+  HandleMap<uint32_t> node_number;
+  auto node_of = [&](int32_t vpid, uint64_t handle) {
+    auto [it, inserted] = node_number.try_emplace({vpid, handle}, pe.nodes.size());
+    if (inserted) pe.nodes.push_back(node_name(c, vpid, handle));
+    return it->second;
+  };
+  std::set<std::pair<int32_t, int32_t>> threads;
+  auto add = [&](const PartedVector<RmwEvent>& events, const HandleMap<Endpoint>& endpoints,
+                 PathEvent::Kind kind) {
+    for (const RmwEvent& e : events) {
+      if (run && !run->processes.contains(e.vpid)) continue;
+      auto ep = endpoints.find({e.vpid, e.handle});
+      if (ep == endpoints.end()) continue;
+      auto t = topic_number.find(c.names[ep->second.topic]);
+      if (t == topic_number.end()) continue;
+      pe.events.push_back({e.ts, e.stamp, e.vpid, e.vtid, node_of(e.vpid, ep->second.node_handle),
+                           t->second, kind});
+      threads.insert({e.vpid, e.vtid});
+    }
+  };
+  add(c.rmw_publishes, c.publishers_by_rmw, PathEvent::Kind::kPublish);
+  add(c.rmw_takes, c.subscriptions_by_rmw, PathEvent::Kind::kTake);
+  const auto& sites = c.callback_sites.all();
+  std::vector<char> site_wanted(sites.size());
+  for (std::size_t i = 0; i < sites.size(); ++i)
+    site_wanted[i] = threads.contains({sites[i].vpid, sites[i].vtid}) ? 1 : 0;
+  for (const CallbackEvent& e : c.callbacks) {
+    if (!site_wanted[e.site]) continue;
+    const CallbackSite& site = sites[e.site];
+    pe.events.push_back(
+        {e.ts, 0, site.vpid, site.vtid, 0, 0,
+         e.start ? PathEvent::Kind::kCallbackStart : PathEvent::Kind::kCallbackEnd});
+  }
+  return pe;
+}
+
+// The path's topics checked against the graph: each in the trace, each pair joined by a node.
+void check_path(const TracedGraph& g, const std::vector<std::string>& path) {
+  const std::string hint = " (robotperf trace paths lists the trace's paths)";
+  if (path.size() < 2)
+    throw std::invalid_argument("a path needs at least two topics, comma-separated" + hint);
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    if (g.find(path[i]) == nullptr)
+      throw std::invalid_argument("topic " + path[i] + " is not in the trace" + hint);
+    if (i == 0) continue;
+    const auto& subs = g.find(path[i - 1])->subscribers;
+    const auto& pubs = g.find(path[i])->publishers;
+    if (std::none_of(subs.begin(), subs.end(), [&](const std::string& n) {
+          return std::find(pubs.begin(), pubs.end(), n) != pubs.end();
+        }))
+      throw std::invalid_argument("no node in the trace subscribes " + path[i - 1] +
+                                  " and publishes " + path[i] + hint);
+  }
+}
+
 std::string fixed(double v, int decimals) {
   if (!std::isfinite(v)) return "-";
   char buf[64];
@@ -1443,6 +1574,12 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
     topic_latencies(a, c, a.run);
     controller_update_durations(a, c, a.run);
   });
+  a.graph = traced_graph(c, a.run);
+  if (options.timeline) timeline(a, c, a.run);
+  if (!options.path.empty()) {
+    check_path(a.graph, options.path);
+    a.path = path_latency(path_events(c, options.path, a.run));
+  }
   if (a.run) {
     const MessageLookup lookup = summarise_run(a, c, *a.run);
     breakdown(a, c, *a.run, lookup);
@@ -1472,6 +1609,35 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
   a.read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return a;
 }
+
+namespace {
+
+nlohmann::json path_json(const PathLatency& p) {
+  nlohmann::json hops = nlohmann::json::array();
+  for (const auto& h : p.hops) {
+    hops.push_back({{"from", h.from},
+                    {"node", h.node},
+                    {"to", h.to},
+                    {"transport_ms", metrics::to_json(h.transport, 1.0 / kNsPerMs, "ms")},
+                    {"in_node_ms", metrics::to_json(h.in_node, 1.0 / kNsPerMs, "ms")},
+                    {"inputs", h.inputs},
+                    {"outputs", h.outputs},
+                    {"by_callback", h.by_callback},
+                    {"by_latest_input", h.by_latest},
+                    {"unlinked", h.unlinked},
+                    {"unused_inputs", h.unused},
+                    {"reused_inputs", h.reused}});
+  }
+  return {{"topics", p.topics},
+          {"end", p.ends_at_take ? "take" : "publish"},
+          {"sources", p.sources},
+          {"reached", p.reached},
+          {"stopped_at", p.stopped_at},
+          {"end_to_end_ms", metrics::to_json(p.end_to_end, 1.0 / kNsPerMs, "ms")},
+          {"hops", hops}};
+}
+
+}  // namespace
 
 nlohmann::json to_json(const TraceAnalysis& a) {
   using nlohmann::json;
@@ -1505,22 +1671,24 @@ nlohmann::json to_json(const TraceAnalysis& a) {
                                   {"controller", u.controller},
                                   {"duration_us", metrics::to_json(u.duration, 1e-3, "us")}});
   }
-  return {{"trace",
-           {{"folders", a.traces},
-            {"streams", a.streams},
-            {"packets", a.packets},
-            {"events", a.events},
-            {"discarded_events", a.discarded_events},
-            {"lost_packets", a.lost_packets},
-            {"defective_packets", a.defective_packets},
-            {"packet_defects", a.packet_defects},
-            {"duration_s", static_cast<double>(a.last_ns - a.first_ns) * 1e-9},
-            {"analysis_s", a.read_seconds}}},
-          {"hops", hops},
-          {"callbacks", callbacks},
-          {"topics", topics},
-          {"controller_updates", controller_updates},
-          {"unavailable", a.unavailable}};
+  json j = {{"trace",
+             {{"folders", a.traces},
+              {"streams", a.streams},
+              {"packets", a.packets},
+              {"events", a.events},
+              {"discarded_events", a.discarded_events},
+              {"lost_packets", a.lost_packets},
+              {"defective_packets", a.defective_packets},
+              {"packet_defects", a.packet_defects},
+              {"duration_s", static_cast<double>(a.last_ns - a.first_ns) * 1e-9},
+              {"analysis_s", a.read_seconds}}},
+            {"hops", hops},
+            {"callbacks", callbacks},
+            {"topics", topics},
+            {"controller_updates", controller_updates},
+            {"unavailable", a.unavailable}};
+  if (a.path) j["path"] = path_json(*a.path);
+  return j;
 }
 
 std::string breakdown_table(const TraceAnalysis& a) {
@@ -1536,6 +1704,34 @@ std::string breakdown_table(const TraceAnalysis& a) {
                   ms(s.mean).c_str(), ms(s.p50).c_str(), ms(s.p99).c_str(), ms(s.max).c_str());
     out << line;
   };
+  if (a.path) {
+    const PathLatency& p = *a.path;
+    std::string name;
+    for (const auto& t : p.topics) name += (name.empty() ? "" : " -> ") + t;
+    out << "path " << name << "\n";
+    out << "  messages of " << p.topics.front() << ": " << p.sources << ", reached "
+        << p.topics.back() << " (" << (p.ends_at_take ? "taken" : "published")
+        << "): " << p.reached;
+    for (std::size_t i = 0; i < p.stopped_at.size(); ++i) {
+      if (p.stopped_at[i] == 0) continue;
+      out << "; went no further than " << p.topics[i] << ": " << p.stopped_at[i];
+    }
+    out << "\n";
+    header("path latency (ms), first arrival of each message");
+    row("end to end", p.end_to_end);
+    for (const auto& h : p.hops) {
+      row("transport " + h.from + " -> " + h.node, h.transport);
+      row("node " + h.node + " -> " + h.to, h.in_node);
+    }
+    out << "  links per hop (outputs: in their input's callback / latest input / none; inputs "
+           "unused / reused):\n";
+    for (const auto& h : p.hops) {
+      out << "    " << h.from << " -> " << h.to << ": " << h.outputs
+          << " outputs: " << h.by_callback << " / " << h.by_latest << " / " << h.unlinked << "; "
+          << h.inputs << " inputs: " << h.unused << " / " << h.reused << "\n";
+    }
+    out << "\n";
+  }
   if (!a.hops.empty()) {
     header("per-hop breakdown (ms), along the path");
     for (const auto& h : a.hops) row(h.kind + "  " + h.label(), h.duration);

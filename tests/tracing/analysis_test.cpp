@@ -586,10 +586,12 @@ TEST(Analyzer, ARunOfAnotherProcessIsNamedNotTaken) {
   FixtureRoot dir;
   CtfWriter w(dir.path(), CtfWriter::Header::kCompact, false, 2);
   write_run(w);
-  EXPECT_EQ(analyze_trace(dir.path(), {.run_pid = kRunPid, .extra_processes = {}}).run_pids,
-            std::vector<int>{kRunPid});
-  const TraceAnalysis a =
-      analyze_trace(dir.path(), {.run_pid = kRunPid + 1, .extra_processes = {}});
+  AnalyzeOptions of_run;
+  of_run.run_pid = kRunPid;
+  EXPECT_EQ(analyze_trace(dir.path(), of_run).run_pids, std::vector<int>{kRunPid});
+  AnalyzeOptions of_another;
+  of_another.run_pid = kRunPid + 1;
+  const TraceAnalysis a = analyze_trace(dir.path(), of_another);
   EXPECT_FALSE(a.run.has_value());
   EXPECT_FALSE(a.valid);
   const std::string expected = "no robotperf run of process " + std::to_string(kRunPid + 1) +

@@ -601,6 +601,68 @@ TEST_F(GreyRun, CommandLineRunsGreyAndAnalysesTheTrace) {
   EXPECT_EQ(a["run"]["latency_ms"]["from_scheduled"]["p50"],
             j["latency_ms"]["from_scheduled"]["p50"]);
 
+  // The graph's paths, and the latency along the Playback's topic to the Monitor's from the
+  // trace alone: the measured messages, each once, agreeing with the run's latency from the
+  // actual send within the tracepoints' cost (publish and take against the run's input and
+  // output events).
+  const Outcome paths = robotperf_cli("trace paths " + trace.string());
+  ASSERT_EQ(paths.exit_code, 0) << paths.out;
+  EXPECT_NE(paths.out.find("/camera/image_raw -> [rectify] -> /rectify/image_rect"),
+            std::string::npos)
+      << paths.out;
+  const fs::path path_json = dir_ / "path.json";
+  const Outcome path =
+      robotperf_cli("trace analyze " + trace.string() +
+                    " --path /camera/image_raw,/rectify/image_rect --json " + path_json.string());
+  ASSERT_EQ(path.exit_code, 0) << path.out;
+  EXPECT_NE(path.out.find("path /camera/image_raw -> /rectify/image_rect"), std::string::npos)
+      << path.out;
+  std::ifstream pin(path_json);
+  const auto p = nlohmann::json::parse(pin)["path"];
+  EXPECT_EQ(p["sources"], 35);
+  EXPECT_EQ(p["reached"], 35);
+  EXPECT_EQ(p["end"], "take");
+  EXPECT_EQ(p["hops"][0]["node"], "rectify");
+  // Rectify publishes in the callback of whichever of the image and its CameraInfo completes the
+  // pair: an output made in the CameraInfo's callback is linked to the latest image instead.
+  EXPECT_EQ(p["hops"][0]["by_callback"].get<int>() + p["hops"][0]["by_latest_input"].get<int>(),
+            p["hops"][0]["outputs"].get<int>());
+  EXPECT_EQ(p["hops"][0]["unlinked"], 0);
+  const double from_sent = j["latency_ms"]["from_sent"]["p50"];
+  const double along_path = p["end_to_end_ms"]["p50"];
+  EXPECT_NEAR(along_path, from_sent, 0.5 + 0.2 * from_sent);
+
+  // The timeline: every callback the analysis counted, as a complete event on its thread, and
+  // each path instance as a span.
+  const fs::path timeline = dir_ / "timeline.json";
+  const Outcome exported =
+      robotperf_cli("trace export " + trace.string() + " --format chrome -o " + timeline.string() +
+                    " --path /camera/image_raw,/rectify/image_rect");
+  ASSERT_EQ(exported.exit_code, 0) << exported.out;
+  std::ifstream tin(timeline);
+  const auto t = nlohmann::json::parse(tin);
+  ASSERT_TRUE(t["traceEvents"].is_array());
+  std::size_t callbacks = 0, spans = 0, threads_named = 0;
+  for (const auto& e : t["traceEvents"]) {
+    ASSERT_TRUE(e.contains("ph") && e.contains("pid") && e.contains("name")) << e.dump();
+    const std::string ph = e["ph"];
+    if (ph != "M") {
+      ASSERT_TRUE(e["ts"].is_number()) << e.dump();
+    }
+    if (ph == "X" && e["cat"] == "callback") {
+      ++callbacks;
+      EXPECT_GE(e["dur"].get<double>(), 0.0);
+    }
+    if (ph == "b") ++spans;
+    if (ph == "M" && e["name"] == "thread_name") ++threads_named;
+  }
+  std::size_t counted = 0;
+  for (const auto& cb : a["callbacks"]) counted += cb["duration_ms"]["count"].get<std::size_t>();
+  EXPECT_GT(counted, 0u);
+  EXPECT_EQ(callbacks, counted);
+  EXPECT_EQ(spans, 35u);
+  EXPECT_GT(threads_named, 0u);
+
   // A process whose run the trace does not hold is a wrong argument, named on one line.
   const Outcome other = robotperf_cli("trace analyze " + trace.string() + " --pid 1");
   EXPECT_EQ(other.exit_code, 2) << other.out;

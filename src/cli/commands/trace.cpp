@@ -1,6 +1,8 @@
-// `robotperf trace analyze DIR`: the grey-box analysis of any CTF trace folder.
+// `robotperf trace analyze DIR` (the grey-box analysis of any CTF trace folder, optionally the
+// latency of a path through its graph) and `robotperf trace paths DIR` (the graph's paths).
 #include <iostream>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 
 #include "commands.hpp"
@@ -46,12 +48,62 @@ class TraceCommand : public Command {
         ->add_option("--pid", pid_,
                      "analyse the robotperf run of this process (default: the first)")
         ->transform(whole_number(0, std::numeric_limits<int>::max()));
-    analyze->footer("Example: robotperf trace analyze results/a1-grey.trace --json analysis.json");
+    analyze
+        ->add_option("--path", path_,
+                     "also measure the latency along these topics, comma-separated (from the "
+                     "trace alone: no header copying needed; see robotperf trace paths)")
+        ->delimiter(',');
+    analyze->footer(
+        "Example: robotperf trace analyze results/a1-grey.trace --json analysis.json\n"
+        "         robotperf trace analyze my.trace --path /image_raw,/image_rect,/detections");
+    paths_ = command->add_subcommand(
+        "paths", "list the topic chains (sources to sinks) of the graph a trace shows");
+    paths_->add_option("dir", dir_, "the trace folder (searched for CTF metadata)")->required();
+    paths_->add_option("--json", json_, "also write the graph and its paths as JSON to this file");
+    paths_
+        ->add_option("--max-paths", max_paths_,
+                     "stop after this many paths (the search also stops after 10^6 steps)")
+        ->transform(whole_number(1, 1'000'000));
+    paths_->footer("Example: robotperf trace paths results/a1-grey.trace");
+    export_ = command->add_subcommand(
+        "export", "write a trace's callbacks, publishes, takes and path instances as a timeline");
+    export_->add_option("dir", dir_, "the trace folder (searched for CTF metadata)")->required();
+    export_
+        ->add_option("--format", format_,
+                     "chrome: Chrome Trace Event JSON, which Perfetto UI (ui.perfetto.dev) and "
+                     "chrome://tracing open; perfetto: the same file")
+        ->check(CLI::IsMember({"chrome", "perfetto"}));
+    export_->add_option("-o,--output", output_, "the file to write")->required();
+    export_
+        ->add_option("--path", path_,
+                     "also show each message's way along these topics (comma-separated) as a span")
+        ->delimiter(',');
+    export_->footer(
+        "Example: robotperf trace export results/a1-grey.trace -o a1.json "
+        "--path /camera/image_raw,/rectify/image_rect,/resize/image");
     return command;
   }
 
   int run(const Context&) override {
-    const auto analysis = tracing::analyze_trace(dir_, {.run_pid = pid_, .extra_processes = {}});
+    if (paths_->parsed()) return list_paths();
+    if (export_->parsed()) {
+      tracing::AnalyzeOptions options;
+      options.path = path_;
+      options.timeline = true;
+      const auto analysis = tracing::analyze_trace(dir_, options);
+      std::ostringstream out;
+      tracing::write_chrome_trace(analysis, out);
+      files::write_output(output_, out.str());
+      std::cout << "wrote " << output_ << ": " << analysis.timeline.size()
+                << " callbacks, publishes and takes";
+      if (analysis.path) std::cout << ", " << analysis.path->instances.size() << " path instances";
+      std::cout << "\n";
+      return kExitOk;
+    }
+    tracing::AnalyzeOptions options;
+    options.run_pid = pid_;
+    options.path = path_;
+    const auto analysis = tracing::analyze_trace(dir_, options);
     // A process the trace has no run of is a wrong --pid, not an invalid run.
     if (pid_ != 0 && !analysis.run) {
       throw std::invalid_argument(
@@ -71,9 +123,47 @@ class TraceCommand : public Command {
   }
 
  private:
+  int list_paths() {
+    const auto analysis = tracing::analyze_trace(dir_);
+    if (analysis.graph.topics.empty()) {
+      throw std::invalid_argument(
+          "the trace has no ros2:rcl_publisher_init / rcl_subscription_init events, so its graph "
+          "is unknown: start tracing before the nodes start (robotperf run --mode grey does)");
+    }
+    const tracing::PathSearch search =
+        tracing::find_paths(analysis.graph, {.max_paths = max_paths_});
+    for (const auto& p : search.paths) std::cout << p.text() << "\n";
+    std::cout << search.paths.size() << (search.paths.size() == 1 ? " path" : " paths") << " of "
+              << analysis.graph.topics.size() << " topics, " << search.steps << " search steps";
+    if (!search.stopped.empty()) std::cout << "; " << search.stopped << ": there may be more";
+    std::cout << "\n";
+    if (!json_.empty()) {
+      nlohmann::json topics = nlohmann::json::array(), paths = nlohmann::json::array();
+      for (const auto& t : analysis.graph.topics) {
+        topics.push_back(
+            {{"name", t.name}, {"publishers", t.publishers}, {"subscribers", t.subscribers}});
+      }
+      for (const auto& p : search.paths)
+        paths.push_back({{"topics", p.topics}, {"nodes", p.nodes}, {"cut", p.cut}});
+      files::write_output(json_, json_text({{"topics", topics},
+                                            {"paths", paths},
+                                            {"search_steps", search.steps},
+                                            {"stopped", search.stopped}},
+                                           2) +
+                                     "\n");
+    }
+    return kExitOk;
+  }
+
+  CLI::App* paths_ = nullptr;
+  CLI::App* export_ = nullptr;
+  std::string format_ = "chrome";
+  std::string output_;
   std::string dir_;
   std::string json_;
   int pid_ = 0;
+  std::vector<std::string> path_;
+  std::size_t max_paths_ = 1000;
 };
 
 }  // namespace

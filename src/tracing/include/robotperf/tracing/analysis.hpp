@@ -9,11 +9,13 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <ostream>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "robotperf/metrics/latency_stats.hpp"
+#include "robotperf/tracing/paths.hpp"
 
 namespace robotperf::tracing {
 
@@ -82,6 +84,18 @@ struct ControllerUpdateStats {
   metrics::SampleStats duration;  // one update(), ns
 };
 
+// One event of a trace's timeline (AnalyzeOptions::timeline): a callback (with its duration), or
+// a publish or take (an instant). Times are the trace clock's nanoseconds.
+struct TimelineEvent {
+  enum class Kind : uint8_t { kCallback, kPublish, kTake };
+  Kind kind = Kind::kCallback;
+  int64_t ts = 0;
+  int64_t duration = 0;  // callbacks
+  int32_t pid = 0, tid = 0;
+  std::string node;
+  std::string what;  // the callback's source (topic or "timer <period>"), or the topic
+};
+
 struct TraceAnalysis {
   // The trace.
   std::vector<std::string> traces;  // the CTF folders read
@@ -118,6 +132,12 @@ struct TraceAnalysis {
   std::vector<TopicLatency> topics;
   // Traces of robotperf control loops.
   std::vector<ControllerUpdateStats> controller_updates;
+  // Any trace with the ros2 init events: the graph it shows (for `trace paths`), and the latency
+  // of the path AnalyzeOptions::path names, when it names one.
+  TracedGraph graph;
+  std::optional<PathLatency> path;
+  // With AnalyzeOptions::timeline: every callback, publish and take, in time order.
+  std::vector<TimelineEvent> timeline;
   // One line per table (or column) the trace cannot provide, saying why: which events it lacks.
   std::vector<std::string> unavailable;
 
@@ -135,6 +155,11 @@ struct AnalyzeOptions {
   // on either.
   unsigned decode_threads = 0;
   uint64_t part_bytes = 0;
+  // Topics of a path to measure (docs/design.md §3.13); empty: none. Each consecutive pair must be
+  // joined by a node of the trace, or analyze_trace throws std::invalid_argument.
+  std::vector<std::string> path;
+  // Keep every callback, publish and take for a timeline (TraceAnalysis::timeline).
+  bool timeline = false;
 };
 
 // Reads every CTF trace under `dir` (one per buffer domain) and analyses it.
@@ -151,6 +176,11 @@ std::string breakdown_table(const TraceAnalysis& analysis);
 
 // The full report of `robotperf trace analyze`: run summary (when there is a run) + breakdown.
 std::string analysis_summary(const TraceAnalysis& analysis);
+
+// The analysis's timeline (and path instances, when it has a path) as Chrome Trace Event JSON,
+// which Perfetto UI and chrome://tracing open: callbacks as complete events on their process and
+// thread, publishes and takes as instants, each path instance as an async span.
+void write_chrome_trace(const TraceAnalysis& analysis, std::ostream& out);
 
 // Why `analysis` has no run: the trace holds none, or none of process `run_pid` (0: any), naming
 // the processes whose runs it holds.
