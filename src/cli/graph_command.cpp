@@ -2,11 +2,14 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "robotperf/msgs/type_support.hpp"
@@ -33,25 +36,80 @@ json endpoint_json(const rmw::PeerEndpoint& e) {
           {"gid", rmw::to_text(e.gid)}};
 }
 
+// A service's DDS topic: "rq/<service>Request" or "rr/<service>Reply" -> (service, is request).
+std::optional<std::pair<std::string, bool>> service_of(const std::string& topic) {
+  for (const auto& [prefix, suffix, request] :
+       {std::tuple{"rq", "Request", true}, std::tuple{"rr", "Reply", false}}) {
+    const std::string head = std::string(prefix) + "/";
+    if (topic.starts_with(head) && topic.ends_with(suffix) &&
+        topic.size() > head.size() + std::strlen(suffix)) {
+      return std::pair{
+          "/" + topic.substr(head.size(), topic.size() - head.size() - std::strlen(suffix)),
+          request};
+    }
+  }
+  return std::nullopt;
+}
+
+// A node's endpoints with its services folded, as rmw makes them: a server reads rq/<s>Request
+// and writes rr/<s>Reply, a client the other way round. Returns (endpoints, services); an rq/ or
+// rr/ endpoint without its pair stays an endpoint.
+std::pair<json, json> fold_services(const std::vector<const rmw::PeerEndpoint*>& own) {
+  // (service, server?) -> (request endpoint, reply endpoint)
+  std::map<std::pair<std::string, bool>,
+           std::pair<const rmw::PeerEndpoint*, const rmw::PeerEndpoint*>>
+      pairs;
+  for (const auto* e : own) {
+    auto s = service_of(e->topic);
+    if (!s) continue;
+    const bool server = s->second ? !e->writer : e->writer;
+    auto& [request, reply] = pairs[{s->first, server}];
+    (s->second ? request : reply) = e;
+  }
+  std::set<const rmw::PeerEndpoint*> folded;
+  json services = json::array();
+  for (const auto& [key, ends] : pairs) {
+    if (ends.first == nullptr || ends.second == nullptr) continue;
+    folded.insert(ends.first);
+    folded.insert(ends.second);
+    std::string type = msgs::ros_type_name(ends.first->dds_type);
+    if (type.ends_with("_Request")) type.resize(type.size() - std::strlen("_Request"));
+    services.push_back(
+        {{"service", key.first}, {"type", type}, {"kind", key.second ? "server" : "client"}});
+  }
+  json endpoints = json::array();
+  for (const auto* e : own) {
+    if (!folded.contains(e)) endpoints.push_back(endpoint_json(*e));
+  }
+  return {endpoints, services};
+}
+
 // What every participant of the domain shows: its nodes with their endpoints, and the endpoints
 // no node claims (plain DDS applications, or ROS 2 participants whose announcement is not read).
 json graph_json(const std::vector<rmw::PeerParticipant>& peers) {
   json participants = json::array();
-  std::map<std::string, std::pair<std::set<std::string>, std::array<int, 2>>> topics;
+  std::map<std::string, std::pair<std::set<std::string>, std::array<int, 2>>> topics, services;
   for (const auto& peer : peers) {
     if (peer.endpoints.empty() && peer.nodes.empty()) continue;  // left, or only discovering
     std::set<rmw::Gid> claimed;
     json nodes = json::array();
     for (const auto& node : peer.nodes) {
-      json endpoints = json::array();
+      std::vector<const rmw::PeerEndpoint*> own;
       for (const auto* gids : {&node.writers, &node.readers}) {
         for (const auto& gid : *gids) {
           claimed.insert(gid);
           auto e = std::ranges::find(peer.endpoints, gid, &rmw::PeerEndpoint::gid);
-          if (e != peer.endpoints.end()) endpoints.push_back(endpoint_json(*e));
+          if (e != peer.endpoints.end()) own.push_back(&*e);
         }
       }
-      nodes.push_back({{"name", node.path()}, {"endpoints", endpoints}});
+      auto [endpoints, node_services] = fold_services(own);
+      for (const auto& service : node_services) {
+        auto& [types, counts] = services[service["service"].get<std::string>()];
+        types.insert(service["type"].get<std::string>());
+        ++counts[service["kind"] == "server" ? 0 : 1];
+      }
+      nodes.push_back(
+          {{"name", node.path()}, {"endpoints", endpoints}, {"services", node_services}});
     }
     json unclaimed = json::array();
     for (const auto& e : peer.endpoints) {
@@ -78,7 +136,14 @@ json graph_json(const std::vector<rmw::PeerParticipant>& peers) {
                           {"publishers", entry.second[0]},
                           {"subscriptions", entry.second[1]}});
   }
-  return {{"participants", participants}, {"topics", topic_list}};
+  json service_list = json::array();
+  for (const auto& [name, entry] : services) {
+    service_list.push_back({{"name", name},
+                            {"types", entry.first},
+                            {"servers", entry.second[0]},
+                            {"clients", entry.second[1]}});
+  }
+  return {{"participants", participants}, {"topics", topic_list}, {"services", service_list}};
 }
 
 std::string plural(int n, const std::string& word) {
@@ -126,13 +191,19 @@ void print_graph(const std::vector<rmw::PeerParticipant>& peers, const GraphOpti
       << options.listen_s
       << " s): " << plural(static_cast<int>(graph["participants"].size()), "participant") << ", "
       << plural(node_count, "node") << ", "
-      << plural(static_cast<int>(graph["topics"].size()), "topic") << "\n";
+      << plural(static_cast<int>(graph["topics"].size()), "topic") << ", "
+      << plural(static_cast<int>(graph["services"].size()), "service") << "\n";
   out << "\nnodes\n";
   for (const auto& p : graph["participants"]) {
     for (const auto& node : p["nodes"]) {
       out << "  " << node["name"].get<std::string>() << "   (participant "
           << p["id"].get<std::string>() << ", enclave " << p["enclave"].get<std::string>() << ")\n";
       for (const auto& e : node["endpoints"]) print_endpoint(out, e, "    ");
+      for (const auto& service : node["services"]) {
+        out << "    " << (service["kind"] == "server" ? "serves      " : "calls       ")
+            << service["service"].get<std::string>() << "  [" << service["type"].get<std::string>()
+            << "]\n";
+      }
     }
   }
   out << "\ntopics\n";
@@ -143,6 +214,15 @@ void print_graph(const std::vector<rmw::PeerParticipant>& peers, const GraphOpti
     out << "  " << topic["name"].get<std::string>() << "  [" << types << "]  "
         << plural(topic["publishers"].get<int>(), "publisher") << ", "
         << plural(topic["subscriptions"].get<int>(), "subscription") << "\n";
+  }
+  if (!graph["services"].empty()) out << "\nservices\n";
+  for (const auto& service : graph["services"]) {
+    std::string types;
+    for (const auto& type : service["types"])
+      types += (types.empty() ? "" : ", ") + type.get<std::string>();
+    out << "  " << service["name"].get<std::string>() << "  [" << types << "]  "
+        << plural(service["servers"].get<int>(), "server") << ", "
+        << plural(service["clients"].get<int>(), "client") << "\n";
   }
   bool header = false;
   for (const auto& p : graph["participants"]) {

@@ -138,9 +138,10 @@ bool GenericSubscription::execute() {
   return true;
 }
 
-Node::Node(Context& context, std::string name) : context_(context), name_(std::move(name)) {
-  if (name_.empty()) throw std::invalid_argument("a node needs a name");
-  lttng_ust_tracepoint(ros2, rcl_node_init, this, &context_.transport(), name_.c_str(), "/");
+Node::Node(Context& context, std::string name)
+    : context_(context), name_(std::move(name)), ros_name_(rmw::parse_node_name(name_)) {
+  lttng_ust_tracepoint(ros2, rcl_node_init, this, &context_.transport(), ros_name_.name.c_str(),
+                       ros_name_.namespace_.c_str());
 }
 
 std::shared_ptr<Timer> Node::create_timer(std::chrono::nanoseconds period,

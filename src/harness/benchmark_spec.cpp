@@ -256,7 +256,12 @@ NodeSpec load_node(const YamlFile& file, const YAML::Node& n,
                    std::set<std::string>& names) {
   file.allow_keys(n, {"name", "kernel", "backend", "host", "parameters", "topics", "qos"});
   NodeSpec node;
-  node.name = file.require_file_name_part(n, "name", "node name");
+  node.name = file.require_string(n, "name");
+  try {
+    rmw::parse_node_name(node.name);
+  } catch (const std::invalid_argument& e) {
+    file.fail(n["name"], e.what());
+  }
   if (!names.insert(node.name).second) file.fail(n, "duplicate node name '" + node.name + "'");
   node.kernel = file.require_string(n, "kernel");
   const plugin::KernelEntry* entry = plugin::registry().find_kernel(node.kernel);

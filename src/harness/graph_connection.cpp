@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <chrono>
+#include <set>
 #include <thread>
 
 #include "robotperf/harness/run.hpp"
+#include "robotperf/harness/suggestions.hpp"
 #include "robotperf/msgs/known_types.hpp"
 
 namespace robotperf::harness {
@@ -100,8 +102,29 @@ std::string others_on_topic(const std::vector<rmw::PeerParticipant>& peers,
     }
   }
   if (seen.empty()) {
-    return "no other participant on domain " + std::to_string(domain_id) +
-           " has an endpoint on it (is the graph running, with this domain and RMW?)";
+    // The graph may be running with its topics named otherwise: say which it has, of the kind
+    // that would match ours, and the nearest name when one looks like a typo of ours.
+    std::set<std::string> theirs;
+    for (const auto& peer : peers) {
+      for (const auto& e : peer.endpoints) {
+        if (e.writer != ours.is_publisher && e.topic.starts_with('/'))
+          theirs.insert(e.topic + " [" + msgs::ros_type_name(e.dds_type) + "]");
+      }
+    }
+    std::string line =
+        "no other participant on domain " + std::to_string(domain_id) + " has an endpoint on it";
+    if (theirs.empty()) return line + " (is the graph running, with this domain and RMW?)";
+    std::vector<std::string> names;
+    for (const auto& t : theirs) names.push_back(t.substr(0, t.find(" [")));
+    line += std::string("; the others ") + (ours.is_publisher ? "subscribe " : "publish ");
+    constexpr std::size_t kShown = 8;
+    std::size_t shown = 0;
+    for (const auto& t : theirs) {
+      if (shown == kShown) break;
+      line += (shown++ == 0 ? "" : ", ") + t;
+    }
+    if (theirs.size() > kShown) line += " and " + std::to_string(theirs.size() - kShown) + " more";
+    return line + did_you_mean(ours.topic, names);
   }
   return seen + " (ours: " + rmw::to_string(our_qos) + ")";
 }

@@ -92,6 +92,13 @@ const std::map<std::string_view, std::string_view>& definitions() {
        "trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_error\n"
        "trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_output\n"
        "float64 speed_scaling_factor\n"},
+      // ros_discovery_info's type (Iron and later: 16-byte GIDs), for its endpoints' type hash.
+      {"rmw_dds_common/msg/Gid", "char[16] data\n"},
+      {"rmw_dds_common/msg/NodeEntitiesInfo",
+       "string<=256 node_namespace\nstring<=256 node_name\nGid[] reader_gid_seq\n"
+       "Gid[] writer_gid_seq\n"},
+      {"rmw_dds_common/msg/ParticipantEntitiesInfo",
+       "Gid gid\nNodeEntitiesInfo[] node_entities_info_seq\n"},
       // robotperf's own (not ROS 2 interfaces): the manipulation kernels' results.
       {"robotperf_msgs/msg/CollisionResult",
        "std_msgs/Header header\nbool in_collision\nbool with_scene\nstring first\nstring second\n"},

@@ -226,4 +226,48 @@ std::string dds_topic_name(const std::string& ros_topic) {
   return "rt" + ros_topic;
 }
 
+NodeName parse_node_name(std::string_view full_name) {
+  const std::string quoted = "node name '" + std::string(full_name) + "'";
+  auto check_token = [&](std::string_view token, const char* what) {
+    if (token.empty()) {
+      throw std::invalid_argument(quoted + " is not a ROS 2 node name: its " + what +
+                                  " has an empty part ('//', or a '/' at an end)");
+    }
+    if (token.front() >= '0' && token.front() <= '9') {
+      throw std::invalid_argument(quoted + " is not a ROS 2 node name: its " + what +
+                                  " starts with a digit ('" + std::string(token) + "')");
+    }
+    for (const char ch : token) {
+      const bool ok = (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') ||
+                      (ch >= '0' && ch <= '9') || ch == '_';
+      if (!ok) {
+        throw std::invalid_argument(quoted + " is not a ROS 2 node name: '" + std::string(1, ch) +
+                                    "' in its " + what +
+                                    " (letters, digits and '_' only; a namespace before it: "
+                                    "'ns/relay')");
+      }
+    }
+  };
+  if (full_name.empty()) throw std::invalid_argument("a node needs a name");
+  std::string_view rest = full_name;
+  if (rest.front() == '/') rest.remove_prefix(1);
+  const std::size_t slash = rest.rfind('/');
+  NodeName out;
+  out.name = std::string(slash == std::string_view::npos ? rest : rest.substr(slash + 1));
+  check_token(out.name, "name");
+  if (out.name.size() > 255)
+    throw std::invalid_argument(quoted + " is not a ROS 2 node name: longer than 255 characters");
+  if (slash != std::string_view::npos) {
+    const std::string_view ns = rest.substr(0, slash);
+    std::size_t start = 0;
+    while (start <= ns.size()) {
+      const std::size_t end = std::min(ns.find('/', start), ns.size());
+      check_token(ns.substr(start, end - start), "namespace");
+      start = end + 1;
+    }
+    out.namespace_ = "/" + std::string(ns);
+  }
+  return out;
+}
+
 }  // namespace robotperf::rmw

@@ -40,6 +40,16 @@ class Counter {
   int n_ = 0;
 };
 
+// A node's name is split as rcl splits it: that is the name ROS 2 tools see (ros_discovery_info).
+TEST(Node, ANamespacedNameIsSplitAndABadOneRefused) {
+  Context ctx(rmw::make_transport("intra"));
+  Node relay(ctx, "ns/relay");
+  EXPECT_EQ(relay.ros_name().namespace_, "/ns");
+  EXPECT_EQ(relay.ros_name().name, "relay");
+  EXPECT_EQ(relay.name(), "ns/relay");
+  EXPECT_THROW(Node(ctx, "my-relay"), std::invalid_argument);
+}
+
 TEST(Executor, RunsSubscriptionCallbacksOnItsThread) {
   Context ctx(rmw::make_transport("intra"));
   auto node = std::make_shared<Node>(ctx, "n");

@@ -137,7 +137,7 @@ TEST(BenchmarkSpec, MissingListsAndOddKeysAreOneLineErrors) {
   EXPECT_NE(err.find(r.dir().string()), std::string::npos) << err;
 }
 
-// An id, a name or a node name becomes part of a file name (results, reports, logs): one that
+// An id or a name becomes part of a file name (results, reports, logs): one that
 // could leave the output folder, or make an odd file name, is refused where the package is loaded.
 TEST(BenchmarkSpec, NamesThatBecomeFileNamesAreRefusedUnlessPlain) {
   const char* const kBad[] = {"/abs/ABSOLUTE", "../../..", "\"\"", "\"a\\nb\"",
@@ -153,13 +153,26 @@ TEST(BenchmarkSpec, NamesThatBecomeFileNamesAreRefusedUnlessPlain) {
         << "id: t1\nname: " << bad << "\nshort: test\ndescription: test\nresults: []\n";
     err = error_of(p.dir());
     EXPECT_NE(err.find("benchmark.yaml:2: name '"), std::string::npos) << bad << ": " << err;
+  }
+}
+
+// Node names are ROS 2 names, split into namespace and name as rcl does: a namespace is allowed,
+// anything rcl refuses is refused where the package is loaded, naming the line.
+TEST(BenchmarkSpec, NodeNamesAreRosNames) {
+  auto with_node_name = [](const std::string& name) {
     std::string graph = relay_graph("");
-    graph.replace(graph.find("name: relay"), 11, "name: " + bad);
-    std::ofstream(p.dir() / "graph.yaml") << graph;
-    std::ofstream(p.dir() / "benchmark.yaml")
-        << "id: t1\nname: t1_ids\nshort: test\ndescription: test\nresults: []\n";
-    err = error_of(p.dir());
-    EXPECT_NE(err.find("node name '"), std::string::npos) << bad << ": " << err;
+    graph.replace(graph.find("name: relay"), 11, "name: " + name);
+    return graph;
+  };
+  for (const std::string good : {"ns/relay", "/ns/relay", "_relay2"}) {
+    TestPackage p("node_names", with_node_name(good));
+    EXPECT_NO_THROW(load_benchmark(p.dir())) << good;
+  }
+  for (const std::string bad : {"my-relay", "2relay", "\"relay node\"", "a//b", "../relay"}) {
+    TestPackage p("node_names", with_node_name(bad));
+    const std::string err = error_of(p.dir());
+    EXPECT_NE(err.find("is not a ROS 2 node name"), std::string::npos) << bad << ": " << err;
+    EXPECT_NE(err.find("graph.yaml:"), std::string::npos) << err;
   }
 }
 

@@ -48,6 +48,12 @@ TEST(TypeHash, MatchesRosidlForStandardTypes) {
   for (const auto& [type, hash] : known) EXPECT_EQ(type_hash(registry, type), hash) << type;
 }
 
+// ros_discovery_info's type is built in, so its endpoints carry the hash rmw gives them.
+TEST(TypeHash, DiscoveryTypeIsBuiltIn) {
+  EXPECT_EQ(builtin_type_hash("rmw_dds_common/msg/ParticipantEntitiesInfo"),
+            "RIHS01_91a0593bacdcc50ea9bdcf849a938b128412cc1ea821245c663bcd26f83c295e");
+}
+
 TEST(TypeHash, DescriptionIsRosidlsJson) {
   const dyn::TypeRegistry registry = ros2_registry();
   EXPECT_EQ(type_description_json(registry, "builtin_interfaces/msg/Time"),

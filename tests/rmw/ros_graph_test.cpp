@@ -200,10 +200,19 @@ void check_announcements(const std::string& vendor, RosDistro distro) {
   EXPECT_EQ(bytes_of(std::get<dyn::List>(node["writer_gid_seq"].data)[0]),
             padded(writer->gid, gid_size))
       << "the node's writer is the writer discovery announces";
+  // ros_discovery_info's own writer carries its type's hash too, as rmw does on Iron and later.
+  std::optional<Observer::Writer> discovery;
+  ASSERT_TRUE(testing::wait_until([&] {
+    discovery = observer.writer_on("ros_discovery_info");
+    return discovery.has_value();
+  }));
   if (distro == RosDistro::kHumble) {
     EXPECT_EQ(writer->user_data.find("typehash="), std::string::npos) << writer->user_data;
+    EXPECT_EQ(discovery->user_data.find("typehash="), std::string::npos) << discovery->user_data;
   } else {
     EXPECT_EQ(writer->user_data, std::string("typehash=") + kImageHash + ";");
+    EXPECT_EQ(discovery->user_data,
+              "typehash=RIHS01_91a0593bacdcc50ea9bdcf849a938b128412cc1ea821245c663bcd26f83c295e;");
   }
 
   // A writer that goes is withdrawn from its node.
@@ -336,6 +345,40 @@ TEST(ParticipantEntities, UserDataValuesAreReadByKey) {
   EXPECT_EQ(user_data_value("enclave=/;", "typehash"), "");
   EXPECT_EQ(user_data_value("typehashes=x;", "typehash"), "");
   EXPECT_EQ(user_data_value("", "typehash"), "");
+}
+
+// Node names as rcl takes them: a namespace before the name, each part a ROS name token.
+TEST(NodeNames, SplitAndCheckedAsRclDoes) {
+  auto split = [](std::string_view full) {
+    const NodeName n = parse_node_name(full);
+    return n.namespace_ + " " + n.name;
+  };
+  EXPECT_EQ(split("relay"), "/ relay");
+  EXPECT_EQ(split("ns/relay"), "/ns relay");
+  EXPECT_EQ(split("/ns/relay"), "/ns relay");
+  EXPECT_EQ(split("a/b_2/_relay"), "/a/b_2 _relay");
+  auto error = [](std::string_view full) {
+    try {
+      parse_node_name(full);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(error("my-relay"),
+            "node name 'my-relay' is not a ROS 2 node name: '-' in its name (letters, digits and "
+            "'_' only; a namespace before it: 'ns/relay')");
+  EXPECT_EQ(error("2relay"),
+            "node name '2relay' is not a ROS 2 node name: its name starts with a digit ('2relay')");
+  EXPECT_EQ(error("relay node"),
+            "node name 'relay node' is not a ROS 2 node name: ' ' in its name (letters, digits "
+            "and '_' only; a namespace before it: 'ns/relay')");
+  EXPECT_NE(error("ns//relay").find("empty part"), std::string::npos);
+  EXPECT_NE(error("relay/").find("empty part"), std::string::npos);
+  EXPECT_NE(error("9ns/relay").find("its namespace starts with a digit"), std::string::npos);
+  EXPECT_NE(error(std::string(256, 'r')).find("longer than 255"), std::string::npos);
+  EXPECT_EQ(error(std::string(255, 'r')), "accepted");
+  EXPECT_EQ(error(""), "a node needs a name");
 }
 
 }  // namespace

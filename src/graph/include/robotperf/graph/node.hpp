@@ -254,9 +254,9 @@ class Node {
   std::shared_ptr<Timer> create_timer(std::chrono::nanoseconds period,
                                       std::function<void()> callback);
 
-  // The name ROS 2 tools show this node under (ros_discovery_info): its name in the root
-  // namespace.
-  rmw::NodeName ros_name() const { return rmw::NodeName{name_, "/"}; }
+  // The name ROS 2 tools show this node under (ros_discovery_info): the name given split as rcl
+  // splits it ("ns/relay": relay in /ns).
+  const rmw::NodeName& ros_name() const { return ros_name_; }
 
   // Topics this node publishes and subscribes, with their matched counts.
   std::vector<EndpointStatus> endpoints() const;
@@ -274,6 +274,7 @@ class Node {
 
   Context& context_;
   std::string name_;
+  rmw::NodeName ros_name_;
   mutable std::mutex mutex_;  // guards the lists
   std::vector<std::shared_ptr<GenericPublisher>> publishers_;
   std::vector<std::shared_ptr<Entity>> entities_;

@@ -74,6 +74,12 @@ struct NodeName {
   std::string namespace_ = "/";
 };
 
+// A node name as a graph names it, split as rcl does: "relay" is node relay in "/", "ns/relay"
+// and "/ns/relay" node relay in "/ns". Each part: letters, digits and '_', not starting with a
+// digit; the name at most 255 characters. Throws std::invalid_argument (one line, saying what is
+// wrong) for any other.
+NodeName parse_node_name(std::string_view full_name);
+
 // A DDS participant's GUID prefix.
 using ParticipantId = std::array<uint8_t, 12>;
 // An endpoint's (or participant's) GUID, which rmw uses as its GID.
