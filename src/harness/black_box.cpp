@@ -211,6 +211,8 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
   const bool gated = gate != nullptr && gate->warmup > 0 && gate->warmup < ids_.count;
   bool repeating = false;  // sending the warm-up again: records and counts stay as they are
   int64_t longest_prepare_ns = 0;
+  // Paced by the graph: when each message went (a repeated warm-up's last time).
+  std::vector<int64_t> sent_at(pacing_.scenario != Scenario::kOpenLoop ? ids_.count : 0);
   std::size_t sent = 0;
   for (uint64_t first = 0; first < ids_.count;) {
     if (should_stop()) break;
@@ -224,18 +226,32 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
         first = 0;
       }
     }
-    const int64_t due = deadline(first);
+    const bool paced = pacing_.scenario != Scenario::kOpenLoop;
+    if (paced && first >= pacing_.in_flight) {
+      // The output of the message in_flight before, or giving up on it; in slices, so that a
+      // stop is seen.
+      const uint64_t before = first - pacing_.in_flight;
+      const int64_t give_up = sent_at[before] + pacing_.give_up_ns;
+      while (!pacing_.answered(before, std::min(give_up, rmw::steady_now_ns() + kStopCheckNs))) {
+        if (rmw::steady_now_ns() >= give_up || should_stop()) break;
+      }
+      if (should_stop()) break;
+    }
+    // Paced by the graph, a message is due when it may go (its preparation is not measured).
+    const int64_t due = paced ? INT64_MIN : deadline(first);
     uint64_t end = first + 1;
     // A burst that holds the last warm-up message and the first measured one is sent in two
     // parts at its deadline, the gate asked between them: no measured message goes out before it.
-    while (end < ids_.count && deadline(end) == due && !(gated && end == gate->warmup)) ++end;
+    while (!paced && end < ids_.count && deadline(end) == due && !(gated && end == gate->warmup))
+      ++end;
     // Prepare before the deadline, so copying the payload is not measured, but only just before
     // it: copying megabytes right after the previous send would compete with the graph while it
     // handles that message (for a core, for memory bandwidth, and for the wake-up of the node
     // that has to take it). The lead is a multiple of the longest preparation seen, so that a
     // slow copy on a busy machine still ends before the deadline.
     // Long waits (low rates) in slices, so that a stop is seen within kStopCheckNs.
-    const int64_t prepare_at = due - std::max(kMinPrepareLeadNs, 4 * longest_prepare_ns);
+    const int64_t prepare_at =
+        paced ? rmw::steady_now_ns() : due - std::max(kMinPrepareLeadNs, 4 * longest_prepare_ns);
     bool stopped = false;
     while (!stopped && rmw::steady_now_ns() + kStopCheckNs < prepare_at) {
       sleep_until_ns(rmw::steady_now_ns() + kStopCheckNs);
@@ -252,8 +268,11 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
       }
     }
     longest_prepare_ns = std::max(longest_prepare_ns, rmw::steady_now_ns() - prepare_start);
-    sleep_until_ns(due);
+    const int64_t send_at = paced ? rmw::steady_now_ns() : due;
+    if (!paced) sleep_until_ns(send_at);
     for (uint64_t k = first; k < end; ++k) {
+      const int64_t now = rmw::steady_now_ns();
+      if (paced) sent_at[k] = now;
       if (repeating) {
         for (std::size_t i = 0; i < inputs_.size(); ++i)
           inputs_[i].publisher->publish(std::move(next[k - first][i]));
@@ -261,9 +280,9 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
       }
       MessageRecord& r = records[k];
       r.id = k;
-      r.scheduled_ns = due;
-      r.sent_ns = rmw::steady_now_ns();
-      lttng_ust_tracepoint(robotperf, input, node_->name().c_str(), ids_.stamp_ns(k), k, due);
+      r.scheduled_ns = send_at;
+      r.sent_ns = now;
+      lttng_ust_tracepoint(robotperf, input, node_->name().c_str(), ids_.stamp_ns(k), k, send_at);
       for (std::size_t i = 0; i < inputs_.size(); ++i)
         inputs_[i].publisher->publish(std::move(next[k - first][i]));
       ++sent;
@@ -415,6 +434,15 @@ void Monitor::keep_observed_truth(const std::string& topic, const msgs::TypeSupp
           cv_.notify_all();
         }
       });
+}
+
+bool Monitor::wait_received(uint64_t id, int64_t deadline_ns) {
+  std::unique_lock lock(mutex_);
+  const auto deadline =
+      std::chrono::steady_clock::time_point(std::chrono::nanoseconds(deadline_ns));
+  return cv_.wait_until(lock, deadline, [&] {
+    return id < tally_.received_ns.size() && tally_.received_ns[id] >= 0;
+  });
 }
 
 bool Monitor::wait_for(std::size_t expected, int64_t deadline_ns) {

@@ -86,6 +86,19 @@ class Playback {
                   const std::function<void(std::size_t sent)>& after_send,
                   const DeliveryGate* gate = nullptr, int64_t* repeated_ns = nullptr);
 
+  // Instead of the schedule (docs/design.md §3.3): a message goes once at most `in_flight - 1`
+  // messages are outstanding, i.e. once `answered(id, deadline)` says the output of the message
+  // `in_flight` before it arrived, or `give_up_ns` after that one's send when it never does
+  // (single-stream: 1; offline: as many as the graph's queues hold). A message is scheduled when
+  // it may go. Before run().
+  struct Pacing {
+    Scenario scenario = Scenario::kOpenLoop;
+    std::function<bool(uint64_t id, int64_t deadline_ns)> answered;
+    int64_t give_up_ns = 0;
+    std::size_t in_flight = 1;
+  };
+  void pace(Pacing pacing) { pacing_ = std::move(pacing); }
+
  private:
   struct Input {
     const msgs::TypeSupport* type;
@@ -99,6 +112,7 @@ class Playback {
   std::vector<Input> inputs_;
   MessageIds ids_;
   std::vector<int64_t> schedule_ns_;
+  Pacing pacing_;
 };
 
 class Monitor {
@@ -124,6 +138,8 @@ class Monitor {
   // frame k mod `frames`. Before the run; the evaluator outlives it.
   void evaluate_on_arrival(plugin::FunctionalEvaluator& evaluator, std::size_t frames);
 
+  // Waits until message `id`'s output arrived (true), or `deadline_ns` passes (false).
+  bool wait_received(uint64_t id, int64_t deadline_ns);
   // Waits until `expected` measured messages arrived, and the observed truth of every kept one
   // (a node's second output follows its first), or `deadline_ns` passes.
   bool wait_for(std::size_t expected, int64_t deadline_ns);

@@ -153,6 +153,12 @@ void resolve_timeline(const BenchmarkSpec& spec, const Dataset& dataset, const R
   }
   r.rate_hz = options.load.rate_hz.value_or(spec.rate_hz);
   check_rate(r.rate_hz, options.load.rate_hz ? "--rate" : "the benchmark's rate_hz");
+  if (options.load.scenario != Scenario::kOpenLoop) {
+    // The rate still spaces the message IDs (and sizes the run by --duration); nothing is sent
+    // at it. The timeline names the scenario, so results of different scenarios never pool.
+    r.timeline = scenario_name(options.load.scenario);
+    return;
+  }
   if (options.load.arrival.kind == ArrivalPattern::Kind::kPoisson) {
     r.timeline = "poisson";
     r.arrival_seed = options.load.arrival.seed;
@@ -261,6 +267,33 @@ void LoadOptions::check() const {
     throw std::invalid_argument(
         "--arrival " + arrival.name() +
         " replaces the bag's timeline: give one of --rate bag and --arrival");
+  if (scenario != Scenario::kOpenLoop) {
+    const std::string which = "--scenario " + scenario_name(scenario);
+    if (bag_timeline)
+      throw std::invalid_argument(which + " sends at no timeline: give it without --rate bag");
+    if (arrival.kind != ArrivalPattern::Kind::kFixed)
+      throw std::invalid_argument(which + " sends at no arrival times: give it without --arrival");
+  }
+}
+
+Scenario parse_scenario(const std::string& text) {
+  if (text == "open-loop") return Scenario::kOpenLoop;
+  if (text == "single-stream") return Scenario::kSingleStream;
+  if (text == "offline") return Scenario::kOffline;
+  throw std::invalid_argument("--scenario " + text +
+                              ": expected open-loop, single-stream or offline");
+}
+
+std::string scenario_name(Scenario scenario) {
+  switch (scenario) {
+    case Scenario::kSingleStream:
+      return "single-stream";
+    case Scenario::kOffline:
+      return "offline";
+    case Scenario::kOpenLoop:
+      break;
+  }
+  return "open-loop";
 }
 
 void ProcessOptions::check() const {
@@ -271,6 +304,11 @@ void ProcessOptions::check() const {
 void RunOptions::check() const {
   load.check();
   processes.check();
+  if (tracing.mode == RunMode::kGrey && load.scenario != Scenario::kOpenLoop) {
+    // The trace's analysis rates sends by their deadlines, which a closed loop does not have.
+    throw std::invalid_argument("--scenario " + scenario_name(load.scenario) +
+                                " is measured black-box: give it without --mode grey");
+  }
   if (nodes.device_resident &&
       (transport.rmw != "intra" || processes.layout != ProcessLayout::kSingle)) {
     throw std::invalid_argument(

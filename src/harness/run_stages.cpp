@@ -60,12 +60,27 @@ void add_peers(std::vector<rmw::PeerParticipant>& seen, std::vector<rmw::PeerPar
   }
 }
 
+// How many messages the graph's queues hold on their way through it: the shallowest KEEP_LAST
+// depth of its inputs and of its nodes' subscriptions (all of them with KEEP_ALL). Offline keeps
+// that many in flight, so that it fills the graph without overflowing a queue, which would turn
+// the Playback's haste into loss charged to the graph.
+std::size_t queued_messages(const BenchmarkSpec& spec, std::size_t count) {
+  std::size_t depth = count;
+  auto shallowest = [&](const rmw::QoS& qos) {
+    if (qos.history == rmw::History::kKeepLast)
+      depth = std::min(depth, std::max<std::size_t>(qos.depth, 1));
+  };
+  for (const auto& input : spec.inputs) shallowest(input.qos);
+  for (const auto& node : spec.nodes) shallowest(node.qos);
+  return std::max<std::size_t>(depth, 1);
+}
+
 // When the Playback sends each message; empty: every period.
 std::vector<int64_t> schedule_of(const RunPlan& plan, const RunOptions& options,
                                  const RunResult& r) {
   if (options.load.bag_timeline)
     return timeline_schedule(plan.dataset.frame_times_ns, options.load.rate_scale, r.count);
-  if (r.timeline == "fixed") return {};
+  if (r.timeline == "fixed" || options.load.scenario != Scenario::kOpenLoop) return {};
   return arrival_schedule(options.load.arrival, plan.period_ns, r.count);
 }
 
@@ -114,6 +129,14 @@ Instruments::Instruments(const RunPlan& plan, const RunOptions& options, RunEnvi
       monitor(*env.context, plan.spec().output, env.ids, r.warmup, &*env.isolation),
       monitor_executor(1, options.transport.monitor_wait) {
   const BenchmarkSpec& spec = plan.spec();
+  if (options.load.scenario != Scenario::kOpenLoop) {
+    // A lost output holds the next message back for as long as the drain waits.
+    playback.pace(
+        {options.load.scenario,
+         [this](uint64_t id, int64_t deadline) { return monitor.wait_received(id, deadline); },
+         static_cast<int64_t>(r.drain_s * 1e9),
+         options.load.scenario == Scenario::kOffline ? queued_messages(spec, r.count) : 1});
+  }
   if (plan.evaluate_outputs) {
     // A missing truth stream fails before timing.
     auto evaluator = make_evaluator(*spec.functional, plan.dataset);
@@ -496,6 +519,20 @@ namespace {
 void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& tally) {
   std::vector<double> from_scheduled, from_sent, lateness;
   std::vector<metrics::TimedEvent> sends, receptions;
+  // Offline, every measured message is issued at once (LoadGen's Offline): at the first one's
+  // send, which the others wait behind in the Playback.
+  const bool offline = r.timeline == scenario_name(Scenario::kOffline);
+  if (offline) {
+    for (auto& rec : r.records) {
+      if (rec.id >= r.warmup) {
+        const int64_t issued = rec.sent_ns;
+        for (auto& later : r.records) {
+          if (later.id >= r.warmup) later.scheduled_ns = issued;
+        }
+        break;
+      }
+    }
+  }
   for (auto& rec : r.records) {
     rec.received_ns = tally.received_ns[rec.id];
     rec.warmup = rec.id < r.warmup;
@@ -523,6 +560,18 @@ void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& ta
   r.throughput_hz = rates.output_hz;
   r.offered_rate_hz = rates.offered_hz;
   r.window_s = rates.window_s;
+  if (offline && !sends.empty()) {
+    // One deadline for all: the rates are counts over the time from the first send (LoadGen's
+    // samples per second), not intervals between deadlines.
+    const auto last = [](const std::vector<metrics::TimedEvent>& events) {
+      return std::ranges::max(events, {}, &metrics::TimedEvent::time_ns).time_ns;
+    };
+    const int64_t first_send = sends.front().time_ns;
+    const double send_span_s = static_cast<double>(last(sends) - first_send) * 1e-9;
+    r.offered_rate_hz = send_span_s > 0 ? static_cast<double>(sends.size()) / send_span_s : 0;
+    r.window_s = receptions.empty() ? 0 : static_cast<double>(last(receptions) - first_send) * 1e-9;
+    r.throughput_hz = r.window_s > 0 ? static_cast<double>(receptions.size()) / r.window_s : 0;
+  }
 
   auto invalid = [&](std::string why) { r.invalid_reasons.push_back(std::move(why)); };
   for (const auto& e : r.errors) invalid("run ended early: " + e);

@@ -329,8 +329,10 @@ json configuration_json(const harness::RunResult& r) {
       {"cpus", sched.cpus.empty() ? json(nullptr) : json(harness::format_cpu_list(sched.cpus))},
       {"rt_priority", sched.rt_priority ? json(sched.rt_priority) : json(nullptr)},
       {"lock_memory", sched.lock_memory}};
+  const bool closed = r.timeline == "single-stream" || r.timeline == "offline";
   return {{"rate_hz", r.rate_hz},
           {"timeline", r.timeline},
+          {"scenario", closed ? r.timeline : "open-loop"},
           {"rate_scale", r.timeline == "bag" ? json(r.rate_scale) : json(nullptr)},
           {"burst", r.timeline == "burst" ? json(r.burst) : json(nullptr)},
           {"arrival_seed", r.timeline == "poisson" ? json(r.arrival_seed) : json(nullptr)},
@@ -543,8 +545,14 @@ namespace {
 // The summary's first lines: what ran, how, on what, fed with what.
 void write_configuration(std::ostream& out, const harness::RunResult& r) {
   out << r.benchmark_id << " (" << r.benchmark_name << ") · " << (r.grey ? "grey-box · " : "")
-      << r.rmw << " · " << r.processes << " process" << (r.processes == "single" ? "" : "es")
-      << " · " << format_fixed(r.rate_hz, 1) << " Hz";
+      << r.rmw << " · " << r.processes << " process" << (r.processes == "single" ? "" : "es");
+  if (r.timeline == "single-stream") {
+    out << " · single-stream (the next message when the last output arrived)";
+  } else if (r.timeline == "offline") {
+    out << " · offline (as many in flight as the graph's queues hold)";
+  } else {
+    out << " · " << format_fixed(r.rate_hz, 1) << " Hz";
+  }
   if (r.timeline == "bag") {
     out << " (the bag's timeline";
     if (r.rate_scale != 1.0) out << " x" << r.rate_scale;
@@ -781,6 +789,18 @@ void write_lead(std::ostream& out, const harness::RunResult& r, const std::strin
   const auto& s = r.latency_from_scheduled;
   if (s.count == 0) {
     out << "latency: none measured (no measured message came out of the graph)\n";
+  } else if (r.timeline == "single-stream") {
+    // LoadGen's SingleStream metric is the 90th percentile.
+    out << "latency: " << percentile_with_interval("p90", 0.90, s.p90, s.p90_ci) << " · "
+        << percentile_with_interval("p50", 0.50, s.p50, s.p50_ci)
+        << " · 95 % intervals, single-stream (no queueing: each sent when the last answered)\n";
+  } else if (r.timeline == "offline") {
+    out << "throughput: " << format_fixed(r.throughput_hz, 3)
+        << " samples/s (offline: outputs over the time from the first send to the last output; "
+           "LoadGen Offline's metric)\n";
+    out << "latency: " << percentile_with_interval("p50", 0.50, s.p50, s.p50_ci) << " · "
+        << percentile_with_interval("p99", 0.99, s.p99, s.p99_ci)
+        << " · 95 % intervals, from the batch's issue (queueing included)\n";
   } else {
     out << "latency: " << percentile_with_interval("p50", 0.50, s.p50, s.p50_ci) << " · "
         << percentile_with_interval("p99", 0.99, s.p99, s.p99_ci)
@@ -788,13 +808,18 @@ void write_lead(std::ostream& out, const harness::RunResult& r, const std::strin
   }
   if (!r.sample.empty() && r.measured < metrics::samples_for_upper_bound(0.99))
     out << "samples: " << r.measured << " by the benchmark's nature: one is " << r.sample << "\n";
-  out << "throughput: " << format_fixed(r.throughput_hz, 3) << " Hz out at "
-      << format_fixed(r.offered_rate_hz, 3) << " Hz offered"
-      << (r.throughput_kind == "peak" ? " (peak: the highest rate the search found sustained)"
-          : r.peak_search
-              ? " (the highest rate sustained before the search was cut short: not the peak)"
-              : " (keeping up with the offered load; --find-peak searches for the peak)")
-      << "\n";
+  if (r.timeline == "single-stream") {
+    out << "throughput: " << format_fixed(r.throughput_hz, 3)
+        << " Hz out (one message in flight at a time: the inverse of the latency, not a peak)\n";
+  } else if (r.timeline != "offline") {
+    out << "throughput: " << format_fixed(r.throughput_hz, 3) << " Hz out at "
+        << format_fixed(r.offered_rate_hz, 3) << " Hz offered"
+        << (r.throughput_kind == "peak" ? " (peak: the highest rate the search found sustained)"
+            : r.peak_search
+                ? " (the highest rate sustained before the search was cut short: not the peak)"
+                : " (keeping up with the offered load; --find-peak searches for the peak)")
+        << "\n";
+  }
   const bool answers_ok = !r.functional || r.functional->valid;
   out << "result: " << (r.valid && answers_ok ? "VALID" : "INVALID");
   std::vector<std::string> reasons = r.invalid_reasons;

@@ -284,6 +284,90 @@ TEST(BlackBox, BurstsAreSentBackToBackAtTheirDeadline) {
   }
 }
 
+// Single-stream: each message goes out once the previous one's output is back, so a relay that
+// takes 20 ms sets the pace (not the 1 kHz rate) and nothing queues.
+TEST(Scenarios, SingleStreamSendsWhenTheLastOutputArrived) {
+  RunOptions o = with_count(30, 1000);
+  o.load.warmup = 5;
+  o.load.scenario = Scenario::kSingleStream;
+  const RunResult r = run_package("single_stream", relay_graph("delay_ms: 20"), o);
+  expect_sane(r);
+  EXPECT_EQ(r.timeline, "single-stream");
+  EXPECT_EQ(r.matched, 25u);
+  ASSERT_EQ(r.records.size(), 30u);
+  for (std::size_t k = 1; k < r.records.size(); ++k) {
+    ASSERT_GE(r.records[k - 1].received_ns, 0);
+    EXPECT_GE(r.records[k].sent_ns, r.records[k - 1].received_ns) << k;
+    // Due when it may go: sent at once (a publish's time at most).
+    EXPECT_LT(r.records[k].sent_ns - r.records[k].scheduled_ns, 5 * kMs) << k;
+  }
+  // Each latency is the relay's 20 ms and a wake-up or two: never two relays' worth.
+  EXPECT_GE(r.latency_from_scheduled.min, 20 * kMs);
+  EXPECT_LT(r.latency_from_scheduled.p50, 40 * kMs);
+  EXPECT_LT(r.throughput_hz, 50.5);
+}
+
+// Offline: as many messages at once as the graph's queues hold (the relay's KEEP_LAST 10), the
+// next one as each output comes back; the relay answers one after another, so the throughput is
+// its own rate and the latency from the batch's issue grows with each message's place. No
+// message is lost to an overflowing queue.
+TEST(Scenarios, OfflineKeepsTheGraphFullAndCountsSamplesPerSecond) {
+  RunOptions o = with_count(25, 1);
+  o.load.warmup = 5;
+  o.load.scenario = Scenario::kOffline;
+  const RunResult r = run_package("offline", relay_graph("delay_ms: 10"), o);
+  expect_sane(r);
+  EXPECT_EQ(r.timeline, "offline");
+  EXPECT_EQ(r.matched, 20u);
+  ASSERT_EQ(r.records.size(), 25u);
+  // The first ten go out back to back (at 1 Hz they would take 9 s), the rest as outputs return.
+  EXPECT_LT(r.records[9].sent_ns - r.records[0].sent_ns, 100 * kMs);
+  for (std::size_t k = 10; k < r.records.size(); ++k) {
+    ASSERT_GE(r.records[k - 10].received_ns, 0);
+    EXPECT_GE(r.records[k].sent_ns, r.records[k - 10].received_ns) << k;
+  }
+  const int64_t issued = r.records[5].sent_ns;
+  for (std::size_t k = 5; k < r.records.size(); ++k) EXPECT_EQ(r.records[k].scheduled_ns, issued);
+  // The last measured output waited behind the 19 before it (and the warm-up's): 20 relay
+  // delays from the issue at least.
+  EXPECT_GE(r.latency_from_scheduled.max, 20 * 10 * kMs);
+  EXPECT_GT(r.throughput_hz, 40.0);
+  EXPECT_LT(r.throughput_hz, 105.0);
+}
+
+TEST(Scenarios, ClosedLoopsRefuseWhatNeedsDeadlines) {
+  RunOptions o;
+  o.load.scenario = Scenario::kOffline;
+  o.load.arrival = ArrivalPattern::parse("poisson");
+  EXPECT_THROW(o.check(), std::invalid_argument);
+  o.load.arrival = {};
+  o.tracing.mode = RunMode::kGrey;
+  try {
+    o.check();
+    FAIL() << "an offline grey run was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "--scenario offline is measured black-box: give it without --mode grey");
+  }
+  EXPECT_THROW(parse_scenario("closed"), std::invalid_argument);
+  EXPECT_EQ(scenario_name(parse_scenario("single-stream")), "single-stream");
+}
+
+// a5 in both closed-loop scenarios: valid, with their lead figures.
+TEST(Scenarios, A5RunsInBothClosedLoopScenarios) {
+  const auto a5 = find_benchmark(std::filesystem::path(ROBOTPERF_SOURCE_DIR) / "benchmarks", "a5");
+  for (const Scenario scenario : {Scenario::kSingleStream, Scenario::kOffline}) {
+    RunOptions o;
+    o.load.count = 60;
+    o.load.scenario = scenario;
+    const RunResult r = run_benchmark(a5, o);
+    expect_sane(r);
+    EXPECT_TRUE(r.valid) << scenario_name(scenario) << ": "
+                         << (r.invalid_reasons.empty() ? "" : r.invalid_reasons[0]);
+    EXPECT_EQ(r.timeline, scenario_name(scenario));
+    EXPECT_GT(r.throughput_hz, 0.0);
+  }
+}
+
 // A grey run's trace is recorded in a temporary folder and moved beside the results: no line of
 // the result may go on naming the temporary folder once it is gone.
 TEST(MoveTrace, RewritesEveryLineThatNamedTheTemporaryFolder) {

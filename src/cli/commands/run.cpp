@@ -142,6 +142,14 @@ class RunCommand : public Command {
                      "with --arrival poisson: the schedule's seed (default 1)")
         ->transform(whole_number(0));
     command_
+        ->add_option("--scenario", args_.scenario,
+                     "open-loop (default: at the arrival times, whatever the graph does), "
+                     "single-stream (the next message when the last output arrived: latency "
+                     "without queueing) or offline (every message at once: throughput), as "
+                     "MLPerf LoadGen names them")
+        ->check(CLI::IsMember({"open-loop", "single-stream", "offline"}))
+        ->excludes(find_peak_);
+    command_
         ->add_option("--monitor-wait", args_.monitor_wait,
                      "how the Monitor waits for outputs: sleep (default; each latency includes a "
                      "thread wake-up) or spin (no wake-up; keeps one core busy during the run)")

@@ -27,6 +27,7 @@ struct RunArgs {
   std::vector<std::string> remaps;
   double rate_scale = 1.0;
   std::string arrival = "fixed";
+  std::string scenario = "open-loop";
   std::optional<uint64_t> arrival_seed;
   std::string monitor_wait = "sleep";
   // --find-peak and its bounds.

@@ -103,6 +103,7 @@ void set_input_options(harness::RunOptions& o, const RunArgs& a) {
   if (a.arrival_seed && o.load.arrival.kind != harness::ArrivalPattern::Kind::kPoisson)
     throw std::invalid_argument("--arrival-seed only applies with --arrival poisson");
   if (a.arrival_seed) o.load.arrival.seed = *a.arrival_seed;
+  o.load.scenario = harness::parse_scenario(a.scenario);
   o.transport.monitor_wait =
       a.monitor_wait == "spin" ? graph::WaitMode::kSpin : graph::WaitMode::kSleep;
   o.nodes.update_rate_hz = a.update_rate;

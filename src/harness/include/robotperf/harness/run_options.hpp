@@ -45,6 +45,19 @@ struct ArrivalPattern {
   std::string name() const;  // as parse() reads it
 };
 
+// Whether the Playback paces itself or follows the graph (MLPerf LoadGen's scenarios, named as it
+// names them; docs/design.md §3.3).
+enum class Scenario {
+  kOpenLoop,      // messages at their arrival times whatever the graph does (LoadGen's Server
+                  // with Poisson arrivals; with fixed ones, a camera)
+  kSingleStream,  // the next message when the previous one's output arrived: latency with no
+                  // queueing (LoadGen's SingleStream)
+  kOffline,       // every message at once, back to back: throughput (LoadGen's Offline)
+};
+// "open-loop", "single-stream" or "offline"; parse throws std::invalid_argument otherwise.
+Scenario parse_scenario(const std::string& text);
+std::string scenario_name(Scenario scenario);
+
 // The stages of run_benchmark, in their order: each acquires what it needs for the run, and an
 // exception or interrupt at any point releases what the stages before it acquired.
 enum class RunStage {
@@ -75,6 +88,8 @@ struct LoadOptions {
   double rate_scale = 1.0;
   // Otherwise, when messages are sent at the rate.
   ArrivalPattern arrival;
+  // Or not at arrival times at all: closed loop, or everything at once.
+  Scenario scenario = Scenario::kOpenLoop;
 
   // Throws std::invalid_argument naming the option (--rate, --count, ...) that is out of range.
   void check() const;
