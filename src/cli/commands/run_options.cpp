@@ -129,7 +129,8 @@ void set_graph_options(harness::RunOptions& o, const harness::BenchmarkSpec& spe
   o.transport.keystore = a.security;
   o.transport.ros_distro = rmw::ros_distro_from_name(a.ros_distro);
   if (a.netns) {
-    link.emplace(harness::LinkShaping{a.link_rate == "none" ? "" : a.link_rate, a.netem});
+    link.emplace(harness::LinkShaping{a.link_rate == "none" ? "" : a.link_rate, a.netem},
+                 spec.network);
     link->enter_runner_side();
     for (const auto& host : spec.hosts()) o.processes.host_launchers[host] = link->launcher();
     o.processes.network_link = &*link;
