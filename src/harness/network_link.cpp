@@ -163,8 +163,11 @@ std::string burst_for(const std::string& rate) {
 void shape(const std::string& ns, const std::string& device, const LinkShaping& shaping) {
   const std::vector<std::string> tc = {"ip",    "netns", "exec", ns,    "tc",
                                        "qdisc", "add",   "dev",  device};
-  const std::vector<std::string> tbf = {
-      "tbf", "rate", shaping.rate, "burst", burst_for(shaping.rate), "limit", "32mb"};
+  // Only with a rate: an unshaped link (--link-rate none) has no bucket to size.
+  const auto tbf = [&] {
+    return std::vector<std::string>{"tbf",   "rate", shaping.rate, "burst", burst_for(shaping.rate),
+                                    "limit", "32mb"};
+  };
   if (!shaping.netem.empty()) {
     std::vector<std::string> args = tc;
     args.insert(args.end(), {"root", "handle", "1:", "netem"});
@@ -185,13 +188,15 @@ void shape(const std::string& ns, const std::string& device, const LinkShaping& 
     if (!shaping.rate.empty()) {
       args = tc;
       args.insert(args.end(), {"parent", "1:", "handle", "2:"});
-      args.insert(args.end(), tbf.begin(), tbf.end());
+      const auto bucket = tbf();
+      args.insert(args.end(), bucket.begin(), bucket.end());
       step(args);
     }
   } else if (!shaping.rate.empty()) {
     std::vector<std::string> args = tc;
     args.push_back("root");
-    args.insert(args.end(), tbf.begin(), tbf.end());
+    const auto bucket = tbf();
+    args.insert(args.end(), bucket.begin(), bucket.end());
     const ToolRun run = run_tool(args);
     if (run.status != 0)
       throw NetworkSetupError("--link-rate '" + shaping.rate + "': " + first_line(run.output));
@@ -349,6 +354,9 @@ void NetworkLink::make_path() {
     step({"ip", "-n", b, "route", "add", "default", "dev", remote_device_});
   } else {
     // Each host reaches the other subnet through the router; multicast stays on its own.
+    // The other subnet's own route outlasts a tunnel's taking the default one.
+    step({"ip", "-n", a, "route", "add", "10.200.2.0/24", "via", "10.200.1.254"});
+    step({"ip", "-n", b, "route", "add", "10.200.1.0/24", "via", "10.200.2.254"});
     step({"ip", "-n", a, "route", "add", "default", "via", "10.200.1.254"});
     step({"ip", "-n", b, "route", "add", "default", "via", "10.200.2.254"});
     description_.static_peers = {description_.runner_address, description_.remote_address};
