@@ -301,6 +301,8 @@ TEST_F(Report, VpnRunsAreTheirOwnSeriesBesidePublishedN5Rows) {
       d.tunnel = harness::NetworkLink::Tunnel{"wireguard-go", "0.0.20220316", "10.200.1.1",
                                               "10.200.2.2", 1500};
       run.network_link = harness::RunResult::LinkUse{d, {}};
+      // As --netns records it: the pong's host behind its launcher.
+      run.host_launchers = {{"remote", "ip netns exec robotperf-1-b"}};
     }
     const auto j = result_to_json(run, testing::make_machine(s));
     std::ofstream(dir_ / (std::string(tunnel ? "vpn" : "plain") + ".json")) << j.dump(2);
