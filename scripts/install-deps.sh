@@ -16,6 +16,9 @@ done
 packages=(
   g++ cmake make pkg-config git
   iproute2  # ip and tc: --netns (n3, n4)
+  wireguard-go  # the userspace WireGuard of --netns tunnels (n5-n8): no kernel module needed
+  wireguard-tools  # wg: the tunnels' keys and peers (n5-n8)
+  procps  # sysctl: forwarding in the router namespace of routed --netns paths (n7, n8)
   libfastrtps-dev libfastcdr-dev cyclonedds-dev cyclonedds-tools  # cyclonedds-tools: idlc, for bench_transport
   libssl-dev  # DDS Security keystores (security init)
   libopencv-dev

@@ -190,6 +190,20 @@ void load_settings(const YamlFile& file, BenchmarkSpec& spec) {
       file.fail(security, "security must be 'required' (DDS Security, --security) or 'none'");
     spec.security_required = security.Scalar() == "required";
   }
+  if (const YAML::Node network = root["network"]; network.IsDefined()) {
+    if (!network.IsMap()) file.fail(network, "network must be a map (vpn:, topology:)");
+    file.allow_keys(network, {"vpn", "topology"});
+    const std::string vpn = file.get<std::string>(network, "vpn", "none");
+    const std::string topology = file.get<std::string>(network, "topology", "same-subnet");
+    if (const auto v = vpn_from_name(vpn))
+      spec.network.vpn = *v;
+    else
+      file.fail(network["vpn"], "network: vpn must be 'wireguard' or 'none'");
+    if (const auto t = topology_from_name(topology))
+      spec.network.topology = *t;
+    else
+      file.fail(network["topology"], "network: topology must be 'same-subnet' or 'routed'");
+  }
   if (!(spec.drain_s >= 0)) file.fail(root["drain_s"], "drain_s must be >= 0");
   spec.executor_threads = file.get<std::size_t>(root, "executor_threads", 1);
   // More threads than that only contend: the graph's nodes run one callback at a time each.
@@ -397,8 +411,8 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   const YamlFile file(path);
   const YAML::Node& root = file.root();
   file.allow_keys(root, {"plugins", "dataset", "rate_hz", "count", "warmup", "drain_s", "sample",
-                         "executor_threads", "processes", "security", "validity", "inputs",
-                         "output", "nodes", "launch", "attach", "functional"});
+                         "executor_threads", "processes", "security", "network", "validity",
+                         "inputs", "output", "nodes", "launch", "attach", "functional"});
   load_plugins(file, spec);
   load_settings(file, spec);
   const std::set<std::string> input_topics = load_boundary(file, spec);
@@ -415,6 +429,10 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   }
   for (const auto& n : nodes) spec.nodes.push_back(load_node(file, n, boundary, names));
   check_wiring(file, spec);
+  if (spec.network != NetworkLayout{} && spec.hosts().empty()) {
+    file.fail(root["network"],
+              "network: describes the path to another host, but no node has host:");
+  }
   // The Monitor would time the Playback's own messages. Only a graph of nothing (no node, no
   // process) does that on purpose: it measures the harness itself.
   if (input_topics.contains(spec.output.topic) && (!spec.nodes.empty() || spec.external())) {

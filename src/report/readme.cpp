@@ -110,6 +110,15 @@ std::string render_package_readme(const fs::path& package_dir) {
           << " --`; `--netns` makes it a network "
              "namespace of this machine).\n";
     }
+    if (spec.network != harness::NetworkLayout{}) {
+      const bool routed = spec.network.topology == harness::NetworkLayout::Topology::kRouted;
+      out << "\nWith `--netns` the path between the hosts "
+          << (routed ? "crosses a router namespace between two subnets" : "is one subnet")
+          << (spec.network.vpn == harness::NetworkLayout::Vpn::kWireguard
+                  ? ", inside a WireGuard tunnel (wireguard-go, MTU 1420, keys made for the run)"
+                  : "")
+          << " (graph.yaml `network:`).\n";
+    }
     out << "\nThe Monitor measures `" << spec.output.topic << "` (`" << spec.output.type
         << "`). A result is valid with at least " << spec.min_samples
         << " matched samples and at most " << spec.max_loss_percent << " % loss.\n\n";

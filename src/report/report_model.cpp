@@ -663,6 +663,7 @@ Configuration configuration_of(const StoredRun& r) {
                      {"mode", r.type},
                      {"arrivals", r.timeline},
                      {"monitor", r.monitor_wait},
+                     {"network", r.network},
                      {"rate", rate_text(r)},
                      {"node settings", r.node_settings}};
   for (const auto& [key, value] : r.labels) c.emplace_back("label." + key, value);
@@ -1379,14 +1380,15 @@ const char* colour_of(std::size_t colour) {
 std::string configuration_series(const StoredRun& run) {
   // What makes two runs comparable (docs/design.md §3.9), the rate aside: the machine, the
   // transport, the process layout, the backend, black- or grey-box, the arrivals and how the
-  // Monitor waited (a spinning one takes no wake-up out of each latency). Defaults are left out of
-  // the label.
+  // Monitor waited (a spinning one takes no wake-up out of each latency), the network path (a VPN
+  // tunnel, a router). Defaults are left out of the label.
   std::string label = run.hardware + " · " + run.rmw;
   if (run.processes == "per-node") label += " · per-node";
   if (!run.backend.empty()) label += " · " + run.backend;
   if (run.type == "grey") label += " · grey";
   if (run.timeline != "fixed") label += " · " + run.timeline;
   if (run.monitor_wait == "spin") label += " · monitor spinning";
+  if (run.network != "plain") label += " · " + run.network;
   // The user's labels (run --label) name series of their own; the automatic ones (robotperf's
   // version) are in the results but would split every series at each robotperf build.
   for (const auto& [key, value] : run.labels) {

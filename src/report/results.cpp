@@ -240,9 +240,20 @@ nlohmann::json network_json(const harness::RunResult& r) {
   if (const auto& use = r.network_link) {
     const auto& d = use->link;
     const auto& t = use->traffic;
+    json tunnel = nullptr;
+    if (d.tunnel) {
+      tunnel = {{"implementation", d.tunnel->implementation},
+                {"version", d.tunnel->version},
+                {"mtu", d.mtu},
+                {"runner_endpoint", d.tunnel->runner_endpoint},
+                {"remote_endpoint", d.tunnel->remote_endpoint},
+                {"underlay_mtu", d.tunnel->underlay_mtu}};
+    }
     out["link"] = {{"kind", "veth pair between network namespaces on this machine (--netns)"},
                    {"runner_namespace", d.runner_namespace},
                    {"remote_namespace", d.remote_namespace},
+                   {"topology", harness::to_string(d.layout.topology)},
+                   {"tunnel", tunnel},
                    {"runner_address", d.runner_address},
                    {"remote_address", d.remote_address},
                    {"mtu", d.mtu},
@@ -611,7 +622,10 @@ void write_placement(std::ostream& out, const harness::RunResult& r) {
   if (const auto& use = r.network_link) {
     const auto& d = use->link;
     const auto& t = use->traffic;
-    out << "link: veth " << d.runner_address << " <-> " << d.remote_address << ", MTU " << d.mtu
+    out << "link: "
+        << (d.tunnel ? d.tunnel->implementation + " " + d.tunnel->version + " tunnel" : "veth")
+        << " " << d.runner_address << " <-> " << d.remote_address << ", MTU " << d.mtu
+        << (d.layout.topology == harness::NetworkLayout::Topology::kRouted ? ", routed" : "")
         << ", " << (d.shaping.rate.empty() ? "unshaped" : d.shaping.rate)
         << (d.shaping.netem.empty() ? "" : ", netem " + d.shaping.netem) << "; during the run "
         << format_fixed(static_cast<double>(t.bytes_out) / (1 << 20), 2) << " MiB out, "

@@ -327,6 +327,16 @@ bool looks_like_result(const fs::path& path) {
 
 namespace {
 
+// network.link as StoredRun::network names it; "plain" for a run without a link robotperf made.
+std::string network_path(const json& link) {
+  if (!link.is_object()) return "plain";
+  const bool routed = string_or(link, "topology", "same-subnet") == "routed";
+  const json& tunnel = member(link, "tunnel");
+  if (!tunnel.is_object()) return routed ? "routed" : "plain";
+  return string_or(tunnel, "implementation", "?") + " " + string_or(tunnel, "version", "?") +
+         ", MTU " + std::to_string(tunnel.value("mtu", 0)) + (routed ? ", routed" : "");
+}
+
 // Every field of a results file, read into `run`. Throws ReportError (without the file name) for
 // a file that is not a usable result, and json::exception for a field of another type than
 // robotperf writes.
@@ -347,6 +357,7 @@ void read_run(const json& j, StoredRun& run) {
   // Older files have neither: they sent at a fixed rate, and their Monitor slept.
   run.timeline = string_or(config, "timeline", "fixed");
   run.monitor_wait = string_or(config, "monitor_wait", "sleep");
+  run.network = network_path(member(member(j, "network"), "link"));
   run.dataset = string_or_empty(member(j, "dataset"), "name");
   const json& software = member(j, "software");
   run.robotperf_version = string_or(software, "robotperf_version", "?");
@@ -590,6 +601,7 @@ std::vector<std::pair<const char*, json>> run_fields(const StoredRun& r) {
           {"backend", r.backend.empty() ? "cpu" : r.backend},
           {"arrivals", r.timeline},
           {"monitor", r.monitor_wait},
+          {"network", r.network},
           {"rate_hz", number(r.rate_hz)},
           {"update_rate_hz", optional(r.update_rate_hz)},
           {"started_utc", r.started_utc},

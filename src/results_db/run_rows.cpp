@@ -27,11 +27,19 @@ std::string configuration_key(const report::StoredRun& run) {
     std::snprintf(rate, sizeof rate, "peak");
   else if (std::isfinite(run.rate_hz))
     std::snprintf(rate, sizeof rate, "%.6g Hz", run.rate_hz);
-  return report::joined(
-      std::vector<std::string>{run.benchmark_id, run.hardware, run.rmw, run.processes,
-                               run.backend.empty() ? "cpu" : run.backend, run.type, run.timeline,
-                               "monitor " + run.monitor_wait, rate, run.node_settings},
-      " | ");
+  std::vector<std::string> parts{run.benchmark_id,
+                                 run.hardware,
+                                 run.rmw,
+                                 run.processes,
+                                 run.backend.empty() ? "cpu" : run.backend,
+                                 run.type,
+                                 run.timeline,
+                                 "monitor " + run.monitor_wait,
+                                 rate,
+                                 run.node_settings};
+  // Only where not plain, so that the keys of runs stored before it was recorded still match.
+  if (run.network != "plain") parts.push_back("network " + run.network);
+  return report::joined(parts, " | ");
 }
 
 // The non-empty bins of the results file's histogram, edges in ns.

@@ -492,13 +492,28 @@ class PeerDirectory {
 // (net.core.rmem_max), from 1 MiB. Fast DDS sends a large sample as one burst of 64 KiB
 // fragments; a fragment the socket drops is never repaired by a Cyclone 0.10 reader (it
 // acknowledges the sample before it is complete), so the buffer must hold the largest burst.
-constexpr const char* kDomainConfig =
-    "<CycloneDDS><Domain><Internal><SocketReceiveBufferSize min=\"default\" max=\"8MiB\"/>"
-    "</Internal></Domain></CycloneDDS>";
+// The domain's configuration: large receive buffers, and ROS_STATIC_PEERS as rmw_cyclonedds adds
+// them: unicast discovery peers beside multicast, reached at the ports of a participant index,
+// which each participant then takes (Cyclone's default leaves it unknowable to the peers).
+std::string domain_config() {
+  std::string discovery;
+  const std::vector<std::string> peers = static_peers_from_environment();
+  if (!peers.empty()) {
+    discovery =
+        "<Discovery><ParticipantIndex>auto</ParticipantIndex>"
+        "<MaxAutoParticipantIndex>32</MaxAutoParticipantIndex><Peers>";
+    for (const auto& peer : peers) discovery += "<Peer address=\"" + peer + "\"/>";
+    discovery += "</Peers></Discovery>";
+  }
+  return "<CycloneDDS><Domain><Internal><SocketReceiveBufferSize min=\"default\" max=\"8MiB\"/>"
+         "</Internal>" +
+         discovery + "</Domain></CycloneDDS>";
+}
 
-// The domains this process created with kDomainConfig, shared by its participants: Cyclone deletes
-// an explicitly created domain (and everything in it) only when told to, so the last participant
-// on it does. Without CYCLONEDDS_URI only: the user's configuration otherwise applies as is.
+// The domains this process created with domain_config(), shared by its participants: Cyclone
+// deletes an explicitly created domain (and everything in it) only when told to, so the last
+// participant on it does. Without CYCLONEDDS_URI only: the user's configuration otherwise applies
+// as is.
 //
 // It also keeps the participants of one domain alike in DDS Security. Cyclone DDS 0.10 delivers
 // between the participants of one process directly, without authentication or access control, and
@@ -521,7 +536,7 @@ class DomainRegistry {
     Domain domain{.security = security};
     const char* uri = std::getenv("CYCLONEDDS_URI");
     if (uri == nullptr || *uri == '\0') {
-      domain.handle = dds_create_domain(id, kDomainConfig);
+      domain.handle = dds_create_domain(id, domain_config().c_str());
       if (domain.handle < 0) {
         throw TransportError("cyclonedds: cannot create domain " + std::to_string(id) + ": " +
                              error_text(domain.handle));

@@ -72,6 +72,9 @@ constexpr uint32_t kSharedMemorySegmentSize = 16u << 20;
 
 // As the Cyclone DDS transport asks for its sockets.
 constexpr uint32_t kUdpReceiveBufferSize = 8u << 20;
+constexpr uint32_t kParticipantsPerStaticPeer = 16;
+// DDS's (RTPS 2.x) discovery multicast group.
+constexpr const char* kDiscoveryMulticastAddress = "239.255.0.1";
 
 // What the transport hands Fast DDS to write, or to take into: a message and the TypeSupport that
 // (de)serializes it. Fast DDS keeps one data type per type name and participant, while endpoints of
@@ -322,6 +325,23 @@ void add_security(const SecurityFiles& files, dds::DomainParticipantQos& qos) {
   properties.emplace_back("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
 }
 
+// ROS_STATIC_PEERS as rmw_fastrtps adds them: unicast initial peers beside the multicast one that
+// Fast DDS uses alone when none are given (port 0: Fast DDS fills in the domain's discovery ports).
+void add_static_peers(const std::vector<std::string>& peers, dds::DomainParticipantQos& qos) {
+  if (peers.empty()) return;
+  auto& initial = qos.wire_protocol().builtin.initialPeersList;
+  if (initial.empty()) {
+    eprosima::fastrtps::rtps::Locator_t multicast;
+    eprosima::fastrtps::rtps::IPLocator::setIPv4(multicast, kDiscoveryMulticastAddress);
+    initial.push_back(multicast);
+  }
+  for (const auto& peer : peers) {
+    eprosima::fastrtps::rtps::Locator_t unicast;
+    eprosima::fastrtps::rtps::IPLocator::setIPv4(unicast, peer);
+    initial.push_back(unicast);
+  }
+}
+
 // The participant and the entities every endpoint shares. Publisher and
 // subscription handles keep it alive, so they may outlive their Transport.
 class Participant {
@@ -563,9 +583,13 @@ dds::DomainParticipantQos fastdds_participant_qos() {
     // (208 KiB) drops most of a VGA colour image.
     auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
     udp->receiveBufferSize = kUdpReceiveBufferSize;
+    // ROS_STATIC_PEERS: each peer is tried at the discovery ports of this many participants per
+    // address (Fast DDS's default of 4 misses a host's fifth participant).
+    udp->maxInitialPeersRange = kParticipantsPerStaticPeer;
     qos.transport().use_builtin_transports = false;
     qos.transport().user_transports = {shm, udp};
   }
+  add_static_peers(static_peers_from_environment(), qos);
   return qos;
 }
 

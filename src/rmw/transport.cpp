@@ -1,5 +1,6 @@
 #include "robotperf/rmw/transport.hpp"
 
+#include <arpa/inet.h>
 #include <fcntl.h>
 #include <sys/file.h>
 #include <time.h>
@@ -133,6 +134,26 @@ int domain_id_from_environment() {
                                 std::to_string(kMaxDomainId));
   }
   return *id;
+}
+
+std::vector<std::string> static_peers_from_environment() {
+  const char* value = std::getenv("ROS_STATIC_PEERS");
+  std::vector<std::string> peers;
+  if (value == nullptr) return peers;
+  std::string_view rest = value;
+  while (!rest.empty()) {
+    const auto semicolon = rest.find(';');
+    const std::string peer(rest.substr(0, semicolon));
+    rest = semicolon == std::string_view::npos ? std::string_view{} : rest.substr(semicolon + 1);
+    if (peer.empty()) continue;
+    in_addr address{};
+    if (inet_pton(AF_INET, peer.c_str(), &address) != 1) {
+      throw std::invalid_argument("ROS_STATIC_PEERS: '" + peer +
+                                  "' is not an IPv4 address (expected e.g. 10.0.0.2;10.0.0.3)");
+    }
+    peers.push_back(peer);
+  }
+  return peers;
 }
 
 namespace {

@@ -381,6 +381,55 @@ TEST_F(Cli, N4SecuredPingPongBetweenNetworkNamespaces) {
   EXPECT_EQ(std::count(broken.out.begin(), broken.out.end(), '\n'), 1) << broken.out;
 }
 
+// Why this process cannot make the WireGuard tunnel of n5 to n8, or empty when it can.
+std::string wireguard_missing() {
+  if (auto why = netns_missing(); !why.empty()) return why;
+  if (std::system("wireguard-go --version >/dev/null 2>&1") != 0) return "no wireguard-go here";
+  if (!fs::exists("/dev/net/tun")) return "no /dev/net/tun here";
+  return {};
+}
+
+// n5 to n8: the ping-pong through a WireGuard tunnel robotperf makes, on one subnet or across a
+// router, with and without DDS Security; discovery crosses it by unicast (no multicast in a
+// tunnel), and the run records the tunnel.
+TEST_F(Cli, N5ToN8CrossTheWireguardTunnel) {
+  if (const auto why = wireguard_missing(); !why.empty()) GTEST_SKIP() << why;
+  const fs::path keystore = out_ / "keystore";
+  ASSERT_EQ(robotperf_cli("security init " + keystore.string()).exit_code, 0);
+  const Outcome cyclone =
+      robotperf_cli("run n5 --netns --rmw cyclonedds --quiet --output " + out_.string());
+  EXPECT_EQ(cyclone.exit_code, 2) << cyclone.out;
+  EXPECT_NE(cyclone.out.find("around the tunnel"), std::string::npos) << cyclone.out;
+  for (const std::string id : {"n5", "n6", "n7", "n8"}) {
+    const std::string rmw = "fastdds";
+    const fs::path runs = out_ / (id + rmw);
+    const bool secured = id == "n6" || id == "n8";
+    const Outcome o =
+        robotperf_cli("run " + id + " --netns --rmw " + rmw +
+                      (secured ? " --security " + keystore.string() : "") +
+                      " --workload payload_bytes=16384 --count 130 --rate 50 --quiet --domain " +
+                      domain() + " --output " + runs.string());
+    ASSERT_EQ(o.exit_code, 0) << id << " " << rmw << "\n" << o.out;
+    nlohmann::json j;
+    for (const auto& e : fs::directory_iterator(runs)) {
+      if (e.path().extension() == ".json") j = nlohmann::json::parse(std::ifstream(e.path()));
+    }
+    EXPECT_EQ(j["validity"]["valid"], true) << id << j["validity"].dump();
+    EXPECT_EQ(j["functional"]["metrics"]["identical_fraction"]["value"], 1.0);
+    const auto& link = j["network"]["link"];
+    ASSERT_TRUE(link["tunnel"].is_object()) << link.dump();
+    EXPECT_EQ(link["tunnel"]["implementation"], "wireguard-go");
+    EXPECT_EQ(link["tunnel"]["mtu"], 1420);
+    EXPECT_EQ(link["topology"], id == "n7" || id == "n8" ? "routed" : "same-subnet");
+    // Every ping and echo crossed the tunnel's device.
+    const uint64_t payloads = 130ull * 16384;
+    EXPECT_GE(link["traffic"]["bytes_out"].get<uint64_t>(), payloads) << link.dump();
+    EXPECT_GE(link["traffic"]["bytes_in"].get<uint64_t>(), payloads) << link.dump();
+    EXPECT_FALSE(fs::exists("/run/netns/" + link["runner_namespace"].get<std::string>()));
+    EXPECT_FALSE(fs::exists("/run/netns/" + link["remote_namespace"].get<std::string>()));
+  }
+}
+
 // a3 and a4 on every transport: valid, with a functional section that passed.
 void expect_functional_result(const nlohmann::json& j, const std::string& id,
                               const std::string& rmw, const std::string& evaluator) {

@@ -6,6 +6,7 @@
 
 #include <fstream>
 #include <sstream>
+#include <tuple>
 
 #include "../shared_data.hpp"
 #include "sample_runs.hpp"
@@ -139,6 +140,23 @@ TEST_F(BenchmarkYaml, ImportsEveryPublishedFile) {
     EXPECT_NO_THROW(import_benchmark_yaml(e.path())) << e.path();
   }
   EXPECT_GT(files, 30u);
+}
+
+// RobotPerf's VPN ping-pongs (n5 to n8): their rows import with both hosts named and the median.
+TEST_F(BenchmarkYaml, ImportsThePublishedVpnRows) {
+  for (const auto& [package, rows, first_value] :
+       std::vector<std::tuple<std::string, std::size_t, double>>{
+           {"n5_intra_network_vpn", 2, 0.4974},
+           {"n6_intra_network_security_vpn", 2, 0.5641},
+           {"n7_inter_network_vpn", 1, 28.0395},
+           {"n8_inter_network_vpn_security", 1, 29.4749}}) {
+    const auto b = import_benchmark_yaml(published() / "middleware" / package / "benchmark.yaml");
+    EXPECT_EQ(b.name, package);
+    ASSERT_EQ(b.results.size(), rows) << package;
+    EXPECT_DOUBLE_EQ(b.results[0].value, first_value) << package;
+    EXPECT_NE(b.results[0].hardware.find(" <-> "), std::string::npos) << b.results[0].hardware;
+    EXPECT_EQ(b.results[0].type, "grey");
+  }
 }
 
 TEST_F(BenchmarkYaml, PowerBelowOneMilliwattIsFlagged) {

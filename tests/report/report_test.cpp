@@ -283,6 +283,44 @@ TEST_F(Report, HtmlHasSummaryBarsTablesDistributionsAndComparison) {
   EXPECT_NE(md.find("## Machines"), std::string::npos);
 }
 
+// n5: a run through the WireGuard tunnel and one without are two series (never pooled), named by
+// the path, and the published n5 rows are plotted beside them.
+TEST_F(Report, VpnRunsAreTheirOwnSeriesBesidePublishedN5Rows) {
+  testing::SampleRun s;
+  s.id = "n5";
+  s.name = "n5_intra_network_vpn";
+  s.rmw = "fastdds";
+  s.base_latency_ms = 0.5;
+  for (const bool tunnel : {true, false}) {
+    auto run = testing::make_run(s);
+    if (tunnel) {
+      harness::NetworkLink::Description d;
+      d.layout.vpn = harness::NetworkLayout::Vpn::kWireguard;
+      d.layout.topology = harness::NetworkLayout::Topology::kRouted;
+      d.mtu = 1420;
+      d.tunnel = harness::NetworkLink::Tunnel{"wireguard-go", "0.0.20220316", "10.200.1.1",
+                                              "10.200.2.2", 1500};
+      run.network_link = harness::RunResult::LinkUse{d, {}};
+      // As --netns records it: the pong's host behind its launcher.
+      run.host_launchers = {{"remote", "ip netns exec robotperf-1-b"}};
+    }
+    const auto j = result_to_json(run, testing::make_machine(s));
+    std::ofstream(dir_ / (std::string(tunnel ? "vpn" : "plain") + ".json")) << j.dump(2);
+    s.start_unix_ns += 60'000'000'000;
+  }
+  const auto published_n5 = shared_data("robotperf/middleware/n5_intra_network_vpn/benchmark.yaml");
+  const ReportInput input = load_report_inputs({dir_, published_n5});
+  ASSERT_EQ(input.runs.size(), 2u);
+  std::set<std::string> paths;
+  for (const auto& r : input.runs) paths.insert(r.network);
+  EXPECT_EQ(paths, (std::set<std::string>{"plain", "wireguard-go 0.0.20220316, MTU 1420, routed"}));
+  ASSERT_EQ(input.published.size(), 1u);
+  const std::string html = render_html(input, {});
+  EXPECT_NE(html.find("wireguard-go 0.0.20220316, MTU 1420, routed"), std::string::npos);
+  EXPECT_NE(html.find("Intel i7-8700K (server) &lt;-&gt; AMD Ryzen 5 PRO 4650G (client)"),
+            std::string::npos);
+}
+
 TEST_F(Report, OverlappingRunsAreNotSignificant) {
   write_two_machines(5.2, 4.9);
   ReportOptions options;

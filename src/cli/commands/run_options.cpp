@@ -129,8 +129,15 @@ void set_graph_options(harness::RunOptions& o, const harness::BenchmarkSpec& spe
   o.processes.host_launchers = host_launchers(spec, a);
   o.transport.keystore = a.security;
   o.transport.ros_distro = rmw::ros_distro_from_name(a.ros_distro);
+  if (a.netns && spec.network.vpn != harness::NetworkLayout::Vpn::kNone &&
+      o.transport.rmw == "cyclonedds") {
+    throw std::invalid_argument(
+        "--netns with a VPN (graph.yaml network:): cyclonedds would send around the tunnel, on the "
+        "veth path under it (Cyclone DDS 0.10 takes the multicast-capable interface); use fastdds");
+  }
   if (a.netns) {
-    link.emplace(harness::LinkShaping{a.link_rate == "none" ? "" : a.link_rate, a.netem});
+    link.emplace(harness::LinkShaping{a.link_rate == "none" ? "" : a.link_rate, a.netem},
+                 spec.network);
     link->enter_runner_side();
     for (const auto& host : spec.hosts()) o.processes.host_launchers[host] = link->launcher();
     o.processes.network_link = &*link;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "robotperf/harness/functional.hpp"
+#include "robotperf/harness/network_link.hpp"
 #include "robotperf/plugin/kernel.hpp"
 #include "robotperf/plugin/registry.hpp"
 #include "robotperf/rmw/transport.hpp"
@@ -86,6 +87,9 @@ struct BenchmarkSpec {
   std::string processes = "single";
   // graph.yaml `security: required`: runs only with DDS Security (--security), e.g. n4.
   bool security_required = false;
+  // graph.yaml `network:` the path --netns makes to the other host: a router between two subnets
+  // (topology: routed) and a VPN over it (vpn: wireguard), e.g. n5 to n8.
+  NetworkLayout network;
   std::size_t executor_threads = 1;
   std::size_t min_samples = 30;
   double max_loss_percent = 0.0;

@@ -43,6 +43,10 @@ struct StoredRun {
   std::string rmw, processes;
   std::string timeline = "fixed";      // arrivals: "fixed", "poisson", "burst" or "bag"
   std::string monitor_wait = "sleep";  // "sleep" or "spin"
+  // The path --netns made between the hosts, when not one plain subnet: "routed", or the tunnel
+  // ("wireguard-go 0.0.20220316, MTU 1420", with ", routed" where so). A VPN's runs are never
+  // pooled with plain ones (docs/design.md §3.9).
+  std::string network = "plain";
   double rate_hz = kNoValue;
   std::string dataset;
   // What the nodes computed with, as one text ("relay (built-in util): delay_ms=0, ..."): runs that

@@ -228,6 +228,12 @@ std::optional<int> parse_domain_id(std::string_view text);
 // Reads ROS_DOMAIN_ID (0 when unset); throws std::invalid_argument when malformed.
 int domain_id_from_environment();
 
+// ROS_STATIC_PEERS as ROS 2 reads it: the IPv4 addresses, separated by ';', that the DDS
+// transports' participants also announce themselves to by unicast, besides multicast discovery:
+// for networks that carry no multicast (a VPN tunnel, a router between subnets). Empty when unset;
+// throws std::invalid_argument naming an entry that is not an IPv4 address.
+std::vector<std::string> static_peers_from_environment();
+
 // A DDS domain on which `transport` discovers no other participant within `listen_s`: domains
 // 1 to 230 tried in a random order (0, ROS 2's default, is left to robots; 231 and 232 to no one,
 // as DDS Security cannot name them), each reserved first
