@@ -200,17 +200,28 @@ std::size_t Playback::run(std::vector<MessageRecord>& records,
   records.assign(ids_.count, MessageRecord{});
   // The messages of one deadline (several in a burst), per input.
   std::vector<std::vector<rmw::MessagePtr>> next;
-  // The first deadline leaves time to prepare the first message.
-  const int64_t start_ns = rmw::steady_now_ns() + 10'000'000;
   auto offset = [&](uint64_t k) {
     return schedule_ns_.empty() ? static_cast<int64_t>(k) * ids_.period_ns : schedule_ns_[k];
   };
+  // The first deadline's messages are prepared once before the schedule starts, and thrown
+  // away: with no earlier preparation to go by, the first one would get only the minimum lead,
+  // and in a fresh process (its pages not yet faulted in) it is the slowest of all, so a first
+  // burst of images went out tens of milliseconds late. The first deadline leaves time for it.
+  int64_t longest_prepare_ns = 0;
+  {
+    const int64_t prepare_start = rmw::steady_now_ns();
+    for (uint64_t k = 0; k < ids_.count && offset(k) == offset(0); ++k) {
+      for (const Input& in : inputs_) (void)in.copy_with_stamp(k % in.messages.size(), 0);
+    }
+    longest_prepare_ns = rmw::steady_now_ns() - prepare_start;
+  }
+  const int64_t start_ns =
+      rmw::steady_now_ns() + std::max<int64_t>(10'000'000, 4 * longest_prepare_ns);
   // Each repetition of the warm-up moves the rest of the schedule by the warm-up's span.
   int64_t shift_ns = 0;
   auto deadline = [&](uint64_t k) { return start_ns + shift_ns + offset(k); };
   const bool gated = gate != nullptr && gate->warmup > 0 && gate->warmup < ids_.count;
   bool repeating = false;  // sending the warm-up again: records and counts stay as they are
-  int64_t longest_prepare_ns = 0;
   // Paced by the graph: when each message went (a repeated warm-up's last time).
   std::vector<int64_t> sent_at(pacing_.scenario != Scenario::kOpenLoop ? ids_.count : 0);
   std::size_t sent = 0;
@@ -300,14 +311,16 @@ rmw::QoS Monitor::subscription_qos(rmw::QoS graph_output) {
 }
 
 Monitor::Monitor(graph::Context& context, const BoundaryTopic& output, MessageIds ids,
-                 std::size_t warmup, RunIsolation* isolation)
-    : node_(std::make_shared<graph::Node>(context, "robotperf_monitor")),
+                 std::size_t warmup, RunIsolation* isolation, const std::string& node_name,
+                 bool traced)
+    : node_(std::make_shared<graph::Node>(context, node_name)),
       type_(&type_support_by_name(output.type, output.topic)),
       topic_(output.topic),
       ids_(ids),
       warmup_(warmup),
       isolation_(isolation),
-      state_(output.state) {
+      state_(output.state),
+      traced_(traced) {
   tally_.received_ns.assign(ids_.count, -1);
   node_->create_generic_subscription(output.topic, *type_, subscription_qos(output.qos),
                                      [this](rmw::MessagePtr m, const graph::MessageInfo& info) {
@@ -331,8 +344,10 @@ void Monitor::on_message(const rmw::MessagePtr& msg, const graph::MessageInfo& i
     }
     return;
   }
-  lttng_ust_tracepoint(robotperf, output, node_->name().c_str(), topic_.c_str(), stamp,
-                       type_->serialized_size(msg.get()));
+  if (traced_) {
+    lttng_ust_tracepoint(robotperf, output, node_->name().c_str(), topic_.c_str(), stamp,
+                         type_->serialized_size(msg.get()));
+  }
   const bool shared_with_graph = info.from_intra_process;
   // A kept output the graph shares with us (intra) is copied rather than held: holding it would
   // make a node that reuses its output buffer once released allocate and page-fault a fresh one
