@@ -234,7 +234,26 @@ std::set<std::string> load_boundary(const YamlFile& file, BenchmarkSpec& spec) {
     if (!input_topics.insert(spec.inputs.back().topic).second)
       file.fail(n["topic"], "two inputs are published on " + spec.inputs.back().topic);
   }
-  if (!root["output"].IsDefined()) file.fail(root, "missing 'output'");
+  const YAML::Node outputs = root["outputs"];
+  if (outputs.IsDefined()) {
+    if (root["output"].IsDefined())
+      file.fail(root["outputs"], "give 'output' (one) or 'outputs' (a list), not both");
+    if (!outputs.IsSequence() || outputs.size() == 0)
+      file.fail(outputs, "'outputs' must be a non-empty list");
+    std::set<std::string> output_topics;
+    for (const auto& n : outputs) {
+      BoundaryTopic out = boundary_topic(file, n, false);
+      if (!output_topics.insert(out.topic).second)
+        file.fail(n["topic"], "two outputs are monitored on " + out.topic);
+      if (output_topics.size() == 1) {
+        spec.output = std::move(out);
+      } else {
+        spec.more_outputs.push_back(std::move(out));
+      }
+    }
+    return input_topics;
+  }
+  if (!root["output"].IsDefined()) file.fail(root, "missing 'output' (or 'outputs')");
   spec.output = boundary_topic(file, root["output"], false);
   return input_topics;
 }
@@ -412,11 +431,12 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   const YAML::Node& root = file.root();
   file.allow_keys(root, {"plugins", "dataset", "rate_hz", "count", "warmup", "drain_s", "sample",
                          "executor_threads", "processes", "security", "network", "validity",
-                         "inputs", "output", "nodes", "launch", "attach", "functional"});
+                         "inputs", "output", "outputs", "nodes", "launch", "attach", "functional"});
   load_plugins(file, spec);
   load_settings(file, spec);
   const std::set<std::string> input_topics = load_boundary(file, spec);
   std::vector<const BoundaryTopic*> boundary{&spec.output};
+  for (const auto& out : spec.more_outputs) boundary.push_back(&out);
   for (const auto& in : spec.inputs) boundary.push_back(&in);
   std::set<std::string> names;
   load_launch(file, spec, names);
@@ -435,10 +455,17 @@ void load_graph(const fs::path& path, BenchmarkSpec& spec) {
   }
   // The Monitor would time the Playback's own messages. Only a graph of nothing (no node, no
   // process) does that on purpose: it measures the harness itself.
+  const YAML::Node output_node = root["outputs"].IsDefined() ? root["outputs"] : root["output"];
   if (input_topics.contains(spec.output.topic) && (!spec.nodes.empty() || spec.external())) {
-    file.fail(root["output"]["topic"], "the output topic " + spec.output.topic +
-                                           " is also an input: the Monitor would time the "
-                                           "Playback's own messages, not the graph's outputs");
+    file.fail(output_node, "the output topic " + spec.output.topic +
+                               " is also an input: the Monitor would time the Playback's own "
+                               "messages, not the graph's outputs");
+  }
+  for (const auto& out : spec.more_outputs) {
+    if (input_topics.contains(out.topic))
+      file.fail(output_node, "the output topic " + out.topic + " is also an input");
+    if (out.state != spec.output.state)
+      file.fail(output_node, "outputs are all state streams or none (" + out.topic + ")");
   }
   load_functional(file, spec);
 }
@@ -723,6 +750,7 @@ std::vector<ResidentTopic> keep_on_device(BenchmarkSpec& spec) {
     }
   }
   std::set<std::string> on_the_host{spec.output.topic};
+  for (const auto& out : spec.more_outputs) on_the_host.insert(out.topic);
   if (spec.functional && !spec.functional->observed_truth_topic.empty())
     on_the_host.insert(spec.functional->observed_truth_topic);
   std::vector<ResidentTopic> kept;

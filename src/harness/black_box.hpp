@@ -122,9 +122,12 @@ class Monitor {
   static rmw::QoS subscription_qos(rmw::QoS graph_output);
 
   // Counts receptions of ids >= `warmup` towards received_measured(). With `isolation`, another
-  // run's receptions are counted as foreign and otherwise ignored.
+  // run's receptions are counted as foreign and otherwise ignored. A graph's further outputs
+  // (graph.yaml `outputs:`) have a Monitor each, of another node name, whose receptions are not
+  // traced as the run's outputs (`traced` false): the trace's analysis times the first output.
   Monitor(graph::Context& context, const BoundaryTopic& output, MessageIds ids, std::size_t warmup,
-          RunIsolation* isolation = nullptr);
+          RunIsolation* isolation = nullptr, const std::string& node_name = "robotperf_monitor",
+          bool traced = true);
   std::shared_ptr<graph::Node> node() const { return node_; }
 
   // Keeps the first reception of each of `ids` for the functional evaluation: a copy of a
@@ -174,6 +177,7 @@ class Monitor {
   std::size_t warmup_;
   RunIsolation* isolation_;
   bool state_;
+  bool traced_;
   std::vector<bool> keep_;               // per id
   std::vector<std::size_t> kept_index_;  // per id: where in tally_.kept, or SIZE_MAX
   bool observing_truth_ = false;         // keep_observed_truth was called

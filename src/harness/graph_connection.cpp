@@ -15,10 +15,12 @@ Wiring wiring_of(const BenchmarkSpec& spec) {
   Wiring w;
   for (const auto& in : spec.inputs) w.published.insert(in.topic);
   w.subscribed.insert(spec.output.topic);
+  for (const auto& out : spec.more_outputs) w.subscribed.insert(out.topic);
   if (spec.external()) {
-    // An external graph's endpoints are not declared: it reads every input and writes the output.
+    // An external graph's endpoints are not declared: it reads every input and writes the outputs.
     for (const auto& in : spec.inputs) w.subscribed.insert(in.topic);
     w.published.insert(spec.output.topic);
+    for (const auto& out : spec.more_outputs) w.published.insert(out.topic);
   }
   for (const auto& node : spec.nodes) {
     const plugin::KernelInfo& info = kernel_of(node).info;

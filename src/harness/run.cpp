@@ -139,7 +139,7 @@ RunResult run_benchmark(const BenchmarkSpec& package_spec, const RunOptions& opt
   stop_graph(plan, environment, instruments, graph, watch, r);
 
   begin(RunStage::kSummarise);
-  summarise_run(plan, options, environment, tally, r);
+  summarise_run(plan, options, environment, tally, instruments.more_tallies, r);
 
   begin(RunStage::kCheck);
   check_outputs(plan, instruments, tally, r);

@@ -72,6 +72,8 @@ void resolve_layout(const BenchmarkSpec& spec, const RunOptions& options, RunRes
   r.output_topic = spec.output.topic;
   for (const auto& in : spec.inputs) r.qos.push_back({"playback", in.topic, in.qos});
   r.qos.push_back({"monitor", spec.output.topic, Monitor::subscription_qos(spec.output.qos)});
+  for (const auto& out : spec.more_outputs)
+    r.qos.push_back({"monitor", out.topic, Monitor::subscription_qos(out.qos)});
   for (const auto& node : spec.nodes) {
     for (const auto& [port, topic] : node.topics) r.qos.push_back({node.name, topic, node.qos});
   }

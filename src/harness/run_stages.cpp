@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 
@@ -164,6 +165,12 @@ Instruments::Instruments(const RunPlan& plan, const RunOptions& options, RunEnvi
     monitor.keep_outputs(functional_ids);
   }
   monitor_executor.add_node(monitor.node());
+  for (std::size_t i = 0; i < spec.more_outputs.size(); ++i) {
+    more_monitors.push_back(std::make_unique<Monitor>(
+        *env.context, spec.more_outputs[i], env.ids, r.warmup, &*env.isolation,
+        "robotperf_monitor_" + std::to_string(i + 2), false));
+    monitor_executor.add_node(more_monitors.back()->node());
+  }
 }
 
 GraphUnderTest::GraphUnderTest(const RunPlan& plan, const RunOptions& options, RunEnvironment& env,
@@ -171,6 +178,7 @@ GraphUnderTest::GraphUnderTest(const RunPlan& plan, const RunOptions& options, R
     : executor(std::make_unique<graph::Executor>(plan.spec().executor_threads)),
       local_nodes{instruments.playback.node(), instruments.monitor.node()} {
   const BenchmarkSpec& spec = plan.spec();
+  for (const auto& m : instruments.more_monitors) local_nodes.push_back(m->node());
   if (options.processes.layout == ProcessLayout::kSingle) {
     for (const auto& n : spec.nodes) {
       auto node = make_kernel_node(n, *env.context, spec.workload);
@@ -410,15 +418,24 @@ Monitor::Tally drain(const RunPlan& plan, const RunOptions& options, Instruments
   while (!monitor.wait_for(expected, std::min(drain_end, rmw::steady_now_ns() + kWatchPeriodNs))) {
     if (rmw::steady_now_ns() >= drain_end || !watch.must_stop().empty()) break;
   }
+  // The further outputs within the same drain.
+  for (const auto& m : instruments.more_monitors) {
+    while (!m->wait_for(expected, std::min(drain_end, rmw::steady_now_ns() + kWatchPeriodNs))) {
+      if (rmw::steady_now_ns() >= drain_end || !watch.must_stop().empty()) break;
+    }
+  }
   // What has not arrived by now is lost, though the window's last readings (an external power
   // meter may take seconds) come before the tally.
   monitor.close();
+  for (const auto& m : instruments.more_monitors) m->close();
   window.measurement.end(r);
   if (window.link_before) {
     r.network_link =
         RunResult::LinkUse{options.processes.network_link->description(),
                            options.processes.network_link->counters() - *window.link_before};
   }
+  instruments.more_tallies.clear();
+  for (const auto& m : instruments.more_monitors) instruments.more_tallies.push_back(m->tally());
   return monitor.tally();
 }
 
@@ -515,6 +532,74 @@ void stop_graph(const RunPlan& plan, RunEnvironment& env, Instruments& instrumen
 }
 
 namespace {
+
+// One output's figures from what its Monitor received of the run's measured messages.
+OutputFigures output_figures(const RunResult& r, const std::string& topic,
+                             const std::vector<int64_t>& received_ns) {
+  OutputFigures f;
+  f.topic = topic;
+  std::vector<double> from_scheduled, from_sent;
+  std::vector<metrics::TimedEvent> receptions;
+  std::vector<int64_t> arrivals;
+  std::size_t measured = 0;
+  for (const auto& rec : r.records) {
+    if (rec.id < r.warmup) continue;
+    ++measured;
+    const int64_t at = rec.id < received_ns.size() ? received_ns[rec.id] : -1;
+    if (at < 0) continue;
+    ++f.matched;
+    from_scheduled.push_back(static_cast<double>(at - rec.scheduled_ns));
+    from_sent.push_back(static_cast<double>(at - rec.sent_ns));
+    receptions.push_back({rec.scheduled_ns, at});
+    arrivals.push_back(at);
+  }
+  f.lost = measured - f.matched;
+  f.loss_percent =
+      measured ? 100.0 * static_cast<double>(f.lost) / static_cast<double>(measured) : 0.0;
+  f.latency_from_scheduled = metrics::compute_stats(from_scheduled);
+  f.latency_from_sent = metrics::compute_stats(from_sent);
+  f.throughput_hz = metrics::event_rate_hz(receptions);
+  if (r.timeline == scenario_name(Scenario::kOffline) && !arrivals.empty()) {
+    // One deadline for all: outputs over the time from the first measured send (as the run's).
+    int64_t first_send = INT64_MAX;
+    for (const auto& rec : r.records)
+      if (rec.id >= r.warmup) first_send = std::min(first_send, rec.sent_ns);
+    const double window_s = static_cast<double>(std::ranges::max(arrivals) - first_send) * 1e-9;
+    f.throughput_hz = window_s > 0 ? static_cast<double>(f.matched) / window_s : 0;
+  }
+  // Jitter against the input period as the Playback achieved it (any arrival pattern).
+  const double rate = r.offered_rate_hz > 0 ? r.offered_rate_hz : r.rate_hz;
+  f.period_ns = rate > 0 ? 1e9 / rate : 0;
+  std::ranges::sort(arrivals);
+  std::vector<double> intervals, jitter;
+  for (std::size_t i = 1; i < arrivals.size(); ++i) {
+    const auto interval = static_cast<double>(arrivals[i] - arrivals[i - 1]);
+    intervals.push_back(interval);
+    jitter.push_back(std::abs(interval - f.period_ns));
+  }
+  f.interval = metrics::compute_stats(intervals);
+  f.jitter = metrics::compute_stats(jitter);
+  return f;
+}
+
+// Every output's figures, the run's own first; a further output's loss beyond the bound makes the
+// run invalid as the first's does.
+void summarise_outputs(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& tally,
+                       const std::vector<Monitor::Tally>& more_tallies) {
+  r.outputs.clear();
+  r.outputs.push_back(output_figures(r, spec.output.topic, tally.received_ns));
+  for (std::size_t i = 0; i < more_tallies.size() && i < spec.more_outputs.size(); ++i) {
+    OutputFigures f = output_figures(r, spec.more_outputs[i].topic, more_tallies[i].received_ns);
+    if (f.loss_percent > spec.max_loss_percent) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "output %s: %.2f %% lost, above the %.2f %% bound",
+                    f.topic.c_str(), f.loss_percent, spec.max_loss_percent);
+      r.invalid_reasons.emplace_back(buf);
+      r.valid = false;
+    }
+    r.outputs.push_back(std::move(f));
+  }
+}
 
 void summarise(RunResult& r, const BenchmarkSpec& spec, const Monitor::Tally& tally) {
   std::vector<double> from_scheduled, from_sent, lateness;
@@ -614,9 +699,11 @@ void warn_of_interference(const BenchmarkSpec& spec, const RunOptions& options, 
 }  // namespace
 
 void summarise_run(const RunPlan& plan, const RunOptions& options, RunEnvironment& env,
-                   const Monitor::Tally& tally, RunResult& r) {
+                   const Monitor::Tally& tally, const std::vector<Monitor::Tally>& more_tallies,
+                   RunResult& r) {
   r.completed = r.records.size() == r.count && r.errors.empty();
   summarise(r, plan.spec(), tally);
+  summarise_outputs(r, plan.spec(), tally, more_tallies);
   r.repeats = tally.repeats;
   // Grey-box: counts, latencies and validity come from the trace; a trace that cannot be read
   // leaves the Playback's and Monitor's, and says so.

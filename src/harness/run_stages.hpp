@@ -54,6 +54,10 @@ struct Instruments {
 
   Playback playback;
   Monitor monitor;
+  // The graph's further outputs (graph.yaml `outputs:`), a Monitor each, and what each had when
+  // the drain ended.
+  std::vector<std::unique_ptr<Monitor>> more_monitors;
+  std::vector<Monitor::Tally> more_tallies;
   std::vector<uint64_t> functional_ids;  // the outputs the Monitor keeps
   // An evaluator that checks each output as it arrives; null when the outputs are kept to the
   // end instead (a state output's later receptions, or a truth observed during the run).
@@ -130,7 +134,8 @@ void stop_graph(const RunPlan& plan, RunEnvironment& env, Instruments& instrumen
 
 // kSummarise: the figures (from the trace when grey-box), and the warnings about the run.
 void summarise_run(const RunPlan& plan, const RunOptions& options, RunEnvironment& env,
-                   const Monitor::Tally& tally, RunResult& r);
+                   const Monitor::Tally& tally, const std::vector<Monitor::Tally>& more_tallies,
+                   RunResult& r);
 
 // kCheck: after timing, the outputs against ground truth and other backends' against the cpu's.
 void check_outputs(const RunPlan& plan, Instruments& instruments, const Monitor::Tally& tally,

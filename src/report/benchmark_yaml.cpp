@@ -335,17 +335,41 @@ std::vector<PublishedResult> export_entries(const StoredRun& run, const ExportOp
     for (const auto& r : run.invalid_reasons) why += (why.empty() ? "" : "; ") + r;
     context += ", INVALID result: " + why;
   }
+  // An output's jitter, when the run recorded it: ", output jitter ..." or "".
+  auto jitter = [](const StoredOutput& o) -> std::string {
+    if (o.jitter.count == 0) return "";
+    return ", output jitter |interval - period| mean " + format_fixed(o.jitter.mean, 3) +
+           " ms, p99 " + format_fixed(o.jitter.p99, 3) + " ms, max " +
+           format_fixed(o.jitter.max, 3) + " ms against the input period " +
+           format_fixed(o.period_ms, 3) + " ms";
+  };
+  auto latency_note = [](const LatencySummary& l) {
+    return "mean " + format_fixed(l.mean, 3) + " ms, rms " + format_fixed(l.rms, 3) + " ms, max " +
+           format_fixed(l.max, 3) + " ms, min " + format_fixed(l.min, 3) + " ms, p50 " +
+           format_fixed(l.p50, 3) + " ms, p99 " + format_fixed(l.p99, 3) + " ms, ";
+  };
   std::vector<PublishedResult> out;
   if (std::isfinite(run.latency.max)) {
     PublishedResult e = base;
     e.metric = "latency";
     e.metric_unit = "ms";
     e.value = run.latency.max;
-    const auto& l = run.latency;
-    e.note = "mean " + format_fixed(l.mean, 3) + " ms, rms " + format_fixed(l.rms, 3) +
-             " ms, max " + format_fixed(l.max, 3) + " ms, min " + format_fixed(l.min, 3) +
-             " ms, p50 " + format_fixed(l.p50, 3) + " ms, p99 " + format_fixed(l.p99, 3) + " ms, " +
-             lost + ", from the scheduled send, " + context;
+    e.note = latency_note(run.latency) + lost +
+             (run.outputs.empty() ? "" : jitter(run.outputs.front())) +
+             ", from the scheduled send, " + context;
+    out.push_back(std::move(e));
+  }
+  // A graph's further outputs (graph.yaml `outputs:`): a latency row each, named in its note.
+  for (std::size_t i = 1; i < run.outputs.size(); ++i) {
+    const StoredOutput& o = run.outputs[i];
+    if (!std::isfinite(o.latency.max)) continue;
+    PublishedResult e = base;
+    e.metric = "latency";
+    e.metric_unit = "ms";
+    e.value = o.latency.max;
+    e.note = "output " + o.topic + ": " + latency_note(o.latency) + "lost " +
+             format_fixed(o.loss_percent, 2) + " %" + jitter(o) + ", from the scheduled send, " +
+             context;
     out.push_back(std::move(e));
   }
   if (std::isfinite(run.throughput_hz) && run.throughput_hz > 0) {

@@ -318,6 +318,11 @@ void write_benchmark(std::ostream& s, const detail::BenchmarkSection& b) {
     if (!b.also_measured.rows.empty()) {
       s << "<p class=\"note\">What the runs also measured:</p>\n" << table_html(b.also_measured);
     }
+    if (!b.outputs.rows.empty()) {
+      s << "<p class=\"note\">Each monitored output, with its output jitter (|interval between "
+           "consecutive outputs - the input period|):</p>\n"
+        << table_html(b.outputs);
+    }
     if (!b.hops.rows.empty()) {
       s << "<p class=\"note\">Where the time goes (grey-box, per hop):</p>\n"
         << detail::hops_svg(b.hop_bars, b.hops_run) << table_html(b.hops);
@@ -468,6 +473,11 @@ std::string render_markdown(const ReportInput& input, const ReportOptions& optio
       if (!b.also_measured.rows.empty()) {
         s << "What the runs also measured:\n\n";
         table(b.also_measured);
+      }
+      if (!b.outputs.rows.empty()) {
+        s << "Each monitored output, with its output jitter (|interval between consecutive "
+             "outputs - the input period|):\n\n";
+        table(b.outputs);
       }
       if (!b.hops.rows.empty()) {
         s << "Where the time goes (grey-box, per hop):\n\n";

@@ -348,6 +348,27 @@ Table also_measured_table_for(const std::vector<const StoredRun*>& runs) {
   return t;
 }
 
+// Each run's monitored outputs (graph.yaml `outputs:`, or its one output) with their latency, rate
+// and output jitter; empty when no run recorded its outputs.
+Table outputs_table_for(const std::vector<const StoredRun*>& runs) {
+  Table t;
+  t.css_class = "outputs";
+  t.header = {"run",    "output",  "loss %",         "p50 ms",        "p99 ms",
+              "max ms", "out fps", "jitter mean ms", "jitter p99 ms", "input period ms"};
+  t.numeric = {false, false, true, true, true, true, true, true, true, true};
+  for (const StoredRun* r : runs) {
+    for (const StoredOutput& o : r->outputs) {
+      t.rows.push_back({r->stem(), o.topic, format_fixed(o.loss_percent, 2),
+                        format_fixed(o.latency.p50, 3), format_fixed(o.latency.p99, 3),
+                        format_fixed(o.latency.max, 3), format_fixed(o.throughput_hz, 2),
+                        format_fixed(o.jitter.mean, 3), format_fixed(o.jitter.p99, 3),
+                        format_fixed(o.period_ms, 3)});
+      t.row_warning.push_back(o.loss_percent > 0);
+    }
+  }
+  return t;
+}
+
 // The newest of `runs` that `has`, or null.
 template <class Has>
 const StoredRun* newest_where(const std::vector<const StoredRun*>& runs, Has has) {
@@ -1579,6 +1600,7 @@ Model build_model(const ReportInput& in, const ReportOptions& options) {
       section.charts = charts_for(id, runs, in, obs);
       section.versus_published = versus_published_for(id, runs, in, section.versus_ratios);
       section.also_measured = also_measured_table_for(runs);
+      section.outputs = outputs_table_for(runs);
       section.hops = hops_table_for(runs);
       section.callbacks = callbacks_table_for(runs);
       section.peak_search = peak_search_table_for(runs);

@@ -85,6 +85,7 @@ struct BenchmarkSection {
   std::string id, name, category;
   Table runs;            // local runs
   Table also_measured;   // their functional check, resources, energy per message, control loops
+  Table outputs;         // each run's monitored outputs with their output jitter
   Table hops;            // the newest grey-box run's per-hop breakdown
   std::string hops_run;  // that run, and its hops' mean durations drawn as bars
   std::vector<StoredRun::Hop> hop_bars;

@@ -333,6 +333,26 @@ json software_of(const harness::RunResult& r) {
   return software;
 }
 
+// Every monitored output, the run's own first: counts, latency, rate and jitter (milliseconds).
+json outputs_json(const harness::RunResult& r) {
+  json out = json::array();
+  for (const auto& o : r.outputs) {
+    out.push_back(
+        {{"topic", o.topic},
+         {"matched", o.matched},
+         {"lost", o.lost},
+         {"loss_percent", o.loss_percent},
+         {"latency_ms",
+          {{"from_scheduled", metrics::to_json(o.latency_from_scheduled, 1.0 / kNsPerMs, "ms")},
+           {"from_sent", metrics::to_json(o.latency_from_sent, 1.0 / kNsPerMs, "ms")}}},
+         {"throughput_hz", o.throughput_hz},
+         {"period_ms", o.period_ns / kNsPerMs},
+         {"interval_ms", metrics::to_json(o.interval, 1.0 / kNsPerMs, "ms")},
+         {"jitter_ms", metrics::to_json(o.jitter, 1.0 / kNsPerMs, "ms")}});
+  }
+  return out;
+}
+
 // How the run was configured: its rate and timeline, counts, transport, scheduling.
 json configuration_json(const harness::RunResult& r) {
   const auto& sched = r.scheduling;
@@ -442,6 +462,7 @@ nlohmann::json result_to_json(const harness::RunResult& r, const sysinfo::Machin
         {"kind", r.throughput_kind},
         {"offered_hz", r.offered_rate_hz},
         {"window_s", r.window_s}}},
+      {"outputs", outputs_json(r)},
       {"power", metrics::to_json(r.power, r.matched, r.throughput_hz)},
       {"resources", metrics::to_json(r.resources)},
       {"nodes", nodes_json(r)},
@@ -681,7 +702,36 @@ void write_latency(std::ostream& out, const harness::RunResult& r) {
 }
 
 // The peak search's steps, the grey-box breakdown, and RobotPerf's headline, named as what it is.
+// Each monitored output: its counts, latency, rate and jitter (a table when the graph has
+// several, a line for one).
+void write_outputs(std::ostream& out, const harness::RunResult& r) {
+  if (r.outputs.empty()) return;
+  auto ms = [](double ns) { return format_fixed(ns / kNsPerMs, 3); };
+  if (r.outputs.size() == 1) {
+    const auto& o = r.outputs.front();
+    if (o.interval.count == 0) return;
+    out << "output jitter: interval p50 " << ms(o.interval.p50) << " ms against the input period "
+        << ms(o.period_ns) << " ms; |interval - period| mean " << ms(o.jitter.mean) << ", p99 "
+        << ms(o.jitter.p99) << ", max " << ms(o.jitter.max) << " ms\n";
+    return;
+  }
+  char line[320];
+  std::snprintf(line, sizeof line, "\n%-32s %8s %8s %10s %10s %10s %10s %10s\n",
+                "outputs (ms; jitter: |interval - period|)", "matched", "lost %", "p50", "p99",
+                "Hz", "jitter", "jitter p99");
+  out << line;
+  for (const auto& o : r.outputs) {
+    std::snprintf(
+        line, sizeof line, "%-32s %8zu %8s %10s %10s %10s %10s %10s\n", o.topic.c_str(), o.matched,
+        format_fixed(o.loss_percent, 2).c_str(), ms(o.latency_from_scheduled.p50).c_str(),
+        ms(o.latency_from_scheduled.p99).c_str(), format_fixed(o.throughput_hz, 2).c_str(),
+        ms(o.jitter.mean).c_str(), ms(o.jitter.p99).c_str());
+    out << line;
+  }
+}
+
 void write_throughput_details(std::ostream& out, const harness::RunResult& r) {
+  write_outputs(out, r);
   if (r.peak_search) out << "\n" << peak_search_table(*r.peak_search);
   if (r.grey) out << "\n" << tracing::breakdown_table(*r.grey) << "\n";
   out << "\nRobotPerf headline (its latency is the maximum, not a typical message): latency "

@@ -379,6 +379,19 @@ void read_run(const json& j, StoredRun& run) {
   run.latency = latency_summary(member(latency, "from_scheduled"));
   run.loss_percent = number_or_nan(counts, "loss_percent");
   run.histogram = log_histogram_from_json(member(latency, "from_scheduled_histogram"));
+  if (const json& outputs = member(j, "outputs"); outputs.is_array()) {
+    for (const json& o : outputs) {
+      StoredOutput out;
+      out.topic = string_or(o, "topic", "?");
+      out.loss_percent = number_or_nan(o, "loss_percent");
+      out.latency = latency_summary(member(member(o, "latency_ms"), "from_scheduled"));
+      out.throughput_hz = number_or_nan(o, "throughput_hz");
+      out.period_ms = number_or_nan(o, "period_ms");
+      out.interval = latency_summary(member(o, "interval_ms"));
+      out.jitter = latency_summary(member(o, "jitter_ms"));
+      run.outputs.push_back(std::move(out));
+    }
+  }
   const json& throughput = member(j, "throughput");
   run.throughput_hz = number_or_nan(throughput, "output_hz");
   run.offered_hz = number_or_nan(throughput, "offered_hz");

@@ -368,6 +368,73 @@ TEST(Scenarios, A5RunsInBothClosedLoopScenarios) {
   }
 }
 
+// A graph that fans out to two outputs, each monitored: a fast relay to /out, a slow one that
+// drops every 4th message to /slow. Each output has its own latency, loss and jitter; the
+// second's loss makes the run invalid as the first's would.
+TEST(Outputs, EachOfSeveralOutputsHasItsLatencyLossAndJitter) {
+  const std::string graph =
+      "dataset: perception/image\n"
+      "rate_hz: 50\n"
+      "warmup: 2\n"
+      "drain_s: 1.0\n"
+      "validity: {min_samples: 5, max_loss_percent: 0.0}\n"
+      "inputs:\n"
+      "  - {topic: /in, type: sensor_msgs/msg/Image, stream: image}\n"
+      "outputs:\n"
+      "  - {topic: /out, type: sensor_msgs/msg/Image}\n"
+      "  - {topic: /slow, type: sensor_msgs/msg/Image}\n"
+      "nodes:\n"
+      "  - name: fast\n"
+      "    kernel: util/relay\n"
+      "    topics: {input: /in, output: /out}\n"
+      "  - name: slow\n"
+      "    kernel: util/relay\n"
+      "    parameters: {delay_ms: 5, drop_every: 4}\n"
+      "    topics: {input: /in, output: /slow}\n";
+  RunOptions o;
+  o.load.count = 42;
+  const RunResult r = run_package("fan_out", graph, o);
+  expect_sane(r);
+  ASSERT_EQ(r.outputs.size(), 2u);
+  const OutputFigures& fast = r.outputs[0];
+  const OutputFigures& slow = r.outputs[1];
+  EXPECT_EQ(fast.topic, "/out");
+  EXPECT_EQ(slow.topic, "/slow");
+  // The first output is the run's own figures.
+  EXPECT_EQ(fast.matched, r.matched);
+  EXPECT_EQ(fast.lost, 0u);
+  EXPECT_DOUBLE_EQ(fast.latency_from_scheduled.p50, r.latency_from_scheduled.p50);
+  // The slow relay's every 4th message (counting from its first, a warm-up one) is lost.
+  EXPECT_EQ(slow.lost, 10u);
+  EXPECT_EQ(slow.matched, 30u);
+  EXPECT_GE(slow.latency_from_scheduled.min, 5 * kMs);
+  EXPECT_GT(slow.latency_from_scheduled.p50, fast.latency_from_scheduled.p50);
+  // Jitter against the 20 ms period: the fast output's intervals are about it; the slow one's
+  // include the 40 ms gaps its drops leave, 20 ms away from the period.
+  EXPECT_NEAR(fast.period_ns, 20 * kMs, 2 * kMs);
+  EXPECT_NEAR(fast.interval.p50, 20 * kMs, 5 * kMs);
+  EXPECT_LT(fast.jitter.p50, 5 * kMs);
+  EXPECT_GE(slow.interval.max, 35 * kMs);
+  EXPECT_GE(slow.jitter.max, 15 * kMs);
+  EXPECT_FALSE(r.valid);
+  ASSERT_FALSE(r.invalid_reasons.empty());
+  EXPECT_EQ(r.invalid_reasons.back(), "output /slow: 25.00 % lost, above the 0.00 % bound");
+}
+
+TEST(Outputs, OutputAndOutputsAreOneOrTheOther) {
+  std::string graph = relay_graph("");
+  graph += "outputs:\n  - {topic: /out, type: sensor_msgs/msg/Image}\n";
+  TestPackage p("both_outputs", graph);
+  try {
+    load_benchmark(p.dir());
+    FAIL() << "a graph with output and outputs was accepted";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("give 'output' (one) or 'outputs' (a list), not both"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // A grey run's trace is recorded in a temporary folder and moved beside the results: no line of
 // the result may go on naming the temporary folder once it is gone.
 TEST(MoveTrace, RewritesEveryLineThatNamedTheTemporaryFolder) {

@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <tuple>
 
@@ -252,6 +253,46 @@ TEST_F(BenchmarkYaml, ExportGivesRobotPerfEntries) {
     check_published(e);
     EXPECT_TRUE(e.flags.empty()) << e.flags.front();
   }
+}
+
+// A run's outputs (graph.yaml `outputs:`) read from its file: the first's jitter goes into the
+// latency row's note, and each further output gets a latency row of its own, naming it. The
+// jitter's figures come after the latency's, so a re-imported row reads the latency's.
+TEST_F(BenchmarkYaml, ExportedRowsCarryEachOutputAndItsJitter) {
+  const fs::path file = testing::write_sample(dir_, {});
+  nlohmann::json j = nlohmann::json::parse(read_text(file));
+  auto output = [](const std::string& topic, double loss, double max_ms) {
+    return nlohmann::json{
+        {"topic", topic},
+        {"matched", 30},
+        {"lost", 10},
+        {"loss_percent", loss},
+        {"latency_ms",
+         {{"from_scheduled", {{"count", 30}, {"mean", 6.5}, {"p50", 6.1}, {"max", max_ms}}}}},
+        {"throughput_hz", 25.0},
+        {"period_ms", 33.333},
+        {"interval_ms", {{"count", 29}, {"p50", 33.4}}},
+        {"jitter_ms", {{"count", 29}, {"mean", 0.25}, {"p99", 1.5}, {"max", 33.0}}}};
+  };
+  j["outputs"] = {output("/image_rect", 0.0, 7.0), output("/slow", 25.0, 9.5)};
+  std::ofstream(file) << j.dump();
+  const StoredRun run = load_run(file);
+  ASSERT_EQ(run.outputs.size(), 2u);
+  EXPECT_EQ(run.outputs[1].topic, "/slow");
+  EXPECT_DOUBLE_EQ(run.outputs[1].jitter.p99, 1.5);
+  EXPECT_DOUBLE_EQ(run.outputs[1].period_ms, 33.333);
+  auto entries = export_entries(run, {});
+  ASSERT_EQ(entries.size(), 3u);  // latency, /slow's latency, throughput
+  EXPECT_NE(entries[0].note.find("output jitter |interval - period| mean 0.250 ms, p99 1.500 ms"),
+            std::string::npos)
+      << entries[0].note;
+  EXPECT_EQ(entries[1].metric, "latency");
+  EXPECT_EQ(entries[1].value, 9.5);
+  EXPECT_TRUE(entries[1].note.starts_with("output /slow: mean 6.500 ms")) << entries[1].note;
+  EXPECT_NE(entries[1].note.find("lost 25.00 %"), std::string::npos) << entries[1].note;
+  for (auto& e : entries) check_published(e);
+  EXPECT_DOUBLE_EQ(*entries[1].note_mean, 6.5);
+  EXPECT_DOUBLE_EQ(*entries[1].note_loss_percent, 25.0);
 }
 
 // An exported row states its input rate as imported rows are read (so a re-imported row is

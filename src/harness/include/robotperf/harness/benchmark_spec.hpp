@@ -94,7 +94,11 @@ struct BenchmarkSpec {
   std::size_t min_samples = 30;
   double max_loss_percent = 0.0;
   std::vector<BoundaryTopic> inputs;
+  // graph.yaml `output:`, or the first of `outputs:`: the output the run's latency and validity
+  // are first of all about.
   BoundaryTopic output;
+  // The rest of `outputs:`, each monitored and reported as the first is (a graph that fans out).
+  std::vector<BoundaryTopic> more_outputs;
   std::vector<NodeSpec> nodes;
   // An external graph: processes robotperf starts (launch:), or one already running (attach:
   // true). Either may go with nodes of robotperf's own.

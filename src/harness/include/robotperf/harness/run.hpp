@@ -120,6 +120,20 @@ struct PeakSearchRecord {
   bool finished = true;
 };
 
+// One monitored output's figures (graph.yaml `outputs:`; the first is the run's own).
+struct OutputFigures {
+  std::string topic;
+  std::size_t matched = 0;
+  std::size_t lost = 0;
+  double loss_percent = 0;
+  metrics::SampleStats latency_from_scheduled, latency_from_sent;  // ns
+  double throughput_hz = 0;
+  // Output jitter: the intervals between consecutive outputs of measured messages, in arrival
+  // order, and how far each is from the input period (|interval - period|). Nanoseconds.
+  metrics::SampleStats interval, jitter;
+  double period_ns = 0;  // the input period they are compared with
+};
+
 struct RunResult {
   std::string benchmark_id;
   std::string benchmark_name;
@@ -196,6 +210,8 @@ struct RunResult {
   std::optional<PeakSearchRecord> peak_search;
   double offered_rate_hz = 0;  // input rate actually achieved by the Playback
   double window_s = 0;         // from the first measured send to the last reception
+  // Every monitored output, the run's own first, with its jitter (docs/design.md §3.5).
+  std::vector<OutputFigures> outputs;
   int64_t started_unix_ns = 0;
   bool completed = false;    // false when the run was cut short
   bool interrupted = false;  // cut short by SIGINT/SIGTERM (RunOptions::interrupted)

@@ -33,6 +33,16 @@ struct LatencySummary {
   double p50_lower = kNoValue, p50_upper = kNoValue;
 };
 
+// One monitored output of a run (results `outputs`; the run's own first). Milliseconds.
+struct StoredOutput {
+  std::string topic;
+  double loss_percent = kNoValue;
+  LatencySummary latency;  // from the scheduled send
+  double throughput_hz = kNoValue;
+  double period_ms = kNoValue;  // the input period its intervals are compared with
+  LatencySummary interval, jitter;
+};
+
 // A run as its results file records it.
 struct StoredRun {
   std::filesystem::path path;
@@ -63,6 +73,7 @@ struct StoredRun {
   double loss_percent = kNoValue;
   LatencySummary latency;  // from the scheduled send time: the RobotPerf-compatible latency
   double throughput_hz = kNoValue;
+  std::vector<StoredOutput> outputs;  // empty in files from before robotperf recorded them
   double offered_hz = kNoValue;
   // "offered" (the graph kept up with the rate it was fed) or "peak" (found by --find-peak).
   std::string throughput_kind = "offered";
