@@ -82,6 +82,13 @@ struct ControllerUpdateStats {
   metrics::SampleStats duration;  // one update(), ns
 };
 
+// A tf2 buffer's calls (robotperf/plugin/tf2_buffer.hpp), from robotperf:tf2_begin/end.
+struct Tf2CallStats {
+  std::string node;               // the buffer's owner
+  std::string operation;          // "set" or "lookup"
+  metrics::SampleStats duration;  // one call, ns
+};
+
 struct TraceAnalysis {
   // The trace.
   std::vector<std::string> traces;  // the CTF folders read
@@ -118,6 +125,8 @@ struct TraceAnalysis {
   std::vector<TopicLatency> topics;
   // Traces of robotperf control loops.
   std::vector<ControllerUpdateStats> controller_updates;
+  // Traces of nodes with a tf2 buffer.
+  std::vector<Tf2CallStats> tf2_calls;
   // One line per table (or column) the trace cannot provide, saying why: which events it lacks.
   std::vector<std::string> unavailable;
 
