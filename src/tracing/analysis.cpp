@@ -1247,10 +1247,16 @@ void explain_missing_tables(TraceAnalysis& a, const Collected& c, int run_pid) {
   }
 }
 
-// Span durations per node and what it spans, from begin and end events of the run's processes:
-// a begin and an end of the same number of the same node and process make one span.
-std::map<std::pair<std::string, std::string>, Samples> span_durations(
-    const Collected& c, const PartedVector<SpanEvent>& events, const std::optional<RunInfo>& run) {
+// A begin and its end: what a node spans, when and how long.
+struct Span {
+  uint32_t node, what;  // interned names
+  int64_t begin, duration;
+};
+
+// The spans of the run's processes: a begin and an end of the same number of the same node and
+// process make one span.
+std::vector<Span> paired_spans(const PartedVector<SpanEvent>& events,
+                               const std::optional<RunInfo>& run) {
   std::vector<SpanEvent> ev;
   for (const auto& e : events) {
     if (!run || run->processes.contains(e.vpid)) ev.push_back(e);
@@ -1259,28 +1265,68 @@ std::map<std::pair<std::string, std::string>, Samples> span_durations(
     return std::tuple(e.vpid, e.node, e.what, e.number, !e.begin, e.ts);
   };
   std::sort(ev.begin(), ev.end(), [&](const auto& x, const auto& y) { return key(x) < key(y); });
-  std::map<std::pair<std::string, std::string>, Samples> acc;
+  std::vector<Span> spans;
   for (std::size_t i = 0; i + 1 < ev.size(); ++i) {
     const auto& b = ev[i];
     const auto& e = ev[i + 1];
     if (!b.begin || e.begin || b.vpid != e.vpid || b.node != e.node || b.what != e.what ||
         b.number != e.number)
       continue;
-    acc[{std::string(c.names[b.node]), std::string(c.names[b.what])}].push_back(
-        static_cast<double>(e.ts - b.ts));
+    spans.push_back({b.node, b.what, b.ts, e.ts - b.ts});
     ++i;
+  }
+  return spans;
+}
+
+// Span durations per node and what it spans.
+std::map<std::pair<std::string, std::string>, Samples> span_durations(
+    const Collected& c, const std::vector<Span>& spans) {
+  std::map<std::pair<std::string, std::string>, Samples> acc;
+  for (const Span& s : spans) {
+    acc[{std::string(c.names[s.node]), std::string(c.names[s.what])}].push_back(
+        static_cast<double>(s.duration));
   }
   return acc;
 }
 
 // Controller update durations from robotperf:controller_update_begin/end, per controller manager
 // and controller (the span's number is the loop's cycle), and tf2 call durations from
-// robotperf:tf2_begin/end, per buffer and operation (numbered by the buffer's calls).
-void span_tables(TraceAnalysis& a, const Collected& c, const std::optional<RunInfo>& run) {
-  for (auto& [k, d] : span_durations(c, c.controller_updates, run))
+// robotperf:tf2_begin/end, per buffer and operation (numbered by the buffer's calls). Returns the
+// tf2 calls, for their share of the latency.
+std::vector<Span> span_tables(TraceAnalysis& a, const Collected& c,
+                              const std::optional<RunInfo>& run) {
+  for (auto& [k, d] : span_durations(c, paired_spans(c.controller_updates, run)))
     a.controller_updates.push_back({k.first, k.second, stats_of(d)});
-  for (auto& [k, d] : span_durations(c, c.tf2_calls, run))
+  std::vector<Span> tf2 = paired_spans(c.tf2_calls, run);
+  for (auto& [k, d] : span_durations(c, tf2))
     a.tf2_calls.push_back({k.first, k.second, stats_of(d)});
+  return tf2;
+}
+
+// The tf2 calls' share of the run's latency (docs/guides/grey-box.md): the calls that begin
+// between the first measured message's send and the last matched output, per matched message,
+// against the mean end-to-end latency from the actual send. Over a window rather than per message,
+// so that a call is counted once however many messages are in flight.
+void tf2_share(TraceAnalysis& a, const std::vector<Span>& tf2) {
+  if (tf2.empty() || a.matched == 0) return;
+  int64_t from = INT64_MAX, to = INT64_MIN;
+  for (const auto& m : a.messages) {
+    if (m.warmup || m.received_ns < 0) continue;
+    from = std::min(from, m.sent_ns);
+    to = std::max(to, m.received_ns);
+  }
+  Tf2Share share;
+  double total_ns = 0;
+  for (const Span& s : tf2) {
+    if (s.begin < from || s.begin > to) continue;
+    ++share.calls;
+    total_ns += static_cast<double>(s.duration);
+  }
+  const auto matched = static_cast<double>(a.matched);
+  share.calls_per_message = static_cast<double>(share.calls) / matched;
+  share.per_message_ns = total_ns / matched;
+  share.of_latency = share.per_message_ns / a.latency_from_sent.mean;
+  a.tf2_share = share;
 }
 
 // rmw_publish -> rmw_take latencies, matched by topic and source timestamp; in a run, of the
@@ -1470,13 +1516,14 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
   auto tables = std::async(std::launch::async, [&] {
     callback_durations(a, c, a.run);
     topic_latencies(a, c, a.run);
-    span_tables(a, c, a.run);
+    return span_tables(a, c, a.run);
   });
   if (a.run) {
     const MessageLookup lookup = summarise_run(a, c, *a.run);
     breakdown(a, c, *a.run, lookup);
   }
-  tables.get();
+  const std::vector<Span> tf2 = tables.get();
+  if (a.run) tf2_share(a, tf2);
   explain_missing_tables(a, c, options.run_pid);
 
   if (a.discarded_events > 0) {
@@ -1556,6 +1603,11 @@ nlohmann::json to_json(const TraceAnalysis& a) {
           {"topics", topics},
           {"controller_updates", controller_updates},
           {"tf2_calls", tf2_calls},
+          {"tf2_share", a.tf2_share ? json{{"calls", a.tf2_share->calls},
+                                           {"calls_per_message", a.tf2_share->calls_per_message},
+                                           {"per_message_us", a.tf2_share->per_message_ns * 1e-3},
+                                           {"of_latency", a.tf2_share->of_latency}}
+                                    : json(nullptr)},
           {"unavailable", a.unavailable}};
 }
 
@@ -1606,6 +1658,12 @@ std::string breakdown_table(const TraceAnalysis& a) {
   if (!a.tf2_calls.empty()) {
     header("tf2 set and lookup durations (us)");
     for (const auto& t : a.tf2_calls) us_row(t.node + "  " + t.operation, t.duration);
+    if (a.tf2_share) {
+      const Tf2Share& s = *a.tf2_share;
+      out << "tf2 share: " << fixed(100 * s.of_latency, 2) << " % of the end-to-end latency ("
+          << fixed(s.per_message_ns / 1e3, 1) << " us of tf2 calls per message, "
+          << fixed(s.calls_per_message, 1) << " calls)\n";
+    }
     out << "\n";
   }
   if (!a.unavailable.empty()) {

@@ -89,6 +89,15 @@ struct Tf2CallStats {
   metrics::SampleStats duration;  // one call, ns
 };
 
+// The tf2 calls' share of a run's latency: the calls that begin between the first measured
+// message's send and the last matched output, per matched message.
+struct Tf2Share {
+  uint64_t calls = 0;  // in that window
+  double calls_per_message = 0;
+  double per_message_ns = 0;  // their durations together, per message
+  double of_latency = 0;      // per_message_ns / the mean latency from the actual send
+};
+
 struct TraceAnalysis {
   // The trace.
   std::vector<std::string> traces;  // the CTF folders read
@@ -127,6 +136,7 @@ struct TraceAnalysis {
   std::vector<ControllerUpdateStats> controller_updates;
   // Traces of nodes with a tf2 buffer.
   std::vector<Tf2CallStats> tf2_calls;
+  std::optional<Tf2Share> tf2_share;  // a run whose nodes called a tf2 buffer
   // One line per table (or column) the trace cannot provide, saying why: which events it lacks.
   std::vector<std::string> unavailable;
 
