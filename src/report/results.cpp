@@ -2,6 +2,7 @@
 
 #include <gnu/libc-version.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -701,6 +702,14 @@ void write_latency(std::ostream& out, const harness::RunResult& r) {
   }
 }
 
+// Whether a node of the run is wired to tf2's topics: its share of the latency is then a figure
+// only the trace gives.
+bool wired_to_tf2(const harness::RunResult& r) {
+  return std::ranges::any_of(r.qos, [](const harness::RunResult::EndpointQos& e) {
+    return e.topic == "/tf" || e.topic == "/tf_static";
+  });
+}
+
 // The peak search's steps, the grey-box breakdown, and RobotPerf's headline, named as what it is.
 // Each monitored output: its counts, latency, rate and jitter (a table when the graph has
 // several, a line for one).
@@ -733,7 +742,12 @@ void write_outputs(std::ostream& out, const harness::RunResult& r) {
 void write_throughput_details(std::ostream& out, const harness::RunResult& r) {
   write_outputs(out, r);
   if (r.peak_search) out << "\n" << peak_search_table(*r.peak_search);
-  if (r.grey) out << "\n" << tracing::breakdown_table(*r.grey) << "\n";
+  if (r.grey) {
+    out << "\n" << tracing::breakdown_table(*r.grey) << "\n";
+  } else if (wired_to_tf2(r)) {
+    out << "\ntf2 share: needs --mode grey (the robotperf:tf2 tracepoints time the buffers' "
+           "calls)\n";
+  }
   out << "\nRobotPerf headline (its latency is the maximum, not a typical message): latency "
       << format_fixed(r.latency_from_scheduled.max / kNsPerMs, 3) << " ms, throughput "
       << format_fixed(r.throughput_hz, 3) << " Hz\n";

@@ -66,6 +66,8 @@ enum class Handler : uint8_t {
   kRmwTake,
   kControllerUpdateBegin,
   kControllerUpdateEnd,
+  kTf2Begin,
+  kTf2End,
 };
 
 struct Dispatch {
@@ -126,6 +128,8 @@ Dispatch dispatch_for(const ctf::EventClass& ec, const ctf::Trace& trace) {
       {"robotperf:controller_update_end",
        Handler::kControllerUpdateEnd,
        {"node", "controller", "cycle"}},
+      {"robotperf:tf2_begin", Handler::kTf2Begin, {"node", "operation", "call"}},
+      {"robotperf:tf2_end", Handler::kTf2End, {"node", "operation", "call"}},
   };
   Dispatch d;
   for (const auto& s : specs) {
@@ -283,11 +287,13 @@ struct RmwEvent {
   uint64_t handle;
   int64_t stamp;
 };
-struct ControllerUpdateEvent {
+// The begin or end of a span a node numbers: a controller's update (`what`: the controller,
+// `number`: the cycle) or a tf2 buffer's call (`what`: the operation, `number`: the call).
+struct SpanEvent {
   int64_t ts;
   int32_t vpid;
-  uint32_t node, controller;  // interned names
-  uint64_t cycle;
+  uint32_t node, what;  // interned names
+  uint64_t number;
   bool begin;
 };
 struct Endpoint {
@@ -330,7 +336,7 @@ struct Collected {
   PartedVector<CallbackEvent> callbacks;
   SiteTable<CallbackSite, CallbackSiteHash> callback_sites;
   PartedVector<RmwEvent> rmw_publishes, rmw_takes;
-  PartedVector<ControllerUpdateEvent> controller_updates;
+  PartedVector<SpanEvent> controller_updates, tf2_calls;
 
   HandleMap<std::string> node_names;
   HandleMap<Endpoint> publishers_by_rmw, subscriptions_by_handle, subscriptions_by_rmw;
@@ -431,7 +437,8 @@ uint64_t collect_once(StreamPart& part) {
   BigVector<CallbackEvent>& callbacks = c.callbacks.add_part(estimate / 4);
   BigVector<RmwEvent>& rmw_publishes = c.rmw_publishes.add_part(estimate / 8);
   BigVector<RmwEvent>& rmw_takes = c.rmw_takes.add_part(estimate / 8);
-  BigVector<ControllerUpdateEvent>& controller_updates = c.controller_updates.add_part();
+  BigVector<SpanEvent>& controller_updates = c.controller_updates.add_part();
+  BigVector<SpanEvent>& tf2_calls = c.tf2_calls.add_part();
   const DispatchTable& dispatch = *part.dispatch;
   const ctf::EventClass* last_class = nullptr;
   const Dispatch* d = nullptr;
@@ -558,6 +565,11 @@ uint64_t collect_once(StreamPart& part) {
                                       field(2).as_uint(),
                                       d->handler == Handler::kControllerUpdateBegin});
         break;
+      case Handler::kTf2Begin:
+      case Handler::kTf2End:
+        tf2_calls.push_back({ts, vpid, c.intern(field(0).s), c.intern(field(1).s),
+                             field(2).as_uint(), d->handler == Handler::kTf2Begin});
+        break;
     }
   };
   const ctf::PacketsRead read =
@@ -608,10 +620,12 @@ void merge(Collected& c, Collected&& part) {
   }));
   renumber(part.callbacks,
            c.callback_sites.merge(part.callback_sites, [](const CallbackSite& s) { return s; }));
-  for (auto& updates : part.controller_updates.parts()) {
-    for (auto& u : updates) {
-      u.node = id_of[u.node];
-      u.controller = id_of[u.controller];
+  for (auto* spans : {&part.controller_updates, &part.tf2_calls}) {
+    for (auto& events : spans->parts()) {
+      for (auto& e : events) {
+        e.node = id_of[e.node];
+        e.what = id_of[e.what];
+      }
     }
   }
   for (auto* endpoints :
@@ -629,6 +643,7 @@ void merge(Collected& c, Collected&& part) {
   c.rmw_publishes.append(std::move(part.rmw_publishes));
   c.rmw_takes.append(std::move(part.rmw_takes));
   c.controller_updates.append(std::move(part.controller_updates));
+  c.tf2_calls.append(std::move(part.tf2_calls));
   replace(c.node_names, part.node_names);
   replace(c.publishers_by_rmw, part.publishers_by_rmw);
   replace(c.subscriptions_by_handle, part.subscriptions_by_handle);
@@ -1268,32 +1283,92 @@ void explain_missing_tables(TraceAnalysis& a, const Collected& c, int run_pid) {
         "controller update durations: no robotperf:controller_update events (the graph runs no "
         "control loop)");
   }
+  if (a.tf2_calls.empty()) {
+    a.unavailable.push_back(
+        "tf2 set and lookup durations: no robotperf:tf2 events (no node holds a tf2 buffer)");
+  }
 }
 
-// Controller update durations from robotperf:controller_update_begin/end, per controller manager
-// and controller: a begin and an end of the same cycle of the same loop make one update.
-void controller_update_durations(TraceAnalysis& a, const Collected& c,
-                                 const std::optional<RunInfo>& run) {
-  std::vector<ControllerUpdateEvent> ev;
-  for (const auto& e : c.controller_updates) {
+// A begin and its end: what a node spans, when and how long.
+struct Span {
+  uint32_t node, what;  // interned names
+  int64_t begin, duration;
+};
+
+// The spans of the run's processes: a begin and an end of the same number of the same node and
+// process make one span.
+std::vector<Span> paired_spans(const PartedVector<SpanEvent>& events,
+                               const std::optional<RunInfo>& run) {
+  std::vector<SpanEvent> ev;
+  for (const auto& e : events) {
     if (!run || run->processes.contains(e.vpid)) ev.push_back(e);
   }
-  auto key = [](const ControllerUpdateEvent& e) {
-    return std::tuple(e.vpid, e.node, e.controller, e.cycle, !e.begin, e.ts);
+  auto key = [](const SpanEvent& e) {
+    return std::tuple(e.vpid, e.node, e.what, e.number, !e.begin, e.ts);
   };
   std::sort(ev.begin(), ev.end(), [&](const auto& x, const auto& y) { return key(x) < key(y); });
-  std::map<std::pair<std::string, std::string>, Samples> acc;
+  std::vector<Span> spans;
   for (std::size_t i = 0; i + 1 < ev.size(); ++i) {
     const auto& b = ev[i];
     const auto& e = ev[i + 1];
-    if (!b.begin || e.begin || b.vpid != e.vpid || b.node != e.node ||
-        b.controller != e.controller || b.cycle != e.cycle)
+    if (!b.begin || e.begin || b.vpid != e.vpid || b.node != e.node || b.what != e.what ||
+        b.number != e.number)
       continue;
-    acc[{std::string(c.names[b.node]), std::string(c.names[b.controller])}].push_back(
-        static_cast<double>(e.ts - b.ts));
+    spans.push_back({b.node, b.what, b.ts, e.ts - b.ts});
     ++i;
   }
-  for (auto& [k, d] : acc) a.controller_updates.push_back({k.first, k.second, stats_of(d)});
+  return spans;
+}
+
+// Span durations per node and what it spans.
+std::map<std::pair<std::string, std::string>, Samples> span_durations(
+    const Collected& c, const std::vector<Span>& spans) {
+  std::map<std::pair<std::string, std::string>, Samples> acc;
+  for (const Span& s : spans) {
+    acc[{std::string(c.names[s.node]), std::string(c.names[s.what])}].push_back(
+        static_cast<double>(s.duration));
+  }
+  return acc;
+}
+
+// Controller update durations from robotperf:controller_update_begin/end, per controller manager
+// and controller (the span's number is the loop's cycle), and tf2 call durations from
+// robotperf:tf2_begin/end, per buffer and operation (numbered by the buffer's calls). Returns the
+// tf2 calls, for their share of the latency.
+std::vector<Span> span_tables(TraceAnalysis& a, const Collected& c,
+                              const std::optional<RunInfo>& run) {
+  for (auto& [k, d] : span_durations(c, paired_spans(c.controller_updates, run)))
+    a.controller_updates.push_back({k.first, k.second, stats_of(d)});
+  std::vector<Span> tf2 = paired_spans(c.tf2_calls, run);
+  for (auto& [k, d] : span_durations(c, tf2))
+    a.tf2_calls.push_back({k.first, k.second, stats_of(d)});
+  return tf2;
+}
+
+// The tf2 calls' share of the run's latency (docs/guides/grey-box.md): the calls that begin
+// between the first measured message's send and the last matched output, per matched message,
+// against the mean end-to-end latency from the actual send. Over a window rather than per message,
+// so that a call is counted once however many messages are in flight.
+void tf2_share(TraceAnalysis& a, const std::vector<Span>& tf2) {
+  if (tf2.empty() || a.matched == 0) return;
+  int64_t from = INT64_MAX, to = INT64_MIN;
+  for (const auto& m : a.messages) {
+    if (m.warmup || m.received_ns < 0) continue;
+    from = std::min(from, m.sent_ns);
+    to = std::max(to, m.received_ns);
+  }
+  Tf2Share share;
+  double total_ns = 0;
+  for (const Span& s : tf2) {
+    if (s.begin < from || s.begin > to) continue;
+    ++share.calls;
+    total_ns += static_cast<double>(s.duration);
+  }
+  const auto matched = static_cast<double>(a.matched);
+  share.calls_per_message = static_cast<double>(share.calls) / matched;
+  share.per_message_ns = total_ns / matched;
+  share.of_latency = share.per_message_ns / a.latency_from_sent.mean;
+  a.tf2_share = share;
 }
 
 // rmw_publish -> rmw_take latencies, matched by topic and source timestamp; in a run, of the
@@ -1572,7 +1647,7 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
   auto tables = std::async(std::launch::async, [&] {
     callback_durations(a, c, a.run);
     topic_latencies(a, c, a.run);
-    controller_update_durations(a, c, a.run);
+    return span_tables(a, c, a.run);
   });
   a.graph = traced_graph(c, a.run);
   if (options.timeline) timeline(a, c, a.run);
@@ -1584,7 +1659,8 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
     const MessageLookup lookup = summarise_run(a, c, *a.run);
     breakdown(a, c, *a.run, lookup);
   }
-  tables.get();
+  const std::vector<Span> tf2 = tables.get();
+  if (a.run) tf2_share(a, tf2);
   explain_missing_tables(a, c, options.run_pid);
 
   if (a.discarded_events > 0) {
@@ -1671,22 +1747,34 @@ nlohmann::json to_json(const TraceAnalysis& a) {
                                   {"controller", u.controller},
                                   {"duration_us", metrics::to_json(u.duration, 1e-3, "us")}});
   }
+  json tf2_calls = json::array();
+  for (const auto& t : a.tf2_calls) {
+    tf2_calls.push_back({{"node", t.node},
+                         {"operation", t.operation},
+                         {"duration_us", metrics::to_json(t.duration, 1e-3, "us")}});
+  }
   json j = {{"trace",
-             {{"folders", a.traces},
-              {"streams", a.streams},
-              {"packets", a.packets},
-              {"events", a.events},
-              {"discarded_events", a.discarded_events},
-              {"lost_packets", a.lost_packets},
-              {"defective_packets", a.defective_packets},
-              {"packet_defects", a.packet_defects},
-              {"duration_s", static_cast<double>(a.last_ns - a.first_ns) * 1e-9},
-              {"analysis_s", a.read_seconds}}},
-            {"hops", hops},
-            {"callbacks", callbacks},
-            {"topics", topics},
-            {"controller_updates", controller_updates},
-            {"unavailable", a.unavailable}};
+           {{"folders", a.traces},
+            {"streams", a.streams},
+            {"packets", a.packets},
+            {"events", a.events},
+            {"discarded_events", a.discarded_events},
+            {"lost_packets", a.lost_packets},
+            {"defective_packets", a.defective_packets},
+            {"packet_defects", a.packet_defects},
+            {"duration_s", static_cast<double>(a.last_ns - a.first_ns) * 1e-9},
+            {"analysis_s", a.read_seconds}}},
+          {"hops", hops},
+          {"callbacks", callbacks},
+          {"topics", topics},
+          {"controller_updates", controller_updates},
+          {"tf2_calls", tf2_calls},
+          {"tf2_share", a.tf2_share ? json{{"calls", a.tf2_share->calls},
+                                           {"calls_per_message", a.tf2_share->calls_per_message},
+                                           {"per_message_us", a.tf2_share->per_message_ns * 1e-3},
+                                           {"of_latency", a.tf2_share->of_latency}}
+                                    : json(nullptr)},
+          {"unavailable", a.unavailable}};
   if (a.path) j["path"] = path_json(*a.path);
   return j;
 }
@@ -1751,17 +1839,26 @@ std::string breakdown_table(const TraceAnalysis& a) {
       row(t.topic + ": " + t.publisher + " -> " + t.subscriber, t.latency);
     out << "\n";
   }
-  if (!a.controller_updates.empty()) {
-    std::snprintf(line, sizeof line, "%-58s %8s %9s %9s %9s %9s\n",
-                  "controller update durations (us)", "count", "mean", "p50", "p99", "max");
-    out << line;
+  // Spans of microseconds: their own unit.
+  auto us_row = [&](const std::string& name, const metrics::SampleStats& s) {
     auto us = [](double ns) { return fixed(ns / 1e3, 1); };
-    for (const auto& u : a.controller_updates) {
-      const auto& s = u.duration;
-      std::snprintf(line, sizeof line, "%-58s %8zu %9s %9s %9s %9s\n",
-                    (u.node + "  " + u.controller).c_str(), s.count, us(s.mean).c_str(),
-                    us(s.p50).c_str(), us(s.p99).c_str(), us(s.max).c_str());
-      out << line;
+    std::snprintf(line, sizeof line, "%-58s %8zu %9s %9s %9s %9s\n", name.c_str(), s.count,
+                  us(s.mean).c_str(), us(s.p50).c_str(), us(s.p99).c_str(), us(s.max).c_str());
+    out << line;
+  };
+  if (!a.controller_updates.empty()) {
+    header("controller update durations (us)");
+    for (const auto& u : a.controller_updates) us_row(u.node + "  " + u.controller, u.duration);
+    out << "\n";
+  }
+  if (!a.tf2_calls.empty()) {
+    header("tf2 set and lookup durations (us)");
+    for (const auto& t : a.tf2_calls) us_row(t.node + "  " + t.operation, t.duration);
+    if (a.tf2_share) {
+      const Tf2Share& s = *a.tf2_share;
+      out << "tf2 share: " << fixed(100 * s.of_latency, 2) << " % of the end-to-end latency ("
+          << fixed(s.per_message_ns / 1e3, 1) << " us of tf2 calls per message, "
+          << fixed(s.calls_per_message, 1) << " calls)\n";
     }
     out << "\n";
   }

@@ -14,11 +14,13 @@
 #include "category.hpp"
 #include "robotperf/manipulation/collision.hpp"
 #include "robotperf/manipulation/kinematics.hpp"
+#include "robotperf/manipulation/manipulation_requests.hpp"
 #include "robotperf/manipulation/planning.hpp"
 #include "robotperf/msgs/eigen_geometry.hpp"
 #include "robotperf/msgs/geometry_msgs.hpp"
 #include "robotperf/msgs/robotperf_msgs.hpp"
 #include "robotperf/msgs/sensor_msgs.hpp"
+#include "robotperf/msgs/tf2_msgs.hpp"
 #include "robotperf/msgs/trajectory_msgs.hpp"
 #include "robotperf/rmw/transport.hpp"
 
@@ -309,6 +311,131 @@ TEST(InverseKinematicsNode, RejectsTargetsInAnotherFrameOrNotFinite) {
     pose_error(arm().tip_pose(answer.position.data()), arm().tip_pose(q.data()), dp, dr);
     EXPECT_LT(dp, 1e-4);
   }
+}
+
+// use_tf2 (RobotPerf m2-m7): the answers through the tf2 buffer equal the direct ones. At most 10
+// requests a run: the subscription keeps the last 10 that wait.
+const std::map<std::string, std::string> kUseTf2{{"use_tf2", "true"}};
+
+TEST(Tf2Mode, ForwardKinematicsThroughTf2EqualsKdlAndBroadcastsTheLinks) {
+  const KinematicsRequests requests = generate_kinematics_requests({.seed = 3, .requests = 10});
+  const auto direct = run_node<msgs::PoseStamped>("manipulation/forward_kinematics", {},
+                                                  "joint_states", "pose", requests.states);
+  const auto via_tf2 = run_node<msgs::PoseStamped>("manipulation/forward_kinematics", kUseTf2,
+                                                   "joint_states", "pose", requests.states);
+  ASSERT_EQ(direct.answers.size(), requests.states.size());
+  ASSERT_EQ(via_tf2.answers.size(), requests.states.size());
+  for (std::size_t i = 0; i < requests.states.size(); ++i) {
+    EXPECT_EQ(via_tf2.answers[i].header.frame_id, arm().base_link());
+    double dp, dr;
+    pose_error(msgs::isometry_of(via_tf2.answers[i].pose),
+               msgs::isometry_of(direct.answers[i].pose), dp, dr);
+    EXPECT_LT(dp, 1e-12) << "request " << i;
+    EXPECT_LT(dr, 1e-9) << "request " << i;
+  }
+
+  // What a tf2 listener of the node sees on /tf: each state's links, at its stamp (the mount, on
+  // /tf_static, is looked up in the world-frame test below).
+  testing::NodeUnderTest node(category(), "manipulation/forward_kinematics", kUseTf2);
+  auto& tf = node.output<msgs::TFMessage>("tf");
+  auto& poses = node.output<msgs::PoseStamped>("pose");
+  auto input = node.input<msgs::JointState>("joint_states");
+  node.start();
+  msgs::JointState state = requests.states[0];
+  state.header.stamp = msgs::Time::from_ns(5'000'000'000);
+  input->publish(std::move(state));
+  ASSERT_TRUE(poses.wait([](const auto& m) { return !m.empty(); }));
+  ASSERT_TRUE(tf.wait([](const auto& m) { return !m.empty(); }));
+  node.stop();
+  const auto links = tf.messages().at(0).transforms;
+  ASSERT_EQ(links.size(), arm().links().size() - 1);
+  EXPECT_EQ(links.front().header.frame_id, arm().base_link());
+  EXPECT_EQ(links.back().child_frame_id, arm().tip_link());
+  EXPECT_EQ(links.back().header.stamp.to_ns(), 5'000'000'000);
+}
+
+TEST(Tf2Mode, CollisionThroughTf2EqualsTheDirectAnswerWithBothBackends) {
+  const CollisionRequests requests = generate_collision_requests({.seed = 5, .requests = 10});
+  for (const char* kernel : {"manipulation/collision_fcl", "manipulation/collision_bullet"}) {
+    const auto direct =
+        run_node<msgs::CollisionResult>(kernel, {}, "joint_states", "collision", requests.states);
+    const auto via_tf2 = run_node<msgs::CollisionResult>(kernel, kUseTf2, "joint_states",
+                                                         "collision", requests.states);
+    ASSERT_EQ(via_tf2.answers.size(), requests.states.size()) << kernel;
+    ASSERT_EQ(direct.answers.size(), requests.states.size()) << kernel;
+    std::size_t colliding = 0;
+    for (std::size_t i = 0; i < requests.states.size(); ++i) {
+      EXPECT_EQ(via_tf2.answers[i].in_collision, direct.answers[i].in_collision) << kernel << i;
+      EXPECT_EQ(via_tf2.answers[i].with_scene, direct.answers[i].with_scene) << kernel << i;
+      EXPECT_EQ(via_tf2.answers[i].first, direct.answers[i].first) << kernel << i;
+      EXPECT_EQ(via_tf2.answers[i].second, direct.answers[i].second) << kernel << i;
+      colliding += requests.truth[i].in_collision;
+    }
+    // Both answers occur: the comparison is not of "free" alone.
+    EXPECT_GT(colliding, 0u);
+    EXPECT_LT(colliding, requests.states.size());
+  }
+}
+
+// With tf2 the target's frame is looked up: a target in the world frame (the arm's mount) is
+// solved as the same target in the base; without tf2 it is rejected.
+TEST(Tf2Mode, InverseKinematicsSolvesTargetsOfTheWorldFrame) {
+  const KinematicsRequests requests = generate_kinematics_requests({.seed = 4, .requests = 6});
+  std::vector<msgs::PoseStamped> targets;
+  for (std::size_t i = 0; i < requests.poses.size(); ++i) {
+    targets.push_back(requests.poses[i]);
+    if (i % 2 == 0) targets.back().header.frame_id = "world";  // the last one: the base
+  }
+  for (const char* kernel : {"manipulation/ik_kdl", "manipulation/ik_lma"}) {
+    std::map<std::string, std::string> parameters = kUseTf2;
+    parameters["timeout_s"] = "1";
+    const auto via_tf2 =
+        run_node<msgs::JointState>(kernel, parameters, "pose", "joint_states", targets);
+    ASSERT_EQ(via_tf2.answers.size(), targets.size()) << kernel;
+    for (std::size_t i = 0; i < targets.size(); ++i) {
+      ASSERT_EQ(via_tf2.answers[i].position.size(), 6u) << kernel << " target " << i;
+      double dp, dr;
+      pose_error(arm().tip_pose(via_tf2.answers[i].position.data()),
+                 msgs::isometry_of(requests.poses[i].pose), dp, dr);
+      EXPECT_LT(dp, 1e-4) << kernel << " target " << i;
+      EXPECT_LT(dr, 1e-3) << kernel << " target " << i;
+    }
+  }
+  const auto direct = run_node<msgs::JointState>("manipulation/ik_kdl", {{"timeout_s", "1"}},
+                                                 "pose", "joint_states", targets);
+  EXPECT_EQ(direct.counters.at("requests_rejected"), targets.size() / 2);
+}
+
+// The planner's start state goes through tf2 and is checked before planning: a start in
+// collision fails the plan (no points), a free one plans as without tf2.
+TEST(Tf2Mode, PlannerChecksItsStartStateThroughTf2) {
+  const CollisionRequests states = generate_collision_requests({.seed = 2, .requests = 40});
+  const auto colliding = std::ranges::find_if(
+      states.truth, [](const msgs::CollisionResult& r) { return r.in_collision; });
+  ASSERT_NE(colliding, states.truth.end());
+  const msgs::JointState& start =
+      states.states[static_cast<std::size_t>(colliding - states.truth.begin())];
+  msgs::JointTrajectory blocked;
+  blocked.joint_names = arm().joint_names();
+  blocked.points.resize(2);
+  blocked.points[0].positions = in_model_order(arm(), start.name, start.position, "positions");
+  blocked.points[1].positions = kGoal;
+  const msgs::JointTrajectory free_query =
+      *static_cast<const msgs::JointTrajectory*>(query_stream().messages[0].get());
+  const auto run = run_node<msgs::JointTrajectory>(
+      "manipulation/plan", {{"use_tf2", "true"}, {"seed", "1"}}, "query", "trajectory",
+      std::vector<msgs::JointTrajectory>{blocked, free_query});
+  ASSERT_EQ(run.answers.size(), 2u);
+  EXPECT_TRUE(run.answers[0].points.empty());
+  ASSERT_FALSE(run.answers[1].points.empty());
+  EXPECT_EQ(run.answers[1].points.front().positions, kStart);
+  EXPECT_EQ(run.answers[1].points.back().positions, kGoal);
+}
+
+TEST(Tf2Mode, RefusesAWorldFrameThatIsALinkOfTheArm) {
+  EXPECT_THROW(testing::NodeUnderTest(category(), "manipulation/forward_kinematics",
+                                      {{"use_tf2", "true"}, {"world_frame", "link3"}}),
+               std::invalid_argument);
 }
 
 }  // namespace

@@ -49,13 +49,21 @@ uint64_t sent_of(uint64_t k) {
 // in a trace from before run_begin recorded it.
 // With `slow_warmup_take`, the relay takes frame 0 (warm-up) from the middleware kSlowWarmupTake
 // after its rmw_publish instead of 500 ns.
+// With `tf2_calls`, the relay's kernel calls its tf2 buffer in every frame: a set of 500 ns, then
+// a lookup of 250 ns; and another process's buffer calls one lookup of 4 us.
 enum class OutputKind { kPlain, kState, kStateUnrecorded };
 constexpr int64_t kSlowWarmupTake = 10'000'000;
 void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool device_stages = false,
                bool repeated_outputs = false, int64_t declared_period = kPeriod,
-               OutputKind output = OutputKind::kPlain, bool slow_warmup_take = false) {
+               OutputKind output = OutputKind::kPlain, bool slow_warmup_take = false,
+               bool tf2_calls = false) {
   testing::define_robotperf_events(w, testing::Ros2Layout::kJazzy,
                                    output != OutputKind::kStateUnrecorded);
+  for (const char* e : {"robotperf:tf2_begin", "robotperf:tf2_end"}) {
+    w.define(e, {{"node", testing::FieldKind::kString},
+                 {"operation", testing::FieldKind::kString},
+                 {"call", testing::FieldKind::kU64}});
+  }
   const std::string play = "robotperf_playback", relay = "relay", mon = "robotperf_monitor";
   const uint64_t t0 = kStart - 1'000'000;
   // Initialisation: node, subscription + callback, timer, publisher of /in.
@@ -120,6 +128,19 @@ void write_run(CtfWriter& w, uint64_t discarded_in_second_packet = 0, bool devic
         w.event(1, "robotperf:device_end", sent + stages[i + 1].second, kRunPid, 2,
                 {V(relay), V(std::string(stages[i].first)), V(id), V(uint64_t{100})});
       }
+    }
+    if (tf2_calls) {
+      const std::pair<const char*, uint64_t> calls[] = {{"set", 2100}, {"lookup", 2650}};
+      const uint64_t lasts[] = {500, 250};
+      for (int i = 0; i < 2; ++i) {
+        const std::vector<V> fields{V(relay), V(std::string(calls[i].first)), V(2 * k + i)};
+        w.event(1, "robotperf:tf2_begin", sent + calls[i].second, kRunPid, 2, fields);
+        w.event(1, "robotperf:tf2_end", sent + calls[i].second + lasts[i], kRunPid, 2, fields);
+      }
+      w.event(0, "robotperf:tf2_begin", sent + 2200, 99, 99,
+              {V(std::string("other")), V(std::string("lookup")), V(k)});
+      w.event(0, "robotperf:tf2_end", sent + 6200, 99, 99,
+              {V(std::string("other")), V(std::string("lookup")), V(k)});
     }
     w.event(1, "robotperf:kernel_fini", sent + 3000 + 100 * k, kRunPid, 2,
             {V(relay), V(std::string("k")), V(id), V(uint64_t{100})});
@@ -424,6 +445,43 @@ TEST(Analyzer, HandBuiltTraceGivesExactLatencies) {
     EXPECT_EQ(a.topics[0].subscriber, "relay");
     EXPECT_DOUBLE_EQ(a.topics[0].latency.mean, 500.0);
   }
+}
+
+// The tf2 share: the calls of the run's processes from the first measured send to the last matched
+// output (frames 1, 2 and 3: the lost frame's calls too, not the warm-up's), per matched message,
+// over the mean latency from the actual send.
+TEST(Analyzer, Tf2ShareIsTheCallsPerMessageOverTheLatency) {
+  FixtureRoot dir;
+  CtfWriter w(dir.path() / "ust" / "uid" / "0" / "64-bit", CtfWriter::Header::kCompact, false, 2);
+  write_run(w, 0, false, false, kPeriod, OutputKind::kPlain, false, true);
+  const TraceAnalysis a = analyze_trace(dir.path());
+  ASSERT_TRUE(a.valid) << a.invalid_reasons.at(0);
+  ASSERT_EQ(a.tf2_calls.size(), 2u);
+  for (const auto& t : a.tf2_calls) {
+    EXPECT_EQ(t.node, "relay");
+    EXPECT_EQ(t.duration.count, 4u) << "every frame's call, the warm-up's too";
+    EXPECT_DOUBLE_EQ(t.duration.mean, t.operation == "set" ? 500.0 : 250.0);
+  }
+  ASSERT_TRUE(a.tf2_share.has_value());
+  EXPECT_EQ(a.tf2_share->calls, 6u);
+  EXPECT_DOUBLE_EQ(a.tf2_share->calls_per_message, 3.0);  // 6 calls, 2 matched
+  EXPECT_DOUBLE_EQ(a.tf2_share->per_message_ns, 3 * 750.0 / 2);
+  // Mean latency from the send: (7 ms + 3 ms) / 2.
+  EXPECT_DOUBLE_EQ(a.tf2_share->of_latency, 1125.0 / 5'000'000.0);
+  EXPECT_NE(breakdown_table(a).find("tf2 share: 0.02 % of the end-to-end latency (1.1 us of tf2 "
+                                    "calls per message, 3.0 calls)"),
+            std::string::npos)
+      << breakdown_table(a);
+  EXPECT_DOUBLE_EQ(to_json(a)["tf2_share"]["per_message_us"].get<double>(), 1.125);
+
+  // Without tf2 calls there is no share.
+  FixtureRoot plain;
+  CtfWriter w2(plain.path() / "ust" / "uid" / "0" / "64-bit", CtfWriter::Header::kCompact, false,
+               2);
+  write_run(w2);
+  const TraceAnalysis b = analyze_trace(plain.path());
+  EXPECT_FALSE(b.tf2_share.has_value());
+  EXPECT_TRUE(to_json(b)["tf2_share"].is_null());
 }
 
 // A run whose streams hold many packets, names first used in late packets and handles

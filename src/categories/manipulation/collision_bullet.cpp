@@ -87,8 +87,12 @@ class BulletChecker final : public CollisionChecker {
 
   CollisionAnswer check(const double* q) override {
     model_.link_poses(q, poses_);
+    return check_at(poses_);
+  }
+
+  CollisionAnswer check_at(const std::vector<Eigen::Isometry3d>& poses) override {
     for (auto& ls : link_shapes_)
-      ls.body->setWorldTransform(bullet_transform(poses_[ls.link] * ls.origin));
+      ls.body->setWorldTransform(bullet_transform(poses[ls.link] * ls.origin));
     // Contact points persist between queries in Bullet's manifolds; a boolean query must not see
     // those of the previous state.
     for (int i = 0; i < dispatcher_.getNumManifolds(); ++i)

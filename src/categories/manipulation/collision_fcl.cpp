@@ -63,8 +63,12 @@ class FclChecker final : public CollisionChecker {
 
   CollisionAnswer check(const double* q) override {
     model_.link_poses(q, poses_);
+    return check_at(poses_);
+  }
+
+  CollisionAnswer check_at(const std::vector<Eigen::Isometry3d>& poses) override {
     for (auto& ls : link_shapes_) {
-      ls.object->setTransform(poses_[static_cast<std::size_t>(ls.link)] * ls.origin);
+      ls.object->setTransform(poses[static_cast<std::size_t>(ls.link)] * ls.origin);
       ls.object->computeAABB();
     }
     robot_.update();

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "category.hpp"
+#include "robot_tf2.hpp"
 #include "robotperf/manipulation/collision.hpp"
 #include "robotperf/manipulation/kinematics.hpp"
 #include "robotperf/manipulation/planning.hpp"
@@ -32,6 +33,13 @@ double positive(const KernelConfig& c, const std::string& name, double v) {
 std::vector<double> model_positions(const RobotModel& m, const std::vector<std::string>& names,
                                     const std::vector<double>& position) {
   return in_model_order(m, names, position, "positions");
+}
+
+// The node's RobotTf2 when its use_tf2 parameter is set, else null.
+std::unique_ptr<RobotTf2> robot_tf2(graph::Node& node, const KernelConfig& config) {
+  const Tf2Settings s = kTf2Parameters.read(config.parameters);
+  if (!s.use_tf2) return nullptr;
+  return std::make_unique<RobotTf2>(node, config, RobotModel::xarm6(), s.world_frame);
 }
 
 // A node that answers each request; requests it cannot use are skipped and counted (the frame
@@ -72,17 +80,26 @@ class RequestNode : public graph::Node, public plugin::NodeCounters {
 class ForwardKinematicsNode final : public RequestNode<msgs::JointState, msgs::PoseStamped> {
  public:
   ForwardKinematicsNode(graph::Context& context, const KernelConfig& config)
-      : RequestNode(context, config, "joint_states", "pose"), fk_(RobotModel::xarm6()) {}
+      : RequestNode(context, config, "joint_states", "pose"),
+        fk_(RobotModel::xarm6()),
+        tf2_(robot_tf2(*this, config)) {}
 
  private:
   void respond(const msgs::JointState& request, msgs::PoseStamped& answer) override {
     const RobotModel& m = RobotModel::xarm6();
     const auto q = model_positions(m, request.name, request.position);
-    const Eigen::Isometry3d t = fk_.tip_pose(q.data());
     answer.header.frame_id = m.base_link();
-    answer.pose = msgs::pose_msg_of(t);
+    if (tf2_) {
+      // robot_state_publisher's transforms of the state, then the tip looked up in the base.
+      const int64_t stamp = request.header.stamp.to_ns();
+      tf2_->set_state(q.data(), stamp);
+      answer.pose = msgs::pose_msg_of(tf2_->lookup(m.base_link(), m.tip_link(), stamp));
+    } else {
+      answer.pose = msgs::pose_msg_of(fk_.tip_pose(q.data()));
+    }
   }
   manipulation::ForwardKinematics fk_;
+  std::unique_ptr<RobotTf2> tf2_;
 };
 
 // As given: checked below before they become IkOptions' unsigned members.
@@ -123,15 +140,20 @@ class InverseKinematicsNode final : public RequestNode<msgs::PoseStamped, msgs::
                         manipulation::IkSolver solver)
       : RequestNode(context, config, "pose", "joint_states"),
         ik_(RobotModel::xarm6(), ik_options(config, solver)),
-        seed_state_(RobotModel::xarm6().dof(), 0.0) {}
+        seed_state_(RobotModel::xarm6().dof(), 0.0),
+        tf2_(robot_tf2(*this, config)) {}
 
  private:
   void respond(const msgs::PoseStamped& request, msgs::JointState& answer) override {
     const RobotModel& m = RobotModel::xarm6();
-    // The solver works in the base frame; no transforms are known here to bring others into it.
-    if (!request.header.frame_id.empty() && request.header.frame_id != m.base_link()) {
-      throw std::invalid_argument("target pose is in frame '" + request.header.frame_id +
-                                  "', not the arm's base '" + m.base_link() + "'");
+    const int64_t stamp = request.header.stamp.to_ns();
+    const std::string& frame =
+        request.header.frame_id.empty() ? m.base_link() : request.header.frame_id;
+    // The solver works in the base frame: without tf2 no transforms are known to bring others
+    // into it; with tf2 the target's frame is looked up in the base (the world frame, the base).
+    if (!tf2_ && frame != m.base_link()) {
+      throw std::invalid_argument("target pose is in frame '" + frame + "', not the arm's base '" +
+                                  m.base_link() + "'");
     }
     const auto& p = request.pose;
     if (!std::isfinite(p.position.x) || !std::isfinite(p.position.y) ||
@@ -140,13 +162,18 @@ class InverseKinematicsNode final : public RequestNode<msgs::PoseStamped, msgs::
     const Eigen::Quaterniond r(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
     if (!(std::abs(r.norm() - 1.0) < 1e-3))
       throw std::invalid_argument("target orientation is not a unit quaternion");
-    const Eigen::Isometry3d target = msgs::isometry_of(p);
+    Eigen::Isometry3d target = msgs::isometry_of(p);
+    if (tf2_) target = tf2_->lookup(m.base_link(), frame, stamp) * target;
     const manipulation::IkResult result = ik_.solve(target, seed_state_);
     answer.name = m.joint_names();
-    if (result.success) answer.position = result.q;
+    if (!result.success) return;
+    answer.position = result.q;
+    // The arm's state at the solution, as robot_state_publisher broadcasts it.
+    if (tf2_) tf2_->set_state(result.q.data(), stamp);
   }
   manipulation::InverseKinematics ik_;
   std::vector<double> seed_state_;
+  std::unique_ptr<RobotTf2> tf2_;
 };
 
 class CollisionNode final : public RequestNode<msgs::JointState, msgs::CollisionResult> {
@@ -155,18 +182,30 @@ class CollisionNode final : public RequestNode<msgs::JointState, msgs::Collision
                 manipulation::CollisionBackend backend)
       : RequestNode(context, config, "joint_states", "collision"),
         checker_(manipulation::make_collision_checker(backend, RobotModel::xarm6(),
-                                                      manipulation::default_scene())) {}
+                                                      manipulation::default_scene())),
+        tf2_(robot_tf2(*this, config)) {}
 
  private:
   void respond(const msgs::JointState& request, msgs::CollisionResult& answer) override {
     const auto q = model_positions(RobotModel::xarm6(), request.name, request.position);
-    const manipulation::CollisionAnswer a = checker_->check(q.data());
+    manipulation::CollisionAnswer a;
+    if (tf2_) {
+      // The links posed from the state's transforms looked up in the base frame.
+      const int64_t stamp = request.header.stamp.to_ns();
+      tf2_->set_state(q.data(), stamp);
+      tf2_->link_poses(stamp, poses_);
+      a = checker_->check_at(poses_);
+    } else {
+      a = checker_->check(q.data());
+    }
     answer.in_collision = a.in_collision;
     answer.with_scene = a.with_scene;
     answer.first = a.first;
     answer.second = a.second;
   }
   std::unique_ptr<manipulation::CollisionChecker> checker_;
+  std::unique_ptr<RobotTf2> tf2_;
+  std::vector<Eigen::Isometry3d> poses_;
 };
 
 msgs::Duration duration_of(double seconds) {
@@ -224,7 +263,8 @@ class PlanNode final : public RequestNode<msgs::JointTrajectory, msgs::JointTraj
                  plan_options(config, s)),
         sample_period_s_(positive(config, "sample_period_s", s.sample_period_s)),
         velocity_scaling_(positive(config, "velocity_scaling", s.velocity_scaling)),
-        acceleration_scaling_(positive(config, "acceleration_scaling", s.acceleration_scaling)) {}
+        acceleration_scaling_(positive(config, "acceleration_scaling", s.acceleration_scaling)),
+        tf2_(robot_tf2(*this, config)) {}
 
   static manipulation::PlanOptions plan_options(const KernelConfig& c, const PlanSettings& s) {
     manipulation::PlanOptions o;
@@ -252,6 +292,15 @@ class PlanNode final : public RequestNode<msgs::JointTrajectory, msgs::JointTraj
     const auto start = model_positions(m, query.joint_names, query.points.front().positions);
     const auto goal = model_positions(m, query.joint_names, query.points.back().positions);
     answer.joint_names = m.joint_names();
+    if (tf2_) {
+      // The start is the arm's current state: its transforms set as robot_state_publisher
+      // broadcasts them, its links posed from the buffer and checked before planning (a start in
+      // collision fails the plan, as MoveIt's does).
+      const int64_t stamp = query.header.stamp.to_ns();
+      tf2_->set_state(start.data(), stamp);
+      tf2_->link_poses(stamp, poses_);
+      if (planner_.checker().check_at(poses_).in_collision) return;
+    }
     const manipulation::PlanResult plan = planner_.plan(start, goal);
     if (!plan.success) return;
     for (auto& s : manipulation::time_parameterize(plan.path, m.limits(), sample_period_s_,
@@ -266,6 +315,8 @@ class PlanNode final : public RequestNode<msgs::JointTrajectory, msgs::JointTraj
   }
   manipulation::Planner planner_;
   double sample_period_s_, velocity_scaling_, acceleration_scaling_;
+  std::unique_ptr<RobotTf2> tf2_;
+  std::vector<Eigen::Isometry3d> poses_;
 };
 
 const ExecutionOptions kExecution;
@@ -360,23 +411,24 @@ void register_kernels(plugin::Registrar& registrar) {
                         .description = "xArm6 flange pose of a joint state (KDL "
                                        "ChainFkSolverPos_recursive)",
                         .inputs = state_in,
-                        .outputs = pose},
+                        .outputs = with_tf2_ports(pose),
+                        .parameters = with_tf2({})},
                        factory<ForwardKinematicsNode>());
   registrar.add_kernel(
       {.name = "manipulation/ik_kdl",
        .description = "xArm6 joint state for a target pose: Newton-Raphson with joint limits on "
                       "KDL, random restarts within the timeout (MoveIt's KDL plugin)",
        .inputs = pose,
-       .outputs = state_out,
-       .parameters = kIkParameters.declarations()},
+       .outputs = with_tf2_ports(state_out),
+       .parameters = with_tf2(kIkParameters.declarations())},
       factory<InverseKinematicsNode>(IkSolver::kNewtonRaphsonJL));
   registrar.add_kernel(
       {.name = "manipulation/ik_lma",
        .description = "xArm6 joint state for a target pose: KDL ChainIkSolverPos_LMA, random "
                       "restarts within the timeout (MoveIt's LMA plugin)",
        .inputs = pose,
-       .outputs = state_out,
-       .parameters = kIkParameters.declarations()},
+       .outputs = with_tf2_ports(state_out),
+       .parameters = with_tf2(kIkParameters.declarations())},
       factory<InverseKinematicsNode>(IkSolver::kLevenbergMarquardt));
   const std::vector<plugin::PortInfo> collision_out{
       {"collision", "robotperf_msgs/msg/CollisionResult"}};
@@ -384,13 +436,15 @@ void register_kernels(plugin::Registrar& registrar) {
                         .description = "boolean collision query of an xArm6 joint state vs the "
                                        "box, then self-collision (FCL)",
                         .inputs = state_in,
-                        .outputs = collision_out},
+                        .outputs = with_tf2_ports(collision_out),
+                        .parameters = with_tf2({})},
                        factory<CollisionNode>(CollisionBackend::kFcl));
   registrar.add_kernel({.name = "manipulation/collision_bullet",
                         .description = "boolean collision query of an xArm6 joint state vs the "
                                        "box, then self-collision (Bullet)",
                         .inputs = state_in,
-                        .outputs = collision_out},
+                        .outputs = with_tf2_ports(collision_out),
+                        .parameters = with_tf2({})},
                        factory<CollisionNode>(CollisionBackend::kBullet));
   const std::vector<plugin::PortInfo> trajectory{
       {"trajectory", "trajectory_msgs/msg/JointTrajectory"}};
@@ -400,8 +454,8 @@ void register_kernels(plugin::Registrar& registrar) {
                       "validity), simplify, time-parameterise within the velocity and "
                       "acceleration limits",
        .inputs = {{"query", "trajectory_msgs/msg/JointTrajectory"}},
-       .outputs = trajectory,
-       .parameters = kPlanParameters.declarations()},
+       .outputs = with_tf2_ports(trajectory),
+       .parameters = with_tf2(kPlanParameters.declarations())},
       factory<PlanNode>());
   registrar.add_kernel(
       {.name = "manipulation/execute",

@@ -30,6 +30,7 @@
 #include "robotperf/plugin/parameter_struct.hpp"
 #include "robotperf/plugin/parameters.hpp"
 #include "robotperf/plugin/registry.hpp"
+#include "robotperf/plugin/tf2_buffer.hpp"
 #include "robotperf/plugin/version.hpp"
 
 // Defines the plug-in's entry points: the API version it was built against, which robotperf

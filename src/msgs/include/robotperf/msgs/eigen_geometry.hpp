@@ -1,6 +1,6 @@
-// geometry_msgs/Pose <-> Eigen rigid transform, for the kernels, datasets and checks that turn
-// messages into poses they compute with. Header-only: who includes it needs Eigen (the msgs
-// library itself does not).
+// geometry_msgs/Pose and Transform <-> Eigen rigid transform, for the kernels, datasets and checks
+// that turn messages into poses they compute with. Header-only: who includes it needs Eigen (the
+// msgs library itself does not).
 #pragma once
 
 #include <Eigen/Geometry>
@@ -26,6 +26,16 @@ inline Pose pose_msg_of(const Eigen::Isometry3d& t) {
   p.position = {t.translation().x(), t.translation().y(), t.translation().z()};
   p.orientation = {r.x(), r.y(), r.z(), r.w()};
   return p;
+}
+
+// A tf2 transform is a pose of the child frame in its parent: the same conversions.
+inline Eigen::Isometry3d isometry_of(const Transform& t) {
+  return isometry_of(Pose{{t.translation.x, t.translation.y, t.translation.z}, t.rotation});
+}
+
+inline Transform transform_msg_of(const Eigen::Isometry3d& t) {
+  const Pose p = pose_msg_of(t);
+  return {{p.position.x, p.position.y, p.position.z}, p.orientation};
 }
 
 }  // namespace robotperf::msgs

@@ -96,6 +96,22 @@ struct TimelineEvent {
   std::string what;  // the callback's source (topic or "timer <period>"), or the topic
 };
 
+// A tf2 buffer's calls (robotperf/plugin/tf2_buffer.hpp), from robotperf:tf2_begin/end.
+struct Tf2CallStats {
+  std::string node;               // the buffer's owner
+  std::string operation;          // "set" or "lookup"
+  metrics::SampleStats duration;  // one call, ns
+};
+
+// The tf2 calls' share of a run's latency: the calls that begin between the first measured
+// message's send and the last matched output, per matched message.
+struct Tf2Share {
+  uint64_t calls = 0;  // in that window
+  double calls_per_message = 0;
+  double per_message_ns = 0;  // their durations together, per message
+  double of_latency = 0;      // per_message_ns / the mean latency from the actual send
+};
+
 struct TraceAnalysis {
   // The trace.
   std::vector<std::string> traces;  // the CTF folders read
@@ -138,6 +154,9 @@ struct TraceAnalysis {
   std::optional<PathLatency> path;
   // With AnalyzeOptions::timeline: every callback, publish and take, in time order.
   std::vector<TimelineEvent> timeline;
+  // Traces of nodes with a tf2 buffer.
+  std::vector<Tf2CallStats> tf2_calls;
+  std::optional<Tf2Share> tf2_share;  // a run whose nodes called a tf2 buffer
   // One line per table (or column) the trace cannot provide, saying why: which events it lacks.
   std::vector<std::string> unavailable;
 

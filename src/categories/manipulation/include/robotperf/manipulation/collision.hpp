@@ -25,6 +25,9 @@ class CollisionChecker {
   // Robot vs the scene first, then self-collision of the links the allowed-collision matrix does
   // not exempt; stops at the first contact (touching counts as collision).
   virtual CollisionAnswer check(const double* q) = 0;
+  // The same query with the links posed by the caller: each link's pose in the base frame, in
+  // RobotModel::links() order (as a planning scene poses them from tf).
+  virtual CollisionAnswer check_at(const std::vector<Eigen::Isometry3d>& link_poses) = 0;
 };
 
 enum class CollisionBackend { kFcl, kBullet };

@@ -171,6 +171,23 @@ LTTNG_UST_TRACEPOINT_EVENT(
         lttng_ust_field_integer(uint64_t, cycle, cycle_arg)
         lttng_ust_field_integer(int64_t, message_id, message_id_arg)))
 
+/* A tf2 buffer (robotperf/plugin/tf2_buffer.hpp) of node `node` begins and ends an `operation`:
+ * "set" (setTransform) or "lookup" (lookupTransform). `call` numbers the buffer's calls, so that
+ * a begin pairs with its end when calls of several threads interleave. */
+LTTNG_UST_TRACEPOINT_EVENT_CLASS(
+    robotperf, tf2_call,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, const char *, operation_arg, uint64_t, call_arg),
+    LTTNG_UST_TP_FIELDS(
+        lttng_ust_field_string(node, node_arg)
+        lttng_ust_field_string(operation, operation_arg)
+        lttng_ust_field_integer(uint64_t, call, call_arg)))
+LTTNG_UST_TRACEPOINT_EVENT_INSTANCE(
+    robotperf, tf2_call, robotperf, tf2_begin,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, const char *, operation_arg, uint64_t, call_arg))
+LTTNG_UST_TRACEPOINT_EVENT_INSTANCE(
+    robotperf, tf2_call, robotperf, tf2_end,
+    LTTNG_UST_TP_ARGS(const char *, node_arg, const char *, operation_arg, uint64_t, call_arg))
+
 /* clang-format on */
 #endif /* ROBOTPERF_TRACING_TP_ROBOTPERF_H */
 
