@@ -118,5 +118,30 @@ TEST(DisparityNode, SkipsAPairOpenCvRefusesAndGoesOn) {
   EXPECT_EQ(node.counters().at("rejected_sets"), 1u);
 }
 
+// A disparity the point cloud cannot use (16UC1) is skipped and counted, and the next is used.
+TEST(StereoPointCloudNode, SkipsADisparityItCannotUseAndGoesOn) {
+  testing::NodeUnderTest node(category(), "stereo_image_proc/point_cloud");
+  auto& points = node.output<msgs::PointCloud2>("points2");
+  auto left = node.input<msgs::Image>("left_image");
+  auto left_info = node.input<msgs::CameraInfo>("left_camera_info");
+  auto right_info = node.input<msgs::CameraInfo>("right_camera_info");
+  auto disparity = node.input<msgs::DisparityImage>("disparity");
+  node.start();
+  msgs::DisparityImage millimetres = frame().disparity;
+  prepare_image(millimetres.image, {}, "16UC1", 640, 480);
+  const msgs::DisparityImage& unusable = millimetres;
+  for (const msgs::DisparityImage* d : {&unusable, &frame().disparity}) {
+    const int32_t sec = d == &unusable ? 1 : 2;
+    left_info->publish(stamped(frame().left_info, sec));
+    right_info->publish(stamped(frame().right_info, sec));
+    left->publish(stamped(frame().left, sec));
+    disparity->publish(stamped(*d, sec));
+  }
+  EXPECT_TRUE(points.wait([](const auto& so_far) { return has_stamp(so_far, 2); }));
+  node.stop();
+  EXPECT_EQ(points.messages().size(), 1u);
+  EXPECT_EQ(node.counters().at("rejected_sets"), 1u);
+}
+
 }  // namespace
 }  // namespace robotperf::perception

@@ -25,18 +25,21 @@ std::vector<DatasetStream> camera_streams(const plugin::Parameters&) {
   return {std::move(images), std::move(infos)};
 }
 
-// The pair is rectified: its topics are those a3 takes, so that the bag `dataset generate`
-// writes plays into a3 without remapping.
+// The pair is rectified: its topics are those a3 takes, and its disparity is on the topic a8 takes,
+// so that the bag `dataset generate` writes plays into both without remapping.
 std::vector<DatasetStream> stereo_streams(const plugin::Parameters&) {
   plugin::StereoPairStreams pair;
   auto truth = make_stream<msgs::DisparityImage>("disparity_truth", "/ground_truth/disparity");
+  auto disparity = make_stream<msgs::DisparityImage>("disparity", "/disparity");
   for (auto& f : generate_stereo_sequence()) {
     pair.append(std::move(f.left), std::move(f.left_info), std::move(f.right),
                 std::move(f.right_info));
     append(truth, std::move(f.truth));
+    append(disparity, std::move(f.disparity));
   }
   std::vector<DatasetStream> more;
   more.push_back(std::move(truth));
+  more.push_back(std::move(disparity));
   return pair.take(std::move(more));
 }
 
@@ -85,7 +88,10 @@ void register_datasets(plugin::Registrar& registrar) {
        .streams = plugin::stereo_pair_stream_infos(
            {{"disparity_truth", "/ground_truth/disparity", "stereo_msgs/msg/DisparityImage", true,
              "per-pixel true disparity of the left view, NaN where "
-             "occluded"}})},
+             "occluded"},
+            {"disparity", "/disparity", "stereo_msgs/msg/DisparityImage", false,
+             "the true disparity as stereo_image_proc publishes one: 1/16 px steps, -1 where "
+             "there is none"}})},
       stereo_streams);
   const SyntheticDepthConfig depth;
   registrar.add_dataset(

@@ -21,6 +21,45 @@ std::string number(double v) {
   return buf;
 }
 
+// The float32 field `name` of a cloud's points, if it has one inside its point_step.
+const msgs::PointField* field(const msgs::PointCloud2& cloud, const char* name) {
+  for (const auto& f : cloud.fields) {
+    if (f.name == name && f.datatype == msgs::PointField::kFloat32 && f.count == 1 &&
+        uint64_t{f.offset} + 4 <= cloud.point_step) {
+      return &f;
+    }
+  }
+  return nullptr;
+}
+
+float read_float(const uint8_t* point, const msgs::PointField& f) {
+  float value;
+  std::memcpy(&value, point + f.offset, sizeof value);
+  return value;
+}
+
+// An organised cloud's x, y and z fields, or why it cannot be read: not width x height points,
+// fields missing, or data that does not hold its points.
+struct XyzFields {
+  const msgs::PointField *x = nullptr, *y = nullptr, *z = nullptr;
+  std::string problem;
+};
+
+XyzFields xyz_fields(const msgs::PointCloud2& cloud, uint32_t width, uint32_t height) {
+  if (cloud.width != width || cloud.height != height) {
+    return {.problem = "point cloud is " + std::to_string(cloud.width) + "x" +
+                       std::to_string(cloud.height) + ", expected an organised " +
+                       std::to_string(width) + "x" + std::to_string(height) + " cloud"};
+  }
+  XyzFields f{field(cloud, "x"), field(cloud, "y"), field(cloud, "z"), {}};
+  if (!f.x || !f.y || !f.z || cloud.is_bigendian ||
+      uint64_t{cloud.row_step} * cloud.height > cloud.data.size() ||
+      uint64_t{cloud.point_step} * cloud.width > cloud.row_step) {
+    f.problem = "point cloud lacks float32 fields x, y, z or its data does not hold its points";
+  }
+  return f;
+}
+
 // ---------------------------------------------------------------------------------------------
 // stereo_disparity: DisparityImage against a ground-truth DisparityImage of the left view.
 // ---------------------------------------------------------------------------------------------
@@ -119,22 +158,12 @@ class DepthPointCloudEvaluator final : public FunctionalEvaluator {
       throw std::invalid_argument("depth_point_cloud: truth depth must be 64FC1 metres, is " +
                                   truth.encoding);
     }
-    if (cloud.width != truth.width || cloud.height != truth.height) {
-      problem("point cloud is " + std::to_string(cloud.width) + "x" + std::to_string(cloud.height) +
-              ", expected an organised " + std::to_string(truth.width) + "x" +
-              std::to_string(truth.height) + " cloud");
+    const XyzFields xyz = xyz_fields(cloud, truth.width, truth.height);
+    if (!xyz.problem.empty()) {
+      problem(xyz.problem);
       return;
     }
-    const msgs::PointField* fx = field(cloud, "x");
-    const msgs::PointField* fy = field(cloud, "y");
-    const msgs::PointField* fz = field(cloud, "z");
     const msgs::PointField* frgb = field(cloud, "rgb");
-    if (!fx || !fy || !fz || cloud.is_bigendian ||
-        uint64_t{cloud.row_step} * cloud.height > cloud.data.size() ||
-        uint64_t{cloud.point_step} * cloud.width > cloud.row_step) {
-      problem("point cloud lacks float32 fields x, y, z or its data does not hold its points");
-      return;
-    }
     if (!frgb) problem("point cloud has no rgb field");
     const bool colour_ok = frgb && image.encoding == "rgb8";
     const cv::Mat gt = perception::image_view(truth);
@@ -145,8 +174,8 @@ class DepthPointCloudEvaluator final : public FunctionalEvaluator {
       const uint8_t* row = cloud.data.data() + uint64_t{v} * cloud.row_step;
       for (uint32_t u = 0; u < cloud.width; ++u) {
         const uint8_t* point = row + uint64_t{u} * cloud.point_step;
-        const float x = read_float(point, *fx), y = read_float(point, *fy),
-                    z = read_float(point, *fz);
+        const float x = read_float(point, *xyz.x), y = read_float(point, *xyz.y),
+                    z = read_float(point, *xyz.z);
         const bool valid = std::isfinite(x) && std::isfinite(y) && std::isfinite(z);
         const double true_z = gt_row[u];
         if (std::isnan(true_z)) {
@@ -185,26 +214,85 @@ class DepthPointCloudEvaluator final : public FunctionalEvaluator {
   }
 
  private:
-  static const msgs::PointField* field(const msgs::PointCloud2& cloud, const char* name) {
-    for (const auto& f : cloud.fields) {
-      if (f.name == name && f.datatype == msgs::PointField::kFloat32 && f.count == 1 &&
-          uint64_t{f.offset} + 4 <= cloud.point_step) {
-        return &f;
-      }
-    }
-    return nullptr;
-  }
-  static float read_float(const uint8_t* point, const msgs::PointField& f) {
-    float value;
-    std::memcpy(&value, point + f.offset, sizeof value);
-    return value;
-  }
-
   const DatasetStream& depth_;
   const DatasetStream& info_;
   const DatasetStream& image_;
   uint64_t truth_valid_ = 0, truth_invalid_ = 0, valid_ = 0, spurious_ = 0, colour_match_ = 0;
   double error_sum_ = 0, error_max_ = 0;
+};
+
+// ---------------------------------------------------------------------------------------------
+// stereo_point_cloud: an organised xyz PointCloud2 against the 3D points of the true disparity.
+// ---------------------------------------------------------------------------------------------
+
+class StereoPointCloudEvaluator final : public FunctionalEvaluator {
+ public:
+  StereoPointCloudEvaluator(const DatasetStream& disparity, const DatasetStream& info)
+      : disparity_(disparity), info_(info) {
+    plugin::require_type<msgs::DisparityImage>(disparity, "stereo_point_cloud");
+    plugin::require_type<msgs::CameraInfo>(info, "stereo_point_cloud");
+  }
+
+  void add(const void* output, std::size_t frame) override {
+    const auto& cloud = *static_cast<const msgs::PointCloud2*>(output);
+    const auto& truth = *static_cast<const msgs::DisparityImage*>(disparity_.messages[frame].get());
+    const auto& info = *static_cast<const msgs::CameraInfo*>(info_.messages[frame].get());
+    if (truth.image.encoding != "32FC1") {
+      throw std::invalid_argument("stereo_point_cloud: truth disparity must be 32FC1, is " +
+                                  truth.image.encoding);
+    }
+    const XyzFields xyz = xyz_fields(cloud, truth.image.width, truth.image.height);
+    if (!xyz.problem.empty()) {
+      problem(xyz.problem);
+      return;
+    }
+    const cv::Mat gt = perception::image_view(truth.image);
+    const double fx = info.p[0], fy = info.p[5], cx = info.p[2], cy = info.p[6];
+    for (uint32_t v = 0; v < cloud.height; ++v) {
+      const float* gt_row = gt.ptr<float>(static_cast<int>(v));
+      const uint8_t* row = cloud.data.data() + uint64_t{v} * cloud.row_step;
+      for (uint32_t u = 0; u < cloud.width; ++u) {
+        const uint8_t* point = row + uint64_t{u} * cloud.point_step;
+        const double x = read_float(point, *xyz.x), y = read_float(point, *xyz.y),
+                     z = read_float(point, *xyz.z);
+        const bool valid = std::isfinite(x) && std::isfinite(y) && std::isfinite(z);
+        const double d = gt_row[u];
+        if (!(d > 0.0)) {
+          ++truth_invalid_;
+          if (valid) ++spurious_;
+          continue;
+        }
+        ++truth_valid_;
+        if (!valid) continue;
+        ++valid_;
+        // The true point: depth from the true disparity, f and baseline.
+        const double tz = static_cast<double>(truth.f) * truth.t / d;
+        const double tx = (u - cx) * tz / fx;
+        const double ty = (v - cy) * tz / fy;
+        const double error =
+            std::sqrt((x - tx) * (x - tx) + (y - ty) * (y - ty) + (z - tz) * (z - tz));
+        error_sum_ += error;
+        relative_max_ = std::max(relative_max_, error / std::sqrt(tx * tx + ty * ty + tz * tz));
+      }
+    }
+  }
+
+  std::map<std::string, double> metrics() const override {
+    const double nan = std::nan("");
+    return {
+        {"valid_fraction", truth_valid_ ? static_cast<double>(valid_) / truth_valid_ : nan},
+        {"mean_error_m", valid_ ? error_sum_ / valid_ : nan},
+        {"max_relative_error", valid_ ? relative_max_ : nan},
+        {"spurious_fraction",
+         truth_invalid_ ? static_cast<double>(spurious_) / truth_invalid_ : 0.0},
+    };
+  }
+
+ private:
+  const DatasetStream& disparity_;
+  const DatasetStream& info_;
+  uint64_t truth_valid_ = 0, truth_invalid_ = 0, valid_ = 0, spurious_ = 0;
+  double error_sum_ = 0, relative_max_ = 0;
 };
 
 }  // namespace
@@ -239,6 +327,24 @@ void register_evaluators(plugin::Registrar& registrar) {
       [](const plugin::TruthStreams& truth, const plugin::Parameters&) {
         return std::make_unique<DepthPointCloudEvaluator>(truth["depth"], truth["camera_info"],
                                                           truth["image"]);
+      });
+  registrar.add_evaluator(
+      {.name = "stereo_point_cloud",
+       .description = "organised point cloud of a disparity image against the 3D points of the "
+                      "true disparity",
+       .output_type = "sensor_msgs/msg/PointCloud2",
+       .truth_roles = {"disparity", "camera_info"},
+       .metrics = {{"valid_fraction", "fraction",
+                    "points with a true disparity that the cloud has"},
+                   {"mean_error_m", "m", "mean distance of valid points to the true point"},
+                   {"max_relative_error", "fraction",
+                    "largest distance of a valid point to the true point, over the true point's "
+                    "distance from the camera"},
+                   {"spurious_fraction", "fraction",
+                    "pixels without a true disparity that the cloud has a point for"}}},
+      [](const plugin::TruthStreams& truth, const plugin::Parameters&) {
+        return std::make_unique<StereoPointCloudEvaluator>(truth["disparity"],
+                                                           truth["camera_info"]);
       });
 }
 
