@@ -1,6 +1,7 @@
-// The perception category (RobotPerf a1-a5, a8): image_proc, stereo_image_proc and depth_image_proc
-// kernels on OpenCV, the synthetic camera, stereo and depth datasets, their evaluators, how their
-// answers on opencl and cuda are compared with the cpu's, and those two backends.
+// The perception category (RobotPerf a1-a5, a8): image_proc, stereo_image_proc and
+// depth_image_proc kernels on OpenCV, the synthetic camera, stereo and depth datasets, their
+// evaluators, how their answers on opencl and cuda are compared with the cpu's, and those two
+// backends.
 #include "category.hpp"
 
 namespace robotperf::perception {
