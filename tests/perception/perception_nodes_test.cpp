@@ -2,6 +2,7 @@
 // the ROS nodes log and drop it, and the node goes on with the next.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -11,14 +12,15 @@
 #include "robotperf/msgs/sensor_msgs.hpp"
 #include "robotperf/msgs/stereo_msgs.hpp"
 #include "robotperf/perception/image_proc.hpp"
+#include "robotperf/perception/synthetic_depth.hpp"
 #include "robotperf/perception/synthetic_stereo.hpp"
 
 namespace robotperf::perception {
 namespace {
 
 const testing::CategoryUnderTest& category() {
-  static const testing::CategoryUnderTest c{register_image_proc_kernels,
-                                            register_stereo_depth_kernels};
+  static const testing::CategoryUnderTest c{
+      register_image_proc_kernels, register_stereo_depth_kernels, register_laser_scan_kernels};
   return c;
 }
 
@@ -141,6 +143,42 @@ TEST(StereoPointCloudNode, SkipsADisparityItCannotUseAndGoesOn) {
   node.stop();
   EXPECT_EQ(points.messages().size(), 1u);
   EXPECT_EQ(node.counters().at("rejected_sets"), 1u);
+}
+
+// depthimage_to_laserscan converts each depth image with the latest CameraInfo (a depth image
+// published after one is converted with it, whatever its stamp), counts images that come before
+// any, and skips an image it cannot convert.
+TEST(DepthToScanNode, UsesTheLatestCameraInfoAndSkipsWhatItCannotConvert) {
+  static const DepthFrame depth_frame = [] {
+    SyntheticDepthConfig c;
+    c.frames = 1;
+    return generate_depth_sequence(c).front();
+  }();
+  testing::NodeUnderTest node(category(), "depthimage_to_laserscan/convert");
+  auto& scans = node.output<msgs::LaserScan>("scan");
+  auto depth = node.input<msgs::Image>("depth");
+  auto info = node.input<msgs::CameraInfo>("depth_camera_info");
+  node.start();
+  depth->publish(stamped(depth_frame.depth, 1));
+  info->publish(stamped(depth_frame.info, 7));
+  depth->publish(stamped(depth_frame.depth, 2));
+  // A camera whose principal point is 40 px to the right: a wider left half of the scan.
+  msgs::CameraInfo shifted = depth_frame.info;
+  shifted.p[2] += 40.0;
+  info->publish(stamped(shifted, 8));
+  depth->publish(stamped(depth_frame.colour, 3));  // rgb8: no depth
+  depth->publish(stamped(depth_frame.depth, 4));
+  ASSERT_TRUE(scans.wait([](const auto& so_far) { return has_stamp(so_far, 4); }));
+  node.stop();
+  const std::vector<msgs::LaserScan> out = scans.messages();
+  const auto counters = node.counters();
+  EXPECT_EQ(counters.at("rejected_images"), 1u);
+  // Image 1 may be converted, or dropped when it came before the first CameraInfo; image 2 is
+  // converted with the first or, when the second came in between, with the second.
+  EXPECT_EQ(out.size() + counters.at("images_without_camera_info"), 3u);
+  EXPECT_FALSE(has_stamp(out, 3));
+  const double fx = depth_frame.info.p[0];
+  EXPECT_NEAR(out.back().angle_max, std::atan2(shifted.p[2], fx), 1e-6);
 }
 
 }  // namespace
