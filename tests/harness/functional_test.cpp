@@ -1,5 +1,5 @@
-// Functional accuracy: the a3, a4 and a6 benchmarks meet their stated accuracy, a broken graph is
-// reported functionally invalid, and inputs that cannot be paired are dropped, never mixed.
+// Functional accuracy: the a3, a4, a6 and a7 benchmarks meet their stated accuracy, a broken graph
+// is reported functionally invalid, and inputs that cannot be paired are dropped, never mixed.
 #include "robotperf/harness/functional.hpp"
 
 #include <gtest/gtest.h>
@@ -243,6 +243,24 @@ TEST(Functional, A6ScanMeetsItsAccuracyFromMetresAndMillimetres) {
   ASSERT_TRUE(millimetres.functional);
   EXPECT_TRUE(millimetres.functional->valid) << reasons(*millimetres.functional);
   EXPECT_GT(metric(*millimetres.functional, "mean_error_m").value, 1e-5);
+}
+
+TEST(Functional, A7ScanMeetsItsAccuracy) {
+  const RunResult r =
+      run_benchmark(load_benchmark(kBenchmarks / "a7_pointcloud_to_laserscan"), quick(10, 15));
+  ASSERT_TRUE(r.functional);
+  EXPECT_TRUE(r.functional->valid) << reasons(*r.functional);
+  EXPECT_LT(metric(*r.functional, "max_error_m").value, 1e-5);
+  EXPECT_EQ(metric(*r.functional, "valid_fraction").value, 1.0);
+  // A slab that the evaluator is told differs from the node's: the floor's points, 1.2 m down,
+  // are in the truth but not in the scan.
+  const PackageCopy lower("a7_pointcloud_to_laserscan", "x7", [](std::string g) {
+    return replace_all(g, "{min_height: -1.1,", "{min_height: -1.3,");
+  });
+  const RunResult floor = run_benchmark(lower.spec(), quick(10, 15));
+  ASSERT_TRUE(floor.functional);
+  EXPECT_FALSE(floor.functional->valid);
+  EXPECT_GT(metric(*floor.functional, "max_error_m").value, 0.1);
 }
 
 // Scans that are wrong in two ways: every beam 1 m (a kernel that ignores the depth), and no beam

@@ -1,11 +1,14 @@
 // depthimage_to_laserscan: the scan's geometry, its ranges against a known wall and the rendered
-// room's truth, from metres and millimetres, its range limits and refusals.
+// room's truth, from metres and millimetres, its range limits and refusals;
+// pointcloud_to_laserscan: its beams, which points each keeps, and its refusals.
 #include "robotperf/perception/laser_scan.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <vector>
 
 #include "robotperf/perception/image_proc.hpp"
 #include "robotperf/perception/synthetic_depth.hpp"
@@ -141,6 +144,137 @@ TEST(DepthToScan, RefusesWhatItCannotConvert) {
   msgs::Image column;
   prepare_image(column, f.depth.header, "32FC1", 1, 480);
   EXPECT_NE(error(column, f.info).find("at least 2"), std::string::npos);
+}
+
+// An unorganised xyz cloud (point_step 16, as PointCloud2Modifier lays out "xyz") in `frame`.
+msgs::PointCloud2 cloud_of(const std::vector<BodyPoint>& points,
+                           const std::string& frame = "camera_link") {
+  msgs::PointCloud2 c;
+  c.header.frame_id = frame;
+  c.height = 1;
+  c.width = static_cast<uint32_t>(points.size());
+  c.fields = {{"x", 0, msgs::PointField::kFloat32, 1},
+              {"y", 4, msgs::PointField::kFloat32, 1},
+              {"z", 8, msgs::PointField::kFloat32, 1}};
+  c.point_step = 16;
+  c.row_step = 16 * c.width;
+  c.data.assign(c.row_step, 0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const float xyz[3] = {static_cast<float>(points[i].x), static_cast<float>(points[i].y),
+                          static_cast<float>(points[i].z)};
+    std::memcpy(c.data.data() + 16 * i, xyz, sizeof xyz);
+  }
+  return c;
+}
+
+// The graph's parameters (a7): a slab 1.1 m to 0.1 m below the camera, half a turn of beams.
+CloudToScanParams slab() {
+  CloudToScanParams p;
+  p.min_height = -1.1;
+  p.max_height = -0.1;
+  p.angle_min = -1.5708;
+  p.angle_max = 1.5708;
+  p.angle_increment = 0.0087;
+  p.range_min = 0.45;
+  p.range_max = 10.0;
+  return p;
+}
+
+msgs::LaserScan scan_of(const msgs::PointCloud2& cloud, const CloudToScanParams& params = slab()) {
+  msgs::LaserScan scan;
+  point_cloud_to_laser_scan(cloud, params, scan);
+  return scan;
+}
+
+std::size_t beam_of(const msgs::LaserScan& scan, double angle) {
+  return static_cast<std::size_t>((angle - scan.angle_min) / scan.angle_increment);
+}
+
+TEST(CloudToScan, CountsBeamsAsTheNodeDoesInItsOwnFrame) {
+  const msgs::LaserScan scan = scan_of(cloud_of({}));
+  EXPECT_EQ(scan.ranges.size(), 362u);  // ceil(3.1416 / 0.0087) in float
+  EXPECT_EQ(scan.header.frame_id, "camera_link");
+  for (const float r : scan.ranges) ASSERT_TRUE(std::isinf(r) && r > 0);
+  EXPECT_FLOAT_EQ(scan.range_max, 10.0f);
+  EXPECT_FLOAT_EQ(scan.scan_time, 1.0f / 30.0f);
+  CloudToScanParams finite = slab();
+  finite.use_inf = false;
+  finite.inf_epsilon = 0.5;
+  EXPECT_FLOAT_EQ(scan_of(cloud_of({}), finite).ranges[7], 10.5f);
+  CloudToScanParams own = slab();
+  own.target_frame = "camera_link";
+  EXPECT_EQ(scan_of(cloud_of({}), own).header.frame_id, "camera_link");
+  // The node's defaults: a whole turn in degrees.
+  EXPECT_EQ(scan_of(cloud_of({}), CloudToScanParams{}).ranges.size(), 360u);
+}
+
+// Each beam keeps the shortest planar range of the points in the slab, the range limits and the
+// angles; NaN points are skipped.
+TEST(CloudToScan, KeepsTheNearestPointInTheSlabPerBeam) {
+  const double nan = std::nan("");
+  const msgs::LaserScan scan = scan_of(cloud_of({
+      {3.0, 0.0, -0.5},     // ahead
+      {2.0, 0.0, -0.5},     // nearer, same beam
+      {1.0, 0.0, -1.15},    // below the slab
+      {1.5, 0.0, 0.0},      // above it
+      {nan, 0.0, -0.5},     // no point
+      {1.0, 1.0, -0.5},     // 45 degrees left
+      {0.3, 0.3, -0.5},     // the same beam, nearer than range_min
+      {-5.0, -0.01, -0.5},  // behind, outside the angles
+      {12.0, -1.0, -0.5},   // beyond range_max
+  }));
+  std::size_t with_range = 0;
+  for (const float r : scan.ranges) with_range += std::isfinite(r);
+  EXPECT_EQ(with_range, 2u);
+  EXPECT_FLOAT_EQ(scan.ranges[beam_of(scan, 0.0)], 2.0f);
+  EXPECT_FLOAT_EQ(scan.ranges[beam_of(scan, std::atan2(1.0, 1.0))],
+                  static_cast<float>(std::sqrt(2.0)));
+}
+
+// The rendered room's cloud: a range for most beams within the camera's 1.089 rad, none outside,
+// and each the planar range of a point of the cloud in the slab.
+TEST(CloudToScan, ScansTheRoomWithinTheCamerasView) {
+  const msgs::LaserScan scan = scan_of(frame().cloud);
+  std::size_t inside = 0, outside = 0;
+  for (std::size_t i = 0; i < scan.ranges.size(); ++i) {
+    const double angle = scan.angle_min + (i + 0.5) * scan.angle_increment;
+    const bool finite = std::isfinite(scan.ranges[i]);
+    if (std::abs(angle) < 0.5) inside += finite;
+    if (std::abs(angle) > 0.56) outside += finite;
+  }
+  EXPECT_GT(inside, 100u);
+  EXPECT_EQ(outside, 0u);
+}
+
+TEST(CloudToScan, RefusesWhatItCannotConvert) {
+  auto error = [](const msgs::PointCloud2& cloud, const CloudToScanParams& params) -> std::string {
+    msgs::LaserScan scan;
+    try {
+      point_cloud_to_laser_scan(cloud, params, scan);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const msgs::PointCloud2 ok = cloud_of({{1.0, 0.0, -0.5}});
+  CloudToScanParams base = slab();
+  base.target_frame = "base_link";
+  EXPECT_NE(error(ok, base).find("no tf to transform"), std::string::npos);
+  msgs::PointCloud2 flat = ok;
+  flat.fields.pop_back();
+  EXPECT_NE(error(flat, slab()).find("no float32 fields x, y and z"), std::string::npos);
+  msgs::PointCloud2 short_data = ok;
+  short_data.data.resize(8);
+  EXPECT_NE(error(short_data, slab()).find("does not hold its 1x1 points"), std::string::npos);
+  CloudToScanParams still = slab();
+  still.angle_increment = 0.0;
+  EXPECT_NE(error(ok, still).find("angle_increment must be positive"), std::string::npos);
+  CloudToScanParams fine = slab();
+  fine.angle_increment = 1e-7;
+  EXPECT_NE(error(ok, fine).find("not 1 to 2^20"), std::string::npos);
+  CloudToScanParams upside_down = slab();
+  upside_down.min_height = 0.0;
+  EXPECT_NE(error(ok, upside_down).find("min_height is above max_height"), std::string::npos);
 }
 
 }  // namespace

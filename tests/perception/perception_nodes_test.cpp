@@ -181,5 +181,36 @@ TEST(DepthToScanNode, UsesTheLatestCameraInfoAndSkipsWhatItCannotConvert) {
   EXPECT_NEAR(out.back().angle_max, std::atan2(shifted.p[2], fx), 1e-6);
 }
 
+// pointcloud_to_laserscan skips a cloud in a frame it would need tf for and goes on; angles that
+// make no scan are refused when the node is built, naming it.
+TEST(CloudToScanNode, SkipsACloudInAnotherFrameAndRefusesBadAngles) {
+  static const DepthFrame depth_frame = [] {
+    SyntheticDepthConfig c;
+    c.frames = 1;
+    return generate_depth_sequence(c).front();
+  }();
+  testing::NodeUnderTest node(category(), "pointcloud_to_laserscan/convert",
+                              {{"target_frame", "camera_link"}});
+  auto& scans = node.output<msgs::LaserScan>("scan");
+  auto cloud = node.input<msgs::PointCloud2>("cloud_in");
+  node.start();
+  msgs::PointCloud2 elsewhere = stamped(depth_frame.cloud, 1);
+  elsewhere.header.frame_id = "camera_depth_optical_frame";
+  cloud->publish(elsewhere);
+  cloud->publish(stamped(depth_frame.cloud, 2));
+  ASSERT_TRUE(scans.wait([](const auto& so_far) { return has_stamp(so_far, 2); }));
+  node.stop();
+  EXPECT_EQ(scans.messages().size(), 1u);
+  EXPECT_EQ(node.counters().at("rejected_clouds"), 1u);
+  try {
+    testing::NodeUnderTest bad(category(), "pointcloud_to_laserscan/convert",
+                               {{"angle_increment", "-0.01"}});
+    ADD_FAILURE() << "a negative angle_increment was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("angle_increment must be positive"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace robotperf::perception

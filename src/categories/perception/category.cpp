@@ -1,7 +1,7 @@
-// The perception category (RobotPerf a1-a6, a8): image_proc, stereo_image_proc and
-// depth_image_proc kernels on OpenCV, depthimage_to_laserscan, the synthetic camera, stereo and
-// depth datasets, their evaluators, how their answers on opencl and cuda are compared with the
-// cpu's, and those two backends.
+// The perception category (RobotPerf a1-a8): image_proc, stereo_image_proc and
+// depth_image_proc kernels on OpenCV, depthimage_to_laserscan and pointcloud_to_laserscan, the
+// synthetic camera, stereo and depth datasets, their evaluators, how their answers on opencl and
+// cuda are compared with the cpu's, and those two backends.
 #include "category.hpp"
 
 namespace robotperf::perception {

@@ -43,22 +43,25 @@ std::vector<DatasetStream> stereo_streams(const plugin::Parameters&) {
   return pair.take(std::move(more));
 }
 
-// Depth registered to the colour camera, on the topics a4 takes (depth_image_proc's names).
+// Depth registered to the colour camera, on the topics a4 and a6 take (depth_image_proc's names),
+// and its cloud in the camera's body frame, on the topic a7 takes.
 std::vector<DatasetStream> depth_streams(const plugin::Parameters&) {
   auto depth = make_stream<msgs::Image>("depth", "/camera/depth_registered/image_rect");
   auto depth_mm = make_stream<msgs::Image>("depth_mm", "/camera/depth_registered/image_rect_mm");
   auto image = make_stream<msgs::Image>("image", "/camera/rgb/image_rect_color");
   auto info = make_stream<msgs::CameraInfo>("camera_info", "/camera/rgb/camera_info");
   auto truth = make_stream<msgs::Image>("depth_truth", "/ground_truth/depth");
+  auto cloud = make_stream<msgs::PointCloud2>("cloud", "/camera/depth/points");
   for (auto& f : generate_depth_sequence()) {
     append(depth, std::move(f.depth));
     append(depth_mm, std::move(f.depth_mm));
     append(image, std::move(f.colour));
     append(info, std::move(f.info));
     append(truth, std::move(f.truth_depth));
+    append(cloud, std::move(f.cloud));
   }
-  return {std::move(depth), std::move(depth_mm), std::move(image), std::move(info),
-          std::move(truth)};
+  return {std::move(depth), std::move(depth_mm), std::move(image),
+          std::move(info),  std::move(truth),    std::move(cloud)};
 }
 
 }  // namespace
@@ -110,7 +113,9 @@ void register_datasets(plugin::Registrar& registrar) {
                    {"camera_info", "/camera/rgb/camera_info", "sensor_msgs/msg/CameraInfo", false,
                     "the colour camera's calibration"},
                    {"depth_truth", "/ground_truth/depth", "sensor_msgs/msg/Image", true,
-                    "64FC1 true depth"}}},
+                    "64FC1 true depth"},
+                   {"cloud", "/camera/depth/points", "sensor_msgs/msg/PointCloud2", false,
+                    "the true depth's xyz points in camera_link (x forward, z up), NaN = none"}}},
       depth_streams);
 }
 

@@ -12,6 +12,7 @@
 #include "robotperf/msgs/stereo_msgs.hpp"
 #include "robotperf/perception/image_proc.hpp"
 #include "robotperf/perception/laser_scan.hpp"
+#include "robotperf/perception/synthetic_depth.hpp"
 
 namespace robotperf::perception {
 namespace {
@@ -420,6 +421,74 @@ const plugin::ParameterStruct<DepthScanScoring> kDepthScanScoring{plugin::field(
     &DepthScanScoring::scan_height, "scan_height", DepthToScanParams{}.scan_height,
     "the node's scan_height: rows about the principal point the scan covers", {.minimum = 1})};
 
+struct CloudScanScoring {
+  double min_height = 0, max_height = 0;
+};
+
+const plugin::ParameterStruct<CloudScanScoring> kCloudScanScoring{
+    plugin::field(&CloudScanScoring::min_height, "min_height", CloudToScanParams{}.min_height,
+                  "the node's min_height, m"),
+    plugin::field(&CloudScanScoring::max_height, "max_height", CloudToScanParams{}.max_height,
+                  "the node's max_height, m")};
+
+// cloud_laser_scan: the scan of a depth camera's cloud in its body frame against the true points
+// between two heights.
+class CloudLaserScanEvaluator final : public FunctionalEvaluator {
+ public:
+  CloudLaserScanEvaluator(const DatasetStream& depth, const DatasetStream& info,
+                          const CloudScanScoring& heights)
+      : depth_(depth), info_(info), heights_(heights) {
+    plugin::require_type<msgs::Image>(depth, "cloud_laser_scan");
+    plugin::require_type<msgs::CameraInfo>(info, "cloud_laser_scan");
+  }
+
+  void add(const void* output, std::size_t frame) override {
+    const auto& scan = *static_cast<const msgs::LaserScan*>(output);
+    const auto& truth = *static_cast<const msgs::Image*>(depth_.messages[frame].get());
+    const auto& info = *static_cast<const msgs::CameraInfo*>(info_.messages[frame].get());
+    if (truth.encoding != "64FC1") {
+      throw std::invalid_argument("cloud_laser_scan: truth depth must be 64FC1 metres, is " +
+                                  truth.encoding);
+    }
+    const double beams = std::ceil((scan.angle_max - scan.angle_min) / scan.angle_increment);
+    if (!(scan.angle_increment > 0) || static_cast<double>(scan.ranges.size()) != beams) {
+      problem("scan has " + std::to_string(scan.ranges.size()) + " beams, its angles make " +
+              number(beams));
+      return;
+    }
+    // Margins of the float cloud's rounding, a metre's 1e-7, and of the float angles.
+    constexpr double kHeightMargin = 1e-5, kAngleMargin = 1e-6;
+    const cv::Mat gt = perception::image_view(truth);
+    BeamTruth truth_beams(scan);
+    for (int v = 0; v < gt.rows; ++v) {
+      const double* row = gt.ptr<double>(v);
+      for (int u = 0; u < gt.cols; ++u) {
+        if (std::isnan(row[u])) continue;
+        const BodyPoint p = camera_body_point(info, u, v, row[u]);
+        if (p.z < heights_.min_height - kHeightMargin || p.z > heights_.max_height + kHeightMargin)
+          continue;
+        const double angle = std::atan2(p.y, p.x);
+        if (angle < scan.angle_min - kAngleMargin || angle > scan.angle_max + kAngleMargin)
+          continue;
+        const bool sure = p.z >= heights_.min_height + kHeightMargin &&
+                          p.z <= heights_.max_height - kHeightMargin &&
+                          angle >= scan.angle_min + kAngleMargin &&
+                          angle <= scan.angle_max - kAngleMargin;
+        truth_beams.add(std::hypot(p.x, p.y), angle, sure);
+      }
+    }
+    truth_beams.score(score_);
+  }
+
+  std::map<std::string, double> metrics() const override { return score_.metrics(); }
+
+ private:
+  const DatasetStream& depth_;
+  const DatasetStream& info_;
+  CloudScanScoring heights_;
+  ScanScore score_;
+};
+
 }  // namespace
 
 void register_evaluators(plugin::Registrar& registrar) {
@@ -482,6 +551,18 @@ void register_evaluators(plugin::Registrar& registrar) {
       [](const plugin::TruthStreams& truth, const plugin::Parameters& p) {
         return std::make_unique<DepthLaserScanEvaluator>(truth["depth"], truth["camera_info"],
                                                          kDepthScanScoring.read(p).scan_height);
+      });
+  registrar.add_evaluator(
+      {.name = "cloud_laser_scan",
+       .description = "LaserScan of a depth camera's cloud in its body frame against the true "
+                      "planar range of the points between two heights, beam by beam",
+       .output_type = "sensor_msgs/msg/LaserScan",
+       .truth_roles = {"depth", "camera_info"},
+       .metrics = kScanMetrics,
+       .parameters = kCloudScanScoring.declarations()},
+      [](const plugin::TruthStreams& truth, const plugin::Parameters& p) {
+        return std::make_unique<CloudLaserScanEvaluator>(truth["depth"], truth["camera_info"],
+                                                         kCloudScanScoring.read(p));
       });
 }
 

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "cloud_fields.hpp"
 #include "robotperf/perception/image_proc.hpp"
 
 namespace robotperf::perception {
@@ -151,6 +152,83 @@ void depth_image_to_laser_scan(const msgs::Image& depth, const msgs::CameraInfo&
     fill_ranges<float>(image, camera, first, params.scan_height, scan);
   } else {
     fill_ranges<uint16_t>(image, camera, first, params.scan_height, scan);
+  }
+}
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// pointcloud_to_laserscan
+// ---------------------------------------------------------------------------------------------
+
+constexpr const char* kCloudScan = "pointcloud_to_laserscan";
+
+// The beams of a scan over the message's (float) angles, as the node counts them.
+double beam_count(float angle_min, float angle_max, float angle_increment) {
+  return std::ceil((angle_max - angle_min) / angle_increment);
+}
+
+}  // namespace
+
+void check(const CloudToScanParams& p) {
+  require(std::isfinite(p.angle_min) && std::isfinite(p.angle_max) && p.angle_max > p.angle_min,
+          kCloudScan, "angle_max must be finite and above a finite angle_min");
+  require(p.angle_increment > 0.0, kCloudScan, "angle_increment must be positive");
+  const double beams = beam_count(static_cast<float>(p.angle_min), static_cast<float>(p.angle_max),
+                                  static_cast<float>(p.angle_increment));
+  require(beams >= 1.0 && beams <= double{1 << 20}, kCloudScan,
+          "angle_min .. angle_max in steps of angle_increment make " + std::to_string(beams) +
+              " beams, not 1 to 2^20");
+  require(!(p.min_height > p.max_height), kCloudScan, "min_height is above max_height");
+  require(!(p.range_min > p.range_max), kCloudScan, "range_min is above range_max");
+}
+
+void point_cloud_to_laser_scan(const msgs::PointCloud2& cloud, const CloudToScanParams& params,
+                               msgs::LaserScan& scan) {
+  check(params);
+  require(params.target_frame.empty() || params.target_frame == cloud.header.frame_id, kCloudScan,
+          "target_frame '" + params.target_frame + "' is not the cloud's frame '" +
+              cloud.header.frame_id + "', and the graph has no tf to transform the cloud");
+  const msgs::PointField* fx = float32_field(cloud, "x");
+  const msgs::PointField* fy = float32_field(cloud, "y");
+  const msgs::PointField* fz = float32_field(cloud, "z");
+  require(fx && fy && fz, kCloudScan, "the cloud has no float32 fields x, y and z");
+  require(holds_its_points(cloud), kCloudScan,
+          "the cloud is big-endian or its data does not hold its " + std::to_string(cloud.width) +
+              "x" + std::to_string(cloud.height) + " points");
+
+  scan.header = cloud.header;
+  if (!params.target_frame.empty()) scan.header.frame_id = params.target_frame;
+  scan.angle_min = static_cast<float>(params.angle_min);
+  scan.angle_max = static_cast<float>(params.angle_max);
+  scan.angle_increment = static_cast<float>(params.angle_increment);
+  scan.time_increment = 0.0f;
+  scan.scan_time = static_cast<float>(params.scan_time);
+  scan.range_min = static_cast<float>(params.range_min);
+  scan.range_max = static_cast<float>(params.range_max);
+  const auto beams =
+      static_cast<std::size_t>(beam_count(scan.angle_min, scan.angle_max, scan.angle_increment));
+  scan.ranges.assign(beams, params.use_inf
+                                ? std::numeric_limits<float>::infinity()
+                                : static_cast<float>(scan.range_max + params.inf_epsilon));
+  scan.intensities.clear();
+
+  for (uint32_t v = 0; v < cloud.height; ++v) {
+    const uint8_t* point = cloud.data.data() + uint64_t{v} * cloud.row_step;
+    for (uint32_t u = 0; u < cloud.width; ++u, point += cloud.point_step) {
+      const float x = read_float(point, *fx), y = read_float(point, *fy),
+                  z = read_float(point, *fz);
+      if (std::isnan(x) || std::isnan(y) || std::isnan(z)) continue;
+      if (z > params.max_height || z < params.min_height) continue;
+      const double range = std::hypot(double{x}, double{y});
+      if (range < params.range_min || range > params.range_max) continue;
+      const double angle = std::atan2(double{y}, double{x});
+      if (angle < scan.angle_min || angle > scan.angle_max) continue;
+      const auto beam = static_cast<std::size_t>((angle - scan.angle_min) / scan.angle_increment);
+      // angle_max itself falls one past the last beam when the span is whole beams.
+      if (beam >= beams) continue;
+      if (range < scan.ranges[beam]) scan.ranges[beam] = static_cast<float>(range);
+    }
   }
 }
 

@@ -36,4 +36,36 @@ struct DepthToScanParams {
 void depth_image_to_laser_scan(const msgs::Image& depth, const msgs::CameraInfo& info,
                                const DepthToScanParams& params, msgs::LaserScan& scan);
 
+// pointcloud_to_laserscan's parameters, with its defaults (min_height is the smallest positive
+// double, as the node declares it).
+struct CloudToScanParams {
+  std::string target_frame;  // "" = the cloud's own frame
+  double min_height = std::numeric_limits<double>::min();
+  double max_height = std::numeric_limits<double>::max();
+  double angle_min = -std::numbers::pi;
+  double angle_max = std::numbers::pi;
+  double angle_increment = std::numbers::pi / 180.0;
+  double scan_time = 1.0 / 30.0;
+  double range_min = 0.0;
+  double range_max = std::numeric_limits<double>::max();
+  bool use_inf = true;  // beams without a point: +inf, or else range_max + inf_epsilon
+  double inf_epsilon = 1.0;
+};
+
+// Throws std::invalid_argument, naming the parameter, unless the angles make a scan of 1 to 2^20
+// beams and the height and range bounds are ordered.
+void check(const CloudToScanParams& params);
+
+// Writes the scan of a cloud's float32 x, y, z points into `scan`, as PointCloudToLaserScanNode
+// does: ceil((angle_max - angle_min) / angle_increment) beams (in float, as the message holds the
+// angles); a point that is not NaN, with z in [min_height, max_height], hypot(x, y) in [range_min,
+// range_max] and atan2(y, x) in [angle_min, angle_max] lowers the range of beam
+// int((angle - angle_min) / angle_increment) to its own (one past the last beam, which the node
+// would write, is dropped). The graph has no tf: a target_frame other than the cloud's frame is
+// refused, as the node refuses a cloud tf cannot transform.
+// Throws std::invalid_argument for such a frame, a cloud without float32 x, y, z or whose data
+// does not hold its points, a big-endian cloud, or parameters check() refuses.
+void point_cloud_to_laser_scan(const msgs::PointCloud2& cloud, const CloudToScanParams& params,
+                               msgs::LaserScan& scan);
+
 }  // namespace robotperf::perception
