@@ -1,9 +1,9 @@
-// Graph overhead of the a3 and a4 kernels: each kernel's latency inside the benchmark graph
-// (black-box, intra transport: Playback -> pairing -> kernel -> Monitor) against its like-for-like
-// reference: the benchmark's own nodes, built as the run builds them, on an executor of their own,
-// fed the same frames the same way, timed from their first callback to their answer
+// Graph overhead of the a3, a4, a6, a7 and a8 kernels: each kernel's latency inside the benchmark
+// graph (black-box, intra transport: Playback -> pairing -> kernel -> Monitor) against its
+// like-for-like reference: the benchmark's own nodes, built as the run builds them, on an executor
+// of their own, fed the same frames the same way, timed from their first callback to their answer
 // (bench/common/node_reference.hpp).
-// Run on demand: ./build/bench/perception/bench_perception [--smoke] [a3 a4]
+// Run on demand: ./build/bench/perception/bench_perception [--smoke] [a3 a4 a6 a7 a8]
 //
 // Target (issue #7): graph overhead <= 10 % of the kernel time on intra, judged on p50. A graph
 // faster than its reference beyond the noise, in every round, is a bench defect (exit status 1)
@@ -103,7 +103,7 @@ int main(int argc, char** argv) {
       rounds, frames);
   bench::print_overhead_columns();
   std::vector<std::string> ids = options.args;
-  if (ids.empty()) ids = {"a3", "a4"};
+  if (ids.empty()) ids = {"a3", "a4", "a6", "a7", "a8"};
   return bench::run_overhead_bench(options, "bench_perception", ids, [&](const std::string& id) {
     return compare(id, frames, rounds);
   });

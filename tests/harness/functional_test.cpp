@@ -1,5 +1,5 @@
-// Functional accuracy: the a3 and a4 benchmarks meet their stated accuracy, a broken graph is
-// reported functionally invalid, and inputs that cannot be paired are dropped, never mixed.
+// Functional accuracy: the a3, a4, a6 and a7 benchmarks meet their stated accuracy, a broken graph
+// is reported functionally invalid, and inputs that cannot be paired are dropped, never mixed.
 #include "robotperf/harness/functional.hpp"
 
 #include <gtest/gtest.h>
@@ -226,6 +226,68 @@ TEST(Functional, PointCloudEvaluatorCatchesWrongPoints) {
   const FunctionalResult none = evaluate_functional(*spec.functional, dataset, {}, 4);
   EXPECT_FALSE(none.valid);
   EXPECT_NE(none.reasons[0].find("no output could be evaluated"), std::string::npos);
+}
+
+TEST(Functional, A6ScanMeetsItsAccuracyFromMetresAndMillimetres) {
+  const BenchmarkSpec spec = load_benchmark(kBenchmarks / "a6_depthimage_to_laserscan");
+  const RunResult metres = run_benchmark(spec, quick(10, 15));
+  ASSERT_TRUE(metres.functional);
+  EXPECT_TRUE(metres.functional->valid) << reasons(*metres.functional);
+  EXPECT_LT(metric(*metres.functional, "max_error_m").value, 1e-5);
+  EXPECT_EQ(metric(*metres.functional, "valid_fraction").value, 1.0);
+
+  const PackageCopy mm("a6_depthimage_to_laserscan", "x6", [](std::string g) {
+    return replace_all(g, "stream: depth}", "stream: depth_mm}");
+  });
+  const RunResult millimetres = run_benchmark(mm.spec(), quick(10, 15));
+  ASSERT_TRUE(millimetres.functional);
+  EXPECT_TRUE(millimetres.functional->valid) << reasons(*millimetres.functional);
+  EXPECT_GT(metric(*millimetres.functional, "mean_error_m").value, 1e-5);
+}
+
+TEST(Functional, A7ScanMeetsItsAccuracy) {
+  const RunResult r =
+      run_benchmark(load_benchmark(kBenchmarks / "a7_pointcloud_to_laserscan"), quick(10, 15));
+  ASSERT_TRUE(r.functional);
+  EXPECT_TRUE(r.functional->valid) << reasons(*r.functional);
+  EXPECT_LT(metric(*r.functional, "max_error_m").value, 1e-5);
+  EXPECT_EQ(metric(*r.functional, "valid_fraction").value, 1.0);
+  // A slab that the evaluator is told differs from the node's: the floor's points, 1.2 m down,
+  // are in the truth but not in the scan.
+  const PackageCopy lower("a7_pointcloud_to_laserscan", "x7", [](std::string g) {
+    return replace_all(g, "{min_height: -1.1,", "{min_height: -1.3,");
+  });
+  const RunResult floor = run_benchmark(lower.spec(), quick(10, 15));
+  ASSERT_TRUE(floor.functional);
+  EXPECT_FALSE(floor.functional->valid);
+  EXPECT_GT(metric(*floor.functional, "max_error_m").value, 0.1);
+}
+
+// Scans that are wrong in two ways: every beam 1 m (a kernel that ignores the depth), and no beam
+// at all (one that drops every range).
+TEST(Functional, ScanEvaluatorCatchesWrongRanges) {
+  const Dataset dataset = load_dataset("perception/depth");
+  const BenchmarkSpec spec = load_benchmark(kBenchmarks / "a6_depthimage_to_laserscan");
+  const auto& info =
+      *static_cast<const msgs::CameraInfo*>(dataset.stream("camera_info").messages[3].get());
+  msgs::LaserScan scan;
+  scan.angle_max = static_cast<float>(std::atan2(info.p[2], info.p[0]));
+  scan.angle_min = static_cast<float>(-std::atan2(639 - info.p[2], info.p[0]));
+  scan.angle_increment = (scan.angle_max - scan.angle_min) / 639;
+  scan.range_min = 0.45f;
+  scan.range_max = 10.0f;
+  scan.ranges.assign(640, 1.0f);
+  const auto flat = std::make_shared<const msgs::LaserScan>(scan);
+  const FunctionalResult f = evaluate_functional(*spec.functional, dataset, {{3, flat}}, 1);
+  EXPECT_FALSE(f.valid);
+  EXPECT_GT(metric(f, "mean_error_m").value, 1.0);
+  EXPECT_NE(reasons(f).find("max_error_m"), std::string::npos) << reasons(f);
+
+  scan.ranges.assign(640, std::nanf(""));
+  const auto empty = std::make_shared<const msgs::LaserScan>(scan);
+  const FunctionalResult g = evaluate_functional(*spec.functional, dataset, {{3, empty}}, 1);
+  EXPECT_FALSE(g.valid);
+  EXPECT_EQ(metric(g, "valid_fraction").value, 0.0);
 }
 
 // n1/n2: the payload dataset is what the workload asks for, and the echo evaluator finds a single

@@ -7,6 +7,7 @@ namespace robotperf::perception {
 
 void register_image_proc_kernels(plugin::Registrar& registrar);
 void register_stereo_depth_kernels(plugin::Registrar& registrar);
+void register_laser_scan_kernels(plugin::Registrar& registrar);
 void register_datasets(plugin::Registrar& registrar);
 void register_evaluators(plugin::Registrar& registrar);
 void register_output_comparisons(plugin::Registrar& registrar);

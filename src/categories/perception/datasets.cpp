@@ -25,37 +25,43 @@ std::vector<DatasetStream> camera_streams(const plugin::Parameters&) {
   return {std::move(images), std::move(infos)};
 }
 
-// The pair is rectified: its topics are those a3 takes, so that the bag `dataset generate`
-// writes plays into a3 without remapping.
+// The pair is rectified: its topics are those a3 takes, and its disparity is on the topic a8 takes,
+// so that the bag `dataset generate` writes plays into both without remapping.
 std::vector<DatasetStream> stereo_streams(const plugin::Parameters&) {
   plugin::StereoPairStreams pair;
   auto truth = make_stream<msgs::DisparityImage>("disparity_truth", "/ground_truth/disparity");
+  auto disparity = make_stream<msgs::DisparityImage>("disparity", "/disparity");
   for (auto& f : generate_stereo_sequence()) {
     pair.append(std::move(f.left), std::move(f.left_info), std::move(f.right),
                 std::move(f.right_info));
     append(truth, std::move(f.truth));
+    append(disparity, std::move(f.disparity));
   }
   std::vector<DatasetStream> more;
   more.push_back(std::move(truth));
+  more.push_back(std::move(disparity));
   return pair.take(std::move(more));
 }
 
-// Depth registered to the colour camera, on the topics a4 takes (depth_image_proc's names).
+// Depth registered to the colour camera, on the topics a4 and a6 take (depth_image_proc's names),
+// and its cloud in the camera's body frame, on the topic a7 takes.
 std::vector<DatasetStream> depth_streams(const plugin::Parameters&) {
   auto depth = make_stream<msgs::Image>("depth", "/camera/depth_registered/image_rect");
   auto depth_mm = make_stream<msgs::Image>("depth_mm", "/camera/depth_registered/image_rect_mm");
   auto image = make_stream<msgs::Image>("image", "/camera/rgb/image_rect_color");
   auto info = make_stream<msgs::CameraInfo>("camera_info", "/camera/rgb/camera_info");
   auto truth = make_stream<msgs::Image>("depth_truth", "/ground_truth/depth");
+  auto cloud = make_stream<msgs::PointCloud2>("cloud", "/camera/depth/points");
   for (auto& f : generate_depth_sequence()) {
     append(depth, std::move(f.depth));
     append(depth_mm, std::move(f.depth_mm));
     append(image, std::move(f.colour));
     append(info, std::move(f.info));
     append(truth, std::move(f.truth_depth));
+    append(cloud, std::move(f.cloud));
   }
-  return {std::move(depth), std::move(depth_mm), std::move(image), std::move(info),
-          std::move(truth)};
+  return {std::move(depth), std::move(depth_mm), std::move(image),
+          std::move(info),  std::move(truth),    std::move(cloud)};
 }
 
 }  // namespace
@@ -85,7 +91,10 @@ void register_datasets(plugin::Registrar& registrar) {
        .streams = plugin::stereo_pair_stream_infos(
            {{"disparity_truth", "/ground_truth/disparity", "stereo_msgs/msg/DisparityImage", true,
              "per-pixel true disparity of the left view, NaN where "
-             "occluded"}})},
+             "occluded"},
+            {"disparity", "/disparity", "stereo_msgs/msg/DisparityImage", false,
+             "the true disparity as stereo_image_proc publishes one: 1/16 px steps, -1 where "
+             "there is none"}})},
       stereo_streams);
   const SyntheticDepthConfig depth;
   registrar.add_dataset(
@@ -104,7 +113,9 @@ void register_datasets(plugin::Registrar& registrar) {
                    {"camera_info", "/camera/rgb/camera_info", "sensor_msgs/msg/CameraInfo", false,
                     "the colour camera's calibration"},
                    {"depth_truth", "/ground_truth/depth", "sensor_msgs/msg/Image", true,
-                    "64FC1 true depth"}}},
+                    "64FC1 true depth"},
+                   {"cloud", "/camera/depth/points", "sensor_msgs/msg/PointCloud2", false,
+                    "the true depth's xyz points in camera_link (x forward, z up), NaN = none"}}},
       depth_streams);
 }
 

@@ -3,6 +3,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "colour_layout.hpp"
 #include "depth_image_proc_computations.hpp"
 #include "robotperf/perception/cuda_device.hpp"
 #include "robotperf/perception/image_proc.hpp"
@@ -10,20 +11,6 @@
 
 namespace robotperf::perception {
 namespace {
-
-struct ColourLayout {
-  int red, green, blue, step;
-};
-
-ColourLayout colour_layout(const std::string& encoding) {
-  if (encoding == "rgb8") return {0, 1, 2, 3};
-  if (encoding == "rgba8") return {0, 1, 2, 4};
-  if (encoding == "bgr8") return {2, 1, 0, 3};
-  if (encoding == "bgra8") return {2, 1, 0, 4};
-  if (encoding == "mono8") return {0, 0, 0, 1};
-  throw std::invalid_argument("point_cloud_xyzrgb: colour encoding '" + encoding +
-                              "' is not supported (rgb8, rgba8, bgr8, bgra8, mono8)");
-}
 
 // As depth_image_proc takes it from image_geometry: the principal point in float, the focal
 // lengths in double.
@@ -101,7 +88,7 @@ void PointCloudXyzrgbProcessor::compute(const msgs::Image& depth, const msgs::Im
     throw std::invalid_argument("point_cloud_xyzrgb: depth encoding '" + depth.encoding +
                                 "' is not supported (32FC1 metres, 16UC1 millimetres)");
   }
-  const ColourLayout layout = colour_layout(colour.encoding);
+  const ColourLayout layout = colour_layout(colour.encoding, "point_cloud_xyzrgb");
   if (colour.width == 0 || colour.height == 0) {
     throw std::invalid_argument("point_cloud_xyzrgb: the colour image is empty (" +
                                 std::to_string(colour.width) + "x" + std::to_string(colour.height) +

@@ -1,4 +1,5 @@
-// stereo_image_proc/disparity and depth_image_proc/point_cloud_xyzrgb as graph nodes.
+// stereo_image_proc/disparity, stereo_image_proc/point_cloud and
+// depth_image_proc/point_cloud_xyzrgb as graph nodes.
 #include <cmath>
 #include <stdexcept>
 
@@ -7,6 +8,7 @@
 #include "output_pool.hpp"
 #include "robotperf/perception/depth_image_proc.hpp"
 #include "robotperf/perception/stereo_image_proc.hpp"
+#include "robotperf/perception/stereo_point_cloud.hpp"
 #include "robotperf/plugin/synced_inputs.hpp"
 #include "skipping_node.hpp"
 
@@ -90,6 +92,26 @@ const plugin::ParameterStruct<PointCloudSettings> kPointCloudParameters{
                   "pair inputs by equal stamps instead of nearby ones"),
     queue_size_field(&PointCloudSettings::queue_size)};
 
+struct StereoPointCloudSettings {
+  StereoPointCloudParams cloud;
+  bool approximate_sync = false;
+  int64_t queue_size = 0;
+};
+
+const StereoPointCloudParams kStereoPointCloud;
+const plugin::ParameterStruct<StereoPointCloudSettings> kStereoPointCloudParameters{
+    plugin::field(&StereoPointCloudSettings::approximate_sync, "approximate_sync", false,
+                  "pair inputs by nearby stamps instead of equal ones"),
+    queue_size_field(&StereoPointCloudSettings::queue_size),
+    plugin::nested(
+        &StereoPointCloudSettings::cloud,
+        plugin::ParameterStruct<StereoPointCloudParams>{
+            plugin::field(&StereoPointCloudParams::use_color, "use_color",
+                          kStereoPointCloud.use_color, "an rgb field from the left image"),
+            plugin::field(&StereoPointCloudParams::avoid_point_cloud_padding,
+                          "avoid_point_cloud_padding", kStereoPointCloud.avoid_point_cloud_padding,
+                          "fields back to back, without alignment padding")})};
+
 class DisparityNode final : public SkippingNode, public ImageDeviceNode {
  public:
   enum Input { kLeftImage, kLeftInfo, kRightImage, kRightInfo };
@@ -157,6 +179,59 @@ class DisparityNode final : public SkippingNode, public ImageDeviceNode {
   OutputPool<msgs::DisparityImage> pool_;
   Inputs inputs_;
   std::shared_ptr<graph::Publisher<msgs::DisparityImage>> output_;
+};
+
+// stereo_image_proc's PointCloudNode: the left image, both CameraInfos and the disparity, paired.
+class StereoPointCloudNode final : public SkippingNode, public ImageDeviceNode {
+ public:
+  enum Input { kLeftImage, kLeftInfo, kRightInfo, kDisparity };
+
+  StereoPointCloudNode(graph::Context& context, const KernelConfig& config,
+                       const StereoPointCloudImplementation& implementation)
+      : SkippingNode(context, config.node_name),
+        ImageDeviceNode(implementation.device),
+        settings_(kStereoPointCloudParameters.read(config.parameters)),
+        processor_(implementation),
+        inputs_({"left_image", "left_camera_info", "right_camera_info", "disparity"},
+                sync_options(config, settings_.approximate_sync, settings_.queue_size),
+                [this](const Inputs::Set& set) { process(set); }) {
+    output_ = create_publisher<msgs::PointCloud2>(config.topic("points2"), config.qos);
+    inputs_.subscribe<msgs::Image>(*this, config, kLeftImage);
+    inputs_.subscribe<msgs::CameraInfo>(*this, config, kLeftInfo);
+    inputs_.subscribe<msgs::CameraInfo>(*this, config, kRightInfo);
+    inputs_.subscribe<msgs::DisparityImage>(*this, config, kDisparity);
+  }
+
+  std::map<std::string, uint64_t> counters() const override {
+    std::map<std::string, uint64_t> out = inputs_.counters();
+    out["rejected_sets"] = rejected_.count();
+    return out;
+  }
+
+ private:
+  using Inputs = plugin::SyncedInputs<4>;
+
+  void process(const Inputs::Set& set) {
+    guarded([&] {
+      std::shared_ptr<msgs::PointCloud2> cloud = pool_.acquire();
+      const auto& disparity = Inputs::message<msgs::DisparityImage>(set, kDisparity);
+      const auto& left = Inputs::message<msgs::Image>(set, kLeftImage);
+      plugin::trace_kernel_init(*this, kKernel, disparity.header.stamp.to_ns(), disparity, left);
+      const DeviceStageContext stages(*this, disparity.header.stamp.to_ns());
+      processor_.compute(left, Inputs::message<msgs::CameraInfo>(set, kLeftInfo),
+                         Inputs::message<msgs::CameraInfo>(set, kRightInfo), disparity,
+                         settings_.cloud, *cloud);
+      plugin::trace_kernel_fini(*this, kKernel, *cloud);
+      output_->publish(std::shared_ptr<const msgs::PointCloud2>(std::move(cloud)));
+    });
+  }
+
+  static constexpr const char* kKernel = "stereo_image_proc/point_cloud";
+  StereoPointCloudSettings settings_;
+  StereoPointCloudProcessor processor_;
+  OutputPool<msgs::PointCloud2> pool_;
+  Inputs inputs_;
+  std::shared_ptr<graph::Publisher<msgs::PointCloud2>> output_;
 };
 
 class PointCloudXyzrgbNode final : public SkippingNode, public ImageDeviceNode {
@@ -233,6 +308,22 @@ void register_stereo_depth_kernels(plugin::Registrar& registrar) {
       disparity_implementations(),
       [](graph::Context& context, const KernelConfig& config, const DisparityImplementation& i) {
         return std::make_shared<DisparityNode>(context, config, i);
+      });
+  register_implementations(
+      registrar,
+      {.name = "stereo_image_proc/point_cloud",
+       .description = "organised xyz (+ rgb) point cloud from a disparity image, its left image "
+                      "and the pair's CameraInfos, as stereo_image_proc",
+       .inputs = {{"left_image", "sensor_msgs/msg/Image"},
+                  {"left_camera_info", "sensor_msgs/msg/CameraInfo"},
+                  {"right_camera_info", "sensor_msgs/msg/CameraInfo"},
+                  {"disparity", "stereo_msgs/msg/DisparityImage"}},
+       .outputs = {{"points2", "sensor_msgs/msg/PointCloud2"}},
+       .parameters = kStereoPointCloudParameters.declarations()},
+      stereo_point_cloud_implementations(),
+      [](graph::Context& context, const KernelConfig& config,
+         const StereoPointCloudImplementation& i) {
+        return std::make_shared<StereoPointCloudNode>(context, config, i);
       });
   register_implementations(
       registrar,

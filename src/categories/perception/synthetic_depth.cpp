@@ -1,6 +1,7 @@
 #include "robotperf/perception/synthetic_depth.hpp"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <opencv2/core.hpp>
@@ -72,7 +73,44 @@ void validate(const SyntheticDepthConfig& c) {
     throw std::invalid_argument("synthetic depth hfov_rad must be in (0, pi)");
 }
 
+// The organised xyz cloud of a frame's true depth.
+msgs::PointCloud2 body_cloud(const cv::Mat& truth, const msgs::CameraInfo& info,
+                             msgs::Header header) {
+  msgs::PointCloud2 cloud;
+  cloud.header = std::move(header);
+  cloud.height = static_cast<uint32_t>(truth.rows);
+  cloud.width = static_cast<uint32_t>(truth.cols);
+  constexpr uint8_t kFloat32 = msgs::PointField::kFloat32;
+  cloud.fields = {{"x", 0, kFloat32, 1}, {"y", 4, kFloat32, 1}, {"z", 8, kFloat32, 1}};
+  cloud.is_bigendian = false;
+  cloud.point_step = 16;
+  cloud.row_step = cloud.point_step * cloud.width;
+  cloud.is_dense = false;
+  cloud.data.assign(std::size_t{cloud.row_step} * cloud.height, 0);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int v = 0; v < truth.rows; ++v) {
+    const double* row = truth.ptr<double>(v);
+    uint8_t* point = cloud.data.data() + std::size_t{cloud.row_step} * static_cast<std::size_t>(v);
+    for (int u = 0; u < truth.cols; ++u, point += cloud.point_step) {
+      float xyz[3] = {nan, nan, nan};
+      if (!std::isnan(row[u])) {
+        const BodyPoint p = camera_body_point(info, u, v, row[u]);
+        xyz[0] = static_cast<float>(p.x);
+        xyz[1] = static_cast<float>(p.y);
+        xyz[2] = static_cast<float>(p.z);
+      }
+      std::memcpy(point, xyz, sizeof xyz);
+    }
+  }
+  return cloud;
+}
+
 }  // namespace
+
+BodyPoint camera_body_point(const msgs::CameraInfo& info, double u, double v, double z) {
+  const double fx = info.p[0], fy = info.p[5], cx = info.p[2], cy = info.p[6];
+  return {z, -(u - cx) * z / fx, -(v - cy) * z / fy};
+}
 
 std::vector<DepthFrame> generate_depth_sequence(const SyntheticDepthConfig& config) {
   validate(config);
@@ -121,6 +159,9 @@ std::vector<DepthFrame> generate_depth_sequence(const SyntheticDepthConfig& conf
     });
     frame.info = info;
     frame.info.header = header;
+    msgs::Header body = header;
+    body.frame_id = config.body_frame_id;
+    frame.cloud = body_cloud(truth, info, std::move(body));
   }
   return frames;
 }

@@ -53,6 +53,30 @@ void validate(const SyntheticStereoConfig& c) {
     throw std::invalid_argument("synthetic stereo hfov_rad must be in (0, pi)");
 }
 
+// StereoFrame::disparity of a truth: StereoBM's 1/16 px, its invalid value where the truth has
+// none.
+msgs::DisparityImage matched_disparity(const msgs::DisparityImage& truth) {
+  constexpr float kSteps = 16.0f;
+  constexpr float kInvalid = -1.0f;  // min_disparity 0, less one
+  msgs::DisparityImage out;
+  out.header = truth.header;
+  const cv::Mat in = image_view(truth.image);
+  cv::Mat d = prepare_image(out.image, truth.image.header, "32FC1", in.cols, in.rows);
+  for (int v = 0; v < in.rows; ++v) {
+    const float* t = in.ptr<float>(v);
+    float* row = d.ptr<float>(v);
+    for (int u = 0; u < in.cols; ++u)
+      row[u] = std::isnan(t[u]) ? kInvalid : std::round(t[u] * kSteps) / kSteps;
+  }
+  out.f = truth.f;
+  out.t = truth.t;
+  out.valid_window = truth.valid_window;
+  out.min_disparity = 0.0f;
+  out.max_disparity = 63.0f;
+  out.delta_d = 1.0f / kSteps;
+  return out;
+}
+
 }  // namespace
 
 std::vector<StereoFrame> generate_stereo_sequence(const SyntheticStereoConfig& config) {
@@ -138,6 +162,7 @@ std::vector<StereoFrame> generate_stereo_sequence(const SyntheticStereoConfig& c
     frame.truth.min_disparity = std::isfinite(lo) ? static_cast<float>(lo) : 0.0f;
     frame.truth.max_disparity = std::isfinite(hi) ? static_cast<float>(hi) : 0.0f;
     frame.truth.delta_d = 0.0f;
+    frame.disparity = matched_disparity(frame.truth);
   }
   return frames;
 }

@@ -34,6 +34,11 @@ struct StereoFrame {
   // hidden from the right camera or falls outside its image), f, t = baseline, valid_window =
   // whole image, min/max disparity of the known pixels, delta_d 0.
   msgs::DisparityImage truth;
+  // The truth as stereo_image_proc's disparity node would publish it were its matcher exact
+  // (StereoBM at its defaults): 32FC1 in steps of 1/16 px, -1 (min_disparity - 1) where the truth
+  // has none, header, f and t as the truth's, valid_window = whole image, min_disparity 0,
+  // max_disparity 63, delta_d 1/16. What stereo_image_proc's point cloud node takes.
+  msgs::DisparityImage disparity;
 };
 
 // Frames 0 .. frames-1, frame k stamped k / rate_hz s. Every pixel, and its truth, is the scene
