@@ -1651,9 +1651,12 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
   });
   a.graph = traced_graph(c, a.run);
   if (options.timeline) timeline(a, c, a.run);
+  // A path's latency only reads what was collected too: on a thread of its own meanwhile.
+  std::future<PathLatency> path;
   if (!options.path.empty()) {
     check_path(a.graph, options.path);
-    a.path = path_latency(path_events(c, options.path, a.run));
+    path = std::async(std::launch::async,
+                      [&] { return path_latency(path_events(c, options.path, a.run)); });
   }
   if (a.run) {
     const MessageLookup lookup = summarise_run(a, c, *a.run);
@@ -1661,6 +1664,7 @@ TraceAnalysis analyze_trace(const fs::path& dir, const AnalyzeOptions& options) 
   }
   const std::vector<Span> tf2 = tables.get();
   if (a.run) tf2_share(a, tf2);
+  if (path.valid()) a.path = path.get();
   explain_missing_tables(a, c, options.run_pid);
 
   if (a.discarded_events > 0) {

@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 #include <stdexcept>
+#include <tuple>
 #include <unordered_map>
 
 namespace robotperf::tracing {
@@ -126,10 +127,26 @@ PathSearch find_paths(const TracedGraph& graph, const PathSearchLimits& limits) 
 namespace {
 
 constexpr int64_t kNone = -1;
+constexpr uint32_t kNoMessage = UINT32_MAX;
 
+// A message of one of the path's topics: its first publish, its first take, and (beyond the first
+// topic) the take on the topic before that it is linked to.
 struct Message {
   int64_t publish_ts;
-  std::size_t publish;  // index of the publish in the event list
+  std::size_t publish;         // index of the publish event
+  int64_t first_take = kNone;  // index of its first take event
+  int64_t parent = kNone;      // index of the take it is linked to
+  uint32_t uses = 0;           // outputs on the next topic linked to it
+};
+
+// The messages of one topic, found by source timestamp.
+struct TopicMessages {
+  std::vector<Message> messages;
+  std::unordered_map<int64_t, uint32_t> by_stamp;
+  uint32_t find(int64_t stamp) const {
+    auto it = by_stamp.find(stamp);
+    return it == by_stamp.end() ? kNoMessage : it->second;
+  }
 };
 
 }  // namespace
@@ -140,38 +157,43 @@ PathLatency path_latency(const PathEvents& in) {
   PathLatency out;
   out.topics = in.topics;
   out.stopped_at.assign(k, 0);
+  const auto& ev = in.events;
 
-  // Events in thread order: callback causality is read along each thread.
-  std::vector<std::size_t> order(in.events.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    const PathEvent& x = in.events[a];
-    const PathEvent& y = in.events[b];
-    if (x.vpid != y.vpid) return x.vpid < y.vpid;
-    if (x.vtid != y.vtid) return x.vtid < y.vtid;
-    if (x.ts != y.ts) return x.ts < y.ts;
-    return a < b;
+  // Events in thread order, each thread's by time: callback causality is read along each thread.
+  // Sorted as compact keys rather than through the events, which millions of them make slow.
+  struct Order {
+    uint64_t thread;
+    int64_t ts;
+    std::size_t index;
+  };
+  std::vector<Order> order(ev.size());
+  for (std::size_t i = 0; i < ev.size(); ++i) {
+    order[i] = {static_cast<uint64_t>(static_cast<uint32_t>(ev[i].vpid)) << 32 |
+                    static_cast<uint32_t>(ev[i].vtid),
+                ev[i].ts, i};
+  }
+  std::sort(order.begin(), order.end(), [](const Order& x, const Order& y) {
+    return std::tie(x.thread, x.ts, x.index) < std::tie(y.thread, y.ts, y.index);
   });
   // The take whose callback each publish ran in (kNone outside a callback, or in one no take
   // started: a timer's).
-  std::vector<int64_t> callback_input(in.events.size(), kNone);
+  std::vector<int64_t> callback_input(ev.size(), kNone);
   {
-    int32_t vpid = 0, vtid = 0;
+    uint64_t thread = 0;
     bool first = true;
     int64_t pending = kNone, input = kNone;
     bool in_callback = false;
-    for (const std::size_t i : order) {
-      const PathEvent& e = in.events[i];
-      if (first || e.vpid != vpid || e.vtid != vtid) {
+    for (const Order& o : order) {
+      const PathEvent& e = ev[o.index];
+      if (first || o.thread != thread) {
         first = false;
-        vpid = e.vpid;
-        vtid = e.vtid;
+        thread = o.thread;
         pending = input = kNone;
         in_callback = false;
       }
       switch (e.kind) {
         case PathEvent::Kind::kTake:
-          pending = static_cast<int64_t>(i);
+          pending = static_cast<int64_t>(o.index);
           break;
         case PathEvent::Kind::kCallbackStart:
           input = pending;
@@ -183,39 +205,55 @@ PathLatency path_latency(const PathEvents& in) {
           in_callback = false;
           break;
         case PathEvent::Kind::kPublish:
-          if (in_callback) callback_input[i] = input;
+          if (in_callback) callback_input[o.index] = input;
           break;
       }
     }
   }
 
-  // Per topic: its messages by source timestamp (the first publish of each), and the first take
-  // of each; per (node, topic): its takes in time order, for the latest-input link.
-  std::vector<std::unordered_map<int64_t, Message>> messages(k);
-  std::vector<std::unordered_map<int64_t, std::size_t>> first_take(k);
-  std::map<std::pair<uint32_t, uint32_t>, std::vector<std::size_t>> takes_of;
-  for (const std::size_t i : order) {
-    const PathEvent& e = in.events[i];
-    if (e.topic >= k) continue;
-    if (e.kind == PathEvent::Kind::kPublish) {
-      auto [it, inserted] = messages[e.topic].try_emplace(e.stamp, Message{e.ts, i});
-      if (!inserted && e.ts < it->second.publish_ts) it->second = {e.ts, i};
-    } else if (e.kind == PathEvent::Kind::kTake) {
-      auto [it, inserted] = first_take[e.topic].try_emplace(e.stamp, i);
-      if (!inserted && e.ts < in.events[it->second].ts) it->second = i;
-      takes_of[{e.node, e.topic}].push_back(i);
+  // Per topic: its messages (the first publish of each source timestamp) and their first takes;
+  // per (node, topic): its takes in time order, for the latest-input link.
+  std::vector<TopicMessages> topics(k);
+  {
+    std::vector<std::size_t> publishes(k, 0);
+    for (const PathEvent& e : ev)
+      if (e.kind == PathEvent::Kind::kPublish && e.topic < k) ++publishes[e.topic];
+    for (std::size_t t = 0; t < k; ++t) {
+      topics[t].messages.reserve(publishes[t]);
+      topics[t].by_stamp.reserve(publishes[t]);
     }
   }
+  std::map<std::pair<uint32_t, uint32_t>, std::vector<std::size_t>> takes_of;
+  for (const Order& o : order) {
+    const PathEvent& e = ev[o.index];
+    if (e.topic >= k || e.kind != PathEvent::Kind::kPublish) continue;
+    TopicMessages& tm = topics[e.topic];
+    auto [it, inserted] =
+        tm.by_stamp.try_emplace(e.stamp, static_cast<uint32_t>(tm.messages.size()));
+    if (inserted) {
+      tm.messages.push_back({e.ts, o.index});
+    } else if (e.ts < tm.messages[it->second].publish_ts) {
+      tm.messages[it->second].publish_ts = e.ts;
+      tm.messages[it->second].publish = o.index;
+    }
+  }
+  for (const Order& o : order) {
+    const PathEvent& e = ev[o.index];
+    if (e.topic >= k || e.kind != PathEvent::Kind::kTake) continue;
+    takes_of[{e.node, e.topic}].push_back(o.index);
+    const uint32_t m = topics[e.topic].find(e.stamp);
+    if (m == kNoMessage) continue;
+    int64_t& first_take = topics[e.topic].messages[m].first_take;
+    if (first_take == kNone || e.ts < ev[static_cast<std::size_t>(first_take)].ts)
+      first_take = static_cast<int64_t>(o.index);
+  }
   for (auto& [key, takes] : takes_of) {
-    std::stable_sort(takes.begin(), takes.end(), [&](std::size_t a, std::size_t b) {
-      return in.events[a].ts < in.events[b].ts;
-    });
+    std::stable_sort(takes.begin(), takes.end(),
+                     [&](std::size_t a, std::size_t b) { return ev[a].ts < ev[b].ts; });
   }
 
   // Each message on topic i+1 linked to its input on topic i: the take of the callback that
   // published it, or else the publishing node's latest take of topic i before the publish.
-  std::vector<std::unordered_map<int64_t, std::size_t>> parent(k);  // stamp -> the take
-  std::vector<std::unordered_map<int64_t, uint64_t>> uses(k);       // stamp on i -> outputs
   out.hops.resize(k - 1);
   for (std::size_t i = 0; i + 1 < k; ++i) {
     PathHop& hop = out.hops[i];
@@ -223,112 +261,107 @@ PathLatency path_latency(const PathEvents& in) {
     hop.to = in.topics[i + 1];
     std::set<std::string> hop_nodes;
     std::set<uint32_t> publishers;  // of topic i+1
-    for (const auto& [stamp, m] : messages[i + 1]) publishers.insert(in.events[m.publish].node);
-    for (const auto& [stamp, m] : messages[i + 1]) {
-      const PathEvent& pub = in.events[m.publish];
+    for (Message& m : topics[i + 1].messages) {
+      const PathEvent& pub = ev[m.publish];
+      publishers.insert(pub.node);
       const int64_t direct = callback_input[m.publish];
-      std::size_t take = 0;
-      bool linked = false;
-      if (direct != kNone && in.events[static_cast<std::size_t>(direct)].topic == i &&
-          in.events[static_cast<std::size_t>(direct)].node == pub.node) {
-        take = static_cast<std::size_t>(direct);
-        linked = true;
+      int64_t take = kNone;
+      if (direct != kNone && ev[static_cast<std::size_t>(direct)].topic == i &&
+          ev[static_cast<std::size_t>(direct)].node == pub.node) {
+        take = direct;
         ++hop.by_callback;
       } else if (auto t = takes_of.find({pub.node, static_cast<uint32_t>(i)});
                  t != takes_of.end()) {
         auto it = std::partition_point(t->second.begin(), t->second.end(),
-                                       [&](std::size_t x) { return in.events[x].ts <= pub.ts; });
+                                       [&](std::size_t x) { return ev[x].ts <= pub.ts; });
         if (it != t->second.begin()) {
-          take = *std::prev(it);
-          linked = true;
+          take = static_cast<int64_t>(*std::prev(it));
           ++hop.by_latest;
         }
       }
-      if (!linked) {
+      if (take == kNone) {
         ++hop.unlinked;
         continue;
       }
       hop_nodes.insert(in.nodes[pub.node]);
-      parent[i + 1][stamp] = take;
-      ++uses[i][in.events[take].stamp];
+      m.parent = take;
+      if (const uint32_t input = topics[i].find(ev[static_cast<std::size_t>(take)].stamp);
+          input != kNoMessage)
+        ++topics[i].messages[input].uses;
     }
     for (const auto& [node_topic, takes] : takes_of) {
       if (node_topic.second != i || !publishers.contains(node_topic.first)) continue;
       hop.inputs += takes.size();
       for (const std::size_t t : takes) {
-        auto u = uses[i].find(in.events[t].stamp);
-        if (u == uses[i].end()) ++hop.unused;
+        const uint32_t m = topics[i].find(ev[t].stamp);
+        if (m == kNoMessage || topics[i].messages[m].uses == 0) ++hop.unused;
       }
     }
-    for (const auto& [stamp, n] : uses[i]) hop.reused += n > 1 ? 1 : 0;
-    hop.outputs = messages[i + 1].size();
+    for (const Message& m : topics[i].messages) hop.reused += m.uses > 1 ? 1 : 0;
+    hop.outputs = topics[i + 1].messages.size();
     for (const auto& name : hop_nodes) hop.node += (hop.node.empty() ? "" : ", ") + name;
   }
 
-  // Each message of the last topic traced back to the first; the first arrival of each source
-  // counts.
-  out.ends_at_take = !first_take[k - 1].empty();
-  auto arrival = [&](int64_t stamp, const Message& m) {
-    if (!out.ends_at_take) return m.publish_ts;
-    auto t = first_take[k - 1].find(stamp);
-    return t != first_take[k - 1].end() ? in.events[t->second].ts : kNone;
-  };
-  struct Arrival {
-    int64_t ts;
-    int64_t end_stamp;
-  };
-  std::unordered_map<int64_t, Arrival> first_arrival;  // source stamp -> its first arrival
-  // furthest[stamp on topic 0]: the furthest topic one of its descendants reached.
-  std::unordered_map<int64_t, std::size_t> furthest;
-  // The message of topic 0 a message of `topic` comes from (kNone when a link is missing).
-  auto source_of = [&](std::size_t topic, int64_t stamp) -> int64_t {
-    for (std::size_t i = topic; i > 0; --i) {
-      auto p = parent[i].find(stamp);
-      if (p == parent[i].end()) return kNone;
-      stamp = in.events[p->second].stamp;
-      if (!messages[i - 1].contains(stamp)) return kNone;
+  // Each message traced back to the first topic; the first arrival at the end of each source
+  // message counts.
+  out.ends_at_take = std::any_of(topics[k - 1].messages.begin(), topics[k - 1].messages.end(),
+                                 [](const Message& m) { return m.first_take != kNone; });
+  // The message of topic 0 a message of `topic` comes from (kNoMessage when a link is missing).
+  auto source_of = [&](std::size_t topic, uint32_t m) -> uint32_t {
+    for (std::size_t i = topic; i > 0 && m != kNoMessage; --i) {
+      const int64_t parent = topics[i].messages[m].parent;
+      if (parent == kNone) return kNoMessage;
+      m = topics[i - 1].find(ev[static_cast<std::size_t>(parent)].stamp);
     }
-    return stamp;
+    return m;
   };
+  const std::size_t sources = topics[0].messages.size();
+  std::vector<std::size_t> furthest(sources, 0);
+  std::vector<int64_t> arrival_ts(sources, kNone);
+  std::vector<uint32_t> arrival_message(sources, kNoMessage);
   for (std::size_t i = 1; i < k; ++i) {
-    for (const auto& [stamp, m] : messages[i]) {
-      const int64_t source = source_of(i, stamp);
-      if (source == kNone) continue;
-      auto [it, inserted] = furthest.try_emplace(source, i);
-      if (!inserted) it->second = std::max(it->second, i);
+    const auto& messages = topics[i].messages;
+    for (uint32_t m = 0; m < messages.size(); ++m) {
+      const uint32_t source = source_of(i, m);
+      if (source == kNoMessage) continue;
+      furthest[source] = std::max(furthest[source], i);
       if (i != k - 1) continue;
-      const int64_t at = arrival(stamp, m);
+      const int64_t at = !out.ends_at_take ? messages[m].publish_ts
+                         : messages[m].first_take == kNone
+                             ? kNone
+                             : ev[static_cast<std::size_t>(messages[m].first_take)].ts;
       if (at == kNone) continue;
-      auto [a, fresh] = first_arrival.try_emplace(source, Arrival{at, stamp});
-      if (!fresh && at < a->second.ts) a->second = {at, stamp};
+      if (arrival_ts[source] == kNone || at < arrival_ts[source]) {
+        arrival_ts[source] = at;
+        arrival_message[source] = m;
+      }
     }
   }
 
   std::vector<double> end_to_end;
   std::vector<std::vector<double>> transport(k - 1), in_node(k - 1);
-  for (const auto& [stamp, m] : messages[0]) {
-    if (m.publish_ts < in.since) continue;
+  for (uint32_t s = 0; s < sources; ++s) {
+    const Message& source = topics[0].messages[s];
+    if (source.publish_ts < in.since) continue;
     ++out.sources;
-    auto a = first_arrival.find(stamp);
-    if (a == first_arrival.end()) {
-      auto f = furthest.find(stamp);
-      const std::size_t reached = f != furthest.end() ? f->second : 0;
-      ++out.stopped_at[reached];
+    if (arrival_ts[s] == kNone) {
+      ++out.stopped_at[furthest[s]];
       continue;
     }
     ++out.reached;
-    end_to_end.push_back(static_cast<double>(a->second.ts - m.publish_ts));
-    const PathEvent& source = in.events[m.publish];
-    out.instances.push_back({m.publish_ts, a->second.ts, source.vpid, source.vtid});
+    end_to_end.push_back(static_cast<double>(arrival_ts[s] - source.publish_ts));
+    const PathEvent& publish = ev[source.publish];
+    out.instances.push_back({source.publish_ts, arrival_ts[s], publish.vpid, publish.vtid});
     // The chain's hops, walked back from the end.
-    int64_t s = a->second.end_stamp;
+    uint32_t m = arrival_message[s];
     for (std::size_t i = k - 1; i > 0; --i) {
-      const std::size_t take = parent[i].at(s);
-      const PathEvent& t = in.events[take];
+      const Message& message = topics[i].messages[m];
+      const PathEvent& take = ev[static_cast<std::size_t>(message.parent)];
+      const uint32_t input = topics[i - 1].find(take.stamp);
       transport[i - 1].push_back(
-          static_cast<double>(t.ts - messages[i - 1].at(t.stamp).publish_ts));
-      in_node[i - 1].push_back(static_cast<double>(messages[i].at(s).publish_ts - t.ts));
-      s = t.stamp;
+          static_cast<double>(take.ts - topics[i - 1].messages[input].publish_ts));
+      in_node[i - 1].push_back(static_cast<double>(message.publish_ts - take.ts));
+      m = input;
     }
   }
   std::sort(out.instances.begin(), out.instances.end(),
