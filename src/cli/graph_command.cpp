@@ -129,21 +129,19 @@ json graph_json(const std::vector<rmw::PeerParticipant>& peers) {
                             {"nodes", nodes},
                             {"endpoints_of_no_node", unclaimed}});
   }
-  json topic_list = json::array();
-  for (const auto& [name, entry] : topics) {
-    topic_list.push_back({{"name", name},
-                          {"types", entry.first},
-                          {"publishers", entry.second[0]},
-                          {"subscriptions", entry.second[1]}});
-  }
-  json service_list = json::array();
-  for (const auto& [name, entry] : services) {
-    service_list.push_back({{"name", name},
-                            {"types", entry.first},
-                            {"servers", entry.second[0]},
-                            {"clients", entry.second[1]}});
-  }
-  return {{"participants", participants}, {"topics", topic_list}, {"services", service_list}};
+  auto listed = [](const auto& named, const char* first, const char* second) {
+    json out = json::array();
+    for (const auto& [name, entry] : named) {
+      out.push_back({{"name", name},
+                     {"types", entry.first},
+                     {first, entry.second[0]},
+                     {second, entry.second[1]}});
+    }
+    return out;
+  };
+  return {{"participants", participants},
+          {"topics", listed(topics, "publishers", "subscriptions")},
+          {"services", listed(services, "servers", "clients")}};
 }
 
 std::string plural(int n, const std::string& word) {
@@ -206,24 +204,25 @@ void print_graph(const std::vector<rmw::PeerParticipant>& peers, const GraphOpti
       }
     }
   }
+  // Topics and services alike: a name, its types, and who is on each side.
+  auto list = [&](const json& entries, const char* sides[2], const char* words[2]) {
+    for (const auto& e : entries) {
+      std::string types;
+      for (const auto& type : e["types"])
+        types += (types.empty() ? "" : ", ") + type.get<std::string>();
+      out << "  " << e["name"].get<std::string>() << "  [" << types << "]  "
+          << plural(e[sides[0]].get<int>(), words[0]) << ", "
+          << plural(e[sides[1]].get<int>(), words[1]) << "\n";
+    }
+  };
+  const char* topic_sides[2] = {"publishers", "subscriptions"};
+  const char* topic_words[2] = {"publisher", "subscription"};
   out << "\ntopics\n";
-  for (const auto& topic : graph["topics"]) {
-    std::string types;
-    for (const auto& type : topic["types"])
-      types += (types.empty() ? "" : ", ") + type.get<std::string>();
-    out << "  " << topic["name"].get<std::string>() << "  [" << types << "]  "
-        << plural(topic["publishers"].get<int>(), "publisher") << ", "
-        << plural(topic["subscriptions"].get<int>(), "subscription") << "\n";
-  }
+  list(graph["topics"], topic_sides, topic_words);
+  const char* service_sides[2] = {"servers", "clients"};
+  const char* service_words[2] = {"server", "client"};
   if (!graph["services"].empty()) out << "\nservices\n";
-  for (const auto& service : graph["services"]) {
-    std::string types;
-    for (const auto& type : service["types"])
-      types += (types.empty() ? "" : ", ") + type.get<std::string>();
-    out << "  " << service["name"].get<std::string>() << "  [" << types << "]  "
-        << plural(service["servers"].get<int>(), "server") << ", "
-        << plural(service["clients"].get<int>(), "client") << "\n";
-  }
+  list(graph["services"], service_sides, service_words);
   bool header = false;
   for (const auto& p : graph["participants"]) {
     if (p["endpoints_of_no_node"].empty()) continue;

@@ -623,7 +623,7 @@ TEST_F(Cli, TyposAreOneLineWithTheirNearestName) {
            {"describe a11", "unknown benchmark 'a11'; did you mean 'a1'?"},
            {"help resuls", "unknown command 'resuls'; did you mean 'results'?"},
            {"frobnicate", "unknown command 'frobnicate' (robotperf --help lists the commands)"},
-           {"describe a6", "unknown benchmark 'a6' (available:"}}) {
+           {"describe x9", "unknown benchmark 'x9' (available:"}}) {
     const Outcome o = robotperf_cli(args);
     EXPECT_EQ(o.exit_code, 2) << args << "\n" << o.out;
     EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 1) << args << "\n" << o.out;
