@@ -3,8 +3,12 @@
 #pragma once
 
 #include <memory>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "robotperf/harness/run.hpp"
+#include "robotperf/tracing/analysis.hpp"
 #include "robotperf/tracing/session.hpp"
 
 namespace robotperf::harness {
@@ -21,7 +25,18 @@ class GreyBoxRecording {
   void finish(RunResult& result);
 
  private:
+  // The shortest path of the traced graph from one of the benchmark's inputs to its output.
+  std::optional<std::vector<std::string>> path_to_output(const tracing::TraceAnalysis& a) const;
+  // The run's counts and latencies as measured along `path` (outputs with stamps of their own).
+  void measure_along_path(RunResult& r, const tracing::PathLatency& path) const;
+
+ private:
   std::unique_ptr<tracing::RecordingSession> session_;
+  // What measuring along a path needs of the benchmark (outputs_restamped).
+  std::vector<std::string> input_topics_;
+  std::string output_topic_;
+  std::size_t min_samples_ = 0;
+  double max_loss_percent_ = 0;
 };
 
 // robotperf:run_begin / run_end around the Playback (emitted in both modes:

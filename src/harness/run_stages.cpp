@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <cstdint>
 #include <cstdio>
 
@@ -570,15 +569,9 @@ OutputFigures output_figures(const RunResult& r, const std::string& topic,
   // Jitter against the input period as the Playback achieved it (any arrival pattern).
   const double rate = r.offered_rate_hz > 0 ? r.offered_rate_hz : r.rate_hz;
   f.period_ns = rate > 0 ? 1e9 / rate : 0;
-  std::ranges::sort(arrivals);
-  std::vector<double> intervals, jitter;
-  for (std::size_t i = 1; i < arrivals.size(); ++i) {
-    const auto interval = static_cast<double>(arrivals[i] - arrivals[i - 1]);
-    intervals.push_back(interval);
-    jitter.push_back(std::abs(interval - f.period_ns));
-  }
-  f.interval = metrics::compute_stats(intervals);
-  f.jitter = metrics::compute_stats(jitter);
+  const metrics::OutputJitter j = metrics::output_jitter(arrivals, f.period_ns);
+  f.interval = j.interval;
+  f.jitter = j.jitter;
   return f;
 }
 

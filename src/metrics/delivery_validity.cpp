@@ -1,6 +1,7 @@
 #include "robotperf/metrics/delivery_validity.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace robotperf::metrics {
@@ -10,10 +11,11 @@ std::vector<std::string> delivery_invalid_reasons(const DeliveryCounts& c, std::
   std::vector<std::string> out;
   if (c.matched == 0 && c.unknown > 0) {
     // Not loss: the graph answered, but with stamps that are none of the inputs'.
-    out.push_back("all " + std::to_string(c.unknown) +
-                  " outputs carry a header.stamp that no input had: the graph does not copy its "
-                  "input's header into its output, and robotperf's message IDs travel in the "
-                  "stamp (see docs/guides/your-own-graphs.md, \"A node that does not copy the header\")");
+    out.push_back(
+        "all " + std::to_string(c.unknown) +
+        " outputs carry a header.stamp that no input had: the graph does not copy its "
+        "input's header into its output, and robotperf's message IDs travel in the "
+        "stamp (see docs/guides/your-own-graphs.md, \"A node that does not copy the header\")");
     return out;
   }
   if (c.matched < min_samples) {
@@ -69,6 +71,17 @@ DeliveryRates delivery_rates(std::span<const TimedEvent> sends,
     rates.window_s = static_cast<double>(last - sends.front().time_ns) * 1e-9;
   }
   return rates;
+}
+
+OutputJitter output_jitter(std::vector<int64_t> arrival_ns, double period_ns) {
+  std::ranges::sort(arrival_ns);
+  std::vector<double> intervals, jitter;
+  for (std::size_t i = 1; i < arrival_ns.size(); ++i) {
+    const auto interval = static_cast<double>(arrival_ns[i] - arrival_ns[i - 1]);
+    intervals.push_back(interval);
+    jitter.push_back(std::abs(interval - period_ns));
+  }
+  return {compute_stats(intervals), compute_stats(jitter)};
 }
 
 }  // namespace robotperf::metrics

@@ -375,6 +375,36 @@ TEST_F(GreyRun, APluginKernelIsTracedThroughThePluginApi) {
   EXPECT_TRUE(kernel);
 }
 
+// A node that writes its own stamps: black-box, no output carries an input's ID and the run says
+// so; grey-box, the trace links each output to its input along the graph, and the run is
+// measured that way (docs/design.md §3.13).
+TEST_F(GreyRun, ANodeThatRestampsIsMeasuredAlongItsPathFromTheTrace) {
+  RunOptions o;
+  o.load.count = 40;
+  const BenchmarkSpec spec = relay_package(false, "restamp: true");
+  const RunResult black = run_benchmark(spec, o);
+  EXPECT_FALSE(black.valid);
+  EXPECT_NE(reasons(black).find("does not copy its input's header"), std::string::npos)
+      << reasons(black);
+
+  const RunResult g = run_benchmark(spec, grey(o, "restamp.trace"));
+  ASSERT_TRUE(g.grey.has_value());
+  EXPECT_TRUE(g.outputs_restamped);
+  EXPECT_TRUE(g.valid) << reasons(g);
+  EXPECT_EQ(g.measured, 40u);
+  EXPECT_EQ(g.matched, 40u);
+  ASSERT_TRUE(g.grey->path.has_value());
+  EXPECT_EQ(g.grey->path->topics, (std::vector<std::string>{"/in", "/out"}));
+  EXPECT_EQ(g.latency_from_sent.count, 40u);
+  EXPECT_GT(g.latency_from_sent.p50, 0.0);
+  EXPECT_LT(g.latency_from_sent.p50, 50e6);  // an in-process relay: far below 50 ms
+  ASSERT_FALSE(g.outputs.empty());
+  EXPECT_EQ(g.outputs.front().matched, 40u);
+  bool warned = false;
+  for (const auto& w : g.warnings) warned = warned || w.rule == "restamped_output";
+  EXPECT_TRUE(warned);
+}
+
 using robotperf::test_support::Outcome;
 using robotperf::test_support::robotperf_cli;
 

@@ -1,7 +1,9 @@
 // util/relay: republishes what it receives. With delay_ms it holds each
 // message for a known time, with drop_every = k it drops every k-th message,
-// and with fail_after = n its callback throws on message n + 1, so the harness
-// can be checked against a graph whose behaviour is known exactly.
+// with fail_after = n its callback throws on message n + 1, and with restamp its
+// outputs carry the time they were published instead of their input's stamp (as
+// a node that writes its own headers), so the harness can be checked against a
+// graph whose behaviour is known exactly.
 #include <chrono>
 #include <stdexcept>
 #include <string>
@@ -19,6 +21,7 @@ struct RelaySettings {
   double delay_ms = 0;
   int64_t drop_every = 0;
   int64_t fail_after = 0;
+  bool restamp = false;
 };
 
 const plugin::ParameterStruct<RelaySettings> kRelayParameters{
@@ -27,7 +30,9 @@ const plugin::ParameterStruct<RelaySettings> kRelayParameters{
     plugin::field(&RelaySettings::delay_ms, "delay_ms", 0, "hold each message this long, ms"),
     plugin::field(&RelaySettings::drop_every, "drop_every", 0, "drop every k-th message (0: none)"),
     plugin::field(&RelaySettings::fail_after, "fail_after", 0,
-                  "throw from the callback on message n + 1 (0: never)")};
+                  "throw from the callback on message n + 1 (0: never)"),
+    plugin::field(&RelaySettings::restamp, "restamp", false,
+                  "stamp each output with the time it is published, not its input's stamp")};
 
 class RelayNode final : public graph::Node {
  public:
@@ -39,6 +44,7 @@ class RelayNode final : public graph::Node {
     delay_ = std::chrono::microseconds(static_cast<int64_t>(s.delay_ms * 1000.0));
     drop_every_ = s.drop_every;
     fail_after_ = s.fail_after;
+    restamp_ = s.restamp;
     if (drop_every_ < 0)
       throw std::invalid_argument("node '" + name() + "': drop_every must be >= 0");
     if (fail_after_ < 0)
@@ -46,6 +52,7 @@ class RelayNode final : public graph::Node {
 
     bool known = msgs::with_message_type(s.type, [&]<class T>() {
       const auto& ts = msgs::type_support<T>();
+      type_ = &ts;
       output_ = create_generic_publisher(config.topic("output"), ts, config.qos);
       input_ = create_generic_subscription(
           config.topic("input"), ts, config.qos,
@@ -64,6 +71,11 @@ class RelayNode final : public graph::Node {
     }
     if (drop_every_ > 0 && received_ % drop_every_ == 0) return;
     if (delay_.count() > 0) std::this_thread::sleep_for(delay_);
+    if (restamp_) {
+      const auto now = std::chrono::system_clock::now().time_since_epoch();
+      msg = type_->copy_with_stamp_ns(
+          msg.get(), std::chrono::duration_cast<std::chrono::nanoseconds>(now).count());
+    }
     output_->publish(std::move(msg));
   }
 
@@ -71,6 +83,8 @@ class RelayNode final : public graph::Node {
   int64_t drop_every_ = 0;
   int64_t fail_after_ = 0;
   int64_t received_ = 0;
+  bool restamp_ = false;
+  const msgs::TypeSupport* type_ = nullptr;
   std::shared_ptr<graph::GenericPublisher> output_;
   std::shared_ptr<graph::GenericSubscription> input_;
 };
@@ -80,8 +94,8 @@ class RelayNode final : public graph::Node {
 void register_relay_kernel(plugin::Registrar& registrar) {
   registrar.add_kernel(
       {.name = "util/relay",
-       .description = "republish each message unchanged; delay_ms, drop_every and fail_after for "
-                      "harness checks",
+       .description = "republish each message unchanged; delay_ms, drop_every, fail_after and "
+                      "restamp for harness checks",
        .inputs = {{"input", ""}},
        .outputs = {{"output", ""}},
        .parameters = kRelayParameters.declarations()},

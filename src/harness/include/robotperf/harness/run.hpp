@@ -212,6 +212,9 @@ struct RunResult {
   double window_s = 0;         // from the first measured send to the last reception
   // Every monitored output, the run's own first, with its jitter (docs/design.md §3.5).
   std::vector<OutputFigures> outputs;
+  // Grey-box: the outputs carried header stamps of their own, and the counts and latencies were
+  // measured along the graph's path from the trace instead (docs/design.md §3.13).
+  bool outputs_restamped = false;
   int64_t started_unix_ns = 0;
   bool completed = false;    // false when the run was cut short
   bool interrupted = false;  // cut short by SIGINT/SIGTERM (RunOptions::interrupted)

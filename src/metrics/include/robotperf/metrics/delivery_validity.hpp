@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "robotperf/metrics/latency_stats.hpp"
+
 namespace robotperf::metrics {
 
 struct DeliveryCounts {
@@ -46,5 +48,12 @@ struct DeliveryRates {
 // `sends` in message order.
 DeliveryRates delivery_rates(std::span<const TimedEvent> sends,
                              std::span<const TimedEvent> receptions);
+
+// An output's jitter (docs/design.md §3.5): the intervals between consecutive arrivals (in time
+// order; `arrival_ns` in any), and |interval - period| of each. Nanoseconds.
+struct OutputJitter {
+  SampleStats interval, jitter;
+};
+OutputJitter output_jitter(std::vector<int64_t> arrival_ns, double period_ns);
 
 }  // namespace robotperf::metrics
