@@ -30,7 +30,6 @@ class GreyBoxRecording {
   // The run's counts and latencies as measured along `path` (outputs with stamps of their own).
   void measure_along_path(RunResult& r, const tracing::PathLatency& path) const;
 
- private:
   std::unique_ptr<tracing::RecordingSession> session_;
   // What measuring along a path needs of the benchmark (outputs_restamped).
   std::vector<std::string> input_topics_;
