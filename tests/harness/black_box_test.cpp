@@ -91,7 +91,8 @@ TEST(BlackBox, DroppingEveryFourthMessageIsCountedExactly) {
             (std::map<std::string, std::string>{{"type", "sensor_msgs/msg/Image"},
                                                 {"delay_ms", "0"},
                                                 {"drop_every", "4"},
-                                                {"fail_after", "0"}}));
+                                                {"fail_after", "0"},
+                                                {"restamp", "false"}}));
 }
 
 TEST(BlackBox, WarmupIsExcludedAndIdsStayUniqueWhenTheDatasetLoops) {
