@@ -422,6 +422,24 @@ struct StreamPart {
   std::exception_ptr error;
 };
 
+// What an event carrying a message ID says, by its handler (one of the six that carry one).
+IdKind id_kind_of(Handler handler) {
+  switch (handler) {
+    case Handler::kPublish:
+      return IdKind::kPublish;
+    case Handler::kCallbackEntry:
+      return IdKind::kEntry;
+    case Handler::kKernelInit:
+      return IdKind::kKernelInit;
+    case Handler::kKernelFini:
+      return IdKind::kKernelFini;
+    case Handler::kDeviceBegin:
+      return IdKind::kDeviceBegin;
+    default:
+      return IdKind::kDeviceEnd;
+  }
+}
+
 // Collects the events of the part's packets; returns how many packets it found defective.
 uint64_t collect_once(StreamPart& part) {
   Collected& c = part.c;
@@ -499,12 +517,7 @@ uint64_t collect_once(StreamPart& part) {
       case Handler::kKernelFini:
       case Handler::kDeviceBegin:
       case Handler::kDeviceEnd: {
-        const IdKind kind = d->handler == Handler::kPublish         ? IdKind::kPublish
-                            : d->handler == Handler::kCallbackEntry ? IdKind::kEntry
-                            : d->handler == Handler::kKernelInit    ? IdKind::kKernelInit
-                            : d->handler == Handler::kKernelFini    ? IdKind::kKernelFini
-                            : d->handler == Handler::kDeviceBegin   ? IdKind::kDeviceBegin
-                                                                    : IdKind::kDeviceEnd;
+        const IdKind kind = id_kind_of(d->handler);
         const int64_t id = field(2).as_int();
         if (message_ids.empty() || message_ids.back() != id) message_ids.push_back(id);
         const uint32_t site =
@@ -1758,27 +1771,27 @@ nlohmann::json to_json(const TraceAnalysis& a) {
                          {"duration_us", metrics::to_json(t.duration, 1e-3, "us")}});
   }
   json j = {{"trace",
-           {{"folders", a.traces},
-            {"streams", a.streams},
-            {"packets", a.packets},
-            {"events", a.events},
-            {"discarded_events", a.discarded_events},
-            {"lost_packets", a.lost_packets},
-            {"defective_packets", a.defective_packets},
-            {"packet_defects", a.packet_defects},
-            {"duration_s", static_cast<double>(a.last_ns - a.first_ns) * 1e-9},
-            {"analysis_s", a.read_seconds}}},
-          {"hops", hops},
-          {"callbacks", callbacks},
-          {"topics", topics},
-          {"controller_updates", controller_updates},
-          {"tf2_calls", tf2_calls},
-          {"tf2_share", a.tf2_share ? json{{"calls", a.tf2_share->calls},
-                                           {"calls_per_message", a.tf2_share->calls_per_message},
-                                           {"per_message_us", a.tf2_share->per_message_ns * 1e-3},
-                                           {"of_latency", a.tf2_share->of_latency}}
-                                    : json(nullptr)},
-          {"unavailable", a.unavailable}};
+             {{"folders", a.traces},
+              {"streams", a.streams},
+              {"packets", a.packets},
+              {"events", a.events},
+              {"discarded_events", a.discarded_events},
+              {"lost_packets", a.lost_packets},
+              {"defective_packets", a.defective_packets},
+              {"packet_defects", a.packet_defects},
+              {"duration_s", static_cast<double>(a.last_ns - a.first_ns) * 1e-9},
+              {"analysis_s", a.read_seconds}}},
+            {"hops", hops},
+            {"callbacks", callbacks},
+            {"topics", topics},
+            {"controller_updates", controller_updates},
+            {"tf2_calls", tf2_calls},
+            {"tf2_share", a.tf2_share ? json{{"calls", a.tf2_share->calls},
+                                             {"calls_per_message", a.tf2_share->calls_per_message},
+                                             {"per_message_us", a.tf2_share->per_message_ns * 1e-3},
+                                             {"of_latency", a.tf2_share->of_latency}}
+                                      : json(nullptr)},
+            {"unavailable", a.unavailable}};
   if (a.path) j["path"] = path_json(*a.path);
   return j;
 }

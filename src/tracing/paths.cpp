@@ -149,23 +149,55 @@ struct TopicMessages {
   }
 };
 
-}  // namespace
+// An event's place in thread order (its thread, then its time): compact keys to sort, rather
+// than indices through the events, which millions of them make slow.
+struct Order {
+  uint64_t thread;
+  int64_t ts;
+  std::size_t index;
+};
 
-PathLatency path_latency(const PathEvents& in) {
-  const std::size_t k = in.topics.size();
-  if (k < 2) throw std::invalid_argument("a path needs at least two topics");
-  PathLatency out;
-  out.topics = in.topics;
-  out.stopped_at.assign(k, 0);
-  const auto& ev = in.events;
+// The links of a path's messages (docs/design.md §3.13), found in steps.
+class PathLinks {
+ public:
+  explicit PathLinks(const PathEvents& events)
+      : in(events), ev(events.events), k(events.topics.size()) {
+    const std::vector<Order> order = thread_order();
+    find_callback_inputs(order);
+    collect_messages(order);
+  }
 
-  // Events in thread order, each thread's by time: callback causality is read along each thread.
-  // Sorted as compact keys rather than through the events, which millions of them make slow.
-  struct Order {
-    uint64_t thread;
-    int64_t ts;
-    std::size_t index;
+  // Each message on topic i+1 linked to its input on topic i, with the hop's counts.
+  void link_hop(std::size_t i, PathHop& hop);
+  // Each message traced back to the first topic: how far each source message got, and its first
+  // arrival at the end.
+  struct Arrivals {
+    std::vector<std::size_t> furthest;  // per message of topic 0: the furthest topic reached
+    std::vector<int64_t> ts;            // its first arrival at the end, or kNone
+    std::vector<uint32_t> message;      // the message of the last topic that arrived first
   };
+  Arrivals first_arrivals(bool ends_at_take) const;
+  bool last_topic_taken() const;
+  // End to end and per-hop times along the chains that reached the end, and the counts.
+  void measure(const Arrivals& arrivals, PathLatency& out) const;
+
+ private:
+  std::vector<Order> thread_order() const;
+  void find_callback_inputs(const std::vector<Order>& order);
+  void collect_messages(const std::vector<Order>& order);
+  // The message of topic 0 a message of `topic` comes from (kNoMessage when a link is missing).
+  uint32_t source_of(std::size_t topic, uint32_t m) const;
+
+  const PathEvents& in;
+  const std::vector<PathEvent>& ev;
+  const std::size_t k;
+  std::vector<int64_t> callback_input;  // per event; see find_callback_inputs
+  std::vector<TopicMessages> topics;
+  std::map<std::pair<uint32_t, uint32_t>, std::vector<std::size_t>> takes_of;
+};
+
+// Events in thread order, each thread's by time: callback causality is read along each thread.
+std::vector<Order> PathLinks::thread_order() const {
   std::vector<Order> order(ev.size());
   for (std::size_t i = 0; i < ev.size(); ++i) {
     order[i] = {static_cast<uint64_t>(static_cast<uint32_t>(ev[i].vpid)) << 32 |
@@ -175,45 +207,49 @@ PathLatency path_latency(const PathEvents& in) {
   std::sort(order.begin(), order.end(), [](const Order& x, const Order& y) {
     return std::tie(x.thread, x.ts, x.index) < std::tie(y.thread, y.ts, y.index);
   });
-  // The take whose callback each publish ran in (kNone outside a callback, or in one no take
-  // started: a timer's).
-  std::vector<int64_t> callback_input(ev.size(), kNone);
-  {
-    uint64_t thread = 0;
-    bool first = true;
-    int64_t pending = kNone, input = kNone;
-    bool in_callback = false;
-    for (const Order& o : order) {
-      const PathEvent& e = ev[o.index];
-      if (first || o.thread != thread) {
-        first = false;
-        thread = o.thread;
-        pending = input = kNone;
+  return order;
+}
+
+// The take whose callback each publish ran in (kNone outside a callback, or in one no take
+// started: a timer's).
+void PathLinks::find_callback_inputs(const std::vector<Order>& order) {
+  callback_input.assign(ev.size(), kNone);
+  uint64_t thread = 0;
+  bool first = true;
+  int64_t pending = kNone, input = kNone;
+  bool in_callback = false;
+  for (const Order& o : order) {
+    const PathEvent& e = ev[o.index];
+    if (first || o.thread != thread) {
+      first = false;
+      thread = o.thread;
+      pending = input = kNone;
+      in_callback = false;
+    }
+    switch (e.kind) {
+      case PathEvent::Kind::kTake:
+        pending = static_cast<int64_t>(o.index);
+        break;
+      case PathEvent::Kind::kCallbackStart:
+        input = pending;
+        pending = kNone;
+        in_callback = true;
+        break;
+      case PathEvent::Kind::kCallbackEnd:
+        input = kNone;
         in_callback = false;
-      }
-      switch (e.kind) {
-        case PathEvent::Kind::kTake:
-          pending = static_cast<int64_t>(o.index);
-          break;
-        case PathEvent::Kind::kCallbackStart:
-          input = pending;
-          pending = kNone;
-          in_callback = true;
-          break;
-        case PathEvent::Kind::kCallbackEnd:
-          input = kNone;
-          in_callback = false;
-          break;
-        case PathEvent::Kind::kPublish:
-          if (in_callback) callback_input[o.index] = input;
-          break;
-      }
+        break;
+      case PathEvent::Kind::kPublish:
+        if (in_callback) callback_input[o.index] = input;
+        break;
     }
   }
+}
 
-  // Per topic: its messages (the first publish of each source timestamp) and their first takes;
-  // per (node, topic): its takes in time order, for the latest-input link.
-  std::vector<TopicMessages> topics(k);
+// Per topic: its messages (the first publish of each source timestamp) and their first takes;
+// per (node, topic): its takes in time order, for the latest-input link.
+void PathLinks::collect_messages(const std::vector<Order>& order) {
+  topics.resize(k);
   {
     std::vector<std::size_t> publishes(k, 0);
     for (const PathEvent& e : ev)
@@ -223,7 +259,6 @@ PathLatency path_latency(const PathEvents& in) {
       topics[t].by_stamp.reserve(publishes[t]);
     }
   }
-  std::map<std::pair<uint32_t, uint32_t>, std::vector<std::size_t>> takes_of;
   for (const Order& o : order) {
     const PathEvent& e = ev[o.index];
     if (e.topic >= k || e.kind != PathEvent::Kind::kPublish) continue;
@@ -251,74 +286,76 @@ PathLatency path_latency(const PathEvents& in) {
     std::stable_sort(takes.begin(), takes.end(),
                      [&](std::size_t a, std::size_t b) { return ev[a].ts < ev[b].ts; });
   }
+}
 
-  // Each message on topic i+1 linked to its input on topic i: the take of the callback that
-  // published it, or else the publishing node's latest take of topic i before the publish.
-  out.hops.resize(k - 1);
-  for (std::size_t i = 0; i + 1 < k; ++i) {
-    PathHop& hop = out.hops[i];
-    hop.from = in.topics[i];
-    hop.to = in.topics[i + 1];
-    std::set<std::string> hop_nodes;
-    std::set<uint32_t> publishers;  // of topic i+1
-    for (Message& m : topics[i + 1].messages) {
-      const PathEvent& pub = ev[m.publish];
-      publishers.insert(pub.node);
-      const int64_t direct = callback_input[m.publish];
-      int64_t take = kNone;
-      if (direct != kNone && ev[static_cast<std::size_t>(direct)].topic == i &&
-          ev[static_cast<std::size_t>(direct)].node == pub.node) {
-        take = direct;
-        ++hop.by_callback;
-      } else if (auto t = takes_of.find({pub.node, static_cast<uint32_t>(i)});
-                 t != takes_of.end()) {
-        auto it = std::partition_point(t->second.begin(), t->second.end(),
-                                       [&](std::size_t x) { return ev[x].ts <= pub.ts; });
-        if (it != t->second.begin()) {
-          take = static_cast<int64_t>(*std::prev(it));
-          ++hop.by_latest;
-        }
-      }
-      if (take == kNone) {
-        ++hop.unlinked;
-        continue;
-      }
-      hop_nodes.insert(in.nodes[pub.node]);
-      m.parent = take;
-      if (const uint32_t input = topics[i].find(ev[static_cast<std::size_t>(take)].stamp);
-          input != kNoMessage)
-        ++topics[i].messages[input].uses;
-    }
-    for (const auto& [node_topic, takes] : takes_of) {
-      if (node_topic.second != i || !publishers.contains(node_topic.first)) continue;
-      hop.inputs += takes.size();
-      for (const std::size_t t : takes) {
-        const uint32_t m = topics[i].find(ev[t].stamp);
-        if (m == kNoMessage || topics[i].messages[m].uses == 0) ++hop.unused;
+// Each message on topic i+1 linked to its input on topic i: the take of the callback that
+// published it, or else the publishing node's latest take of topic i before the publish.
+void PathLinks::link_hop(std::size_t i, PathHop& hop) {
+  hop.from = in.topics[i];
+  hop.to = in.topics[i + 1];
+  std::set<std::string> hop_nodes;
+  std::set<uint32_t> publishers;  // of topic i+1
+  for (Message& m : topics[i + 1].messages) {
+    const PathEvent& pub = ev[m.publish];
+    publishers.insert(pub.node);
+    const int64_t direct = callback_input[m.publish];
+    int64_t take = kNone;
+    if (direct != kNone && ev[static_cast<std::size_t>(direct)].topic == i &&
+        ev[static_cast<std::size_t>(direct)].node == pub.node) {
+      take = direct;
+      ++hop.by_callback;
+    } else if (auto t = takes_of.find({pub.node, static_cast<uint32_t>(i)}); t != takes_of.end()) {
+      auto it = std::partition_point(t->second.begin(), t->second.end(),
+                                     [&](std::size_t x) { return ev[x].ts <= pub.ts; });
+      if (it != t->second.begin()) {
+        take = static_cast<int64_t>(*std::prev(it));
+        ++hop.by_latest;
       }
     }
-    for (const Message& m : topics[i].messages) hop.reused += m.uses > 1 ? 1 : 0;
-    hop.outputs = topics[i + 1].messages.size();
-    for (const auto& name : hop_nodes) hop.node += (hop.node.empty() ? "" : ", ") + name;
+    if (take == kNone) {
+      ++hop.unlinked;
+      continue;
+    }
+    hop_nodes.insert(in.nodes[pub.node]);
+    m.parent = take;
+    if (const uint32_t input = topics[i].find(ev[static_cast<std::size_t>(take)].stamp);
+        input != kNoMessage)
+      ++topics[i].messages[input].uses;
   }
-
-  // Each message traced back to the first topic; the first arrival at the end of each source
-  // message counts.
-  out.ends_at_take = std::any_of(topics[k - 1].messages.begin(), topics[k - 1].messages.end(),
-                                 [](const Message& m) { return m.first_take != kNone; });
-  // The message of topic 0 a message of `topic` comes from (kNoMessage when a link is missing).
-  auto source_of = [&](std::size_t topic, uint32_t m) -> uint32_t {
-    for (std::size_t i = topic; i > 0 && m != kNoMessage; --i) {
-      const int64_t parent = topics[i].messages[m].parent;
-      if (parent == kNone) return kNoMessage;
-      m = topics[i - 1].find(ev[static_cast<std::size_t>(parent)].stamp);
+  for (const auto& [node_topic, takes] : takes_of) {
+    if (node_topic.second != i || !publishers.contains(node_topic.first)) continue;
+    hop.inputs += takes.size();
+    for (const std::size_t t : takes) {
+      const uint32_t m = topics[i].find(ev[t].stamp);
+      if (m == kNoMessage || topics[i].messages[m].uses == 0) ++hop.unused;
     }
-    return m;
-  };
+  }
+  for (const Message& m : topics[i].messages) hop.reused += m.uses > 1 ? 1 : 0;
+  hop.outputs = topics[i + 1].messages.size();
+  for (const auto& name : hop_nodes) hop.node += (hop.node.empty() ? "" : ", ") + name;
+}
+
+uint32_t PathLinks::source_of(std::size_t topic, uint32_t m) const {
+  for (std::size_t i = topic; i > 0 && m != kNoMessage; --i) {
+    const int64_t parent = topics[i].messages[m].parent;
+    if (parent == kNone) return kNoMessage;
+    m = topics[i - 1].find(ev[static_cast<std::size_t>(parent)].stamp);
+  }
+  return m;
+}
+
+bool PathLinks::last_topic_taken() const {
+  return std::any_of(topics[k - 1].messages.begin(), topics[k - 1].messages.end(),
+                     [](const Message& m) { return m.first_take != kNone; });
+}
+
+PathLinks::Arrivals PathLinks::first_arrivals(bool ends_at_take) const {
   const std::size_t sources = topics[0].messages.size();
-  std::vector<std::size_t> furthest(sources, 0);
-  std::vector<int64_t> arrival_ts(sources, kNone);
-  std::vector<uint32_t> arrival_message(sources, kNoMessage);
+  Arrivals arrivals{std::vector<std::size_t>(sources, 0), std::vector<int64_t>(sources, kNone),
+                    std::vector<uint32_t>(sources, kNoMessage)};
+  auto& furthest = arrivals.furthest;
+  auto& arrival_ts = arrivals.ts;
+  auto& arrival_message = arrivals.message;
   for (std::size_t i = 1; i < k; ++i) {
     const auto& messages = topics[i].messages;
     for (uint32_t m = 0; m < messages.size(); ++m) {
@@ -326,7 +363,7 @@ PathLatency path_latency(const PathEvents& in) {
       if (source == kNoMessage) continue;
       furthest[source] = std::max(furthest[source], i);
       if (i != k - 1) continue;
-      const int64_t at = !out.ends_at_take ? messages[m].publish_ts
+      const int64_t at = !ends_at_take ? messages[m].publish_ts
                          : messages[m].first_take == kNone
                              ? kNone
                              : ev[static_cast<std::size_t>(messages[m].first_take)].ts;
@@ -337,23 +374,27 @@ PathLatency path_latency(const PathEvents& in) {
       }
     }
   }
+  return arrivals;
+}
 
+void PathLinks::measure(const Arrivals& arrivals, PathLatency& out) const {
+  const std::size_t sources = topics[0].messages.size();
   std::vector<double> end_to_end;
   std::vector<std::vector<double>> transport(k - 1), in_node(k - 1);
   for (uint32_t s = 0; s < sources; ++s) {
     const Message& source = topics[0].messages[s];
     if (source.publish_ts < in.since) continue;
     ++out.sources;
-    if (arrival_ts[s] == kNone) {
-      ++out.stopped_at[furthest[s]];
+    if (arrivals.ts[s] == kNone) {
+      ++out.stopped_at[arrivals.furthest[s]];
       continue;
     }
     ++out.reached;
-    end_to_end.push_back(static_cast<double>(arrival_ts[s] - source.publish_ts));
+    end_to_end.push_back(static_cast<double>(arrivals.ts[s] - source.publish_ts));
     const PathEvent& publish = ev[source.publish];
-    out.instances.push_back({source.publish_ts, arrival_ts[s], publish.vpid, publish.vtid});
+    out.instances.push_back({source.publish_ts, arrivals.ts[s], publish.vpid, publish.vtid});
     // The chain's hops, walked back from the end.
-    uint32_t m = arrival_message[s];
+    uint32_t m = arrivals.message[s];
     for (std::size_t i = k - 1; i > 0; --i) {
       const Message& message = topics[i].messages[m];
       const PathEvent& take = ev[static_cast<std::size_t>(message.parent)];
@@ -371,6 +412,21 @@ PathLatency path_latency(const PathEvents& in) {
     if (!transport[i].empty()) out.hops[i].transport = metrics::compute_stats(transport[i]);
     if (!in_node[i].empty()) out.hops[i].in_node = metrics::compute_stats(in_node[i]);
   }
+}
+
+}  // namespace
+
+PathLatency path_latency(const PathEvents& in) {
+  const std::size_t k = in.topics.size();
+  if (k < 2) throw std::invalid_argument("a path needs at least two topics");
+  PathLatency out;
+  out.topics = in.topics;
+  out.stopped_at.assign(k, 0);
+  PathLinks links(in);
+  out.hops.resize(k - 1);
+  for (std::size_t i = 0; i + 1 < k; ++i) links.link_hop(i, out.hops[i]);
+  out.ends_at_take = links.last_topic_taken();
+  links.measure(links.first_arrivals(out.ends_at_take), out);
   return out;
 }
 
